@@ -1,0 +1,65 @@
+"""User-facing errors. The CLI maps them to exit codes; nothing else catches them."""
+
+from __future__ import annotations
+
+
+class LinkdynError(Exception):
+    """Base class of errors meant for the user (no traceback is shown for these)."""
+
+    exit_code = 1
+
+
+class ModelError(LinkdynError):
+    """An invalid model file or argument (exit status 2).
+
+    Parameters
+    ----------
+    message : str
+        What is wrong.
+    file : str
+        The model file ('' when the model was built in Python).
+    field : str
+        Dotted path of the offending field, e.g. ``joints[2].connect``.
+    fix : str
+        How to fix it.
+    """
+
+    exit_code = 2
+
+    def __init__(self, message: str, *, file: str = "", field: str = "", fix: str = ""):
+        self.message, self.file, self.field, self.fix = message, file, field, fix
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        where = ": ".join(x for x in (self.file, self.field) if x)
+        text = f"{where}: {self.message}" if where else self.message
+        return f"{text}. {self.fix}" if self.fix else text
+
+
+class AssemblyError(LinkdynError):
+    """The mechanism cannot be assembled, or passes a singular position (exit status 3).
+
+    Parameters
+    ----------
+    message : str
+    time : float or None
+        First time (s) where it fails.
+    drivers : dict[str, float]
+        Driver joint coordinates at that time (rad or m).
+    """
+
+    exit_code = 3
+
+    def __init__(self, message: str, *, file: str = "", time: float | None = None,
+                 drivers: dict[str, float] | None = None, fix: str = ""):
+        self.message, self.file, self.time, self.drivers, self.fix = (
+            message, file, time, drivers or {}, fix)
+        super().__init__(self.__str__())
+
+    def __str__(self) -> str:
+        parts = [self.file] if self.file else []
+        if self.time is not None:
+            drv = ", ".join(f"q_{k} = {v:.6g}" for k, v in self.drivers.items())
+            parts.append(f"at t = {self.time:.6g} s" + (f" ({drv})" if drv else ""))
+        text = ": ".join(parts + [self.message])
+        return f"{text}. {self.fix}" if self.fix else text

@@ -1,0 +1,160 @@
+"""The mechanism model: bodies, joints, drivers, loads, in SI units.
+
+A :class:`Model` is frozen and holds no results. It is built by :func:`linkdyn.io.load_model`
+from a model file (which converts units), or directly in Python. Vectors are NumPy arrays of
+shape ``(2,)`` in the body's local frame unless stated otherwise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+GROUND = "ground"
+REVOLUTE = "revolute"
+PRISMATIC = "prismatic"
+JOINT_KINDS = (REVOLUTE, PRISMATIC)
+
+
+class Motion(Protocol):
+    """A driver's prescribed joint coordinate as a function of time."""
+
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return ``(q, qd, qdd)``, each of the shape of ``t`` (rad or m, per s, per s^2)."""
+        ...
+
+
+@dataclass(frozen=True)
+class Body:
+    """A rigid body.
+
+    Attributes
+    ----------
+    name : str
+    points : dict[str, ndarray (2,)]
+        Named points in the body's frame, m.
+    mass : float
+        kg (0 for the ground).
+    com : ndarray (2,)
+        Mass centre in the body's frame, m.
+    inertia : float
+        Moment of inertia about the mass centre, kg m^2.
+    """
+
+    name: str
+    points: dict[str, np.ndarray]
+    mass: float = 0.0
+    com: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    inertia: float = 0.0
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A lower pair between body ``body_a`` (first) and body ``body_b`` (second).
+
+    Attributes
+    ----------
+    name : str
+    kind : {'revolute', 'prismatic'}
+    body_a, point_a, body_b, point_b : str
+        ``connect = ["body_a.point_a", "body_b.point_b"]``.
+    axis : ndarray (2,)
+        Prismatic only: unit sliding direction in ``body_a``'s frame.
+    angle : float
+        Prismatic only: fixed angle of ``body_b``'s frame relative to ``body_a``'s, rad.
+    """
+
+    name: str
+    kind: str
+    body_a: str
+    point_a: str
+    body_b: str
+    point_b: str
+    axis: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))
+    angle: float = 0.0
+
+
+@dataclass(frozen=True)
+class Driver:
+    """Prescribed motion of one joint coordinate ``q_<joint>``."""
+
+    joint: str
+    motion: Motion
+    description: str = ""
+    period: float | None = None  # s, for a fully rotating constant-speed driver
+
+
+@dataclass(frozen=True)
+class Load:
+    """An applied load.
+
+    ``kind`` is one of ``force`` (``value`` N, global frame, at ``body.point``), ``torque`` (``value``
+    N m on ``body``), ``spring`` and ``damper`` (between ``body.point`` and ``body2.point2``;
+    ``stiffness`` N/m, ``free_length`` m, ``damping`` N s/m). A ``value`` is a callable of time
+    returning the shape of ``t`` plus the load's components, so constant and time-varying loads
+    share one path.
+    """
+
+    kind: str
+    body: str
+    point: str | None = None
+    value: Any = None
+    body2: str | None = None
+    point2: str | None = None
+    stiffness: float = 0.0
+    free_length: float = 0.0
+    damping: float = 0.0
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Model:
+    """A planar mechanism, in SI units.
+
+    Attributes
+    ----------
+    name : str
+    bodies : tuple[Body, ...]
+        Includes the ground, named ``'ground'``.
+    joints : tuple[Joint, ...]
+    drivers : tuple[Driver, ...]
+    loads : tuple[Load, ...]
+    gravity : ndarray (2,)
+        m/s^2, global frame.
+    assembly_phi : dict[str, float]
+        Guesses of absolute body angles at t = 0, rad.
+    assembly_q : dict[str, float]
+        Guesses of joint coordinates at t = 0, rad or m.
+    cut : tuple[str, ...] or None
+        Joints to cut; ``None`` chooses automatically.
+    duration, cycles, samples : optional analysis defaults.
+    source : str
+        File the model came from ('' if built in Python).
+    """
+
+    name: str
+    bodies: tuple[Body, ...]
+    joints: tuple[Joint, ...]
+    drivers: tuple[Driver, ...] = ()
+    loads: tuple[Load, ...] = ()
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    assembly_phi: dict[str, float] = field(default_factory=dict)
+    assembly_q: dict[str, float] = field(default_factory=dict)
+    cut: tuple[str, ...] | None = None
+    duration: float | None = None
+    cycles: float | None = None
+    samples: int | None = None
+    source: str = ""
+    description: str = ""
+
+    def body(self, name: str) -> Body:
+        return next(b for b in self.bodies if b.name == name)
+
+    def joint(self, name: str) -> Joint:
+        return next(j for j in self.joints if j.name == name)
+
+    @property
+    def moving_bodies(self) -> tuple[Body, ...]:
+        return tuple(b for b in self.bodies if b.name != GROUND)

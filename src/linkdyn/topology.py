@@ -1,0 +1,178 @@
+"""Topology: spanning tree rooted at the ground, cut joints, drivers, mobility.
+
+Bodies are renumbered so that the ground is body 0 and every body's parent comes before it
+(``parent[i] < i``). Each moving body ``i`` hangs from its parent by its *tree joint*; the
+joints left out of the tree are the *cut joints*, one per independent loop. Driven joints are
+always kept in the tree.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ModelError
+from .model import GROUND, PRISMATIC, REVOLUTE, Model
+
+
+@dataclass(frozen=True)
+class Topology:
+    """Static integer description of the mechanism's graph (no geometry).
+
+    Attributes
+    ----------
+    bodies : tuple[str, ...]
+        Body names in tree order; ``bodies[0] == 'ground'``.
+    parent : tuple[int, ...]
+        Parent body index of each body (``-1`` for the ground); ``parent[i] < i``.
+    tree_joint : tuple[int, ...]
+        Index into ``model.joints`` of body i's tree joint (``-1`` for the ground).
+    sign : tuple[int, ...]
+        ``+1`` if body i is its tree joint's second body (``connect[1]``), ``-1`` if the first.
+    cut : tuple[int, ...]
+        Indices into ``model.joints`` of the cut joints.
+    driven : tuple[int, ...]
+        Body index whose tree joint each driver moves, in the order of ``model.drivers``.
+    dependent : tuple[int, ...]
+        Bodies whose tree joint is not driven (their rates follow from loop closure).
+    ancestors : ndarray (n, n) bool
+        ``ancestors[i, k]``: body k's tree joint lies on the path from the ground to body i
+        (k = i included).
+    mobility : int
+        Grübler–Kutzbach: ``3 (n - 1) - 2 j``.
+    """
+
+    bodies: tuple[str, ...]
+    parent: tuple[int, ...]
+    tree_joint: tuple[int, ...]
+    sign: tuple[int, ...]
+    cut: tuple[int, ...]
+    driven: tuple[int, ...]
+    dependent: tuple[int, ...]
+    ancestors: np.ndarray
+    mobility: int
+
+    @property
+    def n(self) -> int:
+        """Number of bodies, ground included."""
+        return len(self.bodies)
+
+    @property
+    def n_loops(self) -> int:
+        return len(self.cut)
+
+    def children(self, i: int) -> list[int]:
+        return [k for k in range(1, self.n) if self.parent[k] == i]
+
+
+def build(model: Model) -> Topology:
+    """Choose the spanning tree and cut joints of ``model`` and check its mobility.
+
+    Kruskal's algorithm over the joints, driven joints first, then in file order, skipping
+    joints the user asked to cut: every joint that would close a cycle is cut.
+
+    Raises
+    ------
+    ModelError
+        A body not connected to the ground, a driven joint that would have to be cut, or a
+        mobility that differs from the number of drivers.
+    """
+    src = model.source
+    names = [b.name for b in model.bodies]
+    index = {name: k for k, name in enumerate(names)}
+    joints = model.joints
+    driven_names = [d.joint for d in model.drivers]
+    user_cut = set(model.cut or ())
+
+    # union-find over bodies
+    root = list(range(len(names)))
+
+    def find(a: int) -> int:
+        while root[a] != a:
+            root[a] = root[root[a]]
+            a = root[a]
+        return a
+
+    order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_names, j))
+    tree, cut = [], []
+    for j in order:
+        jt = joints[j]
+        a, b = find(index[jt.body_a]), find(index[jt.body_b])
+        if jt.name in user_cut or a == b:
+            if jt.name in driven_names:
+                raise ModelError(
+                    f"driven joint '{jt.name}' closes a loop formed by other driven joints",
+                    file=src, field="drivers",
+                    fix="Drive joints that do not form a closed loop among themselves")
+            cut.append(j)
+        else:
+            root[a] = b
+            tree.append(j)
+
+    for name in names:
+        if find(index[name]) != find(index[GROUND]):
+            linked = any(find(index[b]) == find(index[GROUND])
+                         for j in cut if name in (joints[j].body_a, joints[j].body_b)
+                         for b in (joints[j].body_a, joints[j].body_b))
+            if user_cut and linked:
+                raise ModelError(
+                    f"cutting {sorted(user_cut)} leaves body '{name}' without a path to the ground",
+                    file=src, field="topology.cut",
+                    fix="Cut only joints that close a loop (one per loop), or omit [topology]")
+            raise ModelError(
+                f"body '{name}' is not connected to the ground by any chain of joints",
+                file=src, field=f"bodies.{name}",
+                fix="Add a joint that connects it, or remove the body")
+    # breadth-first numbering from the ground gives parent[i] < i
+    adj: dict[str, list[int]] = {name: [] for name in names}
+    for j in tree:
+        adj[joints[j].body_a].append(j)
+        adj[joints[j].body_b].append(j)
+    bodies, parent, tree_joint, sign = [GROUND], [-1], [-1], [0]
+    queue = deque([GROUND])
+    while queue:
+        here = queue.popleft()
+        for j in adj[here]:
+            jt = joints[j]
+            child, s = (jt.body_b, 1) if jt.body_a == here else (jt.body_a, -1)
+            if child in bodies:
+                continue
+            bodies.append(child)
+            parent.append(bodies.index(here))
+            tree_joint.append(j)
+            sign.append(s)
+            queue.append(child)
+
+    n = len(bodies)
+    ancestors = np.zeros((n, n), dtype=bool)
+    for i in range(1, n):
+        k = i
+        while k > 0:
+            ancestors[i, k] = True
+            k = parent[k]
+
+    # Grübler–Kutzbach: each revolute or prismatic joint removes two of the three planar freedoms
+    mobility = 3 * (n - 1) - 2 * len(joints)
+    if mobility != len(model.drivers):
+        kinds = {REVOLUTE: 0, PRISMATIC: 0}
+        for jt in joints:
+            kinds[jt.kind] += 1
+        need = "add" if mobility > len(model.drivers) else "remove"
+        raise ModelError(
+            f"the mechanism has mobility {mobility} (Grübler–Kutzbach: 3*({n}-1) - 2*{len(joints)}"
+            f" with {n} bodies including the ground and {len(joints)} joints) but "
+            f"{len(model.drivers)} driver(s)",
+            file=src, field="drivers",
+            fix=(f"{need.capitalize()} {abs(mobility - len(model.drivers))} driver(s), "
+                 "or check the joints: a mechanism needs one driver per degree of freedom"
+                 if mobility >= 0 else
+                 "The joints over-constrain the bodies; remove joints or add bodies"))
+
+    tree_of_joint = {tree_joint[i]: i for i in range(1, n)}
+    driven = tuple(tree_of_joint[next(j for j, jt in enumerate(joints) if jt.name == name)]
+                   for name in driven_names)
+    dependent = tuple(i for i in range(1, n) if i not in driven)
+    return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign),
+                    tuple(sorted(cut)), driven, dependent, ancestors, mobility)
