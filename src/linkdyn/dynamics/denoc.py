@@ -1,0 +1,109 @@
+"""Recursive inverse dynamics with the DeNOC matrices (seed paper, eqs. 8-27).
+
+For each body, the uncoupled Newton–Euler wrench about O_i (eq. 10)
+
+    w_star_i = M_i td_i + W_i M_i E_i t_i - w_ext_i,
+
+is reduced by the DeNOC matrices without forming them: the backward recursion
+
+    w_tilde_i = w_star_i + sum_{children c} A(r_c - r_i)^T w_tilde_c
+
+gives ``N_l^T w_star`` body by body, and ``N_d^T`` picks ``Q_i = p_i . w_tilde_i``, the
+generalized force needed at tree joint i. With the cut-joint multipliers ``lam`` (eqs. 16-24)
+and the driver efforts ``tau`` (eqs. 25-26), eq. (27) reads ``Q = J^T lam + D tau``; its rows
+at the dependent joints give ``J_dep^T lam = Q_dep`` and the driven rows then give
+``tau = Q_drv - J_drv^T lam``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics import KinematicSolution
+from ..loads import Loads
+from ..planar import cross, dot, perp, shift_wrench, solve_small
+
+
+@dataclass(frozen=True)
+class DynamicSolution:
+    """Driver efforts, cut-joint multipliers and the reduced quantities behind them.
+
+    Attributes
+    ----------
+    w_star : ndarray (..., T, n, 3)
+        Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
+    w_tilde : ndarray (..., T, n, 3)
+        Composite wrench of each body's subtree about O_i (``N_l^T w_star``).
+    Q : ndarray (..., T, n)
+        Generalized force at each tree joint (``N^T w_star``), N m or N.
+    lam : ndarray (..., T, 2 n_cut)
+        Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second (N);
+        prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
+    tau : ndarray (..., T, n_drivers)
+        Driver efforts in the order of ``model.drivers``, N m or N.
+    kinetic_energy : ndarray (..., T)
+        J.
+    pivot : ndarray (..., T)
+        Smallest relative pivot of ``J_dep^T`` (~0 at a singular position).
+    """
+
+    w_star: np.ndarray
+    w_tilde: np.ndarray
+    Q: np.ndarray
+    lam: np.ndarray
+    tau: np.ndarray
+    kinetic_energy: np.ndarray
+    pivot: np.ndarray
+
+
+def newton_euler(kin: KinematicSolution, w_ext: np.ndarray):
+    """Uncoupled Newton–Euler wrenches ``w_star`` (..., T, n, 3) and kinetic energy (..., T).
+
+    About O_i with ``d`` the vector from O_i to the mass centre (eq. 10, planar):
+    ``n = I_O al + m d x a_O``, ``f = m (a_O + al perp(d) - w^2 d)``.
+    """
+    lay = kin.layout
+    w_star = -np.array(w_ext, dtype=float)
+    ke = np.zeros(kin.t.shape)
+    for i in range(1, lay.topo.n):
+        m = lay.mass[i]
+        d = kin.pose.rotate(i, lay.com[i])
+        w, v = kin.tw[..., i, 0], kin.tw[..., i, 1:]
+        al, a = kin.twd[..., i, 0], kin.twd[..., i, 1:]
+        i_o = lay.inertia[i] + m * dot(d, d)
+        w_star[..., i, 0] += i_o * al + m * cross(d, a)
+        w_star[..., i, 1:] += m * (a + al[..., None] * perp(d) - (w ** 2)[..., None] * d)
+        # kinetic energy: 1/2 m |v_C|^2 + 1/2 I_C w^2
+        v_c = v + w[..., None] * perp(d)
+        ke += 0.5 * m * dot(v_c, v_c) + 0.5 * lay.inertia[i] * w ** 2
+    return w_star, ke
+
+
+def composite(kin: KinematicSolution, w: np.ndarray) -> np.ndarray:
+    """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c`` (..., n, 3)."""
+    topo, r = kin.layout.topo, kin.pose.r
+    out = np.array(w, dtype=float)
+    for i in range(topo.n - 1, 0, -1):
+        p = topo.parent[i]
+        out[..., p, :] += shift_wrench(out[..., i, :], r[..., i, :] - r[..., p, :])
+    return out
+
+
+def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
+    """Driver efforts and cut-joint multipliers of the motion ``kin`` under ``loads``."""
+    topo = kin.layout.topo
+    dep, drv = np.array(topo.dependent, int), np.array(topo.driven, int)
+    w_star, ke = newton_euler(kin, loads.w_ext)
+    # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
+    w_tilde = composite(kin, w_star)
+    Q = np.einsum("...k,...k->...", kin.p, w_tilde)
+    # eq. (27): J_dep^T lam = Q_dep, then tau = Q_drv - J_drv^T lam
+    if len(dep):
+        Jt = np.swapaxes(kin.J[..., dep - 1], -1, -2)
+        lam, pivot = solve_small(Jt, Q[..., dep])
+    else:
+        lam, pivot = np.zeros(Q.shape[:-1] + (0,)), np.ones(Q.shape[:-1])
+    tau = Q[..., drv] - np.einsum("...ij,...i->...j", kin.J[..., drv - 1], lam)
+    return DynamicSolution(w_star, w_tilde, Q, lam, tau, ke, pivot)

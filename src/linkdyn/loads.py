@@ -1,0 +1,102 @@
+"""Applied loads as wrenches on the bodies: gravity, point forces, torques, springs, dampers.
+
+Every wrench is ``[n, fx, fy]`` about the body's reference point O_i (its tree joint), global
+components, N m and N, with shape ``(..., T, n, 3)`` in tree order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .kinematics import KinematicSolution
+from .model import Model
+from .planar import cross, dot, shift_twist
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Applied wrenches and their energy terms.
+
+    Attributes
+    ----------
+    w_ext : ndarray (..., T, n, 3)
+        Sum of applied wrenches on each body about O_i (tree order), N m / N.
+    potential_energy : ndarray (..., T)
+        Gravity and spring potential, J (zero at the global origin / free length).
+    power : ndarray (..., T)
+        Power of the non-conservative loads (forces, torques, dampers), W.
+    has_potential : bool
+        Whether gravity or springs are present.
+    """
+
+    w_ext: np.ndarray
+    potential_energy: np.ndarray
+    power: np.ndarray
+    has_potential: bool
+
+
+def _point(kin: KinematicSolution, i: int, name: str):
+    """Global position and velocity (..., T, 2) of body i's named point."""
+    lay = kin.layout
+    r = kin.pose.point(i, lay.points[i][name])
+    v = shift_twist(kin.tw[..., i, :], r - kin.pose.r[..., i, :])[..., 1:]
+    return r, v
+
+
+def _add_force(w, kin, i, r, f):
+    """Accumulate force ``f`` (..., 2) applied at ``r`` on body i: ``[(r - r_i) x f, f]``."""
+    w[..., i, 0] += cross(r - kin.pose.r[..., i, :], f)
+    w[..., i, 1:] += f
+
+
+def wrenches(model: Model, kin: KinematicSolution) -> Loads:
+    """Applied wrenches of ``model.loads`` and gravity over the kinematic solution ``kin``."""
+    lay = kin.layout
+    topo = lay.topo
+    index = {name: k for k, name in enumerate(topo.bodies)}
+    shape = kin.t.shape
+    w = np.zeros(kin.tw.shape)
+    pe = np.zeros(shape)
+    power = np.zeros(shape)
+    g = np.asarray(model.gravity, float)
+    has_pe = bool(np.any(g != 0))
+    # gravity: m g at the mass centre; potential -m g . r_C
+    if has_pe:
+        for i in range(1, topo.n):
+            r_c = kin.pose.point(i, lay.com[i])
+            _add_force(w, kin, i, r_c, lay.mass[i] * g)
+            pe -= lay.mass[i] * dot(r_c, np.broadcast_to(g, r_c.shape))
+    for load in model.loads:
+        i = index[load.body]
+        if load.kind == "force":
+            r, v = _point(kin, i, load.point)
+            f = np.broadcast_to(load.value(kin.t), shape + (2,))
+            _add_force(w, kin, i, r, f)
+            power += dot(f, v)
+        elif load.kind == "torque":
+            tq = np.broadcast_to(load.value(kin.t), shape)
+            w[..., i, 0] += tq
+            power += tq * kin.tw[..., i, 0]
+        else:  # spring or damper between two points, force along the line joining them
+            j = index[load.body2]
+            r1, v1 = _point(kin, i, load.point)
+            r2, v2 = _point(kin, j, load.point2)
+            d = r2 - r1
+            length = np.sqrt(dot(d, d))
+            u = d / length[..., None]
+            if load.kind == "spring":
+                # tension k (l - l0) pulls the two points together
+                tension = load.stiffness * (length - load.free_length)
+                pe += 0.5 * load.stiffness * (length - load.free_length) ** 2
+                has_pe = True
+            else:
+                # damper: tension c dl/dt
+                rate = dot(u, v2 - v1)
+                tension = load.damping * rate
+                power -= load.damping * rate ** 2
+            _add_force(w, kin, i, r1, tension[..., None] * u)
+            _add_force(w, kin, j, r2, -tension[..., None] * u)
+    w[..., 0, :] = 0.0  # loads on the ground do no work and are not part of the balance
+    return Loads(w, pe, power, has_pe)

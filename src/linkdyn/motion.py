@@ -1,0 +1,226 @@
+"""Driver motions: a joint coordinate prescribed as a function of time, with exact derivatives.
+
+Each motion is a frozen dataclass with ``evaluate(t) -> (q, qd, qdd)``: the joint coordinate
+(rad for a revolute joint, m for a prismatic one), its rate (per s) and its second derivative
+(per s^2), each of the shape of ``t`` (any shape, s), float64. Units are SI: a ``scale`` converts
+the numbers of a model file (deg -> rad, mm -> m).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from .expr import Expr, parse
+
+__all__ = ["ConstantSpeed", "ExpressionMotion", "TableMotion"]
+
+
+def _time(t) -> np.ndarray:
+    return np.asarray(t, dtype=np.float64)
+
+
+def _finite(name: str, value: float) -> float:
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    return value
+
+
+@dataclass(frozen=True)
+class ConstantSpeed:
+    """q = start + speed t.
+
+    Attributes
+    ----------
+    speed : float
+        rad/s (revolute) or m/s (prismatic).
+    start : float
+        q at t = 0, rad or m.
+    """
+
+    speed: float
+    start: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "speed", _finite("speed", self.speed))
+        object.__setattr__(self, "start", _finite("start", self.start))
+
+    @property
+    def period(self) -> float | None:
+        """Time of one turn, 2 pi / |speed| (s), for a revolute driver; None if speed == 0."""
+        return 2 * math.pi / abs(self.speed) if self.speed else None
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd)`` at times ``t`` (s, any shape); each of the shape of ``t``."""
+        t = _time(t)
+        return self.start + self.speed * t, np.full_like(t, self.speed), np.zeros_like(t)
+
+    def describe(self, unit: str = "rad") -> str:
+        """E.g. ``'constant speed 4.712 rad/s from 0'`` (``unit``: 'rad' or 'm')."""
+        return f"constant speed {self.speed:.4g} {unit}/s from {self.start:.4g}"
+
+
+@dataclass(frozen=True)
+class ExpressionMotion:
+    """q = scale * f(t) for an expression f of ``t`` (see :func:`linkdyn.expr.parse`).
+
+    The text is parsed at construction (an invalid text raises
+    :class:`~linkdyn.expr.ExpressionError` at once); qd and qdd come from the exact symbolic
+    derivatives f' and f''.
+
+    Attributes
+    ----------
+    text : str
+        E.g. ``"0.3 + 6.0*t + 0.4*sin(5*t)"``, in the model file's units, t in s.
+    scale : float
+        Factor to SI, e.g. pi/180 for degrees, 1e-3 for mm.
+    expr, d1, d2 : Expr
+        f, f' and f'' (derived; not constructor arguments).
+    """
+
+    text: str
+    scale: float = 1.0
+    expr: Expr = field(init=False, repr=False, compare=False)
+    d1: Expr = field(init=False, repr=False, compare=False)
+    d2: Expr = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "scale", _finite("scale", self.scale))
+        f = parse(self.text, ("t",))
+        object.__setattr__(self, "expr", f)
+        object.__setattr__(self, "d1", f.diff("t"))
+        object.__setattr__(self, "d2", self.d1.diff("t"))
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd)`` = scale * (f, f', f'') at times ``t`` (s, any shape); shape of ``t``.
+
+        Outside the domain of a function (e.g. log of a negative number) the values are NaN.
+        """
+        t = _time(t)
+        return tuple(self.scale * g(t) for g in (self.expr, self.d1, self.d2))
+
+    def describe(self, unit: str = "rad") -> str:
+        """E.g. ``'q(t) = 0.3 + 6.0*t + 0.4*sin(5*t) rad'`` or ``'q(t) = 0.0174533*(30*t) rad'``."""
+        text = self.text.strip()
+        return f"q(t) = {text if self.scale == 1 else f'{self.scale:.6g}*({text})'} {unit}"
+
+
+@dataclass(frozen=True, eq=False)
+class TableMotion:
+    """q(t) interpolated through a table by a cubic spline (not-a-knot ends).
+
+    qd and qdd are the exact first and second derivatives of that spline (continuous: the spline
+    is C2). Outside ``[t[0], t[-1]]`` all three are NaN (no extrapolation, no exception).
+
+    Attributes
+    ----------
+    t : ndarray (n,)
+        Times, s, strictly increasing, n >= 4.
+    q : ndarray (n,)
+        Joint coordinates in the table's units.
+    scale : float
+        Factor to SI (rad or m), e.g. pi/180 for degrees.
+
+    Raises
+    ------
+    ValueError
+        For a table that is too short, not 1-D of equal lengths, not finite, or whose times do not
+        strictly increase (the message names the first offending row, counted from 1).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    scale: float = 1.0
+    spline: CubicSpline = field(init=False, repr=False)
+
+    def __post_init__(self):
+        t, q = _time(self.t).copy(), _time(self.q).copy()
+        if t.ndim != 1 or q.shape != t.shape:
+            raise ValueError(f"a motion table needs two columns of equal length (t, q), "
+                             f"got shapes {t.shape} and {q.shape}")
+        if len(t) < 4:
+            raise ValueError(f"a motion table needs at least 4 rows for a cubic spline, got {len(t)}")
+        bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(q)))
+        if bad.size:
+            i = bad[0]
+            raise ValueError(f"row {i + 1} of the motion table is not finite (t = {t[i]}, q = {q[i]})")
+        bad = np.flatnonzero(np.diff(t) <= 0)
+        if bad.size:
+            i = bad[0] + 1
+            raise ValueError(f"times of a motion table must strictly increase: row {i + 1} has "
+                             f"t = {t[i]:.6g} after t = {t[i - 1]:.6g}")
+        t.flags.writeable = q.flags.writeable = False
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "q", q)
+        object.__setattr__(self, "scale", _finite("scale", self.scale))
+        object.__setattr__(self, "spline", CubicSpline(t, q, bc_type="not-a-knot", extrapolate=False))
+
+    @classmethod
+    def from_csv(cls, path: str | Path, scale: float = 1.0) -> TableMotion:
+        """Read a two-column CSV file ``t,q`` (s, table units) with an optional header line.
+
+        Blank lines and lines starting with ``#`` are skipped.
+
+        Raises
+        ------
+        FileNotFoundError
+            If ``path`` does not exist (the message contains the path).
+        ValueError
+            For a line that is not two numbers (the message names the file and line), or a table
+            rejected by the constructor (the message names the file).
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"motion table file not found: {path}")
+        try:
+            lines = path.read_text(encoding="utf-8-sig").splitlines()
+        except UnicodeDecodeError:
+            raise ValueError(f"{path}: not a UTF-8 text file") from None
+        rows, header_allowed = [], True
+        for n, line in enumerate(lines, start=1):
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue
+            fields = [f.strip() for f in text.split(",")]
+            try:
+                ti, qi = map(float, fields)
+            except ValueError:
+                if header_allowed and not _is_number(fields[0]):
+                    header_allowed = False
+                    continue
+                raise ValueError(f"{path}, line {n}: expected two numbers 't,q', got {text!r}") from None
+            if not (math.isfinite(ti) and math.isfinite(qi)):
+                raise ValueError(f"{path}, line {n}: t and q must be finite, got {text!r}")
+            if rows and ti <= rows[-1][0]:
+                raise ValueError(f"{path}, line {n}: t = {ti:.6g} does not increase "
+                                 f"(previous t = {rows[-1][0]:.6g})")
+            rows.append((ti, qi))
+            header_allowed = False
+        t, q = np.array(rows, dtype=np.float64).reshape(-1, 2).T
+        try:
+            return cls(t, q, scale)
+        except ValueError as exc:
+            raise ValueError(f"{path}: {exc}") from None
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd)`` at times ``t`` (s, any shape); shape of ``t``; NaN outside the table."""
+        t = _time(t)
+        return tuple(self.scale * self.spline(t, nu) for nu in (0, 1, 2))
+
+    def describe(self, unit: str = "rad") -> str:
+        """E.g. ``'table of 37 rows, t from 0 to 2 s'``."""
+        factor = "" if self.scale == 1 else f", q x {self.scale:.6g} to {unit}"
+        return f"table of {len(self.t)} rows, t from {self.t[0]:.4g} to {self.t[-1]:.4g} s{factor}"
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False

@@ -1,0 +1,85 @@
+"""Joint reactions, body by body from the ends of the tree back to the ground.
+
+With the cut-joint multipliers known, the wrench the parent exerts on body i through its tree
+joint (reaction plus driver effort) follows from body i's wrench balance:
+
+    R_i = w_star_i - w_cut_i + sum_{children c} A(r_c - r_i)^T R_c,
+
+where ``w_cut_i`` is the wrench of the cut joints on body i about O_i. Removing the driver's
+share ``tau p_i`` leaves the joint's reaction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import joints as jk
+from .dynamics.denoc import DynamicSolution, composite
+from .kinematics import KinematicSolution, _cut_frames
+from .model import Model
+from .planar import shift_wrench
+
+
+@dataclass(frozen=True)
+class Reactions:
+    """Reaction at every joint, in the model's joint order.
+
+    Attributes
+    ----------
+    force : ndarray (..., T, n_joints, 2)
+        Force exerted by the joint's first body on its second, global components, N.
+    moment : ndarray (..., T, n_joints)
+        Moment exerted by the first body on the second about the second body's joint point,
+        N m (zero for revolute joints, which cannot transmit one).
+    tree : ndarray (..., T, n, 3)
+        ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
+        effort included (tree order).
+    """
+
+    force: np.ndarray
+    moment: np.ndarray
+    tree: np.ndarray
+
+
+def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> np.ndarray:
+    """Wrenches of the cut-joint multipliers on every body about O_i (..., T, n, 3)."""
+    lay = kin.layout
+    w = np.zeros(kin.tw.shape)
+    for k, c in enumerate(lay.cuts):
+        r_pa, r_pb, e_a = _cut_frames(lay, kin.pose, c)
+        # S^T lam acts at the cut point on the second body, its opposite on the first
+        on_b = jk.cut_wrench(c.kind, e_a, lam[..., 2 * k:2 * k + 2])
+        w[..., c.b, :] += shift_wrench(on_b, r_pb - kin.pose.r[..., c.b, :])
+        w[..., c.a, :] -= shift_wrench(on_b, r_pb - kin.pose.r[..., c.a, :])
+    return w
+
+
+def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactions:
+    """Reactions at all joints from the dynamic solution."""
+    lay = kin.layout
+    topo = lay.topo
+    w_cut = cut_wrenches(kin, dyn.lam)
+    # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
+    R = composite(kin, dyn.w_star - w_cut)
+    shape = kin.t.shape
+    nj = len(model.joints)
+    force, moment = np.zeros(shape + (nj, 2)), np.zeros(shape + (nj,))
+    driver_of = {i: k for k, i in enumerate(topo.driven)}
+    for i in range(1, topo.n):
+        j, p = topo.tree_joint[i], topo.parent[i]
+        on_child = R[..., i, :]
+        if i in driver_of:  # remove the driver's effort tau p_i
+            on_child = on_child - dyn.tau[..., driver_of[i], None] * kin.p[..., i, :]
+        if topo.sign[i] > 0:  # child is the second body: report as is, about O_i
+            force[..., j, :], moment[..., j] = on_child[..., 1:], on_child[..., 0]
+        else:  # child is the first body: the second body (parent) receives the opposite
+            r_pb = kin.pose.point(p, lay.joint_point[i])
+            on_b = shift_wrench(-on_child, kin.pose.r[..., i, :] - r_pb)
+            force[..., j, :], moment[..., j] = on_b[..., 1:], on_b[..., 0]
+    for k, c in enumerate(lay.cuts):
+        _, _, e_a = _cut_frames(lay, kin.pose, c)
+        on_b = jk.cut_wrench(c.kind, e_a, dyn.lam[..., 2 * k:2 * k + 2])
+        force[..., c.joint, :], moment[..., c.joint] = on_b[..., 1:], on_b[..., 0]
+    return Reactions(force, moment, R)
