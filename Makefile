@@ -18,8 +18,8 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 
 demo: $(VENV)/.installed
 	$(BIN)/linkdyn example hoeken > hoeken.toml
-	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
-	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json, out/hoeken/report.html"
+	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken
+	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json"
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest

@@ -1,3 +1,31 @@
-"""linkdyn: recursive (DeNOC) kinematics and inverse dynamics of planar closed-loop mechanisms."""
+"""linkdyn: recursive (DeNOC) kinematics and inverse dynamics of planar closed-loop mechanisms.
+
+>>> import linkdyn, numpy as np
+>>> mech = linkdyn.load(linkdyn.example_path("hoeken"))
+>>> sol = linkdyn.analyze(mech, np.linspace(0.0, 4 / 3, 361))
+>>> round(float(abs(sol.effort("J1")).max()), 3)
+1.119
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+
+from .analysis import Solution, analyze
+from .errors import AssemblyError, LinkdynError, ModelError
+from .io import load_model, model_from_dict
+from .model import Body, Driver, Joint, Load, Model
 
 __version__ = "0.1.0"
+
+load = load_model
+
+
+def example_path(name: str):
+    """Path of a bundled example model, e.g. ``example_path("hoeken")``."""
+    return resources.files("linkdyn").joinpath("examples", f"{name}.toml")
+
+
+__all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",
+           "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
+           "example_path"]
