@@ -53,13 +53,16 @@ class Solution:
         return self.topology.bodies.index(name)
 
     def phi(self, body: str) -> np.ndarray:
-        return self.kin.pose.phi[..., self.body_index(body)]
+        """Absolute angle (T,) of a body, rad."""
+        return self.kin.pose.phi[self.body_index(body)]
 
     def omega(self, body: str) -> np.ndarray:
-        return self.kin.tw[..., self.body_index(body), 0]
+        """Angular velocity (T,) of a body, rad/s."""
+        return self.kin.twists[self.body_index(body)][0]
 
     def alpha(self, body: str) -> np.ndarray:
-        return self.kin.twd[..., self.body_index(body), 0]
+        """Angular acceleration (T,) of a body, rad/s^2."""
+        return self.kin.rates[self.body_index(body)][0]
 
     def point(self, body: str, point: str) -> np.ndarray:
         """Path (T, 2) of a named point, m."""

@@ -1,14 +1,17 @@
 """The one place that knows joint kinds.
 
-For a tree joint of kind ``kind`` whose child is body i (``s = +1`` if the child is the joint's
-second body, ``-1`` if the first), this module gives
+For a tree joint whose child is body i (``s = +1`` if the child is the joint's second body,
+``-1`` if the first), this module gives
 
 - the child's pose from the parent's (:func:`place_child`),
-- the joint-motion propagation vector ``p_i`` of eq. (3) in the plane
-  (revolute ``[s, 0, 0]``, prismatic ``[0, s e]``), and its time derivative,
-- the rows a *cut* joint of that kind constrains (the cut-row selection ``S``: revolute keeps
-  the two in-plane relative velocity components, prismatic keeps the relative rotation and the
-  relative velocity normal to the axis).
+- the joint-motion propagation vector ``p_i`` of eq. (3) in the plane (revolute ``[s, 0, 0]``,
+  prismatic ``[0, s e]``) and its rate,
+- for a *cut* joint, its closure residual and the rows it constrains (the cut-row selection
+  ``S``: a revolute keeps the two in-plane components of the relative velocity, a prismatic the
+  relative rotation and the relative velocity normal to its axis), and the constraint wrench
+  ``S^T lam`` those rows carry.
+
+Arrays are component-first (see :mod:`linkdyn.planar`).
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from .planar import dot, perp, rotate_cs, twist, wrap
 
 
 def place_child(kind, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
-    """Pose of the child from the parent's and the joint coordinate.
+    """Pose of the child from its parent's pose and the joint coordinate.
 
     Parameters
     ----------
@@ -33,17 +36,17 @@ def place_child(kind, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
     axis_p : ndarray (2,)
         Prismatic: unit axis expressed in the parent's frame.
     phi_p, cos_p, sin_p : ndarray (...)
-        Parent's absolute angle and its cosine and sine.
-    r_joint : ndarray (..., 2)
+        Parent's absolute angle, its cosine and sine.
+    r_joint : ndarray (2, ...)
         Global position of the parent's joint point, m.
 
     Returns
     -------
     phi, cos, sin : ndarray (...)
         Child's absolute angle, its cosine and sine.
-    r : ndarray (..., 2)
+    r : ndarray (2, ...)
         Child's reference point O_i (its own joint point), m.
-    e : ndarray (..., 2) or None
+    e : ndarray (2, ...) or None
         Prismatic: global unit axis.
     """
     if kind == REVOLUTE:
@@ -54,55 +57,56 @@ def place_child(kind, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
     ca, sa = np.cos(s * angle), np.sin(s * angle)
     e = rotate_cs(cos_p, sin_p, axis_p)
     return (phi_p + s * angle, ca * cos_p - sa * sin_p, sa * cos_p + ca * sin_p,
-            r_joint + (s * q)[..., None] * e, e)
+            r_joint + (s * q) * e, e)
 
 
-def motion_vector(kind, s, e, shape):
-    """Joint-motion propagation vector ``p_i`` (eq. 3), shape ``shape + (3,)``."""
+def motion_vector(kind, s, e, ndim):
+    """Joint-motion propagation vector ``p_i`` (3, ...) of eq. (3); a revolute joint's is the
+    constant ``[s, 0, 0]``, shaped ``(3, 1, ...)`` to broadcast over ``ndim`` batch axes."""
     if kind == REVOLUTE:
-        return np.broadcast_to(np.array([float(s), 0.0, 0.0]), shape + (3,))
-    return twist(np.zeros(shape), s * e)
+        return np.array([float(s), 0.0, 0.0]).reshape((3,) + (1,) * ndim)
+    return twist(0.0, s * e)
 
 
-def motion_vector_rate(kind, s, e, w_axis_body, shape):
-    """Time derivative of ``p_i``: zero for a revolute joint; ``[0, s w perp(e)]`` for prismatic,
-    ``w_axis_body`` (...) being the angular velocity of the body that carries the axis."""
+def motion_vector_rate(kind, s, e, w_axis):
+    """Rate of ``p_i``: zero (None) for a revolute joint; ``[0, s w perp(e)]`` for a prismatic
+    one, ``w_axis`` (...) being the angular velocity of the body that carries the axis."""
     if kind == REVOLUTE:
         return None
-    return twist(np.zeros(shape), s * w_axis_body[..., None] * perp(e))
+    return twist(0.0, s * w_axis * perp(e))
 
 
 def cut_residual(kind, angle, phi_a, phi_b, e_a, r_pa, r_pb):
-    """Loop-closure residual of a cut joint, (..., 2): revolute ``r_Pb - r_Pa``; prismatic
+    """Loop-closure residual (2, ...) of a cut joint: revolute ``r_Pb - r_Pa``; prismatic
     ``[phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n]`` with ``n = perp(e)``."""
     d = r_pb - r_pa
     if kind == REVOLUTE:
         return d
-    return np.stack((wrap(phi_b - phi_a - angle), dot(d, perp(e_a))), axis=-1)
+    return np.stack((wrap(phi_b - phi_a - angle), dot(d, perp(e_a))))
 
 
 def cut_rows(kind, e_a, x):
-    """Apply the cut-row selection ``S`` to a relative twist (or twist rate) ``x`` (..., 3) at the
+    """Cut-row selection ``S x`` (2, ...) of a relative twist or twist rate ``x`` (3, ...) at the
     cut point: revolute ``[x_vx, x_vy]``; prismatic ``[x_w, n . x_v]``."""
     if kind == REVOLUTE:
-        return x[..., 1:]
-    return np.stack((x[..., 0], dot(x[..., 1:], perp(e_a))), axis=-1)
+        return x[1:]
+    return np.stack(np.broadcast_arrays(x[0], dot(x[1:], perp(e_a))))
 
 
 def cut_rows_rate(kind, e_a, w_a, x):
-    """``dS/dt x`` (..., 2): zero for revolute; ``[0, n_dot . x_v]``, ``n_dot = w_a perp(n)``."""
+    """``(dS/dt) x`` (2, ...): zero for revolute; ``[0, n_dot . x_v]``, ``n_dot = -w_a e``."""
     if kind == REVOLUTE:
         return 0.0
-    n_dot = w_a[..., None] * perp(perp(e_a))
-    return np.stack((np.zeros_like(w_a), dot(x[..., 1:], n_dot)), axis=-1)
+    ndot_x = -w_a * dot(x[1:], e_a)
+    return np.stack((np.zeros_like(ndot_x), ndot_x))
 
 
 def cut_wrench(kind, e_a, lam):
-    """Constraint wrench ``S^T lam`` (..., 3) on the second body at the cut point: revolute
+    """Constraint wrench ``S^T lam`` (3, ...) on the second body at the cut point: revolute
     ``[0, lam_x, lam_y]``; prismatic ``[lam_0, lam_1 n]``."""
     if kind == REVOLUTE:
-        return twist(np.zeros(lam.shape[:-1]), lam)
-    return twist(lam[..., 0], lam[..., 1:2] * perp(e_a))
+        return twist(0.0, lam)
+    return twist(lam[0], lam[1] * perp(e_a))
 
 
 def joint_coordinate(kind, phi_a, phi_b, e_a, r_pa, r_pb):

@@ -1,7 +1,7 @@
 """Applied loads as wrenches on the bodies: gravity, point forces, torques, springs, dampers.
 
 Every wrench is ``[n, fx, fy]`` about the body's reference point O_i (its tree joint), global
-components, N m and N, with shape ``(..., T, n, 3)`` in tree order.
+components, N m and N: one component-first array ``(3, T)`` per body, tree order.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .model import Model
-from .planar import cross, dot, shift_twist
+from .planar import cross, dot, last, shift_twist, twist
 
 
 @dataclass(frozen=True)
@@ -21,7 +21,7 @@ class Loads:
 
     Attributes
     ----------
-    w_ext : ndarray (..., T, n, 3)
+    wrenches : list of ndarray (3, T)
         Sum of applied wrenches on each body about O_i (tree order), N m / N.
     potential_energy : ndarray (..., T)
         Gravity and spring potential, J (zero at the global origin / free length).
@@ -31,24 +31,26 @@ class Loads:
         Whether gravity or springs are present.
     """
 
-    w_ext: np.ndarray
+    wrenches: list
     potential_energy: np.ndarray
     power: np.ndarray
     has_potential: bool
 
+    @property
+    def w_ext(self) -> np.ndarray:
+        """Applied wrenches stacked components last, (T, n, 3), tree order."""
+        return np.stack([last(x) for x in self.wrenches], axis=-2)
+
 
 def _point(kin: KinematicSolution, i: int, name: str):
-    """Global position and velocity (..., T, 2) of body i's named point."""
-    lay = kin.layout
-    r = kin.pose.point(i, lay.points[i][name])
-    v = shift_twist(kin.tw[..., i, :], r - kin.pose.r[..., i, :])[..., 1:]
-    return r, v
+    """Global position and velocity (2, T) of body i's named point."""
+    a = kin.pose.rotate(i, kin.layout.points[i][name])
+    return kin.pose.r[i] + a, shift_twist(kin.twists[i], a)[1:]
 
 
 def _add_force(w, kin, i, r, f):
-    """Accumulate force ``f`` (..., 2) applied at ``r`` on body i: ``[(r - r_i) x f, f]``."""
-    w[..., i, 0] += cross(r - kin.pose.r[..., i, :], f)
-    w[..., i, 1:] += f
+    """Accumulate force ``f`` (2, T) applied at ``r`` on body i: ``[(r - r_i) x f, f]``."""
+    w[i] = w[i] + twist(cross(r - kin.pose.r[i], f), f)
 
 
 def wrenches(model: Model, kin: KinematicSolution) -> Loads:
@@ -57,7 +59,7 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
     topo = lay.topo
     index = {name: k for k, name in enumerate(topo.bodies)}
     shape = kin.t.shape
-    w = np.zeros(kin.tw.shape)
+    w = [np.zeros((3,) + shape) for _ in range(topo.n)]
     pe = np.zeros(shape)
     power = np.zeros(shape)
     g = np.asarray(model.gravity, float)
@@ -66,26 +68,26 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
     if has_pe:
         for i in range(1, topo.n):
             r_c = kin.pose.point(i, lay.com[i])
-            _add_force(w, kin, i, r_c, lay.mass[i] * g)
-            pe -= lay.mass[i] * dot(r_c, np.broadcast_to(g, r_c.shape))
+            _add_force(w, kin, i, r_c, lay.mass[i] * np.broadcast_to(g[:, None], r_c.shape))
+            pe -= lay.mass[i] * (g[0] * r_c[0] + g[1] * r_c[1])
     for load in model.loads:
         i = index[load.body]
         if load.kind == "force":
             r, v = _point(kin, i, load.point)
-            f = np.broadcast_to(load.value(kin.t), shape + (2,))
+            f = np.moveaxis(np.broadcast_to(load.value(kin.t), shape + (2,)), -1, 0)
             _add_force(w, kin, i, r, f)
             power += dot(f, v)
         elif load.kind == "torque":
             tq = np.broadcast_to(load.value(kin.t), shape)
-            w[..., i, 0] += tq
-            power += tq * kin.tw[..., i, 0]
+            w[i] = w[i] + twist(tq, np.zeros((2,) + shape))
+            power += tq * kin.twists[i][0]
         else:  # spring or damper between two points, force along the line joining them
             j = index[load.body2]
             r1, v1 = _point(kin, i, load.point)
             r2, v2 = _point(kin, j, load.point2)
             d = r2 - r1
             length = np.sqrt(dot(d, d))
-            u = d / length[..., None]
+            u = d / length
             if load.kind == "spring":
                 # tension k (l - l0) pulls the two points together
                 tension = load.stiffness * (length - load.free_length)
@@ -96,7 +98,7 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
                 rate = dot(u, v2 - v1)
                 tension = load.damping * rate
                 power -= load.damping * rate ** 2
-            _add_force(w, kin, i, r1, tension[..., None] * u)
-            _add_force(w, kin, j, r2, -tension[..., None] * u)
-    w[..., 0, :] = 0.0  # loads on the ground do no work and are not part of the balance
+            _add_force(w, kin, i, r1, tension * u)
+            _add_force(w, kin, j, r2, -tension * u)
+    w[0] = np.zeros((3,) + shape)  # loads on the ground do no work and are not part of the balance
     return Loads(w, pe, power, has_pe)

@@ -19,7 +19,7 @@ from . import joints as jk
 from .dynamics.denoc import DynamicSolution, composite
 from .kinematics import KinematicSolution, _cut_frames
 from .model import Model
-from .planar import shift_wrench
+from .planar import first, last, shift_wrench
 
 
 @dataclass(frozen=True)
@@ -33,7 +33,7 @@ class Reactions:
     moment : ndarray (..., T, n_joints)
         Moment exerted by the first body on the second about the second body's joint point,
         N m (zero for revolute joints, which cannot transmit one).
-    tree : ndarray (..., T, n, 3)
+    tree : list of ndarray (3, T)
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).
     """
@@ -43,16 +43,16 @@ class Reactions:
     tree: np.ndarray
 
 
-def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> np.ndarray:
-    """Wrenches of the cut-joint multipliers on every body about O_i (..., T, n, 3)."""
+def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
+    """Wrenches (3, T) of the cut-joint multipliers ``lam`` (2 n_cut, T) on every body about O_i."""
     lay = kin.layout
-    w = np.zeros(kin.tw.shape)
+    w = [np.zeros((3,) + kin.t.shape) for _ in range(lay.topo.n)]
     for k, c in enumerate(lay.cuts):
         r_pa, r_pb, e_a = _cut_frames(lay, kin.pose, c)
         # S^T lam acts at the cut point on the second body, its opposite on the first
-        on_b = jk.cut_wrench(c.kind, e_a, lam[..., 2 * k:2 * k + 2])
-        w[..., c.b, :] += shift_wrench(on_b, r_pb - kin.pose.r[..., c.b, :])
-        w[..., c.a, :] -= shift_wrench(on_b, r_pb - kin.pose.r[..., c.a, :])
+        on_b = jk.cut_wrench(c.kind, e_a, lam[2 * k:2 * k + 2])
+        w[c.b] = w[c.b] + shift_wrench(on_b, r_pb - kin.pose.r[c.b])
+        w[c.a] = w[c.a] - shift_wrench(on_b, r_pb - kin.pose.r[c.a])
     return w
 
 
@@ -60,26 +60,25 @@ def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactio
     """Reactions at all joints from the dynamic solution."""
     lay = kin.layout
     topo = lay.topo
-    w_cut = cut_wrenches(kin, dyn.lam)
+    lam = first(dyn.lam)
+    w_cut = cut_wrenches(kin, lam)
     # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
-    R = composite(kin, dyn.w_star - w_cut)
-    shape = kin.t.shape
-    nj = len(model.joints)
-    force, moment = np.zeros(shape + (nj, 2)), np.zeros(shape + (nj,))
+    R = composite(kin, [ws - wc for ws, wc in zip(dyn.wstar, w_cut)])
+    on_b = [None] * len(model.joints)
     driver_of = {i: k for k, i in enumerate(topo.driven)}
     for i in range(1, topo.n):
-        j, p = topo.tree_joint[i], topo.parent[i]
-        on_child = R[..., i, :]
+        j, k = topo.tree_joint[i], topo.parent[i]
+        on_child = R[i]
         if i in driver_of:  # remove the driver's effort tau p_i
-            on_child = on_child - dyn.tau[..., driver_of[i], None] * kin.p[..., i, :]
-        if topo.sign[i] > 0:  # child is the second body: report as is, about O_i
-            force[..., j, :], moment[..., j] = on_child[..., 1:], on_child[..., 0]
-        else:  # child is the first body: the second body (parent) receives the opposite
-            r_pb = kin.pose.point(p, lay.joint_point[i])
-            on_b = shift_wrench(-on_child, kin.pose.r[..., i, :] - r_pb)
-            force[..., j, :], moment[..., j] = on_b[..., 1:], on_b[..., 0]
+            on_child = on_child - dyn.tau[..., driver_of[i]] * kin.motion[i]
+        if topo.sign[i] > 0:  # the child is the second body: its wrench about O_i as is
+            on_b[j] = on_child
+        else:  # the child is the first body: the second (the parent) receives the opposite
+            r_pb = kin.pose.point(k, lay.joint_point[i])
+            on_b[j] = shift_wrench(-on_child, kin.pose.r[i] - r_pb)
     for k, c in enumerate(lay.cuts):
         _, _, e_a = _cut_frames(lay, kin.pose, c)
-        on_b = jk.cut_wrench(c.kind, e_a, dyn.lam[..., 2 * k:2 * k + 2])
-        force[..., c.joint, :], moment[..., c.joint] = on_b[..., 1:], on_b[..., 0]
+        on_b[c.joint] = jk.cut_wrench(c.kind, e_a, lam[2 * k:2 * k + 2])
+    force = np.stack([last(w[1:]) for w in on_b], axis=-2)
+    moment = np.stack([w[0] for w in on_b], axis=-1)
     return Reactions(force, moment, R)

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..kinematics import KinematicSolution
 from ..loads import Loads
-from ..planar import cross, dot, perp, shift_wrench, solve_small
+from ..planar import cross, dot, last, perp, shift_wrench, solve_small, twist
 
 
 @dataclass(frozen=True)
@@ -32,62 +32,72 @@ class DynamicSolution:
 
     Attributes
     ----------
-    w_star : ndarray (..., T, n, 3)
+    wstar : list of ndarray (3, T)
         Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
-    w_tilde : ndarray (..., T, n, 3)
+    wtilde : list of ndarray (3, T)
         Composite wrench of each body's subtree about O_i (``N_l^T w_star``).
-    Q : ndarray (..., T, n)
+    Q : ndarray (n, T)
         Generalized force at each tree joint (``N^T w_star``), N m or N.
-    lam : ndarray (..., T, 2 n_cut)
+    lam : ndarray (T, 2 n_cut)
         Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second (N);
         prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
-    tau : ndarray (..., T, n_drivers)
+    tau : ndarray (T, n_drivers)
         Driver efforts in the order of ``model.drivers``, N m or N.
-    kinetic_energy : ndarray (..., T)
+    kinetic_energy : ndarray (T,)
         J.
-    pivot : ndarray (..., T)
+    pivot : ndarray (T,)
         Smallest relative pivot of ``J_dep^T`` (~0 at a singular position).
     """
 
-    w_star: np.ndarray
-    w_tilde: np.ndarray
+    wstar: list
+    wtilde: list
     Q: np.ndarray
     lam: np.ndarray
     tau: np.ndarray
     kinetic_energy: np.ndarray
     pivot: np.ndarray
 
+    @property
+    def w_star(self) -> np.ndarray:
+        """``w_star`` stacked components last, (T, n, 3)."""
+        return np.stack([last(x) for x in self.wstar], axis=-2)
 
-def newton_euler(kin: KinematicSolution, w_ext: np.ndarray):
-    """Uncoupled Newton–Euler wrenches ``w_star`` (..., T, n, 3) and kinetic energy (..., T).
+    @property
+    def w_tilde(self) -> np.ndarray:
+        """``w_tilde`` stacked components last, (T, n, 3)."""
+        return np.stack([last(x) for x in self.wtilde], axis=-2)
+
+
+def newton_euler(kin: KinematicSolution, w_ext: list):
+    """Uncoupled Newton–Euler wrenches ``w_star_i`` (3, T) and the kinetic energy (T,).
 
     About O_i with ``d`` the vector from O_i to the mass centre (eq. 10, planar):
     ``n = I_O al + m d x a_O``, ``f = m (a_O + al perp(d) - w^2 d)``.
     """
     lay = kin.layout
-    w_star = -np.array(w_ext, dtype=float)
+    w_star = [np.zeros_like(w_ext[0])]
     ke = np.zeros(kin.t.shape)
     for i in range(1, lay.topo.n):
         m = lay.mass[i]
         d = kin.pose.rotate(i, lay.com[i])
-        w, v = kin.tw[..., i, 0], kin.tw[..., i, 1:]
-        al, a = kin.twd[..., i, 0], kin.twd[..., i, 1:]
+        (w, v), (al, a) = (kin.twists[i][0], kin.twists[i][1:]), (kin.rates[i][0], kin.rates[i][1:])
         i_o = lay.inertia[i] + m * dot(d, d)
-        w_star[..., i, 0] += i_o * al + m * cross(d, a)
-        w_star[..., i, 1:] += m * (a + al[..., None] * perp(d) - (w ** 2)[..., None] * d)
+        # M_i td_i + W_i M_i E_i t_i - w_ext_i
+        w_star.append(twist(i_o * al + m * cross(d, a), m * (a + al * perp(d) - w ** 2 * d))
+                      - w_ext[i])
         # kinetic energy: 1/2 m |v_C|^2 + 1/2 I_C w^2
-        v_c = v + w[..., None] * perp(d)
+        v_c = v + w * perp(d)
         ke += 0.5 * m * dot(v_c, v_c) + 0.5 * lay.inertia[i] * w ** 2
     return w_star, ke
 
 
-def composite(kin: KinematicSolution, w: np.ndarray) -> np.ndarray:
-    """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c`` (..., n, 3)."""
+def composite(kin: KinematicSolution, w: list) -> list:
+    """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c``, (3, T) each."""
     topo, r = kin.layout.topo, kin.pose.r
-    out = np.array(w, dtype=float)
+    out = list(w)
     for i in range(topo.n - 1, 0, -1):
-        p = topo.parent[i]
-        out[..., p, :] += shift_wrench(out[..., i, :], r[..., i, :] - r[..., p, :])
+        k = topo.parent[i]
+        out[k] = out[k] + shift_wrench(out[i], r[i] - r[k])
     return out
 
 
@@ -95,15 +105,16 @@ def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
     """Driver efforts and cut-joint multipliers of the motion ``kin`` under ``loads``."""
     topo = kin.layout.topo
     dep, drv = np.array(topo.dependent, int), np.array(topo.driven, int)
-    w_star, ke = newton_euler(kin, loads.w_ext)
+    w_star, ke = newton_euler(kin, loads.wrenches)
     # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
     w_tilde = composite(kin, w_star)
-    Q = np.einsum("...k,...k->...", kin.p, w_tilde)
+    Q = np.stack([np.zeros(kin.t.shape)] + [dot(kin.motion[i], w_tilde[i])
+                                            for i in range(1, topo.n)])
     # eq. (27): J_dep^T lam = Q_dep, then tau = Q_drv - J_drv^T lam
+    J = kin.jacobian
     if len(dep):
-        Jt = np.swapaxes(kin.J[..., dep - 1], -1, -2)
-        lam, pivot = solve_small(Jt, Q[..., dep])
+        lam, pivot = solve_small(np.swapaxes(J[:, dep - 1], 0, 1), Q[dep])
     else:
-        lam, pivot = np.zeros(Q.shape[:-1] + (0,)), np.ones(Q.shape[:-1])
-    tau = Q[..., drv] - np.einsum("...ij,...i->...j", kin.J[..., drv - 1], lam)
-    return DynamicSolution(w_star, w_tilde, Q, lam, tau, ke, pivot)
+        lam, pivot = np.zeros((0,) + kin.t.shape), np.ones(kin.t.shape)
+    tau = Q[drv] - np.einsum("ij...,i...->j...", J[:, drv - 1], lam)
+    return DynamicSolution(w_star, w_tilde, Q, last(lam), last(tau), ke, pivot)
