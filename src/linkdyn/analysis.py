@@ -132,6 +132,8 @@ class Solution:
             import pandas as pd
         except ImportError as exc:  # pragma: no cover - depends on the environment
             raise ImportError("to_dataframe needs pandas: pip install 'linkdyn[pandas]'") from exc
+        if self.valid.ndim > 1:
+            raise ValueError("to_dataframe needs a single design; index the design first")
         return pd.DataFrame(self.columns)
 
     def to_array(self) -> tuple[list[str], np.ndarray]:
@@ -140,8 +142,19 @@ class Solution:
         return names, np.stack([self.columns[k] for k in names], axis=-1)
 
 
-def analyze(model: Model, t, *, allow_singular: bool = False) -> Solution:
+def analyze(model, t, *, allow_singular: bool = False) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
+
+    Parameters
+    ----------
+    model : Model or sequence of Model
+        One mechanism, or D designs of one topology (geometry, masses and inertias may
+        differ; drivers and loads are the first design's). With designs every per-sample
+        array has shape (D, T, ...) and bad designs are flagged in ``valid``, never raised.
+    t : array_like (T,)
+        Sample times, s.
+    allow_singular : bool
+        Keep samples that do not close or are singular as NaN rows instead of raising.
 
     Raises
     ------
@@ -149,12 +162,14 @@ def analyze(model: Model, t, *, allow_singular: bool = False) -> Solution:
         The mechanism cannot be assembled, stops closing, or passes a singular position, at the
         first such time (unless ``allow_singular``, which leaves NaN rows flagged in ``valid``).
     """
+    designs = not isinstance(model, Model)
     kin = kinematics.solve(model, t)
+    model = list(model)[0] if designs else model
     applied = loads_mod.wrenches(model, kin)
     dyn = denoc.solve(kin, applied)
     react = reactions_mod.solve(model, kin, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
-    if not allow_singular and not np.all(valid):
+    if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
         drivers = {d.joint: float(v) for d, v in
                    zip(model.drivers, kinematics.driver_values(model, kin.t[k:k + 1])[0][0])}

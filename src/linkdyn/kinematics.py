@@ -114,6 +114,44 @@ def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
                   tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0)
 
 
+def stack_layouts(layouts: list[Layout]) -> Layout:
+    """One layout for several designs of the same topology: every number gains a design axis,
+    shaped to broadcast against ``(D, T)`` batches (vectors ``(2, D, 1)``, scalars ``(D, 1)``).
+    """
+    first = layouts[0]
+    topo = first.topo
+    for k, lay in enumerate(layouts[1:], 1):
+        same = (lay.topo.bodies, lay.topo.parent, lay.topo.tree_joint, lay.topo.sign,
+                lay.topo.cut, lay.kind) == (topo.bodies, topo.parent, topo.tree_joint, topo.sign,
+                                            topo.cut, first.kind)
+        if not same:
+            raise ModelError(f"design {k} has a different topology from design 0",
+                             field="designs", fix="Vary numbers only, not bodies or joints")
+
+    def vec(xs):
+        return np.stack([np.asarray(x, float) for x in xs], axis=-1)[..., None]
+
+    def num(xs):
+        return np.asarray(xs, float)[:, None]
+
+    def per_body(name):
+        return tuple(vec([getattr(l, name)[i] for l in layouts]) for i in range(topo.n))
+
+    def per_body_num(name):
+        return tuple(num([getattr(l, name)[i] for l in layouts]) for i in range(topo.n))
+
+    cuts = tuple(Cut(c.joint, c.kind, c.a, c.b, vec([l.cuts[k].pa for l in layouts]),
+                     vec([l.cuts[k].pb for l in layouts]), vec([l.cuts[k].axis for l in layouts]),
+                     num([l.cuts[k].angle for l in layouts]))
+                 for k, c in enumerate(first.cuts))
+    points = tuple({name: vec([l.points[i][name] for l in layouts]) for name in first.points[i]}
+                   for i in range(topo.n))
+    return Layout(topo, first.kind, per_body("joint_point"), per_body("axis"),
+                  per_body_num("angle"), per_body("origin"), points, per_body("com"),
+                  per_body_num("mass"), per_body_num("inertia"), cuts,
+                  num([l.size for l in layouts]))
+
+
 @dataclass(frozen=True)
 class Pose:
     """Poses of all bodies, one entry per body in tree order (index 0 = ground).
@@ -256,11 +294,10 @@ def closure_bias(lay: Layout, pose: Pose, t: list, td: list) -> np.ndarray:
 
 def _scaled(lay: Layout, g: np.ndarray) -> np.ndarray:
     """Closure residual (2 n_cut, ...) made dimensionless (lengths / size), max over rows."""
-    scale = []
-    for c in lay.cuts:
-        scale += [lay.size, lay.size] if c.kind == REVOLUTE else [1.0, lay.size]
-    scale = np.array(scale).reshape((-1,) + (1,) * (g.ndim - 1))
-    return np.max(np.abs(g) / scale, axis=0)
+    rows = []
+    for k, c in enumerate(lay.cuts):
+        rows += [g[2 * k] / (lay.size if c.kind == REVOLUTE else 1.0), g[2 * k + 1] / lay.size]
+    return np.max(np.abs(np.stack(rows)), axis=0)
 
 
 def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
@@ -318,34 +355,47 @@ def _drivers_at(model: Model, lay: Layout, q_drv: np.ndarray) -> dict[str, float
             for k, i in enumerate(topo.driven)}
 
 
-def assemble(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0) -> np.ndarray:
-    """Assembled tree coordinates (n,) at the first sample, on the branch of the guess.
+def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
+             raise_error: bool = True) -> np.ndarray:
+    """Assembled tree coordinates (n, D) of D designs at the first sample, on the branch of
+    each design's ``[assembly]`` guess.
 
-    A damped Newton solve from the ``[assembly]`` guess; if it fails, 64 deterministic
-    restarts are solved at once and the converged one nearest the guess is kept.
+    A damped Newton solve from the guesses; designs where it fails get 64 deterministic
+    restarts, solved at once, and the converged one nearest the guess is kept. A design that
+    still does not close is NaN, or raises :class:`AssemblyError` if ``raise_error``.
     """
     topo = lay.topo
     dep = list(topo.dependent)
-    q0 = _guess(model, lay)
-    q0[list(topo.driven)] = q_drv0
+    # batch shape (D, 1): the trailing axis stands for time, so design arrays broadcast
+    q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]
+    q0[list(topo.driven)] = q_drv0[:, None, None]
     q, err = newton(lay, q0, maxiter=60, damped=True)
-    if err <= ACCEPT:
-        return q
-    rng = np.random.default_rng(0)
-    starts = np.tile(q0[:, None], (1, 64))
-    for i in dep:
-        starts[i] = (rng.uniform(-np.pi, np.pi, 64) if lay.kind[i] == REVOLUTE
-                     else rng.uniform(-2, 2, 64) * lay.size)
-    qs, errs = newton(lay, starts, maxiter=60, damped=True)
-    ok = errs <= ACCEPT
-    if not np.any(ok):
-        raise AssemblyError(
-            "the mechanism cannot be assembled: the loops do not close "
-            f"(closest relative residual {np.nanmin(np.append(errs, err)):.2e})",
-            file=model.source, time=t0, drivers=_drivers_at(model, lay, q_drv0),
-            fix="Check the link lengths and the [assembly] guess")
-    dist = np.sum(np.abs(wrap(qs[dep] - q0[dep, None])), axis=0)
-    return qs[:, np.argmin(np.where(ok, dist, np.inf))]
+    q0, q, err = q0[..., 0], q[..., 0], err[..., 0]
+    failed = ~(err <= ACCEPT)
+    if np.any(failed):
+        rng = np.random.default_rng(0)
+        starts = np.repeat(q0[..., None], 64, axis=-1)
+        for i in dep:
+            starts[i] = (rng.uniform(-np.pi, np.pi, 64) if lay.kind[i] == REVOLUTE
+                         else rng.uniform(-2, 2, 64) * lay.size)
+        qs, errs = newton(lay, starts, maxiter=60, damped=True)  # batch (D, 64)
+        ok = errs <= ACCEPT
+        dist = np.sum(np.abs(wrap(qs[dep] - q0[dep, :, None])), axis=0)
+        best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
+        pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
+        rescued = failed & np.any(ok, axis=-1)
+        q[:, rescued] = pick[:, rescued]
+        failed &= ~rescued
+        if np.any(failed):
+            if raise_error:
+                d = int(np.argmax(failed))
+                raise AssemblyError(
+                    "the mechanism cannot be assembled: the loops do not close"
+                    + (f" (design {d})" if len(models) > 1 else ""),
+                    file=models[d].source, time=t0, drivers=_drivers_at(models[d], lay, q_drv0),
+                    fix="Check the link lengths and the [assembly] guess")
+            q[:, failed] = np.nan
+    return q
 
 
 # ----------------------------------------------------------------------------------------------
@@ -395,6 +445,11 @@ class KinematicSolution:
     residual: np.ndarray
     valid: np.ndarray
 
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Batch shape of every per-sample array: ``(T,)``, or ``(D, T)`` for D designs."""
+        return self.pose.phi[0].shape
+
     # stacked, components-last views ------------------------------------------------------
     @cached_property
     def phi(self) -> np.ndarray:
@@ -419,7 +474,7 @@ class KinematicSolution:
     @cached_property
     def p(self) -> np.ndarray:
         """Joint-motion propagation vectors (T, n, 3), tree order (zeros for the ground)."""
-        shape = self.t.shape
+        shape = self.shape
         return np.stack([np.zeros(shape + (3,))] + [
             last(np.broadcast_to(x, (3,) + shape)) for x in self.motion[1:]], axis=-2)
 
@@ -459,7 +514,7 @@ def _travel_nodes(model: Model, lay: Layout, t: np.ndarray) -> np.ndarray:
     """Continuation times: the drivers move at most one step between consecutive nodes."""
     probe = np.linspace(t[0], t[-1], 4097)
     qp, _, _ = driver_values(model, probe)
-    step = np.array([STEP_ANGLE if lay.kind[i] == REVOLUTE else STEP_LENGTH * lay.size
+    step = np.array([STEP_ANGLE if lay.kind[i] == REVOLUTE else STEP_LENGTH * np.min(lay.size)
                      for i in lay.topo.driven])[:, None]
     moves = np.max(np.abs(np.diff(qp, axis=1)) / step, axis=0) if len(step) else np.zeros(4096)
     travel = np.concatenate(([0.0], np.cumsum(moves)))
@@ -477,74 +532,100 @@ def _rates(lay: Layout, J: np.ndarray, q_rates_drv: np.ndarray):
     return solve_small(J[:, dep - 1], rhs)
 
 
-def solve(model: Model, t, layout: Layout | None = None) -> KinematicSolution:
+def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
     """Positions, velocities and accelerations at the times ``t`` (T,) s.
 
     Assembles at ``t[0]`` on the branch of the ``[assembly]`` guess, follows the branch through
-    continuation nodes (driver travel at most ``STEP_ANGLE`` rad between nodes, a loop over
+    continuation nodes (driver travel at most ``STEP_ANGLE`` rad between nodes: a loop over
     driver steps, not samples), interpolates the nodes to every sample with cubic Hermite
     polynomials and corrects all samples at once with Newton's method. Samples where the loop
     does not close or ``J_dep`` is singular have ``valid = False`` and NaN values; nothing
     raises here except an assembly failure at ``t[0]``.
+
+    Parameters
+    ----------
+    model : Model or sequence of Model
+        One mechanism, or D designs of the same topology (their numbers may differ; drivers and
+        loads are those of the first). With designs every array gains a leading axis D, and a
+        design that cannot be assembled is NaN instead of raising.
+    t : array_like (T,)
+        Sample times, s.
     """
-    lay = layout or compile_layout(model)
+    models = [model] if isinstance(model, Model) else list(model)
+    lay = layout or (compile_layout(models[0]) if len(models) == 1 else
+                     stack_layouts([compile_layout(m) for m in models]))
     topo = lay.topo
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or len(t) < 1:
         raise ModelError("time samples must be a 1-D array with at least one sample",
                          fix="Pass t = numpy.linspace(0, duration, samples)")
     n, dep, drv = topo.n, list(topo.dependent), list(topo.driven)
-    qdrv, qddrv, qdddrv = driver_values(model, t)
-    q_start = assemble(model, lay, qdrv[:, 0], float(t[0]))
+    qdrv, qddrv, qdddrv = driver_values(models[0], t)
+    q_start = assemble(models, lay, qdrv[:, 0], float(t[0]), raise_error=len(models) == 1)
+    if len(models) == 1:
+        q_start = q_start[:, 0]
+        lay_q = np.zeros(0)
+    else:
+        lay_q = np.zeros((len(models), 1))  # the design axis, broadcast against (D, T)
     if dep and len(t) > 1:
-        nodes = _travel_nodes(model, lay, t)
-        Q, QD, last_ok = _continuation(model, lay, q_start, nodes)
+        nodes = _travel_nodes(models[0], lay, t)
+        if len(models) == 1:
+            Q, QD, last_ok = _continuation(models[0], lay, q_start, nodes)
+        else:  # nodes carry the batch shape (D, 1), like the assembly
+            Q, QD, last_ok = _continuation(models[0], lay, q_start[..., None], nodes)
+            Q, QD, last_ok = Q[..., 0, :], QD[..., 0, :], last_ok[..., 0]
         # cubic Hermite guess for every sample from the bracketing nodes
         j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, len(nodes) - 2)
         h = nodes[j + 1] - nodes[j]
         u = (t - nodes[j]) / h
         h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
         h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
-        q = h00 * Q[:, j] + h10 * QD[:, j] + h01 * Q[:, j + 1] + h11 * QD[:, j + 1]
-        q[drv] = qdrv
-        beyond = t > last_ok
-        q[:, beyond] = 0.0
+        q = h00 * Q[..., j] + h10 * QD[..., j] + h01 * Q[..., j + 1] + h11 * QD[..., j + 1]
+        q[drv] = qdrv[:, None] + lay_q if len(models) > 1 else qdrv
+        beyond = t > np.asarray(last_ok)[..., None]
+        q = np.where(beyond, 0.0, q)
         q, pose, p, J, err = _correct(lay, q)
         err = np.where(beyond, np.inf, err)
     else:
-        q = np.repeat(q_start[:, None], len(t), axis=1)
-        q[drv] = qdrv
+        q = np.repeat(q_start[..., None], len(t), axis=-1)
+        q[drv] = qdrv[:, None] + lay_q if len(models) > 1 else qdrv
         q, err = newton(lay, q)
         pose = forward_positions(lay, q)
         p = motion_vectors(lay, pose)
         J = closure_jacobian(lay, pose, p)
-    return _rates_and_accelerations(model, lay, t, q, pose, p, J, qddrv, qdddrv, err)
+    qd_drv, qdd_drv = (x[:, None] + lay_q if len(models) > 1 else x for x in (qddrv, qdddrv))
+    return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
 
 
 def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
-    """Follow the branch from ``q_start`` through the node times: a predictor ``q += qd dt``
-    and a Newton corrector per node. Returns node coordinates and rates (n, K) and the last
-    node time where the loops still close."""
+    """Follow the branch from ``q_start`` (n, ...) through the node times: a predictor
+    ``q += qd dt`` and a Newton corrector per node. Returns node coordinates and rates
+    (n, ..., K) and the last node time (...) where the loops still close."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
     nq, nqd, _ = driver_values(model, nodes)
-    Q = np.full((topo.n, len(nodes)), np.nan)
-    QD = np.full((topo.n, len(nodes)), np.nan)
+    Q = np.full(q_start.shape + (len(nodes),), np.nan)
+    QD = np.full(q_start.shape + (len(nodes),), np.nan)
     q = q_start.copy()
-    last_ok = nodes[0] - 1.0
+    last_ok = np.full(q_start.shape[1:], nodes[0] - 1.0)
+    alive = np.isfinite(q_start[0])
     for k in range(len(nodes)):
-        q[drv] = nq[:, k]
+        q[drv] = nq[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
         if k:
-            q[dep] = Q[dep, k - 1] + QD[dep, k - 1] * (nodes[k] - nodes[k - 1])
+            q[dep] = Q[dep, ..., k - 1] + QD[dep, ..., k - 1] * (nodes[k] - nodes[k - 1])
         q, err = newton(lay, q)
         pose = forward_positions(lay, q)
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
-        x, _ = _rates(lay, J, nqd[:, k])
-        if not err <= ACCEPT or not np.all(np.isfinite(x)):
-            break  # the branch ends here; samples beyond are flagged
-        Q[:, k], QD[:, k] = q, 0.0
-        QD[drv, k], QD[dep, k] = nqd[:, k], x
-        last_ok = nodes[k]
+        x, _ = _rates(lay, J, nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1)))
+        alive = alive & (err <= ACCEPT) & np.all(np.isfinite(x), axis=0)
+        if not np.any(alive):
+            break  # every branch ends here; samples beyond are flagged
+        Q[..., k] = np.where(alive, q, np.nan)
+        QD[..., k] = 0.0
+        QD[drv, ..., k] = nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
+        QD[dep, ..., k] = np.where(alive, x, np.nan)
+        last_ok = np.where(alive, nodes[k], last_ok)
+        q = np.where(alive, q, np.nan)
     return Q, QD, last_ok
 
 
@@ -561,7 +642,7 @@ def _correct(lay: Layout, q: np.ndarray):
     err = _scaled(lay, closure_residual(lay, pose))
     retry = ~(err <= ACCEPT)
     if np.any(retry):
-        q[:, retry], err[retry] = newton(lay, q[:, retry], maxiter=8)
+        q, err = newton(lay, q, maxiter=8)  # only samples above TOL move
         pose = forward_positions(lay, q)
     p = motion_vectors(lay, pose)
     return q, pose, p, closure_jacobian(lay, pose, p), err
@@ -573,7 +654,7 @@ def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
     # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
     qd = np.zeros(q.shape)
     qd[drv] = qd_drv
-    pivot = np.ones(t.shape)
+    pivot = np.ones(q.shape[1:])
     if dep:
         qd[dep], pivot = _rates(lay, J, qd_drv)
     tw = forward_twists(lay, pose, p, qd)

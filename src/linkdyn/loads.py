@@ -58,7 +58,7 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
     lay = kin.layout
     topo = lay.topo
     index = {name: k for k, name in enumerate(topo.bodies)}
-    shape = kin.t.shape
+    shape = kin.shape
     w = [np.zeros((3,) + shape) for _ in range(topo.n)]
     pe = np.zeros(shape)
     power = np.zeros(shape)

@@ -46,7 +46,7 @@ class Reactions:
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
     """Wrenches (3, T) of the cut-joint multipliers ``lam`` (2 n_cut, T) on every body about O_i."""
     lay = kin.layout
-    w = [np.zeros((3,) + kin.t.shape) for _ in range(lay.topo.n)]
+    w = [np.zeros((3,) + kin.shape) for _ in range(lay.topo.n)]
     for k, c in enumerate(lay.cuts):
         r_pa, r_pb, e_a = _cut_frames(lay, kin.pose, c)
         # S^T lam acts at the cut point on the second body, its opposite on the first

@@ -76,7 +76,7 @@ def newton_euler(kin: KinematicSolution, w_ext: list):
     """
     lay = kin.layout
     w_star = [np.zeros_like(w_ext[0])]
-    ke = np.zeros(kin.t.shape)
+    ke = np.zeros(kin.shape)
     for i in range(1, lay.topo.n):
         m = lay.mass[i]
         d = kin.pose.rotate(i, lay.com[i])
@@ -108,13 +108,13 @@ def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
     w_star, ke = newton_euler(kin, loads.wrenches)
     # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
     w_tilde = composite(kin, w_star)
-    Q = np.stack([np.zeros(kin.t.shape)] + [dot(kin.motion[i], w_tilde[i])
+    Q = np.stack([np.zeros(kin.shape)] + [dot(kin.motion[i], w_tilde[i])
                                             for i in range(1, topo.n)])
     # eq. (27): J_dep^T lam = Q_dep, then tau = Q_drv - J_drv^T lam
     J = kin.jacobian
     if len(dep):
         lam, pivot = solve_small(np.swapaxes(J[:, dep - 1], 0, 1), Q[dep])
     else:
-        lam, pivot = np.zeros((0,) + kin.t.shape), np.ones(kin.t.shape)
+        lam, pivot = np.zeros((0,) + kin.shape), np.ones(kin.shape)
     tau = Q[drv] - np.einsum("ij...,i...->j...", J[:, drv - 1], lam)
     return DynamicSolution(w_star, w_tilde, Q, last(lam), last(tau), ke, pivot)
