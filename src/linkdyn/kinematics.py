@@ -18,11 +18,12 @@ Every function works on arrays with any leading batch axes ``(...)``; the loops 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
 
+from . import dyads
 from . import joints as jk
 from .errors import AssemblyError, ModelError
 from .model import PRISMATIC, REVOLUTE, Model
@@ -72,6 +73,7 @@ class Layout:
     inertia: tuple[float, ...]
     cuts: tuple[Cut, ...]
     size: float
+    dyads: tuple | None = None  # closed-form plan (linkdyn.dyads), None: Newton's method
 
 
 def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
@@ -109,9 +111,10 @@ def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
     com = tuple(np.asarray(b.com, float) - origin[i] for i, b in enumerate(bodies))
     allpts = np.array([v for b in model.bodies for v in b.points.values()], float)
     size = float(np.max(np.ptp(allpts, axis=0))) if len(allpts) > 1 else 1.0
-    return Layout(topo, tuple(kind), tuple(joint_point), tuple(axis), tuple(angle), tuple(origin),
-                  points, com, tuple(float(b.mass) for b in bodies),
-                  tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0)
+    lay = Layout(topo, tuple(kind), tuple(joint_point), tuple(axis), tuple(angle), tuple(origin),
+                 points, com, tuple(float(b.mass) for b in bodies),
+                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0)
+    return replace(lay, dyads=dyads.plan(lay))
 
 
 def stack_layouts(layouts: list[Layout]) -> Layout:
@@ -149,7 +152,7 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
     return Layout(topo, first.kind, per_body("joint_point"), per_body("axis"),
                   per_body_num("angle"), per_body("origin"), points, per_body("com"),
                   per_body_num("mass"), per_body_num("inertia"), cuts,
-                  num([l.size for l in layouts]))
+                  num([l.size for l in layouts]), first.dyads)
 
 
 @dataclass(frozen=True)
@@ -202,7 +205,7 @@ def closure_residual(lay: Layout, pose: Pose) -> np.ndarray:
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
         out.append(jk.cut_residual(c.kind, c.angle, pose.phi[c.a], pose.phi[c.b], e_a, r_pa, r_pb))
-    return np.concatenate(out)
+    return np.concatenate(out) if out else np.zeros((0,) + pose.phi[0].shape)
 
 
 def motion_vectors(lay: Layout, pose: Pose) -> list:
@@ -231,7 +234,7 @@ def closure_jacobian(lay: Layout, pose: Pose, p: list) -> np.ndarray:
             x = side[k] * shift_twist(np.broadcast_to(p[k], (3,) + shape), r_pb - pose.r[k])
             cols.append(jk.cut_rows(c.kind, e_a, x))
         rows.append(np.stack(cols, axis=1))
-    return np.concatenate(rows)
+    return np.concatenate(rows) if rows else np.zeros((0, topo.n - 1) + shape)
 
 
 def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
@@ -285,7 +288,7 @@ def closure_bias(lay: Layout, pose: Pose, t: list, td: list) -> np.ndarray:
         ta, aa = _at_point(t[c.a], td[c.a], pose.r[c.a], r_pb, v_pb)
         out.append(jk.cut_rows(c.kind, e_a, ab - aa)
                    + jk.cut_rows_rate(c.kind, e_a, t[c.a][0], tb - ta))
-    return np.concatenate(out)
+    return np.concatenate(out) if out else np.zeros((0,) + t[0].shape[1:])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -297,6 +300,8 @@ def _scaled(lay: Layout, g: np.ndarray) -> np.ndarray:
     rows = []
     for k, c in enumerate(lay.cuts):
         rows += [g[2 * k] / (lay.size if c.kind == REVOLUTE else 1.0), g[2 * k + 1] / lay.size]
+    if not rows:
+        return np.zeros(g.shape[1:])
     return np.max(np.abs(np.stack(rows)), axis=0)
 
 
@@ -630,18 +635,23 @@ def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndar
 
 
 def _correct(lay: Layout, q: np.ndarray):
-    """One Newton step from a close guess for all samples at once, then more steps only for the
-    samples whose residual is still above ``ACCEPT``. Returns q, pose, p, J, err."""
+    """Close the loops of a close guess for all samples at once: in closed form when every loop
+    is an RRR dyad, else by one Newton step; then Newton steps for samples whose residual is
+    still above ``ACCEPT``. Returns q, pose, p, J, err."""
     dep = np.array(lay.topo.dependent)
-    pose = forward_positions(lay, q)
-    J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
-    dx, _ = solve_small(J[:, dep - 1], -closure_residual(lay, pose))
-    q = q.copy()
-    q[dep] += np.where(np.isfinite(dx), dx, 0.0)
-    pose = forward_positions(lay, q)
+    if lay.dyads is not None:
+        # every loop is an RRR dyad: close it exactly on the guess's branch
+        q, pose = dyads.solve(lay, lay.dyads, q, forward_positions)
+    else:
+        pose = forward_positions(lay, q)
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+        dx, _ = solve_small(J[:, dep - 1], -closure_residual(lay, pose))
+        q = q.copy()
+        q[dep] += np.where(np.isfinite(dx), dx, 0.0)
+        pose = forward_positions(lay, q)
     err = _scaled(lay, closure_residual(lay, pose))
     retry = ~(err <= ACCEPT)
-    if np.any(retry):
+    if np.any(retry & np.all(np.isfinite(q), axis=0)):
         q, err = newton(lay, q, maxiter=8)  # only samples above TOL move
         pose = forward_positions(lay, q)
     p = motion_vectors(lay, pose)

@@ -1,0 +1,124 @@
+"""Closed-form position analysis of loops that are RRR dyads.
+
+A loop closed at a revolute cut joint whose only unknown joints are two revolute joints, once
+the loops solved before it are known, is an RRR dyad: a triangle with two known vertices and
+two known side lengths. Its third vertex is the intersection of two circles, on the side of the
+line through the known vertices where the current guess lies (the assembly branch). The two
+unknown joint angles then follow as the rotations that carry the guess onto the solution.
+
+Two shapes occur along the spanning tree:
+
+- *split*: one unknown joint on each side of the cut. Known vertices: the two joints; the
+  third vertex: the cut point.
+- *chain*: both unknown joints on the same side. Known vertices: the upper joint and the cut
+  point on the other side; the third vertex: the lower joint.
+
+:func:`plan` orders the loops so each dyad only needs joints already solved; a mechanism that
+does not decompose this way (prismatic loops, Stephenson-type coupled loops) has no plan and
+uses Newton's method instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import REVOLUTE
+from .planar import cross, dot, perp, rotate
+
+
+@dataclass(frozen=True)
+class Dyad:
+    """One RRR dyad: cut index, the two unknown joints (body indices, ``upper`` nearer the
+    ground) and the shape: ``'split'``, or ``'chain'`` with ``side`` ('a' or 'b') carrying both."""
+
+    cut: int
+    upper: int
+    lower: int
+    shape: str
+    side: str = ""
+
+
+def plan(lay) -> tuple[Dyad, ...] | None:
+    """An order of dyads solving every loop in closed form, or None."""
+    topo = lay.topo
+    known = set(topo.driven)
+    todo = list(range(len(lay.cuts)))
+    out = []
+    while todo:
+        for k in todo:
+            c = lay.cuts[k]
+            if c.kind != REVOLUTE:
+                continue
+            on_a = {j for j in range(1, topo.n) if topo.ancestors[c.a, j] and not topo.ancestors[c.b, j]}
+            on_b = {j for j in range(1, topo.n) if topo.ancestors[c.b, j] and not topo.ancestors[c.a, j]}
+            unknown = sorted((on_a | on_b) - known)
+            if len(unknown) != 2 or any(lay.kind[j] != REVOLUTE for j in unknown):
+                continue
+            j1, j2 = unknown
+            if (j1 in on_a) != (j2 in on_a):
+                upper, lower = (j1, j2) if j1 in on_a else (j2, j1)
+                out.append(Dyad(k, upper, lower, "split"))
+            else:
+                upper, lower = (j1, j2) if topo.ancestors[j2, j1] else (j2, j1)
+                out.append(Dyad(k, upper, lower, "chain", "a" if j1 in on_a else "b"))
+            known.update(unknown)
+            todo.remove(k)
+            break
+        else:
+            return None
+    return tuple(out)
+
+
+def _circles(c1, r1, c2, r2, guess):
+    """Intersection of circles (c1, r1) and (c2, r2) on the side of c1->c2 where ``guess``
+    lies; NaN where they do not meet. Points (2, ...), radii (...)."""
+    d_vec = c2 - c1
+    d = np.sqrt(dot(d_vec, d_vec))
+    ex = d_vec / d
+    a = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
+    h2 = r1 ** 2 - a ** 2
+    with np.errstate(invalid="ignore"):
+        h = np.sqrt(np.where(h2 >= 0, h2, np.nan))
+    side = np.where(cross(ex, guess - c1) >= 0, 1.0, -1.0)
+    return c1 + a * ex + side * h * perp(ex)
+
+
+def _turn(u, v):
+    """Angle (...) that rotates direction u onto direction v, in (-pi, pi]."""
+    return np.arctan2(cross(u, v), dot(u, v))
+
+
+def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward) -> np.ndarray:
+    """Close every loop of ``q`` (n, ...) exactly, dyad by dyad, on the branch of ``q``.
+
+    ``forward(lay, q)`` gives the pose; it is re-evaluated after each dyad because later dyads
+    stand on the joints earlier ones moved.
+    """
+    q = np.array(q, dtype=float)
+    topo = lay.topo
+    pose = forward(lay, q)
+    for dy in dyads:
+        c = lay.cuts[dy.cut]
+        p_a, p_b = pose.point(c.a, c.pa), pose.point(c.b, c.pb)
+        x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
+        if dy.shape == "split":
+            # the cut point is the apex over the two unknown joints
+            p_up, p_low = (p_a, p_b) if topo.ancestors[c.a, dy.upper] else (p_b, p_a)
+            m = _circles(x1, np.sqrt(dot(p_up - x1, p_up - x1)), x2,
+                         np.sqrt(dot(p_low - x2, p_low - x2)), p_up)
+            d_up, d_low = _turn(p_up - x1, m - x1), _turn(p_low - x2, m - x2)
+        else:
+            # the lower joint is the apex over the upper joint and the fixed cut point
+            p_mov, p_fix = (p_a, p_b) if dy.side == "a" else (p_b, p_a)
+            m = _circles(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p_fix,
+                         np.sqrt(dot(p_mov - x2, p_mov - x2)), x2)
+            d_up = _turn(x2 - x1, m - x1)
+            p_mov = x1 + rotate(d_up, p_mov - x1)
+            d_low = _turn(p_mov - m, p_fix - m)
+        # q_i = phi_i - phi_parent (times the joint's sign): a rotation of body i's subtree
+        q[dy.upper] += topo.sign[dy.upper] * d_up
+        q[dy.lower] += topo.sign[dy.lower] * d_low
+        pose = forward(lay, q)
+    return q, pose
