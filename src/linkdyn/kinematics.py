@@ -515,16 +515,17 @@ def driver_values(model: Model, t: np.ndarray):
     return tuple(np.stack([np.broadcast_to(v[k], t.shape) for v in vals]) for k in range(3))
 
 
-def _travel_nodes(model: Model, lay: Layout, t: np.ndarray) -> np.ndarray:
-    """Continuation times: the drivers move at most one step between consecutive nodes."""
-    probe = np.linspace(t[0], t[-1], 4097)
+def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.ndarray:
+    """Continuation times from ``start`` to ``end`` (either order): the drivers move at most one
+    step between consecutive nodes."""
+    probe = np.linspace(start, end, 4097)
     qp, _, _ = driver_values(model, probe)
     step = np.array([STEP_ANGLE if lay.kind[i] == REVOLUTE else STEP_LENGTH * np.min(lay.size)
                      for i in lay.topo.driven])[:, None]
     moves = np.max(np.abs(np.diff(qp, axis=1)) / step, axis=0) if len(step) else np.zeros(4096)
     travel = np.concatenate(([0.0], np.cumsum(moves)))
     if not travel[-1] > 0:
-        return np.array([t[0], t[-1]])
+        return np.array([start, end])
     n = int(np.clip(np.ceil(travel[-1]) + 1, 2, 20000))
     return np.interp(np.linspace(0, travel[-1], n), travel, probe)
 
@@ -566,19 +567,20 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
                          fix="Pass t = numpy.linspace(0, duration, samples)")
     n, dep, drv = topo.n, list(topo.dependent), list(topo.driven)
     qdrv, qddrv, qdddrv = driver_values(models[0], t)
-    q_start = assemble(models, lay, qdrv[:, 0], float(t[0]), raise_error=len(models) == 1)
-    if len(models) == 1:
+    # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
+    # branch to the samples
+    q_start = assemble(models, lay, driver_values(models[0], np.zeros(1))[0][:, 0], 0.0,
+                       raise_error=len(models) == 1)
+    single = len(models) == 1
+    if single:
         q_start = q_start[:, 0]
-        lay_q = np.zeros(0)
-    else:
-        lay_q = np.zeros((len(models), 1))  # the design axis, broadcast against (D, T)
-    if dep and len(t) > 1:
-        nodes = _travel_nodes(models[0], lay, t)
-        if len(models) == 1:
-            Q, QD, last_ok = _continuation(models[0], lay, q_start, nodes)
-        else:  # nodes carry the batch shape (D, 1), like the assembly
-            Q, QD, last_ok = _continuation(models[0], lay, q_start[..., None], nodes)
-            Q, QD, last_ok = Q[..., 0, :], QD[..., 0, :], last_ok[..., 0]
+    lay_q = np.zeros(0) if single else np.zeros((len(models), 1))  # design axis vs (D, T)
+    lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
+    if dep and hi > lo:
+        nodes, Q, QD, reach = _follow(models[0], lay, q_start if single else q_start[..., None],
+                                      lo, hi)
+        if not single:
+            Q, QD, reach = Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
         # cubic Hermite guess for every sample from the bracketing nodes
         j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, len(nodes) - 2)
         h = nodes[j + 1] - nodes[j]
@@ -586,20 +588,45 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
         h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
         h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
         q = h00 * Q[..., j] + h10 * QD[..., j] + h01 * Q[..., j + 1] + h11 * QD[..., j + 1]
-        q[drv] = qdrv[:, None] + lay_q if len(models) > 1 else qdrv
-        beyond = t > np.asarray(last_ok)[..., None]
+        q[drv] = qdrv if single else qdrv[:, None] + lay_q
+        beyond = (t < reach[..., :1]) | (t > reach[..., 1:])
         q = np.where(beyond, 0.0, q)
         q, pose, p, J, err = _correct(lay, q)
         err = np.where(beyond, np.inf, err)
     else:
         q = np.repeat(q_start[..., None], len(t), axis=-1)
-        q[drv] = qdrv[:, None] + lay_q if len(models) > 1 else qdrv
+        q[drv] = qdrv if single else qdrv[:, None] + lay_q
         q, err = newton(lay, q)
         pose = forward_positions(lay, q)
         p = motion_vectors(lay, pose)
         J = closure_jacobian(lay, pose, p)
-    qd_drv, qdd_drv = (x[:, None] + lay_q if len(models) > 1 else x for x in (qddrv, qdddrv))
+    qd_drv, qdd_drv = (x if single else x[:, None] + lay_q for x in (qddrv, qdddrv))
     return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
+
+
+def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+    """Continuation from the assembly at t = 0 forwards to ``hi`` and backwards to ``lo``.
+
+    Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
+    interval ``reach`` (..., 2) over which each branch was followed."""
+    nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
+    for end in (hi, lo):
+        if end == 0.0:
+            reach.append(np.zeros(q0.shape[1:]))
+            continue
+        nd = _travel_nodes(model, lay, 0.0, end)
+        Qe, QDe, last = _continuation(model, lay, q0, nd)
+        reach.append(last)
+        if end < 0:
+            nd, Qe, QDe = nd[::-1], Qe[..., ::-1], QDe[..., ::-1]
+            nodes, Q, QD = [nd[:-1]] + nodes, [Qe[..., :-1]] + Q, [QDe[..., :-1]] + QD
+            QD[-1] = QDe[..., -1:] if QD[-1] is None else QD[-1]
+        else:
+            nodes, Q, QD = nodes + [nd[1:]], Q + [Qe[..., 1:]], QD + [QDe[..., 1:]]
+            QD[0 if lo == 0.0 else -2] = QDe[..., :1]
+    QD = [x for x in QD if x is not None]
+    return (np.concatenate(nodes), np.concatenate(Q, axis=-1), np.concatenate(QD, axis=-1),
+            np.stack([reach[1], reach[0]], axis=-1))
 
 
 def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
@@ -612,7 +639,7 @@ def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndar
     Q = np.full(q_start.shape + (len(nodes),), np.nan)
     QD = np.full(q_start.shape + (len(nodes),), np.nan)
     q = q_start.copy()
-    last_ok = np.full(q_start.shape[1:], nodes[0] - 1.0)
+    last_ok = np.full(q_start.shape[1:], np.nan)
     alive = np.isfinite(q_start[0])
     for k in range(len(nodes)):
         q[drv] = nq[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
