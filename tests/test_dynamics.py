@@ -1,0 +1,893 @@
+"""Inverse dynamics and joint reactions against independent computations.
+
+Every check compares linkdyn's recursive DeNOC results (``linkdyn.analysis.analyze``) with a
+computation that shares none of its recursions:
+
+a. the slow explicit-matrix reference ``linkdyn.dynamics.dense`` (eq. 27 with N_l, N_d, M, J
+   formed as matrices; reactions from a stacked wrench balance);
+b. a simultaneous Newton–Euler solve written here: every joint reaction and driver effort
+   unknown at once, three equations per moving body about its mass centre, mass-centre
+   accelerations computed here from the body's angle, angular velocity and acceleration and the
+   acceleration of one point; applied loads computed here too;
+c. power balance: driver power + power of the non-conservative loads = d(KE + PE)/dt by a
+   five-point (Richardson) finite difference in time;
+d. statics by virtual work, virtual displacements by finite differences of positions;
+e. action = reaction (every joint's connect order reversed) and each body's wrench balance with
+   the reported reactions and efforts;
+f. property-based random Grashof crank-rockers;
+g. batch equals loop.
+
+Tolerances are relative to each quantity's peak over the samples (scale-aware).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from linkdyn.analysis import analyze
+from linkdyn.dynamics import dense
+from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
+from linkdyn.motion import ConstantSpeed, ExpressionMotion
+
+MM = 1e-3
+DEG = math.pi / 180
+RPM = 2 * math.pi / 60
+RTOL = 1e-9
+
+# ----------------------------------------------------------------------------------------------
+# model builders (SI); geometry in mm, inertia about the mass centre in kg mm^2
+
+
+def body(name, points, mass=0.0, com=(0.0, 0.0), inertia=0.0):
+    return Body(name, {k: np.array(v, float) * MM for k, v in points.items()}, float(mass),
+                np.array(com, float) * MM, inertia * 1e-6)
+
+
+def rev(name, a, b):
+    (ba, pa), (bb, pb) = a.split("."), b.split(".")
+    return Joint(name, REVOLUTE, ba, pa, bb, pb)
+
+
+def pri(name, a, b, axis=(1.0, 0.0), angle=0.0):
+    (ba, pa), (bb, pb) = a.split("."), b.split(".")
+    return Joint(name, PRISMATIC, ba, pa, bb, pb, np.array(axis, float), float(angle))
+
+
+def force(body_, point, fx, fy, wx=0.0):
+    """Force (N, global) ``[fx + 0.3 fx sin(wx t), fy]`` at ``body.point``."""
+    return Load("force", body_, point,
+                value=lambda t: np.stack(np.broadcast_arrays(fx + 0.3 * fx * np.sin(wx * t), fy),
+                                         axis=-1))
+
+
+def torque(body_, value, wt=0.0):
+    return Load("torque", body_, value=lambda t: value * (1.0 + 0.5 * np.sin(wt * np.asarray(t))))
+
+
+def spring(b1, p1, b2, p2, k, l0):
+    return Load("spring", b1, p1, body2=b2, point2=p2, stiffness=k, free_length=l0)
+
+
+def damper(b1, p1, b2, p2, c):
+    return Load("damper", b1, p1, body2=b2, point2=p2, damping=c)
+
+
+GRAVITY = np.array([0.7, -9.81])
+
+
+def hoeken(loaded=False):
+    """The seed paper's Hoeken four-bar (Table 1; table inertias are about O_i), cut at J4."""
+    bodies = (
+        body("ground", {"O1": (0, 0), "O4": (89.5, 0), "S": (200, 150)}),
+        body("crank", {"O1": (0, 0), "O2": (38.1, 0)}, 1.5, (19.05, 0), 725.80 - 1.5 * 19.05**2),
+        body("coupler", {"O2": (0, 0), "O3": (115.2, 0), "P": (230.4, 0)}, 5.0, (115.2, 0),
+             88473.60 - 5.0 * 115.2**2),
+        body("rocker", {"O3": (0, 0), "O4": (115.2, 0)}, 3.0, (57.6, 0),
+             13271.76 - 3.0 * 57.6**2),
+    )
+    joints = (rev("J1", "ground.O1", "crank.O1"), rev("J2", "crank.O2", "coupler.O2"),
+              rev("J3", "coupler.O3", "rocker.O3"), rev("J4", "ground.O4", "rocker.O4"))
+    loads = ()
+    if loaded:
+        loads = (force("coupler", "P", -20.0, 35.0, 2.0), torque("rocker", 0.5, 3.0),
+                 spring("coupler", "P", "ground", "S", 400.0, 0.1),
+                 damper("crank", "O2", "ground", "O4", 2.0))
+    return Model("hoeken" + ("-loaded" if loaded else ""), bodies, joints,
+                 (Driver("J1", ConstantSpeed(45 * RPM)),), loads,
+                 GRAVITY if loaded else np.zeros(2),
+                 assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG, "rocker": -77.12 * DEG},
+                 cut=("J4",))
+
+
+def slider_crank(cut=None):
+    """Offset slider-crank (prismatic to the ground), gas load, damper, gravity."""
+    bodies = (
+        body("ground", {"O": (0, 0), "G": (0, 20)}),
+        body("crank", {"O": (0, 0), "A": (50, 0)}, 0.3, (25, 3), 62.5),
+        body("rod", {"A": (0, 0), "B": (180, 0)}, 0.6, (90, -4), 1620.0),
+        body("slider", {"B": (0, 0), "F": (20, 0)}, 0.8, (5, 3), 133.33),
+    )
+    joints = (rev("J1", "ground.O", "crank.O"), rev("J2", "crank.A", "rod.A"),
+              rev("J3", "rod.B", "slider.B"), pri("J4", "ground.G", "slider.B"))
+    loads = (force("slider", "F", -200.0, 0.0, 31.4), damper("slider", "B", "ground", "O", 5.0))
+    return Model("slider-crank", bodies, joints, (Driver("J1", ConstantSpeed(300 * RPM)),),
+                 loads, GRAVITY, assembly_phi={"crank": 0.0, "rod": 6.38 * DEG, "slider": 0.0},
+                 assembly_q={"J4": 0.2289}, cut=cut)
+
+
+def inverted_slider_crank(cut=None):
+    """Crank and slotted lever; the block slides along a slot offset 10 mm from the lever's
+    pivot line and sits at 0.2 rad to the lever (prismatic joint between two moving bodies)."""
+    bodies = (
+        body("ground", {"O2": (0, 0), "O4": (0, -150)}),
+        body("crank", {"O2": (0, 0), "A": (75, 0)}, 0.4, (37.5, 2), 187.5),
+        body("block", {"A": (0, 0)}, 0.2, (3, -2), 18.75),
+        body("lever", {"O4": (0, 0), "S": (0, 10), "T": (300, 0)}, 1.2, (150, 5), 9000.0),
+    )
+    joints = (rev("J1", "ground.O2", "crank.O2"), rev("J2", "crank.A", "block.A"),
+              pri("J3", "lever.S", "block.A", (1.0, 0.0), 0.2),
+              rev("J4", "ground.O4", "lever.O4"))
+    loads = (force("lever", "T", -30.0, 10.0, 5.0), torque("lever", -2.0, 2.0))
+    return Model("inverted slider-crank", bodies, joints,
+                 (Driver("J1", ConstantSpeed(60 * RPM, 0.3)),), loads, GRAVITY,
+                 assembly_phi={"crank": 0.3, "block": 1.2, "lever": 1.0},
+                 assembly_q={"J3": 0.17}, cut=cut)
+
+
+def boom(offset=0.0):
+    """Hydraulic-cylinder-driven boom: the driven joint is a prismatic joint between two moving
+    bodies (barrel and rod); ``offset`` (mm) moves the rod's line off the barrel's pivot. The
+    cylinder's length 0.52..0.68 m swings the 0.3 m boom arm between about 66 and 103 deg, far
+    from the dead centres at 0.2 and 0.8 m."""
+    bodies = (
+        body("ground", {"C0": (0, 0), "B0": (500, 0)}),
+        body("barrel", {"C0": (0, 0), "Y": (0, offset)}, 2.0, (150, 0), 15000.0),
+        body("rod", {"R": (0, 0)}, 1.0, (-120, 2), 5000.0),
+        body("boom", {"B0": (0, 0), "R": (300, 0), "tip": (800, 0)}, 6.0, (350, 20), 3.0e5),
+    )
+    joints = (rev("J1", "ground.C0", "barrel.C0"), pri("J2", "barrel.Y", "rod.R"),
+              rev("J3", "rod.R", "boom.R"), rev("J4", "ground.B0", "boom.B0"))
+    loads = (force("boom", "tip", 5.0, -50.0, 1.0),)
+    return Model("boom", bodies, joints,
+                 (Driver("J2", ExpressionMotion("0.6 + 0.08*sin(2*t)")),), loads, GRAVITY,
+                 assembly_phi={"barrel": 30 * DEG, "rod": 30 * DEG, "boom": 86 * DEG},
+                 assembly_q={"J2": 0.6})
+
+
+def stephenson():
+    """Stephenson-III six-bar (two loops), loads on the output."""
+    bodies = (
+        body("ground", {"O2": (0, 0), "O4": (90, 0), "O6": (40, -60)}),
+        body("crank", {"O2": (0, 0), "A": (25, 0)}, 0.15, (12.5, 0), 7.81),
+        body("coupler", {"A": (0, 0), "B": (80, 0), "E": (40, 40)}, 0.6, (40, 10), 420.0),
+        body("rocker", {"O4": (0, 0), "B": (80, 0)}, 0.35, (40, 0), 186.67),
+        body("link5", {"E": (0, 0), "F": (120, 0)}, 0.45, (60, 0), 540.0),
+        body("output", {"O6": (0, 0), "F": (40, 0), "T": (70, 0)}, 0.3, (35, 0), 122.5),
+    )
+    joints = (rev("J1", "ground.O2", "crank.O2"), rev("J2", "crank.A", "coupler.A"),
+              rev("J3", "coupler.B", "rocker.B"), rev("J4", "ground.O4", "rocker.O4"),
+              rev("J5", "coupler.E", "link5.E"), rev("J6", "link5.F", "output.F"),
+              rev("J7", "ground.O6", "output.O6"))
+    loads = (force("output", "T", 3.0, -4.0, 6.0), torque("rocker", 0.2, 4.0),
+             spring("link5", "F", "ground", "O2", 50.0, 0.05))
+    return Model("stephenson", bodies, joints, (Driver("J1", ConstantSpeed(60 * RPM)),), loads,
+                 GRAVITY,
+                 assembly_phi={"crank": 0.0, "coupler": 66.03 * DEG, "rocker": 113.97 * DEG,
+                               "link5": -91.94 * DEG, "output": -169.73 * DEG})
+
+
+def watt2():
+    """Watt-II six-bar (two four-bar loops in series)."""
+    bodies = (
+        body("ground", {"O2": (0, 0), "O4": (100, 0), "O6": (160, -20)}),
+        body("crank", {"O2": (0, 0), "A": (30, 0)}, 0.2, (15, 0), 15.0),
+        body("coupler1", {"A": (0, 0), "B": (90, 0)}, 0.4, (45, 0), 270.0),
+        body("rocker1", {"O4": (0, 0), "B": (80, 0), "C": (45, -53.62)}, 0.5, (31.25, -13.41),
+             363.6),
+        body("coupler2", {"C": (0, 0), "D": (80, 0)}, 0.35, (40, 0), 186.67),
+        body("output", {"O6": (0, 0), "D": (40, 0), "T": (100, 0)}, 0.3, (50, 0), 250.0),
+    )
+    joints = (rev("J1", "ground.O2", "crank.O2"), rev("J2", "crank.A", "coupler1.A"),
+              rev("J3", "coupler1.B", "rocker1.B"), rev("J4", "ground.O4", "rocker1.O4"),
+              rev("J5", "rocker1.C", "coupler2.C"), rev("J6", "coupler2.D", "output.D"),
+              rev("J7", "ground.O6", "output.O6"))
+    loads = (force("output", "T", 0.0, -6.0, 0.0), damper("output", "T", "ground", "O4", 0.5))
+    return Model("watt2", bodies, joints, (Driver("J1", ConstantSpeed(60 * RPM)),), loads,
+                 GRAVITY,
+                 assembly_phi={"crank": 0.0, "coupler1": 58.41 * DEG, "rocker1": 106.60 * DEG,
+                               "coupler2": -46.00 * DEG, "output": 31.49 * DEG})
+
+
+def five_bar():
+    """Two-driver five-bar; the second driven joint and the distal pin are declared with the
+    child body first (``connect = [child, parent]``)."""
+    bodies = (
+        body("ground", {"A": (0, 0), "E": (200, 0)}),
+        body("link1", {"A": (0, 0), "B": (100, 0)}, 0.3, (50, 5), 250.0),
+        body("link2", {"B": (0, 0), "C": (150, 0)}, 0.4, (75, 0), 750.0),
+        body("link3", {"D": (0, 0), "C": (150, 0)}, 0.4, (70, -3), 750.0),
+        body("link4", {"E": (0, 0), "D": (100, 0)}, 0.3, (50, 0), 250.0),
+    )
+    joints = (rev("J1", "ground.A", "link1.A"), rev("J2", "link1.B", "link2.B"),
+              rev("J3", "link3.C", "link2.C"), rev("J4", "link4.D", "link3.D"),
+              rev("J5", "link4.E", "ground.E"))
+    loads = (force("link2", "C", 4.0, -10.0, 3.0),
+             spring("link1", "B", "link4", "D", 200.0, 0.08))
+    drivers = (Driver("J1", ExpressionMotion("1.2 + 0.3*sin(3*t)")),
+               Driver("J5", ExpressionMotion("-(1.9 + 0.3*sin(2*t + 0.5))")))
+    return Model("five-bar", bodies, joints, drivers, loads, GRAVITY,
+                 assembly_phi={"link1": 1.2, "link2": 67 * DEG, "link3": 113 * DEG,
+                               "link4": 2.04})
+
+
+MODELS = {
+    "hoeken": hoeken,
+    "hoeken-loaded": lambda: hoeken(True),
+    "slider-crank": slider_crank,
+    "slider-crank-cut-J3": lambda: slider_crank(("J3",)),
+    "inverted-slider-crank": inverted_slider_crank,
+    "inverted-slider-crank-cut-prismatic": lambda: inverted_slider_crank(("J3",)),
+    "boom": boom,
+    "boom-offset": lambda: boom(20.0),
+    "stephenson": stephenson,
+    "watt2": watt2,
+    "five-bar": five_bar,
+}
+
+
+def times(model, n=17):
+    """n samples over a cycle of the (first) driver, or 1.3 s for expression drivers."""
+    m = model.drivers[0].motion
+    span = 2 * math.pi / abs(m.speed) if isinstance(m, ConstantSpeed) and m.speed else 1.3
+    return np.linspace(0.0, span, n)
+
+
+_SOLUTIONS: dict = {}
+
+
+def solution(name):
+    """Cached solution of a named model over ``times``."""
+    if name not in _SOLUTIONS:
+        model = MODELS[name]()
+        _SOLUTIONS[name] = analyze(model, times(model))
+    return _SOLUTIONS[name]
+
+
+# ----------------------------------------------------------------------------------------------
+# helpers: relative differences, planar algebra
+
+
+def perp(a):
+    return np.stack((-a[..., 1], a[..., 0]), axis=-1)
+
+
+def cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def rot(phi, v):
+    """Rotate local vector(s) v (2,) by angles phi (...) -> (..., 2)."""
+    c, s = np.cos(phi), np.sin(phi)
+    return np.stack((c * v[0] - s * v[1], s * v[0] + c * v[1]), axis=-1)
+
+
+def rel_diff(actual, expected, scale=None):
+    """max |actual - expected| / peak |expected| (or ``scale``)."""
+    actual, expected = np.asarray(actual, float), np.asarray(expected, float)
+    assert actual.shape == expected.shape, (actual.shape, expected.shape)
+    assert np.all(np.isfinite(actual)) and np.all(np.isfinite(expected))
+    peak = float(np.max(np.abs(expected))) if scale is None else float(scale)
+    err = float(np.max(np.abs(actual - expected))) if actual.size else 0.0
+    return err / peak if peak > 0 else err
+
+
+def check(actual, expected, rtol=RTOL, scale=None, what=""):
+    r = rel_diff(actual, expected, scale)
+    assert r <= rtol, f"{what}: relative difference {r:.3e} > {rtol:.1e}"
+    return r
+
+
+def force_scale(reactions_force):
+    """A model-wide force scale: the largest reaction over all joints and samples, N."""
+    return float(np.max(np.abs(reactions_force)))
+
+
+def check_reactions(force_a, moment_a, force_b, moment_b, model, size, rtol=RTOL, what=""):
+    """Per joint: force relative to that joint's peak (floored at 1e-6 of the model's largest
+    reaction); prismatic moment relative to its peak (floored at that force scale x size);
+    revolute moments are ~0 in both and compared on the force-scale x size."""
+    fs = force_scale(force_b)
+    worst = 0.0
+    for k, jt in enumerate(model.joints):
+        peak = max(np.max(np.abs(force_b[..., k, :])), 1e-6 * fs)
+        worst = max(worst, check(force_a[..., k, :], force_b[..., k, :], rtol, peak,
+                                 f"{what} force {jt.name}"))
+        mpeak = np.max(np.abs(moment_b[..., k])) if jt.kind == PRISMATIC else 0.0
+        worst = max(worst, check(moment_a[..., k], moment_b[..., k], rtol,
+                                 max(mpeak, fs * size), f"{what} moment {jt.name}"))
+    return worst
+
+
+def size_of(model):
+    pts = np.array([p for b in model.bodies for p in b.points.values()])
+    return float(np.max(np.ptp(pts, axis=0)))
+
+
+# ----------------------------------------------------------------------------------------------
+# independent mechanics: body states, applied loads, energies, Newton–Euler solve
+
+
+@dataclasses.dataclass
+class BodyState:
+    phi: np.ndarray      # (T,)
+    w: np.ndarray        # (T,)
+    al: np.ndarray       # (T,)
+    rC: np.ndarray       # (T, 2) mass centre
+    vC: np.ndarray
+    aC: np.ndarray
+    rO: np.ndarray       # reference point (the body's tree joint point) and its velocity
+    vO: np.ndarray
+
+
+def body_states(sol):
+    """Mass-centre position/velocity/acceleration of every moving body, computed here from the
+    body's angle, angular velocity and acceleration and the motion of one point (its O_i)."""
+    kin, model = sol.kin, sol.model
+    out = {}
+    for b in model.moving_bodies:
+        i = sol.body_index(b.name)
+        phi, w, al = sol.phi(b.name), sol.omega(b.name), sol.alpha(b.name)
+        pname, plocal = next(iter(b.points.items()))
+        rC = sol.point(b.name, pname) + rot(phi, np.asarray(b.com) - plocal)
+        rO, vO, aO = kin.r[..., i, :], kin.tw[..., i, 1:], kin.twd[..., i, 1:]
+        d = rC - rO
+        vC = vO + w[..., None] * perp(d)
+        aC = aO + al[..., None] * perp(d) - (w**2)[..., None] * d
+        out[b.name] = BodyState(phi, w, al, rC, vC, aC, rO, vO)
+    return out
+
+
+def point_vel(st_, r):
+    return st_.vO + st_.w[..., None] * perp(r - st_.rO)
+
+
+def applied(sol, states):
+    """Applied loads computed here: per moving body (force (T,2), moment about C (T,)), the
+    potential energy (T,) and the power of the non-conservative loads (T,)."""
+    model, t = sol.model, sol.t
+    T = t.shape
+    F = {b: np.zeros(T + (2,)) for b in states}
+    Mc = {b: np.zeros(T) for b in states}
+    pe, power = np.zeros(T), np.zeros(T)
+    g = np.asarray(model.gravity, float)
+
+    def add(b, f, r):
+        if b in states:
+            F[b] += f
+            Mc[b] += cross(r - states[b].rC, f)
+
+    for b in model.moving_bodies:
+        s = states[b.name]
+        F[b.name] += b.mass * g
+        pe -= b.mass * (s.rC @ g)
+    for ld in model.loads:
+        if ld.kind == "force":
+            r = sol.point(ld.body, ld.point)
+            f = np.broadcast_to(ld.value(t), T + (2,))
+            add(ld.body, f, r)
+            if ld.body in states:
+                power += np.sum(f * point_vel(states[ld.body], r), -1)
+        elif ld.kind == "torque":
+            tq = np.broadcast_to(ld.value(t), T)
+            if ld.body in states:
+                Mc[ld.body] += tq
+                power += tq * states[ld.body].w
+        else:
+            r1, r2 = sol.point(ld.body, ld.point), sol.point(ld.body2, ld.point2)
+            v1 = point_vel(states[ld.body], r1) if ld.body in states else np.zeros(T + (2,))
+            v2 = point_vel(states[ld.body2], r2) if ld.body2 in states else np.zeros(T + (2,))
+            d = r2 - r1
+            length = np.linalg.norm(d, axis=-1)
+            u = d / length[..., None]
+            if ld.kind == "spring":
+                tension = ld.stiffness * (length - ld.free_length)
+                pe += 0.5 * ld.stiffness * (length - ld.free_length) ** 2
+            else:
+                rate = np.sum(u * (v2 - v1), -1)
+                tension = ld.damping * rate
+                power -= ld.damping * rate**2
+            add(ld.body, tension[..., None] * u, r1)
+            add(ld.body2, -tension[..., None] * u, r2)
+    return F, Mc, pe, power
+
+
+def kinetic_energy(sol, states):
+    return sum(0.5 * b.mass * np.sum(states[b.name].vC ** 2, -1)
+               + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
+
+
+def ne_system(sol):
+    """The simultaneous Newton–Euler equations ``K x = rhs`` of all moving bodies.
+
+    Unknowns x: per joint (model order) two — revolute ``[Fx, Fy]`` by the first body on the
+    second; prismatic ``[F_n, M]`` (normal force along n = perp(axis), moment by the first on
+    the second about the second body's point) — then one effort per driver (revolute: a moment
+    on the second body; prismatic: a force along the axis through the second body's point).
+    Rows per moving body: ``sum F = m a_C`` (x, y) and ``sum M_C = I_C alpha``.
+    Returns K (T, 3 nb, 2 nj + nd), rhs (T, 3 nb), the axis normals, the body states.
+    """
+    model = sol.model
+    states = body_states(sol)
+    names = [b.name for b in model.moving_bodies]
+    row = {b: 3 * k for k, b in enumerate(names)}
+    T = sol.t.shape
+    nj, nd = len(model.joints), len(model.drivers)
+    K = np.zeros(T + (3 * len(names), 2 * nj + nd))
+    rhs = np.zeros(T + (3 * len(names),))
+
+    def put(b, col, f, x, mz=0.0):
+        if b not in row:
+            return
+        r0 = row[b]
+        K[..., r0, col] += f[..., 0]
+        K[..., r0 + 1, col] += f[..., 1]
+        K[..., r0 + 2, col] += cross(x - states[b].rC, f) + mz
+
+    zero = np.zeros(T + (2,))
+    normals = {}
+    for k, jt in enumerate(model.joints):
+        x = sol.point(jt.body_b, jt.point_b)
+        if jt.kind == REVOLUTE:
+            for c, f in ((2 * k, np.array([1.0, 0.0])), (2 * k + 1, np.array([0.0, 1.0]))):
+                f = np.broadcast_to(f, T + (2,))
+                put(jt.body_b, c, f, x)
+                put(jt.body_a, c, -f, x)
+        else:
+            phi_a = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(T)
+            e = rot(phi_a, np.asarray(jt.axis, float) / np.linalg.norm(jt.axis))
+            n = perp(e)
+            normals[jt.name] = (e, n)
+            put(jt.body_b, 2 * k, n, x)
+            put(jt.body_a, 2 * k, -n, x)
+            put(jt.body_b, 2 * k + 1, zero, x, 1.0)
+            put(jt.body_a, 2 * k + 1, zero, x, -1.0)
+    for d, drv in enumerate(model.drivers):
+        jt = model.joint(drv.joint)
+        c = 2 * nj + d
+        x = sol.point(jt.body_b, jt.point_b)
+        if jt.kind == REVOLUTE:
+            put(jt.body_b, c, zero, x, 1.0)
+            put(jt.body_a, c, zero, x, -1.0)
+        else:
+            e = normals[jt.name][0]
+            put(jt.body_b, c, e, x)
+            put(jt.body_a, c, -e, x)
+    F, Mc, _, _ = applied(sol, states)
+    for b in model.moving_bodies:
+        s, r0 = states[b.name], row[b.name]
+        rhs[..., r0:r0 + 2] = b.mass * s.aC - F[b.name]
+        rhs[..., r0 + 2] = b.inertia * s.al - Mc[b.name]
+    return K, rhs, normals, states
+
+
+def ne_solve(sol):
+    """Reactions (T, nj, 2), moments (T, nj) and efforts (T, nd) from the simultaneous solve."""
+    model = sol.model
+    K, rhs, normals, _ = ne_system(sol)
+    assert K.shape[-1] == K.shape[-2], "mobility != drivers"
+    x = np.linalg.solve(K, rhs[..., None])[..., 0]
+    nj = len(model.joints)
+    force = np.zeros(sol.t.shape + (nj, 2))
+    moment = np.zeros(sol.t.shape + (nj,))
+    for k, jt in enumerate(model.joints):
+        if jt.kind == REVOLUTE:
+            force[..., k, :] = x[..., 2 * k:2 * k + 2]
+        else:
+            force[..., k, :] = x[..., 2 * k, None] * normals[jt.name][1]
+            moment[..., k] = x[..., 2 * k + 1]
+    return force, moment, x[..., 2 * nj:]
+
+
+def reported_unknowns(sol):
+    """The NE unknown vector assembled from linkdyn's reported reactions and efforts."""
+    model = sol.model
+    _, _, normals, _ = ne_system(sol)
+    parts = []
+    for k, jt in enumerate(model.joints):
+        f = sol.reactions.force[..., k, :]
+        if jt.kind == REVOLUTE:
+            parts.append(f)
+        else:
+            n = normals[jt.name][1]
+            parts.append(np.stack((np.sum(f * n, -1), sol.reactions.moment[..., k]), -1))
+    parts.append(sol.dyn.tau)
+    return np.concatenate(parts, axis=-1)
+
+
+# ----------------------------------------------------------------------------------------------
+# a. recursive vs dense explicit matrices
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_recursive_matches_dense(name):
+    sol = solution(name)
+    model, kin = sol.model, sol.kin
+    assert np.all(sol.valid)
+    d = dense.solve(model, kin, sol.loads.w_ext)
+    # N qd reproduces the twists and G^T N the closure Jacobian of the kinematics (eqs. 8, 20-24)
+    check(d.twist, kin.tw, what="N qd vs twists")
+    check(d.J, kin.J, 1e-12, scale=max(np.max(np.abs(kin.J)), 1.0), what="J")
+    for k, drv in enumerate(model.drivers):
+        check(sol.dyn.tau[..., k], d.tau[..., k], what=f"tau {drv.joint}")
+    fs = force_scale(d.force)
+    for k, c in enumerate(kin.layout.topo.cut):
+        # a prismatic cut's moment multiplier is a moment: scale it by the force scale x size
+        check(sol.dyn.lam[..., 2 * k:2 * k + 2], d.lam[..., 2 * k:2 * k + 2],
+              scale=max(np.max(np.abs(d.lam[..., 2 * k:2 * k + 2])), fs * size_of(model)),
+              what=f"lambda at {model.joints[c].name}")
+    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model,
+                    size_of(model), what="recursive vs dense")
+
+
+def test_hoeken_seed_example_is_the_paper_setup():
+    """The Hoeken model really is the seed example: 1 DOF, cut at J4, no gravity, 45 rpm."""
+    sol = solution("hoeken")
+    topo = sol.kin.layout.topo
+    assert [sol.model.joints[j].name for j in topo.cut] == ["J4"]
+    assert topo.mobility == 1
+    np.testing.assert_allclose(sol.kin.qd[:, 0], 4.71238898, rtol=1e-8)
+    # rocker joint angle at t = 0 is -154.24 deg relative to the coupler (Table 1)
+    np.testing.assert_allclose(sol.kin.q[0, 2], -154.24 * DEG, atol=2e-3)
+
+
+EXAMPLES = sorted((Path(__file__).parents[1] / "src" / "linkdyn" / "examples").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=[p.stem for p in EXAMPLES])
+def test_bundled_examples_recursive_matches_dense(path):
+    from linkdyn.io import load_model
+
+    model = load_model(path)
+    sol = analyze(model, times(model, 9))
+    d = dense.solve(model, sol.kin, sol.loads.w_ext)
+    check(sol.dyn.tau, d.tau, what="tau")
+    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model,
+                    size_of(model), what=path.stem)
+
+
+# ----------------------------------------------------------------------------------------------
+# b. simultaneous Newton–Euler solve
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_recursive_matches_simultaneous_newton_euler(name):
+    sol = solution(name)
+    model = sol.model
+    force, moment, tau = ne_solve(sol)
+    for k, drv in enumerate(model.drivers):
+        check(sol.dyn.tau[..., k], tau[..., k], what=f"tau {drv.joint}")
+    check_reactions(sol.reactions.force, sol.reactions.moment, force, moment, model,
+                    size_of(model), what="recursive vs Newton–Euler")
+
+
+def test_newton_euler_reference_is_not_trivially_satisfied():
+    """Guard: a wrong effort (here 1 % off) must fail the Newton–Euler comparison."""
+    sol = solution("hoeken-loaded")
+    _, _, tau = ne_solve(sol)
+    assert rel_diff(1.01 * sol.dyn.tau, tau) > 1e-3
+
+
+# ----------------------------------------------------------------------------------------------
+# c. power balance
+
+
+def five_point_derivative(f, h):
+    """d/dt at the centre of samples (..., 5) at offsets -2h, -h, 0, h, 2h (O(h^4))."""
+    return (f[..., 0] - 8 * f[..., 1] + 8 * f[..., 3] - f[..., 4]) / (12 * h)
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_power_balance(name):
+    model = MODELS[name]()
+    centres = times(model, 9)[:-1] + 0.0123
+    m0 = model.drivers[0].motion
+    speed = max(abs(m0.speed) if isinstance(m0, ConstantSpeed) else 3.0, 1.0)
+    h = 2e-3 / speed
+    offsets = np.arange(-2, 3) * h
+    t = (centres[:, None] + offsets).reshape(-1)
+    sol = analyze(model, t)
+    states = body_states(sol)
+    _, _, pe, p_nc = applied(sol, states)
+    ke = kinetic_energy(sol, states)
+    # the solver's own energy terms agree with the ones computed here
+    check(sol.dyn.kinetic_energy, ke, 1e-12, what="kinetic energy")
+    if sol.loads.has_potential:
+        check(sol.loads.potential_energy - pe, np.zeros_like(pe), 1e-12,
+              scale=np.ptp(pe) + np.max(ke), what="potential energy (up to a constant)")
+    check(sol.loads.power, p_nc, 1e-12, scale=np.max(np.abs(p_nc)) + 1e-300, what="load power")
+    qd = sol.kin.qd[:, [[j.name for j in model.joints].index(d.joint) for d in model.drivers]]
+    p_drv = np.sum(sol.dyn.tau * qd, -1)
+    check(sol.driver_power, p_drv, 1e-13, what="driver power")
+    energy = (ke + pe).reshape(len(centres), 5)
+    dEdt = five_point_derivative(energy, h)
+    mid = (slice(None), 2)
+    lhs = (p_drv + p_nc).reshape(len(centres), 5)[mid]
+    scale = max(np.max(np.abs(p_drv)), np.max(np.abs(p_nc)), np.max(np.abs(dEdt)))
+    check(lhs, dEdt, 1e-7, scale=scale, what="driver + load power vs dE/dt")
+
+
+# ----------------------------------------------------------------------------------------------
+# d. statics by virtual work
+
+
+def static_model(model, sol, k, shift=None):
+    """``model`` held at rest at sample k (drivers constant), optionally with one driver
+    displaced: ``shift = (driver index, dq)``; the sample's pose is the assembly guess."""
+    jnames = [j.name for j in model.joints]
+    drivers = []
+    for d, drv in enumerate(model.drivers):
+        q = float(sol.kin.q[k, jnames.index(drv.joint)])
+        if shift is not None and shift[0] == d:
+            q += shift[1]
+        drivers.append(Driver(drv.joint, ExpressionMotion(repr(q))))
+    return dataclasses.replace(
+        model, drivers=tuple(drivers),
+        assembly_phi={b.name: float(sol.phi(b.name)[k]) for b in model.moving_bodies},
+        assembly_q={j.name: float(sol.kin.q[k, n]) for n, j in enumerate(model.joints)})
+
+
+def load_geometry(sol):
+    """Application points (T, K, 2) with their forces (T, K, 2), torqued bodies' angles (T, L)
+    with torques (T, L), and the spring potential (T,), at rest (dampers exert nothing)."""
+    model, t = sol.model, sol.t
+    pts, fs, angs, tqs = [], [], [], []
+    pe_spring = np.zeros(t.shape)
+    g = np.asarray(model.gravity, float)
+    for b in model.moving_bodies:
+        pname, plocal = next(iter(b.points.items()))
+        pts.append(sol.point(b.name, pname) + rot(sol.phi(b.name), np.asarray(b.com) - plocal))
+        fs.append(np.broadcast_to(b.mass * g, t.shape + (2,)))
+    for ld in model.loads:
+        if ld.kind == "force" and ld.body != "ground":
+            pts.append(sol.point(ld.body, ld.point))
+            fs.append(np.broadcast_to(ld.value(t), t.shape + (2,)))
+        elif ld.kind == "torque" and ld.body != "ground":
+            angs.append(sol.phi(ld.body))
+            tqs.append(np.broadcast_to(ld.value(t), t.shape))
+        elif ld.kind == "spring":
+            d = sol.point(ld.body2, ld.point2) - sol.point(ld.body, ld.point)
+            pe_spring += 0.5 * ld.stiffness * (np.linalg.norm(d, axis=-1) - ld.free_length) ** 2
+    stack = lambda xs, tail: np.stack(xs, axis=-2 if tail else -1) if xs else np.zeros(
+        t.shape + ((0, 2) if tail else (0,)))
+    return stack(pts, True), stack(fs, True), stack(angs, False), stack(tqs, False), pe_spring
+
+
+@pytest.mark.parametrize("name", ["hoeken-loaded", "slider-crank", "inverted-slider-crank",
+                                  "boom", "stephenson", "watt2", "five-bar"])
+def test_statics_by_virtual_work(name):
+    model = MODELS[name]()
+    dyn_sol = solution(name)
+    for k in (3, 10):
+        t = dyn_sol.t[k:k + 1]
+        rest = analyze(static_model(model, dyn_sol, k), t)
+        assert np.all(rest.kin.qd == 0) and np.all(rest.kin.qdd == 0)
+        np.testing.assert_allclose(rest.kin.q, dyn_sol.kin.q[k:k + 1], atol=1e-9)
+        _, F, _, T_, _ = load_geometry(rest)
+        for d, drv in enumerate(model.drivers):
+            h = 1e-3 if model.joint(drv.joint).kind == REVOLUTE else 1e-4 * size_of(model)
+            geo = [load_geometry(analyze(static_model(model, dyn_sol, k, (d, s * h)), t))
+                   for s in (-2, -1, 0, 1, 2)]
+            dX = five_point_derivative(np.stack([g[0] for g in geo], -1), h)      # (1, K, 2)
+            dA = five_point_derivative(np.stack([g[2] for g in geo], -1), h)      # (1, L)
+            dV = five_point_derivative(np.stack([g[4] for g in geo], -1), h)      # (1,)
+            # principle of virtual work: tau dq + sum F . dr + sum T dphi - dV = 0
+            terms = np.concatenate((np.sum(F * dX, -1), T_ * dA, -dV[..., None]), -1)
+            expected = -np.sum(terms, -1)
+            scale = max(np.sum(np.abs(terms)), abs(rest.dyn.tau[0, d]))
+            check(rest.dyn.tau[..., d], expected, 1e-8, scale=scale,
+                  what=f"static effort {drv.joint} at sample {k}")
+
+
+# ----------------------------------------------------------------------------------------------
+# e. action = reaction, wrench balance with the reported values
+
+
+def reversed_model(model):
+    """Every joint's connect order reversed (prismatic axes re-expressed in the new first body);
+    drivers' motions negated, since q changes sign."""
+    joints = []
+    for jt in model.joints:
+        if jt.kind == REVOLUTE:
+            joints.append(Joint(jt.name, REVOLUTE, jt.body_b, jt.point_b, jt.body_a, jt.point_a))
+        else:
+            axis = rot(np.asarray(-jt.angle), np.asarray(jt.axis, float))
+            joints.append(Joint(jt.name, PRISMATIC, jt.body_b, jt.point_b, jt.body_a,
+                                jt.point_a, axis, -jt.angle))
+    drivers = []
+    for drv in model.drivers:
+        m = drv.motion
+        neg = (ConstantSpeed(-m.speed, -m.start) if isinstance(m, ConstantSpeed)
+               else ExpressionMotion(f"-({m.text})"))
+        drivers.append(Driver(drv.joint, neg))
+    return dataclasses.replace(model, joints=tuple(joints), drivers=tuple(drivers),
+                               assembly_q={k: -v for k, v in model.assembly_q.items()})
+
+
+REVERSIBLE = ["hoeken-loaded", "slider-crank", "slider-crank-cut-J3", "inverted-slider-crank",
+              "inverted-slider-crank-cut-prismatic", "boom", "boom-offset", "stephenson",
+              "five-bar"]
+
+
+@pytest.mark.parametrize("name", REVERSIBLE)
+def test_action_equals_reaction(name):
+    """Reversing a joint's connect order reports what B exerts on A: the opposite force, and for
+    a prismatic joint the opposite moment carried to A's point; efforts change sign.
+
+    A driven prismatic joint's actuator force acts along the axis through the second body's
+    point, which the reversal moves to the old first body's point: the reported moment then
+    also changes by the actuator's moment ``-(r_Pb - r_Pa) x tau e``."""
+    sol = solution(name)
+    model = sol.model
+    rev_sol = analyze(reversed_model(model), sol.t)
+    np.testing.assert_allclose(rev_sol.kin.q, -sol.kin.q, atol=1e-9)
+    check(rev_sol.dyn.tau, -sol.dyn.tau, what="efforts")
+    expected_moment = -sol.reactions.moment.copy()
+    _, _, normals, _ = ne_system(sol)
+    efforts = {drv.joint: sol.dyn.tau[..., d] for d, drv in enumerate(model.drivers)}
+    for k, jt in enumerate(model.joints):
+        if jt.kind == PRISMATIC:
+            arm = sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a)
+            total = sol.reactions.force[..., k, :]
+            if jt.name in efforts:
+                total = total + efforts[jt.name][..., None] * normals[jt.name][0]
+            expected_moment[..., k] -= cross(arm, total)
+    check_reactions(rev_sol.reactions.force, rev_sol.reactions.moment,
+                    -sol.reactions.force, expected_moment, model, size_of(model),
+                    what="reversed connect")
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_body_wrench_balance_with_reported_reactions(name):
+    """Every moving body: sum of reported joint reactions, driver efforts and applied loads
+    equals m a_C and I_C alpha; revolute joints report no moment; prismatic reactions are
+    normal to the axis."""
+    sol = solution(name)
+    model = sol.model
+    K, rhs, normals, _ = ne_system(sol)
+    x = reported_unknowns(sol)
+    residual = np.einsum("...ij,...j->...i", K, x) - rhs
+    # each row relative to the peak of the magnitudes of its terms
+    terms = np.einsum("...ij,...j->...i", np.abs(K), np.abs(x)) + np.abs(rhs)
+    rel = np.max(np.abs(residual), axis=0) / np.max(terms, axis=0)
+    assert np.max(rel) <= RTOL, f"wrench balance residual {np.max(rel):.3e}"
+    fs = force_scale(sol.reactions.force)
+    for k, jt in enumerate(model.joints):
+        if jt.kind == REVOLUTE:
+            assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
+        else:
+            e = normals[jt.name][0]
+            along = np.sum(sol.reactions.force[..., k, :] * e, -1)
+            assert np.max(np.abs(along)) <= RTOL * fs
+
+
+# ----------------------------------------------------------------------------------------------
+# f. property-based: random Grashof crank-rockers
+
+
+def _circle_intersection(c1, r1, c2, r2, up):
+    d = c2 - c1
+    L = np.linalg.norm(d)
+    a = (r1**2 - r2**2 + L**2) / (2 * L)
+    h = math.sqrt(max(r1**2 - a**2, 0.0))
+    u = d / L
+    return c1 + a * u + (1 if up else -1) * h * np.array([-u[1], u[0]])
+
+
+@st.composite
+def crank_rockers(draw):
+    """A random crank-rocker (Grashof, crank shortest and adjacent to the ground) assembled at
+    t = 0 by construction: the joint positions are computed first, then each body's points are
+    expressed in a randomly placed body frame."""
+    f = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+    a = f(0.02, 0.2)                                   # crank
+    d = a * f(2.0, 4.0)                                # ground
+    # coupler b, rocker c: b + c >= 1.15 (d + a) and |b - c| <= 0.8 (d - a) keep both
+    # dead-centre positions (coupler and rocker collinear) away from the crank's turn
+    s = (d + a) * f(1.15, 1.9)
+    diff = (d - a) * 0.8 * f(-1.0, 1.0)
+    b, c = (s + diff) / 2, (s - diff) / 2
+    O1 = np.array([f(-0.5, 0.5), f(-0.5, 0.5)])
+    beta = f(-math.pi, math.pi)
+    O4 = O1 + d * np.array([math.cos(beta), math.sin(beta)])
+    gamma = f(-math.pi, math.pi)
+    A = O1 + a * np.array([math.cos(gamma), math.sin(gamma)])
+    B = _circle_intersection(A, b, O4, c, draw(st.booleans()))
+    frames = {}
+    for name in ("crank", "coupler", "rocker"):
+        frames[name] = (f(-math.pi, math.pi), np.array([f(-0.3, 0.3), f(-0.3, 0.3)]))
+
+    def local(name, P):
+        phi, o = frames[name]
+        return rot(np.asarray(-phi), P - o)
+
+    def mass_props(name, length):
+        m = f(0.1, 5.0)
+        com = local(name, frames[name][1]) + np.array([f(-1, 1), f(-1, 1)]) * length
+        return m, com, m * length**2 * f(0.01, 0.5)
+
+    bodies = [Body("ground", {"O1": O1, "O4": O4})]
+    for name, pts, length in (("crank", {"O1": O1, "A": A}, a),
+                              ("coupler", {"A": A, "B": B}, b),
+                              ("rocker", {"B": B, "O4": O4}, c)):
+        m, com, inertia = mass_props(name, length)
+        bodies.append(Body(name, {k: local(name, v) for k, v in pts.items()}, m, com, inertia))
+    specs = [("J1", "ground.O1", "crank.O1"), ("J2", "crank.A", "coupler.A"),
+             ("J3", "coupler.B", "rocker.B"), ("J4", "ground.O4", "rocker.O4")]
+    joints = []
+    for k, (name, p, q) in enumerate(specs):
+        if k > 0 and draw(st.booleans()):
+            p, q = q, p                                 # child-first connect order
+        joints.append(rev(name, p, q))
+    speed = f(1.0, 20.0) * draw(st.sampled_from([-1.0, 1.0]))
+    gravity = np.array([f(-20, 20), f(-20, 20)])
+    # q_J1 = phi_crank - phi_ground (or its opposite if the connect order was reversed)
+    q1 = frames["crank"][0] if joints[0].body_b == "crank" else -frames["crank"][0]
+    s1 = 1.0 if joints[0].body_b == "crank" else -1.0
+    model = Model("random crank-rocker", tuple(bodies), tuple(joints),
+                  (Driver("J1", ConstantSpeed(s1 * speed, q1)),), (), gravity,
+                  assembly_phi={k: v[0] for k, v in frames.items()},
+                  cut=(draw(st.sampled_from(["J2", "J3", "J4"])),))
+    return model, {"A": A, "B": B}, abs(speed)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(crank_rockers())
+def test_random_crank_rockers(case):
+    model, assembled, speed = case
+    t = np.linspace(0.0, 2 * math.pi / speed, 7)
+    sol = analyze(model, t)
+    # the solver assembled the mechanism where it was built
+    size = size_of(model)
+    for body_, p in (("coupler", "A"), ("coupler", "B")):
+        np.testing.assert_allclose(sol.point(body_, p)[0], assembled[p], atol=1e-9 * size)
+    d = dense.solve(model, sol.kin, sol.loads.w_ext)
+    force, moment, tau = ne_solve(sol)
+    check(sol.dyn.tau, d.tau, what="tau recursive vs dense")
+    check(sol.dyn.tau, tau, what="tau recursive vs Newton–Euler")
+    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model, size,
+                    what="recursive vs dense")
+    check_reactions(sol.reactions.force, sol.reactions.moment, force, moment, model, size,
+                    what="recursive vs Newton–Euler")
+
+
+# ----------------------------------------------------------------------------------------------
+# g. batch equals loop
+
+
+@pytest.mark.parametrize("name", ["hoeken-loaded", "inverted-slider-crank", "five-bar",
+                                  "stephenson"])
+def test_batch_equals_loop(name):
+    model = MODELS[name]()
+    t = times(model, 5)[:4] * 0.25                     # a quarter of the cycle, 4 samples
+    batch = analyze(model, t)
+    fields = lambda s: {"q": s.kin.q, "qd": s.kin.qd, "qdd": s.kin.qdd, "tau": s.dyn.tau,
+                        "lam": s.dyn.lam, "force": s.reactions.force,
+                        "moment": s.reactions.moment, "ke": s.dyn.kinetic_energy}
+    whole = fields(batch)
+    singles = [fields(analyze(model, t[k:k + 1])) for k in range(len(t))]
+    for key, value in whole.items():
+        loop = np.concatenate([s[key] for s in singles], axis=0)
+        scale = max(np.max(np.abs(value)), 1e-300)
+        if key == "moment":
+            scale = max(scale, force_scale(whole["force"]) * size_of(model))
+        # the closure is solved to a residual of 1e-12 of the mechanism's size along two different
+        # Newton paths (continuation vs. assembly), so positions, and with them everything else,
+        # may differ by a few 1e-12
+        check(loop, value, 1e-11, scale=scale, what=f"batch vs loop {key}")
