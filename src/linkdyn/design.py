@@ -224,11 +224,9 @@ def four_bars(model: Model) -> list[FourBar]:
         if rank(y, jyf) < rank(x, jfx):
             x, y, jfx, jxc, jcy, jyf = y, x, jyf, jcy, jxc, jfx
         names = (jfx.name, jxc.name, jcy.name, jyf.name)
-        lengths = (
-            np.linalg.norm(_joint_point(model, jfx.name, frame) - _joint_point(model, jyf.name, frame)),
-            np.linalg.norm(_joint_point(model, jfx.name, x) - _joint_point(model, jxc.name, x)),
-            np.linalg.norm(_joint_point(model, jxc.name, cpl) - _joint_point(model, jcy.name, cpl)),
-            np.linalg.norm(_joint_point(model, jcy.name, y) - _joint_point(model, jyf.name, y)))
+        lengths = tuple(
+            np.linalg.norm(_joint_point(model, p.name, body) - _joint_point(model, q.name, body))
+            for body, p, q in ((frame, jfx, jyf), (x, jfx, jxc), (cpl, jxc, jcy), (y, jcy, jyf)))
         found.append(FourBar(x, cpl, y, names, tuple(float(v) for v in lengths), frame))
     found.sort(key=lambda fb: (fb.frame != GROUND, sorted(order[p] for p in fb.pins)))
     return found
@@ -610,7 +608,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             "links": {"input": fb.input, "coupler": fb.coupler, "output": fb.output},
             "frame": fb.frame,
             "pins": list(fb.pins),
-            "lengths_m": dict(zip(("frame", "input", "coupler", "output"), fb.lengths)),
+            # first key "ground" as before; "frame" for a loop that does not contain the ground
+            "lengths_m": dict(zip(("ground" if fb.frame == GROUND else "frame", "input",
+                                   "coupler", "output"), fb.lengths)),
             "grashof": fb.grashof,
             "type": fb.type,
             "transmission_angle_deg": ta,
