@@ -71,9 +71,14 @@ def plan(lay) -> tuple[Dyad, ...] | None:
     return tuple(out)
 
 
-def _circles(c1, r1, c2, r2, guess):
-    """Intersection of circles (c1, r1) and (c2, r2) on the side of c1->c2 where ``guess``
-    lies; NaN where they do not meet. Points (2, ...), radii (...)."""
+def _side(c1, c2, x):
+    """+1 where x lies left of the line c1 -> c2, -1 where right."""
+    return np.where(cross(c2 - c1, x - c1) >= 0, 1.0, -1.0)
+
+
+def _circles(c1, r1, c2, r2, side):
+    """Intersection of circles (c1, r1) and (c2, r2) on the ``side`` (+1 left, -1 right) of the
+    line c1 -> c2; NaN where they do not meet. Points (2, ...), radii and side (...)."""
     d_vec = c2 - c1
     d = np.sqrt(dot(d_vec, d_vec))
     ex = d_vec / d
@@ -81,7 +86,6 @@ def _circles(c1, r1, c2, r2, guess):
     h2 = r1 ** 2 - a ** 2
     with np.errstate(invalid="ignore"):
         h = np.sqrt(np.where(h2 >= 0, h2, np.nan))
-    side = np.where(cross(ex, guess - c1) >= 0, 1.0, -1.0)
     return c1 + a * ex + side * h * perp(ex)
 
 
@@ -90,34 +94,57 @@ def _turn(u, v):
     return np.arctan2(cross(u, v), dot(u, v))
 
 
-def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward) -> np.ndarray:
-    """Close every loop of ``q`` (n, ...) exactly, dyad by dyad, on the branch of ``q``.
+def _vertices(lay, dy, pose):
+    """Known vertices c1, c2, the apex guess and the moving points of one dyad."""
+    c = lay.cuts[dy.cut]
+    p_a, p_b = pose.point(c.a, c.pa), pose.point(c.b, c.pb)
+    x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
+    if dy.shape == "split":
+        return x1, x2, p_a, p_a, p_b   # apex: the cut point over the two joints
+    p_mov, p_fix = (p_a, p_b) if dy.side == "a" else (p_b, p_a)
+    return x1, p_fix, x2, p_mov, p_fix  # apex: the lower joint over the upper joint and cut
 
-    ``forward(lay, q)`` gives the pose; it is re-evaluated after each dyad because later dyads
-    stand on the joints earlier ones moved.
+
+def sides(lay, dyads, q, forward) -> list:
+    """Assembly mode of each dyad at the configuration ``q``: the side (+1/-1, shape (...)) of
+    the line through its known vertices where its apex lies."""
+    out = []
+    for dy in dyads:
+        c1, c2, apex, _, _ = _vertices(lay, dy, forward(lay, q))
+        out.append(_side(c1, c2, apex))
+    return out
+
+
+def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
+    """Close every loop of ``q`` (n, ...) exactly, dyad by dyad.
+
+    Each dyad's apex is put on the side given by ``sides`` (the assembly modes from
+    :func:`sides`), or, if None, on the side where the guess ``q`` has it. The joint angles move
+    by less than pi from ``q``, which therefore sets their winding. ``forward(lay, q)`` gives
+    the pose; it is re-evaluated after each dyad because later dyads stand on the joints earlier
+    ones moved. Returns the closed ``q`` and its pose.
     """
     q = np.array(q, dtype=float)
     topo = lay.topo
     pose = forward(lay, q)
-    for dy in dyads:
-        c = lay.cuts[dy.cut]
-        p_a, p_b = pose.point(c.a, c.pa), pose.point(c.b, c.pb)
-        x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
+    for k, dy in enumerate(dyads):
+        x1, c2, apex, p_a_or_mov, p_b_or_fix = _vertices(lay, dy, pose)
+        side = _side(x1, c2, apex) if sides is None else sides[k]
         if dy.shape == "split":
-            # the cut point is the apex over the two unknown joints
-            p_up, p_low = (p_a, p_b) if topo.ancestors[c.a, dy.upper] else (p_b, p_a)
-            m = _circles(x1, np.sqrt(dot(p_up - x1, p_up - x1)), x2,
-                         np.sqrt(dot(p_low - x2, p_low - x2)), p_up)
-            d_up, d_low = _turn(p_up - x1, m - x1), _turn(p_low - x2, m - x2)
+            # the cut point m over the two unknown joints x1, x2 = c2
+            p_up, p_low = p_a_or_mov, p_b_or_fix
+            m = _circles(x1, np.sqrt(dot(p_up - x1, p_up - x1)), c2,
+                         np.sqrt(dot(p_low - c2, p_low - c2)), side)
+            d_up, d_low = _turn(p_up - x1, m - x1), _turn(p_low - c2, m - c2)
         else:
-            # the lower joint is the apex over the upper joint and the fixed cut point
-            p_mov, p_fix = (p_a, p_b) if dy.side == "a" else (p_b, p_a)
+            # the lower joint m over the upper joint x1 and the fixed cut point p_fix = c2
+            x2, p_mov, p_fix = apex, p_a_or_mov, p_b_or_fix
             m = _circles(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p_fix,
-                         np.sqrt(dot(p_mov - x2, p_mov - x2)), x2)
+                         np.sqrt(dot(p_mov - x2, p_mov - x2)), side)
             d_up = _turn(x2 - x1, m - x1)
             p_mov = x1 + rotate(d_up, p_mov - x1)
             d_low = _turn(p_mov - m, p_fix - m)
-        # q_i = phi_i - phi_parent (times the joint's sign): a rotation of body i's subtree
+        # q_i = s (phi_i - phi_parent): a rotation of body i's subtree
         q[dy.upper] += topo.sign[dy.upper] * d_up
         q[dy.lower] += topo.sign[dy.lower] * d_low
         pose = forward(lay, q)

@@ -609,6 +609,11 @@ def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
 
     Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
     interval ``reach`` (..., 2) over which each branch was followed."""
+    if lay.dyads is not None and q0.ndim == 1:
+        return _follow_dyads(model, lay, q0, lo, hi)
+    if lay.dyads is not None:  # designs (n, D, 1): the nodes take the place of the time axis
+        nodes, Q, QD, reach = _follow_dyads(model, lay, q0[..., 0], lo, hi)
+        return nodes, Q[..., None, :], QD[..., None, :], reach[..., None, :]
     nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
     for end in (hi, lo):
         if end == 0.0:
@@ -627,6 +632,40 @@ def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
     QD = [x for x in QD if x is not None]
     return (np.concatenate(nodes), np.concatenate(Q, axis=-1), np.concatenate(QD, axis=-1),
             np.stack([reach[1], reach[0]], axis=-1))
+
+
+def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+    """:func:`_follow` for mechanisms whose loops are all RRR dyads: every node is solved at
+    once in closed form in the assembly mode of ``q0``, and the dependent angles are unwrapped
+    along the nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
+    topo = lay.topo
+    dep, drv = list(topo.dependent), list(topo.driven)
+    nodes = np.unique(np.concatenate((_travel_nodes(model, lay, 0.0, lo),
+                                      _travel_nodes(model, lay, 0.0, hi))))
+    k0 = int(np.searchsorted(nodes, 0.0))
+    nq, nqd, _ = driver_values(model, nodes)
+    shape = (-1,) + (1,) * (q0.ndim - 1) + (len(nodes),)
+    Q = np.repeat(q0[..., None], len(nodes), axis=-1)
+    Q[drv] = nq.reshape(shape)
+    modes = dyads.sides(lay, lay.dyads, q0[..., None], forward_positions)  # (..., 1) each
+    Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
+    J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+    x, _ = _rates(lay, J, nqd.reshape(shape))
+    ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
+    for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
+        if lay.kind[i] == REVOLUTE:
+            step = np.where(ok[..., 1:] & ok[..., :-1], wrap(np.diff(Q[i], axis=-1)), 0.0)
+            path = np.concatenate((np.zeros(step.shape[:-1] + (1,)), np.cumsum(step, -1)), -1)
+            Q[i] = np.where(ok, q0[i][..., None] + path - path[..., k0:k0 + 1], np.nan)
+    QD = np.zeros(Q.shape)
+    QD[drv], QD[dep] = nqd.reshape(shape), x
+    # the branch is followed over the nodes that close, contiguous around t = 0
+    up = np.cumprod(ok[..., k0:], axis=-1).sum(-1)
+    down = np.cumprod(ok[..., k0::-1], axis=-1).sum(-1)
+    reach = np.stack((np.where(down > 0, nodes[np.maximum(k0 - down + 1, 0)], np.inf),
+                      np.where(up > 0, nodes[np.minimum(k0 + up - 1, len(nodes) - 1)], -np.inf)),
+                     axis=-1)
+    return nodes, Q, QD, reach
 
 
 def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
