@@ -740,7 +740,10 @@ def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
     twd = forward_twist_rates(lay, pose, p, tw, qd, qdd)
     if dep:
         qdd[dep], _ = solve_small(J[:, np.array(dep) - 1], -closure_bias(lay, pose, tw, twd))
-        twd = forward_twist_rates(lay, pose, p, tw, qd, qdd)
+        # td is linear in qdd: add the dependent accelerations' share, propagated like twists
+        extra = np.zeros(q.shape)
+        extra[dep] = qdd[dep]
+        twd = [a + b for a, b in zip(twd, forward_twists(lay, pose, p, extra))]
     valid = (err <= ACCEPT) & np.all(np.isfinite(qd), axis=0) & np.all(np.isfinite(qdd), axis=0)
     if not np.all(valid):  # samples that do not close or are singular become NaN
         nan = ~valid
