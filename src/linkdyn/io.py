@@ -21,10 +21,10 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from linkdyn import expr as _expr
-from linkdyn import motion as _motion
-from linkdyn.errors import ModelError
-from linkdyn.model import GROUND, JOINT_KINDS, PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
+from . import expr as _expr
+from . import motion as _motion
+from .errors import ModelError
+from .model import GROUND, JOINT_KINDS, REVOLUTE, Body, Driver, Joint, Load, Model
 
 __all__ = ["load_model", "model_from_dict", "LENGTH_UNITS", "ANGLE_UNITS"]
 
@@ -108,11 +108,13 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     loads = _loads(r, data.get("loads", []), bodies)
     phi, q = _assembly(r, data.get("assembly", {}), bodies, joints)
     cut = _topology(r, data.get("topology", {}), joints, drivers)
-    duration, cycles, samples = _analysis(r, data.get("analysis", {}), drivers)
+    duration, cycles, samples, path_point, path_range = _analysis(
+        r, data.get("analysis", {}), drivers, bodies, joints)
     return Model(name=name, bodies=tuple(bodies.values()), joints=tuple(joints.values()),
                  drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads), gravity=gravity,
                  assembly_phi=phi, assembly_q=q, cut=cut, duration=duration, cycles=cycles,
-                 samples=samples, source=source, description=description)
+                 samples=samples, source=source, description=description,
+                 path_point=path_point, path_range=path_range)
 
 
 # ---------------------------------------------------------------- parsing
@@ -608,9 +610,11 @@ def _topology(r: _Reader, section: Any, joints, drivers) -> tuple[str, ...] | No
     return tuple(cut)
 
 
-def _analysis(r: _Reader, section: Any, drivers) -> tuple:
-    """Optional CLI defaults: ``(duration s, cycles, samples)``, each None when absent."""
-    section = r.table(section, "analysis", ("duration", "cycles", "samples"))
+def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
+    """Optional CLI defaults: ``(duration s, cycles, samples, path_point, path_range)``, each
+    None when absent; ``path_range`` is a range of the first driver's coordinate, SI."""
+    section = r.table(section, "analysis", ("duration", "cycles", "samples", "path_point",
+                                            "path_range"))
     if "duration" in section and "cycles" in section:
         r.fail("analysis", "give either duration or cycles, not both", "Remove one of them")
     duration = (r.number(section["duration"], "analysis.duration", "s", positive=True)
@@ -628,4 +632,21 @@ def _analysis(r: _Reader, section: Any, drivers) -> tuple:
             r.fail("analysis.samples", f"expected a whole number >= 2, got {_type_name(s)}",
                    "Write e.g. samples = 361")
         samples = int(s)
-    return duration, cycles, samples
+    path_point = None
+    if "path_point" in section:
+        path_point = r.string(section["path_point"], "analysis.path_point")
+        body, _, point = path_point.partition(".")
+        if body not in bodies or point not in bodies[body].points:
+            r.fail("analysis.path_point", f"'{path_point}' is not a named point of a body",
+                   "Write it as BODY.POINT, e.g. path_point = \"coupler.P\"")
+    path_range = None
+    if "path_range" in section:
+        first = next(iter(drivers.values()), None)
+        if first is None:
+            r.fail("analysis.path_range", "path_range needs a driver", "Add a driver or remove it")
+        revolute = joints[first[1].joint].kind == REVOLUTE
+        lo, hi = r.vector(section["path_range"], "analysis.path_range",
+                          "rad or deg" if revolute else "length unit")
+        scale = r.angle if revolute else r.length
+        path_range = (float(lo * scale), float(hi * scale))
+    return duration, cycles, samples, path_point, path_range

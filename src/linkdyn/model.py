@@ -130,6 +130,10 @@ class Model:
     cut : tuple[str, ...] or None
         Joints to cut; ``None`` chooses automatically.
     duration, cycles, samples : optional analysis defaults.
+    path_point : str or None
+        ``BODY.POINT`` whose path straightness the summary reports.
+    path_range : (float, float) or None
+        Range of the first driver's coordinate for ``path_point``, rad or m.
     source : str
         File the model came from ('' if built in Python).
     """
@@ -148,6 +152,8 @@ class Model:
     samples: int | None = None
     source: str = ""
     description: str = ""
+    path_point: str | None = None
+    path_range: tuple[float, float] | None = None
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)
