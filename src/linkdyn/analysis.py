@@ -124,6 +124,8 @@ class Solution:
         cols["kinetic_energy"] = self.kinetic_energy
         if self.loads.has_potential:
             cols["potential_energy"] = self.potential_energy
+        if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
+            cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols
 
     def to_dataframe(self):

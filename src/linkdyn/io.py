@@ -642,9 +642,8 @@ def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
     path_range = None
     if "path_range" in section:
         first = next(iter(drivers.values()), None)
-        if first is None:
-            r.fail("analysis.path_range", "path_range needs a driver", "Add a driver or remove it")
-        revolute = joints[first[1].joint].kind == REVOLUTE
+        # without drivers the mobility check reports the real problem
+        revolute = first is None or joints[first[1].joint].kind == REVOLUTE
         lo, hi = r.vector(section["path_range"], "analysis.path_range",
                           "rad or deg" if revolute else "length unit")
         scale = r.angle if revolute else r.length

@@ -240,27 +240,27 @@ def closure_jacobian(lay: Layout, pose: Pose, p: list) -> np.ndarray:
 def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
     """Twists ``t_i`` (3, ...) of all bodies at their O_i from tree joint rates ``qd`` (n, ...)."""
     topo = lay.topo
-    t = [np.zeros((3,) + qd.shape[1:])]
+    tw = [np.zeros((3,) + qd.shape[1:])]
     for i in range(1, topo.n):
         k = topo.parent[i]
         # t_i = A(r_i - r_p) t_p + p_i qd_i      (eq. 2)
-        t.append(shift_twist(t[k], pose.r[i] - pose.r[k]) + p[i] * qd[i])
-    return t
+        tw.append(shift_twist(tw[k], pose.r[i] - pose.r[k]) + p[i] * qd[i])
+    return tw
 
 
-def forward_twist_rates(lay: Layout, pose: Pose, p: list, t: list, qd: np.ndarray,
+def forward_twist_rates(lay: Layout, pose: Pose, p: list, tw: list, qd: np.ndarray,
                         qdd: np.ndarray) -> list:
     """Twist rates ``td_i`` (3, ...): angular acceleration and acceleration of O_i."""
     topo = lay.topo
-    td = [np.zeros_like(t[0])]
+    td = [np.zeros_like(tw[0])]
     for i in range(1, topo.n):
         k = topo.parent[i]
         # td_i = A td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i
         td_i = shift_twist(td[k], pose.r[i] - pose.r[k]) + p[i] * qdd[i]
-        w_k = t[k][0]
-        td_i[1] -= w_k * (t[i][2] - t[k][2])
-        td_i[2] += w_k * (t[i][1] - t[k][1])
-        w_axis = t[k if topo.sign[i] > 0 else i][0]
+        w_k = tw[k][0]
+        td_i[1] -= w_k * (tw[i][2] - tw[k][2])
+        td_i[2] += w_k * (tw[i][1] - tw[k][1])
+        w_axis = tw[k if topo.sign[i] > 0 else i][0]
         pd = jk.motion_vector_rate(lay.kind[i], topo.sign[i], pose.e[i], w_axis)
         if pd is not None:
             td_i += pd * qd[i]
@@ -277,18 +277,18 @@ def _at_point(t_x, td_x, r_x, r_pt, v_pt):
     return t_at, twist(td_x[0], acc)
 
 
-def closure_bias(lay: Layout, pose: Pose, t: list, td: list) -> np.ndarray:
+def closure_bias(lay: Layout, pose: Pose, tw: list, td: list) -> np.ndarray:
     """Rate of the cut rows ``d/dt (S x)`` (2 n_cut, ...) for the given twist rates, ``x`` being
     the relative twist of the cut's second body to its first at the cut point."""
     out = []
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        v_pb = shift_twist(t[c.b], r_pb - pose.r[c.b])[1:]
-        tb, ab = _at_point(t[c.b], td[c.b], pose.r[c.b], r_pb, v_pb)
-        ta, aa = _at_point(t[c.a], td[c.a], pose.r[c.a], r_pb, v_pb)
+        v_pb = shift_twist(tw[c.b], r_pb - pose.r[c.b])[1:]
+        tb, ab = _at_point(tw[c.b], td[c.b], pose.r[c.b], r_pb, v_pb)
+        ta, aa = _at_point(tw[c.a], td[c.a], pose.r[c.a], r_pb, v_pb)
         out.append(jk.cut_rows(c.kind, e_a, ab - aa)
-                   + jk.cut_rows_rate(c.kind, e_a, t[c.a][0], tb - ta))
-    return np.concatenate(out) if out else np.zeros((0,) + t[0].shape[1:])
+                   + jk.cut_rows_rate(c.kind, e_a, tw[c.a][0], tb - ta))
+    return np.concatenate(out) if out else np.zeros((0,) + tw[0].shape[1:])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -385,7 +385,10 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
                          else rng.uniform(-2, 2, 64) * lay.size)
         qs, errs = newton(lay, starts, maxiter=60, damped=True)  # batch (D, 64)
         ok = errs <= ACCEPT
-        dist = np.sum(np.abs(wrap(qs[dep] - q0[dep, :, None])), axis=0)
+        # distance to the guess: angles modulo 2 pi, slider travel relative to the size
+        gap = qs[dep] - q0[dep, :, None]
+        rev = np.array([lay.kind[i] == REVOLUTE for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
+        dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / np.min(lay.size))), axis=0)
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
         rescued = failed & np.any(ok, axis=-1)
@@ -581,18 +584,32 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
                                       lo, hi)
         if not single:
             Q, QD, reach = Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
-        # cubic Hermite guess for every sample from the bracketing nodes
-        j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, len(nodes) - 2)
+        # cubic Hermite guess for every sample from the bracketing nodes; samples past the
+        # last node followed start from that node
+        lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
+        followed = lo_ok <= hi_ok  # False for a design that did not assemble
+        tc = np.clip(t, np.where(followed, lo_ok, 0.0), np.where(followed, hi_ok, 0.0))
+        j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
         h = nodes[j + 1] - nodes[j]
-        u = (t - nodes[j]) / h
+        u = (tc - nodes[j]) / h
         h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
         h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
-        q = h00 * Q[..., j] + h10 * QD[..., j] + h01 * Q[..., j + 1] + h11 * QD[..., j + 1]
+
+        def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
+            return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
+        q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
         q[drv] = qdrv if single else qdrv[:, None] + lay_q
-        beyond = (t < reach[..., :1]) | (t > reach[..., 1:])
-        q = np.where(beyond, 0.0, q)
-        q, pose, p, J, err = _correct(lay, q)
-        err = np.where(beyond, np.inf, err)
+        q = np.where(np.isfinite(q), q, 0.0)
+        modes = None
+        if lay.dyads is not None:  # the assembly modes, as along the continuation nodes
+            modes = dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions)
+        q, pose, p, J, err = _correct(lay, q, modes)
+        # the branch ends at the first sample past the last node that does not close
+        fails = ~(err <= ACCEPT)
+        hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
+        lo_end = np.max(np.where(fails & (t < lo_ok), t, -np.inf), axis=-1, keepdims=True)
+        cut_off = (t >= hi_end) | (t <= lo_end) | ~followed
+        err = np.where(cut_off, np.inf, err)
     else:
         q = np.repeat(q_start[..., None], len(t), axis=-1)
         q[drv] = qdrv if single else qdrv[:, None] + lay_q
@@ -700,14 +717,16 @@ def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndar
     return Q, QD, last_ok
 
 
-def _correct(lay: Layout, q: np.ndarray):
+def _correct(lay: Layout, q: np.ndarray, modes=None):
     """Close the loops of a close guess for all samples at once: in closed form when every loop
     is an RRR dyad, else by one Newton step; then Newton steps for samples whose residual is
-    still above ``ACCEPT``. Returns q, pose, p, J, err."""
+    still above ``ACCEPT``. ``modes``: the dyads' assembly modes (default: the guess's).
+    Returns q, pose, p, J, err."""
     dep = np.array(lay.topo.dependent)
+    guess = q
     if lay.dyads is not None:
         # every loop is an RRR dyad: close it exactly on the guess's branch
-        q, pose = dyads.solve(lay, lay.dyads, q, forward_positions)
+        q, pose = dyads.solve(lay, lay.dyads, q, forward_positions, sides=modes)
     else:
         pose = forward_positions(lay, q)
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
@@ -716,9 +735,9 @@ def _correct(lay: Layout, q: np.ndarray):
         q[dep] += np.where(np.isfinite(dx), dx, 0.0)
         pose = forward_positions(lay, q)
     err = _scaled(lay, closure_residual(lay, pose))
-    retry = ~(err <= ACCEPT)
-    if np.any(retry & np.all(np.isfinite(q), axis=0)):
-        q, err = newton(lay, q, maxiter=8)  # only samples above TOL move
+    retry = ~(err <= ACCEPT) & np.all(np.isfinite(q), axis=0)
+    if np.any(retry):  # damped Newton from the guess; only samples above TOL move
+        q, err = newton(lay, np.where(retry, guess, q), maxiter=30, damped=True)
         pose = forward_positions(lay, q)
     p = motion_vectors(lay, pose)
     return q, pose, p, closure_jacobian(lay, pose, p), err

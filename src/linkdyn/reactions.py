@@ -32,7 +32,7 @@ class Reactions:
         Force exerted by the joint's first body on its second, global components, N.
     moment : ndarray (..., T, n_joints)
         Moment exerted by the first body on the second about the second body's joint point,
-        N m (zero for revolute joints, which cannot transmit one).
+        N m (zero to rounding for revolute joints, which cannot transmit one).
     tree : list of ndarray (3, T)
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).
@@ -40,7 +40,7 @@ class Reactions:
 
     force: np.ndarray
     moment: np.ndarray
-    tree: np.ndarray
+    tree: list
 
 
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:

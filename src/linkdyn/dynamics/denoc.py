@@ -36,8 +36,9 @@ class DynamicSolution:
         Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
     wtilde : list of ndarray (3, T)
         Composite wrench of each body's subtree about O_i (``N_l^T w_star``).
-    Q : ndarray (n, T)
-        Generalized force at each tree joint (``N^T w_star``), N m or N.
+    Q : ndarray (T, n)
+        Generalized force at each tree joint (``N^T w_star``), N m or N, tree order (column 0,
+        the ground, is zero).
     lam : ndarray (T, 2 n_cut)
         Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second (N);
         prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
@@ -117,4 +118,4 @@ def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
     else:
         lam, pivot = np.zeros((0,) + kin.shape), np.ones(kin.shape)
     tau = Q[drv] - np.einsum("ij...,i...->j...", J[:, drv - 1], lam)
-    return DynamicSolution(w_star, w_tilde, Q, last(lam), last(tau), ke, pivot)
+    return DynamicSolution(w_star, w_tilde, last(Q), last(lam), last(tau), ke, pivot)
