@@ -22,7 +22,7 @@ demo: $(VENV)/.installed
 	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json"
 
 test: $(VENV)/.installed-test
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -q
 
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_hoeken.py

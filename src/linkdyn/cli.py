@@ -11,6 +11,8 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
+import time
 from importlib import resources
 from pathlib import Path
 
@@ -125,10 +127,15 @@ def check(model):
 # ---------------------------------------------------------------------------- analyze
 
 def _times(mech, samples, duration, cycles) -> np.ndarray:
-    samples = samples or mech.samples or 361
+    """Sample times: the options, else the model's [analysis], else 361 samples of one cycle."""
+    if samples is None:
+        samples = mech.samples or 361
     if samples < 2:
-        raise ModelError("--samples must be at least 2", field="--samples",
+        raise ModelError(f"--samples must be at least 2, got {samples}", field="--samples",
                          fix="Give --samples 2 or more")
+    if cycles is not None and not cycles > 0:
+        raise ModelError(f"--cycles must be positive, got {cycles}", field="--cycles",
+                         fix="Give a positive number of driver turns")
     if duration is None and cycles is None:
         duration, cycles = mech.duration, mech.cycles
     if duration is None:
@@ -137,20 +144,68 @@ def _times(mech, samples, duration, cycles) -> np.ndarray:
             raise ModelError("no duration: the drivers do not rotate at constant speed, so "
                              "a cycle is undefined", field="analysis.duration",
                              fix="Give --duration T (s) or [analysis] duration")
-        duration = (cycles or 1.0) * periods[0]
+        duration = (1.0 if cycles is None else cycles) * periods[0]
     if not duration > 0:
         raise ModelError(f"duration must be positive, got {duration}", field="--duration",
                          fix="Give a positive duration in s")
     return np.linspace(0.0, float(duration), int(samples))
 
 
-def _write_outputs(outdir: Path, files: dict[str, callable]) -> None:
+class _Progress:
+    """Progress of a long run on a terminal: after ``delay`` s (at once for a big run) one line
+    on stderr shows a bar of the steps done, the current step and the elapsed time. Silent when
+    the stream is not a terminal (pipes, tests, CI)."""
+
+    def __init__(self, total: int, *, big: bool = False, delay: float = 2.0, stream=None):
+        self.stream = stream if stream is not None else sys.stderr
+        self.on = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.total, self.done, self.label = total, -1, ""
+        self.delay, self.t0, self.shown = (0.0 if big else delay), time.monotonic(), False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def __enter__(self):
+        if self.on:
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        if self.on:
+            self._stop.set()
+            self._thread.join()
+            if self.shown:
+                if exc[0] is None:
+                    self.done, self.label = self.total, "done"
+                    self._draw()
+                click.echo("", file=self.stream)
+        return False
+
+    def step(self, label: str) -> None:
+        self.done, self.label = self.done + 1, label
+
+    def _run(self) -> None:
+        while not self._stop.wait(0.0 if not self.shown and self.delay == 0 else 0.25):
+            if time.monotonic() - self.t0 >= self.delay:
+                self.shown = True
+                self._draw()
+
+    def _draw(self) -> None:
+        n = 24 * max(self.done, 0) // max(self.total, 1)
+        line = (f"  [{'#' * n}{'-' * (24 - n)}] {min(max(self.done, 0), self.total)}/"
+                f"{self.total} {time.monotonic() - self.t0:5.1f} s  {self.label}")
+        width = shutil.get_terminal_size((80, 24)).columns - 1
+        click.echo("\r" + line[:width].ljust(width), file=self.stream, nl=False)
+
+
+def _write_outputs(outdir: Path, files: dict[str, callable], progress=None) -> None:
     """Write every output into a temporary folder, then move them into place: no partial
     output is left behind if anything fails."""
     outdir.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".linkdyn-", dir=outdir))
     try:
         for name, write in files.items():
+            if progress is not None:
+                progress.step(f"writing {name}")
             write(tmp / name)
         for name in files:
             os.replace(tmp / name, outdir / name)
@@ -158,10 +213,35 @@ def _write_outputs(outdir: Path, files: dict[str, callable]) -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
+def _json_safe(x):
+    """JSON-ready copy of ``x``: NaN and infinities become null (strict JSON has neither)."""
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if np.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
 def write_csv(sol, path: Path) -> None:
-    """``results.csv``: one row per sample, SPEC columns, full precision."""
-    names, data = sol.to_array()
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly.
+
+    Uses pyarrow's CSV writer when it is installed (about ten times faster for long runs).
+    """
+    try:
+        import pyarrow as pa
+        from pyarrow import csv as pacsv
+    except ImportError:
+        names, data = sol.to_array()
+        np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        return
+    table = pa.table({k: np.asarray(v, dtype=float) for k, v in sol.columns.items()})
+    with open(path, "wb") as f:
+        f.write((",".join(table.column_names) + "\n").encode())
+        pacsv.write_csv(table, f, pacsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
 def write_parquet(sol, path: Path) -> None:
@@ -182,19 +262,57 @@ def print_summary(s: dict) -> None:
         click.echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
                    f"{fb['links']['output']}: {fb['grashof']}; transmission angle "
                    f"{ta['min']:.2f}..{ta['max']:.2f} deg")
+        if "mechanical_advantage" in fb:
+            ma = fb["mechanical_advantage"]
+            frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
+            click.echo(f"    mechanical advantage |w_in/w_out| {ma['min']:.4g}..{ma['max']:.4g}"
+                       f"{frame}")
     for j, d in s["drivers"].items():
         click.echo(f"  driver {j}: peak {d['effort']} {d['peak']:.6g} {d['unit']} at "
                    f"t = {d['peak_time_s']:.4g} s, RMS {d['rms']:.6g} {d['unit']}")
+    for j, e in s.get("driver_energy", {}).items():
+        if e["work_J"] is not None:
+            fw = e["flywheel"]
+            fly = (f"; flywheel {fw['inertia_kg_m2']:.4g} kg m^2 for C_s = "
+                   f"{fw['speed_fluctuation']:.3g}" if fw else "")
+            click.echo(f"  driver {j}: work {e['work_J']:.4g} J (+{e['positive_work_J']:.4g} / "
+                       f"{e['negative_work_J']:.4g}), energy fluctuation "
+                       f"{e['energy_fluctuation_J']:.4g} J{fly}")
+    if "shaking" in s:
+        f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
+        click.echo(f"  shaking force peak {f['peak']:.6g} N at t = {f['peak_time_s']:.4g} s, RMS "
+                   f"{f['rms']:.6g} N; shaking moment (about the origin) peak {mz['peak']:.6g} N m")
+    ps = s.get("path_straightness")
+    if ps:
+        click.echo(f"  path of {ps['point']}: deviation from a straight line max "
+                   f"{ps['max_deviation_m'] * 1e3:.4g} mm, RMS "
+                   f"{ps['rms_deviation_m'] * 1e3:.4g} mm over {ps['length_m'] * 1e3:.4g} mm"
+                   + ("" if ps["range"] is None else
+                      f" (driver range {ps['range'][0]:.4g}..{ps['range'][1]:.4g})"))
     click.echo("  peak reactions:")
     for j, r in s["reactions"].items():
         extra = f", moment {r['peak_moment_Nm']:.6g} N m" if "peak_moment_Nm" in r else ""
         click.echo(f"    {j:8s} {r['peak_force_N']:.6g} N at t = {r['peak_time_s']:.4g} s{extra}")
     h = s["health"]
-    click.echo(f"  closure residual {h['closure_residual_rel']:.2e} (relative), power balance "
-               f"{h['power_balance_residual_rel']:.2e} (relative), worst condition number "
-               f"{h['worst_condition_number']:.3g}")
+    def num(x, fmt):
+        return "n/a" if x is None else format(x, fmt)
+    click.echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
+               f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
+               f"condition number {num(h['worst_condition_number'], '.3g')}")
     if s["invalid_samples"]:
         click.echo(f"  WARNING: {s['invalid_samples']} singular samples written as NaN")
+
+
+def _path_range(text):
+    """``'A:B'`` -> (A, B) floats, or None."""
+    if text is None:
+        return None
+    try:
+        a, b = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
+                         fix="Give two numbers, e.g. --path-range 1.92:4.36") from None
+    return a, b
 
 
 @main.command()
@@ -206,10 +324,22 @@ def print_summary(s: dict) -> None:
 @click.option("--cycles", type=float, help="Duration in driver revolutions.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
-@click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
+@click.option("--report", is_flag=True, help="Also write a self-contained report.html "
+              "(animation, interactive plots, summary).")
+@click.option("--plots", "plots_", is_flag=True,
+              help="Also write static figures plot_*.png and plot_*.svg (matplotlib).")
 @click.option("--allow-singular", is_flag=True,
               help="Keep going through singular positions; their rows are NaN.")
-def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singular):
+@click.option("--fluctuation", type=float, default=0.02, show_default=True,
+              help="Coefficient of speed fluctuation C_s for the flywheel size.")
+@click.option("--path-point", metavar="BODY.POINT",
+              help="Point whose path straightness is reported (default: the only free "
+                   "coupler point, if any).")
+@click.option("--path-range", metavar="A:B",
+              help="Range of the first driver's coordinate for --path-point, rad (m for a "
+                   "slider); default: the whole run.")
+def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singular, fluctuation,
+            path_point, path_range, plots_):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -217,22 +347,64 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
     if duration is not None and cycles is not None:
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
+    q_range = _path_range(path_range)
     mech = io.load_model(model)
     t = _times(mech, samples, duration, cycles)
-    sol = run(mech, t, allow_singular=allow_singular)
-    summ = design.summary(sol)
-    out = Path(outdir)
-    files = {
-        "results.csv" if fmt == "csv" else "results.parquet":
-            (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
-        "summary.json": lambda p: p.write_text(json.dumps(summ, indent=2, allow_nan=True)),
-    }
-    if report:
-        from . import report as report_mod
-        files.update(report_mod.outputs(sol, summ))
-    _write_outputs(out, files)
+    progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
+    with progress:
+        progress.step(f"solving {len(t)} samples")
+        sol = run(mech, t, allow_singular=allow_singular)
+        progress.step("summary")
+        try:
+            summ = design.summary(sol, fluctuation=fluctuation,
+                                  path_point=path_point or mech.path_point,
+                                  path_range=q_range if path_range else mech.path_range)
+        except ModelError:
+            if path_point or path_range or not (mech.path_point or mech.path_range):
+                raise
+            # the model's default range does not fit this run (too few samples in it)
+            summ = design.summary(sol, fluctuation=fluctuation, path_point=path_point)
+        out = Path(outdir)
+        files = {
+            "results.csv" if fmt == "csv" else "results.parquet":
+                (lambda p: write_csv(sol, p)) if fmt == "csv" else
+                (lambda p: write_parquet(sol, p)),
+            "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
+                                                              allow_nan=False)),
+        }
+        if report:
+            from . import report as report_mod
+            files.update(report_mod.outputs(sol, summ))
+        if plots_ or report:  # SPEC: --report adds the plots and report.html
+            from . import plots as plots_mod
+            files.update(plots_mod.outputs(sol))
+        progress.total = 2 + len(files)
+        _write_outputs(out, files, progress)
     print_summary(summ)
     click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+
+
+# ---------------------------------------------------------------------------- reproduce
+
+@main.command()
+@click.argument("name")
+@click.option("-o", "--outdir", type=click.Path(file_okay=False),
+              help="Output folder [default: out/reproduce-NAME].")
+def reproduce(name, outdir):
+    """Reproduce a published example: its figures (PNG), results.csv and a README.
+
+    NAME: hoeken, the seed paper's worked example (Figs. 5-7: joint motion, cut-joint
+    multipliers and driving torque, joint reactions).
+    """
+    from . import plots
+
+    sol, figs = plots.reproduce(name)
+    files = {"results.csv": lambda p: write_csv(sol, p), **figs}
+    out = Path(outdir or f"out/reproduce-{name}")
+    _write_outputs(out, files)
+    click.echo(f"{sol.model.name}: {len(sol.t)} samples over {sol.t[-1] - sol.t[0]:.6g} s")
+    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+    click.echo(f"see {out / 'README.txt'} for what each figure shows and the sign conventions")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,481 @@
+/* linkdyn report: animation + plots synchronised on one time cursor. Inlined into report.html;
+   reads the JSON in #linkdyn-data; no network, no library. */
+(function () {
+  "use strict";
+  var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
+  var S = D.series, G = D.geom, T = D.t, N = T.length;
+  var anim = document.getElementById("anim");
+  var NS = anim.namespaceURI;
+  var frame = 0, playing = false, simT = T[0], last = null, speed = 1;
+  var xmode = D.xaxes[0];
+  var plots = [];
+  window.__linkdynFrame = 0;
+  window.__linkdynPlayed = 0;
+
+  // ------------------------------------------------------------------ helpers
+  function el(tag, attrs, parent) {
+    var e = document.createElementNS(NS, tag);
+    for (var k in attrs) e.setAttribute(k, attrs[k]);
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function h(tag, cls, parent, text) {
+    var e = document.createElement(tag);
+    if (cls) e.className = cls;
+    if (text !== undefined) e.textContent = text;
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function fin(v) { return v !== null && v !== undefined && isFinite(v); }
+  function fmt(v, sig) {
+    if (!fin(v)) return "–";
+    sig = sig || 4;
+    var a = Math.abs(v);
+    if (a === 0) return "0";
+    if (a >= 1e-3 && a < 1e6) {
+      var dec = Math.max(0, sig - 1 - Math.floor(Math.log10(a)));
+      return v.toFixed(dec);
+    }
+    return v.toExponential(sig - 1);
+  }
+  // a series' values with the decimals its peak needs for 4 significant digits, so numbers
+  // near a zero crossing keep the same format
+  var SCALE = {};
+  function fmtS(key, v) {
+    if (!fin(v)) return "–";
+    if (!(key in SCALE)) {
+      var m = 0, a = S[key];
+      for (var i = 0; i < a.length; i++) if (fin(a[i]) && Math.abs(a[i]) > m) m = Math.abs(a[i]);
+      SCALE[key] = m;
+    }
+    var sc0 = SCALE[key];
+    if (!(sc0 > 0)) return fmt(v);
+    if (sc0 >= 1e6 || sc0 < 1e-3) return v.toExponential(3);
+    var s = v.toFixed(Math.max(0, 3 - Math.floor(Math.log10(sc0))));
+    return /^-0\.?0*$/.test(s) ? s.slice(1) : s;
+  }
+  function lowerBound(arr, x) {  // last index with arr[i] <= x (arr increasing)
+    var lo = 0, hi = arr.length - 1;
+    if (x <= arr[0]) return 0;
+    if (x >= arr[hi]) return hi;
+    while (hi - lo > 1) { var mid = (lo + hi) >> 1; if (arr[mid] <= x) lo = mid; else hi = mid; }
+    return (x - arr[lo] <= arr[hi] - x) ? lo : hi;
+  }
+  function nearest(arr, x) {
+    var best = 0, bd = Infinity;
+    for (var i = 0; i < arr.length; i++) {
+      if (!fin(arr[i])) continue;
+      var d = Math.abs(arr[i] - x);
+      if (d < bd) { bd = d; best = i; }
+    }
+    return best;
+  }
+  function niceStep(span, n) {
+    var s0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(s0))), r = s0 / mag;
+    return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * mag;
+  }
+  function tickText(v, step) {
+    if (Math.abs(v) < step * 1e-6) v = 0;
+    var a = Math.max(Math.abs(v), step);
+    if (a >= 1e5 || step < 1e-4) return v.toExponential(Math.max(0, Math.round(Math.log10(a / step))));
+    var dec = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+    return v.toFixed(dec);
+  }
+  function range(arrs) {
+    var lo = Infinity, hi = -Infinity;
+    arrs.forEach(function (a) {
+      for (var i = 0; i < a.length; i++) { var v = a[i]; if (fin(v)) { if (v < lo) lo = v; if (v > hi) hi = v; } }
+    });
+    if (!(hi >= lo)) { lo = -1; hi = 1; }
+    var scale = Math.max(Math.abs(lo), Math.abs(hi));
+    if (hi - lo <= 1e-9 * scale || hi === lo) {
+      var pad = scale > 0 ? 0.1 * scale : 1;
+      lo -= pad; hi += pad;
+    }
+    return [lo, hi];
+  }
+
+  // ------------------------------------------------------------------ animation
+  // pixel units of about the displayed size, whatever the mechanism's aspect ratio
+  var B = G.bounds, sc = Math.min(640 / (B[2] - B[0]), 520 / (B[3] - B[1]));
+  var VW = (B[2] - B[0]) * sc, VH = (B[3] - B[1]) * sc;
+  anim.setAttribute("viewBox", "0 0 " + VW + " " + VH.toFixed(1));
+  function X(x) { return (x - B[0]) * sc; }
+  function Y(y) { return (B[3] - y) * sc; }
+  function P(id, k) {
+    var p = G.points[id];
+    if (p.static) return [p.x, p.y];
+    return [p.x[k], p.y[k]];
+  }
+  var defs = el("defs", {}, anim);
+  var pat = el("pattern", {id: "hatch", width: 6, height: 6, patternUnits: "userSpaceOnUse",
+                           patternTransform: "rotate(45)"}, defs);
+  el("line", {x1: 0, y1: 0, x2: 0, y2: 6, stroke: "#666", "stroke-width": 1.6}, pat);
+  var mk = el("marker", {id: "arrowhead", viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
+                         markerHeight: 7, orient: "auto-start-reverse"}, defs);
+  el("path", {d: "M0,0 L10,5 L0,10 z", fill: "#c62828"}, mk);
+
+  var gGround = el("g", {}, anim), gTraces = el("g", {}, anim), gBodies = el("g", {}, anim),
+      gSliders = el("g", {}, anim), gJoints = el("g", {}, anim), gForces = el("g", {}, anim),
+      gLabels = el("g", {}, anim);
+  gForces.style.display = "none";
+
+  // scale bar: a round length about a fifth of the view
+  (function () {
+    var span = (B[2] - B[0]) / 5, mag = Math.pow(10, Math.floor(Math.log10(span)));
+    var L = [1, 2, 5, 10].map(function (f) { return f * mag; }).filter(function (v) { return v <= span; }).pop() || mag;
+    var x0 = 14, y0 = VH - 12, w = L * sc;
+    el("line", {x1: x0, y1: y0, x2: x0 + w, y2: y0, stroke: "#444", "stroke-width": 2}, gGround);
+    el("line", {x1: x0, y1: y0 - 4, x2: x0, y2: y0 + 4, stroke: "#444", "stroke-width": 2}, gGround);
+    el("line", {x1: x0 + w, y1: y0 - 4, x2: x0 + w, y2: y0 + 4, stroke: "#444", "stroke-width": 2}, gGround);
+    var txt = L >= 1 ? fmt(L, 3) + " m" : fmt(L * 1000, 3) + " mm";
+    el("text", {x: x0 + w + 6, y: y0 + 4, "font-size": 12, fill: "#444"}, gGround).textContent = txt;
+  })();
+
+  // ground link: a dashed line through the ground pivots
+  if (G.ground.length > 1) {
+    var gp = G.ground.map(function (id) { var p = P(id, 0); return X(p[0]).toFixed(1) + "," + Y(p[1]).toFixed(1); });
+    el(G.ground.length > 2 ? "polygon" : "polyline", {points: gp.join(" "), fill: "none", stroke: "#9aa3ab",
+                    "stroke-width": 2, "stroke-dasharray": "6 5"}, gGround);
+  }
+  // pivots on the ground: a hatched triangle; fixed slider guides: a hatched bar
+  G.joints.forEach(function (j) {
+    if (!j.ground) return;
+    if (j.kind === "revolute") {
+      var gid = j.first === "ground" ? j.a : j.b, p = P(gid, 0), x = X(p[0]), y = Y(p[1]);
+      el("path", {d: "M" + x + "," + y + " l-11,18 h22 z", fill: "#e9ecef", stroke: "#555",
+                  "stroke-width": 1.5}, gGround);
+      el("rect", {x: x - 16, y: y + 18, width: 32, height: 7, fill: "url(#hatch)"}, gGround);
+      el("line", {x1: x - 16, y1: y + 18, x2: x + 16, y2: y + 18, stroke: "#555", "stroke-width": 1.5}, gGround);
+    } else if (j.guide) {
+      var g = j.guide, x0 = X(g[0]), y0 = Y(g[1]), x1 = X(g[2]), y1 = Y(g[3]);
+      var len = Math.hypot(x1 - x0, y1 - y0), ang = Math.atan2(y1 - y0, x1 - x0) * 180 / Math.PI;
+      var grp = el("g", {transform: "translate(" + x0 + "," + y0 + ") rotate(" + ang + ")"}, gGround);
+      el("rect", {x: 0, y: 10, width: len, height: 7, fill: "url(#hatch)"}, grp);
+      el("line", {x1: 0, y1: 10, x2: len, y2: 10, stroke: "#555", "stroke-width": 1.5}, grp);
+      el("line", {x1: 0, y1: 0, x2: len, y2: 0, stroke: "#9aa3ab", "stroke-width": 1,
+                  "stroke-dasharray": "4 4"}, grp);
+    }
+  });
+
+  // traced points: the whole path, faint, and a dot at the current position
+  var traces = G.traces.map(function (id) {
+    var body = G.bodies.filter(function (b) { return b.points.indexOf(id) >= 0; })[0];
+    var color = body ? body.color : "#555", p = G.points[id], d = "", pen = false;
+    for (var k = 0; k < N; k++) {
+      if (fin(p.x[k]) && fin(p.y[k])) { d += (pen ? "L" : "M") + X(p.x[k]).toFixed(1) + "," + Y(p.y[k]).toFixed(1); pen = true; }
+      else pen = false;
+    }
+    el("path", {d: d, fill: "none", stroke: color, "stroke-width": 1.6, opacity: 0.45}, gTraces);
+    var dot = el("circle", {r: 4, fill: color, stroke: "#fff", "stroke-width": 1.2}, gTraces);
+    var lab = el("text", {"font-size": 12, fill: color, "font-weight": "bold"}, gLabels);
+    lab.textContent = id.split(".")[1];
+    return {id: id, dot: dot, lab: lab};
+  });
+
+  // bodies
+  var bodies = G.bodies.map(function (b) {
+    var node;
+    if (b.shape === "polygon")
+      node = el("polygon", {fill: b.color, "fill-opacity": 0.35, stroke: b.color, "stroke-width": 4,
+                            "stroke-linejoin": "round"}, gBodies);
+    else if (b.shape === "dot")
+      node = el("circle", {r: 6, fill: b.color}, gBodies);
+    else
+      node = el("line", {stroke: b.color, "stroke-width": 9, "stroke-linecap": "round", opacity: 0.9}, gBodies);
+    var lab = el("text", {"font-size": 12, fill: b.color, "text-anchor": "middle", "font-style": "italic"}, gLabels);
+    lab.textContent = b.name;
+    return {b: b, node: node, lab: lab};
+  });
+
+  // sliders (prismatic joints): a block along the axis at the second body's point
+  var sliders = G.joints.filter(function (j) { return j.kind === "prismatic"; }).map(function (j) {
+    var body = G.bodies.filter(function (b) { return b.name === j.second; })[0];
+    var g = el("g", {}, gSliders);
+    el("rect", {x: -18, y: -9, width: 36, height: 18, rx: 2, fill: body ? body.color : "#888",
+                "fill-opacity": 0.85, stroke: "#333", "stroke-width": 1.5}, g);
+    return {j: j, g: g};
+  });
+
+  // joints
+  var joints = G.joints.map(function (j) {
+    var c = j.kind === "revolute" ? el("circle", {r: 5.5, fill: "#fff", stroke: "#222", "stroke-width": 2}, gJoints)
+                                  : el("circle", {r: 3, fill: "#222"}, gJoints);
+    var lab = el("text", {"font-size": 11.5, fill: "#333"}, gLabels);
+    lab.textContent = j.name;
+    var arrow = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)"}, gForces);
+    return {j: j, c: c, lab: lab, arrow: arrow};
+  });
+  var ring = el("circle", {r: 11, fill: "none", stroke: "#c62828", "stroke-width": 2.5}, gJoints);
+  var fscale = G.fmax > 0 ? 0.18 * VW / G.fmax : 0;
+
+  function drawAnim(k) {
+    bodies.forEach(function (o) {
+      var b = o.b, pts = b.outline.map(function (id) { return P(id, k); });
+      var ok = pts.every(function (p) { return fin(p[0]) && fin(p[1]); });
+      o.node.style.display = ok ? "" : "none";
+      o.lab.style.display = ok ? "" : "none";
+      if (!ok) return;
+      if (b.shape === "polygon")
+        o.node.setAttribute("points", pts.map(function (p) { return X(p[0]).toFixed(1) + "," + Y(p[1]).toFixed(1); }).join(" "));
+      else if (b.shape === "dot") { o.node.setAttribute("cx", X(pts[0][0])); o.node.setAttribute("cy", Y(pts[0][1])); }
+      else {
+        var e = pts.length - 1;
+        o.node.setAttribute("x1", X(pts[0][0])); o.node.setAttribute("y1", Y(pts[0][1]));
+        o.node.setAttribute("x2", X(pts[e][0])); o.node.setAttribute("y2", Y(pts[e][1]));
+      }
+      // body label: at the centroid of a plate, mid-way along the longest span of a bar,
+      // pushed off the body
+      var cx = 0, cy = 0;
+      if (b.shape === "polygon" || pts.length < 2) {
+        pts.forEach(function (p) { cx += X(p[0]); cy += Y(p[1]); });
+        cx /= pts.length; cy /= pts.length;
+      } else {
+        var gap = -1;
+        for (var n = 0; n + 1 < pts.length; n++) {
+          var gl = Math.hypot(pts[n + 1][0] - pts[n][0], pts[n + 1][1] - pts[n][1]);
+          if (gl > gap * (1 + 1e-6)) { gap = gl; cx = (X(pts[n][0]) + X(pts[n + 1][0])) / 2; cy = (Y(pts[n][1]) + Y(pts[n + 1][1])) / 2; }
+        }
+      }
+      var nx = 0, ny = -1;
+      if (pts.length >= 2) {
+        var dx = X(pts[pts.length - 1][0]) - X(pts[0][0]), dy = Y(pts[pts.length - 1][1]) - Y(pts[0][1]);
+        var L = Math.hypot(dx, dy) || 1; nx = dy / L; ny = -dx / L;
+        if (ny > 0) { nx = -nx; ny = -ny; }
+      }
+      // anchor the text on the side it is pushed to, so it never lies across the body
+      o.lab.setAttribute("text-anchor", nx < -0.35 ? "end" : nx > 0.35 ? "start" : "middle");
+      o.lab.setAttribute("x", (cx + 12 * nx).toFixed(1));
+      o.lab.setAttribute("y", (cy + 12 * ny + 4 + (ny > -0.35 ? 0 : -2)).toFixed(1));
+    });
+    sliders.forEach(function (o) {
+      var p = P(o.j.b, k), a = o.j.angle[k];
+      var ok = fin(p[0]) && fin(p[1]) && fin(a);
+      o.g.style.display = ok ? "" : "none";
+      if (ok) o.g.setAttribute("transform", "translate(" + X(p[0]).toFixed(1) + "," + Y(p[1]).toFixed(1) + ") rotate(" + (-a * 180 / Math.PI).toFixed(2) + ")");
+    });
+    var best = -1, bestF = -1;
+    joints.forEach(function (o, n) {
+      var p = P(o.j.b, k), ok = fin(p[0]) && fin(p[1]);
+      o.c.style.display = o.lab.style.display = ok ? "" : "none";
+      if (!ok) { o.arrow.style.display = "none"; return; }
+      var x = X(p[0]), y = Y(p[1]);
+      o.c.setAttribute("cx", x.toFixed(1)); o.c.setAttribute("cy", y.toFixed(1));
+      o.lab.setAttribute("x", (x + 8).toFixed(1)); o.lab.setAttribute("y", (y - 8).toFixed(1));
+      var fx = S["Fx:" + o.j.name][k], fy = S["Fy:" + o.j.name][k], f = S["F:" + o.j.name][k];
+      if (fin(f) && f > bestF) { bestF = f; best = n; }
+      var ok2 = fin(fx) && fin(fy) && fscale > 0 && f * fscale > 2;
+      o.arrow.style.display = ok2 ? "" : "none";
+      if (ok2) {
+        o.arrow.setAttribute("x1", x.toFixed(1)); o.arrow.setAttribute("y1", y.toFixed(1));
+        o.arrow.setAttribute("x2", (x + fx * fscale).toFixed(1)); o.arrow.setAttribute("y2", (y - fy * fscale).toFixed(1));
+      }
+    });
+    ring.style.display = best >= 0 ? "" : "none";
+    if (best >= 0) { ring.setAttribute("cx", joints[best].c.getAttribute("cx")); ring.setAttribute("cy", joints[best].c.getAttribute("cy")); }
+    traces.forEach(function (o) {
+      var p = P(o.id, k), ok = fin(p[0]) && fin(p[1]);
+      o.dot.style.display = o.lab.style.display = ok ? "" : "none";
+      if (!ok) return;
+      o.dot.setAttribute("cx", X(p[0]).toFixed(1)); o.dot.setAttribute("cy", Y(p[1]).toFixed(1));
+      o.lab.setAttribute("x", (X(p[0]) + 7).toFixed(1)); o.lab.setAttribute("y", (Y(p[1]) + 15).toFixed(1));
+    });
+    return best;
+  }
+
+  // ------------------------------------------------------------------ info panel
+  var elTime = document.getElementById("time"), elFrame = document.getElementById("frameinfo"),
+      elDrv = document.getElementById("drivers"), elLoaded = document.getElementById("loaded"),
+      elJF = document.getElementById("jointforces");
+  var drv = D.drivers.map(function (d) {
+    var row = h("div", "drv", elDrv);
+    var b = h("b", "", row, d.joint); b.style.color = d.color;
+    var eff = h("span", "", row), q = h("span", "sub", row);
+    return {d: d, eff: eff, q: q};
+  });
+  (function () {
+    var tr = h("tr", "", h("thead", "", elJF));
+    h("th", "", tr, "joint"); h("th", "", tr, "|F| now"); h("th", "", tr, "vs. run peak");
+  })();
+  var jfBody = h("tbody", "", elJF);
+  var jfRows = G.joints.map(function (j) {
+    var tr = h("tr", "", jfBody);
+    h("th", "", tr, j.name);
+    var td = h("td", "num", tr), bar = h("td", "bar", tr), fb = h("span", "fbar", bar);
+    return {tr: tr, td: td, bar: fb, name: j.name};
+  });
+  var Fpeak = G.fmax || 1;
+  function drawInfo(k, best) {
+    elTime.textContent = "t = " + T[k].toFixed(4) + " s";
+    elFrame.textContent = "frame " + (k + 1) + " / " + N + (D.valid[k] ? "" : "  (singular: NaN)");
+    drv.forEach(function (o) {
+      var q = S[o.d.q] ? S[o.d.q][k] : null;
+      o.eff.textContent = " driver " + o.d.word + " " + fmtS(o.d.key, S[o.d.key][k]) + " " + o.d.unit;
+      o.q.textContent = q !== null ? "at q = " + fmtS(o.d.q, q) + " " + o.d.qunit : "";
+    });
+    if (best >= 0) {
+      var name = G.joints[best].name;
+      elLoaded.innerHTML = "";
+      h("span", "", elLoaded, "most loaded joint: ");
+      h("span", "hot", elLoaded, name + "  " + fmtS("F:" + name, S["F:" + name][k]) + " N");
+    } else elLoaded.textContent = "most loaded joint: –";
+    jfRows.forEach(function (o, n) {
+      var f = S["F:" + o.name][k];
+      o.td.textContent = fmtS("F:" + o.name, f) + " N";
+      o.bar.style.width = (fin(f) ? Math.min(100, 100 * f / Fpeak) : 0).toFixed(1) + "%";
+      o.tr.className = n === best ? "hot" : "";
+    });
+  }
+
+  // ------------------------------------------------------------------ plots
+  var PW = 360, PH = 210, ML = 50, MR = 16, MT = 22, MB = 32;
+  var container = document.getElementById("plots");
+  function buildPlots() {
+    container.innerHTML = "";
+    plots = [];
+    var xs = S[xmode.key], xr = range([xs]);
+    if (xmode.key === "t") xr = [T[0], T[N - 1] > T[0] ? T[N - 1] : T[0] + 1];
+    var sec = null, grid = null;
+    D.plots.forEach(function (spec) {
+      if (spec.section !== sec) {
+        sec = spec.section;
+        h("h3", "psec", container, sec);
+        grid = h("div", "pgrid", container);
+      }
+      var panel = h("div", "panel", grid);
+      var svg = el("svg", {viewBox: "0 0 " + PW + " " + PH}, panel);
+      var yr = range(spec.series.map(function (s) { return S[s.key]; }));
+      var pad = 0.05 * (yr[1] - yr[0]); yr = [yr[0] - pad, yr[1] + pad];
+      var x0 = ML, x1 = PW - MR, y0 = PH - MB, y1 = MT;
+      var sx = function (v) { return x0 + (v - xr[0]) / (xr[1] - xr[0]) * (x1 - x0); };
+      var sy = function (v) { return y0 - (v - yr[0]) / (yr[1] - yr[0]) * (y0 - y1); };
+      // grid and ticks
+      var ys = niceStep(yr[1] - yr[0], 5), v;
+      for (v = Math.ceil(yr[0] / ys) * ys; v <= yr[1] + 1e-9 * ys; v += ys) {
+        var yy = sy(v);
+        el("line", {x1: x0, x2: x1, y1: yy, y2: yy, "class": Math.abs(v) < ys * 1e-6 ? "zero" : "gridl"}, svg);
+        el("text", {x: x0 - 4, y: yy + 3.5, "text-anchor": "end", "class": "tick"}, svg).textContent = tickText(v, ys);
+      }
+      var xst = niceStep(xr[1] - xr[0], 6);
+      if (xmode.key !== "t") {  // an angle in degrees: ticks on 15, 30, 45, 90... multiples
+        var dstep = [5, 10, 15, 30, 45, 90, 180, 360, 720, 1440].filter(function (d) { return d >= (xr[1] - xr[0]) / 8; })[0];
+        if (dstep) xst = dstep;
+      }
+      for (v = Math.ceil(xr[0] / xst) * xst; v <= xr[1] + 1e-9 * xst; v += xst) {
+        var xx = sx(v);
+        el("line", {x1: xx, x2: xx, y1: y0, y2: y1, "class": "gridl"}, svg);
+        el("line", {x1: xx, x2: xx, y1: y0, y2: y0 + 4, "class": "axis"}, svg);
+        el("text", {x: xx, y: y0 + 15, "text-anchor": "middle", "class": "tick"}, svg).textContent = tickText(v, xst);
+      }
+      el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
+      el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
+      el("text", {x: x1, y: PH - 3, "text-anchor": "end", "class": "tick"}, svg).textContent = xmode.label;
+      el("text", {x: 6, y: 14, "class": "ptitle"}, svg).textContent = spec.title + (spec.unit ? "  (" + spec.unit + ")" : "");
+      // series
+      spec.series.forEach(function (s) {
+        var ya = S[s.key], d = "", pen = false;
+        for (var k = 0; k < N; k++) {
+          if (fin(ya[k]) && fin(xs[k])) { d += (pen ? "L" : "M") + sx(xs[k]).toFixed(1) + "," + sy(ya[k]).toFixed(1); pen = true; }
+          else pen = false;
+        }
+        el("path", {d: d, "class": "series", stroke: s.color}, svg);
+      });
+      var cursor = el("line", {"class": "cursor", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
+      var dots = spec.series.map(function (s) { return el("circle", {r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, svg); });
+      var leg = h("div", "legend", panel);
+      var vals = spec.series.map(function (s) {
+        var it = h("span", "", leg), sw = h("i", "", it); sw.style.background = s.color;
+        h("span", "", it, s.label);
+        return h("b", "", it, "");
+      });
+      var hit = el("rect", {x: x0, y: y1, width: x1 - x0, height: y0 - y1, fill: "transparent"}, svg);
+      var pick = function (e) {
+        var r = svg.getBoundingClientRect(), vx = (e.clientX - r.left) / r.width * PW;
+        var xv = xr[0] + (vx - x0) / (x1 - x0) * (xr[1] - xr[0]);
+        var k = xmode.key === "t" ? lowerBound(T, xv) : nearest(xs, xv);
+        pause(); setFrame(k);
+      };
+      var down = false;
+      hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); });
+      hit.addEventListener("pointermove", function (e) { if (down) pick(e); });
+      hit.addEventListener("pointerup", function () { down = false; });
+      plots.push({spec: spec, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, y0: y0, y1: y1});
+    });
+  }
+  function drawPlots(k) {
+    plots.forEach(function (p) {
+      var x = p.xs[k], cx = fin(x) ? p.sx(x).toFixed(1) : -10;
+      p.cursor.setAttribute("x1", cx); p.cursor.setAttribute("x2", cx);
+      p.spec.series.forEach(function (s, n) {
+        var y = S[s.key][k], ok = fin(y) && fin(x);
+        p.dots[n].style.display = ok ? "" : "none";
+        if (ok) { p.dots[n].setAttribute("cx", cx); p.dots[n].setAttribute("cy", p.sy(y).toFixed(1)); }
+        p.vals[n].textContent = fmtS(s.key, y);
+      });
+    });
+  }
+
+  // ------------------------------------------------------------------ state and controls
+  var btnPlay = document.getElementById("play"), scrub = document.getElementById("scrubber"),
+      selSpeed = document.getElementById("speed"), selX = document.getElementById("xaxis");
+  scrub.max = String(N - 1);
+  var span = T[N - 1] - T[0];
+  // 1x is real time, unless a run is so short or so long that it could not be followed
+  var rate = span > 0 ? span / Math.min(Math.max(span, 1), 30) : 1;  // simulated s per real s
+  document.getElementById("ratenote").textContent =
+    Math.abs(rate - 1) < 1e-9 ? "1× = real time" : "1× shows the run in " + fmt(span / rate, 2) + " s";
+
+  function setFrame(k, fromScrub) {
+    k = Math.max(0, Math.min(N - 1, k | 0));
+    frame = k;
+    window.__linkdynFrame = k;
+    var best = drawAnim(k);
+    drawPlots(k);
+    drawInfo(k, best);
+    if (!fromScrub) scrub.value = String(k);
+    if (!playing) simT = T[k];
+  }
+  function tick(now) {
+    if (!playing) return;
+    if (last !== null && span > 0) {
+      var inc = (now - last) / 1000 * speed * rate;
+      simT += inc;
+      window.__linkdynPlayed += inc;  // simulated seconds played in all, for tests
+      if (simT > T[N - 1]) simT = T[0] + ((simT - T[0]) % span);
+    }
+    last = now;
+    setFrame(span > 0 ? lowerBound(T, simT) : (frame + 1) % N);
+    requestAnimationFrame(tick);
+  }
+  function play() {
+    if (playing) return;
+    playing = true; last = null; simT = T[frame];
+    if (frame >= N - 1) simT = T[0];
+    btnPlay.textContent = "❚❚ Pause";
+    requestAnimationFrame(tick);
+  }
+  function pause() { playing = false; btnPlay.textContent = "▶ Play"; }
+  btnPlay.addEventListener("click", function () { if (playing) pause(); else play(); });
+  document.getElementById("step").addEventListener("click", function () { pause(); setFrame(frame + 1); });
+  document.getElementById("stepback").addEventListener("click", function () { pause(); setFrame(frame - 1); });
+  scrub.addEventListener("input", function () { pause(); setFrame(parseInt(scrub.value, 10), true); });
+  selSpeed.addEventListener("change", function () { speed = parseFloat(selSpeed.value) || 1; });
+  speed = parseFloat(selSpeed.value) || 1;
+  D.xaxes.forEach(function (a, n) {
+    var o = document.createElement("option"); o.value = String(n); o.textContent = a.label; selX.appendChild(o);
+  });
+  selX.addEventListener("change", function () { xmode = D.xaxes[parseInt(selX.value, 10)]; buildPlots(); drawPlots(frame); });
+  document.getElementById("show-labels").addEventListener("change", function (e) { gLabels.style.display = e.target.checked ? "" : "none"; });
+  document.getElementById("show-traces").addEventListener("change", function (e) { gTraces.style.display = e.target.checked ? "" : "none"; });
+  document.getElementById("show-forces").addEventListener("change", function (e) { gForces.style.display = e.target.checked ? "" : "none"; });
+  document.addEventListener("keydown", function (e) {
+    var tag = (e.target && e.target.tagName) || "";
+    if (tag === "INPUT" || tag === "SELECT" || tag === "BUTTON") return;
+    if (e.key === " ") { e.preventDefault(); if (playing) pause(); else play(); }
+    else if (e.key === "ArrowRight") { pause(); setFrame(frame + 1); }
+    else if (e.key === "ArrowLeft") { pause(); setFrame(frame - 1); }
+  });
+
+  buildPlots();
+  setFrame(0);
+})();

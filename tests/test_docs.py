@@ -1,0 +1,263 @@
+"""The documentation keeps up with the code.
+
+- every command, argument and option of the command line is documented in ``docs/cli.md``, in the
+  section of its command (so a new option fails here until it is documented: that is intended);
+- every key the model loader accepts is documented in ``docs/model-format.md``;
+- every code name in the glossary of ``docs/conventions.md`` exists in the source;
+- every column of ``results.csv`` and every key of ``summary.json`` is described in ``docs/cli.md``;
+- the relative links between the docs point to pages and headings that exist.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+from pathlib import Path
+
+import click
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+import linkdyn.io as lio
+from linkdyn.cli import example_names, main
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+SRC = ROOT / "src" / "linkdyn"
+
+
+def read(name: str) -> str:
+    return (DOCS / name).read_text(encoding="utf-8")
+
+
+def mentions(text: str, token: str) -> bool:
+    """``token`` occurs in ``text`` as a whole option or word (``-o`` is not part of ``--outdir``)."""
+    return re.search(r"(?<![\w-])" + re.escape(token) + r"(?![\w-])", text) is not None
+
+
+def sections(text: str) -> list[tuple[int, str, str]]:
+    """Markdown sections as (level, heading text without backticks, body up to the next heading
+    of the same or a higher level), skipping fenced code blocks."""
+    lines = text.splitlines()
+    heads, fenced = [], False
+    for k, line in enumerate(lines):
+        if line.lstrip().startswith("```"):
+            fenced = not fenced
+        m = None if fenced else re.match(r"(#{1,6})\s+(.*)$", line)
+        if m:
+            heads.append((k, len(m.group(1)), m.group(2).replace("`", "").strip()))
+    out = []
+    for n, (k, level, title) in enumerate(heads):
+        end = next((k2 for k2, l2, _ in heads[n + 1:] if l2 <= level), len(lines))
+        out.append((level, title, "\n".join(lines[k:end])))
+    return out
+
+
+# ------------------------------------------------------------------------------- command line
+
+def commands(group: click.Group, prefix: tuple[str, ...] = ()):
+    """(path, command) of every command, recursing into sub-groups."""
+    for name, cmd in sorted(group.commands.items()):
+        yield prefix + (name,), cmd
+        if isinstance(cmd, click.Group):
+            yield from commands(cmd, prefix + (name,))
+
+
+def param_tokens(cmd: click.Command) -> list[str]:
+    """Every spelling of every option (``-o``, ``--outdir``), the metavar of every argument and
+    every choice of a choice-valued parameter, help option included."""
+    ctx = click.Context(cmd, info_name=cmd.name)
+    tokens = []
+    for p in cmd.get_params(ctx):
+        if isinstance(p, click.Option):
+            tokens += list(p.opts) + list(p.secondary_opts)
+        else:
+            tokens.append(p.human_readable_name)
+        if isinstance(p.type, click.Choice):
+            tokens += [str(c) for c in p.type.choices]
+    return tokens
+
+
+COMMANDS = list(commands(main))
+
+
+def test_the_cli_has_commands():
+    assert {"analyze", "check", "example"} <= {path[-1] for path, _ in COMMANDS}
+
+
+@pytest.mark.parametrize("path, cmd", COMMANDS, ids=[" ".join(p) for p, _ in COMMANDS])
+def test_every_command_and_option_is_documented(path, cmd):
+    text = read("cli.md")
+    title = "linkdyn " + " ".join(path)
+    found = [body for _, head, body in sections(text)
+             if re.search(re.escape(title) + r"(?![\w-])", head)]
+    assert found, f"docs/cli.md has no section headed '{title}' (e.g. '## `{title}`')"
+    body = found[0]
+    missing = [tok for tok in param_tokens(cmd) if not mentions(body, tok)]
+    assert not missing, (f"docs/cli.md, section '{title}': document {', '.join(missing)} "
+                         f"(see `{title} --help`)")
+
+
+def test_group_options_are_documented():
+    text = read("cli.md")
+    missing = [tok for tok in param_tokens(main) if not mentions(text, tok)]
+    assert not missing, f"docs/cli.md: document the options of `linkdyn` itself: {missing}"
+
+
+# ------------------------------------------------------------------------------- model format
+
+def loader_keys() -> dict[str, set[str]]:
+    """Keys accepted by the loader: the module's ``SECTIONS`` and ``*_KEYS`` constants (tuples, or
+    dicts of kind -> keys), plus the literal key tuples passed to ``_Reader.table`` in io.py."""
+    found: dict[str, set[str]] = {}
+    for name in dir(lio):
+        if name != "SECTIONS" and not name.endswith("_KEYS"):
+            continue
+        value = getattr(lio, name)
+        keys = set(value) if not isinstance(value, dict) else set(value) | {
+            k for v in value.values() for k in v}
+        found[name] = {k for k in keys if isinstance(k, str)}
+    tree = ast.parse(Path(lio.__file__).read_text(encoding="utf-8"))
+    literal = set()
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                and node.func.attr == "table" and len(node.args) >= 3
+                and isinstance(node.args[2], ast.Tuple)):
+            literal |= {e.value for e in node.args[2].elts
+                        if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+    found["io.py table(...) literals"] = literal
+    return found
+
+
+def documented_key(text: str, key: str) -> bool:
+    """``key`` is written as a key: in backticks, quoted, as a [section], or as ``key =``."""
+    k = re.escape(key)
+    return any(re.search(p, text) for p in (
+        r"`" + k + r"`", r'"' + k + r'"', r"\[\[?" + k + r"\]\]?", r"(?<![\w.])" + k + r"\s*="))
+
+
+def test_loader_constants_are_found():
+    keys = loader_keys()
+    assert {"SECTIONS", "BODY_KEYS", "JOINT_KEYS"} <= set(keys)
+    assert "mechanism" in keys["SECTIONS"] and "inertia_about" in keys["BODY_KEYS"]
+    assert {"gravity", "length", "cut", "samples"} <= keys["io.py table(...) literals"]
+
+
+@pytest.mark.parametrize("group, keys", sorted(loader_keys().items()))
+def test_every_model_key_is_documented(group, keys):
+    text = read("model-format.md")
+    missing = sorted(k for k in keys if not documented_key(text, k))
+    assert not missing, f"docs/model-format.md: document the {group} keys {missing}"
+
+
+def test_every_unit_name_is_documented():
+    text = read("model-format.md")
+    names = set(lio.LENGTH_UNITS) | set(lio.ANGLE_UNITS)
+    missing = sorted(u for u in names if not mentions(text, u))
+    assert not missing, f"docs/model-format.md: document the units {missing}"
+
+
+# ------------------------------------------------------------------------------- glossary
+
+def glossary_names() -> list[str]:
+    """Identifiers in the backticked code names (2nd column) of the glossary table."""
+    body = next(b for _, head, b in sections(read("conventions.md")) if head == "Glossary")
+    rows = [line for line in body.splitlines() if line.startswith("|")][2:]  # skip header, rule
+    names = []
+    for row in rows:
+        cells = [c.strip() for c in row.strip().strip("|").split("|")]
+        for span in re.findall(r"`([^`]+)`", cells[1]):
+            names += re.findall(r"[A-Za-z_][A-Za-z0-9_]*", span)
+    return names
+
+
+def source_words() -> set[str]:
+    words: set[str] = set()
+    for f in SRC.rglob("*.py"):
+        words |= set(re.findall(r"[A-Za-z_][A-Za-z0-9_]*", f.read_text(encoding="utf-8")))
+    return words
+
+
+def test_every_glossary_code_name_exists_in_the_source():
+    names = glossary_names()
+    assert len(set(names)) > 40, "the glossary table was not found or lost its code names"
+    words = source_words()
+    missing = sorted({n for n in names if n not in words})
+    assert not missing, f"docs/conventions.md glossary: no such name in src/linkdyn: {missing}"
+
+
+# ------------------------------------------------------------------------------- outputs
+
+def _run(name: str, tmp_path: Path):
+    """``linkdyn analyze`` on a short run of a bundled example: (csv header, summary dict)."""
+    model = tmp_path / f"{name}.toml"
+    model.write_text(Path(linkdyn.example_path(name)).read_text(encoding="utf-8"),
+                     encoding="utf-8")
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(out), "--samples", "9",
+                                    "--duration", "0.1"])
+    assert res.exit_code == 0, res.output
+    header = (out / "results.csv").read_text(encoding="utf-8").splitlines()[0].split(",")
+    return header, json.loads((out / "summary.json").read_text(encoding="utf-8"))
+
+
+def _keys(x, names: set[str]):
+    """All dict keys of a JSON value, recursively, except model names (joints, bodies)."""
+    if isinstance(x, dict):
+        for k, v in x.items():
+            if k not in names:
+                yield k
+            yield from _keys(v, names)
+    elif isinstance(x, list):
+        for v in x:
+            yield from _keys(v, names)
+
+
+@pytest.mark.parametrize("name", example_names())
+def test_results_columns_and_summary_keys_are_documented(name, tmp_path):
+    text = read("cli.md")
+    header, summary = _run(name, tmp_path)
+    mech = linkdyn.load(linkdyn.example_path(name))
+    # a column is documented by its pattern: q_<joint>, x_<body>.<point>, or its exact name
+    patterns = set()
+    for col in header:
+        m = re.match(r"([A-Za-z]+)_(.+)$", col)
+        known = m and (m.group(2) in {j.name for j in mech.joints} | {b.name for b in mech.bodies}
+                       or "." in m.group(2))
+        patterns.add(f"{m.group(1)}_<" if known else col)
+    missing = sorted(p for p in patterns if (p + ">" if p.endswith("<") else p) not in text
+                     and not (p.endswith("<") and p in text))
+    assert not missing, f"docs/cli.md: document the results.csv columns {missing}"
+    names = {j.name for j in mech.joints} | {b.name for b in mech.bodies}
+    keys = sorted(set(_keys(summary, names)))
+    missing = [k for k in keys if f"`{k}`" not in text]
+    assert not missing, f"docs/cli.md: document the summary.json keys {missing}"
+
+
+# ------------------------------------------------------------------------------- links
+
+def anchors(text: str) -> set[str]:
+    """GitHub's anchors of the headings of a page: lower case, punctuation dropped, spaces to '-'."""
+    out = set()
+    for _, title, _ in sections(text):
+        slug = re.sub(r"[^\w\- ]", "", title.lower()).replace(" ", "-")
+        out.add(slug)
+    return out
+
+
+@pytest.mark.parametrize("page", sorted(p.name for p in DOCS.glob("*.md")))
+def test_relative_links_point_to_existing_pages_and_headings(page):
+    text = read(page)
+    bad = []
+    for target, anchor in re.findall(r"\]\(([^)#\s]*)(?:#([^)\s]*))?\)", text):
+        if target.startswith(("http:", "https:", "mailto:")):
+            continue
+        if target and not target.endswith(".md"):
+            continue
+        if target and not (DOCS / target).is_file():
+            bad.append(target)
+        elif anchor and anchor not in anchors(read(target) if target else text):
+            bad.append(f"{target}#{anchor}")
+    assert not bad, f"docs/{page}: broken links {sorted(set(bad))}"

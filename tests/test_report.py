@@ -1,0 +1,334 @@
+"""report.html: one self-contained offline file, checked in a real browser.
+
+The browser is Debian's headless Chromium driven by Playwright through ``executable_path``
+(Playwright's own browser download is not used). Locally the browser tests skip when Chromium or
+Playwright is missing; with ``CI=true`` they fail instead, so CI cannot pass without them.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import shutil
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+from linkdyn import design, report
+from linkdyn.cli import main
+
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync"]
+IN_CI = os.environ.get("CI", "").strip().lower() in ("true", "1", "yes")
+
+
+def _chromium() -> str | None:
+    for path in ("/usr/bin/chromium", "/usr/bin/chromium-browser"):
+        if os.path.exists(path):
+            return path
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+def _unavailable(why: str):
+    if IN_CI:
+        pytest.fail(f"{why} (CI=true: the browser tests must run; .ci/run installs chromium)")
+    pytest.skip(why)
+
+
+def _analyze(tmp_path, example: str, *extra: str):
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    model = tmp_path / f"{example}.toml"
+    model.write_text(linkdyn.example_path(example).read_text("utf-8"), "utf-8")
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(out), *extra])
+    assert res.exit_code == 0, res.output
+    return out
+
+
+@pytest.fixture(scope="module")
+def hoeken_report(tmp_path_factory):
+    return _analyze(tmp_path_factory.mktemp("hoeken"), "hoeken", "--report") / "report.html"
+
+
+@pytest.fixture(scope="module")
+def browser():
+    exe = _chromium()
+    if exe is None:
+        _unavailable("Chromium is not installed (apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install playwright)")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
+        yield b
+        b.close()
+
+
+class Page:
+    """A page with every console error and uncaught exception recorded (an uncaught exception
+    arrives as ``pageerror``, not as a console message)."""
+
+    def __init__(self, browser, path, width=1400, height=1000):
+        self.page = browser.new_page(viewport={"width": width, "height": height})
+        self.errors: list[str] = []
+        self.requests: list[str] = []
+        self.page.on("console", lambda m: m.type == "error" and self.errors.append(m.text))
+        self.page.on("pageerror", lambda e: self.errors.append(f"pageerror: {e}"))
+        self.page.on("request", lambda r: self.requests.append(r.url))
+        self.page.goto(path.resolve().as_uri())
+        self.page.wait_for_function("window.__linkdynFrame === 0")
+
+    def frame(self) -> int:
+        return self.page.evaluate("window.__linkdynFrame")
+
+    def close(self):
+        self.page.close()
+
+
+@pytest.fixture
+def page(browser, hoeken_report):
+    pg = Page(browser, hoeken_report)
+    yield pg
+    pg.close()
+
+
+# ---------------------------------------------------------------------------- the file
+
+def test_report_is_one_self_contained_file(tmp_path):
+    base = set(os.listdir(_analyze(tmp_path / "a", "hoeken")))
+    with_report = set(os.listdir(_analyze(tmp_path / "b", "hoeken", "--report")))
+    # SPEC: --report adds the plots and one self-contained report.html
+    added = with_report - base
+    assert "report.html" in added and not any(f.endswith(".html") for f in added - {"report.html"})
+    assert {f for f in added if f.startswith("plot_")} == added - {"report.html"}
+    assert {"plot_joints.png", "plot_joints.svg", "plot_efforts.png"} <= added
+    text = (tmp_path / "b" / "out" / "report.html").read_text("utf-8")
+    assert "http://" not in text and "https://" not in text
+    assert not re.search(r"<script[^>]*\bsrc\s*=", text, re.I)
+    assert not re.search(r"<link[^>]*\bhref\s*=", text, re.I)
+    assert not re.search(r"<(img|iframe|object|embed)\b", text, re.I)
+    assert not re.search(r"@import|url\(\s*['\"]?(https?:|//)", text, re.I)
+    assert "fetch(" not in text and "XMLHttpRequest" not in text
+    # the data, the script and the styles are inline
+    assert '<script id="linkdyn-data" type="application/json">' in text
+    for elem_id in ("play", "scrubber", "speed", "time", "anim"):
+        assert f'id="{elem_id}"' in text
+    assert len(text) < 400_000
+
+
+def test_long_runs_are_downsampled_for_the_page():
+    m = linkdyn.load(linkdyn.example_path("hoeken"))
+    sol = linkdyn.analyze(m, np.linspace(0.0, 8 / 3, 5001))
+    data = report.page_data(sol)
+    assert len(data["t"]) == report.MAX_FRAMES
+    assert data["total_samples"] == 5001
+    assert data["t"][0] == 0.0 and data["t"][-1] == pytest.approx(8 / 3)
+    assert all(len(v) == report.MAX_FRAMES for v in data["series"].values())
+    html = report.render(sol, design.summary(sol))
+    assert "the page shows 2000 of them" in html
+    assert len(html) < 1_500_000
+
+
+def test_page_data_matches_the_solution():
+    m = linkdyn.load(linkdyn.example_path("hoeken"))
+    sol = linkdyn.analyze(m, np.linspace(0.0, 4 / 3, 361))
+    d = report.page_data(sol)
+    # driver torque, reaction magnitudes, multipliers: the solution's numbers to 5 digits
+    np.testing.assert_allclose(d["series"]["tau:J1"], sol.dyn.tau[:, 0], rtol=1e-4, atol=1e-9)
+    np.testing.assert_allclose(d["series"]["F:J2"],
+                               np.linalg.norm(sol.reactions.force[:, 1], axis=-1), rtol=1e-4)
+    np.testing.assert_allclose(d["series"]["lam:J4:x"], sol.dyn.lam[:, 0], rtol=1e-4, atol=1e-9)
+    np.testing.assert_allclose(d["series"]["q:J3"], np.degrees(sol.kin.q[:, 2]), rtol=1e-4)
+    xy = sol.point("coupler", "P")
+    np.testing.assert_allclose(d["geom"]["points"]["coupler.P"]["x"], xy[:, 0], rtol=1e-5)
+    assert d["geom"]["traces"] == ["coupler.P"]
+    shapes = {b["name"]: b["shape"] for b in d["geom"]["bodies"]}
+    assert shapes == {"crank": "bar", "coupler": "line", "rocker": "bar"}
+    assert [p["title"] for p in d["plots"]][:3] == ["Joint angles", "Joint rates",
+                                                   "Joint accelerations"]
+    assert {s["label"] for p in d["plots"] for s in p["series"]} >= {"λ x", "λ y", "Fx", "Fy"}
+
+
+def test_summary_tables_render_known_and_unknown_keys():
+    s = {"model": "m", "samples": 3, "drivers": {"J1": {"effort": "torque", "unit": "N m",
+                                                        "peak": 1.5, "peak_time_s": 0.1,
+                                                        "rms": 0.7, "motion": "constant"}},
+         "reactions": {"J1": {"peak_force_N": 12.0, "peak_time_s": 0.2}},
+         "new_metric_Nm": 3.25, "nested": {"a_N": 1.0, "b": [1, 2]}, "health": {"x": None}}
+    html = report.summary_html(s)
+    assert "1.500 N m" in html and "12.00 N" in html
+    assert "New metric (N m)" in html and "3.250" in html
+    assert "a (N)" in html and "1, 2" in html
+    assert report.pretty_key("peak_force_N") == "peak force (N)"
+    assert report.fmt(0.000123) == "1.230e-04" and report.fmt(1234.56) == "1235"
+    assert report.fmt(0.5) == "0.5000"
+
+
+# ---------------------------------------------------------------------------- in the browser
+
+def test_page_loads_without_errors(page):
+    n_plots = page.page.locator("#plots .panel").count()
+    assert n_plots >= 8
+    assert page.page.locator(".cursor").count() == n_plots
+    assert page.page.locator("#anim line, #anim polygon, #anim circle").count() > 10
+    assert page.page.inner_text("#time").startswith("t = 0")
+    assert "J1" in page.page.inner_text("#drivers")
+    assert "most loaded joint" in page.page.inner_text("#loaded")
+    assert page.errors == []
+    assert all(u.startswith("file:") for u in page.requests), page.requests
+
+
+def test_play_advances_the_frame_and_pause_stops_it(page):
+    assert page.frame() == 0
+    page.page.click("#play")
+    page.page.wait_for_function("window.__linkdynFrame > 5", timeout=5000)
+    page.page.click("#play")  # pause
+    f1 = page.frame()
+    page.page.wait_for_timeout(250)
+    assert page.frame() == f1
+    assert "Play" in page.page.inner_text("#play")
+    assert page.errors == []
+
+
+def test_speed_control_offers_quarter_to_four_times(page):
+    values = page.page.eval_on_selector_all("#speed option", "os => os.map(o => +o.value)")
+    assert min(values) == 0.25 and max(values) == 4 and 1 in values
+    # simulated seconds per wall-clock second, measured in the page (Hoeken: 1x is real time)
+    measure = """async () => {
+        const p0 = window.__linkdynPlayed, t0 = performance.now();
+        await new Promise(r => setTimeout(r, 400));
+        const p1 = window.__linkdynPlayed, t1 = performance.now();
+        return (p1 - p0) / ((t1 - t0) / 1000);
+    }"""
+    ratios = {}
+    for speed in ("4", "0.25"):
+        page.page.select_option("#speed", speed)
+        page.page.click("#play")
+        page.page.wait_for_function("window.__linkdynPlayed > 0.005", timeout=5000)
+        ratios[speed] = page.page.evaluate(measure)
+        page.page.click("#play")
+        page.page.evaluate("window.__linkdynPlayed = 0")
+    assert 2.5 < ratios["4"] < 4.5, ratios
+    assert 0.15 < ratios["0.25"] < 0.3, ratios
+    assert page.errors == []
+
+
+def test_scrubber_moves_the_plot_cursors_and_the_time(page):
+    cursor = page.page.locator(".cursor").first
+    x0 = float(cursor.get_attribute("x1"))
+    t0 = page.page.inner_text("#time")
+    page.page.focus("#scrubber")
+    page.page.keyboard.press("End")
+    n = page.page.evaluate("window.__linkdynFrame")
+    assert n == 360
+    x1 = float(cursor.get_attribute("x1"))
+    assert x1 > x0 + 100  # the cursor crossed the panel
+    assert page.page.inner_text("#time") != t0
+    # half-way, set as a user's drag would (input event)
+    page.page.eval_on_selector(
+        "#scrubber", "s => { s.value = '180'; s.dispatchEvent(new Event('input')); }")
+    assert page.frame() == 180
+    xs = page.page.eval_on_selector_all(".cursor", "cs => cs.map(c => +c.getAttribute('x1'))")
+    assert all(x0 < x < x1 for x in xs)
+    # clicking a plot moves the cursor there too
+    svg = page.page.locator("#plots .panel svg").first
+    box = svg.bounding_box()
+    svg.click(position={"x": box["width"] * 0.3, "y": box["height"] * 0.5})
+    assert 0 < page.frame() < 180
+    assert page.errors == []
+
+
+def test_screenshot_is_not_blank(page):
+    page.page.click("#play")
+    page.page.wait_for_timeout(300)
+    page.page.click("#play")
+    png = page.page.screenshot()
+    try:
+        from PIL import Image
+        img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), float)
+    except ImportError:  # pragma: no cover - matplotlib reads PNG itself
+        import matplotlib.image as mpimg
+        img = mpimg.imread(io.BytesIO(png), format="png")[..., :3] * 255.0
+    assert img.shape[0] > 500 and img.shape[1] > 1000
+    assert img.std() > 15.0
+    q = img.reshape(-1, 3).astype(int) // 8
+    colours = np.unique(q[:, 0] * 1024 + q[:, 1] * 32 + q[:, 2])
+    assert len(colours) > 60
+    # the animation itself is drawn, not only the page's text
+    box = page.page.locator("#anim").bounding_box()
+    y0, x0 = int(box["y"]), int(box["x"])
+    anim = img[y0:y0 + int(box["height"]), x0:x0 + int(box["width"])]
+    assert (np.abs(anim - anim.mean(axis=(0, 1))).sum(-1) > 60).mean() > 0.01
+    assert page.errors == []
+
+
+@pytest.mark.parametrize("example", ["slider_crank", "inverted_slider_crank", "stephenson",
+                                     "fivebar"])
+def test_other_mechanisms_render_and_play(browser, tmp_path, example):
+    out = _analyze(tmp_path, example, "--report")
+    pg = Page(browser, out / "report.html", width=1200, height=900)
+    try:
+        pg.page.click("#play")
+        pg.page.wait_for_function("window.__linkdynFrame > 3", timeout=5000)
+        pg.page.click("#play")
+        if example in ("slider_crank", "inverted_slider_crank"):  # a slider block is drawn
+            assert pg.page.locator("#anim rect[rx]").count() == 1
+        if example == "stephenson":  # the ternary coupler is a filled plate
+            assert pg.page.locator("#anim polygon[fill-opacity]").count() == 1
+        if example == "fivebar":  # two drivers
+            assert pg.page.locator("#drivers .drv").count() == 2
+        pg.page.check("#show-forces")
+        pg.page.select_option("#xaxis", index=1)
+        assert pg.page.locator(".cursor").count() == pg.page.locator("#plots .panel").count()
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def _triple_rocker():
+    """A non-Grashof four-bar driven a full turn: the loop cannot close for part of it."""
+    a, b, c, d = 0.07, 0.08, 0.07, 0.09
+
+    def bar(L, m):
+        return {"mass": m, "com": [L / 2, 0.0], "inertia": m * L * L / 12}
+
+    return linkdyn.model_from_dict({
+        "mechanism": {"name": "triple rocker past its limits"},
+        "bodies": [
+            {"name": "ground", "points": {"O1": [0.0, 0.0], "O4": [d, 0.0]}},
+            {"name": "crank", "points": {"O1": [0.0, 0.0], "A": [a, 0.0]}, **bar(a, 0.2)},
+            {"name": "coupler", "points": {"A": [0.0, 0.0], "B": [b, 0.0], "P": [0.04, 0.03]},
+             **bar(b, 0.5)},
+            {"name": "rocker", "points": {"O4": [0.0, 0.0], "B": [c, 0.0]}, **bar(c, 0.3)}],
+        "joints": [{"name": "J1", "type": "revolute", "connect": ["ground.O1", "crank.O1"]},
+                   {"name": "J2", "type": "revolute", "connect": ["crank.A", "coupler.A"]},
+                   {"name": "J3", "type": "revolute", "connect": ["coupler.B", "rocker.B"]},
+                   {"name": "J4", "type": "revolute", "connect": ["ground.O4", "rocker.O4"]}],
+        "drivers": [{"joint": "J1", "motion": {"kind": "constant_speed", "speed": 6.283}}],
+        "assembly": {"phi": {"crank": 1.5, "coupler": 0.0, "rocker": 2.0}}})
+
+
+def test_singular_samples_are_gaps_not_errors(browser, tmp_path):
+    sol = linkdyn.analyze(_triple_rocker(), np.linspace(0.0, 1.0, 200), allow_singular=True)
+    assert 0 < np.sum(~sol.valid) < 200
+    data = report.page_data(sol)
+    assert None in data["series"]["tau:J1"] and not all(data["valid"])
+    path = tmp_path / "report.html"
+    report.outputs(sol, design.summary(sol))["report.html"](path)
+    pg = Page(browser, path)
+    try:
+        bad = int(np.argmin(sol.valid))
+        pg.page.eval_on_selector(
+            "#scrubber", f"s => {{ s.value = '{bad}'; s.dispatchEvent(new Event('input')); }}")
+        assert "singular" in pg.page.inner_text("#frameinfo")
+        pg.page.click("#play")
+        pg.page.wait_for_timeout(400)
+        pg.page.click("#play")
+        assert pg.errors == []
+    finally:
+        pg.close()
