@@ -18,8 +18,8 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 
 demo: $(VENV)/.installed
 	$(BIN)/linkdyn example hoeken > hoeken.toml
-	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken
-	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json"
+	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
+	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json, plots out/hoeken/plot_*.png and the report out/hoeken/report.html"
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q
