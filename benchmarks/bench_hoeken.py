@@ -85,7 +85,7 @@ def baseline_analysis(sol):
         i = kin.layout.topo.bodies.index(n)
         rel = np.asarray(b.com) - kin.layout.origin[i]  # mass centre relative to O_i
         c = kinematics.last(kin.pose.point(i, rel))
-        ac = kinematics.last(kinematics._point_acc(kin.twists[i], kin.rates[i], kin.pose.rotate(i, rel)))
+        ac = kinematics.last(kinematics.point_acceleration(kin.twists[i], kin.rates[i], kin.pose.rotate(i, rel)))
         com[n], acc_c[n] = c, ac
         for j in pins[n]:
             pts[(j, n)] = sol.point(n, joint_pts[(j, n)])

@@ -212,7 +212,6 @@ def test_efforts_and_loop_forces_match_mujoco(case):
 
     dof = {jt.name: m.jnt_dofadr[m.joint(jt.name).id] for _, jt in tree.values()}
     drivers = model.drivers
-    jnames = [j.name for j in model.joints]
     cut_names = list(model.cut)
 
     taus, lams = [], []

@@ -17,7 +17,8 @@ import numpy as np
 
 from . import joints as jk
 from .dynamics.denoc import DynamicSolution, composite
-from .kinematics import KinematicSolution, _cut_frames
+from .kinematics import KinematicSolution
+from .kinematics.recursion import _cut_frames
 from .model import Model
 from .planar import first, last, shift_wrench
 

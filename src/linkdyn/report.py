@@ -157,7 +157,7 @@ def _ground_outline(ground, used: set) -> list[str]:
 
 def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
     """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI)."""
-    m, kin = sol.model, sol.kin
+    m = sol.model
     idx = frame_indices(len(sol.t), max_frames)
     t = np.asarray(sol.t)[idx]
     cols = sol.columns

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import REVOLUTE
-from .planar import cross, dot, perp, rotate
+from ..model import REVOLUTE
+from ..planar import cross, dot, perp, rotate
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,281 @@
+"""Position analysis: assembly at t = 0 and the branch followed to every sample.
+
+The assembly solves the closure from the ``[assembly]`` guess (damped Newton, deterministic
+restarts). The branch is then followed through continuation nodes at most ``STEP_ANGLE`` of
+driver travel apart: in closed form when every loop is an RRR dyad (:mod:`.dyads`), else by a
+predictor and a Newton corrector per node (a loop over driver steps, never over samples).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import AssemblyError
+from ..model import REVOLUTE, Model
+from ..planar import solve_small, wrap
+from . import dyads
+from .layout import Layout
+from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
+                        motion_vectors)
+
+TOL = 1e-12          # closure residual target, relative to the mechanism's size
+ACCEPT = 1e-10       # largest residual accepted as closed
+STEP_ANGLE = 0.1     # rad of driver travel between continuation nodes
+STEP_LENGTH = 0.02   # fraction of the mechanism's size between continuation nodes
+
+
+def _scaled(lay: Layout, g: np.ndarray) -> np.ndarray:
+    """Closure residual (2 n_cut, ...) made dimensionless (lengths / size), max over rows."""
+    rows = []
+    for k, c in enumerate(lay.cuts):
+        rows += [g[2 * k] / (lay.size if c.kind == REVOLUTE else 1.0), g[2 * k + 1] / lay.size]
+    if not rows:
+        return np.zeros(g.shape[1:])
+    return np.max(np.abs(np.stack(rows)), axis=0)
+
+
+def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
+    """Solve the closure for the dependent tree coordinates of ``q`` (n, ...), on a copy.
+
+    Returns ``(q, err)``: ``err`` (...) is the final scaled residual (NaN or large if it failed).
+    With ``damped``, each step is halved until the residual decreases (for assembly).
+    """
+    dep = np.array(lay.topo.dependent, int)
+    q = np.array(q, dtype=float)
+    if len(dep) == 0:
+        return q, np.zeros(q.shape[1:])
+    pose = forward_positions(lay, q)
+    g = closure_residual(lay, pose)
+    err = _scaled(lay, g)
+    for _ in range(maxiter):
+        active = err > TOL
+        if not np.any(active):
+            break
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))[:, dep - 1]
+        dx, _ = solve_small(J, -g)
+        dx = np.where(np.isfinite(dx) & active, dx, 0.0)
+        step = np.ones(err.shape)
+        for _ in range(30 if damped else 1):
+            trial = q.copy()
+            trial[dep] += step * dx
+            pose_t = forward_positions(lay, trial)
+            g_t = closure_residual(lay, pose_t)
+            err_t = _scaled(lay, g_t)
+            worse = ~(err_t < err) & active
+            if not damped or not np.any(worse):
+                break
+            step = np.where(worse, step / 2, step)
+        q, pose, g, err = trial, pose_t, g_t, err_t
+    return q, err
+
+
+def _guess(model: Model, lay: Layout) -> np.ndarray:
+    """Tree coordinates (n,) near the ``[assembly]`` guess (absolute angles, joint values)."""
+    topo = lay.topo
+    phi = {"ground": 0.0, **model.assembly_phi}
+    q = np.zeros(topo.n)
+    for i in range(1, topo.n):
+        jt = model.joints[topo.tree_joint[i]]
+        if jt.name in model.assembly_q:
+            q[i] = model.assembly_q[jt.name]
+        elif jt.kind == REVOLUTE and jt.body_a in phi and jt.body_b in phi:
+            q[i] = phi[jt.body_b] - phi[jt.body_a]
+    return q
+
+
+def _drivers_at(model: Model, lay: Layout, q_drv: np.ndarray) -> dict[str, float]:
+    topo = lay.topo
+    return {model.joints[topo.tree_joint[i]].name: float(q_drv[k])
+            for k, i in enumerate(topo.driven)}
+
+
+def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
+             raise_error: bool = True) -> np.ndarray:
+    """Assembled tree coordinates (n, D) of D designs at the first sample, on the branch of
+    each design's ``[assembly]`` guess.
+
+    A damped Newton solve from the guesses; designs where it fails get 64 deterministic
+    restarts, solved at once, and the converged one nearest the guess is kept. A design that
+    still does not close is NaN, or raises :class:`AssemblyError` if ``raise_error``.
+    """
+    topo = lay.topo
+    dep = list(topo.dependent)
+    # batch shape (D, 1): the trailing axis stands for time, so design arrays broadcast
+    q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]
+    q0[list(topo.driven)] = q_drv0[:, None, None]
+    q, err = newton(lay, q0, maxiter=60, damped=True)
+    q0, q, err = q0[..., 0], q[..., 0], err[..., 0]
+    failed = ~(err <= ACCEPT)
+    if np.any(failed):
+        rng = np.random.default_rng(0)
+        starts = np.repeat(q0[..., None], 64, axis=-1)
+        for i in dep:
+            starts[i] = (rng.uniform(-np.pi, np.pi, 64) if lay.kind[i] == REVOLUTE
+                         else rng.uniform(-2, 2, 64) * lay.size)
+        qs, errs = newton(lay, starts, maxiter=60, damped=True)  # batch (D, 64)
+        ok = errs <= ACCEPT
+        # distance to the guess: angles modulo 2 pi, slider travel relative to the size
+        gap = qs[dep] - q0[dep, :, None]
+        rev = np.array([lay.kind[i] == REVOLUTE for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
+        dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / np.min(lay.size))), axis=0)
+        best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
+        pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
+        rescued = failed & np.any(ok, axis=-1)
+        q[:, rescued] = pick[:, rescued]
+        failed &= ~rescued
+        if np.any(failed):
+            if raise_error:
+                d = int(np.argmax(failed))
+                raise AssemblyError(
+                    "the mechanism cannot be assembled: the loops do not close"
+                    + (f" (design {d})" if len(models) > 1 else ""),
+                    file=models[d].source, time=t0, drivers=_drivers_at(models[d], lay, q_drv0),
+                    fix="Check the link lengths and the [assembly] guess")
+            q[:, failed] = np.nan
+    return q
+
+
+def driver_values(model: Model, t: np.ndarray):
+    """Driver coordinates, rates, accelerations, each (n_drivers, T)."""
+    vals = [d.motion.evaluate(t) for d in model.drivers]
+    if not vals:
+        z = np.zeros((0,) + t.shape)
+        return z, z, z
+    return tuple(np.stack([np.broadcast_to(v[k], t.shape) for v in vals]) for k in range(3))
+
+
+def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.ndarray:
+    """Continuation times from ``start`` to ``end`` (either order): the drivers move at most one
+    step between consecutive nodes."""
+    probe = np.linspace(start, end, 4097)
+    qp, _, _ = driver_values(model, probe)
+    step = np.array([STEP_ANGLE if lay.kind[i] == REVOLUTE else STEP_LENGTH * np.min(lay.size)
+                     for i in lay.topo.driven])[:, None]
+    moves = np.max(np.abs(np.diff(qp, axis=1)) / step, axis=0) if len(step) else np.zeros(4096)
+    travel = np.concatenate(([0.0], np.cumsum(moves)))
+    if not travel[-1] > 0:
+        return np.array([start, end])
+    n = int(np.clip(np.ceil(travel[-1]) + 1, 2, 20000))
+    return np.interp(np.linspace(0, travel[-1], n), travel, probe)
+
+
+def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+    """Continuation from the assembly at t = 0 forwards to ``hi`` and backwards to ``lo``.
+
+    Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
+    interval ``reach`` (..., 2) over which each branch was followed."""
+    if lay.dyads is not None and q0.ndim == 1:
+        return _follow_dyads(model, lay, q0, lo, hi)
+    if lay.dyads is not None:  # designs (n, D, 1): the nodes take the place of the time axis
+        nodes, Q, QD, reach = _follow_dyads(model, lay, q0[..., 0], lo, hi)
+        return nodes, Q[..., None, :], QD[..., None, :], reach[..., None, :]
+    nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
+    for end in (hi, lo):
+        if end == 0.0:
+            reach.append(np.zeros(q0.shape[1:]))
+            continue
+        nd = _travel_nodes(model, lay, 0.0, end)
+        Qe, QDe, last = _continuation(model, lay, q0, nd)
+        reach.append(last)
+        if end < 0:
+            nd, Qe, QDe = nd[::-1], Qe[..., ::-1], QDe[..., ::-1]
+            nodes, Q, QD = [nd[:-1]] + nodes, [Qe[..., :-1]] + Q, [QDe[..., :-1]] + QD
+            QD[-1] = QDe[..., -1:] if QD[-1] is None else QD[-1]
+        else:
+            nodes, Q, QD = nodes + [nd[1:]], Q + [Qe[..., 1:]], QD + [QDe[..., 1:]]
+            QD[0 if lo == 0.0 else -2] = QDe[..., :1]
+    QD = [x for x in QD if x is not None]
+    return (np.concatenate(nodes), np.concatenate(Q, axis=-1), np.concatenate(QD, axis=-1),
+            np.stack([reach[1], reach[0]], axis=-1))
+
+
+def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+    """:func:`_follow` for mechanisms whose loops are all RRR dyads: every node is solved at
+    once in closed form in the assembly mode of ``q0``, and the dependent angles are unwrapped
+    along the nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
+    topo = lay.topo
+    dep, drv = list(topo.dependent), list(topo.driven)
+    nodes = np.unique(np.concatenate((_travel_nodes(model, lay, 0.0, lo),
+                                      _travel_nodes(model, lay, 0.0, hi))))
+    k0 = int(np.searchsorted(nodes, 0.0))
+    nq, nqd, _ = driver_values(model, nodes)
+    shape = (-1,) + (1,) * (q0.ndim - 1) + (len(nodes),)
+    Q = np.repeat(q0[..., None], len(nodes), axis=-1)
+    Q[drv] = nq.reshape(shape)
+    modes = dyads.sides(lay, lay.dyads, q0[..., None], forward_positions)  # (..., 1) each
+    Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
+    J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+    x, _ = dependent_rates(lay, J, nqd.reshape(shape))
+    ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
+    for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
+        if lay.kind[i] == REVOLUTE:
+            step = np.where(ok[..., 1:] & ok[..., :-1], wrap(np.diff(Q[i], axis=-1)), 0.0)
+            path = np.concatenate((np.zeros(step.shape[:-1] + (1,)), np.cumsum(step, -1)), -1)
+            Q[i] = np.where(ok, q0[i][..., None] + path - path[..., k0:k0 + 1], np.nan)
+    QD = np.zeros(Q.shape)
+    QD[drv], QD[dep] = nqd.reshape(shape), x
+    # the branch is followed over the nodes that close, contiguous around t = 0
+    up = np.cumprod(ok[..., k0:], axis=-1).sum(-1)
+    down = np.cumprod(ok[..., k0::-1], axis=-1).sum(-1)
+    reach = np.stack((np.where(down > 0, nodes[np.maximum(k0 - down + 1, 0)], np.inf),
+                      np.where(up > 0, nodes[np.minimum(k0 + up - 1, len(nodes) - 1)], -np.inf)),
+                     axis=-1)
+    return nodes, Q, QD, reach
+
+
+def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
+    """Follow the branch from ``q_start`` (n, ...) through the node times: a predictor
+    ``q += qd dt`` and a Newton corrector per node. Returns node coordinates and rates
+    (n, ..., K) and the last node time (...) where the loops still close."""
+    topo = lay.topo
+    dep, drv = list(topo.dependent), list(topo.driven)
+    nq, nqd, _ = driver_values(model, nodes)
+    Q = np.full(q_start.shape + (len(nodes),), np.nan)
+    QD = np.full(q_start.shape + (len(nodes),), np.nan)
+    q = q_start.copy()
+    last_ok = np.full(q_start.shape[1:], np.nan)
+    alive = np.isfinite(q_start[0])
+    for k in range(len(nodes)):
+        q[drv] = nq[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
+        if k:
+            q[dep] = Q[dep, ..., k - 1] + QD[dep, ..., k - 1] * (nodes[k] - nodes[k - 1])
+        q, err = newton(lay, q)
+        pose = forward_positions(lay, q)
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+        x, _ = dependent_rates(lay, J, nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1)))
+        alive = alive & (err <= ACCEPT) & np.all(np.isfinite(x), axis=0)
+        if not np.any(alive):
+            break  # every branch ends here; samples beyond are flagged
+        Q[..., k] = np.where(alive, q, np.nan)
+        QD[..., k] = 0.0
+        QD[drv, ..., k] = nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
+        QD[dep, ..., k] = np.where(alive, x, np.nan)
+        last_ok = np.where(alive, nodes[k], last_ok)
+        q = np.where(alive, q, np.nan)
+    return Q, QD, last_ok
+
+
+def _correct(lay: Layout, q: np.ndarray, modes=None):
+    """Close the loops of a close guess for all samples at once: in closed form when every loop
+    is an RRR dyad, else by one Newton step; then Newton steps for samples whose residual is
+    still above ``ACCEPT``. ``modes``: the dyads' assembly modes (default: the guess's).
+    Returns q, pose, p, J, err."""
+    dep = np.array(lay.topo.dependent)
+    guess = q
+    if lay.dyads is not None:
+        # every loop is an RRR dyad: close it exactly on the guess's branch
+        q, pose = dyads.solve(lay, lay.dyads, q, forward_positions, sides=modes)
+    else:
+        pose = forward_positions(lay, q)
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+        dx, _ = solve_small(J[:, dep - 1], -closure_residual(lay, pose))
+        q = q.copy()
+        q[dep] += np.where(np.isfinite(dx), dx, 0.0)
+        pose = forward_positions(lay, q)
+    err = _scaled(lay, closure_residual(lay, pose))
+    retry = ~(err <= ACCEPT) & np.all(np.isfinite(q), axis=0)
+    if np.any(retry):  # damped Newton from the guess; only samples above TOL move
+        q, err = newton(lay, np.where(retry, guess, q), maxiter=30, damped=True)
+        pose = forward_positions(lay, q)
+    p = motion_vectors(lay, pose)
+    return q, pose, p, closure_jacobian(lay, pose, p), err

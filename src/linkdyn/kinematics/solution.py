@@ -1,0 +1,267 @@
+"""``solve(model, t)``: positions, rates and accelerations of every joint and body.
+
+Rates: ``J_dep qd_dep = -J_drv qd_drv`` (eqs. 4-5); accelerations: ``J_dep qdd_dep = -bias`` with
+the bias the closure acceleration at ``qdd_dep = 0`` (eqs. 6-7).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..errors import ModelError
+from ..model import REVOLUTE, Model
+from ..planar import dot, last, perp, shift_twist, solve_small
+from . import dyads
+from .layout import Layout, compile_layout, stack_layouts
+from .positions import (ACCEPT, _correct, _follow, assemble, driver_values, newton)
+from .recursion import (Pose, _cut_frames, closure_bias, closure_jacobian, dependent_rates,
+                        forward_positions, forward_twist_rates, forward_twists, motion_vectors,
+                        point_acceleration)
+
+
+@dataclass(frozen=True)
+class KinematicSolution:
+    """Positions, rates and accelerations of every joint and body at every sample.
+
+    The solvers keep one component-first array per body (``pose``, ``twists``, ``rates``,
+    ``motion``: lists in tree order, ``layout.topo.bodies``, index 0 = ground). The stacked
+    properties give the users' layout, components last.
+
+    Attributes
+    ----------
+    t : ndarray (T,)
+        s.
+    q, qd, qdd : ndarray (T, n_joints)
+        Joint coordinates (rad or m), rates, accelerations, model joint order.
+    pose : Pose
+        Per-body angles, reference points O_i and slider axes.
+    motion : list of ndarray (3, T)
+        Joint-motion propagation vectors ``p_i`` of the tree joints.
+    twists, rates : list of ndarray (3, T)
+        Twists ``[w, vx, vy]`` at O_i and their time derivatives.
+    jacobian : ndarray (2 n_cut, n - 1, T)
+        Loop-closure Jacobian.
+    pivot : ndarray (T,)
+        Smallest relative pivot of ``J_dep`` (~0 at a singular position).
+    residual : ndarray (T,)
+        Closure residual relative to ``layout.size``.
+    valid : ndarray (T,) bool
+    """
+
+    layout: Layout
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    pose: Pose
+    motion: list
+    twists: list
+    rates: list
+    jacobian: np.ndarray
+    pivot: np.ndarray
+    residual: np.ndarray
+    valid: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Batch shape of every per-sample array: ``(T,)``, or ``(D, T)`` for D designs."""
+        return self.pose.phi[0].shape
+
+    # stacked, components-last views ------------------------------------------------------
+    @cached_property
+    def phi(self) -> np.ndarray:
+        """Absolute body angles (T, n), tree order."""
+        return np.stack(self.pose.phi, axis=-1)
+
+    @cached_property
+    def r(self) -> np.ndarray:
+        """Body reference points O_i (T, n, 2), tree order."""
+        return last(np.stack(self.pose.r, axis=1), 2).swapaxes(-1, -2)
+
+    @cached_property
+    def tw(self) -> np.ndarray:
+        """Twists (T, n, 3) ``[w, vx, vy]`` at O_i, tree order."""
+        return np.stack([last(x) for x in self.twists], axis=-2)
+
+    @cached_property
+    def twd(self) -> np.ndarray:
+        """Twist rates (T, n, 3), tree order."""
+        return np.stack([last(x) for x in self.rates], axis=-2)
+
+    @cached_property
+    def p(self) -> np.ndarray:
+        """Joint-motion propagation vectors (T, n, 3), tree order (zeros for the ground)."""
+        shape = self.shape
+        return np.stack([np.zeros(shape + (3,))] + [
+            last(np.broadcast_to(x, (3,) + shape)) for x in self.motion[1:]], axis=-2)
+
+    @cached_property
+    def J(self) -> np.ndarray:
+        """Loop-closure Jacobian (T, 2 n_cut, n - 1)."""
+        return last(self.jacobian, 2)
+
+    def point(self, body: str, name: str) -> np.ndarray:
+        """Path (T, 2) of a named point of a body, m."""
+        i = self.layout.topo.bodies.index(body)
+        return last(self.pose.point(i, self.layout.points[i][name]))
+
+    def point_velocity(self, body: str, name: str) -> np.ndarray:
+        """Velocity (T, 2) of a named point of a body, m/s."""
+        i = self.layout.topo.bodies.index(body)
+        a = self.pose.rotate(i, self.layout.points[i][name])
+        return last(shift_twist(self.twists[i], a)[1:])
+
+    def point_acceleration(self, body: str, name: str) -> np.ndarray:
+        """Acceleration (T, 2) of a named point of a body, m/s^2."""
+        i = self.layout.topo.bodies.index(body)
+        a = self.pose.rotate(i, self.layout.points[i][name])
+        return last(point_acceleration(self.twists[i], self.rates[i], a))
+
+
+def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
+    """Positions, velocities and accelerations at the times ``t`` (T,) s.
+
+    Assembles at ``t[0]`` on the branch of the ``[assembly]`` guess, follows the branch through
+    continuation nodes (driver travel at most ``STEP_ANGLE`` rad between nodes: a loop over
+    driver steps, not samples), interpolates the nodes to every sample with cubic Hermite
+    polynomials and corrects all samples at once with Newton's method. Samples where the loop
+    does not close or ``J_dep`` is singular have ``valid = False`` and NaN values; nothing
+    raises here except an assembly failure at ``t[0]``.
+
+    Parameters
+    ----------
+    model : Model or sequence of Model
+        One mechanism, or D designs of the same topology (their numbers may differ; drivers and
+        loads are those of the first). With designs every array gains a leading axis D, and a
+        design that cannot be assembled is NaN instead of raising.
+    t : array_like (T,)
+        Sample times, s.
+    """
+    models = [model] if isinstance(model, Model) else list(model)
+    lay = layout or (compile_layout(models[0]) if len(models) == 1 else
+                     stack_layouts([compile_layout(m) for m in models]))
+    topo = lay.topo
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or len(t) < 1:
+        raise ModelError("time samples must be a 1-D array with at least one sample",
+                         fix="Pass t = numpy.linspace(0, duration, samples)")
+    dep, drv = list(topo.dependent), list(topo.driven)
+    qdrv, qddrv, qdddrv = driver_values(models[0], t)
+    # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
+    # branch to the samples
+    q_start = assemble(models, lay, driver_values(models[0], np.zeros(1))[0][:, 0], 0.0,
+                       raise_error=len(models) == 1)
+    single = len(models) == 1
+    if single:
+        q_start = q_start[:, 0]
+    lay_q = np.zeros(0) if single else np.zeros((len(models), 1))  # design axis vs (D, T)
+    lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
+    if dep and hi > lo:
+        nodes, Q, QD, reach = _follow(models[0], lay, q_start if single else q_start[..., None],
+                                      lo, hi)
+        if not single:
+            Q, QD, reach = Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
+        # cubic Hermite guess for every sample from the bracketing nodes; samples past the
+        # last node followed start from that node
+        lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
+        followed = lo_ok <= hi_ok  # False for a design that did not assemble
+        tc = np.clip(t, np.where(followed, lo_ok, 0.0), np.where(followed, hi_ok, 0.0))
+        j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
+        h = nodes[j + 1] - nodes[j]
+        u = (tc - nodes[j]) / h
+        h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
+        h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
+
+        def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
+            return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
+        q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
+        q[drv] = qdrv if single else qdrv[:, None] + lay_q
+        q = np.where(np.isfinite(q), q, 0.0)
+        modes = None
+        if lay.dyads is not None:  # the assembly modes, as along the continuation nodes
+            modes = dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions)
+        q, pose, p, J, err = _correct(lay, q, modes)
+        # the branch ends at the first sample past the last node that does not close
+        fails = ~(err <= ACCEPT)
+        hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
+        lo_end = np.max(np.where(fails & (t < lo_ok), t, -np.inf), axis=-1, keepdims=True)
+        cut_off = (t >= hi_end) | (t <= lo_end) | ~followed
+        err = np.where(cut_off, np.inf, err)
+    else:
+        q = np.repeat(q_start[..., None], len(t), axis=-1)
+        q[drv] = qdrv if single else qdrv[:, None] + lay_q
+        q, err = newton(lay, q)
+        pose = forward_positions(lay, q)
+        p = motion_vectors(lay, pose)
+        J = closure_jacobian(lay, pose, p)
+    qd_drv, qdd_drv = (x if single else x[:, None] + lay_q for x in (qddrv, qdddrv))
+    return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
+
+
+def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err):
+    topo = lay.topo
+    dep, drv = list(topo.dependent), list(topo.driven)
+    # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
+    qd = np.zeros(q.shape)
+    qd[drv] = qd_drv
+    pivot = np.ones(q.shape[1:])
+    if dep:
+        qd[dep], pivot = dependent_rates(lay, J, qd_drv)
+    tw = forward_twists(lay, pose, p, qd)
+    # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
+    qdd = np.zeros(q.shape)
+    qdd[drv] = qdd_drv
+    twd = forward_twist_rates(lay, pose, p, tw, qd, qdd)
+    if dep:
+        qdd[dep], _ = solve_small(J[:, np.array(dep) - 1], -closure_bias(lay, pose, tw, twd))
+        # td is linear in qdd: add the dependent accelerations' share, propagated like twists
+        extra = np.zeros(q.shape)
+        extra[dep] = qdd[dep]
+        twd = [a + b for a, b in zip(twd, forward_twists(lay, pose, p, extra))]
+    valid = (err <= ACCEPT) & np.all(np.isfinite(qd), axis=0) & np.all(np.isfinite(qdd), axis=0)
+    if not np.all(valid):  # samples that do not close or are singular become NaN
+        nan = ~valid
+
+        def blank(x):
+            return None if x is None else np.where(nan, np.nan, x)
+        q, qd, qdd, J = blank(q), blank(qd), blank(qdd), blank(J)
+        pose = Pose(*([blank(x) for x in field] for field in
+                      (pose.phi, pose.c, pose.s, pose.r, pose.e)))
+        p, tw, twd = ([blank(x) for x in y] for y in (p, tw, twd))
+    jq, jqd, jqdd = joint_values(model, lay, pose, tw, twd, q, qd, qdd)
+    return KinematicSolution(lay, t, jq, jqd, jqdd, pose, p, tw, twd, J, pivot, err, valid)
+
+
+def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
+    """Coordinates, rates, accelerations (T, n_joints) of all joints in model order: tree
+    joints from the tree arrays, cut joints from their bodies' motion."""
+    topo = lay.topo
+    cols = [[None] * len(model.joints) for _ in range(3)]
+    for i in range(1, topo.n):
+        j = topo.tree_joint[i]
+        cols[0][j], cols[1][j], cols[2][j] = q[i], qd[i], qdd[i]
+    for c in lay.cuts:
+        a, b = c.a, c.b
+        if c.kind == REVOLUTE:
+            # q = phi_b - phi_a and its derivatives
+            cols[0][c.joint] = pose.phi[b] - pose.phi[a]
+            cols[1][c.joint] = tw[b][0] - tw[a][0]
+            cols[2][c.joint] = twd[b][0] - twd[a][0]
+            continue
+        # slider: s = d . e with d = r_Pb - r_Pa and e fixed in body a
+        r_pa, r_pb, e = _cut_frames(lay, pose, c)
+        wa, al = tw[a][0], twd[a][0]
+        va = shift_twist(tw[a], r_pa - pose.r[a])[1:]
+        vb = shift_twist(tw[b], r_pb - pose.r[b])[1:]
+        aa = point_acceleration(tw[a], twd[a], r_pa - pose.r[a])
+        ab = point_acceleration(tw[b], twd[b], r_pb - pose.r[b])
+        d, dd, ddd = r_pb - r_pa, vb - va, ab - aa
+        ed = wa * perp(e)
+        edd = al * perp(e) - wa ** 2 * e
+        cols[0][c.joint] = dot(d, e)
+        cols[1][c.joint] = dot(dd, e) + dot(d, ed)
+        cols[2][c.joint] = dot(ddd, e) + 2 * dot(dd, ed) + dot(d, edd)
+    return tuple(np.stack(x, axis=-1) for x in cols)
