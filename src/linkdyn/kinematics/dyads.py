@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import REVOLUTE
-from ..planar import cross, dot, perp, rotate
+from ..planar import cross, dot, perp, rotate_cs
 
 
 @dataclass(frozen=True)
@@ -90,8 +90,23 @@ def _circles(c1, r1, c2, r2, side):
 
 
 def _turn(u, v):
-    """Angle (...) that rotates direction u onto direction v, in (-pi, pi]."""
-    return np.arctan2(cross(u, v), dot(u, v))
+    """The rotation that carries direction u onto direction v: its angle in (-pi, pi], its
+    cosine and its sine, each (...)."""
+    x, y = dot(u, v), cross(u, v)
+    norm = np.sqrt(x * x + y * y)
+    return np.arctan2(y, x), x / norm, y / norm
+
+
+def _rotate_subtree(lay, pose, root, centre, turn):
+    """Rotate body ``root`` and every body beyond it about ``centre`` (2, ...) in place."""
+    angle, c, s = turn
+    for j in range(1, lay.topo.n):
+        if lay.topo.ancestors[j, root]:
+            pose.phi[j] = pose.phi[j] + angle
+            pose.c[j], pose.s[j] = c * pose.c[j] - s * pose.s[j], s * pose.c[j] + c * pose.s[j]
+            pose.r[j] = centre + rotate_cs(c, s, pose.r[j] - centre)
+            if pose.e[j] is not None:
+                pose.e[j] = rotate_cs(c, s, pose.e[j])
 
 
 def _vertices(lay, dy, pose):
@@ -121,31 +136,36 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
     Each dyad's apex is put on the side given by ``sides`` (the assembly modes from
     :func:`sides`), or, if None, on the side where the guess ``q`` has it. The joint angles move
     by less than pi from ``q``, which therefore sets their winding. ``forward(lay, q)`` gives
-    the pose; it is re-evaluated after each dyad because later dyads stand on the joints earlier
-    ones moved. Returns the closed ``q`` and its pose.
+    the guess's pose; each dyad then turns the subtrees beyond its two joints rigidly, so later
+    dyads stand on the joints earlier ones moved. Returns the closed ``q`` and its pose.
     """
     q = np.array(q, dtype=float)
     topo = lay.topo
     pose = forward(lay, q)
+    pose = type(pose)(*(list(x) for x in (pose.phi, pose.c, pose.s, pose.r, pose.e)))
     for k, dy in enumerate(dyads):
         x1, c2, apex, p_a_or_mov, p_b_or_fix = _vertices(lay, dy, pose)
         side = _side(x1, c2, apex) if sides is None else sides[k]
         if dy.shape == "split":
-            # the cut point m over the two unknown joints x1, x2 = c2
+            # the cut point m over the two unknown joints x1 and x2 = c2
             p_up, p_low = p_a_or_mov, p_b_or_fix
             m = _circles(x1, np.sqrt(dot(p_up - x1, p_up - x1)), c2,
                          np.sqrt(dot(p_low - c2, p_low - c2)), side)
-            d_up, d_low = _turn(p_up - x1, m - x1), _turn(p_low - c2, m - c2)
+            up, low = _turn(p_up - x1, m - x1), _turn(p_low - c2, m - c2)
+            _rotate_subtree(lay, pose, dy.upper, x1, up)
+            _rotate_subtree(lay, pose, dy.lower, c2, low)
         else:
             # the lower joint m over the upper joint x1 and the fixed cut point p_fix = c2
             x2, p_mov, p_fix = apex, p_a_or_mov, p_b_or_fix
             m = _circles(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p_fix,
                          np.sqrt(dot(p_mov - x2, p_mov - x2)), side)
-            d_up = _turn(x2 - x1, m - x1)
-            p_mov = x1 + rotate(d_up, p_mov - x1)
-            d_low = _turn(p_mov - m, p_fix - m)
-        # q_i = s (phi_i - phi_parent): a rotation of body i's subtree
-        q[dy.upper] += topo.sign[dy.upper] * d_up
-        q[dy.lower] += topo.sign[dy.lower] * d_low
-        pose = forward(lay, q)
+            up = _turn(x2 - x1, m - x1)
+            _rotate_subtree(lay, pose, dy.upper, x1, up)
+            p_mov = pose.point(*((lay.cuts[dy.cut].a, lay.cuts[dy.cut].pa) if dy.side == "a"
+                                 else (lay.cuts[dy.cut].b, lay.cuts[dy.cut].pb)))
+            low = _turn(p_mov - m, p_fix - m)
+            _rotate_subtree(lay, pose, dy.lower, m, low)
+        # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
+        q[dy.upper] += topo.sign[dy.upper] * up[0]
+        q[dy.lower] += topo.sign[dy.lower] * low[0]
     return q, pose

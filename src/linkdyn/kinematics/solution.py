@@ -164,25 +164,30 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
                                       lo, hi)
         if not single:
             Q, QD, reach = Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
-        # cubic Hermite guess for every sample from the bracketing nodes; samples past the
-        # last node followed start from that node
+        # a guess for every sample from the nodes; samples past the last node followed start
+        # from that node
         lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
         followed = lo_ok <= hi_ok  # False for a design that did not assemble
         tc = np.clip(t, np.where(followed, lo_ok, 0.0), np.where(followed, hi_ok, 0.0))
         j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
-        h = nodes[j + 1] - nodes[j]
-        u = (tc - nodes[j]) / h
-        h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
-        h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
+        u = (tc - nodes[j]) / (nodes[j + 1] - nodes[j])
 
         def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
             return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
-        q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
+        modes = None
+        if lay.dyads is not None:
+            # closed form in the assembly modes: the guess only sets the winding of the angles,
+            # so the nearest node is enough
+            modes = dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions)
+            q = at(Q, np.where(u < 0.5, j, j + 1))
+        else:
+            # cubic Hermite from the bracketing nodes for Newton's method
+            h = nodes[j + 1] - nodes[j]
+            h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
+            h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
+            q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
         q[drv] = qdrv if single else qdrv[:, None] + lay_q
         q = np.where(np.isfinite(q), q, 0.0)
-        modes = None
-        if lay.dyads is not None:  # the assembly modes, as along the continuation nodes
-            modes = dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions)
         q, pose, p, J, err = _correct(lay, q, modes)
         # the branch ends at the first sample past the last node that does not close
         fails = ~(err <= ACCEPT)
