@@ -16,9 +16,18 @@ from __future__ import annotations
 import numpy as np
 
 
+def _empty(k: int, *parts) -> np.ndarray:
+    """An output of k components over the broadcast shape of ``parts`` (written in place by the
+    kernels below, so no component is copied twice)."""
+    return np.empty((k,) + np.broadcast_shapes(*(np.shape(x) for x in parts)))
+
+
 def perp(a: np.ndarray) -> np.ndarray:
     """Rotate ``a`` (2, ...) by +90 degrees: ``z x a``."""
-    return np.stack((-a[1], a[0]))
+    out = _empty(2, a[0])
+    np.negative(a[1], out=out[0, ...])
+    out[1] = a[0]
+    return out
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -36,7 +45,12 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def rotate_cs(c: np.ndarray, s: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Rotate vectors ``a`` (2, ...) by angles given by their cosines and sines (...)."""
-    return np.stack((c * a[0] - s * a[1], s * a[0] + c * a[1]))
+    out = _empty(2, c, a[0])
+    np.multiply(c, a[0], out=out[0, ...])
+    out[0] -= s * a[1]
+    np.multiply(s, a[0], out=out[1, ...])
+    out[1] += c * a[1]
+    return out
 
 
 def rotate(phi: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -46,14 +60,21 @@ def rotate(phi: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 def twist(w: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Pack an angular part (...) and a linear part (2, ...) into a twist or wrench (3, ...)."""
-    w, vx, vy = np.broadcast_arrays(w, v[0], v[1])
-    return np.stack((w, vx, vy))
+    out = _empty(3, w, v[0])
+    out[0], out[1:] = w, v
+    return out
 
 
 def shift_twist(t: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Twist ``t`` (3, ...) of a body at point O, expressed at point O + a: ``A(a) t``,
     with ``A(a) = [[1, 0], [perp(a), 1]]`` the planar twist-propagation matrix (eq. 2)."""
-    return twist(t[0], np.stack((t[1] - t[0] * a[1], t[2] + t[0] * a[0])))
+    out = _empty(3, t[0], a[0])
+    out[0] = t[0]
+    np.multiply(t[0], a[1], out=out[1, ...])
+    np.subtract(t[1], out[1], out=out[1, ...])
+    np.multiply(t[0], a[0], out=out[2, ...])
+    out[2] += t[2]
+    return out
 
 
 def shift_wrench(w: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -61,7 +82,12 @@ def shift_wrench(w: np.ndarray, a: np.ndarray) -> np.ndarray:
 
     The moment gains ``a x f``; the transpose of :func:`shift_twist`, so power is invariant.
     """
-    return twist(w[0] + a[0] * w[2] - a[1] * w[1], w[1:])
+    out = _empty(3, w[0], a[0])
+    np.multiply(a[0], w[2], out=out[0, ...])
+    out[0] -= a[1] * w[1]
+    out[0] += w[0]
+    out[1:] = w[1:]
+    return out
 
 
 def wrap(angle: np.ndarray) -> np.ndarray:
