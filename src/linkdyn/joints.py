@@ -68,12 +68,22 @@ def motion_vector(kind, s, e, ndim):
     return twist(0.0, s * e)
 
 
-def motion_vector_rate(kind, s, e, w_axis):
-    """Rate of ``p_i``: zero (None) for a revolute joint; ``[0, s w perp(e)]`` for a prismatic
-    one, ``w_axis`` (...) being the angular velocity of the body that carries the axis."""
+def add_motion(kind, s, e, x, rate):
+    """``x += p_i rate`` in place, for a twist or twist rate ``x`` (3, ...): a revolute joint
+    adds ``s rate`` to the angular part, a prismatic one ``s rate e`` to the linear part."""
     if kind == REVOLUTE:
-        return None
-    return twist(0.0, s * w_axis * perp(e))
+        x[0] += s * rate
+    else:
+        x[1:] += (s * rate) * e
+    return x
+
+
+def add_motion_rate(kind, s, e, w_axis, x, rate):
+    """``x += pd_i rate`` in place: nothing for a revolute joint, ``s rate w perp(e)`` for a
+    prismatic one, ``w_axis`` (...) being the angular velocity of the body carrying the axis."""
+    if kind != REVOLUTE:
+        x[1:] += (s * rate * w_axis) * perp(e)
+    return x
 
 
 def cut_residual(kind, angle, phi_a, phi_b, e_a, r_pa, r_pb):

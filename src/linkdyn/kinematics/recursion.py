@@ -111,7 +111,8 @@ def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
     for i in range(1, topo.n):
         k = topo.parent[i]
         # t_i = A(r_i - r_p) t_p + p_i qd_i      (eq. 2)
-        tw.append(shift_twist(tw[k], pose.r[i] - pose.r[k]) + p[i] * qd[i])
+        tw.append(jk.add_motion(lay.kind[i], topo.sign[i], pose.e[i],
+                                shift_twist(tw[k], pose.r[i] - pose.r[k]), qd[i]))
     return tw
 
 
@@ -123,14 +124,12 @@ def forward_twist_rates(lay: Layout, pose: Pose, p: list, tw: list, qd: np.ndarr
     for i in range(1, topo.n):
         k = topo.parent[i]
         # td_i = A td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i
-        td_i = shift_twist(td[k], pose.r[i] - pose.r[k]) + p[i] * qdd[i]
+        kind, sign, e = lay.kind[i], topo.sign[i], pose.e[i]
+        td_i = jk.add_motion(kind, sign, e, shift_twist(td[k], pose.r[i] - pose.r[k]), qdd[i])
         w_k = tw[k][0]
         td_i[1] -= w_k * (tw[i][2] - tw[k][2])
         td_i[2] += w_k * (tw[i][1] - tw[k][1])
-        w_axis = tw[k if topo.sign[i] > 0 else i][0]
-        pd = jk.motion_vector_rate(lay.kind[i], topo.sign[i], pose.e[i], w_axis)
-        if pd is not None:
-            td_i += pd * qd[i]
+        jk.add_motion_rate(kind, sign, e, tw[k if sign > 0 else i][0], td_i, qd[i])
         td.append(td_i)
     return td
 
