@@ -91,8 +91,9 @@ class Solution:
     @property
     def driver_power(self) -> np.ndarray:
         """Total power of the drivers (T,), W."""
-        qd = self.kin.qd[..., [self._joint(d.joint) for d in self.model.drivers]]
-        return np.sum(self.dyn.tau * qd, axis=-1)
+        qd = self.kin.joint_motion[1]
+        return sum((self.dyn.tau[..., k] * qd[self._joint(d.joint)]
+                    for k, d in enumerate(self.model.drivers)), np.zeros(self.kin.shape))
 
     # --- tables -----------------------------------------------------------------------------
     @cached_property
@@ -100,10 +101,9 @@ class Solution:
         """All result columns of SPEC's ``results.csv``, in order: name -> (T,) array, SI."""
         m, kin = self.model, self.kin
         cols: dict[str, np.ndarray] = {"t": self.t}
+        q, qd, qdd = kin.joint_motion
         for k, j in enumerate(m.joints):
-            cols[f"q_{j.name}"] = kin.q[..., k]
-            cols[f"qd_{j.name}"] = kin.qd[..., k]
-            cols[f"qdd_{j.name}"] = kin.qdd[..., k]
+            cols[f"q_{j.name}"], cols[f"qd_{j.name}"], cols[f"qdd_{j.name}"] = q[k], qd[k], qdd[k]
         for b in m.moving_bodies:
             cols[f"phi_{b.name}"] = self.phi(b.name)
             cols[f"omega_{b.name}"] = self.omega(b.name)
@@ -111,11 +111,10 @@ class Solution:
         for k, d in enumerate(m.drivers):
             word = "force" if m.joint(d.joint).kind == PRISMATIC else "tau"
             cols[f"{word}_{d.joint}"] = self.dyn.tau[..., k]
-        for k, j in enumerate(m.joints):
-            cols[f"Fx_{j.name}"] = self.reactions.force[..., k, 0]
-            cols[f"Fy_{j.name}"] = self.reactions.force[..., k, 1]
+        for j, w in zip(m.joints, self.reactions.on_second):
+            cols[f"Fx_{j.name}"], cols[f"Fy_{j.name}"] = w[1], w[2]
             if j.kind == PRISMATIC:
-                cols[f"M_{j.name}"] = self.reactions.moment[..., k]
+                cols[f"M_{j.name}"] = w[0]
         for b in m.moving_bodies:
             for name in b.points:
                 xy = self.point(b.name, name)

@@ -12,6 +12,7 @@ share ``tau p_i`` leaves the joint's reaction.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -29,6 +30,9 @@ class Reactions:
 
     Attributes
     ----------
+    on_second : list of ndarray (3, T)
+        Per joint, the wrench ``[M, Fx, Fy]`` by its first body on its second about the second
+        body's joint point, component-first; ``force`` and ``moment`` stack it.
     force : ndarray (..., T, n_joints, 2)
         Force exerted by the joint's first body on its second, global components, N.
     moment : ndarray (..., T, n_joints)
@@ -39,9 +43,18 @@ class Reactions:
         effort included (tree order).
     """
 
-    force: np.ndarray
-    moment: np.ndarray
+    on_second: list
     tree: list
+
+    @cached_property
+    def force(self) -> np.ndarray:
+        """(T, n_joints, 2) force by each joint's first body on its second, N."""
+        return np.stack([last(w[1:]) for w in self.on_second], axis=-2)
+
+    @cached_property
+    def moment(self) -> np.ndarray:
+        """(T, n_joints) moment by the first body on the second about the second's point, N m."""
+        return np.stack([w[0] for w in self.on_second], axis=-1)
 
 
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
@@ -80,6 +93,4 @@ def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactio
     for k, c in enumerate(lay.cuts):
         _, _, e_a = _cut_frames(lay, kin.pose, c)
         on_b[c.joint] = jk.cut_wrench(c.kind, e_a, lam[2 * k:2 * k + 2])
-    force = np.stack([last(w[1:]) for w in on_b], axis=-2)
-    moment = np.stack([w[0] for w in on_b], axis=-1)
-    return Reactions(force, moment, R)
+    return Reactions(on_b, R)

@@ -34,8 +34,9 @@ class KinematicSolution:
     ----------
     t : ndarray (T,)
         s.
-    q, qd, qdd : ndarray (T, n_joints)
-        Joint coordinates (rad or m), rates, accelerations, model joint order.
+    joint_motion : (list, list, list)
+        Coordinates (rad or m), rates and accelerations of every joint, (T,) arrays in model
+        joint order; ``q``, ``qd``, ``qdd`` stack them as (T, n_joints).
     pose : Pose
         Per-body angles, reference points O_i and slider axes.
     motion : list of ndarray (3, T)
@@ -53,9 +54,7 @@ class KinematicSolution:
 
     layout: Layout
     t: np.ndarray
-    q: np.ndarray
-    qd: np.ndarray
-    qdd: np.ndarray
+    joint_motion: tuple
     pose: Pose
     motion: list
     twists: list
@@ -70,7 +69,22 @@ class KinematicSolution:
         """Batch shape of every per-sample array: ``(T,)``, or ``(D, T)`` for D designs."""
         return self.pose.phi[0].shape
 
-    # stacked, components-last views ------------------------------------------------------
+    # stacked, components-last views (built on first use) -----------------------------------
+    @cached_property
+    def q(self) -> np.ndarray:
+        """Joint coordinates (T, n_joints), rad or m, model joint order."""
+        return np.stack(self.joint_motion[0], axis=-1)
+
+    @cached_property
+    def qd(self) -> np.ndarray:
+        """Joint rates (T, n_joints)."""
+        return np.stack(self.joint_motion[1], axis=-1)
+
+    @cached_property
+    def qdd(self) -> np.ndarray:
+        """Joint accelerations (T, n_joints)."""
+        return np.stack(self.joint_motion[2], axis=-1)
+
     @cached_property
     def phi(self) -> np.ndarray:
         """Absolute body angles (T, n), tree order."""
@@ -236,13 +250,13 @@ def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
         pose = Pose(*([blank(x) for x in field] for field in
                       (pose.phi, pose.c, pose.s, pose.r, pose.e)))
         p, tw, twd = ([blank(x) for x in y] for y in (p, tw, twd))
-    jq, jqd, jqdd = joint_values(model, lay, pose, tw, twd, q, qd, qdd)
-    return KinematicSolution(lay, t, jq, jqd, jqdd, pose, p, tw, twd, J, pivot, err, valid)
+    return KinematicSolution(lay, t, joint_values(model, lay, pose, tw, twd, q, qd, qdd), pose, p,
+                             tw, twd, J, pivot, err, valid)
 
 
 def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
-    """Coordinates, rates, accelerations (T, n_joints) of all joints in model order: tree
-    joints from the tree arrays, cut joints from their bodies' motion."""
+    """Coordinates, rates, accelerations of all joints, three lists of (T,) arrays in model
+    order: tree joints from the tree arrays, cut joints from their bodies' motion."""
     topo = lay.topo
     cols = [[None] * len(model.joints) for _ in range(3)]
     for i in range(1, topo.n):
@@ -269,4 +283,4 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
         cols[0][c.joint] = dot(d, e)
         cols[1][c.joint] = dot(dd, e) + dot(d, ed)
         cols[2][c.joint] = dot(ddd, e) + 2 * dot(dd, ed) + dot(d, edd)
-    return tuple(np.stack(x, axis=-1) for x in cols)
+    return tuple(cols)
