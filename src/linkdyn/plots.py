@@ -198,7 +198,7 @@ def fig_multipliers(sol):
 
 def draw_mechanism(ax, sol, frames, *, alpha_min: float = 0.18, mm: bool = True) -> None:
     """Draw the mechanism at the sample indices ``frames`` (faint to solid) with traced paths."""
-    from .report import _body_shape
+    from .report.data import _body_shape
     m = sol.model
     s = 1e3 if mm else 1.0
     colors = {b.name: PALETTE[n % len(PALETTE)] for n, b in enumerate(m.moving_bodies)}

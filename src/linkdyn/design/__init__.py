@@ -1,0 +1,24 @@
+"""Design quantities a mechanism designer judges a linkage by.
+
+Everything here is computed from a solved run (:func:`linkdyn.analyze`) through the public
+arrays of the :class:`~linkdyn.Solution`; all values are SI (m, rad, s, N, N m, J, W, kg m^2).
+
+- :mod:`.fourbar`: four-bar loops, their Grashof type, transmission angle and mechanical
+  advantage;
+- :mod:`.shaking`: the shaking force and moment the moving links put on the ground;
+- :mod:`.energy`: driver power and work, energy fluctuation and the flywheel it calls for;
+- :mod:`.path`: joint travel and the straightness of a point's path;
+- :mod:`.overview`: the run's summary (``summary.json``) and its numerical health.
+"""
+
+from .energy import driver_energy, driver_power, energy_fluctuation, flywheel_inertia
+from .fourbar import FourBar, four_bars, mechanical_advantage, transmission_angle, velocity_ratio
+from .overview import health, summary
+from .path import TWO_PI, default_path_point, joint_travel, path_straightness
+from .shaking import inertia_wrench, shaking_force, shaking_moment, shaking_wrench
+
+__all__ = ["FourBar", "four_bars", "transmission_angle", "velocity_ratio",
+           "mechanical_advantage", "shaking_wrench", "shaking_force", "shaking_moment",
+           "inertia_wrench", "driver_power", "driver_energy", "energy_fluctuation",
+           "flywheel_inertia", "joint_travel", "default_path_point", "path_straightness",
+           "summary", "health", "TWO_PI"]

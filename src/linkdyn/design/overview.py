@@ -1,0 +1,165 @@
+"""A run at a glance: the summary of every design quantity (``summary.json``) and the
+numerical health of the solve (closure residual, energy balance, conditioning)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ModelError
+from ..model import GROUND, REVOLUTE
+from ..planar import dot, perp
+from .energy import driver_energy
+from .fourbar import four_bars, mechanical_advantage, transmission_angle
+from .path import TWO_PI, default_path_point, joint_travel, path_straightness
+from .shaking import inertia_wrench, shaking_wrench
+
+
+def _peak(t, x):
+    """Largest |x| (over the finite samples) and its time."""
+    k = int(np.nanargmax(np.abs(x)))
+    return float(np.abs(x[k])), float(t[k])
+
+
+def _rms(x):
+    return float(np.sqrt(np.nanmean(np.asarray(x) ** 2)))
+
+
+def _extremes(t, x) -> dict:
+    kmin, kmax = int(np.nanargmin(x)), int(np.nanargmax(x))
+    return {"min": float(x[kmin]), "min_time_s": float(t[kmin]),
+            "max": float(x[kmax]), "max_time_s": float(t[kmax])}
+
+
+def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
+            path_range=None) -> dict:
+    """Summary of a solution as plain JSON-ready data (SI units).
+
+    Parameters
+    ----------
+    fluctuation : float
+        Coefficient of speed fluctuation C_s for the flywheel size.
+    path_point : str or None
+        ``'BODY.POINT'`` whose path straightness is reported; None picks
+        :func:`default_path_point` (no report if there is none).
+    path_range : (float, float) or None
+        Range of the first driver's coordinate for the straightness; None for the whole run.
+    """
+    if not fluctuation > 0:
+        raise ModelError(f"the coefficient of speed fluctuation must be positive, got "
+                         f"{fluctuation}", field="--fluctuation", fix="Give e.g. 0.02")
+    m, topo = sol.model, sol.topology
+    t, valid = sol.t, sol.valid
+    out: dict = {
+        "model": m.name,
+        "file": m.source,
+        "samples": int(len(t)),
+        "duration_s": float(t[-1] - t[0]),
+        "mobility": topo.mobility,
+        "loops": topo.n_loops,
+        "cut_joints": [m.joints[j].name for j in topo.cut],
+        "spanning_tree": {b: m.joints[topo.tree_joint[i]].name
+                          for i, b in enumerate(topo.bodies) if i},
+        "drivers": {},
+        "reactions": {},
+        "four_bars": [],
+        "invalid_samples": int(np.sum(~valid)),
+    }
+    for k, d in enumerate(m.drivers):
+        tau = sol.dyn.tau[..., k]
+        peak, at = _peak(t, tau)
+        unit = "N" if m.joint(d.joint).kind != REVOLUTE else "N m"
+        out["drivers"][d.joint] = {
+            "effort": "force" if unit == "N" else "torque", "unit": unit,
+            "peak": peak, "peak_time_s": at,
+            "rms": _rms(tau),
+            "motion": d.description}
+    for k, j in enumerate(m.joints):
+        f = np.linalg.norm(sol.reactions.force[..., k, :], axis=-1)
+        peak, at = _peak(t, f)
+        entry = {"peak_force_N": peak, "peak_time_s": at}
+        if j.kind != REVOLUTE:
+            entry["peak_moment_Nm"] = _peak(t, sol.reactions.moment[..., k])[0]
+        out["reactions"][j.name] = entry
+    for fb in four_bars(m):
+        mu = np.degrees(transmission_angle(sol, fb))
+        kmin = int(np.nanargmin(np.minimum(mu, 180 - mu)))
+        ta = {"min": float(np.nanmin(mu)), "max": float(np.nanmax(mu)),
+              "worst": float(mu[kmin]), "worst_time_s": float(t[kmin])}
+        ta["min_time_s"] = float(t[int(np.nanargmin(mu))])
+        ta["max_time_s"] = float(t[int(np.nanargmax(mu))])
+        out["four_bars"].append({
+            "links": {"input": fb.input, "coupler": fb.coupler, "output": fb.output},
+            "frame": fb.frame,
+            "pins": list(fb.pins),
+            # first key "ground" as before; "frame" for a loop that does not contain the ground
+            "lengths_m": dict(zip(("ground" if fb.frame == GROUND else "frame", "input",
+                                   "coupler", "output"), fb.lengths)),
+            "grashof": fb.grashof,
+            "type": fb.type,
+            "transmission_angle_deg": ta,
+            "mechanical_advantage": _extremes(t, mechanical_advantage(sol, fb))})
+    out["joint_travel"] = {}
+    for j in m.joints:
+        lo, hi = joint_travel(sol, j.name)
+        entry = {"unit": "rad" if j.kind == REVOLUTE else "m", "min": lo, "max": hi,
+                 "range": hi - lo}
+        if j.kind == REVOLUTE:
+            entry["full_turn"] = bool(hi - lo >= TWO_PI * (1 - 1e-9))
+        out["joint_travel"][j.name] = entry
+    ws = shaking_wrench(sol)
+    f_mag = np.linalg.norm(ws[..., 1:], axis=-1)
+    i_mag = np.linalg.norm(inertia_wrench(sol)[..., 1:], axis=-1)
+    out["shaking"] = {
+        "force_N": dict(zip(("peak", "peak_time_s"), _peak(t, f_mag)), rms=_rms(f_mag)),
+        "moment_Nm": dict(zip(("peak", "peak_time_s"), _peak(t, ws[..., 0])),
+                          rms=_rms(ws[..., 0])),
+        "inertia_force_N": dict(zip(("peak", "peak_time_s"), _peak(t, i_mag)), rms=_rms(i_mag)),
+        "moment_about": "global origin",
+        "includes": "ground-joint reactions, driver reactions and ground-anchored springs and "
+                    "dampers, as loads on the ground"}
+    out["driver_energy"] = driver_energy(sol, fluctuation)
+    point = path_point or default_path_point(m)
+    out["path_straightness"] = (path_straightness(sol, point, path_range)
+                                if point else None)
+    out["health"] = health(sol)
+    return out
+
+
+def health(sol) -> dict:
+    """Numerical health of the run: closure residual, energy balance, conditioning.
+
+    The energy balance checks ``P_drivers + P_loads = dKE/dt`` at every valid sample, where
+    ``P_loads`` is the power of every applied load (gravity and springs included) and ``dKE/dt``
+    is computed from the mass centres, ``sum m v_C . a_C + I_C w al`` — a path independent of
+    the Newton–Euler wrenches about O_i the solver uses. The residual is relative to the largest
+    of the three powers over the run. The condition number is that of ``J_dep`` (the matrix of
+    the rate and the ``[lam; tau]`` solves) made dimensionless: rows of velocity divided by the
+    mechanism's size, columns of slider rates multiplied by it.
+    """
+    kin, topo, lay = sol.kin, sol.topology, sol.kin.layout
+    ok = sol.valid
+    p_drv = sol.driver_power
+    p_loads = sum(dot(t, w) for t, w in zip(kin.twists, sol.loads.wrenches))
+    dke = np.zeros(kin.shape)
+    for i in range(1, topo.n):
+        d = kin.pose.rotate(i, lay.com[i])
+        (w, v), (al, a) = (kin.twists[i][0], kin.twists[i][1:]), (kin.rates[i][0], kin.rates[i][1:])
+        v_c = v + w * perp(d)
+        a_c = a + al * perp(d) - w ** 2 * d
+        dke = dke + lay.mass[i] * dot(v_c, a_c) + lay.inertia[i] * w * al
+    resid = np.abs(p_drv + p_loads - dke)[ok]
+    scale = max((float(np.max(np.abs(x[ok]))) for x in (p_drv, p_loads, dke)), default=0.0)
+    dep = np.array(topo.dependent, int)
+    cond = None
+    if len(dep) and np.any(ok):
+        rows = np.array([1.0 / float(np.min(lay.size)) if (c.kind == REVOLUTE or r == 1) else 1.0
+                         for c in lay.cuts for r in (0, 1)])
+        cols = np.array([1.0 if lay.kind[i] == REVOLUTE else float(np.min(lay.size)) for i in dep])
+        Jd = kin.J[ok][..., dep - 1] * rows[:, None] * cols
+        cond = float(np.max(np.linalg.cond(Jd)))
+    return {
+        "closure_residual_rel": float(np.nanmax(kin.residual[ok])) if np.any(ok) else None,
+        "energy_balance_residual_rel": (float(np.max(resid) / scale) if scale > 0 else 0.0)
+        if resid.size else None,
+        "worst_condition_number": cond,
+    }

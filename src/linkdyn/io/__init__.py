@@ -1,0 +1,107 @@
+"""Model files: read TOML or JSON, validate every field, convert to SI, build a :class:`Model`.
+
+The format is documented key by key in ``docs/model-format.md``. Every problem raises
+:class:`~linkdyn.errors.ModelError` naming the file, the field (a dotted path such as
+``bodies.crank.mass`` or ``drivers[0].motion.q``) and how to fix it; misspelt keys and names get
+the closest valid spelling. Checks that need the topology (mobility, loops) live in
+:mod:`linkdyn.topology`, not here.
+
+Reading is split by concept: :mod:`.syntax` (TOML or JSON text to a table of sections),
+:mod:`.reader` (the validation context: type checks, messages, name suggestions), :mod:`.units`,
+then one module per group of sections: :mod:`.linkage` (``[[bodies]]``, ``[[joints]]``),
+:mod:`.drivers`, :mod:`.loads` and :mod:`.options` (``[assembly]``, ``[topology]``,
+``[analysis]``). Each section's accepted keys are the constants re-exported here.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import ModelError
+from ..model import Model
+from .drivers import MOTION_KEYS, _drivers
+from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _joints
+from .loads import LOAD_KEYS, _loads
+from .options import _analysis, _assembly, _topology
+from .reader import _Reader, _type_name
+from .syntax import _parse_json, _parse_toml
+from .units import ANGLE_UNITS, LENGTH_UNITS, _units
+
+__all__ = ["load_model", "model_from_dict", "LENGTH_UNITS", "ANGLE_UNITS", "SECTIONS",
+           "BODY_KEYS", "JOINT_KEYS", "MOTION_KEYS", "LOAD_KEYS"]
+
+SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "assembly", "topology",
+            "analysis")
+
+
+def load_model(path: str | os.PathLike) -> Model:
+    """Read a model file (``.toml`` or ``.json``), validate it and return it in SI units.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The model file. Files it refers to (motion tables) are looked up relative to its directory.
+
+    Returns
+    -------
+    Model
+
+    Raises
+    ------
+    ModelError
+        For any invalid content, naming the file, the field and the fix.
+    """
+    file = os.fspath(path)
+    suffix = Path(file).suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise ModelError(f"unknown model file type '{suffix or '(none)'}'", file=file,
+                         fix="Name the file *.toml (TOML) or *.json (JSON)")
+    try:
+        text = Path(file).read_bytes().decode("utf-8-sig")
+    except FileNotFoundError:
+        raise ModelError("file not found", file=file,
+                         fix="Check the path and the current directory") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ModelError(f"cannot read the file ({e})", file=file,
+                         fix="Give a readable UTF-8 text file") from None
+    data = _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
+    return model_from_dict(data, source=file, base_dir=Path(file).parent)
+
+
+def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike = ".") -> Model:
+    """Validate a parsed model (the structure of a model file) and return it in SI units.
+
+    Parameters
+    ----------
+    data : dict
+        The model, as ``tomllib.load`` or ``json.load`` would return it.
+    source : str
+        File name used in error messages and stored as ``Model.source``.
+    base_dir : str or os.PathLike
+        Directory that relative ``file`` paths (motion tables) are resolved against.
+    """
+    r = _Reader(source, Path(base_dir))
+    if not isinstance(data, dict):
+        r.fail("", f"expected a table of sections, got {_type_name(data)}",
+               "Give the model as a dict such as {'bodies': [...], 'joints': [...]}")
+    r.table(data, "", SECTIONS, noun="section", what="sections")
+    mech = r.table(data.get("mechanism", {}), "mechanism", ("name", "gravity", "description"))
+    name = r.string(mech["name"], "mechanism.name") if "name" in mech else (
+        Path(source).stem if source else "mechanism")
+    gravity = r.vector(mech.get("gravity", [0.0, 0.0]), "mechanism.gravity", "m/s^2")
+    description = r.string(mech.get("description", ""), "mechanism.description", empty=True)
+    _units(r, data.get("units", {}))
+    bodies = _bodies(r, data.get("bodies"))
+    joints = _joints(r, data.get("joints", []), bodies)
+    drivers = _drivers(r, data.get("drivers", []), joints)
+    loads = _loads(r, data.get("loads", []), bodies)
+    phi, q = _assembly(r, data.get("assembly", {}), bodies, joints)
+    cut = _topology(r, data.get("topology", {}), joints, drivers)
+    duration, cycles, samples, path_point, path_range = _analysis(
+        r, data.get("analysis", {}), drivers, bodies, joints)
+    return Model(name=name, bodies=tuple(bodies.values()), joints=tuple(joints.values()),
+                 drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads), gravity=gravity,
+                 assembly_phi=phi, assembly_q=q, cut=cut, duration=duration, cycles=cycles,
+                 samples=samples, source=source, description=description,
+                 path_point=path_point, path_range=path_range)

@@ -1,0 +1,85 @@
+"""``[[drivers]]``: the driven joints and their motion (constant speed, a formula of t or a table
+of samples), in rad for a revolute joint and m for a prismatic one."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .. import expr as _expr
+from .. import motion as _motion
+from ..model import REVOLUTE, Driver, Joint
+from .reader import _Reader, _expr_fix, _type_name
+
+MOTION_KEYS = {"constant_speed": ("kind", "speed", "rpm", "start"),
+               "expression": ("kind", "q"), "table": ("kind", "file")}
+
+
+def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tuple[str, Driver]]:
+    """Drivers keyed by joint name, each with the field that declared it."""
+    drivers: dict[str, tuple[str, Driver]] = {}
+    for i, entry in enumerate(r.entries(entries, "drivers")):
+        f = f"drivers[{i}]"
+        r.table(entry, f, ("joint", "motion"), required=("joint", "motion"))
+        joint = r.choice(entry["joint"], f"{f}.joint", joints, "joint")
+        if joint in drivers:
+            r.fail(f"{f}.joint", f"joint '{joint}' is already driven by {drivers[joint][0]}",
+                   "Give each joint at most one driver; remove one of them")
+        revolute = joints[joint].kind == REVOLUTE
+        motion, period = _motion_of(r, entry["motion"], f"{f}.motion", revolute)
+        description = motion.describe("rad" if revolute else "m")
+        drivers[joint] = (f, Driver(joint, motion, description=description, period=period))
+    return drivers
+
+
+def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
+    """Build the Motion of a driver; q in rad (revolute) or m (prismatic)."""
+    kinds = tuple(MOTION_KEYS)
+    if not isinstance(spec, dict):
+        r.fail(f, f"expected a table, got {_type_name(spec)}",
+               'Write e.g. motion = { kind = "constant_speed", rpm = 45.0 }')
+    if "kind" not in spec:
+        r.fail(f"{f}.kind", "missing required key 'kind'", f"Add kind = one of {', '.join(kinds)}")
+    kind = r.choice(spec["kind"], f"{f}.kind", kinds, "motion kind")
+    r.table(spec, f, MOTION_KEYS[kind], what=f'keys for kind = "{kind}"')
+    scale, unit = (r.angle, r.angle_name) if revolute else (r.length, r.length_name)
+    if kind == "constant_speed":
+        if ("speed" in spec) == ("rpm" in spec):
+            r.fail(f, "give exactly one of speed and rpm",
+                   f"Write speed = ... ({unit}/s) or rpm = ... (revolutions per minute)")
+        if "rpm" in spec and not revolute:
+            r.fail(f"{f}.rpm", "rpm is for a revolute joint; this driver's joint is prismatic",
+                   f"Write speed = ... in {unit}/s")
+        speed = (r.number(spec["rpm"], f"{f}.rpm", "rev/min") * 2 * math.pi / 60 if "rpm" in spec
+                 else r.number(spec["speed"], f"{f}.speed", f"{unit}/s") * scale)
+        start = r.number(spec.get("start", 0.0), f"{f}.start", unit) * scale
+        period = 2 * math.pi / abs(speed) if revolute and speed != 0 else None
+        return _motion.ConstantSpeed(speed, start=start), period
+    if kind == "expression":
+        if "q" not in spec:
+            r.fail(f"{f}.q", "missing required key 'q'",
+                   f'Add q = "..." (a formula of t giving {unit})')
+        text = r.string(spec["q"], f"{f}.q")
+        try:
+            motion = _motion.ExpressionMotion(text, scale=scale)
+            with np.errstate(all="ignore"):
+                q = motion.evaluate(np.zeros(1))
+        except _expr.ExpressionError as e:
+            r.fail(f"{f}.q", str(e).rstrip("."), _expr_fix(unit))
+        if not all(np.all(np.isfinite(v)) for v in q):
+            r.fail(f"{f}.q", f"q = {text!r} or its derivatives are not finite at t = 0",
+                   "The analysis starts at t = 0; give a formula defined there")
+        return motion, None
+    if "file" not in spec:
+        r.fail(f"{f}.file", "missing required key 'file'", 'Add file = "profile.csv" (columns t, q)')
+    path = r.base_dir / r.string(spec["file"], f"{f}.file")
+    if not path.is_file():
+        r.fail(f"{f}.file", f"table file not found: looked for '{path}'",
+               "Give the path of a CSV file relative to the model file's directory")
+    try:
+        return _motion.TableMotion.from_csv(path, scale=scale), None
+    except (OSError, ValueError) as e:
+        r.fail(f"{f}.file", f"invalid motion table: {str(e).rstrip('.')}",
+               f"Give a CSV file with columns t (s, increasing) and q ({unit})")

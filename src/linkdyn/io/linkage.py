@@ -1,0 +1,132 @@
+"""``[[bodies]]`` and ``[[joints]]``: the links with their named points and mass properties, and
+the joints that connect two body points."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..model import GROUND, JOINT_KINDS, REVOLUTE, Body, Joint
+from .reader import _Reader, _did_you_mean, _entry_field, _type_name
+
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about")
+JOINT_KEYS = ("name", "type", "connect", "axis", "angle")
+
+
+def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
+    if entries is None:
+        r.fail("bodies", "the model has no bodies",
+               'Add [[bodies]] tables, one of them with name = "ground"')
+    _check_ground(r, r.entries(entries, "bodies"))
+    L, Lu = r.length, r.length_name
+    bodies: dict[str, Body] = {}
+    for i, entry in enumerate(entries):
+        f = _entry_field("bodies", i, entry)
+        r.table(entry, f, BODY_KEYS, required=("name",))
+        name = r.name(entry["name"], f"{f}.name")
+        if name in bodies:
+            r.fail(f"bodies[{i}].name", f"duplicate body name '{name}'",
+                   "Give every body a different name")
+        pts = entry.get("points")
+        if not isinstance(pts, dict) or not pts:
+            r.fail(f"{f}.points", "a body needs at least one named point",
+                   "Add e.g. points = { O1 = [0, 0], O2 = [38.1, 0] } in the body's frame")
+        points = {r.name(p, f"{f}.points"): r.vector(xy, f"{f}.points.{p}", Lu) * L
+                  for p, xy in pts.items()}
+        if name == GROUND:
+            for key in ("mass", "com", "inertia", "inertia_about"):
+                if key in entry:
+                    r.fail(f"{f}.{key}", "the ground is fixed and has no mass properties",
+                           f"Remove '{key}' from the ground body")
+            bodies[name] = Body(name, points)
+            continue
+        for key in ("mass", "inertia"):
+            if key not in entry:
+                r.fail(f"{f}.{key}", f"a moving body needs a {key}",
+                       "Add mass = ... (kg)" if key == "mass"
+                       else f"Add inertia = ... (kg {Lu}^2, about the mass centre)")
+        mass = r.number(entry["mass"], f"{f}.mass", "kg", positive=True,
+                        fix="Give a positive mass in kg (only the ground is massless)")
+        com = entry.get("com", [0.0, 0.0])
+        if isinstance(com, str):  # the name of one of the body's points
+            com = points[r.point(name, points, com, f"{f}.com")]
+        else:
+            com = r.vector(com, f"{f}.com", Lu) * L
+        inertia = r.number(entry["inertia"], f"{f}.inertia", f"kg {Lu}^2", positive=True,
+                           fix=f"Give a positive moment of inertia in kg {Lu}^2")
+        if "inertia_about" in entry:
+            about = r.point(name, points, entry["inertia_about"], f"{f}.inertia_about")
+            d2 = float(np.sum((points[about] - com) ** 2)) / L**2  # |P - C|^2 in length unit^2
+            if inertia - mass * d2 <= 0:
+                r.fail(f"{f}.inertia",
+                       f"inertia {inertia:g} kg {Lu}^2 about point '{about}' is not more than "
+                       f"m d^2 = {mass * d2:g} kg {Lu}^2 (mass centre {math.sqrt(d2):g} {Lu} away), "
+                       f"so the inertia about the mass centre would be {inertia - mass * d2:g}",
+                       "Check inertia, inertia_about, com and mass: by the parallel-axis theorem "
+                       "the inertia about a point exceeds the centroidal one by m d^2")
+            inertia -= mass * d2  # parallel-axis theorem: I_C = I_P - m |P - C|^2
+        bodies[name] = Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
+    return bodies
+
+
+def _check_ground(r: _Reader, entries: list) -> None:
+    """Exactly one body is the ground; say which body was probably meant if none is."""
+    names = [e.get("name") for e in entries if isinstance(e, dict)]
+    if GROUND in names:
+        return
+    fix = 'Add a [[bodies]] table with name = "ground" and the fixed pivots as its points'
+    close = _did_you_mean(GROUND, [n for n in names if isinstance(n, str)], "")
+    massless = [n for e, n in zip(entries, names) if isinstance(e, dict) and "mass" not in e]
+    if close.startswith("Did you mean"):
+        fix = f'{close.split("?")[0]}? Rename it "ground"'
+    elif massless:
+        fix = (f"If body '{massless[0]}' is the fixed frame, rename it \"ground\"; "
+               f"otherwise a{fix[1:]}")
+    r.fail("bodies", "no body is named 'ground'", fix)
+
+
+def _reference(r: _Reader, value: Any, field: str, bodies: dict[str, Body]) -> tuple[str, str]:
+    """Split ``"body.point"`` and check both names."""
+    if not isinstance(value, str) or value.count(".") != 1:
+        r.fail(field, f"expected \"body.point\", got {_type_name(value)}",
+               'Write the body name and the point name joined by a dot, e.g. "crank.O2"')
+    body, point = value.split(".")
+    r.choice(body, field, bodies, "body", "bodies")
+    return body, r.point(body, bodies[body].points, point, field)
+
+
+def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Joint]:
+    joints: dict[str, Joint] = {}
+    for i, entry in enumerate(r.entries(entries, "joints")):
+        f = _entry_field("joints", i, entry)
+        r.table(entry, f, JOINT_KEYS, required=("name", "type", "connect"))
+        name = r.name(entry["name"], f"{f}.name")
+        if name in joints:
+            r.fail(f"joints[{i}].name", f"duplicate joint name '{name}'",
+                   "Give every joint a different name")
+        kind = r.choice(entry["type"], f"{f}.type", JOINT_KINDS, "joint type")
+        conn = entry["connect"]
+        if not isinstance(conn, list) or len(conn) != 2:
+            r.fail(f"{f}.connect", f"expected two \"body.point\" strings, got {_type_name(conn)}",
+                   'Write connect = ["ground.O1", "crank.O1"]')
+        a, pa = _reference(r, conn[0], f"{f}.connect[0]", bodies)
+        b, pb = _reference(r, conn[1], f"{f}.connect[1]", bodies)
+        if a == b:
+            r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
+                   "A joint joins two different bodies; check the body names in connect")
+        if kind == REVOLUTE:
+            for key in ("axis", "angle"):
+                if key in entry:
+                    r.fail(f"{f}.{key}", f"a revolute joint has no {key}",
+                           f'Remove {key}, or set type = "prismatic" for a slider')
+            joints[name] = Joint(name, kind, a, pa, b, pb)
+            continue
+        axis = r.vector(entry.get("axis", [1.0, 0.0]), f"{f}.axis")
+        if np.hypot(*axis) == 0:
+            r.fail(f"{f}.axis", "the sliding axis is zero",
+                   f"Give the sliding direction in the frame of body '{a}', e.g. axis = [1, 0]")
+        angle = r.number(entry.get("angle", 0.0), f"{f}.angle", r.angle_name) * r.angle
+        joints[name] = Joint(name, kind, a, pa, b, pb, axis=axis / np.hypot(*axis), angle=angle)
+    return joints

@@ -1,0 +1,85 @@
+"""The sections that steer the solution rather than describe the mechanism: ``[assembly]``
+(starting guesses), ``[topology]`` (the joints to cut) and ``[analysis]`` (CLI defaults)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..model import GROUND, REVOLUTE
+from .reader import _Reader, _type_name
+
+
+def _assembly(r: _Reader, section: Any, bodies, joints) -> tuple[dict, dict]:
+    """Guesses: absolute angles ``phi`` (rad) of moving bodies, joint coordinates ``q`` (rad or m)."""
+    section = r.table(section, "assembly", ("phi", "q"))
+    moving = [b for b in bodies if b != GROUND]
+    phi: dict[str, float] = {}
+    for b, v in r.table(section.get("phi", {}), "assembly.phi", moving, noun="moving body",
+                        what="moving bodies", note="The ground's angle is always 0").items():
+        phi[b] = r.number(v, f"assembly.phi.{b}", r.angle_name) * r.angle
+    q: dict[str, float] = {}
+    for j, v in r.table(section.get("q", {}), "assembly.q", joints, noun="joint",
+                        what="joints").items():
+        scale, unit = ((r.angle, r.angle_name) if joints[j].kind == REVOLUTE
+                       else (r.length, r.length_name))
+        q[j] = r.number(v, f"assembly.q.{j}", unit) * scale
+    return phi, q
+
+
+def _topology(r: _Reader, section: Any, joints, drivers) -> tuple[str, ...] | None:
+    section = r.table(section, "topology", ("cut",))
+    if "cut" not in section:
+        return None
+    cut = section["cut"]
+    if not isinstance(cut, list):
+        r.fail("topology.cut", f"expected a list of joint names, got {_type_name(cut)}",
+               'Write cut = ["J4"]')
+    for k, j in enumerate(cut):
+        r.choice(j, f"topology.cut[{k}]", joints, "joint")
+        if j in cut[:k]:
+            r.fail(f"topology.cut[{k}]", f"joint '{j}' is listed twice", "List each cut joint once")
+        if j in drivers:
+            r.fail(f"topology.cut[{k}]", f"joint '{j}' is driven ({drivers[j][0]}) and cannot be cut",
+                   "Cut another joint of the same loop, or remove cut to choose automatically")
+    return tuple(cut)
+
+
+def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
+    """Optional CLI defaults: ``(duration s, cycles, samples, path_point, path_range)``, each
+    None when absent; ``path_range`` is a range of the first driver's coordinate, SI."""
+    section = r.table(section, "analysis", ("duration", "cycles", "samples", "path_point",
+                                            "path_range"))
+    if "duration" in section and "cycles" in section:
+        r.fail("analysis", "give either duration or cycles, not both", "Remove one of them")
+    duration = (r.number(section["duration"], "analysis.duration", "s", positive=True)
+                if "duration" in section else None)
+    cycles = (r.number(section["cycles"], "analysis.cycles", positive=True)
+              if "cycles" in section else None)
+    if cycles is not None and not any(d.period for _, d in drivers.values()):
+        r.fail("analysis.cycles", "cycles needs a revolute driver turning at constant speed",
+               "Give duration = ... (s) instead")
+    samples = None
+    if "samples" in section:
+        s = section["samples"]
+        if (isinstance(s, bool) or not isinstance(s, (int, float)) or not float(s).is_integer()
+                or s < 2):
+            r.fail("analysis.samples", f"expected a whole number >= 2, got {_type_name(s)}",
+                   "Write e.g. samples = 361")
+        samples = int(s)
+    path_point = None
+    if "path_point" in section:
+        path_point = r.string(section["path_point"], "analysis.path_point")
+        body, _, point = path_point.partition(".")
+        if body not in bodies or point not in bodies[body].points:
+            r.fail("analysis.path_point", f"'{path_point}' is not a named point of a body",
+                   "Write it as BODY.POINT, e.g. path_point = \"coupler.P\"")
+    path_range = None
+    if "path_range" in section:
+        first = next(iter(drivers.values()), None)
+        # without drivers the mobility check reports the real problem
+        revolute = first is None or joints[first[1].joint].kind == REVOLUTE
+        lo, hi = r.vector(section["path_range"], "analysis.path_range",
+                          "rad or deg" if revolute else "length unit")
+        scale = r.angle if revolute else r.length
+        path_range = (float(lo * scale), float(hi * scale))
+    return duration, cycles, samples, path_point, path_range

@@ -1,0 +1,174 @@
+"""The validation context of a model file: type checks whose messages name the field and the fix.
+
+:class:`_Reader` carries the file, its directory and its declared units; every check raises
+:class:`~linkdyn.errors.ModelError` with the dotted field path, and an unknown name gets the
+closest valid spelling (:func:`_did_you_mean`).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+
+from .. import expr as _expr
+from ..errors import ModelError
+
+_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_\-]*\Z")
+
+
+def _did_you_mean(word: Any, choices, what: str) -> str:
+    """'Did you mean ...? Valid <what>: ...' for an unknown name."""
+    choices = list(choices)
+    if not choices:
+        return f"There are no {what} to choose from"
+    text = ""
+    if isinstance(word, str):
+        lower = {c.lower(): c for c in choices}
+        close = ([lower[word.lower()]] if word.lower() in lower
+                 else difflib.get_close_matches(word, choices, n=1, cutoff=0.5))
+        text = f"Did you mean '{close[0]}'? " if close else ""
+    if len(choices) <= 16:
+        text += f"Valid {what}: {', '.join(choices)}"
+    return text.strip()
+
+
+def _type_name(value: Any) -> str:
+    if isinstance(value, bool):
+        return f"the boolean {str(value).lower()}"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        return f"a list of {_count(len(value))}"
+    return f"{value!r}"
+
+
+@dataclass
+class _Reader:
+    """Validation context: the file read, the directory it is in and its declared units."""
+
+    file: str
+    base_dir: Path
+    length: float = 1.0
+    angle: float = 1.0
+    length_name: str = "m"
+    angle_name: str = "rad"
+
+    def fail(self, field: str, message: str, fix: str) -> NoReturn:
+        raise ModelError(message, file=self.file, field=field, fix=fix)
+
+    def table(self, value: Any, field: str, keys, required=(), *, noun="key", what="keys",
+              note="") -> dict:
+        """Check that ``value`` is a table with known keys only and the ``required`` ones."""
+        if not isinstance(value, dict):
+            self.fail(field, f"expected a table, got {_type_name(value)}",
+                      f"Write it as [{field}] or {{ key = value, ... }}")
+        for key in value:
+            if key not in keys:
+                self.fail(field, f"unknown {noun} '{key}'", _did_you_mean(key, keys, what) + (
+                    f". {note}" if note else ""))
+        for key in required:
+            if key not in value:
+                self.fail(f"{field}.{key}" if field else key, f"missing required key '{key}'",
+                          f"Add {key} = ...")
+        return value
+
+    def entries(self, value: Any, field: str) -> list[dict]:
+        """An array of tables such as [[bodies]]."""
+        fix = f"Write each entry under its own [[{field}]] header"
+        if not isinstance(value, list):
+            self.fail(field, f"expected an array of tables, got {_type_name(value)}", fix)
+        for i, entry in enumerate(value):
+            if not isinstance(entry, dict):
+                self.fail(f"{field}[{i}]", f"expected a table, got {_type_name(entry)}", fix)
+        return value
+
+    def number(self, value: Any, field: str, unit: str = "", *, positive=False,
+               nonnegative=False, fix: str = "") -> float:
+        u = f" {unit}" if unit else ""
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            hint = " without quotes" if isinstance(value, str) and _is_float(value) else ""
+            self.fail(field, f"expected a number{' in' + u if u else ''}, got {_type_name(value)}",
+                      f"Write a plain number{hint}, e.g. {_key(field)} = 1.5")
+        x = float(value)
+        if not math.isfinite(x):
+            self.fail(field, f"must be a finite number, got {x}", fix or "Give a finite value")
+        if positive and x <= 0:
+            self.fail(field, f"must be positive, got {x:g}{u}", fix or f"Give a value > 0{u}")
+        if nonnegative and x < 0:
+            self.fail(field, f"must not be negative, got {x:g}{u}", fix or f"Give a value >= 0{u}")
+        return x
+
+    def vector(self, value: Any, field: str, unit: str = "") -> np.ndarray:
+        if not isinstance(value, list) or len(value) != 2:
+            got = _count(len(value)) if isinstance(value, list) else _type_name(value)
+            u = f" in {unit}" if unit else ""
+            self.fail(field, f"expected a vector [x, y] of 2 numbers{u}, got {got}",
+                      f"Write e.g. {_key(field)} = [1.0, 0.0]")
+        return np.array([self.number(c, f"{field}[{i}]", unit) for i, c in enumerate(value)])
+
+    def string(self, value: Any, field: str, *, empty=False) -> str:
+        if not isinstance(value, str) or (not value and not empty):
+            self.fail(field, f"expected a non-empty string, got {_type_name(value)}",
+                      f'Write it in double quotes, e.g. {_key(field)} = "..."')
+        return value
+
+    def name(self, value: Any, field: str) -> str:
+        self.string(value, field)
+        if not _NAME.match(value):
+            self.fail(field, f"invalid name {value!r}",
+                      "Use letters, digits, '_' and '-' only (no dots or spaces)")
+        return value
+
+    def choice(self, value: Any, field: str, choices, what: str, plural: str = "") -> str:
+        if not isinstance(value, str) or value not in choices:
+            self.fail(field, f"unknown {what} {value!r}" if isinstance(value, str)
+                      else f"expected the name of a {what}, got {_type_name(value)}",
+                      _did_you_mean(value, choices, plural or f"{what}s"))
+        return value
+
+    def point(self, body: str, points: dict, value: Any, field: str) -> str:
+        if not isinstance(value, str) or value not in points:
+            self.fail(field, f"body '{body}' has no point {value!r}",
+                      _did_you_mean(value, points, f"points of '{body}'"))
+        return value
+
+    def expression(self, text: str, field: str, unit: str):
+        try:
+            return _expr.parse(text, variables=("t",))
+        except _expr.ExpressionError as e:
+            self.fail(field, str(e).rstrip("."), _expr_fix(unit))
+
+
+def _expr_fix(unit: str) -> str:
+    return f"Write a formula of time t (s) giving {unit}; see docs/model-format.md"
+
+
+def _count(n: int) -> str:
+    return f"{n} value" if n == 1 else f"{n} values"
+
+
+def _key(field: str) -> str:
+    """The last key of a dotted field path, for examples: ``bodies.crank.com`` -> ``com``."""
+    return re.sub(r"\[\d+\]$", "", field.rsplit(".", 1)[-1])
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def _entry_field(section: str, i: int, entry: Any) -> str:
+    """``bodies.crank`` for an entry with a valid name, else ``bodies[1]`` (0-based)."""
+    name = entry.get("name") if isinstance(entry, dict) else None
+    return f"{section}.{name}" if isinstance(name, str) and _NAME.match(name) else f"{section}[{i}]"

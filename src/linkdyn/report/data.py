@@ -1,0 +1,298 @@
+"""What the page shows, JSON-ready: the samples thinned to at most ``max_frames`` frames, the
+animation's geometry, and the series and panels of the plots (deg for angles, else SI)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model import GROUND, PRISMATIC, REVOLUTE
+
+MAX_FRAMES = 2000
+DEG = 180.0 / math.pi
+
+# one colour per joint (or per driver / cut joint), the same in every panel
+PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
+           "#17becf", "#bcbd22", "#7f7f7f")
+BODY_COLORS = ("#3b75af", "#e1812c", "#3a923a", "#c03d3e", "#9372b2", "#845b53", "#d684bd",
+               "#2ab0c5", "#a9aa35", "#7f7f7f")
+X_COLOR, Y_COLOR, M_COLOR = "#1f77b4", "#ff7f0e", "#2ca02c"
+
+
+def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> np.ndarray:
+    """At most ``max_frames`` evenly spread sample indices of ``n``, both ends included."""
+    if n <= max_frames:
+        return np.arange(n)
+    return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
+
+
+def _num(a, sig: int = 5) -> list:
+    """A JSON-ready list with ``sig`` significant digits; NaN and inf become null."""
+    a = np.asarray(a, float).ravel()
+    txt = np.char.mod(f"%.{sig}g", np.where(np.isfinite(a), a, 0.0))
+    return [float(s) if ok else None for s, ok in zip(txt.tolist(), np.isfinite(a).tolist())]
+
+
+def joint_roles(sol) -> dict[str, str]:
+    """``'cut'``, ``'tree'`` plus ``', driven'`` for every joint."""
+    m = sol.model
+    cut = set(int(c) for c in sol.topology.cut)
+    driven = {d.joint for d in m.drivers}
+    return {j.name: ("cut" if k in cut else "tree") + (", driven" if j.name in driven else "")
+            for k, j in enumerate(m.joints)}
+
+
+def multiplier_labels(sol) -> list[tuple[str, str, str]]:
+    """``(joint, component label, unit)`` for each column of ``dyn.lam``.
+
+    A cut revolute joint carries the force ``[lam_x, lam_y]`` (global, by the joint's first body
+    on its second); a cut prismatic joint the moment and the force normal to its axis.
+    """
+    m = sol.model
+    out = []
+    for c in sol.topology.cut:
+        j = m.joints[int(c)]
+        if j.kind == PRISMATIC:
+            out += [(j.name, "moment", "N m"), (j.name, "normal force", "N")]
+        else:
+            out += [(j.name, "x", "N"), (j.name, "y", "N")]
+    return out
+
+
+def _known_column(name: str) -> bool:
+    prefixes = ("q_", "qd_", "qdd_", "phi_", "omega_", "alpha_", "tau_", "force_", "Fx_", "Fy_",
+                "M_", "x_", "y_")
+    return name == "t" or name.startswith(prefixes) or name in ("kinetic_energy",
+                                                               "potential_energy")
+
+
+def _body_shape(points: dict) -> tuple[str, list[str]]:
+    """How to draw a body from its named points: ``dot``, ``bar`` (two points), ``line``
+    (collinear points, in order along the line) or ``polygon`` (convex hull, CCW)."""
+    names = list(points)
+    if len(names) == 1:
+        return "dot", names
+    if len(names) == 2:
+        return "bar", names
+    P = np.array([points[k] for k in names], float)
+    c = P - P.mean(0)
+    u, s, vt = np.linalg.svd(c, full_matrices=False)
+    if s[1] <= 1e-6 * max(s[0], 1e-300):
+        proj = c @ vt[0]
+        return "line", [names[k] for k in np.argsort(proj, kind="stable")]
+    # Andrew's monotone chain
+    order = sorted(range(len(names)), key=lambda k: (P[k, 0], P[k, 1]))
+
+    def turn(o, a, b):
+        return (P[a, 0] - P[o, 0]) * (P[b, 1] - P[o, 1]) - (P[a, 1] - P[o, 1]) * (P[b, 0] - P[o, 0])
+
+    lower, upper = [], []
+    for k in order:
+        while len(lower) >= 2 and turn(lower[-2], lower[-1], k) <= 0:
+            lower.pop()
+        lower.append(k)
+    for k in reversed(order):
+        while len(upper) >= 2 and turn(upper[-2], upper[-1], k) <= 0:
+            upper.pop()
+        upper.append(k)
+    hull = lower[:-1] + upper[:-1]
+    return "polygon", [names[k] for k in hull]
+
+
+def _ground_outline(ground, used: set) -> list[str]:
+    """Ground points that joints use, in outline order (drawn as the dashed fixed link)."""
+    pts = {p: xy for p, xy in ground.points.items() if f"{GROUND}.{p}" in used}
+    if len(pts) < 3:
+        return [f"{GROUND}.{p}" for p in pts]
+    shape, outline = _body_shape(pts)
+    return [f"{GROUND}.{p}" for p in (outline if shape == "polygon" else pts)]
+
+
+def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
+    """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI)."""
+    m = sol.model
+    idx = frame_indices(len(sol.t), max_frames)
+    t = np.asarray(sol.t)[idx]
+    cols = sol.columns
+    joints = list(m.joints)
+    jcolor = {j.name: PALETTE[k % len(PALETTE)] for k, j in enumerate(joints)}
+    roles = joint_roles(sol)
+    series: dict[str, list] = {"t": _num(t, 7)}
+
+    def add(key, values, sig=5):
+        series[key] = _num(np.asarray(values)[idx], sig)
+        return key
+
+    # ---- geometry of the animation (m, global frame)
+    points, bounds = {}, []
+    ground = m.body(GROUND)
+    for name, xy in ground.points.items():
+        xy = np.asarray(xy, float)
+        points[f"{GROUND}.{name}"] = {"x": float(xy[0]), "y": float(xy[1]), "static": True}
+        bounds.append(xy[None, :])
+    for b in m.moving_bodies:
+        for name in b.points:
+            xy = np.asarray(sol.point(b.name, name))
+            bounds.append(xy[np.all(np.isfinite(xy), axis=1)])
+            points[f"{b.name}.{name}"] = {"x": _num(xy[idx, 0], 6), "y": _num(xy[idx, 1], 6)}
+    allxy = np.concatenate(bounds) if bounds else np.zeros((1, 2))
+    lo, hi = allxy.min(0), allxy.max(0)
+    size = float(max(np.max(hi - lo), 1e-9))
+
+    bodies = []
+    for k, b in enumerate(m.moving_bodies):
+        shape, outline = _body_shape(b.points)
+        bodies.append({"name": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)], "shape": shape,
+                       "outline": [f"{b.name}.{p}" for p in outline],
+                       "points": [f"{b.name}.{p}" for p in b.points]})
+
+    used = set()
+    jlist = []
+    for k, j in enumerate(joints):
+        a_id, b_id = f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"
+        used |= {a_id, b_id}
+        entry = {"name": j.name, "kind": j.kind, "a": a_id, "b": b_id, "role": roles[j.name],
+                 "ground": GROUND in (j.body_a, j.body_b), "color": jcolor[j.name],
+                 "first": j.body_a, "second": j.body_b}
+        if j.kind == PRISMATIC:
+            phi_a = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
+            ang = phi_a + math.atan2(float(j.axis[1]), float(j.axis[0])) + np.zeros(len(sol.t))
+            entry["angle"] = _num(ang[idx], 6)
+            if j.body_a == GROUND:  # a fixed guide: the stretch the slider travels
+                o = np.asarray(ground.points[j.point_a], float)
+                e = np.array([math.cos(ang[0]), math.sin(ang[0])])
+                s = (np.asarray(sol.point(j.body_b, j.point_b)) - o) @ e
+                s = s[np.isfinite(s)]
+                pad = 0.08 * size
+                s0, s1 = (float(s.min()) - pad, float(s.max()) + pad) if s.size else (-pad, pad)
+                entry["guide"] = [float(v) for v in (*(o + s0 * e), *(o + s1 * e))]
+                bounds.append(np.array([o + s0 * e, o + s1 * e]))
+        jlist.append(entry)
+        add(f"Fx:{j.name}", sol.reactions.force[..., k, 0])
+        add(f"Fy:{j.name}", sol.reactions.force[..., k, 1])
+        add(f"F:{j.name}", np.linalg.norm(sol.reactions.force[..., k, :], axis=-1))
+    # traced: points no joint uses (coupler points), and joints between two bodies that are
+    # not pivoted on the ground (e.g. the tool point of a five-bar)
+    grounded = {j.body_a for j in joints if j.body_b == GROUND} | {
+        j.body_b for j in joints if j.body_a == GROUND}
+    floating = {f"{j.body_b}.{j.point_b}" for j in joints
+                if GROUND not in (j.body_a, j.body_b)
+                and not ({j.body_a, j.body_b} & grounded)}
+    traces = [pid for pid in points if not points[pid].get("static")
+              and (pid not in used or pid in floating)]
+    allxy = np.concatenate(bounds)
+    lo, hi = allxy.min(0), allxy.max(0)
+    size = float(max(np.max(hi - lo), 1e-9))
+    fmax = float(np.nanmax(np.linalg.norm(sol.reactions.force, axis=-1))) if joints else 0.0
+
+    # ---- plot series and panels
+    plots = []
+    deg = {j.name: DEG if j.kind == REVOLUTE else 1.0 for j in joints}
+    kin_names = {"q": ("Joint angles", "Joint displacements"),
+                 "qd": ("Joint rates", "Joint rates"),
+                 "qdd": ("Joint accelerations", "Joint accelerations")}
+    units = {"q": ("deg", "m"), "qd": ("rad/s", "m/s"), "qdd": ("rad/s²", "m/s²")}
+    for kind in ("q", "qd", "qdd"):
+        for rev in (True, False):
+            js = [j for j in joints if (j.kind == REVOLUTE) == rev]
+            if not js:
+                continue
+            scale = (lambda j: deg[j.name]) if kind == "q" else (lambda j: 1.0)
+            ser = [{"key": add(f"{kind}:{j.name}", cols[f"{kind}_{j.name}"] * scale(j)),
+                    "label": j.name, "color": jcolor[j.name]} for j in js]
+            title = kin_names[kind][0 if rev else 1]
+            plots.append({"section": "Joint motion (relative joint coordinates q)",
+                          "title": title, "unit": units[kind][0 if rev else 1], "series": ser})
+
+    drivers = []
+    for unit, word in (("N m", "torque"), ("N", "force")):
+        ser = []
+        for k, d in enumerate(m.drivers):
+            if (m.joint(d.joint).kind == REVOLUTE) != (unit == "N m"):
+                continue
+            key = add(f"tau:{d.joint}", sol.dyn.tau[..., k])
+            ser.append({"key": key, "label": d.joint, "color": jcolor[d.joint]})
+            drivers.append({"joint": d.joint, "key": key, "unit": unit, "word": word,
+                            "q": f"q:{d.joint}", "qunit": "deg" if unit == "N m" else "m",
+                            "color": jcolor[d.joint]})
+        if ser:
+            plots.append({"section": "Driver efforts and joint reactions",
+                          "title": f"Driver {word}", "unit": unit, "series": ser})
+    plots.append({"section": "Driver efforts and joint reactions",
+                  "title": "Reaction force magnitude |F|", "unit": "N",
+                  "series": [{"key": f"F:{j.name}", "label": j.name, "color": jcolor[j.name]}
+                             for j in joints]})
+    for k, j in enumerate(joints):
+        ser = [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
+               {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}]
+        plots.append({"section": "Driver efforts and joint reactions",
+                      "title": f"Reaction at {j.name} ({j.body_a} on {j.body_b})",
+                      "unit": "N", "series": ser})
+    prism = [(k, j) for k, j in enumerate(joints) if j.kind == PRISMATIC]
+    if prism:
+        ser = [{"key": add(f"M:{j.name}", sol.reactions.moment[..., k]), "label": j.name,
+                "color": jcolor[j.name]} for k, j in prism]
+        plots.append({"section": "Driver efforts and joint reactions",
+                      "title": "Prismatic reaction moments", "unit": "N m", "series": ser})
+
+    labels = multiplier_labels(sol)
+    for c in dict.fromkeys(lbl[0] for lbl in labels):
+        comps = [(k, lbl) for k, lbl in enumerate(labels) if lbl[0] == c]
+        for unit in dict.fromkeys(lbl[2] for _, lbl in comps):
+            ser = [{"key": add(f"lam:{c}:{lbl[1]}", sol.dyn.lam[..., k]),
+                    "label": f"λ {lbl[1]}", "color": (X_COLOR, Y_COLOR)[n % 2]}
+                   for n, (k, lbl) in enumerate(comps) if lbl[2] == unit]
+            plots.append({"section": "Cut-joint multipliers λ (reaction at the cut joint)",
+                          "title": f"λ at cut joint {c}", "unit": unit, "series": ser})
+
+    try:
+        from .. import design
+        fbs = design.four_bars(m)
+        for n, fb in enumerate(fbs):
+            key = add(f"mu:{n}", np.degrees(design.transmission_angle(sol, fb)))
+            plots.append({"section": "Design", "title": f"Transmission angle "
+                          f"({fb.coupler} / {fb.output})", "unit": "deg",
+                          "series": [{"key": key, "label": "μ", "color": PALETTE[n]}]})
+    except Exception:  # pragma: no cover - a design helper must never break the report
+        pass
+    energy = [{"key": add("ke", cols["kinetic_energy"]), "label": "kinetic",
+               "color": PALETTE[0]}]
+    if "potential_energy" in cols:
+        energy.append({"key": add("pe", cols["potential_energy"]), "label": "potential",
+                       "color": PALETTE[1]})
+    plots.append({"section": "Design", "title": "Energy", "unit": "J", "series": energy})
+    for n, name in enumerate(c for c in cols if not _known_column(c)):
+        vals = np.asarray(cols[name], float)
+        if vals.shape != np.shape(sol.t):
+            continue
+        plots.append({"section": "Other result columns", "title": name, "unit": "",
+                      "series": [{"key": add(f"col:{name}", vals), "label": name,
+                                  "color": PALETTE[n % len(PALETTE)]}]})
+
+    # x axes: time, and the first driver's angle when it turns monotonically
+    xaxes = [{"key": "t", "label": "t (s)"}]
+    for d in m.drivers:
+        if m.joint(d.joint).kind == REVOLUTE:
+            q = np.asarray(cols[f"q_{d.joint}"])[idx] * DEG
+            dq = np.diff(q)
+            if len(q) > 1 and np.all(np.isfinite(q)) and (np.all(dq > 0) or np.all(dq < 0)):
+                xaxes.append({"key": f"q:{d.joint}", "label": f"{d.joint} angle (deg)"})
+            break
+
+    margin = 0.07 * size
+    return {
+        "name": m.name,
+        "t": series["t"],
+        "total_samples": int(len(sol.t)),
+        "valid": [bool(v) for v in np.asarray(sol.valid)[idx]],
+        "series": series,
+        "plots": plots,
+        "xaxes": xaxes,
+        "drivers": drivers,
+        "geom": {"points": points, "bodies": bodies, "joints": jlist, "traces": traces,
+                 "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
+                            float(hi[0] + margin), float(hi[1] + margin)],
+                 "ground": _ground_outline(ground, used),
+                 "fmax": fmax},
+    }

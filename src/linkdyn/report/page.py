@@ -1,0 +1,124 @@
+"""The page itself: the tables, the data blob and the inline CSS and JavaScript of ``assets/``,
+assembled into one self-contained HTML document."""
+
+from __future__ import annotations
+
+import html
+import json
+from importlib import resources
+from pathlib import Path
+
+from .data import MAX_FRAMES, page_data
+from .tables import key_results_html, model_html, summary_html
+
+
+def outputs(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> dict:
+    """Files this module contributes to ``linkdyn analyze --report``.
+
+    Returns ``{"report.html": writer}`` where ``writer(path)`` writes the page.
+    """
+    def write(path: Path) -> None:
+        Path(path).write_text(render(sol, summary, max_frames=max_frames), encoding="utf-8")
+
+    return {"report.html": write}
+
+
+def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
+    """The whole page as a string."""
+    data = page_data(sol, max_frames=max_frames)
+    m = sol.model
+    blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    blob = blob.replace("</", "<\\/")  # never close the <script> early
+    title = html.escape(m.name or "mechanism")
+    n, total = len(data["t"]), int(len(sol.t))
+    note = (f"{total} samples; the page shows {n} of them evenly spaced (results.csv has all)"
+            if n < total else f"{total} samples")
+    desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
+    return _PAGE.format(
+        title=title, css=_asset("report.css"), js=_asset("report.js"), data=blob, desc=desc,
+        note=html.escape(note), summary=summary_html(summary), model=model_html(sol),
+        key=key_results_html(summary),
+        version=html.escape(_version()))
+
+
+def _asset(name: str) -> str:
+    return resources.files("linkdyn.report").joinpath("assets", name).read_text("utf-8")
+
+
+def _version() -> str:
+    try:
+        from .. import __version__
+        return __version__
+    except ImportError:  # pragma: no cover
+        return ""
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="linkdyn {version}">
+<title>{title} — linkdyn report</title>
+<style>
+{css}
+</style>
+</head>
+<body>
+<header>
+<h1>{title}</h1>
+{desc}
+<p class="note">{note}. Angles in degrees, everything else SI. Click or drag on any plot to move
+the time cursor; keys: space play/pause, ← → step.</p>
+</header>
+<section class="top">
+  <div class="animbox">
+    <svg id="anim" role="img" aria-label="animation of the mechanism"></svg>
+    <div class="controls">
+      <button id="play" type="button" title="play / pause (space)">▶ Play</button>
+      <button id="stepback" type="button" title="previous frame (←)">◀</button>
+      <button id="step" type="button" title="next frame (→)">▶|</button>
+      <input id="scrubber" type="range" min="0" max="0" value="0" step="1"
+             aria-label="time">
+      <label>speed <select id="speed">
+        <option value="0.25">0.25×</option><option value="0.5">0.5×</option>
+        <option value="1" selected>1×</option><option value="2">2×</option>
+        <option value="4">4×</option></select></label>
+    </div>
+    <div class="controls toggles">
+      <label><input type="checkbox" id="show-labels" checked> labels</label>
+      <label><input type="checkbox" id="show-traces" checked> traced points</label>
+      <label><input type="checkbox" id="show-forces"> reaction forces</label>
+      <span id="ratenote" class="note"></span>
+    </div>
+  </div>
+  <aside class="info">
+    <div id="time" class="time">t = 0 s</div>
+    <div id="frameinfo" class="note"></div>
+    <div id="drivers"></div>
+    <div id="loaded" class="loaded"></div>
+    <table id="jointforces" class="grid small"></table>
+    {key}
+  </aside>
+</section>
+<section>
+  <div class="plotbar"><h2>Plots</h2>
+  <label>x axis <select id="xaxis"></select></label></div>
+  <div id="plots"></div>
+</section>
+<section class="tables">
+<h2>Summary</h2>
+{summary}
+</section>
+<section class="tables">
+<h2>Model</h2>
+{model}
+</section>
+<footer class="note">linkdyn {version} · recursive DeNOC kinematics and inverse dynamics</footer>
+<script id="linkdyn-data" type="application/json">{data}</script>
+<script>
+{js}
+</script>
+</body>
+</html>
+"""
