@@ -510,3 +510,47 @@ def test_stop_closing_in_a_subprocess_has_no_traceback(tmp_path):
     assert_user_error(res, 3, "at t = ", "(q_J1 = ")
     assert_no_outputs(tmp_path / "out")
     assert not list(tmp_path.glob("**/.linkdyn-*"))
+
+
+def change_point_hoeken() -> str:
+    """A parallelogram (crank = rocker = 50 mm, coupler = ground = 115.2 mm) started at a crank
+    angle of 30 deg: at 180 deg all four links lie on one line, a change point where the loop
+    still closes but J_dep is singular (the mechanism could continue as a parallelogram or an
+    anti-parallelogram)."""
+    text = edit(HOEKEN, "O2 = [38.1, 0.0]", "O2 = [50.0, 0.0]")
+    text = edit(text, "O4 = [89.5, 0.0] }", "O4 = [115.2, 0.0] }")
+    text = edit(text, "points = { O3 = [0.0, 0.0], O4 = [115.2, 0.0] }",
+                "points = { O3 = [0.0, 0.0], O4 = [50.0, 0.0] }")
+    text = edit(text, "com = [19.05, 0.0]", "com = [25.0, 0.0]")
+    text = edit(text, "com = [57.6, 0.0]", "com = [25.0, 0.0]")
+    text = edit(text, "inertia = 725.80", "inertia = 1250.0")
+    text = edit(text, "inertia = 13271.76", "inertia = 2500.0")
+    text = edit(text, "rpm = 45.0, start = 0.0", "rpm = 45.0, start = 30.0")
+    return edit(text, "phi = { crank = 0.0, coupler = 77.12, rocker = -77.12 }",
+                "phi = { crank = 30.0, coupler = 0.0, rocker = 210.0 }")
+
+
+def test_a_singular_position_exits_3_naming_the_time_and_driver_value(tmp_path):
+    path = write(tmp_path, change_point_hoeken())
+    res = run("analyze", path, "-o", tmp_path / "out", "--samples", 37)
+    line = assert_user_error(res, 3, "singular")
+    # the crank reaches 180 deg at t = (150 deg) / (270 deg/s), a sample of linspace(0, 4/3, 37)
+    t_toggle = (150 / 270)
+    assert f"at t = {t_toggle:.6g} s (q_J1 = {math.pi:.6g})" in line
+    assert_no_outputs(tmp_path / "out")
+
+
+def test_allow_singular_keeps_the_other_samples_as_nan_rows(tmp_path):
+    path = write(tmp_path, change_point_hoeken())
+    out = tmp_path / "out"
+    res = run("analyze", path, "-o", out, "--samples", 37, "--allow-singular")
+    assert res.exit_code == 0, res.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["invalid_samples"] >= 1
+    rows = np.genfromtxt(out / "results.csv", delimiter=",", names=True)
+    bad = np.isnan(rows["tau_J1"])
+    assert bad.sum() == summary["invalid_samples"]
+    # the NaN rows are at the toggle; every other row is finite, t never NaN
+    assert np.all(np.abs(rows["q_J1"][bad] - math.pi) < 1e-9) or np.all(np.isnan(rows["q_J1"][bad]))
+    assert np.isfinite(rows["t"]).all()
+    assert np.isfinite(rows["tau_J1"][~bad]).all() and (~bad).sum() >= 30

@@ -174,7 +174,7 @@ def analyze(model, t, *, allow_singular: bool = False) -> Solution:
         k = int(np.argmin(valid))
         drivers = {d.joint: float(v) for d, v in
                    zip(model.drivers, kinematics.driver_values(model, kin.t[k:k + 1])[0][0])}
-        closes = bool(kin.valid[k])
+        closes = bool(kin.residual[k] <= kinematics.ACCEPT)  # closes, but singular
         raise AssemblyError(
             "the mechanism passes a singular (toggle or dead-centre) position" if closes else
             "the loops stop closing: the mechanism cannot reach this driver position",

@@ -300,7 +300,8 @@ def print_summary(s: dict) -> None:
                f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
                f"condition number {num(h['worst_condition_number'], '.3g')}")
     if s["invalid_samples"]:
-        click.echo(f"  WARNING: {s['invalid_samples']} singular samples written as NaN")
+        click.echo(f"  WARNING: {s['invalid_samples']} samples that do not close or sit at a singular "
+                   "position are written as NaN rows")
 
 
 def _path_range(text):

@@ -84,6 +84,8 @@ def _circles(c1, r1, c2, r2, side):
     ex = d_vec / d
     a = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
     h2 = r1 ** 2 - a ** 2
+    # at a toggle the triangle is flat (h = 0): rounding must not turn it into "cannot close"
+    h2 = np.where((h2 < 0) & (h2 > -1e-12 * r1 ** 2), 0.0, h2)
     with np.errstate(invalid="ignore"):
         h = np.sqrt(np.where(h2 >= 0, h2, np.nan))
     return c1 + a * ex + side * h * perp(ex)
