@@ -616,3 +616,41 @@ def test_unsorted_and_repeated_times(name):
     for attr in ("q", "qd", "qdd", "phi"):
         _same(getattr(kin, attr)[order], getattr(ref, attr), 1e-12, attr)
     np.testing.assert_array_equal(kin.q[2], kin.q[3])
+
+
+# ------------------------------------------------------------------------------------------
+# closed-form dyads against Newton's method
+
+def _tilted_slider_crank(swap: bool):
+    """The bundled slider-crank on a slide tilted 30 deg, the slider turned 15 deg on it, the
+    prismatic joint written in either order (the line fixed in the ground, or in the slider)."""
+    text = example_text("slider_crank").replace(
+        'axis = [1.0, 0.0]', 'axis = [0.8660254037844387, 0.5]\nangle = 15.0').replace(
+        'slider = 0.0 }', 'slider = 15.0 }')
+    if swap:
+        text = text.replace('connect = ["ground.G", "slider.B"]',
+                            'connect = ["slider.B", "ground.G"]').replace(
+            'angle = 15.0', 'angle = -15.0').replace(
+            'axis = [0.8660254037844387, 0.5]', 'axis = [0.9659258262890683, 0.25881904510252074]')
+    mech = model_from_dict(tomllib.loads(text))
+    return dataclasses.replace(mech, assembly_q={})
+
+
+@pytest.mark.parametrize("case", ["hoeken", "drag_link", "watt2", "stephenson", "fivebar",
+                                  "slider_crank", "tilted_slide", "tilted_slide_swapped"])
+def test_closed_form_dyads_agree_with_newton(case):
+    mech = (_tilted_slider_crank(case.endswith("swapped")) if case.startswith("tilted")
+            else load(case))
+    lay = kinematics.compile_layout(mech)
+    assert lay.dyads is not None, "this mechanism decomposes into dyads"
+    shapes = {d.shape for d in lay.dyads}
+    assert shapes <= {"chain", "split", "slide"}
+    if "slide" in case or case == "slider_crank":
+        assert shapes == {"slide"}
+    t = np.linspace(0.0, period(mech), 181)
+    closed = kinematics.solve(mech, t, layout=lay)
+    newton = kinematics.solve(mech, t, layout=dataclasses.replace(lay, dyads=None))
+    assert closed.valid.all() and newton.valid.all()
+    assert closed.residual.max() <= 1e-14
+    for attr in ("q", "qd", "qdd", "phi", "tw", "twd"):
+        _same(getattr(closed, attr), getattr(newton, attr), 1e-10, f"{case} {attr}")

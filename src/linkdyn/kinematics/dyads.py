@@ -30,8 +30,9 @@ from ..planar import cross, dot, perp, rotate_cs
 
 @dataclass(frozen=True)
 class Dyad:
-    """One RRR dyad: cut index, the two unknown joints (body indices, ``upper`` nearer the
-    ground) and the shape: ``'split'``, or ``'chain'`` with ``side`` ('a' or 'b') carrying both."""
+    """One dyad: cut index, the two unknown joints (body indices, ``upper`` nearer the ground)
+    and the shape: RRR ``'split'`` or ``'chain'``, RRP ``'slide'``; ``side`` ('a' or 'b') is the
+    side of the cut carrying both unknown joints of a chain or slide."""
 
     cut: int
     upper: int
@@ -49,15 +50,18 @@ def plan(lay) -> tuple[Dyad, ...] | None:
     while todo:
         for k in todo:
             c = lay.cuts[k]
-            if c.kind != REVOLUTE:
-                continue
             on_a = {j for j in range(1, topo.n) if topo.ancestors[c.a, j] and not topo.ancestors[c.b, j]}
             on_b = {j for j in range(1, topo.n) if topo.ancestors[c.b, j] and not topo.ancestors[c.a, j]}
             unknown = sorted((on_a | on_b) - known)
             if len(unknown) != 2 or any(lay.kind[j] != REVOLUTE for j in unknown):
                 continue
             j1, j2 = unknown
-            if (j1 in on_a) != (j2 in on_a):
+            if c.kind != REVOLUTE:  # a slider cut: RRP, both unknown joints on one side
+                if (j1 in on_a) != (j2 in on_a):
+                    continue
+                upper, lower = (j1, j2) if topo.ancestors[j2, j1] else (j2, j1)
+                out.append(Dyad(k, upper, lower, "slide", "a" if j1 in on_a else "b"))
+            elif (j1 in on_a) != (j2 in on_a):
                 upper, lower = (j1, j2) if j1 in on_a else (j2, j1)
                 out.append(Dyad(k, upper, lower, "split"))
             else:
@@ -122,14 +126,60 @@ def _vertices(lay, dy, pose):
     return x1, p_fix, x2, p_mov, p_fix  # apex: the lower joint over the upper joint and cut
 
 
+def _slide(lay, dy, pose):
+    """Geometry of an RRP dyad (a slider cut with both unknown joints on one side ``dy.side``).
+
+    The body on the moving side that carries the cut point must end at a known angle (the
+    other body's plus the joint's ``angle``), so the whole subtree below the lower joint turns
+    by a known ``total`` turn; the lower joint then lies on the slide line shifted back by the
+    turned offset from it to the cut point. Returns ``x1``, ``x2`` (the joints), the shifted
+    line (point, unit direction) and ``total`` (angle, cosine, sine).
+    """
+    c = lay.cuts[dy.cut]
+    x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
+    cos_a, sin_a = np.cos(c.angle), np.sin(c.angle)
+    if dy.side == "b":   # the slider body b moves; the line is fixed in body a
+        mov, fix, p_mov, sign = c.b, c.a, pose.point(c.b, c.pb), 1.0
+        p0, e = pose.point(c.a, c.pa), pose.rotate(c.a, c.axis)
+    else:                # body a, which carries the line, moves; the slider point is fixed
+        mov, fix, p_mov, sign = c.a, c.b, pose.point(c.a, c.pa), -1.0
+        p0, e = pose.point(c.b, c.pb), None
+    # target angle of the moving body: phi_fix +- angle, as a cosine and a sine
+    ct = pose.c[fix] * cos_a - sign * pose.s[fix] * sin_a
+    st = pose.s[fix] * cos_a + sign * pose.c[fix] * sin_a
+    cd, sd = ct * pose.c[mov] + st * pose.s[mov], st * pose.c[mov] - ct * pose.s[mov]
+    total = (np.arctan2(sd, cd), cd, sd)
+    if e is None:
+        e = rotate_cs(cd, sd, pose.rotate(c.a, c.axis))
+    return x1, x2, p0 - rotate_cs(cd, sd, p_mov - x2), e, total
+
+
+def _on_line(c, r, p0, e, side):
+    """Intersection of circle (c, r) with the line p0 + s e on the ``side`` (+1: ahead along e
+    of the foot of c, -1: behind); NaN where they do not meet."""
+    foot = p0 + dot(c - p0, e) * e
+    d = c - foot
+    h2 = r ** 2 - dot(d, d)
+    h2 = np.where((h2 < 0) & (h2 > -1e-12 * r ** 2), 0.0, h2)
+    with np.errstate(invalid="ignore"):
+        return foot + side * np.sqrt(np.where(h2 >= 0, h2, np.nan)) * e
+
+
+def _mode(lay, dy, pose):
+    """Assembly mode of one dyad in ``pose``: +1 or -1, shape (...)."""
+    if dy.shape == "slide":
+        x1, x2, p0, e, _ = _slide(lay, dy, pose)
+        return np.where(dot(x2 - (p0 + dot(x1 - p0, e) * e), e) >= 0, 1.0, -1.0)
+    c1, c2, apex, _, _ = _vertices(lay, dy, pose)
+    return _side(c1, c2, apex)
+
+
 def sides(lay, dyads, q, forward) -> list:
-    """Assembly mode of each dyad at the configuration ``q``: the side (+1/-1, shape (...)) of
-    the line through its known vertices where its apex lies."""
-    out = []
-    for dy in dyads:
-        c1, c2, apex, _, _ = _vertices(lay, dy, forward(lay, q))
-        out.append(_side(c1, c2, apex))
-    return out
+    """Assembly mode of each dyad at the configuration ``q`` (+1/-1, shape (...)): the side of
+    the line through its known vertices where its apex lies (for a slider, the side of the
+    foot of the upper joint where the lower joint lies along the slide)."""
+    pose = forward(lay, q)
+    return [_mode(lay, dy, pose) for dy in dyads]
 
 
 def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
@@ -146,8 +196,21 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
     pose = forward(lay, q)
     pose = type(pose)(*(list(x) for x in (pose.phi, pose.c, pose.s, pose.r, pose.e)))
     for k, dy in enumerate(dyads):
+        side = _mode(lay, dy, pose) if sides is None else sides[k]
+        if dy.shape == "slide":
+            # the lower joint m on the shifted slide line, at the link length from the upper
+            x1, x2, p0, e, total = _slide(lay, dy, pose)
+            m = _on_line(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p0, e, side)
+            up = _turn(x2 - x1, m - x1)
+            _rotate_subtree(lay, pose, dy.upper, x1, up)
+            # the lower joint supplies the rest of the known total turn
+            c2, s2 = total[1] * up[1] + total[2] * up[2], total[2] * up[1] - total[1] * up[2]
+            low = (np.arctan2(s2, c2), c2, s2)
+            _rotate_subtree(lay, pose, dy.lower, m, low)
+            q[dy.upper] += topo.sign[dy.upper] * up[0]
+            q[dy.lower] += topo.sign[dy.lower] * low[0]
+            continue
         x1, c2, apex, p_a_or_mov, p_b_or_fix = _vertices(lay, dy, pose)
-        side = _side(x1, c2, apex) if sides is None else sides[k]
         if dy.shape == "split":
             # the cut point m over the two unknown joints x1 and x2 = c2
             p_up, p_low = p_a_or_mov, p_b_or_fix
