@@ -32,7 +32,7 @@ SUMMARY_KEYS = {"model", "file", "samples", "duration_s", "mobility", "loops", "
                 "spanning_tree", "drivers", "reactions", "four_bars", "invalid_samples", "health"}
 # (mobility, cut joints) of each bundled example
 TOPOLOGY = {"hoeken": (1, ["J4"]), "drag_link": (1, ["J4"]), "slider_crank": (1, ["J4"]),
-            "inverted_slider_crank": (1, ["J4"]), "fivebar": (2, ["J4"]),
+            "inverted_slider_crank": (1, ["J3"]), "fivebar": (2, ["J4"]),
             "stephenson": (1, ["J4", "J7"]), "watt2": (1, ["J4", "J7"])}
 
 

@@ -637,16 +637,19 @@ def _tilted_slider_crank(swap: bool):
 
 
 @pytest.mark.parametrize("case", ["hoeken", "drag_link", "watt2", "stephenson", "fivebar",
-                                  "slider_crank", "tilted_slide", "tilted_slide_swapped"])
+                                  "slider_crank", "tilted_slide", "tilted_slide_swapped",
+                                  "inverted_slider_crank"])
 def test_closed_form_dyads_agree_with_newton(case):
     mech = (_tilted_slider_crank(case.endswith("swapped")) if case.startswith("tilted")
             else load(case))
     lay = kinematics.compile_layout(mech)
     assert lay.dyads is not None, "this mechanism decomposes into dyads"
     shapes = {d.shape for d in lay.dyads}
-    assert shapes <= {"chain", "split", "slide"}
-    if "slide" in case or case == "slider_crank":
+    assert shapes <= {"chain", "split", "slide", "swing"}
+    if case in ("slider_crank", "tilted_slide", "tilted_slide_swapped"):
         assert shapes == {"slide"}
+    if case == "inverted_slider_crank":
+        assert shapes == {"swing"}
     t = np.linspace(0.0, period(mech), 181)
     closed = kinematics.solve(mech, t, layout=lay)
     newton = kinematics.solve(mech, t, layout=dataclasses.replace(lay, dyads=None))
@@ -654,3 +657,17 @@ def test_closed_form_dyads_agree_with_newton(case):
     assert closed.residual.max() <= 1e-14
     for attr in ("q", "qd", "qdd", "phi", "tw", "twd"):
         _same(getattr(closed, attr), getattr(newton, attr), 1e-10, f"{case} {attr}")
+
+
+def test_inverted_slider_crank_cut_at_the_pivot_matches_the_slider_cut():
+    # cut at the lever pivot J4 the loop is not a dyad of ours and Newton's method solves it;
+    # the motion must be the same as with the (automatic) slider cut solved in closed form
+    text = example_text("inverted_slider_crank")
+    data = tomllib.loads(text)
+    data["topology"] = {"cut": ["J4"]}
+    pivot = model_from_dict(data)
+    assert kinematics.compile_layout(pivot).dyads is None
+    t = np.linspace(0.0, 1.0, 121)
+    a, b = kinematics.solve(load("inverted_slider_crank"), t), kinematics.solve(pivot, t)
+    for attr in ("q", "qd", "qdd", "phi"):
+        _same(a.__getattribute__(attr), b.__getattribute__(attr), 1e-10, attr)

@@ -24,7 +24,7 @@ EXPECTED = {
     "hoeken": (4, 4, 1, 1, ["J4"]),            # [topology] cut = ["J4"] in the file
     "drag_link": (4, 4, 1, 1, ["J4"]),
     "slider_crank": (4, 4, 1, 1, ["J4"]),
-    "inverted_slider_crank": (4, 4, 1, 1, ["J4"]),
+    "inverted_slider_crank": (4, 4, 1, 1, ["J3"]),
     "fivebar": (5, 5, 2, 1, ["J4"]),           # two drivers: J1 and J5 (the last joint)
     "stephenson": (6, 7, 1, 2, ["J4", "J7"]),
     "watt2": (6, 7, 1, 2, ["J4", "J7"]),
@@ -145,6 +145,18 @@ def test_automatic_cut_avoids_a_driven_joint_that_closes_the_loop():
     cuts = joint_names(mech, topo.cut)
     assert len(cuts) == 1 and cuts != ["J4"]
     assert mech.joints[topo.tree_joint[topo.driven[0]]].name == "J4"
+
+
+def test_automatic_cut_prefers_a_slider():
+    # the inverted slider-crank declares the ground pivot J4 last, yet its slider J3 is cut: a
+    # cut slider leaves a loop that closes in closed form (an RPR dyad)
+    mech = linkdyn.load(linkdyn.example_path("inverted_slider_crank"))
+    assert mech.cut is None and mech.joint("J3").kind == "prismatic"
+    topo = topology.build(mech)
+    assert joint_names(mech, topo.cut) == ["J3"]
+    # the slider-crank's slider is its last joint anyway
+    mech = linkdyn.load(linkdyn.example_path("slider_crank"))
+    assert [mech.joints[j].kind for j in topology.build(mech).cut] == ["prismatic"]
 
 
 @pytest.mark.parametrize("cut", ["J2", "J3"])

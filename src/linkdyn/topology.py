@@ -70,8 +70,8 @@ class Topology:
 def build(model: Model) -> Topology:
     """Choose the spanning tree and cut joints of ``model`` and check its mobility.
 
-    Kruskal's algorithm over the joints, driven joints first, then in file order, skipping
-    joints the user asked to cut: every joint that would close a cycle is cut.
+    Kruskal's algorithm over the joints, driven joints first, sliders last, otherwise in file
+    order, skipping joints the user asked to cut: every joint that would close a cycle is cut.
 
     Raises
     ------
@@ -95,7 +95,10 @@ def build(model: Model) -> Topology:
             a = root[a]
         return a
 
-    order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_names, j))
+    # driven joints first (never cut), sliders last (a cut slider leaves loops that close in
+    # closed form, see kinematics.dyads), otherwise file order
+    order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_names,
+                                                      joints[j].kind == PRISMATIC, j))
     tree, cut = [], []
     for j in order:
         jt = joints[j]

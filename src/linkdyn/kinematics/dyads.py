@@ -56,9 +56,11 @@ def plan(lay) -> tuple[Dyad, ...] | None:
             if len(unknown) != 2 or any(lay.kind[j] != REVOLUTE for j in unknown):
                 continue
             j1, j2 = unknown
-            if c.kind != REVOLUTE:  # a slider cut: RRP, both unknown joints on one side
-                if (j1 in on_a) != (j2 in on_a):
-                    continue
+            if c.kind != REVOLUTE and (j1 in on_a) != (j2 in on_a):
+                # a slider cut between the two unknown joints' sides: RPR
+                upper, lower = (j1, j2) if j1 in on_a else (j2, j1)
+                out.append(Dyad(k, upper, lower, "swing"))
+            elif c.kind != REVOLUTE:  # a slider cut with both unknown joints on one side: RRP
                 upper, lower = (j1, j2) if topo.ancestors[j2, j1] else (j2, j1)
                 out.append(Dyad(k, upper, lower, "slide", "a" if j1 in on_a else "b"))
             elif (j1 in on_a) != (j2 in on_a):
@@ -154,6 +156,24 @@ def _slide(lay, dy, pose):
     return x1, x2, p0 - rotate_cs(cd, sd, p_mov - x2), e, total
 
 
+def _swing(lay, dy, pose):
+    """Geometry of an RPR dyad: a slider cut whose line body a turns about the unknown joint
+    ``x_a`` and whose slider body b about ``x_b``. Body b must turn by ``delta`` more than body a
+    (to keep their angle); then the slider point stays on the line when
+    ``A cos(theta) + B sin(theta) = k`` for body a's turn ``theta``. Returns
+    ``x_a, x_b, (A, B, k), delta (angle, cos, sin)``."""
+    c = lay.cuts[dy.cut]
+    x_a, x_b = pose.r[dy.upper], pose.r[dy.lower]
+    # delta = angle - (phi_b - phi_a), from the cosines and sines
+    cr = pose.c[c.b] * pose.c[c.a] + pose.s[c.b] * pose.s[c.a]
+    sr = pose.s[c.b] * pose.c[c.a] - pose.c[c.b] * pose.s[c.a]
+    cd, sd = np.cos(c.angle) * cr + np.sin(c.angle) * sr, np.sin(c.angle) * cr - np.cos(c.angle) * sr
+    n = perp(pose.rotate(c.a, c.axis))
+    d = x_b - x_a
+    k = dot(pose.point(c.a, c.pa) - x_a - rotate_cs(cd, sd, pose.point(c.b, c.pb) - x_b), n)
+    return x_a, x_b, (dot(d, n), dot(d, perp(n)), k), (np.arctan2(sd, cd), cd, sd)
+
+
 def _on_line(c, r, p0, e, side):
     """Intersection of circle (c, r) with the line p0 + s e on the ``side`` (+1: ahead along e
     of the foot of c, -1: behind); NaN where they do not meet."""
@@ -170,6 +190,9 @@ def _mode(lay, dy, pose):
     if dy.shape == "slide":
         x1, x2, p0, e, _ = _slide(lay, dy, pose)
         return np.where(dot(x2 - (p0 + dot(x1 - p0, e) * e), e) >= 0, 1.0, -1.0)
+    if dy.shape == "swing":  # which root of A cos + B sin = k the pose sits on (theta = 0)
+        _, _, (a, b, _), _ = _swing(lay, dy, pose)
+        return np.where(b <= 0, 1.0, -1.0)
     c1, c2, apex, _, _ = _vertices(lay, dy, pose)
     return _side(c1, c2, apex)
 
@@ -207,6 +230,23 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
             c2, s2 = total[1] * up[1] + total[2] * up[2], total[2] * up[1] - total[1] * up[2]
             low = (np.arctan2(s2, c2), c2, s2)
             _rotate_subtree(lay, pose, dy.lower, m, low)
+            q[dy.upper] += topo.sign[dy.upper] * up[0]
+            q[dy.lower] += topo.sign[dy.lower] * low[0]
+            continue
+        if dy.shape == "swing":
+            # body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta
+            x_a, x_b, (a, b, k_), delta = _swing(lay, dy, pose)
+            norm = np.sqrt(a * a + b * b)
+            ratio = k_ / norm
+            ratio = np.where((np.abs(ratio) > 1) & (np.abs(ratio) < 1 + 1e-12), np.sign(ratio), ratio)
+            with np.errstate(invalid="ignore"):
+                theta = np.arctan2(b, a) + side * np.arccos(np.where(np.abs(ratio) <= 1, ratio, np.nan))
+            theta = np.arctan2(np.sin(theta), np.cos(theta))
+            up = (theta, np.cos(theta), np.sin(theta))
+            low = (theta + delta[0], up[1] * delta[1] - up[2] * delta[2],
+                   up[2] * delta[1] + up[1] * delta[2])
+            _rotate_subtree(lay, pose, dy.upper, x_a, up)
+            _rotate_subtree(lay, pose, dy.lower, x_b, low)
             q[dy.upper] += topo.sign[dy.upper] * up[0]
             q[dy.lower] += topo.sign[dy.lower] * low[0]
             continue
