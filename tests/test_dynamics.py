@@ -867,6 +867,76 @@ def test_random_crank_rockers(case):
                     what="recursive vs Newton–Euler")
 
 
+@st.composite
+def slider_cranks(draw):
+    """A random offset slider-crank on a slide of random direction, its slider at a random fixed
+    angle to the slide, the prismatic joint written in either order, cut at a random joint (the
+    slider or a pin), assembled at t = 0 by construction, with gravity and a load on the slider."""
+    f = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+    a = f(0.02, 0.2)                                   # crank
+    rod = a * f(2.5, 5.0)                              # connecting rod
+    off = (rod - a) * 0.6 * f(-1.0, 1.0)               # slide offset: the crank never toggles
+    O = np.array([f(-0.5, 0.5), f(-0.5, 0.5)])
+    beta = f(-math.pi, math.pi)
+    u = np.array([math.cos(beta), math.sin(beta)])
+    n = np.array([-u[1], u[0]])
+    G = O + off * n                                    # a point of the slide line
+    gamma = f(-math.pi, math.pi)
+    A = O + a * np.array([math.cos(gamma), math.sin(gamma)])
+    foot = G + np.dot(A - G, u) * u
+    B = foot + (1 if draw(st.booleans()) else -1) * math.sqrt(rod**2 - np.dot(A - foot, A - foot)) * u
+    frames = {name: (f(-math.pi, math.pi), np.array([f(-0.3, 0.3), f(-0.3, 0.3)]))
+              for name in ("crank", "rod", "slider")}
+
+    def local(name, P):
+        phi, o = frames[name]
+        return rot(np.asarray(-phi), P - o)
+
+    bodies = [Body("ground", {"O": O, "G": G})]
+    for name, pts, length in (("crank", {"O": O, "A": A}, a), ("rod", {"A": A, "B": B}, rod),
+                              ("slider", {"B": B, "F": B + 0.05 * u}, 0.05)):
+        m = f(0.1, 5.0)
+        com = local(name, frames[name][1]) + np.array([f(-1, 1), f(-1, 1)]) * length
+        bodies.append(Body(name, {k: local(name, v) for k, v in pts.items()}, m, com,
+                           m * length**2 * f(0.01, 0.5)))
+    phi_s = frames["slider"][0]
+    if draw(st.booleans()):     # line fixed in the ground: q = (B - G) . u
+        slide = pri("J4", "ground.G", "slider.B", u, phi_s)
+        q4 = float(np.dot(B - G, u))
+    else:                       # line fixed in the slider: q = (G - B) . u
+        slide = pri("J4", "slider.B", "ground.G", rot(np.asarray(-phi_s), u), -phi_s)
+        q4 = float(np.dot(G - B, u))
+    joints = (rev("J1", "ground.O", "crank.O"), rev("J2", "crank.A", "rod.A"),
+              rev("J3", "rod.B", "slider.B"), slide)
+    speed = f(1.0, 20.0) * draw(st.sampled_from([-1.0, 1.0]))
+    loads = (force("slider", "F", f(-50, 50), f(-50, 50), 3.0),)
+    model = Model("random slider-crank", tuple(bodies), joints,
+                  (Driver("J1", ConstantSpeed(speed, frames["crank"][0])),), loads,
+                  np.array([f(-20, 20), f(-20, 20)]),
+                  assembly_phi={k: v[0] for k, v in frames.items()}, assembly_q={"J4": q4},
+                  cut=(draw(st.sampled_from(["J2", "J3", "J4"])),))
+    return model, {"A": A, "B": B}, abs(speed)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(slider_cranks())
+def test_random_slider_cranks(case):
+    model, assembled, speed = case
+    t = np.linspace(0.0, 2 * math.pi / speed, 7)
+    sol = analyze(model, t)
+    size = size_of(model)
+    for p in ("A", "B"):
+        np.testing.assert_allclose(sol.point("rod", p)[0], assembled[p], atol=1e-9 * size)
+    d = dense.solve(model, sol.kin, sol.loads.w_ext)
+    force_, moment, tau = ne_solve(sol)
+    check(sol.dyn.tau, d.tau, what="tau recursive vs dense")
+    check(sol.dyn.tau, tau, what="tau recursive vs Newton–Euler")
+    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model, size,
+                    what="recursive vs dense")
+    check_reactions(sol.reactions.force, sol.reactions.moment, force_, moment, model, size,
+                    what="recursive vs Newton–Euler")
+
+
 # ----------------------------------------------------------------------------------------------
 # g. batch equals loop
 
