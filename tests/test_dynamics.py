@@ -36,28 +36,12 @@ from linkdyn.dynamics import dense
 from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-MM = 1e-3
-DEG = math.pi / 180
-RPM = 2 * math.pi / 60
+from builders import DEG, RPM, body, pri, rev
+
 RTOL = 1e-9
 
 # ----------------------------------------------------------------------------------------------
 # model builders (SI); geometry in mm, inertia about the mass centre in kg mm^2
-
-
-def body(name, points, mass=0.0, com=(0.0, 0.0), inertia=0.0):
-    return Body(name, {k: np.array(v, float) * MM for k, v in points.items()}, float(mass),
-                np.array(com, float) * MM, inertia * 1e-6)
-
-
-def rev(name, a, b):
-    (ba, pa), (bb, pb) = a.split("."), b.split(".")
-    return Joint(name, REVOLUTE, ba, pa, bb, pb)
-
-
-def pri(name, a, b, axis=(1.0, 0.0), angle=0.0):
-    (ba, pa), (bb, pb) = a.split("."), b.split(".")
-    return Joint(name, PRISMATIC, ba, pa, bb, pb, np.array(axis, float), float(angle))
 
 
 def force(body_, point, fx, fy, wx=0.0):
@@ -790,12 +774,32 @@ def _circle_intersection(c1, r1, c2, r2, up):
     return c1 + a * u + (1 if up else -1) * h * np.array([-u[1], u[0]])
 
 
+def _floats(draw):
+    """``f(lo, hi)``: a finite float drawn in [lo, hi]."""
+    return lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+
+
+def _placed_bodies(f, ground, links):
+    """The ground with its points, and each link of ``links`` (name, {point: global position},
+    length) with its points expressed in a randomly placed body frame and random mass, mass
+    centre and inertia. Returns the bodies and each link's frame angle (the assembly guess)."""
+    bodies, angles = [Body("ground", ground)], {}
+    for name, pts, length in links:
+        phi, o = f(-math.pi, math.pi), np.array([f(-0.3, 0.3), f(-0.3, 0.3)])
+        m = f(0.1, 5.0)
+        com = np.array([f(-1, 1), f(-1, 1)]) * length   # the frame origin is at o
+        bodies.append(Body(name, {k: rot(np.asarray(-phi), v - o) for k, v in pts.items()}, m,
+                           com, m * length**2 * f(0.01, 0.5)))
+        angles[name] = phi
+    return bodies, angles
+
+
 @st.composite
 def crank_rockers(draw):
     """A random crank-rocker (Grashof, crank shortest and adjacent to the ground) assembled at
     t = 0 by construction: the joint positions are computed first, then each body's points are
     expressed in a randomly placed body frame."""
-    f = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+    f = _floats(draw)
     a = f(0.02, 0.2)                                   # crank
     d = a * f(2.0, 4.0)                                # ground
     # coupler b, rocker c: b + c >= 1.15 (d + a) and |b - c| <= 0.8 (d - a) keep both
@@ -809,25 +813,9 @@ def crank_rockers(draw):
     gamma = f(-math.pi, math.pi)
     A = O1 + a * np.array([math.cos(gamma), math.sin(gamma)])
     B = _circle_intersection(A, b, O4, c, draw(st.booleans()))
-    frames = {}
-    for name in ("crank", "coupler", "rocker"):
-        frames[name] = (f(-math.pi, math.pi), np.array([f(-0.3, 0.3), f(-0.3, 0.3)]))
-
-    def local(name, P):
-        phi, o = frames[name]
-        return rot(np.asarray(-phi), P - o)
-
-    def mass_props(name, length):
-        m = f(0.1, 5.0)
-        com = local(name, frames[name][1]) + np.array([f(-1, 1), f(-1, 1)]) * length
-        return m, com, m * length**2 * f(0.01, 0.5)
-
-    bodies = [Body("ground", {"O1": O1, "O4": O4})]
-    for name, pts, length in (("crank", {"O1": O1, "A": A}, a),
-                              ("coupler", {"A": A, "B": B}, b),
-                              ("rocker", {"B": B, "O4": O4}, c)):
-        m, com, inertia = mass_props(name, length)
-        bodies.append(Body(name, {k: local(name, v) for k, v in pts.items()}, m, com, inertia))
+    bodies, frames = _placed_bodies(f, {"O1": O1, "O4": O4}, (
+        ("crank", {"O1": O1, "A": A}, a), ("coupler", {"A": A, "B": B}, b),
+        ("rocker", {"B": B, "O4": O4}, c)))
     specs = [("J1", "ground.O1", "crank.O1"), ("J2", "crank.A", "coupler.A"),
              ("J3", "coupler.B", "rocker.B"), ("J4", "ground.O4", "rocker.O4")]
     joints = []
@@ -838,11 +826,11 @@ def crank_rockers(draw):
     speed = f(1.0, 20.0) * draw(st.sampled_from([-1.0, 1.0]))
     gravity = np.array([f(-20, 20), f(-20, 20)])
     # q_J1 = phi_crank - phi_ground (or its opposite if the connect order was reversed)
-    q1 = frames["crank"][0] if joints[0].body_b == "crank" else -frames["crank"][0]
+    q1 = frames["crank"] if joints[0].body_b == "crank" else -frames["crank"]
     s1 = 1.0 if joints[0].body_b == "crank" else -1.0
     model = Model("random crank-rocker", tuple(bodies), tuple(joints),
                   (Driver("J1", ConstantSpeed(s1 * speed, q1)),), (), gravity,
-                  assembly_phi={k: v[0] for k, v in frames.items()},
+                  assembly_phi=frames,
                   cut=(draw(st.sampled_from(["J2", "J3", "J4"])),))
     return model, {"A": A, "B": B}, abs(speed)
 
@@ -872,7 +860,7 @@ def slider_cranks(draw):
     """A random offset slider-crank on a slide of random direction, its slider at a random fixed
     angle to the slide, the prismatic joint written in either order, cut at a random joint (the
     slider or a pin), assembled at t = 0 by construction, with gravity and a load on the slider."""
-    f = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+    f = _floats(draw)
     a = f(0.02, 0.2)                                   # crank
     rod = a * f(2.5, 5.0)                              # connecting rod
     off = (rod - a) * 0.6 * f(-1.0, 1.0)               # slide offset: the crank never toggles
@@ -885,21 +873,10 @@ def slider_cranks(draw):
     A = O + a * np.array([math.cos(gamma), math.sin(gamma)])
     foot = G + np.dot(A - G, u) * u
     B = foot + (1 if draw(st.booleans()) else -1) * math.sqrt(rod**2 - np.dot(A - foot, A - foot)) * u
-    frames = {name: (f(-math.pi, math.pi), np.array([f(-0.3, 0.3), f(-0.3, 0.3)]))
-              for name in ("crank", "rod", "slider")}
-
-    def local(name, P):
-        phi, o = frames[name]
-        return rot(np.asarray(-phi), P - o)
-
-    bodies = [Body("ground", {"O": O, "G": G})]
-    for name, pts, length in (("crank", {"O": O, "A": A}, a), ("rod", {"A": A, "B": B}, rod),
-                              ("slider", {"B": B, "F": B + 0.05 * u}, 0.05)):
-        m = f(0.1, 5.0)
-        com = local(name, frames[name][1]) + np.array([f(-1, 1), f(-1, 1)]) * length
-        bodies.append(Body(name, {k: local(name, v) for k, v in pts.items()}, m, com,
-                           m * length**2 * f(0.01, 0.5)))
-    phi_s = frames["slider"][0]
+    bodies, frames = _placed_bodies(f, {"O": O, "G": G}, (
+        ("crank", {"O": O, "A": A}, a), ("rod", {"A": A, "B": B}, rod),
+        ("slider", {"B": B, "F": B + 0.05 * u}, 0.05)))
+    phi_s = frames["slider"]
     if draw(st.booleans()):     # line fixed in the ground: q = (B - G) . u
         slide = pri("J4", "ground.G", "slider.B", u, phi_s)
         q4 = float(np.dot(B - G, u))
@@ -911,9 +888,9 @@ def slider_cranks(draw):
     speed = f(1.0, 20.0) * draw(st.sampled_from([-1.0, 1.0]))
     loads = (force("slider", "F", f(-50, 50), f(-50, 50), 3.0),)
     model = Model("random slider-crank", tuple(bodies), joints,
-                  (Driver("J1", ConstantSpeed(speed, frames["crank"][0])),), loads,
+                  (Driver("J1", ConstantSpeed(speed, frames["crank"])),), loads,
                   np.array([f(-20, 20), f(-20, 20)]),
-                  assembly_phi={k: v[0] for k, v in frames.items()}, assembly_q={"J4": q4},
+                  assembly_phi=frames, assembly_q={"J4": q4},
                   cut=(draw(st.sampled_from(["J2", "J3", "J4"])),))
     return model, {"A": A, "B": B}, abs(speed)
 

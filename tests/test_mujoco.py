@@ -29,12 +29,11 @@ import numpy as np
 import pytest
 
 from linkdyn.analysis import analyze
-from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
+from linkdyn.model import PRISMATIC, REVOLUTE, Driver, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-MM = 1e-3
-DEG = math.pi / 180
-RPM = 2 * math.pi / 60
+from builders import DEG, RPM, body, pri, rev
+
 RTOL = 1e-8
 
 
@@ -42,31 +41,20 @@ RTOL = 1e-8
 # models (SI)
 
 
-def _body(name, points, mass=0.0, com=(0.0, 0.0), inertia=0.0):
-    """Geometry in mm, inertia about the mass centre in kg mm^2."""
-    return Body(name, {k: np.array(v, float) * MM for k, v in points.items()}, float(mass),
-                np.array(com, float) * MM, inertia * 1e-6)
-
-
-def _joint(name, kind, a, b, axis=(1.0, 0.0)):
-    (ba, pa), (bb, pb) = a.split("."), b.split(".")
-    return Joint(name, kind, ba, pa, bb, pb, np.array(axis, float))
-
-
 def hoeken(gravity=(0.0, 0.0), loads=()):
     """The seed paper's Hoeken four-bar (Table 1 inertias are about O_i), cut at J4."""
     bodies = (
-        _body("ground", {"O1": (0, 0), "O4": (89.5, 0)}),
-        _body("crank", {"O1": (0, 0), "O2": (38.1, 0)}, 1.5, (19.05, 0), 725.80 - 1.5 * 19.05**2),
-        _body("coupler", {"O2": (0, 0), "O3": (115.2, 0), "P": (230.4, 0)}, 5.0, (115.2, 0),
+        body("ground", {"O1": (0, 0), "O4": (89.5, 0)}),
+        body("crank", {"O1": (0, 0), "O2": (38.1, 0)}, 1.5, (19.05, 0), 725.80 - 1.5 * 19.05**2),
+        body("coupler", {"O2": (0, 0), "O3": (115.2, 0), "P": (230.4, 0)}, 5.0, (115.2, 0),
               88473.60 - 5.0 * 115.2**2),
-        _body("rocker", {"O3": (0, 0), "O4": (115.2, 0)}, 3.0, (57.6, 0),
+        body("rocker", {"O3": (0, 0), "O4": (115.2, 0)}, 3.0, (57.6, 0),
               13271.76 - 3.0 * 57.6**2),
     )
-    joints = (_joint("J1", REVOLUTE, "ground.O1", "crank.O1"),
-              _joint("J2", REVOLUTE, "crank.O2", "coupler.O2"),
-              _joint("J3", REVOLUTE, "coupler.O3", "rocker.O3"),
-              _joint("J4", REVOLUTE, "ground.O4", "rocker.O4"))
+    joints = (rev("J1", "ground.O1", "crank.O1"),
+              rev("J2", "crank.O2", "coupler.O2"),
+              rev("J3", "coupler.O3", "rocker.O3"),
+              rev("J4", "ground.O4", "rocker.O4"))
     return Model("hoeken", bodies, joints, (Driver("J1", ConstantSpeed(45 * RPM)),), loads,
                  np.array(gravity, float),
                  assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG, "rocker": -77.12 * DEG},
@@ -78,15 +66,15 @@ def slider_crank():
     MuJoCo ``connect`` closes a revolute loop; the slider's prismatic joint stays in the tree).
     The crank is driven by an expression, so its acceleration is not zero."""
     bodies = (
-        _body("ground", {"O": (0, 0), "G": (0, 20)}),
-        _body("crank", {"O": (0, 0), "A": (50, 0)}, 0.3, (25, 3), 62.5),
-        _body("rod", {"A": (0, 0), "B": (180, 0)}, 0.6, (90, -4), 1620.0),
-        _body("slider", {"B": (0, 0), "F": (20, 0)}, 0.8, (5, 3), 133.33),
+        body("ground", {"O": (0, 0), "G": (0, 20)}),
+        body("crank", {"O": (0, 0), "A": (50, 0)}, 0.3, (25, 3), 62.5),
+        body("rod", {"A": (0, 0), "B": (180, 0)}, 0.6, (90, -4), 1620.0),
+        body("slider", {"B": (0, 0), "F": (20, 0)}, 0.8, (5, 3), 133.33),
     )
-    joints = (_joint("J1", REVOLUTE, "ground.O", "crank.O"),
-              _joint("J2", REVOLUTE, "crank.A", "rod.A"),
-              _joint("J3", REVOLUTE, "rod.B", "slider.B"),
-              _joint("J4", PRISMATIC, "ground.G", "slider.B"))
+    joints = (rev("J1", "ground.O", "crank.O"),
+              rev("J2", "crank.A", "rod.A"),
+              rev("J3", "rod.B", "slider.B"),
+              pri("J4", "ground.G", "slider.B"))
     loads = (Load("force", "slider", "F", value=lambda t: np.array([-200.0, 15.0])),
              Load("torque", "rod", value=lambda t: 0.8 + 0.4 * np.sin(3 * np.asarray(t))))
     return Model("slider-crank", bodies, joints,

@@ -356,15 +356,9 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
         progress.step(f"solving {len(t)} samples")
         sol = run(mech, t, allow_singular=allow_singular)
         progress.step("summary")
-        try:
-            summ = design.summary(sol, fluctuation=fluctuation,
-                                  path_point=path_point or mech.path_point,
-                                  path_range=q_range if path_range else mech.path_range)
-        except ModelError:
-            if path_point or path_range or not (mech.path_point or mech.path_range):
-                raise
-            # the model's default range does not fit this run (too few samples in it)
-            summ = design.summary(sol, fluctuation=fluctuation, path_point=path_point)
+        summ = design.summary(sol, fluctuation=fluctuation,
+                              path_point=path_point or mech.path_point, path_range=q_range,
+                              default_range=mech.path_range)
         out = Path(outdir)
         files = {
             "results.csv" if fmt == "csv" else "results.parquet":

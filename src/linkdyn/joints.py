@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import PRISMATIC, REVOLUTE
+from .model import REVOLUTE
 from .planar import dot, perp, rotate_cs, twist, wrap
 
 
@@ -119,11 +119,18 @@ def cut_wrench(kind, e_a, lam):
     return twist(lam[0], lam[1] * perp(e_a))
 
 
-def joint_coordinate(kind, phi_a, phi_b, e_a, r_pa, r_pb):
-    """Coordinate of a joint from its bodies' poses: ``phi_b - phi_a`` or ``(r_Pb - r_Pa) . e``."""
+def joint_motion(kind, e_a, a, b, points):
+    """Coordinate, rate and acceleration (each (...)) of a cut joint from its bodies' motion.
+
+    ``a``, ``b``: ``(phi, w, al)`` of the first and second body. A revolute joint's coordinate
+    is ``phi_b - phi_a``. A slider's is ``s = d . e`` with ``d`` the second body's point from the
+    first's and ``e`` (fixed in the first body) turning at ``w_a``:
+    ``s' = d' . e + d . e'``, ``s'' = d'' . e + 2 d' . e' + d . e''``; ``points()`` gives
+    ``(d, d', d'')``, each (2, ...), and is only called for a slider.
+    """
     if kind == REVOLUTE:
-        return phi_b - phi_a
-    return dot(r_pb - r_pa, e_a)
-
-
-KINDS = (REVOLUTE, PRISMATIC)
+        return b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    d, dd, ddd = points()
+    ed = a[1] * perp(e_a)
+    edd = a[2] * perp(e_a) - a[1] ** 2 * e_a
+    return dot(d, e_a), dot(dd, e_a) + dot(d, ed), dot(ddd, e_a) + 2 * dot(dd, ed) + dot(d, edd)

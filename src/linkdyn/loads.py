@@ -12,7 +12,7 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .model import Model
-from .planar import cross, dot, last, shift_twist, twist
+from .planar import cross, dot, shift_twist, stack_last, twist
 
 
 @dataclass(frozen=True)
@@ -29,17 +29,21 @@ class Loads:
         Power of the non-conservative loads (forces, torques, dampers), W.
     has_potential : bool
         Whether gravity or springs are present.
+    on_ground : ndarray (3, T)
+        Wrench of the springs and dampers anchored on the ground on it, about the global origin
+        (it enters no balance of the moving bodies; the shaking load includes it).
     """
 
     wrenches: list
     potential_energy: np.ndarray
     power: np.ndarray
     has_potential: bool
+    on_ground: np.ndarray
 
     @property
     def w_ext(self) -> np.ndarray:
         """Applied wrenches stacked components last, (T, n, 3), tree order."""
-        return np.stack([last(x) for x in self.wrenches], axis=-2)
+        return stack_last(self.wrenches)
 
 
 def _point(kin: KinematicSolution, i: int, name: str):
@@ -100,5 +104,7 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
                 power -= load.damping * rate ** 2
             _add_force(w, kin, i, r1, tension * u)
             _add_force(w, kin, j, r2, -tension * u)
-    w[0] = np.zeros((3,) + shape)  # loads on the ground do no work and are not part of the balance
-    return Loads(w, pe, power, has_pe)
+    # the ground's O_0 is the global origin: w[0] is the load on the ground about it, which does
+    # no work and is not part of the moving bodies' balance
+    on_ground, w[0] = w[0], np.zeros((3,) + shape)
+    return Loads(w, pe, power, has_pe, on_ground)

@@ -100,6 +100,12 @@ def last(x: np.ndarray, k: int = 1) -> np.ndarray:
     return np.moveaxis(x, tuple(range(k)), tuple(range(-k, 0)))
 
 
+def stack_last(per_body: list) -> np.ndarray:
+    """Stack one component-first array (k, ...) per entity into the users' layout
+    (..., n_entities, k)."""
+    return np.stack([last(x) for x in per_body], axis=-2)
+
+
 def first(x: np.ndarray) -> np.ndarray:
     """Move the last (component) axis of ``x`` to the front (the solvers' layout)."""
     return np.moveaxis(x, -1, 0)

@@ -21,7 +21,7 @@ from .dynamics.denoc import DynamicSolution, composite
 from .kinematics import KinematicSolution
 from .kinematics.recursion import _cut_frames
 from .model import Model
-from .planar import first, last, shift_wrench
+from .planar import first, shift_wrench, stack_last
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class Reactions:
     @cached_property
     def force(self) -> np.ndarray:
         """(T, n_joints, 2) force by each joint's first body on its second, N."""
-        return np.stack([last(w[1:]) for w in self.on_second], axis=-2)
+        return stack_last([w[1:] for w in self.on_second])
 
     @cached_property
     def moment(self) -> np.ndarray:

@@ -31,7 +31,7 @@ def _extremes(t, x) -> dict:
 
 
 def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
-            path_range=None) -> dict:
+            path_range=None, default_range=None) -> dict:
     """Summary of a solution as plain JSON-ready data (SI units).
 
     Parameters
@@ -42,7 +42,11 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         ``'BODY.POINT'`` whose path straightness is reported; None picks
         :func:`default_path_point` (no report if there is none).
     path_range : (float, float) or None
-        Range of the first driver's coordinate for the straightness; None for the whole run.
+        Range of the first driver's coordinate for the straightness; it must hold at least 3
+        samples of the run. None takes ``default_range``.
+    default_range : (float, float) or None
+        A range used only if it fits (such as the model's ``[analysis] path_range``); the whole
+        run otherwise, or when None.
     """
     if not fluctuation > 0:
         raise ModelError(f"the coefficient of speed fluctuation must be positive, got "
@@ -119,8 +123,16 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
                     "dampers, as loads on the ground"}
     out["driver_energy"] = driver_energy(sol, fluctuation)
     point = path_point or default_path_point(m)
-    out["path_straightness"] = (path_straightness(sol, point, path_range)
-                                if point else None)
+    out["path_straightness"] = None
+    if point:
+        try:
+            out["path_straightness"] = path_straightness(
+                sol, point, default_range if path_range is None else path_range)
+        except ModelError:
+            if path_range is not None or default_range is None:
+                raise
+            # the default range does not fit this run: measure the whole run
+            out["path_straightness"] = path_straightness(sol, point, None)
     out["health"] = health(sol)
     return out
 

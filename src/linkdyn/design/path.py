@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import ModelError
 from ..model import GROUND, PRISMATIC, Model
 from .fourbar import _other
-from .shaking import _cross
+from ..planar import cross, first
 
 TWO_PI = 2.0 * np.pi
 
@@ -117,7 +117,7 @@ def path_straightness(sol, point: str, q_range=None) -> dict:
     _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
     u = vt[0] * (1.0 if vt[0][np.argmax(np.abs(vt[0]))] > 0 else -1.0)
     along = (pts - c) @ u
-    dev = _cross(u, pts - c)  # signed distance from the line
+    dev = cross(first(u), first(pts - c))  # signed distance from the line
     return {"point": point,
             "range": None if q_range is None else [float(x) for x in q_range],
             "samples": int(np.sum(sel)),

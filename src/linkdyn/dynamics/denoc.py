@@ -23,7 +23,7 @@ import numpy as np
 
 from ..kinematics import KinematicSolution
 from ..loads import Loads
-from ..planar import cross, dot, last, perp, shift_wrench, solve_small, twist
+from ..planar import cross, dot, last, perp, shift_wrench, solve_small, stack_last, twist
 
 
 @dataclass(frozen=True)
@@ -61,12 +61,12 @@ class DynamicSolution:
     @property
     def w_star(self) -> np.ndarray:
         """``w_star`` stacked components last, (T, n, 3)."""
-        return np.stack([last(x) for x in self.wstar], axis=-2)
+        return stack_last(self.wstar)
 
     @property
     def w_tilde(self) -> np.ndarray:
         """``w_tilde`` stacked components last, (T, n, 3)."""
-        return np.stack([last(x) for x in self.wtilde], axis=-2)
+        return stack_last(self.wtilde)
 
 
 def newton_euler(kin: KinematicSolution, w_ext: list):

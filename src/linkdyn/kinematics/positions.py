@@ -159,16 +159,23 @@ def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.nda
     return np.interp(np.linspace(0, travel[-1], n), travel, probe)
 
 
-def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
-    """Continuation from the assembly at t = 0 forwards to ``hi`` and backwards to ``lo``.
+def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None):
+    """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
+    to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
     Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
     interval ``reach`` (..., 2) over which each branch was followed."""
-    if lay.dyads is not None and q0.ndim == 1:
-        return _follow_dyads(model, lay, q0, lo, hi)
-    if lay.dyads is not None:  # designs (n, D, 1): the nodes take the place of the time axis
-        nodes, Q, QD, reach = _follow_dyads(model, lay, q0[..., 0], lo, hi)
-        return nodes, Q[..., None, :], QD[..., None, :], reach[..., None, :]
+    if lay.dyads is not None:
+        return _follow_dyads(model, lay, q0, lo, hi, modes)
+    if q0.ndim == 1:
+        return _follow_newton(model, lay, q0, lo, hi)
+    # designs: Newton's batch is (D, 1), the trailing axis standing for time
+    nodes, Q, QD, reach = _follow_newton(model, lay, q0[..., None], lo, hi)
+    return nodes, Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
+
+
+def _follow_newton(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+    """:func:`_follow` by Newton continuation, node by node."""
     nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
     for end in (hi, lo):
         if end == 0.0:
@@ -189,10 +196,10 @@ def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
             np.stack([reach[1], reach[0]], axis=-1))
 
 
-def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
-    """:func:`_follow` for mechanisms whose loops are all RRR dyads: every node is solved at
-    once in closed form in the assembly mode of ``q0``, and the dependent angles are unwrapped
-    along the nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
+def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float, modes):
+    """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
+    in closed form in the assembly ``modes``, and the dependent angles are unwrapped along the
+    nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
     nodes = np.unique(np.concatenate((_travel_nodes(model, lay, 0.0, lo),
@@ -202,7 +209,6 @@ def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: floa
     shape = (-1,) + (1,) * (q0.ndim - 1) + (len(nodes),)
     Q = np.repeat(q0[..., None], len(nodes), axis=-1)
     Q[drv] = nq.reshape(shape)
-    modes = dyads.sides(lay, lay.dyads, q0[..., None], forward_positions)  # (..., 1) each
     Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
     J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
     x, _ = dependent_rates(lay, J, nqd.reshape(shape))

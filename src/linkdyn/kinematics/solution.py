@@ -11,9 +11,10 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import joints as jk
 from ..errors import ModelError
-from ..model import REVOLUTE, Model
-from ..planar import dot, last, perp, shift_twist, solve_small
+from ..model import Model
+from ..planar import last, shift_twist, solve_small, stack_last
 from . import dyads
 from .layout import Layout, compile_layout, stack_layouts
 from .positions import (ACCEPT, _correct, _follow, assemble, driver_values, newton)
@@ -98,12 +99,12 @@ class KinematicSolution:
     @cached_property
     def tw(self) -> np.ndarray:
         """Twists (T, n, 3) ``[w, vx, vy]`` at O_i, tree order."""
-        return np.stack([last(x) for x in self.twists], axis=-2)
+        return stack_last(self.twists)
 
     @cached_property
     def twd(self) -> np.ndarray:
         """Twist rates (T, n, 3), tree order."""
-        return np.stack([last(x) for x in self.rates], axis=-2)
+        return stack_last(self.rates)
 
     @cached_property
     def p(self) -> np.ndarray:
@@ -173,11 +174,11 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
         q_start = q_start[:, 0]
     lay_q = np.zeros(0) if single else np.zeros((len(models), 1))  # design axis vs (D, T)
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
+    # the dyads' assembly modes, (..., 1) each: the branch along the nodes and the samples
+    modes = (None if lay.dyads is None else
+             dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions))
     if dep and hi > lo:
-        nodes, Q, QD, reach = _follow(models[0], lay, q_start if single else q_start[..., None],
-                                      lo, hi)
-        if not single:
-            Q, QD, reach = Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
+        nodes, Q, QD, reach = _follow(models[0], lay, q_start, lo, hi, modes)
         # a guess for every sample from the nodes; samples past the last node followed start
         # from that node
         lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
@@ -188,11 +189,9 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
 
         def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
             return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
-        modes = None
         if lay.dyads is not None:
             # closed form in the assembly modes: the guess only sets the winding of the angles,
             # so the nearest node is enough
-            modes = dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions)
             q = at(Q, np.where(u < 0.5, j, j + 1))
         else:
             # cubic Hermite from the bracketing nodes for Newton's method
@@ -264,23 +263,15 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
         cols[0][j], cols[1][j], cols[2][j] = q[i], qd[i], qdd[i]
     for c in lay.cuts:
         a, b = c.a, c.b
-        if c.kind == REVOLUTE:
-            # q = phi_b - phi_a and its derivatives
-            cols[0][c.joint] = pose.phi[b] - pose.phi[a]
-            cols[1][c.joint] = tw[b][0] - tw[a][0]
-            cols[2][c.joint] = twd[b][0] - twd[a][0]
-            continue
-        # slider: s = d . e with d = r_Pb - r_Pa and e fixed in body a
         r_pa, r_pb, e = _cut_frames(lay, pose, c)
-        wa, al = tw[a][0], twd[a][0]
-        va = shift_twist(tw[a], r_pa - pose.r[a])[1:]
-        vb = shift_twist(tw[b], r_pb - pose.r[b])[1:]
-        aa = point_acceleration(tw[a], twd[a], r_pa - pose.r[a])
-        ab = point_acceleration(tw[b], twd[b], r_pb - pose.r[b])
-        d, dd, ddd = r_pb - r_pa, vb - va, ab - aa
-        ed = wa * perp(e)
-        edd = al * perp(e) - wa ** 2 * e
-        cols[0][c.joint] = dot(d, e)
-        cols[1][c.joint] = dot(dd, e) + dot(d, ed)
-        cols[2][c.joint] = dot(ddd, e) + 2 * dot(dd, ed) + dot(d, edd)
+
+        def points(a=a, b=b, r_pa=r_pa, r_pb=r_pb):  # the cut points' relative motion
+            va = shift_twist(tw[a], r_pa - pose.r[a])[1:]
+            vb = shift_twist(tw[b], r_pb - pose.r[b])[1:]
+            aa = point_acceleration(tw[a], twd[a], r_pa - pose.r[a])
+            ab = point_acceleration(tw[b], twd[b], r_pb - pose.r[b])
+            return r_pb - r_pa, vb - va, ab - aa
+        motion = jk.joint_motion(c.kind, e, (pose.phi[a], tw[a][0], twd[a][0]),
+                                 (pose.phi[b], tw[b][0], twd[b][0]), points)
+        cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
     return tuple(cols)
