@@ -16,6 +16,10 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@ $(VENV)/.installed
 
+$(VENV)/.installed-fast: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[fast]"
+	touch $@ $(VENV)/.installed
+
 demo: $(VENV)/.installed
 	$(BIN)/linkdyn example hoeken > hoeken.toml
 	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
@@ -24,7 +28,7 @@ demo: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q
 
-bench: $(VENV)/.installed
+bench: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/bench_hoeken.py
 
 accuracy: $(VENV)/.installed

@@ -3,7 +3,9 @@
 Prints samples per second for
   1. kinematics (positions, rates, accelerations of every joint, body and named point),
   2. the full analysis (kinematics, driver torque, cut-joint multipliers, every joint reaction),
-each beside a baseline measured in the same run on the same machine:
+on each backend (the numpy reference and, with numba installed, the compiled kernels; their
+one-time compilation is done before timing and reported), each beside a baseline measured in
+the same run on the same machine:
   - kinematics: a per-sample loop with scipy.optimize.fsolve for the loop closure and
     numpy.linalg.solve for the rates and accelerations;
     and, as a ceiling, the same kinematics written out by hand for this one four-bar in numpy;
@@ -27,7 +29,7 @@ import numpy as np  # noqa: E402
 from scipy.optimize import fsolve  # noqa: E402
 
 import linkdyn  # noqa: E402
-from linkdyn import kinematics  # noqa: E402
+from linkdyn import compiled, kinematics  # noqa: E402
 
 TARGET_KINEMATICS = 5e6   # samples/s, issue 2
 TARGET_ANALYSIS = 3e6     # samples/s, issue 3
@@ -154,12 +156,19 @@ def main():
     t = np.linspace(0.0, period, args.samples)
     tb = np.linspace(0.0, period, args.baseline_samples)
 
-    kinematics.solve(mech, t[:1000])  # warm-up
-    tk = best_time(lambda: kinematics.solve(mech, t), args.repeat)
+    backends = ["numpy"] + (["compiled"] if compiled.numba is not None else [])
+    tk, ta = {}, {}
+    for be in backends:
+        t0 = time.perf_counter()
+        linkdyn.analyze(mech, t[:1000], backend=be)  # warm-up (compiles the kernels once)
+        warm = time.perf_counter() - t0
+        if be == "compiled":
+            print(f"(compiled kernels: first use {warm:.1f} s, then cached on disk)")
+        tk[be] = best_time(lambda: kinematics.solve(mech, t, backend=be), args.repeat)
+        ta[be] = best_time(lambda: linkdyn.analyze(mech, t, backend=be), args.repeat)
     ts = best_time(lambda: specialised_kinematics(mech, t), args.repeat)
-    ta = best_time(lambda: linkdyn.analyze(mech, t), args.repeat)
     tkb = best_time(lambda: baseline_kinematics(mech, tb), 1)
-    sol_b = linkdyn.analyze(mech, tb)
+    sol_b = linkdyn.analyze(mech, tb, backend="numpy")
     tab = best_time(lambda: baseline_analysis(sol_b), 1)
 
     # the references solve the same problem: check they agree, so the comparison is fair
@@ -172,19 +181,21 @@ def main():
     tau = sol_b.effort("J1")
     assert np.allclose(ref[:, 8], tau, rtol=0, atol=1e-9 * np.abs(tau).max()), "baseline mismatch"
 
-    rk, ra, rs = args.samples / tk, args.samples / ta, args.samples / ts
+    rs = args.samples / ts
     rkb = args.baseline_samples / tkb
     rab = args.baseline_samples / (tab + tkb)  # the baseline needs its kinematics too
     print(f"Hoeken four-bar, {args.samples} samples, one core, best of {args.repeat}")
-    print(f"kinematics     {rk:12.4g} samples/s   baseline (per-sample fsolve) {rkb:10.4g}/s"
-          f"   ratio {rk / rkb:8.1f}x   target {TARGET_KINEMATICS:.0e}"
-          f" {'met' if rk >= TARGET_KINEMATICS else 'NOT met'}")
-    print(f"               (hand-written closed form for this one four-bar in numpy: {rs:.4g}/s;"
-          f" the general solver runs at {rk / rs:.0%} of it)")
-    print(f"full analysis  {ra:12.4g} samples/s   baseline (per-sample 9x9 NE)  {rab:10.4g}/s"
-          f"   ratio {ra / rab:8.1f}x   target {TARGET_ANALYSIS:.0e}"
-          f" {'met' if ra >= TARGET_ANALYSIS else 'NOT met'}")
-
+    for be in backends:
+        rk, ra = args.samples / tk[be], args.samples / ta[be]
+        print(f"[{be}]")
+        print(f"kinematics     {rk:12.4g} samples/s   baseline (per-sample fsolve) {rkb:10.4g}/s"
+              f"   ratio {rk / rkb:8.1f}x   target {TARGET_KINEMATICS:.0e}"
+              f" {'met' if rk >= TARGET_KINEMATICS else 'NOT met'}")
+        print(f"               (hand-written closed form for this one four-bar in numpy: {rs:.4g}/s;"
+              f" the general solver runs at {rk / rs:.0%} of it)")
+        print(f"full analysis  {ra:12.4g} samples/s   baseline (per-sample 9x9 NE)  {rab:10.4g}/s"
+              f"   ratio {ra / rab:8.1f}x   target {TARGET_ANALYSIS:.0e}"
+              f" {'met' if ra >= TARGET_ANALYSIS else 'NOT met'}")
 
 if __name__ == "__main__":
     main()

@@ -10,7 +10,8 @@ from functools import cached_property
 
 import numpy as np
 
-from . import kinematics, loads as loads_mod, reactions as reactions_mod
+from . import compiled, kinematics, loads as loads_mod, reactions as reactions_mod
+from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import AssemblyError
 from .model import PRISMATIC, Model
@@ -143,7 +144,7 @@ class Solution:
         return names, np.stack([self.columns[k] for k in names], axis=-1)
 
 
-def analyze(model, t, *, allow_singular: bool = False) -> Solution:
+def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
 
     Parameters
@@ -156,6 +157,10 @@ def analyze(model, t, *, allow_singular: bool = False) -> Solution:
         Sample times, s.
     allow_singular : bool
         Keep samples that do not close or are singular as NaN rows instead of raising.
+    backend : {'auto', 'numpy', 'compiled'}, optional
+        Run the per-sample work in numpy array passes or in the compiled kernels of
+        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
+        numba is installed and the batch is large). Both give the same numbers to rounding.
 
     Raises
     ------
@@ -164,11 +169,19 @@ def analyze(model, t, *, allow_singular: bool = False) -> Solution:
         first such time (unless ``allow_singular``, which leaves NaN rows flagged in ``valid``).
     """
     designs = not isinstance(model, Model)
-    kin = kinematics.solve(model, t)
-    model = list(model)[0] if designs else model
+    models = list(model) if designs else [model]
+    t = np.asarray(t, dtype=float)
+    fast = compiled.use_compiled(backend, t.size * len(models))
+    kin = kinematics.solve(models if designs else model, t,
+                           backend="compiled" if fast else "numpy")
+    model = models[0]
     applied = loads_mod.wrenches(model, kin)
-    dyn = denoc.solve(kin, applied)
-    react = reactions_mod.solve(model, kin, dyn)
+    if fast:
+        dyn, react = compiled_dynamics.solve(kin, applied,
+                                             compiled.pack(kin.layout, len(model.joints)))
+    else:
+        dyn = denoc.solve(kin, applied)
+        react = reactions_mod.solve(model, kin, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))

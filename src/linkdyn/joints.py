@@ -11,7 +11,8 @@ For a tree joint whose child is body i (``s = +1`` if the child is the joint's s
   relative rotation and the relative velocity normal to its axis), and the constraint wrench
   ``S^T lam`` those rows carry.
 
-Arrays are component-first (see :mod:`linkdyn.planar`).
+Arrays are component-first (see :mod:`linkdyn.planar`). The compiled kernels
+(:mod:`linkdyn.compiled`) repeat these rules in scalar form; the tests hold the two to agree.
 """
 
 from __future__ import annotations

@@ -13,8 +13,10 @@ import numpy as np
 
 from .. import joints as jk
 from ..errors import ModelError
-from ..model import Model
+from .. import compiled
+from ..model import REVOLUTE, Model
 from ..planar import last, shift_twist, solve_small, stack_last
+from . import compiled as kc
 from . import dyads
 from .layout import Layout, compile_layout, stack_layouts
 from .positions import (ACCEPT, _correct, _follow, assemble, driver_values, newton)
@@ -51,6 +53,10 @@ class KinematicSolution:
     residual : ndarray (T,)
         Closure residual relative to ``layout.size``.
     valid : ndarray (T,) bool
+    arrays : dict or None
+        Set by the compiled kernels (:mod:`linkdyn.compiled`): the contiguous arrays the
+        per-body lists above are views of, batch flattened to (D, T): ``c``, ``s`` (n, D, T),
+        ``r``, ``e`` (n, 2, D, T), ``tw``, ``twd`` (n, 3, D, T), ``J`` (2 n_cut, n - 1, D, T).
     """
 
     layout: Layout
@@ -64,6 +70,7 @@ class KinematicSolution:
     pivot: np.ndarray
     residual: np.ndarray
     valid: np.ndarray
+    arrays: dict | None = None
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -136,7 +143,7 @@ class KinematicSolution:
         return last(point_acceleration(self.twists[i], self.rates[i], a))
 
 
-def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
+def solve(model, t, layout: Layout | None = None, backend: str | None = None) -> KinematicSolution:
     """Positions, velocities and accelerations at the times ``t`` (T,) s.
 
     Assembles at ``t[0]`` on the branch of the ``[assembly]`` guess, follows the branch through
@@ -154,6 +161,10 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
         design that cannot be assembled is NaN instead of raising.
     t : array_like (T,)
         Sample times, s.
+    backend : {'auto', 'numpy', 'compiled'}, optional
+        Run the per-sample work in numpy array passes or in the compiled kernels of
+        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
+        numba is installed and the batch is large).
     """
     models = [model] if isinstance(model, Model) else list(model)
     lay = layout or (compile_layout(models[0]) if len(models) == 1 else
@@ -165,6 +176,9 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
                          fix="Pass t = numpy.linspace(0, duration, samples)")
     dep, drv = list(topo.dependent), list(topo.driven)
     qdrv, qddrv, qdddrv = driver_values(models[0], t)
+    fast = compiled.use_compiled(backend, t.size * len(models))
+    packed = compiled.pack(lay, len(models[0].joints)) if fast else None
+    out = None  # the compiled kernel's arrays
     # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
     # branch to the samples
     q_start = assemble(models, lay, driver_values(models[0], np.zeros(1))[0][:, 0], 0.0,
@@ -183,25 +197,34 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
         # from that node
         lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
         followed = lo_ok <= hi_ok  # False for a design that did not assemble
-        tc = np.clip(t, np.where(followed, lo_ok, 0.0), np.where(followed, hi_ok, 0.0))
-        j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
-        u = (tc - nodes[j]) / (nodes[j + 1] - nodes[j])
+        lo_c, hi_c = np.where(followed, lo_ok, 0.0), np.where(followed, hi_ok, 0.0)
+        if packed is not None and lay.dyads is not None:
+            # the kernel closes every sample in closed form from its nearest node
+            out = kc.run(packed, t, qdrv, qddrv, qdddrv, nodes=nodes, Q=Q, modes=modes,
+                         lo=lo_c, hi=hi_c)
+            err = out["err"].reshape(followed.shape[:-1] + t.shape)
+            if np.any(~(err <= ACCEPT) & np.all(np.isfinite(out["q"]), axis=0).reshape(err.shape)):
+                out = None   # some sample needs the damped Newton retry of the numpy path
+        if out is None:
+            tc = np.clip(t, lo_c, hi_c)
+            j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
+            u = (tc - nodes[j]) / (nodes[j + 1] - nodes[j])
 
-        def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
-            return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
-        if lay.dyads is not None:
-            # closed form in the assembly modes: the guess only sets the winding of the angles,
-            # so the nearest node is enough
-            q = at(Q, np.where(u < 0.5, j, j + 1))
-        else:
-            # cubic Hermite from the bracketing nodes for Newton's method
-            h = nodes[j + 1] - nodes[j]
-            h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
-            h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
-            q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
-        q[drv] = qdrv if single else qdrv[:, None] + lay_q
-        q = np.where(np.isfinite(q), q, 0.0)
-        q, pose, p, J, err = _correct(lay, q, modes)
+            def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
+                return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
+            if lay.dyads is not None:
+                # closed form in the assembly modes: the guess only sets the winding of the
+                # angles, so the nearest node is enough
+                q = at(Q, np.where(u < 0.5, j, j + 1))
+            else:
+                # cubic Hermite from the bracketing nodes for Newton's method
+                h = nodes[j + 1] - nodes[j]
+                h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
+                h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
+                q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
+            q[drv] = qdrv if single else qdrv[:, None] + lay_q
+            q = np.where(np.isfinite(q), q, 0.0)
+            q, pose, p, J, err = _correct(lay, q, modes)
         # the branch ends at the first sample past the last node that does not close
         fails = ~(err <= ACCEPT)
         hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
@@ -212,9 +235,14 @@ def solve(model, t, layout: Layout | None = None) -> KinematicSolution:
         q = np.repeat(q_start[..., None], len(t), axis=-1)
         q[drv] = qdrv if single else qdrv[:, None] + lay_q
         q, err = newton(lay, q)
-        pose = forward_positions(lay, q)
-        p = motion_vectors(lay, pose)
-        J = closure_jacobian(lay, pose, p)
+        if packed is None:
+            pose = forward_positions(lay, q)
+            p = motion_vectors(lay, pose)
+            J = closure_jacobian(lay, pose, p)
+    if packed is not None:
+        if out is None:   # the loops are closed: the kernel does the rest
+            out = kc.run(packed, t, qdrv, qddrv, qdddrv, q=q)
+        return _from_kernel(models[0], lay, t, out, err)
     qd_drv, qdd_drv = (x if single else x[:, None] + lay_q for x in (qddrv, qdddrv))
     return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
 
@@ -251,6 +279,39 @@ def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
         p, tw, twd = ([blank(x) for x in y] for y in (p, tw, twd))
     return KinematicSolution(lay, t, joint_values(model, lay, pose, tw, twd, q, qd, qdd), pose, p,
                              tw, twd, J, pivot, err, valid)
+
+
+def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
+    """The solution from the compiled kernel's arrays (:func:`.compiled.run`), whose samples
+    that do not close (``err``) or are singular are set to NaN in place."""
+    topo, shape = lay.topo, err.shape
+    n, nc = topo.n, len(lay.cuts)
+    valid = ((err <= ACCEPT) & np.all(np.isfinite(out["qd"]), axis=0).reshape(shape)
+             & np.all(np.isfinite(out["qdd"]), axis=0).reshape(shape))
+    if not np.all(valid):
+        nan = ~valid.reshape(out["pivot"].shape)
+        for key, x in out.items():
+            if key not in ("pivot", "err"):
+                x[..., nan] = np.nan
+
+    def each(key, lead):  # per-entity views with the batch shape
+        return list(out[key].reshape(lead + shape))
+    q, qd, qdd = (each(k, (n,)) for k in ("q", "qd", "qdd"))
+    e = [x if lay.kind[i] not in ("", REVOLUTE) else None for i, x in enumerate(each("e", (n, 2)))]
+    pose = Pose(each("phi", (n,)), each("c", (n,)), each("s", (n,)), each("r", (n, 2)), e)
+    cols = [[None] * len(model.joints) for _ in range(3)]
+    for i in range(1, n):
+        j = topo.tree_joint[i]
+        cols[0][j], cols[1][j], cols[2][j] = q[i], qd[i], qdd[i]
+    for c, motion in zip(lay.cuts, each("cut", (nc, 3))):
+        cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
+    J = out["J"].reshape((2 * nc, n - 1) + shape)
+    p = motion_vectors(lay, pose)
+    if not np.all(valid):  # the constant p_i of revolute joints too, as the numpy path does
+        p = [None] + [np.where(valid, x, np.nan) for x in p[1:]]
+    return KinematicSolution(lay, t, tuple(cols), pose, p,
+                             each("tw", (n, 3)), each("twd", (n, 3)), J,
+                             out["pivot"].reshape(shape), err, valid, arrays=out)
 
 
 def joint_values(model, lay, pose, tw, twd, q, qd, qdd):

@@ -1,0 +1,212 @@
+"""Compiled per-sample kernels: the same recursions as the numpy solvers, fused per sample.
+
+The numpy solvers (:mod:`linkdyn.kinematics`, :mod:`linkdyn.dynamics`) make one array pass per
+operation over all samples; they are the reference. With the optional ``numba`` installed
+(``pip install 'linkdyn[fast]'``), :func:`linkdyn.analyze` and :func:`linkdyn.kinematics.solve`
+run these kernels instead: one compiled loop over the samples that walks the bodies of each
+sample, with the same equations in the same order, writing the same component-first arrays.
+The tests hold the two paths to agree to rounding.
+
+The kernels take the layout packed into plain arrays (:func:`pack`), every number with a design
+axis ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T)``.
+
+Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
+variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
+:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (about 20 s, then cached
+on disk beside the modules), which only a large batch repays.
+
+numba caches each kernel by its own file: after editing a helper in another file (this one),
+delete the caches (``find src -name '*.nb[ic]' -delete``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import REVOLUTE
+
+try:  # optional: the numpy path is complete without it
+    import numba
+except ImportError:  # pragma: no cover - depends on the environment
+    numba = None
+
+BACKENDS = ("auto", "numpy", "compiled")
+AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" compiles
+
+# joint kind codes inside the kernels
+GROUND, REV, PRI = 0, 1, 2
+# dyad shape codes (linkdyn.kinematics.dyads)
+SPLIT, CHAIN, SLIDE, SWING = 0, 1, 2, 3
+DYAD_SHAPES = {"split": SPLIT, "chain": CHAIN, "slide": SLIDE, "swing": SWING}
+
+
+def njit(fn):
+    """Compile ``fn`` in nopython mode, cached on disk (identity without numba)."""
+    if numba is None:  # pragma: no cover
+        return fn
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
+def inline(fn):
+    """A helper of the kernels, compiled into its callers (no call, no reference counting of
+    its array arguments per sample)."""
+    if numba is None:  # pragma: no cover
+        return fn
+    return numba.njit(inline="always", error_model="numpy")(fn)
+
+
+def use_compiled(backend: str | None = None, samples: int = 0) -> bool:
+    """Whether to run the compiled kernels for ``backend`` (default: ``LINKDYN_BACKEND`` or
+    ``"auto"``, which uses them when numba is installed and the batch has at least
+    :data:`AUTO_MIN_SAMPLES` ``samples``)."""
+    backend = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+    if backend == "compiled" and numba is None:
+        raise ImportError("the compiled backend needs numba: pip install 'linkdyn[fast]'")
+    return backend == "compiled" or (backend == "auto" and numba is not None
+                                      and samples >= AUTO_MIN_SAMPLES)
+
+
+@dataclass(frozen=True)
+class Packed:
+    """A :class:`~linkdyn.kinematics.Layout` as plain arrays for the kernels.
+
+    Topology (shared by all designs): ``parent``, ``kind`` (``GROUND``/``REV``/``PRI``),
+    ``sign`` (n,); ``ancestors`` (n, n) (1 where body k's tree joint is on the path to body
+    i); ``dep``, ``drv`` tree indices; ``driver_of`` (n,) driver number of a tree joint or -1;
+    ``tree_joint`` (n,) model joint of each tree joint; ``cut_a``, ``cut_b``, ``cut_kind``,
+    ``cut_joint`` (n_cut,); ``side`` (n_cut, n) the sign of tree joint k in cut c's closure
+    (+1 on the path to its second body, -1 to its first, 0 both or neither); ``dyads``
+    (n_dyads, 5) rows ``[shape, cut, upper, lower, side (0: a, 1: b)]``.
+
+    Numbers, one row per design: ``joint_point``, ``axis``, ``com`` (D, n, 2), ``angle``,
+    ``mass``, ``inertia`` (D, n); ``cut_pa``, ``cut_pb``, ``cut_axis`` (D, n_cut, 2),
+    ``cut_angle`` (D, n_cut); ``size`` (D,).
+    """
+
+    parent: np.ndarray
+    kind: np.ndarray
+    sign: np.ndarray
+    ancestors: np.ndarray
+    dep: np.ndarray
+    drv: np.ndarray
+    driver_of: np.ndarray
+    tree_joint: np.ndarray
+    n_joints: int
+    cut_a: np.ndarray
+    cut_b: np.ndarray
+    cut_kind: np.ndarray
+    cut_joint: np.ndarray
+    side: np.ndarray
+    dyads: np.ndarray
+    joint_point: np.ndarray
+    axis: np.ndarray
+    com: np.ndarray
+    angle: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    cut_pa: np.ndarray
+    cut_pb: np.ndarray
+    cut_axis: np.ndarray
+    cut_angle: np.ndarray
+    size: np.ndarray
+
+
+def _vectors(xs) -> np.ndarray:
+    """Per-entity vectors ((2,) or (2, D, 1) each) as (D, n, 2)."""
+    rows = [np.asarray(x, float).reshape(2, -1).T for x in xs]
+    d = max([len(r) for r in rows], default=1)
+    return np.ascontiguousarray(np.stack([np.broadcast_to(r, (d, 2)) for r in rows], axis=1)
+                                if rows else np.zeros((d, 0, 2)))
+
+
+def _numbers(xs, d: int) -> np.ndarray:
+    """Per-entity numbers (float or (D, 1)) as (D, n)."""
+    cols = [np.broadcast_to(np.asarray(x, float).reshape(-1), (d,)) for x in xs]
+    return np.ascontiguousarray(np.stack(cols, axis=1) if cols else np.zeros((d, 0)))
+
+
+def pack(lay, n_joints: int) -> Packed:
+    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs)."""
+    topo = lay.topo
+    n = topo.n
+    kind = np.array([GROUND] + [REV if k == REVOLUTE else PRI for k in lay.kind[1:]], np.int64)
+    driver_of = np.full(n, -1, np.int64)
+    driver_of[list(topo.driven)] = np.arange(len(topo.driven))
+    ints = np.array(topo.ancestors, np.int64)
+    side = np.array([ints[c.b] - ints[c.a] for c in lay.cuts], float).reshape(len(lay.cuts), n)
+    dy = np.array([[DYAD_SHAPES[x.shape], x.cut, x.upper, x.lower, int(x.side == "b")]
+                   for x in (lay.dyads or ())], np.int64).reshape(-1, 5)
+    joint_point = _vectors(lay.joint_point)
+    d = joint_point.shape[0]
+    cuts = lay.cuts
+    return Packed(
+        parent=np.array(topo.parent, np.int64), kind=kind, sign=np.array(topo.sign, float),
+        ancestors=ints, dep=np.array(topo.dependent, np.int64),
+        drv=np.array(topo.driven, np.int64), driver_of=driver_of,
+        tree_joint=np.array(topo.tree_joint, np.int64), n_joints=n_joints,
+        cut_a=np.array([c.a for c in cuts], np.int64), cut_b=np.array([c.b for c in cuts], np.int64),
+        cut_kind=np.array([REV if c.kind == REVOLUTE else PRI for c in cuts], np.int64),
+        cut_joint=np.array([c.joint for c in cuts], np.int64), side=side, dyads=dy,
+        joint_point=joint_point, axis=_vectors(lay.axis), com=_vectors(lay.com),
+        angle=_numbers(lay.angle, d), mass=_numbers(lay.mass, d),
+        inertia=_numbers(lay.inertia, d),
+        cut_pa=_vectors([c.pa for c in cuts]) if cuts else np.zeros((d, 0, 2)),
+        cut_pb=_vectors([c.pb for c in cuts]) if cuts else np.zeros((d, 0, 2)),
+        cut_axis=_vectors([c.axis for c in cuts]) if cuts else np.zeros((d, 0, 2)),
+        cut_angle=_numbers([c.angle for c in cuts], d),
+        size=np.broadcast_to(np.asarray(lay.size, float).reshape(-1), (d,)).copy())
+
+
+@njit
+def eliminate(A, m, nb, x, rel, tol):
+    """Solve the m x m systems of a block of samples at once.
+
+    ``A`` (m, m + 1, block): for each sample k < ``nb`` the augmented matrix ``[K | b]``,
+    overwritten. Gaussian elimination with partial pivoting under the rules of
+    :func:`linkdyn.planar.solve_small`: a row swaps up where its entry is strictly larger; the
+    relative pivot ``rel`` (block,) is the smallest pivot over the largest ``|K_ij|`` (NaN if
+    ``K`` holds a NaN); ``x`` (m, block) is NaN where ``rel`` is not above ``tol``.
+    """
+    for k in range(nb):
+        scale, finite = 0.0, True
+        for i in range(m):
+            for j in range(m):
+                scale = max(scale, abs(A[i, j, k]))
+                finite = finite and A[i, j, k] == A[i, j, k]
+        rel[k] = math.inf if finite else math.nan
+        x[0, k] = scale   # kept here until the pivots are known
+    for p in range(m):
+        # partial pivoting, then eliminate column p below the pivot
+        for i in range(p + 1, m):
+            for k in range(nb):
+                if abs(A[i, p, k]) > abs(A[p, p, k]):
+                    for j in range(m + 1):
+                        A[p, j, k], A[i, j, k] = A[i, j, k], A[p, j, k]
+        for k in range(nb):   # the smallest pivot; a NaN pivot makes it NaN
+            a = abs(A[p, p, k])
+            rel[k] = a if a != a or a < rel[k] else rel[k]
+        for i in range(p + 1, m):
+            for k in range(nb):
+                f = A[i, p, k] * (1.0 / A[p, p, k])
+                for j in range(p + 1, m + 1):
+                    A[i, j, k] -= f * A[p, j, k]
+    for k in range(nb):
+        scale = x[0, k]
+        rel[k] = rel[k] / (scale if scale > 0 else 1.0)
+    # back substitution, blanked where singular
+    for p in range(m - 1, -1, -1):
+        for k in range(nb):
+            acc = A[p, m, k]
+            for j in range(p + 1, m):
+                acc -= A[p, j, k] * x[j, k]
+            x[p, k] = acc / A[p, p, k]
+    for k in range(nb):
+        if not rel[k] > tol:
+            for p in range(m):
+                x[p, k] = math.nan

@@ -1,0 +1,538 @@
+"""Compiled kinematics: the recursions of :mod:`.recursion` and the dyads of :mod:`.dyads`,
+fused by a numba kernel (see :mod:`linkdyn.compiled`).
+
+For every sample the kernel closes the loops (in closed form, dyad by dyad, from the nearest
+continuation node; or takes the coordinates Newton's method closed), places the bodies, forms
+the loop-closure Jacobian, solves ``J_dep qd_dep = -J_drv qd_drv`` (eqs. 4-5), propagates the
+twists (eq. 2), solves ``J_dep qdd_dep = -bias`` (eqs. 6-7) and propagates the twist rates.
+
+The samples are taken a block at a time (:data:`BLOCK`): every step walks the bodies (or cuts,
+or dyads) and, for each, the samples of the block. Each sample sees the operations of the
+one-sample recursion in the same order, while the independent samples keep the processor busy
+and every array is read and written in contiguous runs.
+
+All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
+``[..., d, t]``. The topology comes as ``tree`` (n, 3) rows ``[parent, kind, sign]`` and
+``cuts`` (n_cut, 3) rows ``[a, b, kind]``; the numbers of design d as ``geo[d]`` (n, 5) rows
+``[joint point (2), axis (2), angle]`` and ``cgeo[d]`` (n_cut, 7) rows
+``[pa (2), pb (2), axis (2), angle]``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..compiled import PRI, REV, SLIDE, SPLIT, SWING, Packed, eliminate, inline, njit
+
+BLOCK = 512          # samples per block of the kernel
+PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
+PARENT, KIND, SIGN = range(3)       # tree columns
+CUT_A, CUT_B, CUT_KIND = range(3)   # cuts columns
+
+
+# --- scalar helpers, compiled into their callers -----------------------------------------------
+
+@inline
+def turn(ux, uy, vx, vy):
+    """The rotation carrying direction u onto v: angle, cosine, sine (dyads._turn)."""
+    x, y = ux * vx + uy * vy, ux * vy - uy * vx
+    norm = math.sqrt(x * x + y * y)
+    return math.atan2(y, x), x / norm, y / norm
+
+
+@inline
+def circles(c1x, c1y, r1, c2x, c2y, r2, side):
+    """Intersection of circles (c1, r1), (c2, r2) on ``side`` of c1 -> c2 (dyads._circles)."""
+    dx, dy = c2x - c1x, c2y - c1y
+    d = math.sqrt(dx * dx + dy * dy)
+    ux, uy = dx / d, dy / d
+    a = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
+    h2 = r1 ** 2 - a ** 2
+    if h2 < 0 and h2 > -1e-12 * r1 ** 2:   # a toggle: the triangle is flat
+        h2 = 0.0
+    h = math.sqrt(h2) if h2 >= 0 else math.nan
+    return c1x + a * ux - side * h * uy, c1y + a * uy + side * h * ux
+
+
+@inline
+def on_line(cx, cy, r, px, py, ex, ey, side):
+    """Intersection of circle (c, r) with the line p + s e on ``side`` (dyads._on_line)."""
+    along = (cx - px) * ex + (cy - py) * ey
+    fx, fy = px + along * ex, py + along * ey
+    h2 = r ** 2 - ((cx - fx) ** 2 + (cy - fy) ** 2)
+    if h2 < 0 and h2 > -1e-12 * r ** 2:
+        h2 = 0.0
+    h = math.sqrt(h2) if h2 >= 0 else math.nan
+    return fx + side * h * ex, fy + side * h * ey
+
+
+@inline
+def nearest(nodes, tc):
+    """Index of the continuation node nearest to the time ``tc`` (solution.solve)."""
+    lo, hi = 0, len(nodes)
+    while lo < hi:   # searchsorted(nodes, tc, side="right")
+        mid = (lo + hi) // 2
+        if nodes[mid] <= tc:
+            lo = mid + 1
+        else:
+            hi = mid
+    j = min(max(lo - 1, 0), len(nodes) - 2)
+    return j if (tc - nodes[j]) / (nodes[j + 1] - nodes[j]) < 0.5 else j + 1
+
+
+# --- the steps of one block of samples -----------------------------------------------------------
+
+@njit
+def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
+    """Poses of all bodies (recursion.forward_positions); ``cq``, ``sq`` (n, block): cosine
+    and sine of ``s q_i`` for the revolute joints."""
+    for t in range(k0, k0 + nb):
+        phi[0, d, t], c[0, d, t], s[0, d, t] = 0.0, 1.0, 0.0
+        r[0, 0, d, t], r[0, 1, d, t], e[0, 0, d, t], e[0, 1, d, t] = 0.0, 0.0, 0.0, 0.0
+    for i in range(1, len(tree)):
+        p, sign = tree[i, PARENT], tree[i, SIGN]
+        jx, jy = geo[d, i, 0], geo[d, i, 1]
+        if tree[i, KIND] == REV:
+            # phi_i = phi_p + s q;  O_i at the parent's joint point
+            for k in range(nb):
+                t = k0 + k
+                cp, sp = c[p, d, t], s[p, d, t]
+                phi[i, d, t] = phi[p, d, t] + sign * q[i, d, t]
+                c[i, d, t], s[i, d, t] = cp * cq[i, k] - sp * sq[i, k], sp * cq[i, k] + cp * sq[i, k]
+                r[i, 0, d, t] = r[p, 0, d, t] + cp * jx - sp * jy
+                r[i, 1, d, t] = r[p, 1, d, t] + sp * jx + cp * jy
+                e[i, 0, d, t], e[i, 1, d, t] = 0.0, 0.0
+        else:
+            # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the parent
+            ax, ay, angle = geo[d, i, 2], geo[d, i, 3], sign * geo[d, i, 4]
+            ca, sa = math.cos(angle), math.sin(angle)
+            for k in range(nb):
+                t = k0 + k
+                cp, sp = c[p, d, t], s[p, d, t]
+                ex, ey = cp * ax - sp * ay, sp * ax + cp * ay
+                phi[i, d, t] = phi[p, d, t] + angle
+                c[i, d, t], s[i, d, t] = ca * cp - sa * sp, sa * cp + ca * sp
+                r[i, 0, d, t] = r[p, 0, d, t] + cp * jx - sp * jy + (sign * q[i, d, t]) * ex
+                r[i, 1, d, t] = r[p, 1, d, t] + sp * jx + cp * jy + (sign * q[i, d, t]) * ey
+                e[i, 0, d, t], e[i, 1, d, t] = ex, ey
+
+
+@njit
+def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
+    """Turn body ``root`` and every body beyond it, sample k by ``rot[:, k]`` =
+    ``[angle, cos, sin, centre x, centre y]``."""
+    for j in range(1, len(tree)):
+        if not anc[j, root]:
+            continue
+        prismatic = tree[j, KIND] == PRI
+        for k in range(nb):
+            t = k0 + k
+            ang, co, si, cx, cy = rot[0, k], rot[1, k], rot[2, k], rot[3, k], rot[4, k]
+            cj, sj = c[j, d, t], s[j, d, t]
+            dx, dy = r[j, 0, d, t] - cx, r[j, 1, d, t] - cy
+            phi[j, d, t] += ang
+            c[j, d, t], s[j, d, t] = co * cj - si * sj, si * cj + co * sj
+            r[j, 0, d, t], r[j, 1, d, t] = cx + co * dx - si * dy, cy + si * dx + co * dy
+            if prismatic:
+                ex, ey = e[j, 0, d, t], e[j, 1, d, t]
+                e[j, 0, d, t], e[j, 1, d, t] = co * ex - si * ey, si * ex + co * ey
+
+
+@njit
+def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low):
+    """Close every loop dyad by dyad, turning the subtrees beyond its two unknown joints
+    (dyads.solve); ``up``, ``low`` (5, block) scratch for the two turns."""
+    for m in range(dyads.shape[0]):
+        shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
+        side = modes[m, d]
+        a, b = cuts[cut, CUT_A], cuts[cut, CUT_B]
+        pax_, pay_, pbx_, pby_ = cgeo[d, cut, 0], cgeo[d, cut, 1], cgeo[d, cut, 2], cgeo[d, cut, 3]
+        uax, uay, ca, sa = cgeo[d, cut, 4], cgeo[d, cut, 5], math.cos(cgeo[d, cut, 6]), math.sin(cgeo[d, cut, 6])
+        mov = b if on_b else a
+        lmx, lmy = (pbx_, pby_) if on_b else (pax_, pay_)
+        for k in range(nb):
+            t = k0 + k
+            x1x, x1y, x2x, x2y = r[ju, 0, d, t], r[ju, 1, d, t], r[jl, 0, d, t], r[jl, 1, d, t]
+            pax = r[a, 0, d, t] + c[a, d, t] * pax_ - s[a, d, t] * pay_
+            pay = r[a, 1, d, t] + s[a, d, t] * pax_ + c[a, d, t] * pay_
+            pbx = r[b, 0, d, t] + c[b, d, t] * pbx_ - s[b, d, t] * pby_
+            pby = r[b, 1, d, t] + s[b, d, t] * pbx_ + c[b, d, t] * pby_
+            if shape == SLIDE:
+                # the moving body ends at a known angle: the total turn (cd, sd) of both joints
+                fix, sgn = (a, 1.0) if on_b else (b, -1.0)
+                pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
+                ct = c[fix, d, t] * ca - sgn * s[fix, d, t] * sa
+                st = s[fix, d, t] * ca + sgn * c[fix, d, t] * sa
+                cd = ct * c[mov, d, t] + st * s[mov, d, t]
+                sd = st * c[mov, d, t] - ct * s[mov, d, t]
+                # the slide axis e (turned with the moving body when that body carries it)
+                ex = c[a, d, t] * uax - s[a, d, t] * uay
+                ey = s[a, d, t] * uax + c[a, d, t] * uay
+                if not on_b:
+                    ex, ey = cd * ex - sd * ey, sd * ex + cd * ey
+                # the lower joint on the slide line shifted back by the turned offset to the cut
+                dx, dy = pmx - x2x, pmy - x2y
+                p0x, p0y = p0x - (cd * dx - sd * dy), p0y - (sd * dx + cd * dy)
+                mx, my = on_line(x1x, x1y, math.sqrt((x2x - x1x) ** 2 + (x2y - x1y) ** 2),
+                                 p0x, p0y, ex, ey, side)
+                ang1, c1, s1 = turn(x2x - x1x, x2y - x1y, mx - x1x, my - x1y)
+                # the lower joint supplies the rest of the known total turn
+                c2, s2 = cd * c1 + sd * s1, sd * c1 - cd * s1
+                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = (
+                    math.atan2(s2, c2), c2, s2, mx, my)
+            elif shape == SWING:
+                # body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta
+                cr = c[b, d, t] * c[a, d, t] + s[b, d, t] * s[a, d, t]
+                sr = s[b, d, t] * c[a, d, t] - c[b, d, t] * s[a, d, t]
+                cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
+                nx = -(s[a, d, t] * uax + c[a, d, t] * uay)
+                ny = c[a, d, t] * uax - s[a, d, t] * uay
+                dx, dy = x2x - x1x, x2y - x1y
+                ox, oy = pbx - x2x, pby - x2y
+                kk = (pax - x1x - (cd * ox - sd * oy)) * nx + (pay - x1y - (sd * ox + cd * oy)) * ny
+                aa, bb = dx * nx + dy * ny, dx * -ny + dy * nx
+                ratio = kk / math.sqrt(aa * aa + bb * bb)
+                if abs(ratio) > 1 and abs(ratio) < 1 + 1e-12:
+                    ratio = math.copysign(1.0, ratio)
+                theta = math.atan2(bb, aa) + side * (math.acos(ratio) if abs(ratio) <= 1 else math.nan)
+                c1, s1 = math.cos(theta), math.sin(theta)
+                ang1 = math.atan2(s1, c1)
+                c2, s2 = c1 * cd - s1 * sd, s1 * cd + c1 * sd
+                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = (
+                    ang1 + math.atan2(sd, cd), c2, s2, x2x, x2y)
+            elif shape == SPLIT:
+                # the cut point m over the two unknown joints x1 and x2
+                mx, my = circles(x1x, x1y, math.sqrt((pax - x1x) ** 2 + (pay - x1y) ** 2), x2x,
+                                 x2y, math.sqrt((pbx - x2x) ** 2 + (pby - x2y) ** 2), side)
+                ang1, c1, s1 = turn(pax - x1x, pay - x1y, mx - x1x, my - x1y)
+                ang2, c2, s2 = turn(pbx - x2x, pby - x2y, mx - x2x, my - x2y)
+                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = ang2, c2, s2, x2x, x2y
+            else:
+                # chain: the lower joint m over the upper joint x1 and the fixed cut point
+                pmx, pmy, pfx, pfy = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
+                mx, my = circles(x1x, x1y, math.sqrt((x2x - x1x) ** 2 + (x2y - x1y) ** 2), pfx,
+                                 pfy, math.sqrt((pmx - x2x) ** 2 + (pmy - x2y) ** 2), side)
+                ang1, c1, s1 = turn(x2x - x1x, x2y - x1y, mx - x1x, my - x1y)
+                low[3, k], low[4, k] = mx, my        # the lower turn follows the upper one
+                low[0, k], low[1, k] = pfx, pfy      # (kept here until then)
+            up[0, k], up[1, k], up[2, k], up[3, k], up[4, k] = ang1, c1, s1, x1x, x1y
+        _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
+        if shape != SPLIT and shape != SWING and shape != SLIDE:
+            # chain: the moving cut point, carried by the upper turn, onto the fixed one
+            for k in range(nb):
+                t = k0 + k
+                mx, my, pfx, pfy = low[3, k], low[4, k], low[0, k], low[1, k]
+                pmx = r[mov, 0, d, t] + c[mov, d, t] * lmx - s[mov, d, t] * lmy
+                pmy = r[mov, 1, d, t] + s[mov, d, t] * lmx + c[mov, d, t] * lmy
+                low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
+        _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
+        # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
+        for k in range(nb):
+            q[ju, d, k0 + k] += tree[ju, SIGN] * up[0, k]
+            q[jl, d, k0 + k] += tree[jl, SIGN] * low[0, k]
+
+
+@inline
+def _cut_points(cuts, cgeo, ci, d, t, c, s, r):
+    """Cut ci's points on its bodies a and b and its axis (fixed in a), global, sample t."""
+    a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+    pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
+    ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
+    ca, sa, cb, sb = c[a, d, t], s[a, d, t], c[b, d, t], s[b, d, t]
+    return (r[a, 0, d, t] + ca * pax_ - sa * pay_, r[a, 1, d, t] + sa * pax_ + ca * pay_,
+            r[b, 0, d, t] + cb * pbx_ - sb * pby_, r[b, 1, d, t] + sb * pbx_ + cb * pby_,
+            ca * ux - sa * uy, sa * ux + ca * uy)
+
+
+@njit
+def _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err):
+    """Loop-closure residual relative to ``size``, max over the cut rows (positions._scaled)."""
+    for k in range(nb):
+        err[d, k0 + k] = 0.0
+    for ci in range(len(cuts)):
+        a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        for k in range(nb):
+            t = k0 + k
+            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            dx, dy = pbx - pax, pby - pay
+            if revolute:   # r_Pb - r_Pa
+                g0, g1 = dx / size[d], dy / size[d]
+            else:          # [phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n]
+                g = phi[b, d, t] - phi[a, d, t] - cgeo[d, ci, 6]
+                g0, g1 = math.atan2(math.sin(g), math.cos(g)), (-dx * eay + dy * eax) / size[d]
+            if g0 != g0 or g1 != g1 or err[d, t] != err[d, t]:
+                err[d, t] = math.nan
+            else:
+                err[d, t] = max(err[d, t], abs(g0), abs(g1))
+
+
+@njit
+def _jacobian(tree, side, cuts, cgeo, d, k0, nb, c, s, r, e, J):
+    """Loop-closure Jacobian J (2 n_cut, n - 1): column k of cut c is
+    ``side * S_c A(r_Pb - r_k) p_k`` (eqs. 20-24)."""
+    for ci in range(len(cuts)):
+        revolute = cuts[ci, CUT_KIND] == REV
+        for j in range(1, len(tree)):
+            f = side[ci, j] * tree[j, SIGN]
+            for k in range(nb):
+                t = k0 + k
+                pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+                if tree[j, KIND] == REV:   # A(a) [s, 0, 0]
+                    w, vx, vy = f, -f * (pby - r[j, 1, d, t]), f * (pbx - r[j, 0, d, t])
+                else:                      # A(a) [0, s e]
+                    w, vx, vy = 0.0, f * e[j, 0, d, t], f * e[j, 1, d, t]
+                if revolute:   # S x = [x_vx, x_vy]
+                    J[2 * ci, j - 1, d, t], J[2 * ci + 1, j - 1, d, t] = vx, vy
+                else:          # S x = [x_w, n . x_v]
+                    J[2 * ci, j - 1, d, t], J[2 * ci + 1, j - 1, d, t] = w, -vx * eay + vy * eax
+
+
+@njit
+def _twists(tree, d, k0, nb, r, e, rate, tw):
+    """t_i = A(r_i - r_p) t_p + p_i rate_i for every body (eq. 2); ``rate`` (n, D, T)."""
+    for k in range(nb):
+        tw[0, 0, d, k0 + k], tw[0, 1, d, k0 + k], tw[0, 2, d, k0 + k] = 0.0, 0.0, 0.0
+    for i in range(1, len(tree)):
+        p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        for k in range(nb):
+            t = k0 + k
+            w = tw[p, 0, d, t]
+            tw[i, 0, d, t] = w
+            tw[i, 1, d, t] = tw[p, 1, d, t] - w * (r[i, 1, d, t] - r[p, 1, d, t])
+            tw[i, 2, d, t] = tw[p, 2, d, t] + w * (r[i, 0, d, t] - r[p, 0, d, t])
+            if revolute:
+                tw[i, 0, d, t] += sign * rate[i, d, t]
+            else:
+                tw[i, 1, d, t] += (sign * rate[i, d, t]) * e[i, 0, d, t]
+                tw[i, 2, d, t] += (sign * rate[i, d, t]) * e[i, 1, d, t]
+
+
+@njit
+def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
+    """td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i."""
+    for k in range(nb):
+        td[0, 0, d, k0 + k], td[0, 1, d, k0 + k], td[0, 2, d, k0 + k] = 0.0, 0.0, 0.0
+    for i in range(1, len(tree)):
+        p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        for k in range(nb):
+            t = k0 + k
+            al, w = td[p, 0, d, t], tw[p, 0, d, t]
+            td[i, 0, d, t] = al
+            td[i, 1, d, t] = (td[p, 1, d, t] - al * (r[i, 1, d, t] - r[p, 1, d, t])
+                              - w * (tw[i, 2, d, t] - tw[p, 2, d, t]))
+            td[i, 2, d, t] = (td[p, 2, d, t] + al * (r[i, 0, d, t] - r[p, 0, d, t])
+                              + w * (tw[i, 1, d, t] - tw[p, 1, d, t]))
+            if revolute:
+                td[i, 0, d, t] += sign * qdd[i, d, t]
+            else:   # p_i qdd_i + s qd_i w_axis perp(e), e turning with the joint's first body
+                w_axis = w if sign > 0 else tw[i, 0, d, t]
+                f = sign * qd[i, d, t] * w_axis
+                td[i, 1, d, t] += (sign * qdd[i, d, t]) * e[i, 0, d, t] - f * e[i, 1, d, t]
+                td[i, 2, d, t] += (sign * qdd[i, d, t]) * e[i, 1, d, t] + f * e[i, 0, d, t]
+
+
+@njit
+def _bias(cuts, cgeo, d, k0, nb, c, s, r, tw, td, bias):
+    """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td`` (recursion.closure_bias);
+    ``bias`` (2 n_cut, block)."""
+    for ci in range(len(cuts)):
+        a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        for k in range(nb):
+            t = k0 + k
+            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            # both bodies' motion taken at the cut point, which moves with body b
+            wa, wb = tw[a, 0, d, t], tw[b, 0, d, t]
+            vbx = tw[b, 1, d, t] - wb * (pby - r[b, 1, d, t])
+            vby = tw[b, 2, d, t] + wb * (pbx - r[b, 0, d, t])
+            vax = tw[a, 1, d, t] - wa * (pby - r[a, 1, d, t])
+            vay = tw[a, 2, d, t] + wa * (pbx - r[a, 0, d, t])
+            abx = td[b, 1, d, t] - td[b, 0, d, t] * (pby - r[b, 1, d, t]) - wb * (vby - tw[b, 2, d, t])
+            aby = td[b, 2, d, t] + td[b, 0, d, t] * (pbx - r[b, 0, d, t]) + wb * (vbx - tw[b, 1, d, t])
+            aax = td[a, 1, d, t] - td[a, 0, d, t] * (pby - r[a, 1, d, t]) - wa * (vby - tw[a, 2, d, t])
+            aay = td[a, 2, d, t] + td[a, 0, d, t] * (pbx - r[a, 0, d, t]) + wa * (vbx - tw[a, 1, d, t])
+            dax, day = abx - aax, aby - aay
+            if revolute:
+                bias[2 * ci, k], bias[2 * ci + 1, k] = dax, day
+            else:   # [al_b - al_a, n . a_rel + n_dot . v_rel],  n_dot = -w_a e
+                bias[2 * ci, k] = td[b, 0, d, t] - td[a, 0, d, t]
+                bias[2 * ci + 1, k] = (-dax * eay + day * eax
+                                       - wa * ((vbx - vax) * eax + (vby - vay) * eay))
+
+
+@njit
+def _solve_dep(dep, J, d, k0, nb, rhs, x, A, sol, col):
+    """``J_dep x_dep = rhs`` (``rhs`` (2 n_cut, block)) for the samples of a block, into
+    ``x[dep]``; the relative pivots into ``col`` (block,). ``A``, ``sol``: scratch."""
+    nd = len(dep)
+    for i in range(nd):
+        for m in range(nd):
+            for k in range(nb):
+                A[i, m, k] = J[i, dep[m] - 1, d, k0 + k]
+        for k in range(nb):
+            A[i, nd, k] = rhs[i, k]
+    eliminate(A, nd, nb, sol, col, PIVOT_TOL)
+    for m in range(nd):
+        for k in range(nb):
+            x[dep[m], d, k0 + k] = sol[m, k]
+
+
+@njit
+def _cut_motion(cuts, cgeo, d, k0, nb, phi, c, s, r, tw, td, out):
+    """Coordinate, rate and acceleration of every cut joint (joints.joint_motion): revolute
+    ``phi_b - phi_a``; slider ``s = d . e`` and its rates. ``out`` (n_cut, 3, D, T)."""
+    for ci in range(len(cuts)):
+        a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+        if cuts[ci, CUT_KIND] == REV:
+            for k in range(nb):
+                t = k0 + k
+                out[ci, 0, d, t] = phi[b, d, t] - phi[a, d, t]
+                out[ci, 1, d, t] = tw[b, 0, d, t] - tw[a, 0, d, t]
+                out[ci, 2, d, t] = td[b, 0, d, t] - td[a, 0, d, t]
+            continue
+        for k in range(nb):
+            t = k0 + k
+            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            # d, d', d'': the second body's cut point seen from the first's (body points)
+            wa, wb, ala, alb = tw[a, 0, d, t], tw[b, 0, d, t], td[a, 0, d, t], td[b, 0, d, t]
+            oax, oay, obx, oby = pax - r[a, 0, d, t], pay - r[a, 1, d, t], pbx - r[b, 0, d, t], pby - r[b, 1, d, t]
+            ddx = (tw[b, 1, d, t] - wb * oby) - (tw[a, 1, d, t] - wa * oay)
+            ddy = (tw[b, 2, d, t] + wb * obx) - (tw[a, 2, d, t] + wa * oax)
+            dddx = ((td[b, 1, d, t] - alb * oby - wb * wb * obx)
+                    - (td[a, 1, d, t] - ala * oay - wa * wa * oax))
+            dddy = ((td[b, 2, d, t] + alb * obx - wb * wb * oby)
+                    - (td[a, 2, d, t] + ala * oax - wa * wa * oay))
+            dx, dy = pbx - pax, pby - pay
+            # e' = w_a perp(e), e'' = al_a perp(e) - w_a^2 e
+            edx, edy = -wa * eay, wa * eax
+            eddx, eddy = -ala * eay - wa * wa * eax, ala * eax - wa * wa * eay
+            out[ci, 0, d, t] = dx * eax + dy * eay
+            out[ci, 1, d, t] = ddx * eax + ddy * eay + (dx * edx + dy * edy)
+            out[ci, 2, d, t] = (dddx * eax + dddy * eay + 2 * (ddx * edx + ddy * edy)
+                                + (dx * eddx + dy * eddy))
+
+
+# --- the kernel ----------------------------------------------------------------------------------
+
+@njit
+def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
+           t_s, nodes, lo, hi, Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv,
+           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, block):
+    """Positions, rates and accelerations at the times ``t_s`` (T,), written into the outputs
+    ``q`` ... ``err`` (see :func:`run`).
+
+    With continuation nodes (``nodes`` (K,) s, their coordinates ``Qn`` (n, D, K) and the
+    cosines and sines ``cQ``, ``sQ`` of ``s Qn``), the loops are closed dyad by dyad from the
+    node nearest to each time clamped to ``[lo, hi]`` (D,), in the assembly ``modes``
+    (n_dyads, D); without (K = 0), ``q_in`` (n, D, T) already closes them. Driver coordinates,
+    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, T).
+    """
+    n, nc, nd, nv = len(tree), len(cuts), len(dep), len(drv)
+    D, T, from_nodes = size.shape[0], t_s.shape[0], nodes.shape[0] > 0
+    B = block
+    cq, sq = np.ones((n, B)), np.zeros((n, B))
+    up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((2 * nc, B))
+    A, sol, col = np.zeros((nd, nd + 1, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
+    for d in range(D):
+        for k0 in range(0, T, B):
+            nb = min(B, T - k0)
+            # coordinates: the nearest node's (or the closed ones) and the drivers'
+            for k in range(nb):
+                t = k0 + k
+                if from_nodes:
+                    jn = nearest(nodes, min(max(t_s[t], lo[d]), hi[d]))
+                    for i in range(n):
+                        q[i, d, t], cq[i, k], sq[i, k] = Qn[i, d, jn], cQ[i, d, jn], sQ[i, d, jn]
+                else:
+                    for i in range(n):
+                        q[i, d, t] = q_in[i, d, t]
+                        if tree[i, KIND] == REV:
+                            x = tree[i, SIGN] * q[i, d, t]
+                            cq[i, k], sq[i, k] = math.cos(x), math.sin(x)
+                for j in range(nv):
+                    i = drv[j]
+                    q[i, d, t] = q_drv[j, t]
+                    if tree[i, KIND] == REV:
+                        x = tree[i, SIGN] * q[i, d, t]
+                        cq[i, k], sq[i, k] = math.cos(x), math.sin(x)
+            # positions, the loops closed in closed form from the nodes
+            _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e)
+            if from_nodes:
+                _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low)
+            _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err)
+            _jacobian(tree, side, cuts, cgeo, d, k0, nb, c, s, r, e, J)
+            # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
+            for k in range(nb):
+                t = k0 + k
+                for i in range(n):
+                    qd[i, d, t], qdd[i, d, t] = 0.0, 0.0
+                for j in range(nv):
+                    qd[drv[j], d, t], qdd[drv[j], d, t] = qd_drv[j, t], qdd_drv[j, t]
+                for row in range(nd):
+                    acc = 0.0
+                    for j in range(nv):
+                        acc += J[row, drv[j] - 1, d, t] * qd_drv[j, t]
+                    rhs[row, k] = -acc
+            if nd:
+                _solve_dep(dep, J, d, k0, nb, rhs, qd, A, sol, col)
+            for k in range(nb):
+                pivot[d, k0 + k] = col[k] if nd else 1.0
+            _twists(tree, d, k0, nb, r, e, qd, tw)
+            # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
+            _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
+            if nd:
+                _bias(cuts, cgeo, d, k0, nb, c, s, r, tw, td, rhs)
+                for row in range(nd):
+                    for k in range(nb):
+                        rhs[row, k] = -rhs[row, k]
+                _solve_dep(dep, J, d, k0, nb, rhs, qdd, A, sol, col)
+                _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
+            _cut_motion(cuts, cgeo, d, k0, nb, phi, c, s, r, tw, td, cut)
+
+
+def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
+        lo=None, hi=None, modes=()) -> dict:
+    """Run :func:`kernel` at the times ``t`` (T,) with the driver values (n_drivers, T).
+
+    Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
+    the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
+    (n, ..., K), each design's times clamped to ``[lo, hi]`` (D,), in the dyads' assembly
+    ``modes`` (each (1,) or (D, 1)).
+
+    Returns the outputs, batch flattened to (D, T): ``q``, ``phi``, ``c``, ``s``, ``qd``,
+    ``qdd`` (n, D, T); ``r``, ``e`` (n, 2, D, T; ``e`` is zero for revolute joints); ``tw``,
+    ``twd`` (n, 3, D, T); ``J`` (2 n_cut, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
+    joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T).
+    """
+    n, nc = len(P.parent), len(P.cut_a)
+    D, T = P.size.shape[0], len(t)
+    t = np.ascontiguousarray(t, dtype=float)
+    if nodes is None:
+        nodes, Qn, lo, hi = np.zeros(0), np.zeros((n, D, 0)), np.zeros(D), np.zeros(D)
+        q_in = np.ascontiguousarray(np.broadcast_to(q.reshape(n, -1, T), (n, D, T)))
+    else:
+        Qn = np.ascontiguousarray(np.broadcast_to(
+            np.nan_to_num(Q).reshape(n, -1, len(nodes)), (n, D, len(nodes))))
+        q_in = np.zeros((n, D, 0))
+        lo, hi = (np.ascontiguousarray(np.broadcast_to(np.reshape(x, -1), (D,)), dtype=float)
+                  for x in (lo, hi))
+    sQ, cQ = np.sin(P.sign[:, None, None] * Qn), np.cos(P.sign[:, None, None] * Qn)
+    md = np.zeros((len(modes), D))
+    for k, m in enumerate(modes):
+        md[k] = np.reshape(m, -1)
+    out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
+           "J": (2 * nc, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3), "twd": (n, 3),
+           "cut": (nc, 3), "pivot": (), "err": ()}
+    out = {k: np.empty(shape + (D, T)) for k, shape in out.items()}
+    # the topology and the numbers in the kernel's few arrays
+    tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64)], axis=1)
+    cuts = np.stack([P.cut_a, P.cut_b, P.cut_kind], axis=1).reshape(nc, 3)
+    geo = np.concatenate([P.joint_point, P.axis, P.angle[..., None]], axis=-1)
+    cgeo = np.concatenate([P.cut_pa, P.cut_pb, P.cut_axis, P.cut_angle[..., None]], axis=-1)
+    drivers = [np.ascontiguousarray(np.broadcast_to(x, (len(P.drv), T)), dtype=float)
+               for x in (q_drv, qd_drv, qdd_drv)]
+    kernel(tree, P.ancestors, P.dep, P.drv, cuts, P.side, P.dyads, geo, cgeo, P.size,
+           t, np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in, *drivers, *out.values(),
+           min(BLOCK, T))
+    return out

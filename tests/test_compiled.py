@@ -1,0 +1,200 @@
+"""The compiled kinematics kernel and the compiled analysis against the numpy reference.
+
+``kinematics.solve(..., backend="compiled")`` must give what the numpy path gives (itself
+checked against closed forms, finite differences, the dense reference and MuJoCo elsewhere):
+every joint coordinate, rate and acceleration, every body pose, twist and twist rate, the
+closure Jacobian, the pivots, the validity of every sample, to 1e-12 of each quantity's peak,
+NaN at the same samples. ``analyze`` must then give the same result columns on either path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+
+import numpy as np
+import pytest
+
+import linkdyn
+from linkdyn import compiled, kinematics
+from linkdyn.cli import example_names, example_text
+from linkdyn.io import model_from_dict
+from linkdyn.kinematics import compiled as kc
+
+from test_compiled_dynamics import hoeken_design, same, slider_crank_design
+from test_dynamics import MODELS, times
+
+
+def around(model, n=73):
+    """n samples from before t = 0 to past one cycle: both continuation directions."""
+    t = times(model, n)
+    return np.linspace(-0.3 * t[-1], 1.2 * t[-1], n)
+
+
+def check_kinematics(fast, ref):
+    """Every array of two kinematic solutions."""
+    assert fast.arrays is not None and ref.arrays is None
+    assert np.array_equal(fast.valid, ref.valid)
+    for name in ("q", "qd", "qdd", "phi", "r", "tw", "twd", "J", "pivot"):
+        same(getattr(fast, name), getattr(ref, name), name)
+    # the closure residual is rounding: compare it absolutely
+    both_ok = fast.valid & ref.valid
+    assert np.max(np.abs(fast.residual[both_ok] - ref.residual[both_ok]), initial=0) < 1e-12
+    for i, (a, b) in enumerate(zip(fast.pose.e, ref.pose.e)):
+        assert (a is None) == (b is None), f"slider axis of body {i}"
+        if a is not None:
+            same(a, np.broadcast_to(b, a.shape), f"e[{i}]")
+    for i, (a, b) in enumerate(zip(fast.motion, ref.motion)):
+        if b is not None:
+            same(np.broadcast_to(a, np.broadcast_shapes(np.shape(a), np.shape(b))),
+                 np.broadcast_to(b, np.broadcast_shapes(np.shape(a), np.shape(b))), f"p[{i}]")
+
+
+def same_columns(fast, ref):
+    """Every result column; a column is compared against the peak of its family (``x``,
+    ``phi``, ``Fx`` ...), so a fixed point's ``y`` of 1e-17 m is measured against the other
+    points' coordinates, not against itself."""
+    assert list(fast.columns) == list(ref.columns)
+    peaks: dict = {}
+    for key, col in ref.columns.items():
+        fam = key.split("_")[0]
+        peaks[fam] = max(peaks.get(fam, 0.0), float(np.nanmax(np.abs(col), initial=0.0)))
+    # a slider's moment (zero in a symmetric load case) against the efforts and forces
+    peaks["M"] = max(peaks.get(f, 0.0) for f in ("M", "Fx", "Fy", "tau", "force"))
+    for key, col in ref.columns.items():
+        peak = max(float(np.nanmax(np.abs(col), initial=0.0)), peaks[key.split("_")[0]])
+        same(fast.columns[key], col, key, rtol=1e-12 * peak / max(
+            float(np.nanmax(np.abs(col), initial=0.0)), 1e-300))
+
+
+def solve_both(model, t):
+    """(compiled, numpy) kinematics; a mechanism of dyads must close every sample in the
+    kernel's closed form, without the numpy retry (which would hide a wrong closed form)."""
+    calls = []
+    run = kc.run
+
+    def counted(*args, **kw):
+        calls.append("nodes" if kw.get("nodes") is not None else "closed q")
+        return run(*args, **kw)
+    kc.run = counted
+    try:
+        fast = kinematics.solve(model, t, backend="compiled")
+    finally:
+        kc.run = run
+    if fast.layout.dyads is not None:
+        assert calls == ["nodes"], calls
+    return fast, kinematics.solve(model, t, backend="numpy")
+
+
+@pytest.mark.parametrize("name", example_names())
+def test_bundled_examples(name):
+    model = linkdyn.load(linkdyn.example_path(name))
+    fast, ref = solve_both(model, around(model))
+    assert np.all(ref.valid) and np.max(np.abs(ref.qdd)) > 0
+    check_kinematics(fast, ref)
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_dynamics_test_models(name):
+    """Sliders in the tree, at the cut and driven; two drivers; joints declared child-first."""
+    model = MODELS[name]()
+    check_kinematics(*solve_both(model, around(model, 41)))
+
+
+@pytest.mark.parametrize("cut, shape", [("J2", "chain"), ("J3", "split"), ("J4", "chain")])
+def test_every_cut_of_the_four_bar(cut, shape):
+    """Hoeken cut at each of its undriven joints: both RRR dyad shapes, either side."""
+    model = dataclasses.replace(linkdyn.load(linkdyn.example_path("hoeken")), cut=(cut,))
+    fast, ref = solve_both(model, around(model))
+    assert [d.shape for d in fast.layout.dyads] == [shape]
+    check_kinematics(fast, ref)
+
+
+def test_designs_one_of_which_cannot_assemble():
+    designs = [hoeken_design(38.1), hoeken_design(400.0), hoeken_design(42.0)]
+    fast, ref = solve_both(designs, np.linspace(-0.2, 1.5, 29))
+    assert fast.shape == (3, 29) and not np.any(fast.valid[1]) and np.all(fast.valid[[0, 2]])
+    check_kinematics(fast, ref)
+
+
+def test_designs_with_a_slider():
+    designs = [slider_crank_design(1.0), slider_crank_design(2.0)]
+    check_kinematics(*solve_both(designs, around(designs[0], 31)))
+
+
+def test_samples_past_a_limit_position_are_nan_alike():
+    """A non-Grashof Hoeken driven past the angle where its loop stops closing."""
+    text = example_text("hoeken").replace("O2 = [38.1, 0.0]", "O2 = [60.0, 0.0]")
+    text = text.replace("O4 = [89.5, 0.0] }", "O4 = [180.0, 0.0] }")
+    model = model_from_dict(tomllib.loads(text))
+    fast, ref = solve_both(model, np.linspace(-1.0, 4 / 3, 61))
+    assert 0 < np.sum(~ref.valid) < 61
+    check_kinematics(fast, ref)
+
+
+@pytest.mark.parametrize("block", [1, 7])
+def test_any_sample_block_gives_the_same(monkeypatch, block):
+    monkeypatch.setattr(kc, "BLOCK", block)
+    designs = [slider_crank_design(1.0), hoeken_design(38.1)][:1] + [slider_crank_design(0.5)]
+    check_kinematics(*solve_both(designs, around(designs[0], 23)))
+
+
+def test_a_sample_the_closed_form_misses_goes_to_the_numpy_retry(monkeypatch):
+    """Where the kernel's closed form leaves a sample open, the whole batch is redone by the
+    numpy path's damped Newton retry (and then finished by the kernel)."""
+    model = linkdyn.load(linkdyn.example_path("hoeken"))
+    calls = []
+    run = kc.run
+
+    def spoiled(*args, **kw):
+        out = run(*args, **kw)
+        calls.append("nodes" if kw.get("nodes") is not None else "closed q")
+        if kw.get("nodes") is not None:
+            out["err"][..., 3] = 1.0   # pretend sample 3 did not close
+        return out
+    monkeypatch.setattr(kc, "run", spoiled)
+    fast = kinematics.solve(model, times(model, 9), backend="compiled")
+    assert calls == ["nodes", "closed q"]
+    check_kinematics(fast, kinematics.solve(model, times(model, 9), backend="numpy"))
+
+
+@pytest.mark.parametrize("name", ["hoeken", "slider_crank", "inverted_slider_crank", "fivebar"])
+def test_analyze_gives_the_same_columns(name):
+    model = linkdyn.load(linkdyn.example_path(name))
+    t = times(model, 37)
+    fast = linkdyn.analyze(model, t, backend="compiled")
+    ref = linkdyn.analyze(model, t, backend="numpy")
+    assert fast.kin.arrays is not None and ref.kin.arrays is None
+    same_columns(fast, ref)
+
+
+def test_analyze_allow_singular_flags_the_same_samples():
+    text = example_text("hoeken").replace("O2 = [38.1, 0.0]", "O2 = [60.0, 0.0]")
+    model = model_from_dict(tomllib.loads(text.replace("O4 = [89.5, 0.0] }",
+                                                       "O4 = [180.0, 0.0] }")))
+    t = np.linspace(0.0, 4 / 3, 41)
+    fast = linkdyn.analyze(model, t, allow_singular=True, backend="compiled")
+    ref = linkdyn.analyze(model, t, allow_singular=True, backend="numpy")
+    assert np.array_equal(fast.valid, ref.valid) and 0 < np.sum(~ref.valid) < 41
+    same_columns(fast, ref)
+    with pytest.raises(linkdyn.AssemblyError) as err:
+        linkdyn.analyze(model, t, backend="compiled")
+    with pytest.raises(linkdyn.AssemblyError) as err_ref:
+        linkdyn.analyze(model, t, backend="numpy")
+    assert str(err.value) == str(err_ref.value)
+
+
+def test_backend_choice(monkeypatch):
+    monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
+    assert compiled.use_compiled("compiled") and not compiled.use_compiled("numpy")
+    # auto: compiled only for a batch that repays the first compilation
+    assert not compiled.use_compiled("auto", compiled.AUTO_MIN_SAMPLES - 1)
+    assert compiled.use_compiled("auto", compiled.AUTO_MIN_SAMPLES)
+    monkeypatch.setenv("LINKDYN_BACKEND", "numpy")
+    assert not compiled.use_compiled(None, 10 ** 9)
+    monkeypatch.setenv("LINKDYN_BACKEND", "Compiled")
+    assert compiled.use_compiled(None)
+    with pytest.raises(ValueError, match="backend must be one of auto, numpy, compiled"):
+        compiled.use_compiled("fast")
+    model = linkdyn.load(linkdyn.example_path("hoeken"))
+    assert linkdyn.analyze(model, np.linspace(0, 1, 5)).kin.arrays is not None
