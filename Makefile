@@ -31,7 +31,7 @@ test: $(VENV)/.installed-test
 bench: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/bench_hoeken.py
 
-accuracy: $(VENV)/.installed
+accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py
 
 clean:
