@@ -198,10 +198,11 @@ def test_play_advances_the_frame_and_pause_stops_it(page):
 def test_speed_control_offers_quarter_to_four_times(page):
     values = page.page.eval_on_selector_all("#speed option", "os => os.map(o => +o.value)")
     assert min(values) == 0.25 and max(values) == 4 and 1 in values
-    # simulated seconds per wall-clock second, measured in the page (Hoeken: 1x is real time)
+    # simulated seconds per wall-clock second, measured in the page over a second (Hoeken: 1x
+    # is real time); a busy machine drops or bunches frames, hence the +-20 % band
     measure = """async () => {
         const p0 = window.__linkdynPlayed, t0 = performance.now();
-        await new Promise(r => setTimeout(r, 400));
+        await new Promise(r => setTimeout(r, 1000));
         const p1 = window.__linkdynPlayed, t1 = performance.now();
         return (p1 - p0) / ((t1 - t0) / 1000);
     }"""
@@ -213,8 +214,8 @@ def test_speed_control_offers_quarter_to_four_times(page):
         ratios[speed] = page.page.evaluate(measure)
         page.page.click("#play")
         page.page.evaluate("window.__linkdynPlayed = 0")
-    assert 2.5 < ratios["4"] < 4.5, ratios
-    assert 0.15 < ratios["0.25"] < 0.3, ratios
+    assert 3.2 < ratios["4"] < 4.8, ratios
+    assert 0.2 < ratios["0.25"] < 0.3, ratios
     assert page.errors == []
 
 
