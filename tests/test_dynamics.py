@@ -835,6 +835,20 @@ def crank_rockers(draw):
     return model, {"A": A, "B": B}, abs(speed)
 
 
+def check_against_references(sol, size):
+    """The recursive efforts and reactions of ``sol`` against the dense explicit-matrix form and
+    the simultaneous Newton–Euler solve."""
+    model = sol.model
+    d = dense.solve(model, sol.kin, sol.loads.w_ext)
+    force, moment, tau = ne_solve(sol)
+    check(sol.dyn.tau, d.tau, what="tau recursive vs dense")
+    check(sol.dyn.tau, tau, what="tau recursive vs Newton–Euler")
+    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model, size,
+                    what="recursive vs dense")
+    check_reactions(sol.reactions.force, sol.reactions.moment, force, moment, model, size,
+                    what="recursive vs Newton–Euler")
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(crank_rockers())
 def test_random_crank_rockers(case):
@@ -845,14 +859,7 @@ def test_random_crank_rockers(case):
     size = size_of(model)
     for body_, p in (("coupler", "A"), ("coupler", "B")):
         np.testing.assert_allclose(sol.point(body_, p)[0], assembled[p], atol=1e-9 * size)
-    d = dense.solve(model, sol.kin, sol.loads.w_ext)
-    force, moment, tau = ne_solve(sol)
-    check(sol.dyn.tau, d.tau, what="tau recursive vs dense")
-    check(sol.dyn.tau, tau, what="tau recursive vs Newton–Euler")
-    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model, size,
-                    what="recursive vs dense")
-    check_reactions(sol.reactions.force, sol.reactions.moment, force, moment, model, size,
-                    what="recursive vs Newton–Euler")
+    check_against_references(sol, size)
 
 
 @st.composite
@@ -904,14 +911,7 @@ def test_random_slider_cranks(case):
     size = size_of(model)
     for p in ("A", "B"):
         np.testing.assert_allclose(sol.point("rod", p)[0], assembled[p], atol=1e-9 * size)
-    d = dense.solve(model, sol.kin, sol.loads.w_ext)
-    force_, moment, tau = ne_solve(sol)
-    check(sol.dyn.tau, d.tau, what="tau recursive vs dense")
-    check(sol.dyn.tau, tau, what="tau recursive vs Newton–Euler")
-    check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model, size,
-                    what="recursive vs dense")
-    check_reactions(sol.reactions.force, sol.reactions.moment, force_, moment, model, size,
-                    what="recursive vs Newton–Euler")
+    check_against_references(sol, size)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -49,6 +49,186 @@ def _composite(parent, r, d, k0, nb, w):
 
 
 @njit
+def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o_wstar, o_wtilde,
+                  o_ke):
+    """Uncoupled Newton–Euler wrenches ``w_star`` of a block (denoc.newton_euler), copied into
+    ``w_tilde`` to start its recursion, and the kinetic energy."""
+    n = len(mass[dp])
+    # Newton–Euler about O_i, d = R(phi) com:  n = I_O al + m d x a,
+    # f = m (a + al perp(d) - w^2 d), minus w_ext;  KE = 1/2 m |v + w perp(d)|^2 + 1/2 I w^2
+    for k in range(nb):
+        t = k0 + k
+        ke[k] = 0.0
+        o_wstar[0, 0, d, t], o_wstar[0, 1, d, t], o_wstar[0, 2, d, t] = 0.0, 0.0, 0.0
+        o_wtilde[0, 0, d, t], o_wtilde[0, 1, d, t], o_wtilde[0, 2, d, t] = 0.0, 0.0, 0.0
+    for i in range(1, n):
+        mi, ii = mass[dp, i], inertia[dp, i]
+        cx, cy = com[dp, i, 0], com[dp, i, 1]
+        for k in range(nb):
+            t = k0 + k
+            ci, si = c[i, d, t], s[i, d, t]
+            dx = ci * cx - si * cy
+            dy = si * cx + ci * cy
+            w, vx, vy = tw[i, 0, d, t], tw[i, 1, d, t], tw[i, 2, d, t]
+            al, ax, ay = twd[i, 0, d, t], twd[i, 1, d, t], twd[i, 2, d, t]
+            i_o = ii + mi * (dx * dx + dy * dy)
+            w2 = w * w
+            n0 = (i_o * al + mi * (dx * ay - dy * ax)) - w_ext[i, 0, d, t]
+            f0 = mi * (ax + al * (-dy) - w2 * dx) - w_ext[i, 1, d, t]
+            f1 = mi * (ay + al * dx - w2 * dy) - w_ext[i, 2, d, t]
+            o_wstar[i, 0, d, t], o_wstar[i, 1, d, t], o_wstar[i, 2, d, t] = n0, f0, f1
+            o_wtilde[i, 0, d, t], o_wtilde[i, 1, d, t], o_wtilde[i, 2, d, t] = n0, f0, f1
+            vcx = vx + w * (-dy)
+            vcy = vy + w * dx
+            ke[k] += 0.5 * mi * (vcx * vcx + vcy * vcy) + 0.5 * ii * w2
+    for k in range(nb):
+        o_ke[d, k0 + k] = ke[k]
+
+
+@njit
+def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
+    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q``. The
+    zero entries of ``p_i`` are multiplied too, so a NaN spreads as in numpy's dot product."""
+    for k in range(nb):
+        o_Q[0, d, k0 + k] = 0.0
+    # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
+    for i in range(1, len(kind)):
+        si = sign[i]
+        if kind[i] == REV:
+            for k in range(nb):
+                t = k0 + k
+                q = (si * o_wtilde[i, 0, d, t] + 0.0 * o_wtilde[i, 1, d, t]
+                     + 0.0 * o_wtilde[i, 2, d, t])
+                Q[i, k] = q
+                o_Q[i, d, t] = q
+        else:
+            for k in range(nb):
+                t = k0 + k
+                q = (0.0 * o_wtilde[i, 0, d, t] + (si * e[i, 0, d, t]) * o_wtilde[i, 1, d, t]
+                     + (si * e[i, 1, d, t]) * o_wtilde[i, 2, d, t])
+                Q[i, k] = q
+                o_Q[i, d, t] = q
+
+
+@njit
+def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot):
+    """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27), a block at a time."""
+    m, n_rows, n_drv = dep.shape[0], J.shape[0], drv.shape[0]
+    # J_dep^T lam = Q_dep by Gaussian elimination with partial pivoting; NaN where the
+    # smallest pivot / largest |entry| (a NaN entry: NaN) is not above SINGULAR_PIVOT
+    if m > 0:
+        for a in range(m):
+            col = dep[a] - 1
+            for b in range(m):
+                for k in range(nb):
+                    A[a, b, k] = J[b, col, d, k0 + k]
+            for k in range(nb):
+                A[a, m, k] = Q[dep[a], k]
+        eliminate(A, m, nb, lam, piv, SINGULAR_PIVOT)
+        for k in range(nb):
+            o_pivot[d, k0 + k] = piv[k]
+            for a in range(m):
+                o_lam[a, d, k0 + k] = lam[a, k]
+    else:
+        for k in range(nb):
+            o_pivot[d, k0 + k] = 1.0
+    # tau = Q_drv - J_drv^T lam
+    for jd in range(n_drv):
+        i = drv[jd]
+        for k in range(nb):
+            acc = 0.0
+            for a in range(n_rows):
+                acc += J[a, i - 1, d, k0 + k] * lam[a, k]
+            tau[jd, k] = Q[i, k] - acc
+            o_tau[jd, d, k0 + k] = tau[jd, k]
+
+
+@njit
+def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s, r,
+                  lam, wc, o_on):
+    """Cut-joint wrenches ``S^T lam`` on both bodies about their O (reactions.cut_wrenches) into
+    ``wc`` (n, 3, block), and the cut joints' reactions."""
+    n_cut = cut_a.shape[0]
+    # cut wrenches S^T lam at the cut point: + on body b, - on body a, about O_b, O_a;
+    # revolute [0, lam], prismatic [lam_0, lam_1 perp(e_a)]
+    for i in range(wc.shape[0]):
+        for k in range(nb):
+            wc[i, 0, k], wc[i, 1, k], wc[i, 2, k] = 0.0, 0.0, 0.0
+    for cc in range(n_cut):
+        a, b, jc = cut_a[cc], cut_b[cc], cut_joint[cc]
+        px, py = cut_pb[dp, cc, 0], cut_pb[dp, cc, 1]
+        ux, uy = cut_axis[dp, cc, 0], cut_axis[dp, cc, 1]
+        prismatic = cut_kind[cc] == PRI
+        for k in range(nb):
+            t = k0 + k
+            cb, sb = c[b, d, t], s[b, d, t]
+            rpx = r[b, 0, d, t] + (cb * px - sb * py)
+            rpy = r[b, 1, d, t] + (sb * px + cb * py)
+            l0, l1 = lam[2 * cc, k], lam[2 * cc + 1, k]
+            if prismatic:
+                ca, sa = c[a, d, t], s[a, d, t]
+                ex = ca * ux - sa * uy
+                ey = sa * ux + ca * uy
+                o0, o1, o2 = l0, l1 * (-ey), l1 * ex
+            else:
+                o0, o1, o2 = 0.0, l0, l1
+            ax = rpx - r[b, 0, d, t]
+            ay = rpy - r[b, 1, d, t]
+            wc[b, 0, k] = wc[b, 0, k] + ((ax * o2 - ay * o1) + o0)
+            wc[b, 1, k] = wc[b, 1, k] + o1
+            wc[b, 2, k] = wc[b, 2, k] + o2
+            ax = rpx - r[a, 0, d, t]
+            ay = rpy - r[a, 1, d, t]
+            wc[a, 0, k] = wc[a, 0, k] - ((ax * o2 - ay * o1) + o0)
+            wc[a, 1, k] = wc[a, 1, k] - o1
+            wc[a, 2, k] = wc[a, 2, k] - o2
+            o_on[jc, 0, d, t], o_on[jc, 1, d, t], o_on[jc, 2, d, t] = o0, o1, o2
+
+
+@njit
+def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, c, s,
+                    r, e, tau, wc, o_wstar, o_tree, o_on):
+    """``R_i`` by the backward recursion of ``w_star - w_cut`` and the reaction of every tree
+    joint from it (reactions.solve)."""
+    n = parent.shape[0]
+    # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i
+    for i in range(n):
+        for k in range(nb):
+            t = k0 + k
+            o_tree[i, 0, d, t] = o_wstar[i, 0, d, t] - wc[i, 0, k]
+            o_tree[i, 1, d, t] = o_wstar[i, 1, d, t] - wc[i, 1, k]
+            o_tree[i, 2, d, t] = o_wstar[i, 2, d, t] - wc[i, 2, k]
+    _composite(parent, r, d, k0, nb, o_tree)
+    # tree joints: R_i - tau p_i on the child; sign > 0 as is, sign < 0 the opposite
+    # about the parent's joint point: A(r_i - r_Pb)^T (-w)
+    for i in range(1, n):
+        si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
+        revolute = kind[i] == REV
+        px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
+        for k in range(nb):
+            t = k0 + k
+            o0, o1, o2 = o_tree[i, 0, d, t], o_tree[i, 1, d, t], o_tree[i, 2, d, t]
+            if dr >= 0:
+                tq = tau[dr, k]
+                if revolute:
+                    o0, o1, o2 = o0 - tq * si, o1 - tq * 0.0, o2 - tq * 0.0
+                else:
+                    o0 = o0 - tq * 0.0
+                    o1 = o1 - tq * (si * e[i, 0, d, t])
+                    o2 = o2 - tq * (si * e[i, 1, d, t])
+            if si > 0:
+                o_on[jt, 0, d, t], o_on[jt, 1, d, t], o_on[jt, 2, d, t] = o0, o1, o2
+            else:
+                cp, sp = c[p, d, t], s[p, d, t]
+                ax = r[i, 0, d, t] - (r[p, 0, d, t] + (cp * px - sp * py))
+                ay = r[i, 1, d, t] - (r[p, 1, d, t] + (sp * px + cp * py))
+                o_on[jt, 0, d, t] = (ax * (-o2) - ay * (-o1)) + (-o0)
+                o_on[jt, 1, d, t] = -o1
+                o_on[jt, 2, d, t] = -o2
+
+
+
+@njit
 def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, cut_kind,
             cut_joint, joint_point, com, mass, inertia, cut_pb, cut_axis,
             c, s, r, e, tw, twd, J, w_ext,
@@ -61,9 +241,7 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
     the operations of the one-sample recursion, in the same order).
     """
     n = parent.shape[0]
-    n_cut = cut_a.shape[0]
     m = dep.shape[0]           # = 2 n_cut rows of J_dep^T lam = Q_dep
-    n_rows = J.shape[0]
     n_drv = drv.shape[0]
     D, T = c.shape[1], c.shape[2]
     n_designs = mass.shape[0]
@@ -81,151 +259,16 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
         dp = d if n_designs > 1 else 0
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
-            # Newton–Euler about O_i, d = R(phi) com:  n = I_O al + m d x a,
-            # f = m (a + al perp(d) - w^2 d), minus w_ext;  KE = 1/2 m |v + w perp(d)|^2 + 1/2 I w^2
-            for k in range(nb):
-                t = k0 + k
-                ke[k] = 0.0
-                o_wstar[0, 0, d, t], o_wstar[0, 1, d, t], o_wstar[0, 2, d, t] = 0.0, 0.0, 0.0
-                o_wtilde[0, 0, d, t], o_wtilde[0, 1, d, t], o_wtilde[0, 2, d, t] = 0.0, 0.0, 0.0
-            for i in range(1, n):
-                mi, ii = mass[dp, i], inertia[dp, i]
-                cx, cy = com[dp, i, 0], com[dp, i, 1]
-                for k in range(nb):
-                    t = k0 + k
-                    ci, si = c[i, d, t], s[i, d, t]
-                    dx = ci * cx - si * cy
-                    dy = si * cx + ci * cy
-                    w, vx, vy = tw[i, 0, d, t], tw[i, 1, d, t], tw[i, 2, d, t]
-                    al, ax, ay = twd[i, 0, d, t], twd[i, 1, d, t], twd[i, 2, d, t]
-                    i_o = ii + mi * (dx * dx + dy * dy)
-                    w2 = w * w
-                    n0 = (i_o * al + mi * (dx * ay - dy * ax)) - w_ext[i, 0, d, t]
-                    f0 = mi * (ax + al * (-dy) - w2 * dx) - w_ext[i, 1, d, t]
-                    f1 = mi * (ay + al * dx - w2 * dy) - w_ext[i, 2, d, t]
-                    o_wstar[i, 0, d, t], o_wstar[i, 1, d, t], o_wstar[i, 2, d, t] = n0, f0, f1
-                    o_wtilde[i, 0, d, t], o_wtilde[i, 1, d, t], o_wtilde[i, 2, d, t] = n0, f0, f1
-                    vcx = vx + w * (-dy)
-                    vcy = vy + w * dx
-                    ke[k] += 0.5 * mi * (vcx * vcx + vcy * vcy) + 0.5 * ii * w2
-            for k in range(nb):
-                o_ke[d, k0 + k] = ke[k]
+            _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o_wstar,
+                          o_wtilde, o_ke)
             # w_tilde_p += A(r_i - r_p)^T w_tilde_i, leaves first
             _composite(parent, r, d, k0, nb, o_wtilde)
-            for k in range(nb):
-                o_Q[0, d, k0 + k] = 0.0
-            # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
-            for i in range(1, n):
-                si = sign[i]
-                if kind[i] == REV:
-                    for k in range(nb):
-                        t = k0 + k
-                        q = (si * o_wtilde[i, 0, d, t] + 0.0 * o_wtilde[i, 1, d, t]
-                             + 0.0 * o_wtilde[i, 2, d, t])
-                        Q[i, k] = q
-                        o_Q[i, d, t] = q
-                else:
-                    for k in range(nb):
-                        t = k0 + k
-                        q = (0.0 * o_wtilde[i, 0, d, t] + (si * e[i, 0, d, t]) * o_wtilde[i, 1, d, t]
-                             + (si * e[i, 1, d, t]) * o_wtilde[i, 2, d, t])
-                        Q[i, k] = q
-                        o_Q[i, d, t] = q
-            # J_dep^T lam = Q_dep by Gaussian elimination with partial pivoting; NaN where the
-            # smallest pivot / largest |entry| (a NaN entry: NaN) is not above SINGULAR_PIVOT
-            if m > 0:
-                for a in range(m):
-                    col = dep[a] - 1
-                    for b in range(m):
-                        for k in range(nb):
-                            A[a, b, k] = J[b, col, d, k0 + k]
-                    for k in range(nb):
-                        A[a, m, k] = Q[dep[a], k]
-                eliminate(A, m, nb, lam, piv, SINGULAR_PIVOT)
-                for k in range(nb):
-                    o_pivot[d, k0 + k] = piv[k]
-                    for a in range(m):
-                        o_lam[a, d, k0 + k] = lam[a, k]
-            else:
-                for k in range(nb):
-                    o_pivot[d, k0 + k] = 1.0
-            # tau = Q_drv - J_drv^T lam
-            for jd in range(n_drv):
-                i = drv[jd]
-                for k in range(nb):
-                    acc = 0.0
-                    for a in range(n_rows):
-                        acc += J[a, i - 1, d, k0 + k] * lam[a, k]
-                    tau[jd, k] = Q[i, k] - acc
-                    o_tau[jd, d, k0 + k] = tau[jd, k]
-            # cut wrenches S^T lam at the cut point: + on body b, - on body a, about O_b, O_a;
-            # revolute [0, lam], prismatic [lam_0, lam_1 perp(e_a)]
-            for i in range(n):
-                for k in range(nb):
-                    wc[i, 0, k], wc[i, 1, k], wc[i, 2, k] = 0.0, 0.0, 0.0
-            for cc in range(n_cut):
-                a, b, jc = cut_a[cc], cut_b[cc], cut_joint[cc]
-                px, py = cut_pb[dp, cc, 0], cut_pb[dp, cc, 1]
-                ux, uy = cut_axis[dp, cc, 0], cut_axis[dp, cc, 1]
-                prismatic = cut_kind[cc] == PRI
-                for k in range(nb):
-                    t = k0 + k
-                    cb, sb = c[b, d, t], s[b, d, t]
-                    rpx = r[b, 0, d, t] + (cb * px - sb * py)
-                    rpy = r[b, 1, d, t] + (sb * px + cb * py)
-                    l0, l1 = lam[2 * cc, k], lam[2 * cc + 1, k]
-                    if prismatic:
-                        ca, sa = c[a, d, t], s[a, d, t]
-                        ex = ca * ux - sa * uy
-                        ey = sa * ux + ca * uy
-                        o0, o1, o2 = l0, l1 * (-ey), l1 * ex
-                    else:
-                        o0, o1, o2 = 0.0, l0, l1
-                    ax = rpx - r[b, 0, d, t]
-                    ay = rpy - r[b, 1, d, t]
-                    wc[b, 0, k] = wc[b, 0, k] + ((ax * o2 - ay * o1) + o0)
-                    wc[b, 1, k] = wc[b, 1, k] + o1
-                    wc[b, 2, k] = wc[b, 2, k] + o2
-                    ax = rpx - r[a, 0, d, t]
-                    ay = rpy - r[a, 1, d, t]
-                    wc[a, 0, k] = wc[a, 0, k] - ((ax * o2 - ay * o1) + o0)
-                    wc[a, 1, k] = wc[a, 1, k] - o1
-                    wc[a, 2, k] = wc[a, 2, k] - o2
-                    o_on[jc, 0, d, t], o_on[jc, 1, d, t], o_on[jc, 2, d, t] = o0, o1, o2
-            # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i
-            for i in range(n):
-                for k in range(nb):
-                    t = k0 + k
-                    o_tree[i, 0, d, t] = o_wstar[i, 0, d, t] - wc[i, 0, k]
-                    o_tree[i, 1, d, t] = o_wstar[i, 1, d, t] - wc[i, 1, k]
-                    o_tree[i, 2, d, t] = o_wstar[i, 2, d, t] - wc[i, 2, k]
-            _composite(parent, r, d, k0, nb, o_tree)
-            # tree joints: R_i - tau p_i on the child; sign > 0 as is, sign < 0 the opposite
-            # about the parent's joint point: A(r_i - r_Pb)^T (-w)
-            for i in range(1, n):
-                si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
-                revolute = kind[i] == REV
-                px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
-                for k in range(nb):
-                    t = k0 + k
-                    o0, o1, o2 = o_tree[i, 0, d, t], o_tree[i, 1, d, t], o_tree[i, 2, d, t]
-                    if dr >= 0:
-                        tq = tau[dr, k]
-                        if revolute:
-                            o0, o1, o2 = o0 - tq * si, o1 - tq * 0.0, o2 - tq * 0.0
-                        else:
-                            o0 = o0 - tq * 0.0
-                            o1 = o1 - tq * (si * e[i, 0, d, t])
-                            o2 = o2 - tq * (si * e[i, 1, d, t])
-                    if si > 0:
-                        o_on[jt, 0, d, t], o_on[jt, 1, d, t], o_on[jt, 2, d, t] = o0, o1, o2
-                    else:
-                        cp, sp = c[p, d, t], s[p, d, t]
-                        ax = r[i, 0, d, t] - (r[p, 0, d, t] + (cp * px - sp * py))
-                        ay = r[i, 1, d, t] - (r[p, 1, d, t] + (sp * px + cp * py))
-                        o_on[jt, 0, d, t] = (ax * (-o2) - ay * (-o1)) + (-o0)
-                        o_on[jt, 1, d, t] = -o1
-                        o_on[jt, 2, d, t] = -o2
+            _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q)
+            _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot)
+            _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s,
+                          r, lam, wc, o_on)
+            _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
+                            c, s, r, e, tau, wc, o_wstar, o_tree, o_on)
 
 
 def _plain(x) -> np.ndarray:

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ..compiled import PRI, REV, SLIDE, SPLIT, SWING, Packed, eliminate, inline, njit
+from ..compiled import CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, eliminate, inline, njit
 
 BLOCK = 512          # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
@@ -150,18 +150,17 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
         a, b = cuts[cut, CUT_A], cuts[cut, CUT_B]
         pax_, pay_, pbx_, pby_ = cgeo[d, cut, 0], cgeo[d, cut, 1], cgeo[d, cut, 2], cgeo[d, cut, 3]
         uax, uay, ca, sa = cgeo[d, cut, 4], cgeo[d, cut, 5], math.cos(cgeo[d, cut, 6]), math.sin(cgeo[d, cut, 6])
-        mov = b if on_b else a
+        # the cut's body on the side of both unknown joints (chain, slide), and the other
+        mov, fix = (b, a) if on_b else (a, b)
         lmx, lmy = (pbx_, pby_) if on_b else (pax_, pay_)
+        lfx, lfy = (pax_, pay_) if on_b else (pbx_, pby_)
         for k in range(nb):
             t = k0 + k
             x1x, x1y, x2x, x2y = r[ju, 0, d, t], r[ju, 1, d, t], r[jl, 0, d, t], r[jl, 1, d, t]
-            pax = r[a, 0, d, t] + c[a, d, t] * pax_ - s[a, d, t] * pay_
-            pay = r[a, 1, d, t] + s[a, d, t] * pax_ + c[a, d, t] * pay_
-            pbx = r[b, 0, d, t] + c[b, d, t] * pbx_ - s[b, d, t] * pby_
-            pby = r[b, 1, d, t] + s[b, d, t] * pbx_ + c[b, d, t] * pby_
+            pax, pay, pbx, pby, _, _ = _cut_points(cuts, cgeo, cut, d, t, c, s, r)
             if shape == SLIDE:
                 # the moving body ends at a known angle: the total turn (cd, sd) of both joints
-                fix, sgn = (a, 1.0) if on_b else (b, -1.0)
+                sgn = 1.0 if on_b else -1.0
                 pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
                 ct = c[fix, d, t] * ca - sgn * s[fix, d, t] * sa
                 st = s[fix, d, t] * ca + sgn * c[fix, d, t] * sa
@@ -215,17 +214,18 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
                 mx, my = circles(x1x, x1y, math.sqrt((x2x - x1x) ** 2 + (x2y - x1y) ** 2), pfx,
                                  pfy, math.sqrt((pmx - x2x) ** 2 + (pmy - x2y) ** 2), side)
                 ang1, c1, s1 = turn(x2x - x1x, x2y - x1y, mx - x1x, my - x1y)
-                low[3, k], low[4, k] = mx, my        # the lower turn follows the upper one
-                low[0, k], low[1, k] = pfx, pfy      # (kept here until then)
+                low[3, k], low[4, k] = mx, my   # the lower turn, about m, follows the upper
             up[0, k], up[1, k], up[2, k], up[3, k], up[4, k] = ang1, c1, s1, x1x, x1y
         _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
-        if shape != SPLIT and shape != SWING and shape != SLIDE:
+        if shape == CHAIN:
             # chain: the moving cut point, carried by the upper turn, onto the fixed one
             for k in range(nb):
                 t = k0 + k
-                mx, my, pfx, pfy = low[3, k], low[4, k], low[0, k], low[1, k]
+                mx, my = low[3, k], low[4, k]
                 pmx = r[mov, 0, d, t] + c[mov, d, t] * lmx - s[mov, d, t] * lmy
                 pmy = r[mov, 1, d, t] + s[mov, d, t] * lmx + c[mov, d, t] * lmy
+                pfx = r[fix, 0, d, t] + c[fix, d, t] * lfx - s[fix, d, t] * lfy
+                pfy = r[fix, 1, d, t] + s[fix, d, t] * lfx + c[fix, d, t] * lfy
                 low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
         _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
