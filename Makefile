@@ -30,6 +30,7 @@ test: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/bench_hoeken.py
+	$(BIN)/python benchmarks/bench_kernels.py
 
 accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py

@@ -1,0 +1,118 @@
+"""Where the compiled backend's time goes, on the bundled Hoeken four-bar, one core.
+
+Prints, in ns per sample:
+  1. the kinematics kernel and the dynamics kernel alone, writing into outputs already touched
+     (each kernel re-run on the arguments of a real ``linkdyn.analyze`` call);
+  2. each step of the kinematics kernel, called block by block from Python (each figure
+     includes a few ns of call overhead per sample);
+and the speed of filling fresh memory against memory already touched, which is what separates
+the kernels' own time from the end-to-end throughput of ``make bench``.
+
+Usage: python benchmarks/bench_kernels.py [--samples N]   (needs numba: pip install 'linkdyn[fast]')
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import linkdyn  # noqa: E402
+from linkdyn.dynamics import compiled as dc  # noqa: E402
+from linkdyn.kinematics import compiled as kc  # noqa: E402
+
+
+def best_time(fn, repeat=5):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def kernel_arguments(mech, t):
+    """The arguments ``linkdyn.analyze`` passes to the two kernels (outputs included)."""
+    seen = {}
+    kin_kernel, dyn_kernel = kc.kernel, dc._kernel
+
+    def spy(name, fn):
+        def call(*args):
+            seen[name] = args
+            return fn(*args)
+        return call
+    kc.kernel, dc._kernel = spy("kin", kin_kernel), spy("dyn", dyn_kernel)
+    try:
+        linkdyn.analyze(mech, t, backend="compiled")
+    finally:
+        kc.kernel, dc._kernel = kin_kernel, dyn_kernel
+    return kin_kernel, seen["kin"], dyn_kernel, seen["dyn"]
+
+
+def steps(args):
+    """The kinematics kernel's steps, each a function of a block ``(k0, nb)``."""
+    (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
+     modes, q_in, q_drv, qd_drv, qdd_drv, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot,
+     err, block) = args
+    n, nc, nd = len(tree), len(cuts), len(dep)
+    cq, sq = np.ones((n, block)), np.zeros((n, block))   # cos, sin of s q: any angle will do
+    up, low, rhs = np.zeros((5, block)), np.zeros((5, block)), np.zeros((2 * nc, block))
+    A, sol, col = np.zeros((nd, nd + 1, block)), np.zeros((max(nd, 1), block)), np.zeros(block)
+    closed = [x.copy() for x in (q, phi, c, s, r, e)]   # the close step turns a copy
+    return {
+        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, k0, nb, q, cq, sq, phi, c, s, r, e),
+        "close the dyads": lambda k0, nb: kc._close(dyads, anc, tree, cuts, cgeo, modes, 0, k0, nb,
+                                                    *closed, up, low),
+        "closure residual": lambda k0, nb: kc._residual(cuts, cgeo, size, 0, k0, nb, phi, c, s, r,
+                                                        err),
+        "closure Jacobian": lambda k0, nb: kc._jacobian(tree, side, cuts, cgeo, 0, k0, nb, c, s, r,
+                                                        e, J),
+        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(dep, J, 0, k0, nb, rhs, qd,
+                                                                         A, sol, col),
+        "twists": lambda k0, nb: kc._twists(tree, 0, k0, nb, r, e, qd, tw),
+        "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(tree, 0, k0, nb, r, e,
+                                                                              tw, qd, qdd, td),
+        "closure bias": lambda k0, nb: kc._bias(cuts, cgeo, 0, k0, nb, c, s, r, tw, td, rhs),
+        "cut-joint motion": lambda k0, nb: kc._cut_motion(cuts, cgeo, 0, k0, nb, phi, c, s, r, tw,
+                                                          td, cut),
+    }, block
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--samples", type=int, default=300_000)
+    args = ap.parse_args()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    T = args.samples
+    t = np.linspace(0.0, mech.drivers[0].period, T)
+    linkdyn.analyze(mech, t[:1000], backend="compiled")   # compile once
+    kin_kernel, kin_args, dyn_kernel, dyn_args = kernel_arguments(mech, t)
+    print(f"Hoeken four-bar, {T} samples, one core, best of 5, outputs already touched")
+    print(f"kinematics kernel  {best_time(lambda: kin_kernel(*kin_args)) / T * 1e9:7.1f} ns/sample")
+    print(f"dynamics kernel    {best_time(lambda: dyn_kernel(*dyn_args)) / T * 1e9:7.1f} ns/sample")
+    print("kinematics kernel, step by step:")
+    table, block = steps(kin_args)
+    for name, fn in table.items():
+        fn(0, block)
+        per = best_time(lambda: [fn(k0, min(block, T - k0)) for k0 in range(0, T, block)], 3)
+        print(f"  {name:38s} {per / T * 1e9:7.1f} ns/sample")
+    # first writes to fresh memory against writes to memory already touched
+    size = 10_000_000
+    touched = np.empty(size)
+    touched.fill(0.0)
+    warm = best_time(lambda: touched.fill(1.0), 3)
+    fresh = best_time(lambda: np.empty(size).fill(1.0), 3)
+    print(f"filling memory: fresh {touched.nbytes / fresh / 1e9:.1f} GB/s, "
+          f"already touched {touched.nbytes / warm / 1e9:.1f} GB/s")
+
+
+if __name__ == "__main__":
+    main()
