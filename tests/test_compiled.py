@@ -198,3 +198,40 @@ def test_backend_choice(monkeypatch):
         compiled.use_compiled("fast")
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     assert linkdyn.analyze(model, np.linspace(0, 1, 5)).kin.arrays is not None
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4, 6])
+def test_factor_once_solve_twice_matches_solve_small(m):
+    """The kinematics kernel factors J_dep once and solves for the rates and then the
+    accelerations: each solve equals planar.solve_small on the same system (values, relative
+    pivot, NaN where singular), and equals a fresh elimination of that system bit for bit."""
+    rng = np.random.default_rng(m)
+    nb = 40
+    K = rng.normal(size=(m, m, nb)) * 10.0 ** rng.integers(-3, 4, size=(1, 1, nb))
+    K[:, :, 0] = np.tril(K[:, :, 0], -1) + np.eye(m)[::-1]   # every column needs a row swap
+    K[:, 0, 1] = 0.0                        # exactly singular
+    K[:, -1, 2] = K[:, 0, 2]                # two equal columns (m > 1) or zero-free (m = 1)
+    K[:, 0, 3] *= 1e-15                     # relative pivot below the threshold
+    K[:, 0, 4] *= 1e-9                      # small, but above it
+    K[0, -1, 5] = np.nan
+    b1, b2 = rng.normal(size=(m, nb)), rng.normal(size=(m, nb))
+    A, perm, rel = K.copy(), np.zeros((m, nb), np.int64), np.zeros(nb)
+    compiled.factor(A, m, nb, perm, rel)
+    for b in (b1, b2):
+        x = np.zeros((m, nb))
+        compiled.substitute(A, perm, rel, m, nb, b, x, kc.PIVOT_TOL)
+        ref, ref_rel = linkdyn.planar.solve_small(K, b)
+        np.testing.assert_array_equal(np.isnan(x), np.isnan(ref))
+        np.testing.assert_array_equal(np.isnan(rel), np.isnan(ref_rel))
+        ok = np.isfinite(ref)
+        assert np.allclose(x[ok], ref[ok], rtol=1e-12, atol=0)
+        assert np.allclose(rel[np.isfinite(ref_rel)], ref_rel[np.isfinite(ref_rel)],
+                           rtol=1e-14, atol=0)
+        aug = np.concatenate([K, b[:, None]], axis=1)
+        fresh, fresh_rel = np.zeros((m, nb)), np.zeros(nb)
+        compiled.eliminate(aug, m, nb, fresh, fresh_rel, kc.PIVOT_TOL)
+        np.testing.assert_array_equal(x, fresh)
+        np.testing.assert_array_equal(rel, fresh_rel)
+    assert np.all(np.isnan(x[:, [1, 5]]))
+    assert m == 1 or np.all(np.isnan(x[:, [2, 3]]))   # a 1 x 1 pivot is its own scale
+    assert np.all(np.isfinite(x[:, [0, 4]]))

@@ -164,45 +164,62 @@ def pack(lay, n_joints: int) -> Packed:
 
 
 @njit
-def eliminate(A, m, nb, x, rel, tol):
-    """Solve the m x m systems of a block of samples at once.
+def factor(A, m, nb, perm, rel):
+    """LU-factor the m x m matrices of a block of samples in place: ``P K = L U``.
 
-    ``A`` (m, m + 1, block): for each sample k < ``nb`` the augmented matrix ``[K | b]``,
-    overwritten. Gaussian elimination with partial pivoting under the rules of
-    :func:`linkdyn.planar.solve_small`: a row swaps up where its entry is strictly larger; the
-    relative pivot ``rel`` (block,) is the smallest pivot over the largest ``|K_ij|`` (NaN if
-    ``K`` holds a NaN); ``x`` (m, block) is NaN where ``rel`` is not above ``tol``.
+    ``A`` (m, >= m, block): ``K`` in the first m columns for each sample k < ``nb``; on return
+    U on and above the diagonal and the multipliers of L below it. Partial pivoting under the
+    rules of :func:`linkdyn.planar.solve_small`: a row swaps up where its entry is strictly
+    larger; ``perm`` (m, block) records the row order. ``rel`` (block,): the smallest pivot
+    over the largest ``|K_ij|`` (NaN if ``K`` holds a NaN).
     """
+    scale = np.empty(nb)
     for k in range(nb):
-        scale, finite = 0.0, True
+        top, finite = 0.0, True
         for i in range(m):
+            perm[i, k] = i
             for j in range(m):
-                scale = max(scale, abs(A[i, j, k]))
+                top = max(top, abs(A[i, j, k]))
                 finite = finite and A[i, j, k] == A[i, j, k]
+        scale[k] = top if top > 0 else 1.0
         rel[k] = math.inf if finite else math.nan
-        x[0, k] = scale   # kept here until the pivots are known
     for p in range(m):
-        # partial pivoting, then eliminate column p below the pivot
+        # partial pivoting: rows swap whole, with the multipliers already stored in them
         for i in range(p + 1, m):
             for k in range(nb):
                 if abs(A[i, p, k]) > abs(A[p, p, k]):
-                    for j in range(m + 1):
+                    for j in range(m):
                         A[p, j, k], A[i, j, k] = A[i, j, k], A[p, j, k]
+                    perm[p, k], perm[i, k] = perm[i, k], perm[p, k]
         for k in range(nb):   # the smallest pivot; a NaN pivot makes it NaN
             a = abs(A[p, p, k])
             rel[k] = a if a != a or a < rel[k] else rel[k]
+        # eliminate column p below the pivot: row_i -= l_ip row_p, l_ip kept in its place
         for i in range(p + 1, m):
             for k in range(nb):
                 f = A[i, p, k] * (1.0 / A[p, p, k])
-                for j in range(p + 1, m + 1):
+                A[i, p, k] = f
+                for j in range(p + 1, m):
                     A[i, j, k] -= f * A[p, j, k]
     for k in range(nb):
-        scale = x[0, k]
-        rel[k] = rel[k] / (scale if scale > 0 else 1.0)
-    # back substitution, blanked where singular
-    for p in range(m - 1, -1, -1):
+        rel[k] /= scale[k]
+
+
+@njit
+def substitute(A, perm, rel, m, nb, b, x, tol):
+    """Solve ``K x = b`` for a block of samples from :func:`factor`'s ``A``, ``perm``, ``rel``:
+    ``L y = P b``, then ``U x = y``. ``b``, ``x`` (m, block); ``x`` is NaN where ``rel`` is
+    not above ``tol``."""
+    for i in range(m):
         for k in range(nb):
-            acc = A[p, m, k]
+            x[i, k] = b[perm[i, k], k]
+    for p in range(m):   # y_i -= l_ip y_p
+        for i in range(p + 1, m):
+            for k in range(nb):
+                x[i, k] -= A[i, p, k] * x[p, k]
+    for p in range(m - 1, -1, -1):   # x_p = (y_p - sum_j u_pj x_j) / u_pp
+        for k in range(nb):
+            acc = x[p, k]
             for j in range(p + 1, m):
                 acc -= A[p, j, k] * x[j, k]
             x[p, k] = acc / A[p, p, k]
@@ -210,3 +227,13 @@ def eliminate(A, m, nb, x, rel, tol):
         if not rel[k] > tol:
             for p in range(m):
                 x[p, k] = math.nan
+
+
+@njit
+def eliminate(A, m, nb, x, rel, tol):
+    """Solve the m x m systems of a block of samples at once: ``A`` (m, m + 1, block) holds
+    the augmented matrices ``[K | b]`` (overwritten); ``x`` (m, block) and the relative pivot
+    ``rel`` (block,) as in :func:`factor` and :func:`substitute`."""
+    perm = np.empty((m, nb), np.int64)
+    factor(A, m, nb, perm, rel)
+    substitute(A, perm, rel, m, nb, A[:, m, :], x, tol)

@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ..compiled import CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, eliminate, inline, njit
+from ..compiled import CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, factor, inline, njit, substitute
 
 BLOCK = 512          # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
@@ -247,7 +247,23 @@ def _cut_points(cuts, cgeo, ci, d, t, c, s, r):
 
 
 @njit
-def _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err):
+def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
+    """Every cut's points and axis (:func:`_cut_points`) once the loops are closed, for the
+    steps that follow: ``P`` (n_cut, 6, block) rows ``[pa (2), pb (2), e (2)]``."""
+    for ci in range(len(cuts)):
+        for k in range(nb):
+            (P[ci, 0, k], P[ci, 1, k], P[ci, 2, k], P[ci, 3, k], P[ci, 4, k],
+             P[ci, 5, k]) = _cut_points(cuts, cgeo, ci, d, k0 + k, c, s, r)
+
+
+@inline
+def _frame(P, ci, k):
+    """Cut ci's points and axis, sample k of the block (:func:`_cut_frames`)."""
+    return P[ci, 0, k], P[ci, 1, k], P[ci, 2, k], P[ci, 3, k], P[ci, 4, k], P[ci, 5, k]
+
+
+@njit
+def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
     """Loop-closure residual relative to ``size``, max over the cut rows (positions._scaled)."""
     for k in range(nb):
         err[d, k0 + k] = 0.0
@@ -255,7 +271,7 @@ def _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err):
         a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
         for k in range(nb):
             t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
             dx, dy = pbx - pax, pby - pay
             if revolute:   # r_Pb - r_Pa
                 g0, g1 = dx / size[d], dy / size[d]
@@ -269,7 +285,7 @@ def _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err):
 
 
 @njit
-def _jacobian(tree, side, cuts, cgeo, d, k0, nb, c, s, r, e, J):
+def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
     """Loop-closure Jacobian J (2 n_cut, n - 1): column k of cut c is
     ``side * S_c A(r_Pb - r_k) p_k`` (eqs. 20-24)."""
     for ci in range(len(cuts)):
@@ -278,7 +294,7 @@ def _jacobian(tree, side, cuts, cgeo, d, k0, nb, c, s, r, e, J):
             f = side[ci, j] * tree[j, SIGN]
             for k in range(nb):
                 t = k0 + k
-                pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+                _, _, pbx, pby, eax, eay = _frame(P, ci, k)
                 if tree[j, KIND] == REV:   # A(a) [s, 0, 0]
                     w, vx, vy = f, -f * (pby - r[j, 1, d, t]), f * (pbx - r[j, 0, d, t])
                 else:                      # A(a) [0, s e]
@@ -334,14 +350,14 @@ def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
 
 
 @njit
-def _bias(cuts, cgeo, d, k0, nb, c, s, r, tw, td, bias):
+def _bias(cuts, d, k0, nb, r, tw, td, P, bias):
     """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td`` (recursion.closure_bias);
     ``bias`` (2 n_cut, block)."""
     for ci in range(len(cuts)):
         a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
         for k in range(nb):
             t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
             # both bodies' motion taken at the cut point, which moves with body b
             wa, wb = tw[a, 0, d, t], tw[b, 0, d, t]
             vbx = tw[b, 1, d, t] - wb * (pby - r[b, 1, d, t])
@@ -362,24 +378,29 @@ def _bias(cuts, cgeo, d, k0, nb, c, s, r, tw, td, bias):
 
 
 @njit
-def _solve_dep(dep, J, d, k0, nb, rhs, x, A, sol, col):
-    """``J_dep x_dep = rhs`` (``rhs`` (2 n_cut, block)) for the samples of a block, into
-    ``x[dep]``; the relative pivots into ``col`` (block,). ``A``, ``sol``: scratch."""
+def _factor_dep(dep, J, d, k0, nb, A, perm, col):
+    """LU-factor ``J_dep`` for the samples of a block into ``A`` (n_dep, n_dep, block) and
+    ``perm``; the relative pivots into ``col`` (block,)."""
     nd = len(dep)
     for i in range(nd):
         for m in range(nd):
             for k in range(nb):
                 A[i, m, k] = J[i, dep[m] - 1, d, k0 + k]
-        for k in range(nb):
-            A[i, nd, k] = rhs[i, k]
-    eliminate(A, nd, nb, sol, col, PIVOT_TOL)
-    for m in range(nd):
+    factor(A, nd, nb, perm, col)
+
+
+@njit
+def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
+    """``J_dep x_dep = rhs`` (``rhs`` (2 n_cut, block)) from :func:`_factor_dep`, into
+    ``x[dep]``; ``sol`` scratch."""
+    substitute(A, perm, col, len(dep), nb, rhs, sol, PIVOT_TOL)
+    for m in range(len(dep)):
         for k in range(nb):
             x[dep[m], d, k0 + k] = sol[m, k]
 
 
 @njit
-def _cut_motion(cuts, cgeo, d, k0, nb, phi, c, s, r, tw, td, out):
+def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
     """Coordinate, rate and acceleration of every cut joint (joints.joint_motion): revolute
     ``phi_b - phi_a``; slider ``s = d . e`` and its rates. ``out`` (n_cut, 3, D, T)."""
     for ci in range(len(cuts)):
@@ -393,7 +414,7 @@ def _cut_motion(cuts, cgeo, d, k0, nb, phi, c, s, r, tw, td, out):
             continue
         for k in range(nb):
             t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _cut_points(cuts, cgeo, ci, d, t, c, s, r)
+            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
             # d, d', d'': the second body's cut point seen from the first's (body points)
             wa, wb, ala, alb = tw[a, 0, d, t], tw[b, 0, d, t], td[a, 0, d, t], td[b, 0, d, t]
             oax, oay, obx, oby = pax - r[a, 0, d, t], pay - r[a, 1, d, t], pbx - r[b, 0, d, t], pby - r[b, 1, d, t]
@@ -433,7 +454,9 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
     B = block
     cq, sq = np.ones((n, B)), np.zeros((n, B))
     up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((2 * nc, B))
-    A, sol, col = np.zeros((nd, nd + 1, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
+    P = np.zeros((nc, 6, B))
+    A, sol, col = np.zeros((nd, nd, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
+    perm = np.zeros((nd, B), np.int64)
     for d in range(D):
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
@@ -460,8 +483,9 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             if from_nodes:
                 _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low)
-            _residual(cuts, cgeo, size, d, k0, nb, phi, c, s, r, err)
-            _jacobian(tree, side, cuts, cgeo, d, k0, nb, c, s, r, e, J)
+            _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P)
+            _residual(cuts, cgeo, size, d, k0, nb, phi, P, err)
+            _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
             for k in range(nb):
                 t = k0 + k
@@ -474,21 +498,22 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
                     for j in range(nv):
                         acc += J[row, drv[j] - 1, d, t] * qd_drv[j, t]
                     rhs[row, k] = -acc
-            if nd:
-                _solve_dep(dep, J, d, k0, nb, rhs, qd, A, sol, col)
+            if nd:   # J_dep, factored once for the rates and the accelerations
+                _factor_dep(dep, J, d, k0, nb, A, perm, col)
+                _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qd, sol)
             for k in range(nb):
                 pivot[d, k0 + k] = col[k] if nd else 1.0
             _twists(tree, d, k0, nb, r, e, qd, tw)
             # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
             _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
             if nd:
-                _bias(cuts, cgeo, d, k0, nb, c, s, r, tw, td, rhs)
+                _bias(cuts, d, k0, nb, r, tw, td, P, rhs)
                 for row in range(nd):
                     for k in range(nb):
                         rhs[row, k] = -rhs[row, k]
-                _solve_dep(dep, J, d, k0, nb, rhs, qdd, A, sol, col)
+                _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qdd, sol)
                 _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
-            _cut_motion(cuts, cgeo, d, k0, nb, phi, c, s, r, tw, td, cut)
+            _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, cut)
 
 
 def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
