@@ -10,15 +10,17 @@ The kernel takes the samples a block at a time (:data:`BLOCK`): every step walks
 for each body, the samples of the block. A sample sees exactly the scalar operations of the
 one-sample recursion, but the independent samples keep the processor busy and every array is
 read and written in contiguous runs (one sample at a time through all bodies, the component-
-first arrays were ~2.5x slower). The numpy solvers stay the reference; the tests hold the two to
-agree to rounding, NaN at the same samples.
+first arrays were ~2.5x slower). Each step takes a body's rows over the block as 1-D views
+(:func:`_vector`, :func:`_screw`) before its sample loop: numba then indexes them without the
+multi-dimensional address and wrap-around arithmetic of every access (~25 % faster). The numpy
+solvers stay the reference; the tests hold the two to agree to rounding, NaN at the same samples.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..compiled import PRI, REV, Packed, eliminate, njit
+from ..compiled import PRI, REV, Packed, eliminate, inline, njit
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
@@ -31,21 +33,37 @@ SINGULAR_PIVOT = 1e-13
 BLOCK = 1024
 
 
+@inline
+def _vector(x, i, d, ks):
+    """Body i's planar vector of ``x`` (n, 2, D, T) over the samples ``ks`` of design d: its
+    components x, y as 1-D views."""
+    return x[i, 0, d, ks], x[i, 1, d, ks]
+
+
+@inline
+def _screw(x, i, d, ks):
+    """Body i's twist or wrench of ``x`` (n, 3, D, T) over the samples ``ks`` of design d: its
+    components [w, vx, vy] or [M, Fx, Fy] as 1-D views."""
+    return x[i, 0, d, ks], x[i, 1, d, ks], x[i, 2, d, ks]
+
+
 @njit
 def _composite(parent, r, d, k0, nb, w):
     """The backward recursion ``w_p += A(r_i - r_p)^T w_i``, leaves first, in place on the
     wrenches ``w`` (n, 3, D, T) of a block (denoc.composite): the moment gains
     ``a_x f_y - a_y f_x``."""
+    ks = slice(k0, k0 + nb)   # the block's samples
     for i in range(len(parent) - 1, 0, -1):
         p = parent[i]
+        r_i, r_p = _vector(r, i, d, ks), _vector(r, p, d, ks)
+        w_i, w_p = _screw(w, i, d, ks), _screw(w, p, d, ks)
         for k in range(nb):
-            t = k0 + k
-            ax = r[i, 0, d, t] - r[p, 0, d, t]
-            ay = r[i, 1, d, t] - r[p, 1, d, t]
-            n0, f0, f1 = w[i, 0, d, t], w[i, 1, d, t], w[i, 2, d, t]
-            w[p, 0, d, t] = w[p, 0, d, t] + ((ax * f1 - ay * f0) + n0)
-            w[p, 1, d, t] = w[p, 1, d, t] + f0
-            w[p, 2, d, t] = w[p, 2, d, t] + f1
+            ax = r_i[0][k] - r_p[0][k]
+            ay = r_i[1][k] - r_p[1][k]
+            n0, f0, f1 = w_i[0][k], w_i[1][k], w_i[2][k]
+            w_p[0][k] = w_p[0][k] + ((ax * f1 - ay * f0) + n0)
+            w_p[1][k] = w_p[1][k] + f0
+            w_p[2][k] = w_p[2][k] + f1
 
 
 @njit
@@ -54,93 +72,92 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o
     """Uncoupled Newton–Euler wrenches ``w_star`` of a block (denoc.newton_euler), copied into
     ``w_tilde`` to start its recursion, and the kinetic energy."""
     n = len(mass[dp])
+    ks = slice(k0, k0 + nb)   # the block's samples
+    ke[:nb] = 0.0
+    o_wstar[0, :, d, ks] = 0.0
+    o_wtilde[0, :, d, ks] = 0.0
     # Newton–Euler about O_i, d = R(phi) com:  n = I_O al + m d x a,
     # f = m (a + al perp(d) - w^2 d), minus w_ext;  KE = 1/2 m |v + w perp(d)|^2 + 1/2 I w^2
-    for k in range(nb):
-        t = k0 + k
-        ke[k] = 0.0
-        o_wstar[0, 0, d, t], o_wstar[0, 1, d, t], o_wstar[0, 2, d, t] = 0.0, 0.0, 0.0
-        o_wtilde[0, 0, d, t], o_wtilde[0, 1, d, t], o_wtilde[0, 2, d, t] = 0.0, 0.0, 0.0
     for i in range(1, n):
         mi, ii = mass[dp, i], inertia[dp, i]
         cx, cy = com[dp, i, 0], com[dp, i, 1]
+        c_i, s_i = c[i, d, ks], s[i, d, ks]
+        tw_i, twd_i = _screw(tw, i, d, ks), _screw(twd, i, d, ks)
+        w_ext_i = _screw(w_ext, i, d, ks)
+        wstar_i, wtilde_i = _screw(o_wstar, i, d, ks), _screw(o_wtilde, i, d, ks)
         for k in range(nb):
-            t = k0 + k
-            ci, si = c[i, d, t], s[i, d, t]
+            ci, si = c_i[k], s_i[k]
             dx = ci * cx - si * cy
             dy = si * cx + ci * cy
-            w, vx, vy = tw[i, 0, d, t], tw[i, 1, d, t], tw[i, 2, d, t]
-            al, ax, ay = twd[i, 0, d, t], twd[i, 1, d, t], twd[i, 2, d, t]
+            w, vx, vy = tw_i[0][k], tw_i[1][k], tw_i[2][k]
+            al, ax, ay = twd_i[0][k], twd_i[1][k], twd_i[2][k]
             i_o = ii + mi * (dx * dx + dy * dy)
             w2 = w * w
-            n0 = (i_o * al + mi * (dx * ay - dy * ax)) - w_ext[i, 0, d, t]
-            f0 = mi * (ax + al * (-dy) - w2 * dx) - w_ext[i, 1, d, t]
-            f1 = mi * (ay + al * dx - w2 * dy) - w_ext[i, 2, d, t]
-            o_wstar[i, 0, d, t], o_wstar[i, 1, d, t], o_wstar[i, 2, d, t] = n0, f0, f1
-            o_wtilde[i, 0, d, t], o_wtilde[i, 1, d, t], o_wtilde[i, 2, d, t] = n0, f0, f1
+            n0 = (i_o * al + mi * (dx * ay - dy * ax)) - w_ext_i[0][k]
+            f0 = mi * (ax + al * (-dy) - w2 * dx) - w_ext_i[1][k]
+            f1 = mi * (ay + al * dx - w2 * dy) - w_ext_i[2][k]
+            wstar_i[0][k], wstar_i[1][k], wstar_i[2][k] = n0, f0, f1
+            wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k] = n0, f0, f1
             vcx = vx + w * (-dy)
             vcy = vy + w * dx
             ke[k] += 0.5 * mi * (vcx * vcx + vcy * vcy) + 0.5 * ii * w2
-    for k in range(nb):
-        o_ke[d, k0 + k] = ke[k]
+    o_ke[d, ks] = ke[:nb]
 
 
 @njit
 def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
     """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q``. The
     zero entries of ``p_i`` are multiplied too, so a NaN spreads as in numpy's dot product."""
-    for k in range(nb):
-        o_Q[0, d, k0 + k] = 0.0
+    ks = slice(k0, k0 + nb)   # the block's samples
+    o_Q[0, d, ks] = 0.0
     # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
         si = sign[i]
+        wtilde_i, e_i = _screw(o_wtilde, i, d, ks), _vector(e, i, d, ks)
+        Q_i, o_Q_i = Q[i, :nb], o_Q[i, d, ks]
         if kind[i] == REV:
             for k in range(nb):
-                t = k0 + k
-                q = (si * o_wtilde[i, 0, d, t] + 0.0 * o_wtilde[i, 1, d, t]
-                     + 0.0 * o_wtilde[i, 2, d, t])
-                Q[i, k] = q
-                o_Q[i, d, t] = q
+                q = si * wtilde_i[0][k] + 0.0 * wtilde_i[1][k] + 0.0 * wtilde_i[2][k]
+                Q_i[k] = q
+                o_Q_i[k] = q
         else:
             for k in range(nb):
-                t = k0 + k
-                q = (0.0 * o_wtilde[i, 0, d, t] + (si * e[i, 0, d, t]) * o_wtilde[i, 1, d, t]
-                     + (si * e[i, 1, d, t]) * o_wtilde[i, 2, d, t])
-                Q[i, k] = q
-                o_Q[i, d, t] = q
+                q = (0.0 * wtilde_i[0][k] + (si * e_i[0][k]) * wtilde_i[1][k]
+                     + (si * e_i[1][k]) * wtilde_i[2][k])
+                Q_i[k] = q
+                o_Q_i[k] = q
 
 
 @njit
 def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot):
     """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27), a block at a time."""
     m, n_rows, n_drv = dep.shape[0], J.shape[0], drv.shape[0]
+    ks = slice(k0, k0 + nb)   # the block's samples
     # J_dep^T lam = Q_dep by Gaussian elimination with partial pivoting; NaN where the
     # smallest pivot / largest |entry| (a NaN entry: NaN) is not above SINGULAR_PIVOT
     if m > 0:
         for a in range(m):
             col = dep[a] - 1
             for b in range(m):
-                for k in range(nb):
-                    A[a, b, k] = J[b, col, d, k0 + k]
-            for k in range(nb):
-                A[a, m, k] = Q[dep[a], k]
+                A[a, b, :nb] = J[b, col, d, ks]
+            A[a, m, :nb] = Q[dep[a], :nb]
         eliminate(A, m, nb, lam, piv, SINGULAR_PIVOT)
-        for k in range(nb):
-            o_pivot[d, k0 + k] = piv[k]
-            for a in range(m):
-                o_lam[a, d, k0 + k] = lam[a, k]
+        o_pivot[d, ks] = piv[:nb]
+        for a in range(m):
+            o_lam[a, d, ks] = lam[a, :nb]
     else:
-        for k in range(nb):
-            o_pivot[d, k0 + k] = 1.0
+        o_pivot[d, ks] = 1.0
     # tau = Q_drv - J_drv^T lam
     for jd in range(n_drv):
         i = drv[jd]
+        J_i, Q_i = J[:, i - 1, d, ks], Q[i, :nb]
+        tau_j, o_tau_j = tau[jd, :nb], o_tau[jd, d, ks]
         for k in range(nb):
             acc = 0.0
             for a in range(n_rows):
-                acc += J[a, i - 1, d, k0 + k] * lam[a, k]
-            tau[jd, k] = Q[i, k] - acc
-            o_tau[jd, d, k0 + k] = tau[jd, k]
+                acc += J_i[a, k] * lam[a, k]
+            tau_j[k] = Q_i[k] - acc
+            o_tau_j[k] = tau_j[k]
 
 
 @njit
@@ -149,40 +166,44 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0
     """Cut-joint wrenches ``S^T lam`` on both bodies about their O (reactions.cut_wrenches) into
     ``wc`` (n, 3, block), and the cut joints' reactions."""
     n_cut = cut_a.shape[0]
+    ks = slice(k0, k0 + nb)   # the block's samples
+    wc[:, :, :nb] = 0.0
     # cut wrenches S^T lam at the cut point: + on body b, - on body a, about O_b, O_a;
     # revolute [0, lam], prismatic [lam_0, lam_1 perp(e_a)]
-    for i in range(wc.shape[0]):
-        for k in range(nb):
-            wc[i, 0, k], wc[i, 1, k], wc[i, 2, k] = 0.0, 0.0, 0.0
     for cc in range(n_cut):
         a, b, jc = cut_a[cc], cut_b[cc], cut_joint[cc]
         px, py = cut_pb[dp, cc, 0], cut_pb[dp, cc, 1]
         ux, uy = cut_axis[dp, cc, 0], cut_axis[dp, cc, 1]
         prismatic = cut_kind[cc] == PRI
+        c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], _vector(r, a, d, ks)
+        c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], _vector(r, b, d, ks)
+        wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
+        wc_b = wc[b, 0, :nb], wc[b, 1, :nb], wc[b, 2, :nb]
+        lam_c = lam[2 * cc, :nb], lam[2 * cc + 1, :nb]
+        on_c = _screw(o_on, jc, d, ks)
         for k in range(nb):
-            t = k0 + k
-            cb, sb = c[b, d, t], s[b, d, t]
-            rpx = r[b, 0, d, t] + (cb * px - sb * py)
-            rpy = r[b, 1, d, t] + (sb * px + cb * py)
-            l0, l1 = lam[2 * cc, k], lam[2 * cc + 1, k]
+            cb, sb = c_b[k], s_b[k]
+            rpx = r_b[0][k] + (cb * px - sb * py)
+            rpy = r_b[1][k] + (sb * px + cb * py)
+            l0, l1 = lam_c[0][k], lam_c[1][k]
             if prismatic:
-                ca, sa = c[a, d, t], s[a, d, t]
+                ca, sa = c_a[k], s_a[k]
                 ex = ca * ux - sa * uy
                 ey = sa * ux + ca * uy
                 o0, o1, o2 = l0, l1 * (-ey), l1 * ex
             else:
                 o0, o1, o2 = 0.0, l0, l1
-            ax = rpx - r[b, 0, d, t]
-            ay = rpy - r[b, 1, d, t]
-            wc[b, 0, k] = wc[b, 0, k] + ((ax * o2 - ay * o1) + o0)
-            wc[b, 1, k] = wc[b, 1, k] + o1
-            wc[b, 2, k] = wc[b, 2, k] + o2
-            ax = rpx - r[a, 0, d, t]
-            ay = rpy - r[a, 1, d, t]
-            wc[a, 0, k] = wc[a, 0, k] - ((ax * o2 - ay * o1) + o0)
-            wc[a, 1, k] = wc[a, 1, k] - o1
-            wc[a, 2, k] = wc[a, 2, k] - o2
-            o_on[jc, 0, d, t], o_on[jc, 1, d, t], o_on[jc, 2, d, t] = o0, o1, o2
+            ax = rpx - r_b[0][k]
+            ay = rpy - r_b[1][k]
+            wc_b[0][k] = wc_b[0][k] + ((ax * o2 - ay * o1) + o0)
+            wc_b[1][k] = wc_b[1][k] + o1
+            wc_b[2][k] = wc_b[2][k] + o2
+            ax = rpx - r_a[0][k]
+            ay = rpy - r_a[1][k]
+            wc_a[0][k] = wc_a[0][k] - ((ax * o2 - ay * o1) + o0)
+            wc_a[1][k] = wc_a[1][k] - o1
+            wc_a[2][k] = wc_a[2][k] - o2
+            on_c[0][k], on_c[1][k], on_c[2][k] = o0, o1, o2
 
 
 @njit
@@ -191,13 +212,15 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
     """``R_i`` by the backward recursion of ``w_star - w_cut`` and the reaction of every tree
     joint from it (reactions.solve)."""
     n = parent.shape[0]
+    ks = slice(k0, k0 + nb)   # the block's samples
     # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i
     for i in range(n):
+        R_i, wstar_i = _screw(o_tree, i, d, ks), _screw(o_wstar, i, d, ks)
+        wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
-            t = k0 + k
-            o_tree[i, 0, d, t] = o_wstar[i, 0, d, t] - wc[i, 0, k]
-            o_tree[i, 1, d, t] = o_wstar[i, 1, d, t] - wc[i, 1, k]
-            o_tree[i, 2, d, t] = o_wstar[i, 2, d, t] - wc[i, 2, k]
+            R_i[0][k] = wstar_i[0][k] - wc_i[0][k]
+            R_i[1][k] = wstar_i[1][k] - wc_i[1][k]
+            R_i[2][k] = wstar_i[2][k] - wc_i[2][k]
     _composite(parent, r, d, k0, nb, o_tree)
     # tree joints: R_i - tau p_i on the child; sign > 0 as is, sign < 0 the opposite
     # about the parent's joint point: A(r_i - r_Pb)^T (-w)
@@ -205,26 +228,28 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
         si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
         revolute = kind[i] == REV
         px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
+        R_i, e_i, on_i = _screw(o_tree, i, d, ks), _vector(e, i, d, ks), _screw(o_on, jt, d, ks)
+        r_i, c_p, s_p, r_p = _vector(r, i, d, ks), c[p, d, ks], s[p, d, ks], _vector(r, p, d, ks)
+        tau_i = tau[dr, :nb]   # body i's driver (unused, the last row, if i is not driven)
         for k in range(nb):
-            t = k0 + k
-            o0, o1, o2 = o_tree[i, 0, d, t], o_tree[i, 1, d, t], o_tree[i, 2, d, t]
+            o0, o1, o2 = R_i[0][k], R_i[1][k], R_i[2][k]
             if dr >= 0:
-                tq = tau[dr, k]
+                tq = tau_i[k]
                 if revolute:
                     o0, o1, o2 = o0 - tq * si, o1 - tq * 0.0, o2 - tq * 0.0
                 else:
                     o0 = o0 - tq * 0.0
-                    o1 = o1 - tq * (si * e[i, 0, d, t])
-                    o2 = o2 - tq * (si * e[i, 1, d, t])
+                    o1 = o1 - tq * (si * e_i[0][k])
+                    o2 = o2 - tq * (si * e_i[1][k])
             if si > 0:
-                o_on[jt, 0, d, t], o_on[jt, 1, d, t], o_on[jt, 2, d, t] = o0, o1, o2
+                on_i[0][k], on_i[1][k], on_i[2][k] = o0, o1, o2
             else:
-                cp, sp = c[p, d, t], s[p, d, t]
-                ax = r[i, 0, d, t] - (r[p, 0, d, t] + (cp * px - sp * py))
-                ay = r[i, 1, d, t] - (r[p, 1, d, t] + (sp * px + cp * py))
-                o_on[jt, 0, d, t] = (ax * (-o2) - ay * (-o1)) + (-o0)
-                o_on[jt, 1, d, t] = -o1
-                o_on[jt, 2, d, t] = -o2
+                cp, sp = c_p[k], s_p[k]
+                ax = r_i[0][k] - (r_p[0][k] + (cp * px - sp * py))
+                ay = r_i[1][k] - (r_p[1][k] + (sp * px + cp * py))
+                on_i[0][k] = (ax * (-o2) - ay * (-o1)) + (-o0)
+                on_i[1][k] = -o1
+                on_i[2][k] = -o2
 
 
 

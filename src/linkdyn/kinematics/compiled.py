@@ -84,91 +84,114 @@ def nearest(nodes, tc):
 
 # --- the steps of one block of samples -----------------------------------------------------------
 
+@inline
+def _pose(phi, c, s, r, e, i, d, ks):
+    """Body i's pose over the samples ``ks`` of design d, as views to read and write:
+    ``phi``, ``c``, ``s``, the origin's ``x``, ``y`` and the slider axis's ``x``, ``y``."""
+    return (phi[i, d, ks], c[i, d, ks], s[i, d, ks], r[i, 0, d, ks], r[i, 1, d, ks],
+            e[i, 0, d, ks], e[i, 1, d, ks])
+
+
 @njit
 def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
     """Poses of all bodies (recursion.forward_positions); ``cq``, ``sq`` (n, block): cosine
     and sine of ``s q_i`` for the revolute joints."""
-    for t in range(k0, k0 + nb):
-        phi[0, d, t], c[0, d, t], s[0, d, t] = 0.0, 1.0, 0.0
-        r[0, 0, d, t], r[0, 1, d, t], e[0, 0, d, t], e[0, 1, d, t] = 0.0, 0.0, 0.0, 0.0
+    ks = slice(k0, k0 + nb)   # the block's samples
+    phi[0, d, ks], c[0, d, ks], s[0, d, ks] = 0.0, 1.0, 0.0
+    r[0, :, d, ks], e[0, :, d, ks] = 0.0, 0.0
     for i in range(1, len(tree)):
         p, sign = tree[i, PARENT], tree[i, SIGN]
         jx, jy = geo[d, i, 0], geo[d, i, 1]
+        phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, d, ks)
+        phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, d, ks)
+        q_i = q[i, d, ks]
         if tree[i, KIND] == REV:
             # phi_i = phi_p + s q;  O_i at the parent's joint point
+            cq_i, sq_i = cq[i], sq[i]
             for k in range(nb):
-                t = k0 + k
-                cp, sp = c[p, d, t], s[p, d, t]
-                phi[i, d, t] = phi[p, d, t] + sign * q[i, d, t]
-                c[i, d, t], s[i, d, t] = cp * cq[i, k] - sp * sq[i, k], sp * cq[i, k] + cp * sq[i, k]
-                r[i, 0, d, t] = r[p, 0, d, t] + cp * jx - sp * jy
-                r[i, 1, d, t] = r[p, 1, d, t] + sp * jx + cp * jy
-                e[i, 0, d, t], e[i, 1, d, t] = 0.0, 0.0
+                cp, sp = c_p[k], s_p[k]
+                phi_i[k] = phi_p[k] + sign * q_i[k]
+                c_i[k], s_i[k] = cp * cq_i[k] - sp * sq_i[k], sp * cq_i[k] + cp * sq_i[k]
+                rx_i[k] = rx_p[k] + cp * jx - sp * jy
+                ry_i[k] = ry_p[k] + sp * jx + cp * jy
+                ex_i[k], ey_i[k] = 0.0, 0.0
         else:
             # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the parent
             ax, ay, angle = geo[d, i, 2], geo[d, i, 3], sign * geo[d, i, 4]
             ca, sa = math.cos(angle), math.sin(angle)
             for k in range(nb):
-                t = k0 + k
-                cp, sp = c[p, d, t], s[p, d, t]
+                cp, sp = c_p[k], s_p[k]
                 ex, ey = cp * ax - sp * ay, sp * ax + cp * ay
-                phi[i, d, t] = phi[p, d, t] + angle
-                c[i, d, t], s[i, d, t] = ca * cp - sa * sp, sa * cp + ca * sp
-                r[i, 0, d, t] = r[p, 0, d, t] + cp * jx - sp * jy + (sign * q[i, d, t]) * ex
-                r[i, 1, d, t] = r[p, 1, d, t] + sp * jx + cp * jy + (sign * q[i, d, t]) * ey
-                e[i, 0, d, t], e[i, 1, d, t] = ex, ey
+                phi_i[k] = phi_p[k] + angle
+                c_i[k], s_i[k] = ca * cp - sa * sp, sa * cp + ca * sp
+                rx_i[k] = rx_p[k] + cp * jx - sp * jy + (sign * q_i[k]) * ex
+                ry_i[k] = ry_p[k] + sp * jx + cp * jy + (sign * q_i[k]) * ey
+                ex_i[k], ey_i[k] = ex, ey
 
 
 @njit
 def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
     """Turn body ``root`` and every body beyond it, sample k by ``rot[:, k]`` =
     ``[angle, cos, sin, centre x, centre y]``."""
+    ks = slice(k0, k0 + nb)
     for j in range(1, len(tree)):
         if not anc[j, root]:
             continue
         prismatic = tree[j, KIND] == PRI
+        phi_j, c_j, s_j, rx_j, ry_j, ex_j, ey_j = _pose(phi, c, s, r, e, j, d, ks)
         for k in range(nb):
-            t = k0 + k
             ang, co, si, cx, cy = rot[0, k], rot[1, k], rot[2, k], rot[3, k], rot[4, k]
-            cj, sj = c[j, d, t], s[j, d, t]
-            dx, dy = r[j, 0, d, t] - cx, r[j, 1, d, t] - cy
-            phi[j, d, t] += ang
-            c[j, d, t], s[j, d, t] = co * cj - si * sj, si * cj + co * sj
-            r[j, 0, d, t], r[j, 1, d, t] = cx + co * dx - si * dy, cy + si * dx + co * dy
+            cj, sj = c_j[k], s_j[k]
+            dx, dy = rx_j[k] - cx, ry_j[k] - cy
+            phi_j[k] += ang
+            c_j[k], s_j[k] = co * cj - si * sj, si * cj + co * sj
+            rx_j[k], ry_j[k] = cx + co * dx - si * dy, cy + si * dx + co * dy
             if prismatic:
-                ex, ey = e[j, 0, d, t], e[j, 1, d, t]
-                e[j, 0, d, t], e[j, 1, d, t] = co * ex - si * ey, si * ex + co * ey
+                ex, ey = ex_j[k], ey_j[k]
+                ex_j[k], ey_j[k] = co * ex - si * ey, si * ex + co * ey
+
+
+@inline
+def _point(c_i, s_i, rx_i, ry_i, k, px, py):
+    """Body point (px, py) in global coordinates, sample k, from the body's views (_pose)."""
+    return rx_i[k] + c_i[k] * px - s_i[k] * py, ry_i[k] + s_i[k] * px + c_i[k] * py
 
 
 @njit
 def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low):
     """Close every loop dyad by dyad, turning the subtrees beyond its two unknown joints
     (dyads.solve); ``up``, ``low`` (5, block) scratch for the two turns."""
+    ks = slice(k0, k0 + nb)
     for m in range(dyads.shape[0]):
         shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
         side = modes[m, d]
         a, b = cuts[cut, CUT_A], cuts[cut, CUT_B]
         pax_, pay_, pbx_, pby_ = cgeo[d, cut, 0], cgeo[d, cut, 1], cgeo[d, cut, 2], cgeo[d, cut, 3]
         uax, uay, ca, sa = cgeo[d, cut, 4], cgeo[d, cut, 5], math.cos(cgeo[d, cut, 6]), math.sin(cgeo[d, cut, 6])
+        c_a, s_a, rx_a, ry_a = c[a, d, ks], s[a, d, ks], r[a, 0, d, ks], r[a, 1, d, ks]
+        c_b, s_b, rx_b, ry_b = c[b, d, ks], s[b, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
         # the cut's body on the side of both unknown joints (chain, slide), and the other
-        mov, fix = (b, a) if on_b else (a, b)
+        c_m, s_m, rx_m, ry_m = (c_b, s_b, rx_b, ry_b) if on_b else (c_a, s_a, rx_a, ry_a)
+        c_f, s_f, rx_f, ry_f = (c_a, s_a, rx_a, ry_a) if on_b else (c_b, s_b, rx_b, ry_b)
         lmx, lmy = (pbx_, pby_) if on_b else (pax_, pay_)
         lfx, lfy = (pax_, pay_) if on_b else (pbx_, pby_)
+        # the upper and lower unknown joints
+        rx_u, ry_u, rx_l, ry_l = r[ju, 0, d, ks], r[ju, 1, d, ks], r[jl, 0, d, ks], r[jl, 1, d, ks]
         for k in range(nb):
-            t = k0 + k
-            x1x, x1y, x2x, x2y = r[ju, 0, d, t], r[ju, 1, d, t], r[jl, 0, d, t], r[jl, 1, d, t]
-            pax, pay, pbx, pby, _, _ = _cut_points(cuts, cgeo, cut, d, t, c, s, r)
+            x1x, x1y, x2x, x2y = rx_u[k], ry_u[k], rx_l[k], ry_l[k]
+            pax, pay = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
+            pbx, pby = _point(c_b, s_b, rx_b, ry_b, k, pbx_, pby_)
             if shape == SLIDE:
                 # the moving body ends at a known angle: the total turn (cd, sd) of both joints
                 sgn = 1.0 if on_b else -1.0
                 pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
-                ct = c[fix, d, t] * ca - sgn * s[fix, d, t] * sa
-                st = s[fix, d, t] * ca + sgn * c[fix, d, t] * sa
-                cd = ct * c[mov, d, t] + st * s[mov, d, t]
-                sd = st * c[mov, d, t] - ct * s[mov, d, t]
+                ct = c_f[k] * ca - sgn * s_f[k] * sa
+                st = s_f[k] * ca + sgn * c_f[k] * sa
+                cd = ct * c_m[k] + st * s_m[k]
+                sd = st * c_m[k] - ct * s_m[k]
                 # the slide axis e (turned with the moving body when that body carries it)
-                ex = c[a, d, t] * uax - s[a, d, t] * uay
-                ey = s[a, d, t] * uax + c[a, d, t] * uay
+                ex = c_a[k] * uax - s_a[k] * uay
+                ey = s_a[k] * uax + c_a[k] * uay
                 if not on_b:
                     ex, ey = cd * ex - sd * ey, sd * ex + cd * ey
                 # the lower joint on the slide line shifted back by the turned offset to the cut
@@ -183,11 +206,11 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
                     math.atan2(s2, c2), c2, s2, mx, my)
             elif shape == SWING:
                 # body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta
-                cr = c[b, d, t] * c[a, d, t] + s[b, d, t] * s[a, d, t]
-                sr = s[b, d, t] * c[a, d, t] - c[b, d, t] * s[a, d, t]
+                cr = c_b[k] * c_a[k] + s_b[k] * s_a[k]
+                sr = s_b[k] * c_a[k] - c_b[k] * s_a[k]
                 cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
-                nx = -(s[a, d, t] * uax + c[a, d, t] * uay)
-                ny = c[a, d, t] * uax - s[a, d, t] * uay
+                nx = -(s_a[k] * uax + c_a[k] * uay)
+                ny = c_a[k] * uax - s_a[k] * uay
                 dx, dy = x2x - x1x, x2y - x1y
                 ox, oy = pbx - x2x, pby - x2y
                 kk = (pax - x1x - (cd * ox - sd * oy)) * nx + (pay - x1y - (sd * ox + cd * oy)) * ny
@@ -220,159 +243,172 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
         if shape == CHAIN:
             # chain: the moving cut point, carried by the upper turn, onto the fixed one
             for k in range(nb):
-                t = k0 + k
                 mx, my = low[3, k], low[4, k]
-                pmx = r[mov, 0, d, t] + c[mov, d, t] * lmx - s[mov, d, t] * lmy
-                pmy = r[mov, 1, d, t] + s[mov, d, t] * lmx + c[mov, d, t] * lmy
-                pfx = r[fix, 0, d, t] + c[fix, d, t] * lfx - s[fix, d, t] * lfy
-                pfy = r[fix, 1, d, t] + s[fix, d, t] * lfx + c[fix, d, t] * lfy
+                pmx, pmy = _point(c_m, s_m, rx_m, ry_m, k, lmx, lmy)
+                pfx, pfy = _point(c_f, s_f, rx_f, ry_f, k, lfx, lfy)
                 low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
         _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
+        q_u, q_l = q[ju, d, ks], q[jl, d, ks]
         for k in range(nb):
-            q[ju, d, k0 + k] += tree[ju, SIGN] * up[0, k]
-            q[jl, d, k0 + k] += tree[jl, SIGN] * low[0, k]
-
-
-@inline
-def _cut_points(cuts, cgeo, ci, d, t, c, s, r):
-    """Cut ci's points on its bodies a and b and its axis (fixed in a), global, sample t."""
-    a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
-    pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
-    ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
-    ca, sa, cb, sb = c[a, d, t], s[a, d, t], c[b, d, t], s[b, d, t]
-    return (r[a, 0, d, t] + ca * pax_ - sa * pay_, r[a, 1, d, t] + sa * pax_ + ca * pay_,
-            r[b, 0, d, t] + cb * pbx_ - sb * pby_, r[b, 1, d, t] + sb * pbx_ + cb * pby_,
-            ca * ux - sa * uy, sa * ux + ca * uy)
+            q_u[k] += tree[ju, SIGN] * up[0, k]
+            q_l[k] += tree[jl, SIGN] * low[0, k]
 
 
 @njit
 def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
-    """Every cut's points and axis (:func:`_cut_points`) once the loops are closed, for the
-    steps that follow: ``P`` (n_cut, 6, block) rows ``[pa (2), pb (2), e (2)]``."""
+    """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
+    loops are closed, for the steps that follow: ``P`` (n_cut, 6, block) rows
+    ``[pa (2), pb (2), e (2)]``."""
+    ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
+        a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+        pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
+        ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
+        c_a, s_a, rx_a, ry_a = c[a, d, ks], s[a, d, ks], r[a, 0, d, ks], r[a, 1, d, ks]
+        c_b, s_b, rx_b, ry_b = c[b, d, ks], s[b, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
+        P_c = P[ci]
         for k in range(nb):
-            (P[ci, 0, k], P[ci, 1, k], P[ci, 2, k], P[ci, 3, k], P[ci, 4, k],
-             P[ci, 5, k]) = _cut_points(cuts, cgeo, ci, d, k0 + k, c, s, r)
+            P_c[0, k], P_c[1, k] = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
+            P_c[2, k], P_c[3, k] = _point(c_b, s_b, rx_b, ry_b, k, pbx_, pby_)
+            P_c[4, k], P_c[5, k] = c_a[k] * ux - s_a[k] * uy, s_a[k] * ux + c_a[k] * uy
 
 
 @inline
-def _frame(P, ci, k):
-    """Cut ci's points and axis, sample k of the block (:func:`_cut_frames`)."""
-    return P[ci, 0, k], P[ci, 1, k], P[ci, 2, k], P[ci, 3, k], P[ci, 4, k], P[ci, 5, k]
+def _frame(P_c, k):
+    """A cut's points and axis, sample k of the block, from its rows ``P_c`` = ``P[ci]``
+    (:func:`_cut_frames`)."""
+    return P_c[0, k], P_c[1, k], P_c[2, k], P_c[3, k], P_c[4, k], P_c[5, k]
 
 
 @njit
 def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
     """Loop-closure residual relative to ``size``, max over the cut rows (positions._scaled)."""
-    for k in range(nb):
-        err[d, k0 + k] = 0.0
+    ks = slice(k0, k0 + nb)
+    err_d = err[d, ks]
+    err_d[:] = 0.0
     for ci in range(len(cuts)):
+        P_c = P[ci]
         a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
         for k in range(nb):
-            t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
+            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
             dx, dy = pbx - pax, pby - pay
             if revolute:   # r_Pb - r_Pa
                 g0, g1 = dx / size[d], dy / size[d]
             else:          # [phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n]
-                g = phi[b, d, t] - phi[a, d, t] - cgeo[d, ci, 6]
+                g = phi_b[k] - phi_a[k] - cgeo[d, ci, 6]
                 g0, g1 = math.atan2(math.sin(g), math.cos(g)), (-dx * eay + dy * eax) / size[d]
-            if g0 != g0 or g1 != g1 or err[d, t] != err[d, t]:
-                err[d, t] = math.nan
+            if g0 != g0 or g1 != g1 or err_d[k] != err_d[k]:
+                err_d[k] = math.nan
             else:
-                err[d, t] = max(err[d, t], abs(g0), abs(g1))
+                err_d[k] = max(err_d[k], abs(g0), abs(g1))
 
 
 @njit
 def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
     """Loop-closure Jacobian J (2 n_cut, n - 1): column k of cut c is
     ``side * S_c A(r_Pb - r_k) p_k`` (eqs. 20-24)."""
+    ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
+        P_c = P[ci]
         revolute = cuts[ci, CUT_KIND] == REV
         for j in range(1, len(tree)):
             f = side[ci, j] * tree[j, SIGN]
+            rx_j, ry_j, ex_j, ey_j = r[j, 0, d, ks], r[j, 1, d, ks], e[j, 0, d, ks], e[j, 1, d, ks]
+            J0, J1 = J[2 * ci, j - 1, d, ks], J[2 * ci + 1, j - 1, d, ks]   # cut ci's rows
             for k in range(nb):
-                t = k0 + k
-                _, _, pbx, pby, eax, eay = _frame(P, ci, k)
+                _, _, pbx, pby, eax, eay = _frame(P_c, k)
                 if tree[j, KIND] == REV:   # A(a) [s, 0, 0]
-                    w, vx, vy = f, -f * (pby - r[j, 1, d, t]), f * (pbx - r[j, 0, d, t])
+                    w, vx, vy = f, -f * (pby - ry_j[k]), f * (pbx - rx_j[k])
                 else:                      # A(a) [0, s e]
-                    w, vx, vy = 0.0, f * e[j, 0, d, t], f * e[j, 1, d, t]
+                    w, vx, vy = 0.0, f * ex_j[k], f * ey_j[k]
                 if revolute:   # S x = [x_vx, x_vy]
-                    J[2 * ci, j - 1, d, t], J[2 * ci + 1, j - 1, d, t] = vx, vy
+                    J0[k], J1[k] = vx, vy
                 else:          # S x = [x_w, n . x_v]
-                    J[2 * ci, j - 1, d, t], J[2 * ci + 1, j - 1, d, t] = w, -vx * eay + vy * eax
+                    J0[k], J1[k] = w, -vx * eay + vy * eax
 
 
 @njit
 def _twists(tree, d, k0, nb, r, e, rate, tw):
     """t_i = A(r_i - r_p) t_p + p_i rate_i for every body (eq. 2); ``rate`` (n, D, T)."""
-    for k in range(nb):
-        tw[0, 0, d, k0 + k], tw[0, 1, d, k0 + k], tw[0, 2, d, k0 + k] = 0.0, 0.0, 0.0
+    ks = slice(k0, k0 + nb)
+    tw[0, :, d, ks] = 0.0
     for i in range(1, len(tree)):
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        w_i, vx_i, vy_i = tw[i, 0, d, ks], tw[i, 1, d, ks], tw[i, 2, d, ks]
+        w_p, vx_p, vy_p = tw[p, 0, d, ks], tw[p, 1, d, ks], tw[p, 2, d, ks]
+        rx_i, ry_i, rx_p, ry_p = r[i, 0, d, ks], r[i, 1, d, ks], r[p, 0, d, ks], r[p, 1, d, ks]
+        ex_i, ey_i, rate_i = e[i, 0, d, ks], e[i, 1, d, ks], rate[i, d, ks]
         for k in range(nb):
-            t = k0 + k
-            w = tw[p, 0, d, t]
-            tw[i, 0, d, t] = w
-            tw[i, 1, d, t] = tw[p, 1, d, t] - w * (r[i, 1, d, t] - r[p, 1, d, t])
-            tw[i, 2, d, t] = tw[p, 2, d, t] + w * (r[i, 0, d, t] - r[p, 0, d, t])
+            w = w_p[k]
+            w_i[k] = w
+            vx_i[k] = vx_p[k] - w * (ry_i[k] - ry_p[k])
+            vy_i[k] = vy_p[k] + w * (rx_i[k] - rx_p[k])
             if revolute:
-                tw[i, 0, d, t] += sign * rate[i, d, t]
+                w_i[k] += sign * rate_i[k]
             else:
-                tw[i, 1, d, t] += (sign * rate[i, d, t]) * e[i, 0, d, t]
-                tw[i, 2, d, t] += (sign * rate[i, d, t]) * e[i, 1, d, t]
+                vx_i[k] += (sign * rate_i[k]) * ex_i[k]
+                vy_i[k] += (sign * rate_i[k]) * ey_i[k]
 
 
 @njit
 def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
     """td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i."""
-    for k in range(nb):
-        td[0, 0, d, k0 + k], td[0, 1, d, k0 + k], td[0, 2, d, k0 + k] = 0.0, 0.0, 0.0
+    ks = slice(k0, k0 + nb)
+    td[0, :, d, ks] = 0.0
     for i in range(1, len(tree)):
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        al_i, ax_i, ay_i = td[i, 0, d, ks], td[i, 1, d, ks], td[i, 2, d, ks]
+        al_p, ax_p, ay_p = td[p, 0, d, ks], td[p, 1, d, ks], td[p, 2, d, ks]
+        w_i, vx_i, vy_i = tw[i, 0, d, ks], tw[i, 1, d, ks], tw[i, 2, d, ks]
+        w_p, vx_p, vy_p = tw[p, 0, d, ks], tw[p, 1, d, ks], tw[p, 2, d, ks]
+        rx_i, ry_i, rx_p, ry_p = r[i, 0, d, ks], r[i, 1, d, ks], r[p, 0, d, ks], r[p, 1, d, ks]
+        ex_i, ey_i, qd_i, qdd_i = e[i, 0, d, ks], e[i, 1, d, ks], qd[i, d, ks], qdd[i, d, ks]
         for k in range(nb):
-            t = k0 + k
-            al, w = td[p, 0, d, t], tw[p, 0, d, t]
-            td[i, 0, d, t] = al
-            td[i, 1, d, t] = (td[p, 1, d, t] - al * (r[i, 1, d, t] - r[p, 1, d, t])
-                              - w * (tw[i, 2, d, t] - tw[p, 2, d, t]))
-            td[i, 2, d, t] = (td[p, 2, d, t] + al * (r[i, 0, d, t] - r[p, 0, d, t])
-                              + w * (tw[i, 1, d, t] - tw[p, 1, d, t]))
+            al, w = al_p[k], w_p[k]
+            al_i[k] = al
+            ax_i[k] = ax_p[k] - al * (ry_i[k] - ry_p[k]) - w * (vy_i[k] - vy_p[k])
+            ay_i[k] = ay_p[k] + al * (rx_i[k] - rx_p[k]) + w * (vx_i[k] - vx_p[k])
             if revolute:
-                td[i, 0, d, t] += sign * qdd[i, d, t]
+                al_i[k] += sign * qdd_i[k]
             else:   # p_i qdd_i + s qd_i w_axis perp(e), e turning with the joint's first body
-                w_axis = w if sign > 0 else tw[i, 0, d, t]
-                f = sign * qd[i, d, t] * w_axis
-                td[i, 1, d, t] += (sign * qdd[i, d, t]) * e[i, 0, d, t] - f * e[i, 1, d, t]
-                td[i, 2, d, t] += (sign * qdd[i, d, t]) * e[i, 1, d, t] + f * e[i, 0, d, t]
+                w_axis = w if sign > 0 else w_i[k]
+                f = sign * qd_i[k] * w_axis
+                ax_i[k] += (sign * qdd_i[k]) * ex_i[k] - f * ey_i[k]
+                ay_i[k] += (sign * qdd_i[k]) * ey_i[k] + f * ex_i[k]
 
 
 @njit
 def _bias(cuts, d, k0, nb, r, tw, td, P, bias):
     """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td`` (recursion.closure_bias);
     ``bias`` (2 n_cut, block)."""
+    ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
+        P_c = P[ci]
         a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        w_a, vx_a, vy_a = tw[a, 0, d, ks], tw[a, 1, d, ks], tw[a, 2, d, ks]
+        w_b, vx_b, vy_b = tw[b, 0, d, ks], tw[b, 1, d, ks], tw[b, 2, d, ks]
+        al_a, ax_a, ay_a = td[a, 0, d, ks], td[a, 1, d, ks], td[a, 2, d, ks]
+        al_b, ax_b, ay_b = td[b, 0, d, ks], td[b, 1, d, ks], td[b, 2, d, ks]
+        rx_a, ry_a, rx_b, ry_b = r[a, 0, d, ks], r[a, 1, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
         for k in range(nb):
-            t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
+            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
             # both bodies' motion taken at the cut point, which moves with body b
-            wa, wb = tw[a, 0, d, t], tw[b, 0, d, t]
-            vbx = tw[b, 1, d, t] - wb * (pby - r[b, 1, d, t])
-            vby = tw[b, 2, d, t] + wb * (pbx - r[b, 0, d, t])
-            vax = tw[a, 1, d, t] - wa * (pby - r[a, 1, d, t])
-            vay = tw[a, 2, d, t] + wa * (pbx - r[a, 0, d, t])
-            abx = td[b, 1, d, t] - td[b, 0, d, t] * (pby - r[b, 1, d, t]) - wb * (vby - tw[b, 2, d, t])
-            aby = td[b, 2, d, t] + td[b, 0, d, t] * (pbx - r[b, 0, d, t]) + wb * (vbx - tw[b, 1, d, t])
-            aax = td[a, 1, d, t] - td[a, 0, d, t] * (pby - r[a, 1, d, t]) - wa * (vby - tw[a, 2, d, t])
-            aay = td[a, 2, d, t] + td[a, 0, d, t] * (pbx - r[a, 0, d, t]) + wa * (vbx - tw[a, 1, d, t])
+            wa, wb = w_a[k], w_b[k]
+            vbx = vx_b[k] - wb * (pby - ry_b[k])
+            vby = vy_b[k] + wb * (pbx - rx_b[k])
+            vax = vx_a[k] - wa * (pby - ry_a[k])
+            vay = vy_a[k] + wa * (pbx - rx_a[k])
+            abx = ax_b[k] - al_b[k] * (pby - ry_b[k]) - wb * (vby - vy_b[k])
+            aby = ay_b[k] + al_b[k] * (pbx - rx_b[k]) + wb * (vbx - vx_b[k])
+            aax = ax_a[k] - al_a[k] * (pby - ry_a[k]) - wa * (vby - vy_a[k])
+            aay = ay_a[k] + al_a[k] * (pbx - rx_a[k]) + wa * (vbx - vx_a[k])
             dax, day = abx - aax, aby - aay
             if revolute:
                 bias[2 * ci, k], bias[2 * ci + 1, k] = dax, day
             else:   # [al_b - al_a, n . a_rel + n_dot . v_rel],  n_dot = -w_a e
-                bias[2 * ci, k] = td[b, 0, d, t] - td[a, 0, d, t]
+                bias[2 * ci, k] = al_b[k] - al_a[k]
                 bias[2 * ci + 1, k] = (-dax * eay + day * eax
                                        - wa * ((vbx - vax) * eax + (vby - vay) * eay))
 
@@ -384,8 +420,9 @@ def _factor_dep(dep, J, d, k0, nb, A, perm, col):
     nd = len(dep)
     for i in range(nd):
         for m in range(nd):
+            A_im, J_im = A[i, m], J[i, dep[m] - 1, d, k0:k0 + nb]
             for k in range(nb):
-                A[i, m, k] = J[i, dep[m] - 1, d, k0 + k]
+                A_im[k] = J_im[k]
     factor(A, nd, nb, perm, col)
 
 
@@ -395,43 +432,62 @@ def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
     ``x[dep]``; ``sol`` scratch."""
     substitute(A, perm, col, len(dep), nb, rhs, sol, PIVOT_TOL)
     for m in range(len(dep)):
+        x_m, sol_m = x[dep[m], d, k0:k0 + nb], sol[m]
         for k in range(nb):
-            x[dep[m], d, k0 + k] = sol[m, k]
+            x_m[k] = sol_m[k]
 
 
 @njit
 def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
     """Coordinate, rate and acceleration of every cut joint (joints.joint_motion): revolute
     ``phi_b - phi_a``; slider ``s = d . e`` and its rates. ``out`` (n_cut, 3, D, T)."""
+    ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
+        P_c = P[ci]
         a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+        w_a, vx_a, vy_a = tw[a, 0, d, ks], tw[a, 1, d, ks], tw[a, 2, d, ks]
+        w_b, vx_b, vy_b = tw[b, 0, d, ks], tw[b, 1, d, ks], tw[b, 2, d, ks]
+        al_a, ax_a, ay_a = td[a, 0, d, ks], td[a, 1, d, ks], td[a, 2, d, ks]
+        al_b, ax_b, ay_b = td[b, 0, d, ks], td[b, 1, d, ks], td[b, 2, d, ks]
+        s_c, sd_c, sdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
         if cuts[ci, CUT_KIND] == REV:
+            phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
             for k in range(nb):
-                t = k0 + k
-                out[ci, 0, d, t] = phi[b, d, t] - phi[a, d, t]
-                out[ci, 1, d, t] = tw[b, 0, d, t] - tw[a, 0, d, t]
-                out[ci, 2, d, t] = td[b, 0, d, t] - td[a, 0, d, t]
+                s_c[k] = phi_b[k] - phi_a[k]
+                sd_c[k] = w_b[k] - w_a[k]
+                sdd_c[k] = al_b[k] - al_a[k]
             continue
+        rx_a, ry_a, rx_b, ry_b = r[a, 0, d, ks], r[a, 1, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
         for k in range(nb):
-            t = k0 + k
-            pax, pay, pbx, pby, eax, eay = _frame(P, ci, k)
+            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
             # d, d', d'': the second body's cut point seen from the first's (body points)
-            wa, wb, ala, alb = tw[a, 0, d, t], tw[b, 0, d, t], td[a, 0, d, t], td[b, 0, d, t]
-            oax, oay, obx, oby = pax - r[a, 0, d, t], pay - r[a, 1, d, t], pbx - r[b, 0, d, t], pby - r[b, 1, d, t]
-            ddx = (tw[b, 1, d, t] - wb * oby) - (tw[a, 1, d, t] - wa * oay)
-            ddy = (tw[b, 2, d, t] + wb * obx) - (tw[a, 2, d, t] + wa * oax)
-            dddx = ((td[b, 1, d, t] - alb * oby - wb * wb * obx)
-                    - (td[a, 1, d, t] - ala * oay - wa * wa * oax))
-            dddy = ((td[b, 2, d, t] + alb * obx - wb * wb * oby)
-                    - (td[a, 2, d, t] + ala * oax - wa * wa * oay))
+            wa, wb, ala, alb = w_a[k], w_b[k], al_a[k], al_b[k]
+            oax, oay, obx, oby = pax - rx_a[k], pay - ry_a[k], pbx - rx_b[k], pby - ry_b[k]
+            ddx = (vx_b[k] - wb * oby) - (vx_a[k] - wa * oay)
+            ddy = (vy_b[k] + wb * obx) - (vy_a[k] + wa * oax)
+            dddx = ((ax_b[k] - alb * oby - wb * wb * obx)
+                    - (ax_a[k] - ala * oay - wa * wa * oax))
+            dddy = ((ay_b[k] + alb * obx - wb * wb * oby)
+                    - (ay_a[k] + ala * oax - wa * wa * oay))
             dx, dy = pbx - pax, pby - pay
             # e' = w_a perp(e), e'' = al_a perp(e) - w_a^2 e
             edx, edy = -wa * eay, wa * eax
             eddx, eddy = -ala * eay - wa * wa * eax, ala * eax - wa * wa * eay
-            out[ci, 0, d, t] = dx * eax + dy * eay
-            out[ci, 1, d, t] = ddx * eax + ddy * eay + (dx * edx + dy * edy)
-            out[ci, 2, d, t] = (dddx * eax + dddy * eay + 2 * (ddx * edx + ddy * edy)
-                                + (dx * eddx + dy * eddy))
+            s_c[k] = dx * eax + dy * eay
+            sd_c[k] = ddx * eax + ddy * eay + (dx * edx + dy * edy)
+            sdd_c[k] = (dddx * eax + dddy * eay + 2 * (ddx * edx + ddy * edy)
+                        + (dx * eddx + dy * eddy))
+
+
+@inline
+def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
+    """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
+    ``s q_i`` for a revolute joint."""
+    for k in range(nb):
+        q_i[k] = q_from[k]
+        if tree[i, KIND] == REV:
+            x = tree[i, SIGN] * q_i[k]
+            cq_i[k], sq_i[k] = math.cos(x), math.sin(x)
 
 
 # --- the kernel ----------------------------------------------------------------------------------
@@ -456,29 +512,27 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
     up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((2 * nc, B))
     P = np.zeros((nc, 6, B))
     A, sol, col = np.zeros((nd, nd, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
-    perm = np.zeros((nd, B), np.int64)
+    perm, node = np.zeros((nd, B), np.int64), np.zeros(B, np.int64)
     for d in range(D):
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
+            ks = slice(k0, k0 + nb)
             # coordinates: the nearest node's (or the closed ones) and the drivers'
-            for k in range(nb):
-                t = k0 + k
-                if from_nodes:
-                    jn = nearest(nodes, min(max(t_s[t], lo[d]), hi[d]))
-                    for i in range(n):
-                        q[i, d, t], cq[i, k], sq[i, k] = Qn[i, d, jn], cQ[i, d, jn], sQ[i, d, jn]
-                else:
-                    for i in range(n):
-                        q[i, d, t] = q_in[i, d, t]
-                        if tree[i, KIND] == REV:
-                            x = tree[i, SIGN] * q[i, d, t]
-                            cq[i, k], sq[i, k] = math.cos(x), math.sin(x)
-                for j in range(nv):
-                    i = drv[j]
-                    q[i, d, t] = q_drv[j, t]
-                    if tree[i, KIND] == REV:
-                        x = tree[i, SIGN] * q[i, d, t]
-                        cq[i, k], sq[i, k] = math.cos(x), math.sin(x)
+            if from_nodes:
+                for k in range(nb):
+                    node[k] = nearest(nodes, min(max(t_s[k0 + k], lo[d]), hi[d]))
+                for i in range(n):
+                    q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
+                    Qn_i, cQ_i, sQ_i = Qn[i, d], cQ[i, d], sQ[i, d]
+                    for k in range(nb):
+                        jn = node[k]
+                        q_i[k], cq_i[k], sq_i[k] = Qn_i[jn], cQ_i[jn], sQ_i[jn]
+            else:
+                for i in range(n):
+                    _coordinates(tree, i, q_in[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
+            for j in range(nv):
+                i = drv[j]
+                _coordinates(tree, i, q_drv[j, ks], q[i, d, ks], cq[i], sq[i], nb)
             # positions, the loops closed in closed form from the nodes
             _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             if from_nodes:
@@ -487,17 +541,18 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _residual(cuts, cgeo, size, d, k0, nb, phi, P, err)
             _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
-            for k in range(nb):
-                t = k0 + k
-                for i in range(n):
-                    qd[i, d, t], qdd[i, d, t] = 0.0, 0.0
+            qd[:, d, ks], qdd[:, d, ks] = 0.0, 0.0
+            for j in range(nv):
+                qd[drv[j], d, ks], qdd[drv[j], d, ks] = qd_drv[j, ks], qdd_drv[j, ks]
+            for row in range(nd):
+                acc = rhs[row]   # the sum over the drivers, negated once summed
+                acc[:nb] = 0.0
                 for j in range(nv):
-                    qd[drv[j], d, t], qdd[drv[j], d, t] = qd_drv[j, t], qdd_drv[j, t]
-                for row in range(nd):
-                    acc = 0.0
-                    for j in range(nv):
-                        acc += J[row, drv[j] - 1, d, t] * qd_drv[j, t]
-                    rhs[row, k] = -acc
+                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, ks]
+                    for k in range(nb):
+                        acc[k] += J_rj[k] * qd_j[k]
+                for k in range(nb):
+                    acc[k] = -acc[k]
             if nd:   # J_dep, factored once for the rates and the accelerations
                 _factor_dep(dep, J, d, k0, nb, A, perm, col)
                 _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qd, sol)
