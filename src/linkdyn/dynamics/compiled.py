@@ -230,11 +230,10 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
         px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
         R_i, e_i, on_i = _screw(o_tree, i, d, ks), _vector(e, i, d, ks), _screw(o_on, jt, d, ks)
         r_i, c_p, s_p, r_p = _vector(r, i, d, ks), c[p, d, ks], s[p, d, ks], _vector(r, p, d, ks)
-        tau_i = tau[dr, :nb]   # body i's driver (unused, the last row, if i is not driven)
         for k in range(nb):
             o0, o1, o2 = R_i[0][k], R_i[1][k], R_i[2][k]
-            if dr >= 0:
-                tq = tau_i[k]
+            if dr >= 0:   # body i's driver
+                tq = tau[dr, k]
                 if revolute:
                     o0, o1, o2 = o0 - tq * si, o1 - tq * 0.0, o2 - tq * 0.0
                 else:
@@ -250,7 +249,6 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
                 on_i[0][k] = (ax * (-o2) - ay * (-o1)) + (-o0)
                 on_i[1][k] = -o1
                 on_i[2][k] = -o2
-
 
 
 @njit
