@@ -1,0 +1,41 @@
+"""The benchmark scripts run, on a few samples, and their own checks pass.
+
+Each script checks its references before it times anything: ``bench_hoeken.py`` that the
+per-sample baselines and the hand-written numpy four-bar agree with linkdyn, ``bench_ceiling.py``
+that every row of its hand-written compiled kernels (kinematics; torque, pin forces, kinetic
+energy) agrees with linkdyn's numpy path. A wrong reference would make a wrong comparison, so
+those checks run here, in the suite; the timings they print mean nothing at this size. They
+time the compiled backend too: the test extras install numba.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def run(script, *args):
+    done = subprocess.run([sys.executable, str(BENCHMARKS / script), *args], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def test_bench_hoeken():
+    out = run("bench_hoeken.py", "--samples", "3000", "--baseline-samples", "40", "--repeat", "1")
+    for line in ("[numpy]", "[compiled]", "kinematics", "full analysis"):
+        assert line in out
+
+
+def test_bench_kernels():
+    out = run("bench_kernels.py", "--samples", "3000")
+    assert "kinematics kernel" in out and "close the dyads" in out and "fresh" in out
+
+
+def test_bench_ceiling():
+    out = run("bench_ceiling.py", "--samples", "3000", "--repeat", "1")
+    assert out.count("ceiling, hand-written compiled kernel") == 2
+    assert "47 numbers per sample" in out and "59 numbers per sample" in out
