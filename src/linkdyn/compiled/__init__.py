@@ -12,7 +12,7 @@ axis ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T
 
 Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
 variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
-:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (about 20 s, then cached
+:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (about 40 s, then cached
 on disk beside the modules), which only a large batch repays.
 
 numba caches each kernel by its own file: after editing a helper in another file (this one),
