@@ -35,7 +35,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import math  # noqa: E402
-import time  # noqa: E402
 
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
@@ -44,8 +43,8 @@ import linkdyn  # noqa: E402
 from linkdyn import kinematics  # noqa: E402
 from linkdyn.kinematics import compile_layout  # noqa: E402
 
-TARGET_KINEMATICS = 5e6   # samples/s, issue 2
-TARGET_ANALYSIS = 3e6     # samples/s, issue 3
+from bench_hoeken import TARGET_ANALYSIS, TARGET_KINEMATICS, best_time, one_core  # noqa: E402
+
 BUF = 64                  # samples staged before the row-by-row write
 # output rows: q, qd, qdd of J1..J4; per body (crank, coupler, rocker) phi, c, s, x, y,
 # omega, vx, vy, alpha, ax, ay; residual, pivot; then, for the full analysis, tau,
@@ -129,7 +128,7 @@ def kernel(full):
                           abs(r3y + s3 * pb[0] + c3 * pb[1] - pa[1])) / size
                 first = max(abs(e2x), abs(e2y))
                 piv = min(first, abs(det) / first) / max(first, abs(e3x), abs(e3y))
-                # stored one by one (a tuple indexed in a loop is 2-3 times slower)
+                # stored one by one: a tuple indexed in a runtime loop compiles to slower code
                 buf[0, k], buf[1, k], buf[2, k], buf[3, k] = p1, p2 - p1, p3 - p2, p3
                 buf[4, k], buf[5, k], buf[6, k], buf[7, k] = w, w2 - w, w3 - w2, w3
                 buf[8, k], buf[9, k], buf[10, k], buf[11, k] = 0.0, al2, al3 - al2, al3
@@ -209,8 +208,7 @@ def main():
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--repeat", type=int, default=5)
     args = ap.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    one_core()
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     lay = compile_layout(mech)
     (cut,) = lay.cuts
@@ -234,12 +232,7 @@ def main():
         return out
 
     def best(fn):
-        times = []
-        for _ in range(args.repeat):
-            t0 = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t0)
-        return min(times)
+        return best_time(fn, args.repeat)
     tc = np.linspace(-0.3, 1.2, 2001) * mech.drivers[0].period
     general = {"kinematics": lambda: kinematics.solve(mech, t, backend="compiled"),
                "full analysis": lambda: linkdyn.analyze(mech, t, backend="compiled")}
@@ -255,7 +248,8 @@ def main():
         print(f"{name}: ceiling, hand-written compiled kernel for this one four-bar,"
               f" {rows} numbers per sample")
         print(f"  into fresh outputs        {T / fresh:10.4g} samples/s"
-              f"  ({fresh / T * 1e9:4.0f} ns)   target {target:.0e} {'met' if T / fresh >= target else 'NOT met'}")
+              f"  ({fresh / T * 1e9:4.0f} ns)   target {target:.0e}"
+              f" {'met' if T / fresh >= target else 'NOT met'}")
         print(f"  into outputs touched      {T / warm:10.4g} samples/s  ({warm / T * 1e9:4.0f} ns)")
         print(f"  linkdyn, compiled backend {T / ours:10.4g} samples/s  ({ours / T * 1e9:4.0f} ns),"
               f" {fresh / ours:.0%} of the ceiling")

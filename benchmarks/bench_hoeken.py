@@ -36,12 +36,19 @@ TARGET_ANALYSIS = 3e6     # samples/s, issue 3
 
 
 def best_time(fn, repeat):
+    """The shortest of ``repeat`` runs of ``fn``, s (the other benchmarks use it too)."""
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
         fn()
         times.append(time.perf_counter() - t0)
     return min(times)
+
+
+def one_core():
+    """Pin this process to one core (where the system allows)."""
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
 
 
 def baseline_kinematics(mech, t):
@@ -148,8 +155,7 @@ def main():
     ap.add_argument("--baseline-samples", type=int, default=2000)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    one_core()
 
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     period = mech.drivers[0].period

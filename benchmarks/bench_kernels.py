@@ -19,7 +19,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -27,14 +26,7 @@ import linkdyn  # noqa: E402
 from linkdyn.dynamics import compiled as dc  # noqa: E402
 from linkdyn.kinematics import compiled as kc  # noqa: E402
 
-
-def best_time(fn, repeat=5):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from bench_hoeken import best_time, one_core  # noqa: E402
 
 
 def kernel_arguments(mech, t):
@@ -69,7 +61,8 @@ def steps(args):
     perm = np.zeros((nd, block), np.int64)
     closed = [x.copy() for x in (q, phi, c, s, r, e)]   # the close step turns a copy
     return {
-        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, k0, nb, q, cq, sq, phi, c, s, r, e),
+        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, k0, nb, q, cq, sq, phi, c, s, r,
+                                                     e),
         "close the dyads": lambda k0, nb: kc._close(dyads, anc, tree, cuts, cgeo, modes, 0, k0, nb,
                                                     *closed, up, low),
         "cut frames": lambda k0, nb: kc._cut_frames(cuts, cgeo, 0, k0, nb, c, s, r, P),
@@ -77,8 +70,8 @@ def steps(args):
         "closure Jacobian": lambda k0, nb: kc._jacobian(tree, side, cuts, 0, k0, nb, r, e, P, J),
         "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(dep, J, 0, k0, nb, A, perm,
                                                                         col),
-        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(dep, A, perm, col, 0, k0, nb,
-                                                                         rhs, qd, sol),
+        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(dep, A, perm, col, 0, k0,
+                                                                         nb, rhs, qd, sol),
         "twists": lambda k0, nb: kc._twists(tree, 0, k0, nb, r, e, qd, tw),
         "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(tree, 0, k0, nb, r, e,
                                                                               tw, qd, qdd, td),
@@ -91,16 +84,17 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--samples", type=int, default=300_000)
     args = ap.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    one_core()
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     T = args.samples
     t = np.linspace(0.0, mech.drivers[0].period, T)
     linkdyn.analyze(mech, t[:1000], backend="compiled")   # compile once
     kin_kernel, kin_args, dyn_kernel, dyn_args = kernel_arguments(mech, t)
     print(f"Hoeken four-bar, {T} samples, one core, best of 5, outputs already touched")
-    print(f"kinematics kernel  {best_time(lambda: kin_kernel(*kin_args)) / T * 1e9:7.1f} ns/sample")
-    print(f"dynamics kernel    {best_time(lambda: dyn_kernel(*dyn_args)) / T * 1e9:7.1f} ns/sample")
+    for name, kernel, args in (("kinematics", kin_kernel, kin_args),
+                               ("dynamics", dyn_kernel, dyn_args)):
+        per = best_time(lambda: kernel(*args), 5)
+        print(f"{name + ' kernel':18s} {per / T * 1e9:7.1f} ns/sample")
     print("kinematics kernel, step by step:")
     table, block = steps(kin_args)
     for name, fn in table.items():

@@ -12,7 +12,7 @@ axis ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T
 
 Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
 variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
-:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (about 40 s, then cached
+:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (40-45 s, then cached
 on disk beside the modules), which only a large batch repays.
 
 numba caches each kernel by its own file: after editing a helper in another file (this one),
@@ -57,6 +57,21 @@ def inline(fn):
     if numba is None:  # pragma: no cover
         return fn
     return numba.njit(inline="always", error_model="numpy")(fn)
+
+
+@inline
+def vector_views(x, i, d, ks):
+    """Entity i's planar vector of ``x`` (n, 2, D, T) over the samples ``ks`` of design d: its
+    components x, y as 1-D views. The kernels index such views inside their sample loops,
+    without the multi-dimensional address arithmetic of every access."""
+    return x[i, 0, d, ks], x[i, 1, d, ks]
+
+
+@inline
+def screw_views(x, i, d, ks):
+    """Entity i's twist or wrench of ``x`` (n, 3, D, T) over the samples ``ks`` of design d:
+    its components [w, vx, vy] or [M, Fx, Fy] as 1-D views (see :func:`vector_views`)."""
+    return x[i, 0, d, ks], x[i, 1, d, ks], x[i, 2, d, ks]
 
 
 def use_compiled(backend: str | None = None, samples: int = 0) -> bool:

@@ -11,16 +11,17 @@ for each body, the samples of the block. A sample sees exactly the scalar operat
 one-sample recursion, but the independent samples keep the processor busy and every array is
 read and written in contiguous runs (one sample at a time through all bodies, the component-
 first arrays were ~2.5x slower). Each step takes a body's rows over the block as 1-D views
-(:func:`_vector`, :func:`_screw`) before its sample loop: numba then indexes them without the
-multi-dimensional address and wrap-around arithmetic of every access (~25 % faster). The numpy
-solvers stay the reference; the tests hold the two to agree to rounding, NaN at the same samples.
+(:func:`~linkdyn.compiled.vector_views`, :func:`~linkdyn.compiled.screw_views`) before its
+sample loop: numba then indexes them without the multi-dimensional address and wrap-around
+arithmetic of every access. The numpy solvers stay the reference; the tests hold the two to
+agree to rounding, NaN at the same samples.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..compiled import PRI, REV, Packed, eliminate, inline, njit
+from ..compiled import PRI, REV, Packed, eliminate, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
@@ -33,20 +34,6 @@ SINGULAR_PIVOT = 1e-13
 BLOCK = 1024
 
 
-@inline
-def _vector(x, i, d, ks):
-    """Body i's planar vector of ``x`` (n, 2, D, T) over the samples ``ks`` of design d: its
-    components x, y as 1-D views."""
-    return x[i, 0, d, ks], x[i, 1, d, ks]
-
-
-@inline
-def _screw(x, i, d, ks):
-    """Body i's twist or wrench of ``x`` (n, 3, D, T) over the samples ``ks`` of design d: its
-    components [w, vx, vy] or [M, Fx, Fy] as 1-D views."""
-    return x[i, 0, d, ks], x[i, 1, d, ks], x[i, 2, d, ks]
-
-
 @njit
 def _composite(parent, r, d, k0, nb, w):
     """The backward recursion ``w_p += A(r_i - r_p)^T w_i``, leaves first, in place on the
@@ -55,8 +42,8 @@ def _composite(parent, r, d, k0, nb, w):
     ks = slice(k0, k0 + nb)   # the block's samples
     for i in range(len(parent) - 1, 0, -1):
         p = parent[i]
-        r_i, r_p = _vector(r, i, d, ks), _vector(r, p, d, ks)
-        w_i, w_p = _screw(w, i, d, ks), _screw(w, p, d, ks)
+        r_i, r_p = vector_views(r, i, d, ks), vector_views(r, p, d, ks)
+        w_i, w_p = screw_views(w, i, d, ks), screw_views(w, p, d, ks)
         for k in range(nb):
             ax = r_i[0][k] - r_p[0][k]
             ay = r_i[1][k] - r_p[1][k]
@@ -82,9 +69,9 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o
         mi, ii = mass[dp, i], inertia[dp, i]
         cx, cy = com[dp, i, 0], com[dp, i, 1]
         c_i, s_i = c[i, d, ks], s[i, d, ks]
-        tw_i, twd_i = _screw(tw, i, d, ks), _screw(twd, i, d, ks)
-        w_ext_i = _screw(w_ext, i, d, ks)
-        wstar_i, wtilde_i = _screw(o_wstar, i, d, ks), _screw(o_wtilde, i, d, ks)
+        tw_i, twd_i = screw_views(tw, i, d, ks), screw_views(twd, i, d, ks)
+        w_ext_i = screw_views(w_ext, i, d, ks)
+        wstar_i, wtilde_i = screw_views(o_wstar, i, d, ks), screw_views(o_wtilde, i, d, ks)
         for k in range(nb):
             ci, si = c_i[k], s_i[k]
             dx = ci * cx - si * cy
@@ -113,7 +100,7 @@ def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
     # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
         si = sign[i]
-        wtilde_i, e_i = _screw(o_wtilde, i, d, ks), _vector(e, i, d, ks)
+        wtilde_i, e_i = screw_views(o_wtilde, i, d, ks), vector_views(e, i, d, ks)
         Q_i, o_Q_i = Q[i, :nb], o_Q[i, d, ks]
         if kind[i] == REV:
             for k in range(nb):
@@ -175,12 +162,12 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0
         px, py = cut_pb[dp, cc, 0], cut_pb[dp, cc, 1]
         ux, uy = cut_axis[dp, cc, 0], cut_axis[dp, cc, 1]
         prismatic = cut_kind[cc] == PRI
-        c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], _vector(r, a, d, ks)
-        c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], _vector(r, b, d, ks)
+        c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], vector_views(r, a, d, ks)
+        c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], vector_views(r, b, d, ks)
         wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
         wc_b = wc[b, 0, :nb], wc[b, 1, :nb], wc[b, 2, :nb]
         lam_c = lam[2 * cc, :nb], lam[2 * cc + 1, :nb]
-        on_c = _screw(o_on, jc, d, ks)
+        on_c = screw_views(o_on, jc, d, ks)
         for k in range(nb):
             cb, sb = c_b[k], s_b[k]
             rpx = r_b[0][k] + (cb * px - sb * py)
@@ -215,7 +202,7 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
     ks = slice(k0, k0 + nb)   # the block's samples
     # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i
     for i in range(n):
-        R_i, wstar_i = _screw(o_tree, i, d, ks), _screw(o_wstar, i, d, ks)
+        R_i, wstar_i = screw_views(o_tree, i, d, ks), screw_views(o_wstar, i, d, ks)
         wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
             R_i[0][k] = wstar_i[0][k] - wc_i[0][k]
@@ -228,8 +215,10 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
         si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
         revolute = kind[i] == REV
         px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
-        R_i, e_i, on_i = _screw(o_tree, i, d, ks), _vector(e, i, d, ks), _screw(o_on, jt, d, ks)
-        r_i, c_p, s_p, r_p = _vector(r, i, d, ks), c[p, d, ks], s[p, d, ks], _vector(r, p, d, ks)
+        R_i, on_i = screw_views(o_tree, i, d, ks), screw_views(o_on, jt, d, ks)
+        e_i, r_i = vector_views(e, i, d, ks), vector_views(r, i, d, ks)
+        r_p = vector_views(r, p, d, ks)
+        c_p, s_p = c[p, d, ks], s[p, d, ks]
         for k in range(nb):
             o0, o1, o2 = R_i[0][k], R_i[1][k], R_i[2][k]
             if dr >= 0:   # body i's driver

@@ -24,7 +24,8 @@ import math
 
 import numpy as np
 
-from ..compiled import CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, factor, inline, njit, substitute
+from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, factor, inline, njit,
+                        screw_views, substitute, vector_views)
 
 BLOCK = 512          # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
@@ -88,8 +89,9 @@ def nearest(nodes, tc):
 def _pose(phi, c, s, r, e, i, d, ks):
     """Body i's pose over the samples ``ks`` of design d, as views to read and write:
     ``phi``, ``c``, ``s``, the origin's ``x``, ``y`` and the slider axis's ``x``, ``y``."""
-    return (phi[i, d, ks], c[i, d, ks], s[i, d, ks], r[i, 0, d, ks], r[i, 1, d, ks],
-            e[i, 0, d, ks], e[i, 1, d, ks])
+    rx_i, ry_i = vector_views(r, i, d, ks)
+    ex_i, ey_i = vector_views(e, i, d, ks)
+    return phi[i, d, ks], c[i, d, ks], s[i, d, ks], rx_i, ry_i, ex_i, ey_i
 
 
 @njit
@@ -168,15 +170,18 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
         a, b = cuts[cut, CUT_A], cuts[cut, CUT_B]
         pax_, pay_, pbx_, pby_ = cgeo[d, cut, 0], cgeo[d, cut, 1], cgeo[d, cut, 2], cgeo[d, cut, 3]
         uax, uay, ca, sa = cgeo[d, cut, 4], cgeo[d, cut, 5], math.cos(cgeo[d, cut, 6]), math.sin(cgeo[d, cut, 6])
-        c_a, s_a, rx_a, ry_a = c[a, d, ks], s[a, d, ks], r[a, 0, d, ks], r[a, 1, d, ks]
-        c_b, s_b, rx_b, ry_b = c[b, d, ks], s[b, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
+        c_a, s_a = c[a, d, ks], s[a, d, ks]
+        rx_a, ry_a = vector_views(r, a, d, ks)
+        c_b, s_b = c[b, d, ks], s[b, d, ks]
+        rx_b, ry_b = vector_views(r, b, d, ks)
         # the cut's body on the side of both unknown joints (chain, slide), and the other
         c_m, s_m, rx_m, ry_m = (c_b, s_b, rx_b, ry_b) if on_b else (c_a, s_a, rx_a, ry_a)
         c_f, s_f, rx_f, ry_f = (c_a, s_a, rx_a, ry_a) if on_b else (c_b, s_b, rx_b, ry_b)
         lmx, lmy = (pbx_, pby_) if on_b else (pax_, pay_)
         lfx, lfy = (pax_, pay_) if on_b else (pbx_, pby_)
         # the upper and lower unknown joints
-        rx_u, ry_u, rx_l, ry_l = r[ju, 0, d, ks], r[ju, 1, d, ks], r[jl, 0, d, ks], r[jl, 1, d, ks]
+        rx_u, ry_u = vector_views(r, ju, d, ks)
+        rx_l, ry_l = vector_views(r, jl, d, ks)
         for k in range(nb):
             x1x, x1y, x2x, x2y = rx_u[k], ry_u[k], rx_l[k], ry_l[k]
             pax, pay = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
@@ -265,8 +270,10 @@ def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
         a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
         pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
         ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
-        c_a, s_a, rx_a, ry_a = c[a, d, ks], s[a, d, ks], r[a, 0, d, ks], r[a, 1, d, ks]
-        c_b, s_b, rx_b, ry_b = c[b, d, ks], s[b, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
+        c_a, s_a = c[a, d, ks], s[a, d, ks]
+        rx_a, ry_a = vector_views(r, a, d, ks)
+        c_b, s_b = c[b, d, ks], s[b, d, ks]
+        rx_b, ry_b = vector_views(r, b, d, ks)
         P_c = P[ci]
         for k in range(nb):
             P_c[0, k], P_c[1, k] = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
@@ -315,7 +322,8 @@ def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
         revolute = cuts[ci, CUT_KIND] == REV
         for j in range(1, len(tree)):
             f = side[ci, j] * tree[j, SIGN]
-            rx_j, ry_j, ex_j, ey_j = r[j, 0, d, ks], r[j, 1, d, ks], e[j, 0, d, ks], e[j, 1, d, ks]
+            rx_j, ry_j = vector_views(r, j, d, ks)
+            ex_j, ey_j = vector_views(e, j, d, ks)
             J0, J1 = J[2 * ci, j - 1, d, ks], J[2 * ci + 1, j - 1, d, ks]   # cut ci's rows
             for k in range(nb):
                 _, _, pbx, pby, eax, eay = _frame(P_c, k)
@@ -336,10 +344,12 @@ def _twists(tree, d, k0, nb, r, e, rate, tw):
     tw[0, :, d, ks] = 0.0
     for i in range(1, len(tree)):
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
-        w_i, vx_i, vy_i = tw[i, 0, d, ks], tw[i, 1, d, ks], tw[i, 2, d, ks]
-        w_p, vx_p, vy_p = tw[p, 0, d, ks], tw[p, 1, d, ks], tw[p, 2, d, ks]
-        rx_i, ry_i, rx_p, ry_p = r[i, 0, d, ks], r[i, 1, d, ks], r[p, 0, d, ks], r[p, 1, d, ks]
-        ex_i, ey_i, rate_i = e[i, 0, d, ks], e[i, 1, d, ks], rate[i, d, ks]
+        w_i, vx_i, vy_i = screw_views(tw, i, d, ks)
+        w_p, vx_p, vy_p = screw_views(tw, p, d, ks)
+        rx_i, ry_i = vector_views(r, i, d, ks)
+        rx_p, ry_p = vector_views(r, p, d, ks)
+        ex_i, ey_i = vector_views(e, i, d, ks)
+        rate_i = rate[i, d, ks]
         for k in range(nb):
             w = w_p[k]
             w_i[k] = w
@@ -352,6 +362,16 @@ def _twists(tree, d, k0, nb, r, e, rate, tw):
                 vy_i[k] += (sign * rate_i[k]) * ey_i[k]
 
 
+@inline
+def _motion(tw, td, r, i, d, ks):
+    """Body i's twist, twist rate and origin over the samples ``ks`` of design d, as views:
+    ``w, vx, vy, al, ax, ay, x, y``."""
+    w_i, vx_i, vy_i = screw_views(tw, i, d, ks)
+    al_i, ax_i, ay_i = screw_views(td, i, d, ks)
+    rx_i, ry_i = vector_views(r, i, d, ks)
+    return w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i
+
+
 @njit
 def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
     """td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i."""
@@ -359,12 +379,10 @@ def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
     td[0, :, d, ks] = 0.0
     for i in range(1, len(tree)):
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
-        al_i, ax_i, ay_i = td[i, 0, d, ks], td[i, 1, d, ks], td[i, 2, d, ks]
-        al_p, ax_p, ay_p = td[p, 0, d, ks], td[p, 1, d, ks], td[p, 2, d, ks]
-        w_i, vx_i, vy_i = tw[i, 0, d, ks], tw[i, 1, d, ks], tw[i, 2, d, ks]
-        w_p, vx_p, vy_p = tw[p, 0, d, ks], tw[p, 1, d, ks], tw[p, 2, d, ks]
-        rx_i, ry_i, rx_p, ry_p = r[i, 0, d, ks], r[i, 1, d, ks], r[p, 0, d, ks], r[p, 1, d, ks]
-        ex_i, ey_i, qd_i, qdd_i = e[i, 0, d, ks], e[i, 1, d, ks], qd[i, d, ks], qdd[i, d, ks]
+        w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i = _motion(tw, td, r, i, d, ks)
+        w_p, vx_p, vy_p, al_p, ax_p, ay_p, rx_p, ry_p = _motion(tw, td, r, p, d, ks)
+        ex_i, ey_i = vector_views(e, i, d, ks)
+        qd_i, qdd_i = qd[i, d, ks], qdd[i, d, ks]
         for k in range(nb):
             al, w = al_p[k], w_p[k]
             al_i[k] = al
@@ -387,11 +405,8 @@ def _bias(cuts, d, k0, nb, r, tw, td, P, bias):
     for ci in range(len(cuts)):
         P_c = P[ci]
         a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
-        w_a, vx_a, vy_a = tw[a, 0, d, ks], tw[a, 1, d, ks], tw[a, 2, d, ks]
-        w_b, vx_b, vy_b = tw[b, 0, d, ks], tw[b, 1, d, ks], tw[b, 2, d, ks]
-        al_a, ax_a, ay_a = td[a, 0, d, ks], td[a, 1, d, ks], td[a, 2, d, ks]
-        al_b, ax_b, ay_b = td[b, 0, d, ks], td[b, 1, d, ks], td[b, 2, d, ks]
-        rx_a, ry_a, rx_b, ry_b = r[a, 0, d, ks], r[a, 1, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
+        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
+        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         for k in range(nb):
             pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
             # both bodies' motion taken at the cut point, which moves with body b
@@ -445,10 +460,8 @@ def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
     for ci in range(len(cuts)):
         P_c = P[ci]
         a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
-        w_a, vx_a, vy_a = tw[a, 0, d, ks], tw[a, 1, d, ks], tw[a, 2, d, ks]
-        w_b, vx_b, vy_b = tw[b, 0, d, ks], tw[b, 1, d, ks], tw[b, 2, d, ks]
-        al_a, ax_a, ay_a = td[a, 0, d, ks], td[a, 1, d, ks], td[a, 2, d, ks]
-        al_b, ax_b, ay_b = td[b, 0, d, ks], td[b, 1, d, ks], td[b, 2, d, ks]
+        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
+        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         s_c, sd_c, sdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
         if cuts[ci, CUT_KIND] == REV:
             phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
@@ -457,7 +470,6 @@ def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
                 sd_c[k] = w_b[k] - w_a[k]
                 sdd_c[k] = al_b[k] - al_a[k]
             continue
-        rx_a, ry_a, rx_b, ry_b = r[a, 0, d, ks], r[a, 1, d, ks], r[b, 0, d, ks], r[b, 1, d, ks]
         for k in range(nb):
             pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
             # d, d', d'': the second body's cut point seen from the first's (body points)
