@@ -51,7 +51,7 @@ def steps(args):
     """The kinematics kernel's steps, each a function of a block ``(k0, nb)``."""
     (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
      modes, q_in, q_drv, qd_drv, qdd_drv, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot,
-     err, block) = args
+     err, fin, block) = args
     n, nc, nd = len(tree), len(cuts), len(dep)
     cq, sq = np.ones((n, block)), np.zeros((n, block))   # cos, sin of s q: any angle will do
     up, low, rhs = np.zeros((5, block)), np.zeros((5, block)), np.zeros((2 * nc, block))

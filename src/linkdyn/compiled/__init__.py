@@ -178,6 +178,40 @@ def pack(lay, n_joints: int) -> Packed:
         size=np.broadcast_to(np.asarray(lay.size, float).reshape(-1), (d,)).copy())
 
 
+@inline
+def _factor2(A, nb, perm, rel):
+    """:func:`factor` for m = 2, a sample at a time: the same operations in the same order."""
+    for k in range(nb):
+        a00, a01, a10, a11 = A[0, 0, k], A[0, 1, k], A[1, 0, k], A[1, 1, k]
+        top = max(max(max(max(0.0, abs(a00)), abs(a01)), abs(a10)), abs(a11))
+        finite = a00 == a00 and a01 == a01 and a10 == a10 and a11 == a11
+        perm[0, k], perm[1, k] = 0, 1
+        if abs(a10) > abs(a00):   # the second row swaps up
+            a00, a01, a10, a11 = a10, a11, a00, a01
+            perm[0, k], perm[1, k] = 1, 0
+        # l = a10 / a00, u11 = a11 - l a01; rel = the smaller pivot over the largest |K_ij|
+        f = a10 * (1.0 / a00)
+        u11 = a11 - f * a01
+        low = math.inf if finite else math.nan
+        for piv in (abs(a00), abs(u11)):
+            low = piv if piv != piv or piv < low else low
+        A[0, 0, k], A[0, 1, k], A[1, 0, k], A[1, 1, k] = a00, a01, f, u11
+        rel[k] = low / (top if top > 0 else 1.0)
+
+
+@inline
+def _substitute2(A, perm, rel, nb, b, x, tol):
+    """:func:`substitute` for m = 2, a sample at a time: the same operations in the same
+    order."""
+    for k in range(nb):
+        y0, y1 = b[perm[0, k], k], b[perm[1, k], k]
+        x1 = (y1 - A[1, 0, k] * y0) / A[1, 1, k]
+        x0 = (y0 - A[0, 1, k] * x1) / A[0, 0, k]
+        if not rel[k] > tol:
+            x0, x1 = math.nan, math.nan
+        x[0, k], x[1, k] = x0, x1
+
+
 @njit
 def factor(A, m, nb, perm, rel):
     """LU-factor the m x m matrices of a block of samples in place: ``P K = L U``.
@@ -188,6 +222,9 @@ def factor(A, m, nb, perm, rel):
     larger; ``perm`` (m, block) records the row order. ``rel`` (block,): the smallest pivot
     over the largest ``|K_ij|`` (NaN if ``K`` holds a NaN).
     """
+    if m == 2:   # one loop, the same operations per sample (a single loop's J_dep)
+        _factor2(A, nb, perm, rel)
+        return
     scale = np.empty(nb)
     for k in range(nb):
         top, finite = 0.0, True
@@ -225,6 +262,9 @@ def substitute(A, perm, rel, m, nb, b, x, tol):
     """Solve ``K x = b`` for a block of samples from :func:`factor`'s ``A``, ``perm``, ``rel``:
     ``L y = P b``, then ``U x = y``. ``b``, ``x`` (m, block); ``x`` is NaN where ``rel`` is
     not above ``tol``."""
+    if m == 2:
+        _substitute2(A, perm, rel, nb, b, x, tol)
+        return
     for i in range(m):
         for k in range(nb):
             x[i, k] = b[perm[i, k], k]

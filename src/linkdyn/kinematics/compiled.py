@@ -99,8 +99,7 @@ def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
     """Poses of all bodies (recursion.forward_positions); ``cq``, ``sq`` (n, block): cosine
     and sine of ``s q_i`` for the revolute joints."""
     ks = slice(k0, k0 + nb)   # the block's samples
-    phi[0, d, ks], c[0, d, ks], s[0, d, ks] = 0.0, 1.0, 0.0
-    r[0, :, d, ks], e[0, :, d, ks] = 0.0, 0.0
+    c[0, d, ks] = 1.0   # the ground's other rows, and a revolute joint's e, stay zero
     for i in range(1, len(tree)):
         p, sign = tree[i, PARENT], tree[i, SIGN]
         jx, jy = geo[d, i, 0], geo[d, i, 1]
@@ -116,7 +115,6 @@ def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
                 c_i[k], s_i[k] = cp * cq_i[k] - sp * sq_i[k], sp * cq_i[k] + cp * sq_i[k]
                 rx_i[k] = rx_p[k] + cp * jx - sp * jy
                 ry_i[k] = ry_p[k] + sp * jx + cp * jy
-                ex_i[k], ey_i[k] = 0.0, 0.0
         else:
             # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the parent
             ax, ay, angle = geo[d, i, 2], geo[d, i, 3], sign * geo[d, i, 4]
@@ -341,8 +339,7 @@ def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
 def _twists(tree, d, k0, nb, r, e, rate, tw):
     """t_i = A(r_i - r_p) t_p + p_i rate_i for every body (eq. 2); ``rate`` (n, D, T)."""
     ks = slice(k0, k0 + nb)
-    tw[0, :, d, ks] = 0.0
-    for i in range(1, len(tree)):
+    for i in range(1, len(tree)):   # the ground's row stays zero
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
         w_i, vx_i, vy_i = screw_views(tw, i, d, ks)
         w_p, vx_p, vy_p = screw_views(tw, p, d, ks)
@@ -376,8 +373,7 @@ def _motion(tw, td, r, i, d, ks):
 def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
     """td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i."""
     ks = slice(k0, k0 + nb)
-    td[0, :, d, ks] = 0.0
-    for i in range(1, len(tree)):
+    for i in range(1, len(tree)):   # the ground's row stays zero
         p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
         w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i = _motion(tw, td, r, i, d, ks)
         w_p, vx_p, vy_p, al_p, ax_p, ay_p, rx_p, ry_p = _motion(tw, td, r, p, d, ks)
@@ -491,6 +487,17 @@ def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
                         + (dx * eddx + dy * eddy))
 
 
+@njit
+def _finite(d, k0, nb, qd, qdd, fin):
+    """``fin`` (D, T): whether every rate and acceleration of the sample is finite."""
+    fin_d = fin[d, k0:k0 + nb]
+    fin_d[:] = True
+    for i in range(len(qd)):
+        qd_i, qdd_i = qd[i, d, k0:k0 + nb], qdd[i, d, k0:k0 + nb]
+        for k in range(nb):
+            fin_d[k] = fin_d[k] & math.isfinite(qd_i[k]) & math.isfinite(qdd_i[k])
+
+
 @inline
 def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
     """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
@@ -507,9 +514,10 @@ def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
 @njit
 def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
            t_s, nodes, lo, hi, Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv,
-           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, block):
+           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block):
     """Positions, rates and accelerations at the times ``t_s`` (T,), written into the outputs
-    ``q`` ... ``err`` (see :func:`run`).
+    ``q`` ... ``err`` (see :func:`run`), which come zeroed: the rows that stay zero (the
+    ground's, a revolute joint's slider axis) are never written.
 
     With continuation nodes (``nodes`` (K,) s, their coordinates ``Qn`` (n, D, K) and the
     cosines and sines ``cQ``, ``sQ`` of ``s Qn``), the loops are closed dyad by dyad from the
@@ -533,14 +541,14 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             if from_nodes:
                 for k in range(nb):
                     node[k] = nearest(nodes, min(max(t_s[k0 + k], lo[d]), hi[d]))
-                for i in range(n):
+                for i in range(1, n):
                     q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
                     Qn_i, cQ_i, sQ_i = Qn[i, d], cQ[i, d], sQ[i, d]
                     for k in range(nb):
                         jn = node[k]
                         q_i[k], cq_i[k], sq_i[k] = Qn_i[jn], cQ_i[jn], sQ_i[jn]
             else:
-                for i in range(n):
+                for i in range(1, n):
                     _coordinates(tree, i, q_in[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
             for j in range(nv):
                 i = drv[j]
@@ -553,7 +561,8 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _residual(cuts, cgeo, size, d, k0, nb, phi, P, err)
             _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
-            qd[:, d, ks], qdd[:, d, ks] = 0.0, 0.0
+            for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
+                qdd[dep[m], d, ks] = 0.0
             for j in range(nv):
                 qd[drv[j], d, ks], qdd[drv[j], d, ks] = qd_drv[j, ks], qdd_drv[j, ks]
             for row in range(nd):
@@ -581,6 +590,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
                 _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qdd, sol)
                 _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
             _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, cut)
+            _finite(d, k0, nb, qd, qdd, fin)
 
 
 def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
@@ -595,7 +605,8 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
     Returns the outputs, batch flattened to (D, T): ``q``, ``phi``, ``c``, ``s``, ``qd``,
     ``qdd`` (n, D, T); ``r``, ``e`` (n, 2, D, T; ``e`` is zero for revolute joints); ``tw``,
     ``twd`` (n, 3, D, T); ``J`` (2 n_cut, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
-    joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T).
+    joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T); ``finite`` (D, T)
+    bool, whether every rate and acceleration of the sample is finite.
     """
     n, nc = len(P.parent), len(P.cut_a)
     D, T = P.size.shape[0], len(t)
@@ -616,7 +627,10 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
     out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
            "J": (2 * nc, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3), "twd": (n, 3),
            "cut": (nc, 3), "pivot": (), "err": ()}
-    out = {k: np.empty(shape + (D, T)) for k, shape in out.items()}
+    # zeroed (lazily, by the system) so the rows that stay zero are never written: the
+    # ground's, and the slider axis e of a revolute joint
+    out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
+    out["finite"] = np.zeros((D, T), np.bool_)
     # the topology and the numbers in the kernel's few arrays
     tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64)], axis=1)
     cuts = np.stack([P.cut_a, P.cut_b, P.cut_kind], axis=1).reshape(nc, 3)

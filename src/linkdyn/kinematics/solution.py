@@ -203,7 +203,9 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
             out = kc.run(packed, t, qdrv, qddrv, qdddrv, nodes=nodes, Q=Q, modes=modes,
                          lo=lo_c, hi=hi_c)
             err = out["err"].reshape(followed.shape[:-1] + t.shape)
-            if np.any(~(err <= ACCEPT) & np.all(np.isfinite(out["q"]), axis=0).reshape(err.shape)):
+            unclosed = ~(err <= ACCEPT)
+            if np.any(unclosed) and np.any(
+                    unclosed & np.all(np.isfinite(out["q"]), axis=0).reshape(err.shape)):
                 out = None   # some sample needs the damped Newton retry of the numpy path
         if out is None:
             tc = np.clip(t, lo_c, hi_c)
@@ -227,10 +229,11 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
             q, pose, p, J, err = _correct(lay, q, modes)
         # the branch ends at the first sample past the last node that does not close
         fails = ~(err <= ACCEPT)
-        hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
-        lo_end = np.max(np.where(fails & (t < lo_ok), t, -np.inf), axis=-1, keepdims=True)
-        cut_off = (t >= hi_end) | (t <= lo_end) | ~followed
-        err = np.where(cut_off, np.inf, err)
+        if np.any(fails) or not np.all(followed):
+            hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
+            lo_end = np.max(np.where(fails & (t < lo_ok), t, -np.inf), axis=-1, keepdims=True)
+            cut_off = (t >= hi_end) | (t <= lo_end) | ~followed
+            err = np.where(cut_off, np.inf, err)
     else:
         q = np.repeat(q_start[..., None], len(t), axis=-1)
         q[drv] = qdrv if single else qdrv[:, None] + lay_q
@@ -286,12 +289,11 @@ def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
     that do not close (``err``) or are singular are set to NaN in place."""
     topo, shape = lay.topo, err.shape
     n, nc = topo.n, len(lay.cuts)
-    valid = ((err <= ACCEPT) & np.all(np.isfinite(out["qd"]), axis=0).reshape(shape)
-             & np.all(np.isfinite(out["qdd"]), axis=0).reshape(shape))
+    valid = (err <= ACCEPT) & out["finite"].reshape(shape)
     if not np.all(valid):
         nan = ~valid.reshape(out["pivot"].shape)
         for key, x in out.items():
-            if key not in ("pivot", "err"):
+            if key not in ("pivot", "err", "finite"):
                 x[..., nan] = np.nan
 
     def each(key, lead):  # per-entity views with the batch shape
