@@ -13,6 +13,7 @@ nearly singular on both sides of the pivot threshold) at chosen samples.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import tomllib
 
 import numpy as np
@@ -235,3 +236,93 @@ def test_any_sample_block_gives_the_same(monkeypatch, block):
     designs = [slider_crank_design(1.0), slider_crank_design(0.6)]
     kin = numpy_kinematics(designs, times(designs[0], 33))
     check_all(*both(designs, kin))
+
+
+def kernel_w_ext(monkeypatch):
+    """Record the ``w_ext`` every call of the compiled kernel receives."""
+    seen, kernel = [], compiled._kernel
+
+    def spy(*args):
+        py_func = getattr(kernel, "py_func", kernel)   # the Python function numba compiled
+        seen.append(inspect.signature(py_func).bind(*args).arguments["w_ext"])
+        return kernel(*args)
+
+    monkeypatch.setattr(compiled, "_kernel", spy)
+    return seen
+
+
+def test_bodies_without_loads_get_a_broadcast_zero():
+    """No per-sample memory for a body without loads, nor for the ground's share when nothing
+    is anchored on it; every wrench keeps the shape (3, ...), and the numpy solver's ``w_star``
+    of the ground is a full, writable zero."""
+    model = linkdyn.load(linkdyn.example_path("hoeken"))   # no gravity, no loads
+    kin = numpy_kinematics(model, times(model, 9))
+    applied = loads_mod.wrenches(model, kin)
+    for w in applied.wrenches + [applied.on_ground]:
+        assert w.shape == (3, 9) and w.strides[-1] == 0 and not np.any(w)
+    assert applied.w_ext.shape == (9, 4, 3)
+    dyn = denoc.solve(kin, applied)
+    assert dyn.wstar[0].shape == (3, 9) and dyn.wstar[0].flags.writeable
+    # a spring anchored on the ground: its share is a full array; loaded bodies' too
+    model = MODELS["hoeken-loaded"]()
+    applied = loads_mod.wrenches(model, numpy_kinematics(model, times(model, 9)))
+    assert applied.wrenches[0].strides[-1] == 0
+    assert applied.on_ground.shape == (3, 9) and np.all(np.abs(applied.on_ground[1:]) > 0)
+    assert all(w.shape == (3, 9) and w.strides[-1] != 0 for w in applied.wrenches[1:])
+
+
+def constant_loads(applied, values):
+    """``applied`` with the wrench of body i the constant ``values[i]`` (3, ...) broadcast
+    over the samples (stride 0 along them)."""
+    shape = applied.wrenches[0].shape
+    return dataclasses.replace(applied, wrenches=[np.broadcast_to(v, shape) for v in values])
+
+
+@pytest.mark.parametrize("designs", [1, 2])
+def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
+    """Wrenches constant in time (broadcast along the samples) reach the kernel as one sample,
+    ``w_ext`` (n, 3, D, 1), taken design by design; the results are numpy's and, to the bit,
+    those of the same wrenches given as full arrays, which reach it at every sample."""
+    seen = kernel_w_ext(monkeypatch)
+    monkeypatch.setattr(compiled, "BLOCK", 8)   # several blocks reuse the constant's scratch
+    models = [hoeken_design(38.1), hoeken_design(42.0)][:designs]
+    kin = numpy_kinematics(models if designs > 1 else models[0], times(models[0], 21))
+    D = designs
+    applied = loads_mod.wrenches(models[0], kin)
+    packed = pack(kin.layout, len(models[0].joints))
+    compiled.solve(kin, applied, packed)   # no loads at all
+    assert seen[-1].shape == (4, 3, D, 1) and not np.any(seen[-1])
+    # constant per body (the ground's zero), and per design when stacked: (3, D, 1) or (3, 1)
+    scale = np.linspace(1.0, 1.3, D)[:, None]
+    values = [np.zeros(3)] + [np.array([0.2 * i, -1.5 + i, 0.7]) for i in (1, 2, 3)]
+    values = [v[:, None, None] * scale if designs > 1 else v[:, None] for v in values]
+    const = constant_loads(applied, values)
+    dyn = denoc.solve(kin, const)
+    ref = (dyn, reactions.solve(models[0], kin, dyn))
+    fast = compiled.solve(kin, const, packed)
+    assert seen[-1].shape == (4, 3, D, 1)
+    check_all(ref, fast)
+    # the same wrenches at every sample: the other path of the kernel, the same bits
+    full = dataclasses.replace(const, wrenches=[np.array(w) for w in const.wrenches])
+    again = compiled.solve(kin, full, packed)
+    assert seen[-1].shape == (4, 3, D, 21)
+    for name in ("tau", "lam", "Q", "w_star", "w_tilde"):
+        assert np.array_equal(getattr(again[0], name), getattr(fast[0], name)), name
+    assert np.array_equal(again[1].force, fast[1].force)
+    assert np.array_equal(np.stack(again[1].tree), np.stack(fast[1].tree))
+
+
+def test_a_load_varying_in_time_without_gravity(monkeypatch):
+    """A torque varying in time on one body, none elsewhere and no gravity: the kernel reads
+    every sample of ``w_ext`` (the unloaded bodies' zeros included) and matches numpy."""
+    seen = kernel_w_ext(monkeypatch)
+    model = linkdyn.load(linkdyn.example_path("hoeken"))
+    assert not np.any(model.gravity) and not model.loads
+    torque = linkdyn.Load("torque", "rocker", value=lambda t: 0.3 * np.sin(5.0 * np.asarray(t)))
+    model = dataclasses.replace(model, loads=(torque,))
+    kin = numpy_kinematics(model, times(model, 31))
+    ref, fast = both(model, kin)
+    assert seen[-1].shape == (4, 3, 1, 31)
+    unloaded = both(dataclasses.replace(model, loads=()), kin)[1]
+    assert np.max(np.abs(fast[0].tau - unloaded[0].tau)) > 1e-3 * np.max(np.abs(fast[0].tau))
+    check_all(ref, fast)

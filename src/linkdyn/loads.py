@@ -1,7 +1,9 @@
 """Applied loads as wrenches on the bodies: gravity, point forces, torques, springs, dampers.
 
 Every wrench is ``[n, fx, fy]`` about the body's reference point O_i (its tree joint), global
-components, N m and N: one component-first array ``(3, T)`` per body, tree order.
+components, N m and N: one component-first array ``(3, T)`` per body, tree order. A body without
+loads gets a read-only zero broadcast over the samples (stride 0 along them, no memory per
+sample).
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ class Loads:
     Attributes
     ----------
     wrenches : list of ndarray (3, T)
-        Sum of applied wrenches on each body about O_i (tree order), N m / N.
+        Sum of applied wrenches on each body about O_i (tree order), N m / N; a broadcast
+        (read-only, stride 0 along T) zero for a body without loads.
     potential_energy : ndarray (..., T)
         Gravity and spring potential, J (zero at the global origin / free length).
     power : ndarray (..., T)
@@ -31,7 +34,8 @@ class Loads:
         Whether gravity or springs are present.
     on_ground : ndarray (3, T)
         Wrench of the springs and dampers anchored on the ground on it, about the global origin
-        (it enters no balance of the moving bodies; the shaking load includes it).
+        (it enters no balance of the moving bodies; the shaking load includes it); a broadcast
+        zero as in ``wrenches`` when there are none.
     """
 
     wrenches: list
@@ -63,7 +67,9 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
     topo = lay.topo
     index = {name: k for k, name in enumerate(topo.bodies)}
     shape = kin.shape
-    w = [np.zeros((3,) + shape) for _ in range(topo.n)]
+    # no load: one zero wrench shared by every body, broadcast over the samples
+    zero = np.broadcast_to(np.zeros((3,) + (1,) * len(shape)), (3,) + shape)
+    w = [zero] * topo.n
     pe = np.zeros(shape)
     power = np.zeros(shape)
     g = np.asarray(model.gravity, float)
@@ -106,5 +112,5 @@ def wrenches(model: Model, kin: KinematicSolution) -> Loads:
             _add_force(w, kin, j, r2, -tension * u)
     # the ground's O_0 is the global origin: w[0] is the load on the ground about it, which does
     # no work and is not part of the moving bodies' balance
-    on_ground, w[0] = w[0], np.zeros((3,) + shape)
+    on_ground, w[0] = w[0], zero
     return Loads(w, pe, power, has_pe, on_ground)

@@ -54,15 +54,15 @@ def _composite(parent, r, d, k0, nb, w):
 
 
 @njit
-def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o_wstar, o_wtilde,
-                  o_ke):
+def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_const, ke, o_wstar,
+                  o_wtilde, o_ke):
     """Uncoupled Newton–Euler wrenches ``w_star`` of a block (denoc.newton_euler), copied into
-    ``w_tilde`` to start its recursion, and the kinetic energy."""
+    ``w_tilde`` to start its recursion, and the kinetic energy. The ground's rows stay as
+    allocated (zero). ``w_const`` (n, 3, 1, block): ``w_ext`` repeated over a block when it is
+    constant in time (one sample, ``w_ext`` (n, 3, D, 1))."""
     n = len(mass[dp])
     ks = slice(k0, k0 + nb)   # the block's samples
     ke[:nb] = 0.0
-    o_wstar[0, :, d, ks] = 0.0
-    o_wtilde[0, :, d, ks] = 0.0
     # Newton–Euler about O_i, d = R(phi) com:  n = I_O al + m d x a,
     # f = m (a + al perp(d) - w^2 d), minus w_ext;  KE = 1/2 m |v + w perp(d)|^2 + 1/2 I w^2
     for i in range(1, n):
@@ -70,7 +70,10 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o
         cx, cy = com[dp, i, 0], com[dp, i, 1]
         c_i, s_i = c[i, d, ks], s[i, d, ks]
         tw_i, twd_i = screw_views(tw, i, d, ks), screw_views(twd, i, d, ks)
-        w_ext_i = screw_views(w_ext, i, d, ks)
+        if w_ext.shape[3] == 1:   # constant in time
+            w_ext_i = screw_views(w_const, i, 0, slice(0, nb))
+        else:
+            w_ext_i = screw_views(w_ext, i, d, ks)
         wstar_i, wtilde_i = screw_views(o_wstar, i, d, ks), screw_views(o_wtilde, i, d, ks)
         for k in range(nb):
             ci, si = c_i[k], s_i[k]
@@ -93,10 +96,10 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o
 
 @njit
 def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
-    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q``. The
-    zero entries of ``p_i`` are multiplied too, so a NaN spreads as in numpy's dot product."""
+    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q`` (the
+    ground's row stays as allocated, zero). The zero entries of ``p_i`` are multiplied too, so a
+    NaN spreads as in numpy's dot product."""
     ks = slice(k0, k0 + nb)   # the block's samples
-    o_Q[0, d, ks] = 0.0
     # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
         si = sign[i]
@@ -151,7 +154,8 @@ def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pi
 def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s, r,
                   lam, wc, o_on):
     """Cut-joint wrenches ``S^T lam`` on both bodies about their O (reactions.cut_wrenches) into
-    ``wc`` (n, 3, block), and the cut joints' reactions."""
+    ``wc`` (n, 3, block), and the cut joints' reactions (a revolute cut's moment, zero, stays as
+    allocated)."""
     n_cut = cut_a.shape[0]
     ks = slice(k0, k0 + nb)   # the block's samples
     wc[:, :, :nb] = 0.0
@@ -178,6 +182,7 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0
                 ex = ca * ux - sa * uy
                 ey = sa * ux + ca * uy
                 o0, o1, o2 = l0, l1 * (-ey), l1 * ex
+                on_c[0][k] = o0
             else:
                 o0, o1, o2 = 0.0, l0, l1
             ax = rpx - r_b[0][k]
@@ -190,18 +195,24 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0
             wc_a[0][k] = wc_a[0][k] - ((ax * o2 - ay * o1) + o0)
             wc_a[1][k] = wc_a[1][k] - o1
             wc_a[2][k] = wc_a[2][k] - o2
-            on_c[0][k], on_c[1][k], on_c[2][k] = o0, o1, o2
+            on_c[1][k], on_c[2][k] = o1, o2
 
 
 @njit
 def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, c, s,
                     r, e, tau, wc, o_wstar, o_tree, o_on):
     """``R_i`` by the backward recursion of ``w_star - w_cut`` and the reaction of every tree
-    joint from it (reactions.solve)."""
+    joint from it (reactions.solve). A joint whose reaction is ``R_i`` itself (the child is its
+    second body, not driven) is not written: :func:`solve` gives it ``R_i``'s rows."""
     n = parent.shape[0]
     ks = slice(k0, k0 + nb)   # the block's samples
-    # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i
-    for i in range(n):
+    # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i; the ground's w_star_0 = 0
+    R_0, wc_0 = screw_views(o_tree, 0, d, ks), (wc[0, 0, :nb], wc[0, 1, :nb], wc[0, 2, :nb])
+    for k in range(nb):
+        R_0[0][k] = 0.0 - wc_0[0][k]
+        R_0[1][k] = 0.0 - wc_0[1][k]
+        R_0[2][k] = 0.0 - wc_0[2][k]
+    for i in range(1, n):
         R_i, wstar_i = screw_views(o_tree, i, d, ks), screw_views(o_wstar, i, d, ks)
         wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
@@ -213,6 +224,8 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
     # about the parent's joint point: A(r_i - r_Pb)^T (-w)
     for i in range(1, n):
         si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
+        if si > 0 and dr < 0:   # R_i as is
+            continue
         revolute = kind[i] == REV
         px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
         R_i, on_i = screw_views(o_tree, i, d, ks), screw_views(o_on, jt, d, ks)
@@ -246,7 +259,9 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
             c, s, r, e, tw, twd, J, w_ext,
             o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, o_on, o_tree, block):
     """Dynamics and reactions of every sample; arguments as in :func:`solve`, outputs written in
-    place (component-first, batch ``(D, T)`` last).
+    place (component-first, batch ``(D, T)`` last) into zeroed arrays: the rows that are zero by
+    construction (the ground's ``w_star`` and ``Q``, a revolute cut's moment) are not written,
+    nor those of a joint whose reaction is ``R_i`` itself (:func:`_tree_reactions`).
 
     The samples are taken ``block`` at a time: each step below runs over the bodies, and for
     each body over the samples of the block, which are independent (every sample sees exactly
@@ -260,6 +275,7 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
     B = block
     # scratch for one block of samples, allocated once per call
     # (w_star, w_tilde and R are built in place in their outputs)
+    w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
     wc = np.zeros((n, 3, B))      # cut-joint wrenches on the bodies
     Q = np.zeros((n, B))
     A = np.zeros((m, m + 1, B))   # [J_dep^T | Q_dep]
@@ -269,10 +285,14 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
     piv = np.zeros(B)
     for d in range(D):
         dp = d if n_designs > 1 else 0
+        if w_ext.shape[3] == 1:   # w_ext constant in time: design d's, repeated over a block
+            for i in range(n):
+                for j in range(3):
+                    w_const[i, j, 0, :] = w_ext[i, j, d, 0]
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
-            _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, ke, o_wstar,
-                          o_wtilde, o_ke)
+            _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_const, ke,
+                          o_wstar, o_wtilde, o_ke)
             # w_tilde_p += A(r_i - r_p)^T w_tilde_i, leaves first
             _composite(parent, r, d, k0, nb, o_wtilde)
             _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q)
@@ -336,7 +356,9 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
         Batch shape ``kin.shape``: (T,) or (D, T). Its ``arrays`` are used when set (compiled
         kinematics), else its per-body lists (numpy kinematics).
     loads : Loads
-        Applied wrenches ``loads.wrenches``, (3, ...) per body about O_i, N m / N.
+        Applied wrenches ``loads.wrenches``, (3, ...) per body about O_i, N m / N. When none
+        varies in time (each broadcast along the samples, as for a body without loads), the
+        kernel reads one sample of them.
     packed : Packed
         ``linkdyn.compiled.pack(kin.layout, len(model.joints))``.
 
@@ -354,13 +376,17 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
     x = _inputs(kin)
     n, n_cut = len(packed.parent), len(packed.cut_a)
     n_joints = packed.n_joints
-    w_ext = _flat(np.stack([np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]), shape,
-                  (n, 3))
-    out = {"wstar": np.empty((n, 3, D, T)), "wtilde": np.empty((n, 3, D, T)),
-           "Q": np.empty((n, D, T)), "lam": np.empty((2 * n_cut, D, T)),
-           "tau": np.empty((len(packed.drv), D, T)), "ke": np.empty((D, T)),
-           "pivot": np.empty((D, T)), "on": np.empty((n_joints, 3, D, T)),
-           "tree": np.empty((n, 3, D, T))}
+    # w_ext (n, 3, D, Tw): one sample (Tw = 1) when no wrench varies in time (all broadcast
+    # along t, stride 0, as a body without loads), else every sample (Tw = T)
+    ws = [np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]
+    Tw = 1 if all(w.strides[-1] == 0 for w in ws) else T
+    w_ext = _plain(np.stack([w[..., :Tw].reshape(3, D, Tw) for w in ws]))
+    # zeroed outputs: the pages of the rows the kernel leaves zero are never touched
+    out = {"wstar": np.zeros((n, 3, D, T)), "wtilde": np.zeros((n, 3, D, T)),
+           "Q": np.zeros((n, D, T)), "lam": np.zeros((2 * n_cut, D, T)),
+           "tau": np.zeros((len(packed.drv), D, T)), "ke": np.zeros((D, T)),
+           "pivot": np.zeros((D, T)), "on": np.zeros((n_joints, 3, D, T)),
+           "tree": np.zeros((n, 3, D, T))}
     P = packed
     _kernel(P.parent, P.kind, P.sign, P.dep, P.drv, P.driver_of, P.tree_joint, P.cut_a, P.cut_b,
             P.cut_kind, P.cut_joint, P.joint_point, P.com, P.mass, P.inertia, P.cut_pb,
@@ -377,4 +403,10 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
     dyn = DynamicSolution(per(out["wstar"]), per(out["wtilde"]), comps(out["Q"]),
                           comps(out["lam"]), comps(out["tau"]), out["ke"].reshape(shape),
                           out["pivot"].reshape(shape))
-    return dyn, Reactions(per(out["on"]), per(out["tree"]))
+    # a tree joint whose child is its second body and is not driven reports R_i itself (the
+    # same array, as in reactions.solve): the kernel left its rows of ``on`` unwritten
+    on, tree = per(out["on"]), per(out["tree"])
+    for i in range(1, n):
+        if P.sign[i] > 0 and P.driver_of[i] < 0:
+            on[P.tree_joint[i]] = tree[i]
+    return dyn, Reactions(on, tree)

@@ -76,7 +76,7 @@ def newton_euler(kin: KinematicSolution, w_ext: list):
     ``n = I_O al + m d x a_O``, ``f = m (a_O + al perp(d) - w^2 d)``.
     """
     lay = kin.layout
-    w_star = [np.zeros_like(w_ext[0])]
+    w_star = [np.zeros((3,) + kin.shape)]   # the ground's (w_ext[0] may be a broadcast zero)
     ke = np.zeros(kin.shape)
     for i in range(1, lay.topo.n):
         m = lay.mass[i]
