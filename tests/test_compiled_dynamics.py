@@ -2,8 +2,8 @@
 
 ``linkdyn.dynamics.compiled.solve`` must give what ``denoc.solve`` followed by
 ``reactions.solve`` give on the same kinematic solution: tau, lam, Q, w_star, w_tilde, kinetic
-energy, pivot, every joint's ``on_second`` wrench and every tree wrench ``R_i``, in the same
-shapes, to 1e-12 of each quantity's peak, NaN at the same samples. Covered: every bundled
+energy, pivot, every joint's ``on_second`` wrench and every tree wrench ``R_i`` (the kernel
+keeping its internals), in the same shapes, to 1e-12 of each quantity's peak, NaN at the same samples. Covered: every bundled
 example, the dynamics tests' models (loads, gravity, springs, dampers, prismatic tree, cut and
 driven joints, joints declared child-first, two drivers, two loops), stacked designs, a design
 that cannot assemble, samples past a limit position, and a closure Jacobian made singular (and
@@ -42,7 +42,7 @@ def both(model, kin):
     applied = loads_mod.wrenches(first, kin)
     dyn = denoc.solve(kin, applied)
     ref = (dyn, reactions.solve(first, kin, dyn))
-    return ref, compiled.solve(kin, applied, pack(kin.layout, len(first.joints)))
+    return ref, compiled.solve(kin, applied, pack(kin.layout, len(first.joints)), internals=True)
 
 
 def same(actual, expected, what, rtol=RTOL):
@@ -133,7 +133,7 @@ def test_comparison_detects_a_wrong_kernel_input():
     ref, _ = both(model, kin)
     packed = pack(kin.layout, len(model.joints))
     heavy = dataclasses.replace(packed, mass=packed.mass * np.array([1.0, 1.0, 1.001, 1.0]))
-    wrong = compiled.solve(kin, loads_mod.wrenches(model, kin), heavy)
+    wrong = compiled.solve(kin, loads_mod.wrenches(model, kin), heavy, internals=True)
     with pytest.raises(AssertionError):
         check_all(ref, wrong)
 
@@ -222,7 +222,7 @@ def test_kinematic_arrays_are_used_when_set():
     with_arrays = dataclasses.replace(kin, arrays=arrays)
     applied = loads_mod.wrenches(model, kin)
     packed = pack(kin.layout, len(model.joints))
-    check_all(ref, compiled.solve(with_arrays, applied, packed))
+    check_all(ref, compiled.solve(with_arrays, applied, packed, internals=True))
     arrays["twd"] = arrays["twd"] * 1.01
     changed, _ = compiled.solve(with_arrays, applied, packed)
     assert np.max(np.abs(changed.tau - ref[0].tau)) > 1e-4 * np.max(np.abs(ref[0].tau))
@@ -299,12 +299,12 @@ def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
     const = constant_loads(applied, values)
     dyn = denoc.solve(kin, const)
     ref = (dyn, reactions.solve(models[0], kin, dyn))
-    fast = compiled.solve(kin, const, packed)
+    fast = compiled.solve(kin, const, packed, internals=True)
     assert seen[-1].shape == (4, 3, D, 1)
     check_all(ref, fast)
     # the same wrenches at every sample: the other path of the kernel, the same bits
     full = dataclasses.replace(const, wrenches=[np.array(w) for w in const.wrenches])
-    again = compiled.solve(kin, full, packed)
+    again = compiled.solve(kin, full, packed, internals=True)
     assert seen[-1].shape == (4, 3, D, 21)
     for name in ("tau", "lam", "Q", "w_star", "w_tilde"):
         assert np.array_equal(getattr(again[0], name), getattr(fast[0], name)), name
@@ -326,3 +326,39 @@ def test_a_load_varying_in_time_without_gravity(monkeypatch):
     unloaded = both(dataclasses.replace(model, loads=()), kin)[1]
     assert np.max(np.abs(fast[0].tau - unloaded[0].tau)) > 1e-3 * np.max(np.abs(fast[0].tau))
     check_all(ref, fast)
+
+
+@pytest.mark.parametrize("name", ["hoeken", "stephenson", "inverted_slider_crank"])
+@pytest.mark.parametrize("block", [5, 1024])
+def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, block):
+    """By default the kernel keeps ``w_star``, ``w_tilde``, ``Q`` and ``R_i`` for one block
+    only: every other output is the same to the bit as with them kept, and the solutions
+    compute them with the numpy recursion when they are first read."""
+    monkeypatch.setattr(compiled, "BLOCK", block)
+    model = linkdyn.load(linkdyn.example_path(name))
+    kin = numpy_kinematics(model, times(model, 41))
+    applied = loads_mod.wrenches(model, kin)
+    packed = pack(kin.layout, len(model.joints))
+    shapes = []
+
+    def spy(*args):
+        shapes.append(args[25].shape)   # o_wstar
+        return kernel(*args)
+    kernel = compiled._kernel
+    monkeypatch.setattr(compiled, "_kernel", spy)
+    kept = compiled.solve(kin, applied, packed, internals=True)
+    lean = compiled.solve(kin, applied, packed)
+    n = len(packed.parent)
+    assert shapes == [(n, 3, 1, 41), (n, 3, 1, min(block, 41))]
+    for name_ in ("tau", "lam", "kinetic_energy", "pivot"):
+        assert np.array_equal(getattr(lean[0], name_), getattr(kept[0], name_)), name_
+    for j, (a, b) in enumerate(zip(lean[1].on_second, kept[1].on_second)):
+        assert np.array_equal(a, b), f"on_second[{j}]"
+    assert not callable(kept[0].internals) and callable(lean[0].internals)
+    # first read: the numpy recursion, equal to the kernel's kept internals
+    check_all(kept, lean)
+    dyn = denoc.solve(kin, applied)
+    for name_ in ("w_star", "w_tilde", "Q"):
+        assert np.array_equal(getattr(lean[0], name_), getattr(dyn, name_)), name_
+    ref = reactions.solve(model, kin, dyn)
+    assert np.array_equal(np.stack(lean[1].tree), np.stack(ref.tree))

@@ -11,8 +11,9 @@ share ``tau p_i`` leaves the joint's reaction.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Callable
 
 import numpy as np
 
@@ -38,13 +39,20 @@ class Reactions:
     moment : ndarray (..., T, n_joints)
         Moment exerted by the first body on the second about the second body's joint point,
         N m (zero to rounding for revolute joints, which cannot transmit one).
+    internals : list or callable
+        ``tree``, or a function returning it when first read (the compiled backend keeps no
+        per-sample copy of it unless asked: it is then computed by :func:`tree_wrenches`).
     tree : list of ndarray (3, T)
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).
     """
 
     on_second: list
-    tree: list
+    internals: list | Callable = field(repr=False, compare=False)
+
+    @cached_property
+    def tree(self) -> list:
+        return self.internals() if callable(self.internals) else self.internals
 
     @cached_property
     def force(self) -> np.ndarray:
@@ -70,14 +78,20 @@ def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
     return w
 
 
+def tree_wrenches(kin: KinematicSolution, dyn: DynamicSolution) -> list:
+    """``R_i`` (3, T) per body: the wrench by the parent on body i about O_i through its tree
+    joint, driver effort included."""
+    w_cut = cut_wrenches(kin, first(dyn.lam))
+    # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
+    return composite(kin, [ws - wc for ws, wc in zip(dyn.wstar, w_cut)])
+
+
 def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactions:
     """Reactions at all joints from the dynamic solution."""
     lay = kin.layout
     topo = lay.topo
     lam = first(dyn.lam)
-    w_cut = cut_wrenches(kin, lam)
-    # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
-    R = composite(kin, [ws - wc for ws, wc in zip(dyn.wstar, w_cut)])
+    R = tree_wrenches(kin, dyn)
     on_b = [None] * len(model.joints)
     driver_of = {i: k for k, i in enumerate(topo.driven)}
     for i in range(1, topo.n):

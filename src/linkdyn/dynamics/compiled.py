@@ -21,11 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import reactions
 from ..compiled import PRI, REV, Packed, eliminate, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
 from ..reactions import Reactions
+from . import denoc
 from .denoc import DynamicSolution
 
 #: a relative pivot at or below this marks ``J_dep^T`` singular (as in ``solve_small``)
@@ -35,15 +37,15 @@ BLOCK = 1024
 
 
 @njit
-def _composite(parent, r, d, k0, nb, w):
+def _composite(parent, r, d, k0, nb, di, ki, w):
     """The backward recursion ``w_p += A(r_i - r_p)^T w_i``, leaves first, in place on the
-    wrenches ``w`` (n, 3, D, T) of a block (denoc.composite): the moment gains
-    ``a_x f_y - a_y f_x``."""
-    ks = slice(k0, k0 + nb)   # the block's samples
+    wrenches ``w`` (n, 3, ., .) of a block (denoc.composite), taken at design ``di`` from
+    sample ``ki``: the moment gains ``a_x f_y - a_y f_x``."""
+    ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in r and in w
     for i in range(len(parent) - 1, 0, -1):
         p = parent[i]
         r_i, r_p = vector_views(r, i, d, ks), vector_views(r, p, d, ks)
-        w_i, w_p = screw_views(w, i, d, ks), screw_views(w, p, d, ks)
+        w_i, w_p = screw_views(w, i, di, kw), screw_views(w, p, di, kw)
         for k in range(nb):
             ax = r_i[0][k] - r_p[0][k]
             ay = r_i[1][k] - r_p[1][k]
@@ -54,8 +56,8 @@ def _composite(parent, r, d, k0, nb, w):
 
 
 @njit
-def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_const, ke, o_wstar,
-                  o_wtilde, o_ke):
+def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke,
+                  o_wstar, o_wtilde, o_ke):
     """Uncoupled Newton–Euler wrenches ``w_star`` of a block (denoc.newton_euler), copied into
     ``w_tilde`` to start its recursion, and the kinetic energy. The ground's rows stay as
     allocated (zero). ``w_const`` (n, 3, 1, block): ``w_ext`` repeated over a block when it is
@@ -74,7 +76,8 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_con
             w_ext_i = screw_views(w_const, i, 0, slice(0, nb))
         else:
             w_ext_i = screw_views(w_ext, i, d, ks)
-        wstar_i, wtilde_i = screw_views(o_wstar, i, d, ks), screw_views(o_wtilde, i, d, ks)
+        kw = slice(ki, ki + nb)   # the block's samples in the internals (see _kernel)
+        wstar_i, wtilde_i = screw_views(o_wstar, i, di, kw), screw_views(o_wtilde, i, di, kw)
         for k in range(nb):
             ci, si = c_i[k], s_i[k]
             dx = ci * cx - si * cy
@@ -95,7 +98,7 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_con
 
 
 @njit
-def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
+def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, Q, o_Q):
     """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q`` (the
     ground's row stays as allocated, zero). The zero entries of ``p_i`` are multiplied too, so a
     NaN spreads as in numpy's dot product."""
@@ -103,8 +106,9 @@ def _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q):
     # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
         si = sign[i]
-        wtilde_i, e_i = screw_views(o_wtilde, i, d, ks), vector_views(e, i, d, ks)
-        Q_i, o_Q_i = Q[i, :nb], o_Q[i, d, ks]
+        wtilde_i = screw_views(o_wtilde, i, di, slice(ki, ki + nb))
+        e_i = vector_views(e, i, d, ks)
+        Q_i, o_Q_i = Q[i, :nb], o_Q[i, di, ki:ki + nb]
         if kind[i] == REV:
             for k in range(nb):
                 q = si * wtilde_i[0][k] + 0.0 * wtilde_i[1][k] + 0.0 * wtilde_i[2][k]
@@ -199,36 +203,37 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0
 
 
 @njit
-def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, c, s,
-                    r, e, tau, wc, o_wstar, o_tree, o_on):
+def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, di,
+                    ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on):
     """``R_i`` by the backward recursion of ``w_star - w_cut`` and the reaction of every tree
-    joint from it (reactions.solve). A joint whose reaction is ``R_i`` itself (the child is its
-    second body, not driven) is not written: :func:`solve` gives it ``R_i``'s rows."""
+    joint from it (reactions.solve). With the internals ``keep``, a joint whose reaction is
+    ``R_i`` itself (the child is its second body, not driven) is not written: :func:`solve`
+    gives it ``R_i``'s rows."""
     n = parent.shape[0]
-    ks = slice(k0, k0 + nb)   # the block's samples
+    ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in the internals
     # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i; the ground's w_star_0 = 0
-    R_0, wc_0 = screw_views(o_tree, 0, d, ks), (wc[0, 0, :nb], wc[0, 1, :nb], wc[0, 2, :nb])
+    R_0, wc_0 = screw_views(o_tree, 0, di, kw), (wc[0, 0, :nb], wc[0, 1, :nb], wc[0, 2, :nb])
     for k in range(nb):
         R_0[0][k] = 0.0 - wc_0[0][k]
         R_0[1][k] = 0.0 - wc_0[1][k]
         R_0[2][k] = 0.0 - wc_0[2][k]
     for i in range(1, n):
-        R_i, wstar_i = screw_views(o_tree, i, d, ks), screw_views(o_wstar, i, d, ks)
+        R_i, wstar_i = screw_views(o_tree, i, di, kw), screw_views(o_wstar, i, di, kw)
         wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
             R_i[0][k] = wstar_i[0][k] - wc_i[0][k]
             R_i[1][k] = wstar_i[1][k] - wc_i[1][k]
             R_i[2][k] = wstar_i[2][k] - wc_i[2][k]
-    _composite(parent, r, d, k0, nb, o_tree)
+    _composite(parent, r, d, k0, nb, di, ki, o_tree)
     # tree joints: R_i - tau p_i on the child; sign > 0 as is, sign < 0 the opposite
     # about the parent's joint point: A(r_i - r_Pb)^T (-w)
     for i in range(1, n):
         si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
-        if si > 0 and dr < 0:   # R_i as is
+        if keep and si > 0 and dr < 0:   # R_i as is
             continue
         revolute = kind[i] == REV
         px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
-        R_i, on_i = screw_views(o_tree, i, d, ks), screw_views(o_on, jt, d, ks)
+        R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, jt, d, ks)
         e_i, r_i = vector_views(e, i, d, ks), vector_views(r, i, d, ks)
         r_p = vector_views(r, p, d, ks)
         c_p, s_p = c[p, d, ks], s[p, d, ks]
@@ -257,11 +262,14 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
 def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, cut_kind,
             cut_joint, joint_point, com, mass, inertia, cut_pb, cut_axis,
             c, s, r, e, tw, twd, J, w_ext,
-            o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, o_on, o_tree, block):
+            o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, o_on, o_tree, block, keep):
     """Dynamics and reactions of every sample; arguments as in :func:`solve`, outputs written in
     place (component-first, batch ``(D, T)`` last) into zeroed arrays: the rows that are zero by
     construction (the ground's ``w_star`` and ``Q``, a revolute cut's moment) are not written,
     nor those of a joint whose reaction is ``R_i`` itself (:func:`_tree_reactions`).
+
+    The internals ``o_wstar``, ``o_wtilde``, ``o_Q``, ``o_tree`` are outputs like the others
+    when ``keep``; else one block's scratch, (n, 3, 1, block) and (n, 1, block).
 
     The samples are taken ``block`` at a time: each step below runs over the bodies, and for
     each body over the samples of the block, which are independent (every sample sees exactly
@@ -291,16 +299,20 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
                     w_const[i, j, 0, :] = w_ext[i, j, d, 0]
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
-            _newton_euler(com, mass, inertia, d, dp, k0, nb, c, s, tw, twd, w_ext, w_const, ke,
-                          o_wstar, o_wtilde, o_ke)
+            # the internals' design and first sample: the block's, or the scratch's
+            di, ki = (d, k0) if keep else (0, 0)
+            if not keep:   # the ground's w_tilde only accumulates
+                o_wtilde[0, :, 0, :nb] = 0.0
+            _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const,
+                          ke, o_wstar, o_wtilde, o_ke)
             # w_tilde_p += A(r_i - r_p)^T w_tilde_i, leaves first
-            _composite(parent, r, d, k0, nb, o_wtilde)
-            _generalized(kind, sign, d, k0, nb, e, o_wtilde, Q, o_Q)
+            _composite(parent, r, d, k0, nb, di, ki, o_wtilde)
+            _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, Q, o_Q)
             _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot)
             _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s,
                           r, lam, wc, o_on)
             _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
-                            c, s, r, e, tau, wc, o_wstar, o_tree, o_on)
+                            di, ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on)
 
 
 def _plain(x) -> np.ndarray:
@@ -343,7 +355,7 @@ def _inputs(kin: KinematicSolution) -> dict:
     }
 
 
-def solve(kin: KinematicSolution, loads: Loads, packed: Packed
+def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool = False
           ) -> tuple[DynamicSolution, Reactions]:
     """Driver efforts, cut-joint multipliers and joint reactions by the compiled kernel.
 
@@ -361,6 +373,11 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
         kernel reads one sample of them.
     packed : Packed
         ``linkdyn.compiled.pack(kin.layout, len(model.joints))``.
+    internals : bool
+        Keep the kernel's ``wstar``, ``wtilde``, ``Q`` and tree wrenches ``R_i`` per sample.
+        By default the kernel holds them for one block only (Hoeken's dynamics then writes 16
+        numbers per sample instead of 46), and the solutions compute them with the numpy
+        recursion when they are first read.
 
     Returns
     -------
@@ -381,18 +398,21 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
     ws = [np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]
     Tw = 1 if all(w.strides[-1] == 0 for w in ws) else T
     w_ext = _plain(np.stack([w[..., :Tw].reshape(3, D, Tw) for w in ws]))
-    # zeroed outputs: the pages of the rows the kernel leaves zero are never touched
-    out = {"wstar": np.zeros((n, 3, D, T)), "wtilde": np.zeros((n, 3, D, T)),
-           "Q": np.zeros((n, D, T)), "lam": np.zeros((2 * n_cut, D, T)),
+    # zeroed outputs: the pages of the rows the kernel leaves zero are never touched; the
+    # internals per sample, or for one block
+    block = min(BLOCK, T)
+    at = (D, T) if internals else (1, block)
+    out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
+           "Q": np.zeros((n,) + at), "lam": np.zeros((2 * n_cut, D, T)),
            "tau": np.zeros((len(packed.drv), D, T)), "ke": np.zeros((D, T)),
            "pivot": np.zeros((D, T)), "on": np.zeros((n_joints, 3, D, T)),
-           "tree": np.zeros((n, 3, D, T))}
+           "tree": np.zeros((n, 3) + at)}
     P = packed
     _kernel(P.parent, P.kind, P.sign, P.dep, P.drv, P.driver_of, P.tree_joint, P.cut_a, P.cut_b,
             P.cut_kind, P.cut_joint, P.joint_point, P.com, P.mass, P.inertia, P.cut_pb,
             P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"], w_ext,
             out["wstar"], out["wtilde"], out["Q"], out["lam"], out["tau"], out["ke"],
-            out["pivot"], out["on"], out["tree"], min(BLOCK, T))
+            out["pivot"], out["on"], out["tree"], block, internals)
 
     def per(a):  # per-entity views (3, ...) of a (k, 3, D, T) output
         return [w.reshape((3,) + shape) for w in a]
@@ -400,9 +420,13 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed
     def comps(a):  # (k, D, T) -> components last (..., k), like the numpy path's last(...)
         return last(a.reshape((len(a),) + shape))
 
-    dyn = DynamicSolution(per(out["wstar"]), per(out["wtilde"]), comps(out["Q"]),
-                          comps(out["lam"]), comps(out["tau"]), out["ke"].reshape(shape),
-                          out["pivot"].reshape(shape))
+    lam, tau = comps(out["lam"]), comps(out["tau"])
+    ke, pivot = out["ke"].reshape(shape), out["pivot"].reshape(shape)
+    if not internals:
+        dyn = DynamicSolution(lam, tau, ke, pivot, lambda: denoc.internals(kin, loads))
+        return dyn, Reactions(per(out["on"]), lambda: reactions.tree_wrenches(kin, dyn))
+    dyn = DynamicSolution(lam, tau, ke, pivot,
+                          (per(out["wstar"]), per(out["wtilde"]), comps(out["Q"])))
     # a tree joint whose child is its second body and is not driven reports R_i itself (the
     # same array, as in reactions.solve): the kernel left its rows of ``on`` unwritten
     on, tree = per(out["on"]), per(out["tree"])

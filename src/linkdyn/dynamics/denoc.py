@@ -17,7 +17,9 @@ at the dependent joints give ``J_dep^T lam = Q_dep`` and the driven rows then gi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
 
 import numpy as np
 
@@ -32,13 +34,6 @@ class DynamicSolution:
 
     Attributes
     ----------
-    wstar : list of ndarray (3, T)
-        Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
-    wtilde : list of ndarray (3, T)
-        Composite wrench of each body's subtree about O_i (``N_l^T w_star``).
-    Q : ndarray (T, n)
-        Generalized force at each tree joint (``N^T w_star``), N m or N, tree order (column 0,
-        the ground, is zero).
     lam : ndarray (T, 2 n_cut)
         Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second (N);
         prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
@@ -48,15 +43,40 @@ class DynamicSolution:
         J.
     pivot : ndarray (T,)
         Smallest relative pivot of ``J_dep^T`` (~0 at a singular position).
+    internals : tuple or callable
+        ``(wstar, wtilde, Q)``, or a function returning them when one is first read (the
+        compiled backend keeps no per-sample copy of them unless asked: they are then
+        computed by the numpy recursion of this module).
+    wstar : list of ndarray (3, T)
+        Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
+    wtilde : list of ndarray (3, T)
+        Composite wrench of each body's subtree about O_i (``N_l^T w_star``).
+    Q : ndarray (T, n)
+        Generalized force at each tree joint (``N^T w_star``), N m or N, tree order (column 0,
+        the ground, is zero).
     """
 
-    wstar: list
-    wtilde: list
-    Q: np.ndarray
     lam: np.ndarray
     tau: np.ndarray
     kinetic_energy: np.ndarray
     pivot: np.ndarray
+    internals: tuple | Callable = field(repr=False, compare=False)
+
+    @cached_property
+    def _internals(self) -> tuple:
+        return self.internals() if callable(self.internals) else self.internals
+
+    @property
+    def wstar(self) -> list:
+        return self._internals[0]
+
+    @property
+    def wtilde(self) -> list:
+        return self._internals[1]
+
+    @property
+    def Q(self) -> np.ndarray:
+        return self._internals[2]
 
     @property
     def w_star(self) -> np.ndarray:
@@ -102,15 +122,29 @@ def composite(kin: KinematicSolution, w: list) -> list:
     return out
 
 
+def reduce(kin: KinematicSolution, w_star: list) -> tuple[list, np.ndarray]:
+    """``w_tilde`` (3, T) per body and the generalized forces ``Q`` (n, T) of ``w_star``."""
+    # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
+    w_tilde = composite(kin, w_star)
+    Q = np.stack([np.zeros(kin.shape)] + [dot(kin.motion[i], w_tilde[i])
+                                            for i in range(1, kin.layout.topo.n)])
+    return w_tilde, Q
+
+
+def internals(kin: KinematicSolution, loads: Loads) -> tuple:
+    """``(w_star, w_tilde, Q)`` of the motion ``kin`` under ``loads``, as
+    :attr:`DynamicSolution.internals`."""
+    w_star, _ = newton_euler(kin, loads.wrenches)
+    w_tilde, Q = reduce(kin, w_star)
+    return w_star, w_tilde, last(Q)
+
+
 def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
     """Driver efforts and cut-joint multipliers of the motion ``kin`` under ``loads``."""
     topo = kin.layout.topo
     dep, drv = np.array(topo.dependent, int), np.array(topo.driven, int)
     w_star, ke = newton_euler(kin, loads.wrenches)
-    # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
-    w_tilde = composite(kin, w_star)
-    Q = np.stack([np.zeros(kin.shape)] + [dot(kin.motion[i], w_tilde[i])
-                                            for i in range(1, topo.n)])
+    w_tilde, Q = reduce(kin, w_star)
     # eq. (27): J_dep^T lam = Q_dep, then tau = Q_drv - J_drv^T lam
     J = kin.jacobian
     if len(dep):
@@ -118,4 +152,4 @@ def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
     else:
         lam, pivot = np.zeros((0,) + kin.shape), np.ones(kin.shape)
     tau = Q[drv] - np.einsum("ij...,i...->j...", J[:, drv - 1], lam)
-    return DynamicSolution(w_star, w_tilde, last(Q), last(lam), last(tau), ke, pivot)
+    return DynamicSolution(last(lam), last(tau), ke, pivot, (w_star, w_tilde, last(Q)))
