@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import pickle
 import tomllib
 
 import numpy as np
@@ -362,3 +363,15 @@ def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, bloc
         assert np.array_equal(getattr(lean[0], name_), getattr(dyn, name_)), name_
     ref = reactions.solve(model, kin, dyn)
     assert np.array_equal(np.stack(lean[1].tree), np.stack(ref.tree))
+
+
+def test_a_solution_without_kept_internals_pickles():
+    """The internals computed on first read survive a pickle round trip (a design sweep may
+    send solutions between processes)."""
+    model = linkdyn.load(linkdyn.example_path("hoeken"))
+    kin = numpy_kinematics(model, times(model, 9))
+    applied = loads_mod.wrenches(model, kin)
+    dyn, react = compiled.solve(kin, applied, pack(kin.layout, len(model.joints)))
+    dyn2, react2 = pickle.loads(pickle.dumps((dyn, react)))
+    assert np.array_equal(dyn2.w_star, dyn.w_star) and np.array_equal(dyn2.tau, dyn.tau)
+    assert np.array_equal(np.stack(react2.tree), np.stack(react.tree))

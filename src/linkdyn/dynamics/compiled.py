@@ -19,6 +19,8 @@ agree to rounding, NaN at the same samples.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .. import reactions
@@ -422,9 +424,9 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
 
     lam, tau = comps(out["lam"]), comps(out["tau"])
     ke, pivot = out["ke"].reshape(shape), out["pivot"].reshape(shape)
-    if not internals:
-        dyn = DynamicSolution(lam, tau, ke, pivot, lambda: denoc.internals(kin, loads))
-        return dyn, Reactions(per(out["on"]), lambda: reactions.tree_wrenches(kin, dyn))
+    if not internals:   # (partial, not lambda: the solutions stay picklable)
+        dyn = DynamicSolution(lam, tau, ke, pivot, partial(denoc.internals, kin, loads))
+        return dyn, Reactions(per(out["on"]), partial(reactions.tree_wrenches, kin, dyn))
     dyn = DynamicSolution(lam, tau, ke, pivot,
                           (per(out["wstar"]), per(out["wtilde"]), comps(out["Q"])))
     # a tree joint whose child is its second body and is not driven reports R_i itself (the
