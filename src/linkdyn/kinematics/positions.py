@@ -136,11 +136,14 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
 
 
 def driver_values(model: Model, t: np.ndarray):
-    """Driver coordinates, rates, accelerations, each (n_drivers, T)."""
+    """Driver coordinates, rates, accelerations, each (n_drivers, T) (read-only: with one
+    driver, views of its arrays)."""
     vals = [d.motion.evaluate(t) for d in model.drivers]
     if not vals:
         z = np.zeros((0,) + t.shape)
         return z, z, z
+    if len(vals) == 1:   # one driver: views of its arrays, no copy
+        return tuple(np.broadcast_to(x, t.shape)[None] for x in vals[0])
     return tuple(np.stack([np.broadcast_to(v[k], t.shape) for v in vals]) for k in range(3))
 
 
