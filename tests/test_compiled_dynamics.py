@@ -239,13 +239,13 @@ def test_any_sample_block_gives_the_same(monkeypatch, block):
     check_all(*both(designs, kin))
 
 
-def kernel_w_ext(monkeypatch):
-    """Record the ``w_ext`` every call of the compiled kernel receives."""
+def kernel_argument(monkeypatch, name="w_ext"):
+    """Record the argument ``name`` every call of the compiled kernel receives."""
     seen, kernel = [], compiled._kernel
 
     def spy(*args):
         py_func = getattr(kernel, "py_func", kernel)   # the Python function numba compiled
-        seen.append(inspect.signature(py_func).bind(*args).arguments["w_ext"])
+        seen.append(inspect.signature(py_func).bind(*args).arguments[name])
         return kernel(*args)
 
     monkeypatch.setattr(compiled, "_kernel", spy)
@@ -284,7 +284,7 @@ def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
     """Wrenches constant in time (broadcast along the samples) reach the kernel as one sample,
     ``w_ext`` (n, 3, D, 1), taken design by design; the results are numpy's and, to the bit,
     those of the same wrenches given as full arrays, which reach it at every sample."""
-    seen = kernel_w_ext(monkeypatch)
+    seen = kernel_argument(monkeypatch)
     monkeypatch.setattr(compiled, "BLOCK", 8)   # several blocks reuse the constant's scratch
     models = [hoeken_design(38.1), hoeken_design(42.0)][:designs]
     kin = numpy_kinematics(models if designs > 1 else models[0], times(models[0], 21))
@@ -316,7 +316,7 @@ def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
 def test_a_load_varying_in_time_without_gravity(monkeypatch):
     """A torque varying in time on one body, none elsewhere and no gravity: the kernel reads
     every sample of ``w_ext`` (the unloaded bodies' zeros included) and matches numpy."""
-    seen = kernel_w_ext(monkeypatch)
+    seen = kernel_argument(monkeypatch)
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     assert not np.any(model.gravity) and not model.loads
     torque = linkdyn.Load("torque", "rocker", value=lambda t: 0.3 * np.sin(5.0 * np.asarray(t)))
@@ -340,17 +340,11 @@ def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, bloc
     kin = numpy_kinematics(model, times(model, 41))
     applied = loads_mod.wrenches(model, kin)
     packed = pack(kin.layout, len(model.joints))
-    shapes = []
-
-    def spy(*args):
-        shapes.append(args[25].shape)   # o_wstar
-        return kernel(*args)
-    kernel = compiled._kernel
-    monkeypatch.setattr(compiled, "_kernel", spy)
+    seen = kernel_argument(monkeypatch, "o_wstar")
     kept = compiled.solve(kin, applied, packed, internals=True)
     lean = compiled.solve(kin, applied, packed)
     n = len(packed.parent)
-    assert shapes == [(n, 3, 1, 41), (n, 3, 1, min(block, 41))]
+    assert [x.shape for x in seen] == [(n, 3, 1, 41), (n, 3, 1, min(block, 41))]
     for name_ in ("tau", "lam", "kinetic_energy", "pivot"):
         assert np.array_equal(getattr(lean[0], name_), getattr(kept[0], name_)), name_
     for j, (a, b) in enumerate(zip(lean[1].on_second, kept[1].on_second)):

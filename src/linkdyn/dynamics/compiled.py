@@ -100,33 +100,30 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ex
 
 
 @njit
-def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, Q, o_Q):
-    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into the block scratch ``Q`` and ``o_Q`` (the
-    ground's row stays as allocated, zero). The zero entries of ``p_i`` are multiplied too, so a
-    NaN spreads as in numpy's dot product."""
+def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q):
+    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into ``o_Q`` (the ground's row stays as
+    allocated, zero). The zero entries of ``p_i`` are multiplied too, so a NaN spreads as in
+    numpy's dot product."""
     ks = slice(k0, k0 + nb)   # the block's samples
     # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
         si = sign[i]
         wtilde_i = screw_views(o_wtilde, i, di, slice(ki, ki + nb))
         e_i = vector_views(e, i, d, ks)
-        Q_i, o_Q_i = Q[i, :nb], o_Q[i, di, ki:ki + nb]
+        o_Q_i = o_Q[i, di, ki:ki + nb]
         if kind[i] == REV:
             for k in range(nb):
-                q = si * wtilde_i[0][k] + 0.0 * wtilde_i[1][k] + 0.0 * wtilde_i[2][k]
-                Q_i[k] = q
-                o_Q_i[k] = q
+                o_Q_i[k] = si * wtilde_i[0][k] + 0.0 * wtilde_i[1][k] + 0.0 * wtilde_i[2][k]
         else:
             for k in range(nb):
-                q = (0.0 * wtilde_i[0][k] + (si * e_i[0][k]) * wtilde_i[1][k]
-                     + (si * e_i[1][k]) * wtilde_i[2][k])
-                Q_i[k] = q
-                o_Q_i[k] = q
+                o_Q_i[k] = (0.0 * wtilde_i[0][k] + (si * e_i[0][k]) * wtilde_i[1][k]
+                            + (si * e_i[1][k]) * wtilde_i[2][k])
 
 
 @njit
 def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot):
-    """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27), a block at a time."""
+    """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27), a block at a time;
+    ``Q`` (n, block) the block's generalized forces (a view of ``o_Q``)."""
     m, n_rows, n_drv = dep.shape[0], J.shape[0], drv.shape[0]
     ks = slice(k0, k0 + nb)   # the block's samples
     # J_dep^T lam = Q_dep by Gaussian elimination with partial pivoting; NaN where the
@@ -287,7 +284,6 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
     # (w_star, w_tilde and R are built in place in their outputs)
     w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
     wc = np.zeros((n, 3, B))      # cut-joint wrenches on the bodies
-    Q = np.zeros((n, B))
     A = np.zeros((m, m + 1, B))   # [J_dep^T | Q_dep]
     lam = np.zeros((max(m, 1), B))
     tau = np.zeros((max(n_drv, 1), B))
@@ -309,8 +305,9 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
                           ke, o_wstar, o_wtilde, o_ke)
             # w_tilde_p += A(r_i - r_p)^T w_tilde_i, leaves first
             _composite(parent, r, d, k0, nb, di, ki, o_wtilde)
-            _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, Q, o_Q)
-            _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot)
+            _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q)
+            _multipliers(dep, drv, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A, lam, tau, piv, o_lam,
+                         o_tau, o_pivot)
             _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s,
                           r, lam, wc, o_on)
             _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
