@@ -9,7 +9,9 @@ twists (eq. 2), solves ``J_dep qdd_dep = -bias`` (eqs. 6-7) and propagates the t
 The samples are taken a block at a time (:data:`BLOCK`): every step walks the bodies (or cuts,
 or dyads) and, for each, the samples of the block. Each sample sees the operations of the
 one-sample recursion in the same order, while the independent samples keep the processor busy
-and every array is read and written in contiguous runs.
+and every array is read and written in contiguous runs. The sample loops call nothing from the
+C library where they can help it (angles by :func:`~linkdyn.compiled.arctan2`, one loop per
+dyad shape), so the compiler turns them into vector instructions.
 
 All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
 ``[..., d, t]``. The topology comes as ``tree`` (n, 3) rows ``[parent, kind, sign]`` and
@@ -24,8 +26,8 @@ import math
 
 import numpy as np
 
-from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, factor, inline, njit,
-                        screw_views, substitute, vector_views)
+from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, arctan2, factor, inline,
+                        njit, screw_views, substitute, vector_views)
 
 BLOCK = 512          # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
@@ -40,7 +42,7 @@ def turn(ux, uy, vx, vy):
     """The rotation carrying direction u onto v: angle, cosine, sine (dyads._turn)."""
     x, y = ux * vx + uy * vy, ux * vy - uy * vx
     norm = math.sqrt(x * x + y * y)
-    return math.atan2(y, x), x / norm, y / norm
+    return arctan2(y, x), x / norm, y / norm
 
 
 @inline
@@ -152,9 +154,128 @@ def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
 
 
 @inline
-def _point(c_i, s_i, rx_i, ry_i, k, px, py):
-    """Body point (px, py) in global coordinates, sample k, from the body's views (_pose)."""
+def _body(c, s, r, i, d, ks):
+    """Body i's cosine, sine and origin x, y over the samples ``ks`` of design d, as views."""
+    rx_i, ry_i = vector_views(r, i, d, ks)
+    return c[i, d, ks], s[i, d, ks], rx_i, ry_i
+
+
+@inline
+def _point(body, k, px, py):
+    """Body point (px, py) in global coordinates, sample k, from the body's views (_body)."""
+    c_i, s_i, rx_i, ry_i = body
     return rx_i[k] + c_i[k] * px - s_i[k] * py, ry_i[k] + s_i[k] * px + c_i[k] * py
+
+
+@inline
+def _turns(out, k, angle, co, si, cx, cy):
+    """A turn of sample k into ``out`` (5, block): angle, cosine, sine, centre x, y."""
+    out[0, k], out[1, k], out[2, k], out[3, k], out[4, k] = angle, co, si, cx, cy
+
+
+# --- the dyads' turns over a block: a sample loop per shape (see linkdyn.compiled.arctan2) ------
+# Each takes the cut's bodies a, b (_body views) and points pa, pb in them, the unknown joints'
+# origins x1 = (x1x, x1y), x2 (views), the assembly mode ``side``, and writes the turns of the
+# upper and lower joints into ``up``, ``low`` (5, block).
+
+@inline
+def _split(A, B, pa, pb, x1x, x1y, x2x, x2y, side, nb, up, low):
+    """RRR split: the cut point m over the two unknown joints x1 and x2."""
+    for k in range(nb):
+        pax, pay = _point(A, k, pa[0], pa[1])
+        pbx, pby = _point(B, k, pb[0], pb[1])
+        mx, my = circles(x1x[k], x1y[k], math.sqrt((pax - x1x[k]) ** 2 + (pay - x1y[k]) ** 2),
+                         x2x[k], x2y[k], math.sqrt((pbx - x2x[k]) ** 2 + (pby - x2y[k]) ** 2),
+                         side)
+        ang1, c1, s1 = turn(pax - x1x[k], pay - x1y[k], mx - x1x[k], my - x1y[k])
+        ang2, c2, s2 = turn(pbx - x2x[k], pby - x2y[k], mx - x2x[k], my - x2y[k])
+        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
+        _turns(low, k, ang2, c2, s2, x2x[k], x2y[k])
+
+
+@inline
+def _chain(M, F, pm, pf, x1x, x1y, x2x, x2y, side, nb, up, low):
+    """RRR chain: the lower joint m over the upper joint x1 and the fixed cut point (on body
+    F at pf; the moving one on body M at pm); the lower turn, about m, is left to
+    :func:`_chain_lower` (it follows the upper turn)."""
+    for k in range(nb):
+        pmx, pmy = _point(M, k, pm[0], pm[1])
+        pfx, pfy = _point(F, k, pf[0], pf[1])
+        mx, my = circles(x1x[k], x1y[k], math.sqrt((x2x[k] - x1x[k]) ** 2 + (x2y[k] - x1y[k]) ** 2),
+                         pfx, pfy, math.sqrt((pmx - x2x[k]) ** 2 + (pmy - x2y[k]) ** 2), side)
+        ang1, c1, s1 = turn(x2x[k] - x1x[k], x2y[k] - x1y[k], mx - x1x[k], my - x1y[k])
+        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
+        low[3, k], low[4, k] = mx, my
+
+
+@inline
+def _chain_lower(M, F, pm, pf, nb, low):
+    """RRR chain, after the upper turn: the moving cut point onto the fixed one about m."""
+    for k in range(nb):
+        mx, my = low[3, k], low[4, k]
+        pmx, pmy = _point(M, k, pm[0], pm[1])
+        pfx, pfy = _point(F, k, pf[0], pf[1])
+        low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
+
+
+@inline
+def _slide(A, B, pa, pb, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low):
+    """RRP: the moving body ends at a known angle, so both joints together turn by a known
+    total (cd, sd); the lower joint m lies on the slide line shifted back by the turned offset
+    to the cut point."""
+    ca, sa, sgn = math.cos(angle), math.sin(angle), 1.0 if on_b else -1.0
+    M, F = (B, A) if on_b else (A, B)
+    for k in range(nb):
+        pax, pay = _point(A, k, pa[0], pa[1])
+        pbx, pby = _point(B, k, pb[0], pb[1])
+        pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
+        ct = F[0][k] * ca - sgn * F[1][k] * sa
+        st = F[1][k] * ca + sgn * F[0][k] * sa
+        cd = ct * M[0][k] + st * M[1][k]
+        sd = st * M[0][k] - ct * M[1][k]
+        # the slide axis e (turned with the moving body when that body carries it)
+        ex = A[0][k] * axis[0] - A[1][k] * axis[1]
+        ey = A[1][k] * axis[0] + A[0][k] * axis[1]
+        if not on_b:
+            ex, ey = cd * ex - sd * ey, sd * ex + cd * ey
+        # the lower joint on the slide line shifted back by the turned offset to the cut
+        dx, dy = pmx - x2x[k], pmy - x2y[k]
+        p0x, p0y = p0x - (cd * dx - sd * dy), p0y - (sd * dx + cd * dy)
+        mx, my = on_line(x1x[k], x1y[k], math.sqrt((x2x[k] - x1x[k]) ** 2
+                                                   + (x2y[k] - x1y[k]) ** 2),
+                         p0x, p0y, ex, ey, side)
+        ang1, c1, s1 = turn(x2x[k] - x1x[k], x2y[k] - x1y[k], mx - x1x[k], my - x1y[k])
+        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
+        # the lower joint supplies the rest of the known total turn
+        c2, s2 = cd * c1 + sd * s1, sd * c1 - cd * s1
+        _turns(low, k, arctan2(s2, c2), c2, s2, mx, my)
+
+
+@inline
+def _swing(A, B, pa, pb, axis, angle, x1x, x1y, x2x, x2y, side, nb, up, low):
+    """RPR: body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta."""
+    ca, sa = math.cos(angle), math.sin(angle)
+    for k in range(nb):
+        pax, pay = _point(A, k, pa[0], pa[1])
+        pbx, pby = _point(B, k, pb[0], pb[1])
+        c_a, s_a, c_b, s_b = A[0][k], A[1][k], B[0][k], B[1][k]
+        cr, sr = c_b * c_a + s_b * s_a, s_b * c_a - c_b * s_a
+        cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
+        nx, ny = -(s_a * axis[0] + c_a * axis[1]), c_a * axis[0] - s_a * axis[1]
+        dx, dy = x2x[k] - x1x[k], x2y[k] - x1y[k]
+        ox, oy = pbx - x2x[k], pby - x2y[k]
+        kk = ((pax - x1x[k] - (cd * ox - sd * oy)) * nx
+              + (pay - x1y[k] - (sd * ox + cd * oy)) * ny)
+        aa, bb = dx * nx + dy * ny, dx * -ny + dy * nx
+        ratio = kk / math.sqrt(aa * aa + bb * bb)
+        if abs(ratio) > 1 and abs(ratio) < 1 + 1e-12:
+            ratio = math.copysign(1.0, ratio)
+        theta = arctan2(bb, aa) + side * (math.acos(ratio) if abs(ratio) <= 1 else math.nan)
+        c1, s1 = math.cos(theta), math.sin(theta)
+        ang1 = arctan2(s1, c1)
+        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
+        _turns(low, k, ang1 + arctan2(sd, cd), c1 * cd - s1 * sd, s1 * cd + c1 * sd, x2x[k],
+               x2y[k])
 
 
 @njit
@@ -165,91 +286,25 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
     for m in range(dyads.shape[0]):
         shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
         side = modes[m, d]
-        a, b = cuts[cut, CUT_A], cuts[cut, CUT_B]
-        pax_, pay_, pbx_, pby_ = cgeo[d, cut, 0], cgeo[d, cut, 1], cgeo[d, cut, 2], cgeo[d, cut, 3]
-        uax, uay, ca, sa = cgeo[d, cut, 4], cgeo[d, cut, 5], math.cos(cgeo[d, cut, 6]), math.sin(cgeo[d, cut, 6])
-        c_a, s_a = c[a, d, ks], s[a, d, ks]
-        rx_a, ry_a = vector_views(r, a, d, ks)
-        c_b, s_b = c[b, d, ks], s[b, d, ks]
-        rx_b, ry_b = vector_views(r, b, d, ks)
-        # the cut's body on the side of both unknown joints (chain, slide), and the other
-        c_m, s_m, rx_m, ry_m = (c_b, s_b, rx_b, ry_b) if on_b else (c_a, s_a, rx_a, ry_a)
-        c_f, s_f, rx_f, ry_f = (c_a, s_a, rx_a, ry_a) if on_b else (c_b, s_b, rx_b, ry_b)
-        lmx, lmy = (pbx_, pby_) if on_b else (pax_, pay_)
-        lfx, lfy = (pax_, pay_) if on_b else (pbx_, pby_)
-        # the upper and lower unknown joints
-        rx_u, ry_u = vector_views(r, ju, d, ks)
-        rx_l, ry_l = vector_views(r, jl, d, ks)
-        for k in range(nb):
-            x1x, x1y, x2x, x2y = rx_u[k], ry_u[k], rx_l[k], ry_l[k]
-            pax, pay = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
-            pbx, pby = _point(c_b, s_b, rx_b, ry_b, k, pbx_, pby_)
-            if shape == SLIDE:
-                # the moving body ends at a known angle: the total turn (cd, sd) of both joints
-                sgn = 1.0 if on_b else -1.0
-                pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
-                ct = c_f[k] * ca - sgn * s_f[k] * sa
-                st = s_f[k] * ca + sgn * c_f[k] * sa
-                cd = ct * c_m[k] + st * s_m[k]
-                sd = st * c_m[k] - ct * s_m[k]
-                # the slide axis e (turned with the moving body when that body carries it)
-                ex = c_a[k] * uax - s_a[k] * uay
-                ey = s_a[k] * uax + c_a[k] * uay
-                if not on_b:
-                    ex, ey = cd * ex - sd * ey, sd * ex + cd * ey
-                # the lower joint on the slide line shifted back by the turned offset to the cut
-                dx, dy = pmx - x2x, pmy - x2y
-                p0x, p0y = p0x - (cd * dx - sd * dy), p0y - (sd * dx + cd * dy)
-                mx, my = on_line(x1x, x1y, math.sqrt((x2x - x1x) ** 2 + (x2y - x1y) ** 2),
-                                 p0x, p0y, ex, ey, side)
-                ang1, c1, s1 = turn(x2x - x1x, x2y - x1y, mx - x1x, my - x1y)
-                # the lower joint supplies the rest of the known total turn
-                c2, s2 = cd * c1 + sd * s1, sd * c1 - cd * s1
-                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = (
-                    math.atan2(s2, c2), c2, s2, mx, my)
-            elif shape == SWING:
-                # body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta
-                cr = c_b[k] * c_a[k] + s_b[k] * s_a[k]
-                sr = s_b[k] * c_a[k] - c_b[k] * s_a[k]
-                cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
-                nx = -(s_a[k] * uax + c_a[k] * uay)
-                ny = c_a[k] * uax - s_a[k] * uay
-                dx, dy = x2x - x1x, x2y - x1y
-                ox, oy = pbx - x2x, pby - x2y
-                kk = (pax - x1x - (cd * ox - sd * oy)) * nx + (pay - x1y - (sd * ox + cd * oy)) * ny
-                aa, bb = dx * nx + dy * ny, dx * -ny + dy * nx
-                ratio = kk / math.sqrt(aa * aa + bb * bb)
-                if abs(ratio) > 1 and abs(ratio) < 1 + 1e-12:
-                    ratio = math.copysign(1.0, ratio)
-                theta = math.atan2(bb, aa) + side * (math.acos(ratio) if abs(ratio) <= 1 else math.nan)
-                c1, s1 = math.cos(theta), math.sin(theta)
-                ang1 = math.atan2(s1, c1)
-                c2, s2 = c1 * cd - s1 * sd, s1 * cd + c1 * sd
-                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = (
-                    ang1 + math.atan2(sd, cd), c2, s2, x2x, x2y)
-            elif shape == SPLIT:
-                # the cut point m over the two unknown joints x1 and x2
-                mx, my = circles(x1x, x1y, math.sqrt((pax - x1x) ** 2 + (pay - x1y) ** 2), x2x,
-                                 x2y, math.sqrt((pbx - x2x) ** 2 + (pby - x2y) ** 2), side)
-                ang1, c1, s1 = turn(pax - x1x, pay - x1y, mx - x1x, my - x1y)
-                ang2, c2, s2 = turn(pbx - x2x, pby - x2y, mx - x2x, my - x2y)
-                low[0, k], low[1, k], low[2, k], low[3, k], low[4, k] = ang2, c2, s2, x2x, x2y
-            else:
-                # chain: the lower joint m over the upper joint x1 and the fixed cut point
-                pmx, pmy, pfx, pfy = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
-                mx, my = circles(x1x, x1y, math.sqrt((x2x - x1x) ** 2 + (x2y - x1y) ** 2), pfx,
-                                 pfy, math.sqrt((pmx - x2x) ** 2 + (pmy - x2y) ** 2), side)
-                ang1, c1, s1 = turn(x2x - x1x, x2y - x1y, mx - x1x, my - x1y)
-                low[3, k], low[4, k] = mx, my   # the lower turn, about m, follows the upper
-            up[0, k], up[1, k], up[2, k], up[3, k], up[4, k] = ang1, c1, s1, x1x, x1y
+        A = _body(c, s, r, cuts[cut, CUT_A], d, ks)
+        B = _body(c, s, r, cuts[cut, CUT_B], d, ks)
+        pa, pb = (cgeo[d, cut, 0], cgeo[d, cut, 1]), (cgeo[d, cut, 2], cgeo[d, cut, 3])
+        axis, angle = (cgeo[d, cut, 4], cgeo[d, cut, 5]), cgeo[d, cut, 6]
+        # the cut's body on the side of both unknown joints (chain), and the other
+        M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
+        x1x, x1y = vector_views(r, ju, d, ks)   # the upper and lower unknown joints
+        x2x, x2y = vector_views(r, jl, d, ks)
+        if shape == SLIDE:
+            _slide(A, B, pa, pb, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low)
+        elif shape == SWING:
+            _swing(A, B, pa, pb, axis, angle, x1x, x1y, x2x, x2y, side, nb, up, low)
+        elif shape == SPLIT:
+            _split(A, B, pa, pb, x1x, x1y, x2x, x2y, side, nb, up, low)
+        else:
+            _chain(M, F, pm, pf, x1x, x1y, x2x, x2y, side, nb, up, low)
         _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
         if shape == CHAIN:
-            # chain: the moving cut point, carried by the upper turn, onto the fixed one
-            for k in range(nb):
-                mx, my = low[3, k], low[4, k]
-                pmx, pmy = _point(c_m, s_m, rx_m, ry_m, k, lmx, lmy)
-                pfx, pfy = _point(c_f, s_f, rx_f, ry_f, k, lfx, lfy)
-                low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
+            _chain_lower(M, F, pm, pf, nb, low)
         _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q_u, q_l = q[ju, d, ks], q[jl, d, ks]
@@ -265,18 +320,16 @@ def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
     ``[pa (2), pb (2), e (2)]``."""
     ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
-        a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+        A = _body(c, s, r, cuts[ci, CUT_A], d, ks)
+        B = _body(c, s, r, cuts[ci, CUT_B], d, ks)
         pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
         ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
-        c_a, s_a = c[a, d, ks], s[a, d, ks]
-        rx_a, ry_a = vector_views(r, a, d, ks)
-        c_b, s_b = c[b, d, ks], s[b, d, ks]
-        rx_b, ry_b = vector_views(r, b, d, ks)
         P_c = P[ci]
         for k in range(nb):
-            P_c[0, k], P_c[1, k] = _point(c_a, s_a, rx_a, ry_a, k, pax_, pay_)
-            P_c[2, k], P_c[3, k] = _point(c_b, s_b, rx_b, ry_b, k, pbx_, pby_)
-            P_c[4, k], P_c[5, k] = c_a[k] * ux - s_a[k] * uy, s_a[k] * ux + c_a[k] * uy
+            P_c[0, k], P_c[1, k] = _point(A, k, pax_, pay_)
+            P_c[2, k], P_c[3, k] = _point(B, k, pbx_, pby_)
+            c_a, s_a = A[0][k], A[1][k]
+            P_c[4, k], P_c[5, k] = c_a * ux - s_a * uy, s_a * ux + c_a * uy
 
 
 @inline
