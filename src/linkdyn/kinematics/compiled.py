@@ -29,7 +29,7 @@ import numpy as np
 from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, arctan2, factor, inline,
                         njit, screw_views, substitute, vector_views)
 
-BLOCK = 512          # samples per block of the kernel
+BLOCK = 1024         # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
 PARENT, KIND, SIGN = range(3)       # tree columns
 CUT_A, CUT_B, CUT_KIND = range(3)   # cuts columns
