@@ -12,13 +12,13 @@ numbers that are not redundant. Kinematics:
   velocity, origin velocity x, y; angular acceleration, origin acceleration x, y (33);
 - the closure residual and the relative pivot of the rate system (2).
 
-47 numbers per sample, where the general kernel stores 75 (its ground rows, the zero slider
-axes of revolute joints and the closure Jacobian besides). The full analysis adds the
-Newton-Euler equations of the three links solved for the driving torque and the four pin
-forces, and the kinetic energy: 12 numbers more (the cut pin's force stored twice, standing in
-for the two multipliers), where the general kernel stores 57 (its internal wrenches besides).
-The outputs are staged through a small block buffer so that they are written row by row, the
-fastest order measured here. Every output is checked against linkdyn's results before timing.
+47 numbers per sample, where the general kernel stores 54 (the ground's cosine and the closure
+Jacobian besides). The full analysis adds the Newton-Euler equations of the three links solved
+for the driving torque and the four pin forces, and the kinetic energy: 12 numbers more (the
+cut pin's force stored twice, standing in for the two multipliers), where the general kernel
+stores 16 (the pivot and the three tree joints' moments besides). The outputs are staged
+through a small block buffer so that they are written row by row, the fastest order measured
+here. Every output is checked against linkdyn's results before timing.
 
 It prints the ceilings' samples per second into fresh outputs (as a user's call gets them)
 and into outputs already touched, beside linkdyn's compiled backend measured in the same run.
