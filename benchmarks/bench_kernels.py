@@ -3,8 +3,12 @@
 Prints, in ns per sample:
   1. the kinematics kernel and the dynamics kernel alone, writing into outputs already touched
      (each kernel re-run on the arguments of a real ``linkdyn.analyze`` call);
-  2. each step of the kinematics kernel, called block by block from Python (each figure
+  2. the kinematics kernel with blocks of 512, 1024 and 2048 samples (linkdyn uses
+     ``linkdyn.kinematics.compiled.BLOCK``);
+  3. each step of the kinematics kernel, called block by block from Python (each figure
      includes a few ns of call overhead per sample);
+  4. ``linkdyn.compiled.arctan2`` against the C library's ``math.atan2`` in a compiled loop
+     over an array (the first compiles to vector instructions, the second stays scalar);
 and the speed of filling fresh memory against memory already touched, which is what separates
 the kernels' own time from the end-to-end throughput of ``make bench``.
 
@@ -20,9 +24,12 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 
+import math  # noqa: E402
+
 import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
+from linkdyn import compiled  # noqa: E402
 from linkdyn.dynamics import compiled as dc  # noqa: E402
 from linkdyn.kinematics import compiled as kc  # noqa: E402
 
@@ -80,6 +87,18 @@ def steps(args):
     }, block
 
 
+@compiled.njit
+def _arctan2_loop(y, x, out):
+    for k in range(len(y)):
+        out[k] = compiled.arctan2(y[k], x[k])
+
+
+@compiled.njit
+def _atan2_loop(y, x, out):
+    for k in range(len(y)):
+        out[k] = math.atan2(y[k], x[k])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--samples", type=int, default=300_000)
@@ -95,12 +114,23 @@ def main():
                                ("dynamics", dyn_kernel, dyn_args)):
         per = best_time(lambda: kernel(*args), 5)
         print(f"{name + ' kernel':18s} {per / T * 1e9:7.1f} ns/sample")
+    for block in (512, 1024, 2048):
+        args = kin_args[:-1] + (block,)
+        per = best_time(lambda: kin_kernel(*args), 5)
+        print(f"kinematics kernel, blocks of {block:4d} {per / T * 1e9:7.1f} ns/sample")
     print("kinematics kernel, step by step:")
     table, block = steps(kin_args)
     for name, fn in table.items():
         fn(0, block)
         per = best_time(lambda: [fn(k0, min(block, T - k0)) for k0 in range(0, T, block)], 3)
         print(f"  {name:38s} {per / T * 1e9:7.1f} ns/sample")
+    # angles: straight-line arctan2 against the C library's, random directions
+    rng = np.random.default_rng(0)
+    y, x, out = rng.standard_normal(T), rng.standard_normal(T), np.empty(T)
+    for name, loop in (("linkdyn.compiled.arctan2", _arctan2_loop), ("math.atan2", _atan2_loop)):
+        loop(y, x, out)
+        per = best_time(lambda: loop(y, x, out), 5)
+        print(f"{name + ' over an array':38s} {per / T * 1e9:7.1f} ns/call")
     # first writes to fresh memory against writes to memory already touched
     size = 10_000_000
     touched = np.empty(size)

@@ -110,6 +110,21 @@ def test_every_cut_of_the_four_bar(cut, shape):
     check_kinematics(fast, ref)
 
 
+@pytest.mark.parametrize("connect, side", [('["ground.G", "slider.B"]', "b"),
+                                           ('["slider.B", "ground.G"]', "a")])
+def test_slide_dyad_either_body_carrying_the_line(connect, side):
+    """The slider-crank's RRP dyad with its prismatic joint declared either way: the line fixed
+    in the ground (the slider moves along it, side b) or in the slider (the line moves with it,
+    side a)."""
+    text = example_text("slider_crank").replace('connect = ["ground.G", "slider.B"]',
+                                                 f"connect = {connect}")
+    model = model_from_dict(tomllib.loads(text))
+    fast, ref = solve_both(model, around(model))
+    assert [(d.shape, d.side) for d in fast.layout.dyads] == [("slide", side)]
+    assert np.all(ref.valid)
+    check_kinematics(fast, ref)
+
+
 def test_designs_one_of_which_cannot_assemble():
     designs = [hoeken_design(38.1), hoeken_design(400.0), hoeken_design(42.0)]
     fast, ref = solve_both(designs, np.linspace(-0.2, 1.5, 29))

@@ -219,16 +219,15 @@ def _chain_lower(M, F, pm, pf, nb, low):
 
 
 @inline
-def _slide(A, B, pa, pb, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low):
-    """RRP: the moving body ends at a known angle, so both joints together turn by a known
-    total (cd, sd); the lower joint m lies on the slide line shifted back by the turned offset
-    to the cut point."""
+def _slide(A, M, F, pm, pf, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low):
+    """RRP: the moving body M (the cut's body on the joints' side, b if ``on_b``) ends at a
+    known angle, so both joints together turn by a known total (cd, sd); the lower joint m
+    lies on the slide line (fixed in body a = A) shifted back by the turned offset to the cut
+    point."""
     ca, sa, sgn = math.cos(angle), math.sin(angle), 1.0 if on_b else -1.0
-    M, F = (B, A) if on_b else (A, B)
     for k in range(nb):
-        pax, pay = _point(A, k, pa[0], pa[1])
-        pbx, pby = _point(B, k, pb[0], pb[1])
-        pmx, pmy, p0x, p0y = (pbx, pby, pax, pay) if on_b else (pax, pay, pbx, pby)
+        pmx, pmy = _point(M, k, pm[0], pm[1])
+        p0x, p0y = _point(F, k, pf[0], pf[1])
         ct = F[0][k] * ca - sgn * F[1][k] * sa
         st = F[1][k] * ca + sgn * F[0][k] * sa
         cd = ct * M[0][k] + st * M[1][k]
@@ -290,12 +289,12 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
         B = _body(c, s, r, cuts[cut, CUT_B], d, ks)
         pa, pb = (cgeo[d, cut, 0], cgeo[d, cut, 1]), (cgeo[d, cut, 2], cgeo[d, cut, 3])
         axis, angle = (cgeo[d, cut, 4], cgeo[d, cut, 5]), cgeo[d, cut, 6]
-        # the cut's body on the side of both unknown joints (chain), and the other
+        # the cut's body on the side of both unknown joints (chain, slide), and the other
         M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
         x1x, x1y = vector_views(r, ju, d, ks)   # the upper and lower unknown joints
         x2x, x2y = vector_views(r, jl, d, ks)
         if shape == SLIDE:
-            _slide(A, B, pa, pb, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low)
+            _slide(A, M, F, pm, pf, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low)
         elif shape == SWING:
             _swing(A, B, pa, pb, axis, angle, x1x, x1y, x2x, x2y, side, nb, up, low)
         elif shape == SPLIT:
