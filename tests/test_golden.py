@@ -1,0 +1,75 @@
+"""Golden outputs: every column of every bundled example, on both backends, against the
+numbers stored in ``tests/data/golden.npz`` (recorded by ``tests/golden.py`` before the core was
+restructured for issue 12).
+
+Each column must agree to 1e-12 of its scale: the column's peak, or the peak of its family of
+the same unit in that example when larger (a column that is rounding noise, as the angle of a
+slider that never turns, is held to its family's scale, not to its own noise). A refactoring
+that changes any result beyond rounding fails here; an output meant to change is re-recorded
+with ``python tests/golden.py`` and the commit says why.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import linkdyn
+from linkdyn import compiled
+
+import golden
+
+RTOL = 1e-12
+STORED = np.load(golden.PATH)
+STORED_EXAMPLES = sorted({k.split("/")[0] for k in STORED.files})
+BACKENDS = ["numpy", pytest.param("compiled", marks=pytest.mark.skipif(
+    compiled.numba is None, reason="the compiled backend needs numba"))]
+
+
+def family(column: str) -> str:
+    """The unit family of a column: x and y share one, as do Fx and Fy, and the energies."""
+    head = column.split("_")[0]
+    return {"y": "x", "Fy": "Fx", "potential": "kinetic"}.get(head, head)
+
+
+def scales(columns: dict[str, np.ndarray]) -> dict[str, float]:
+    """Each column's scale: the larger of its peak and its family's peak; a moment's family
+    scale is the peak force times the peak coordinate (N m)."""
+    peak = {c: float(np.nanmax(np.abs(v))) for c, v in columns.items()}
+    fam: dict[str, float] = {}
+    for c, p in peak.items():
+        fam[family(c)] = max(fam.get(family(c), 0.0), p)
+    fam["M"] = max(fam.get("M", 0.0), fam.get("Fx", 0.0) * fam.get("x", 0.0))
+    return {c: max(p, fam[family(c)]) for c, p in peak.items()}
+
+
+def test_stored_file_covers_every_example():
+    # the record holds each bundled example that existed when it was made, with its columns
+    assert len(STORED_EXAMPLES) >= 7
+    assert set(STORED_EXAMPLES) <= set(golden.EXAMPLES)
+    assert golden.PATH.stat().st_size < 1_000_000
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("example", STORED_EXAMPLES)
+def test_outputs_match_stored(example, backend):
+    mech, t = golden.times(example)
+    cols = linkdyn.analyze(mech, t, backend=backend).columns
+    stored = {k.split("/", 1)[1]: STORED[k] for k in STORED.files
+              if k.split("/")[0] == example}
+    missing = set(stored) - set(cols)
+    assert not missing, f"{example}: columns gone: {sorted(missing)}"
+    scale = scales(stored)
+    bad = {}
+    for c, ref in stored.items():
+        err = float(np.max(np.abs(cols[c] - ref)))
+        if not err <= RTOL * scale[c]:   # NaN fails too
+            bad[c] = err / scale[c]
+    assert not bad, f"{example} ({backend}): columns off by (relative to scale): {bad}"
+
+
+def test_scale_floor_is_not_loose():
+    # the family floor lifts noise columns only: a real column keeps its own peak as scale
+    s = scales({"x_a.P": np.array([0.0, 0.5]), "y_b.Q": np.array([1e-17, 0.0]),
+                "Fx_J1": np.array([10.0]), "M_J2": np.array([1e-15]), "phi_b": np.array([3.0])})
+    assert s == {"x_a.P": 0.5, "y_b.Q": 0.5, "Fx_J1": 10.0, "M_J2": 5.0, "phi_b": 3.0}
