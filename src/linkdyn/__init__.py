@@ -14,6 +14,7 @@ from importlib import resources
 from .analysis import Solution, analyze
 from .errors import AssemblyError, LinkdynError, ModelError
 from .io import load_model, model_from_dict
+from .io.writer import model_to_dict, save
 from .model import Body, Driver, Joint, Load, Model
 
 __version__ = "0.1.0"
@@ -28,4 +29,4 @@ def example_path(name: str):
 
 __all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",
            "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
-           "example_path"]
+           "example_path", "save", "model_to_dict"]

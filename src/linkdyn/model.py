@@ -136,6 +136,9 @@ class Model:
         Range of the first driver's coordinate for ``path_point``, rad or m.
     source : str
         File the model came from ('' if built in Python).
+    length_unit, angle_unit : str
+        The units of the file it came from (``[units]``; 'm' and 'rad' otherwise), kept so a
+        written model (:func:`linkdyn.save`) and design parameters use the file's units.
     """
 
     name: str
@@ -154,6 +157,8 @@ class Model:
     description: str = ""
     path_point: str | None = None
     path_range: tuple[float, float] | None = None
+    length_unit: str = "m"
+    angle_unit: str = "rad"
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

@@ -104,4 +104,5 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
                  drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads), gravity=gravity,
                  assembly_phi=phi, assembly_q=q, cut=cut, duration=duration, cycles=cycles,
                  samples=samples, source=source, description=description,
-                 path_point=path_point, path_range=path_range)
+                 path_point=path_point, path_range=path_range, length_unit=r.length_name,
+                 angle_unit=r.angle_name)

@@ -1,0 +1,219 @@
+"""Write a :class:`~linkdyn.Model` back as a model file: ``save(model, path)`` (TOML).
+
+:func:`model_to_dict` turns a model into the structure of a model file (the inverse of
+:func:`linkdyn.model_from_dict`), in the units of the file it came from (``Model.length_unit``,
+``Model.angle_unit``; SI for a model built in Python); :func:`save` writes it as TOML. Loading the
+written file gives the same model to rounding of the unit conversion (a few ulp), so the same
+analysis. What a file states in a second way is written in the first: an inertia given about a
+point (``inertia_about``) is written about the mass centre, a speed given in rpm as ``speed``. A
+driver's motion table is written beside the model as ``<stem>.<joint>.csv``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .. import expr as _expr
+from .. import motion as _motion
+from ..model import GROUND, REVOLUTE, Model
+from .loads import _TimeFunction
+from .units import ANGLE_UNITS, LENGTH_UNITS
+
+__all__ = ["model_to_dict", "save", "dumps_toml"]
+
+
+def _num(x) -> float | int:
+    x = float(x)
+    return int(x) if x.is_integer() and abs(x) < 2 ** 53 else x
+
+
+def _vec(v, scale: float = 1.0) -> list:
+    return [_num(c / scale) for c in np.asarray(v, float)]
+
+
+def _load_value(value, vector: bool):
+    """A load value as written: numbers or formula texts."""
+    if not isinstance(value, _TimeFunction):
+        raise ValueError("a load value given as a Python function cannot be written to a model "
+                         "file; give it as numbers or formulas of t")
+    comps = [str(c) if isinstance(c, _expr.Expr) else _num(c) for c in value.components]
+    return comps if vector else comps[0]
+
+
+def _motion_dict(motion, scale: float, table_file: str | None):
+    if isinstance(motion, _motion.ConstantSpeed):
+        return {"kind": "constant_speed", "speed": _num(motion.speed / scale),
+                "start": _num(motion.start / scale)}
+    if isinstance(motion, _motion.ExpressionMotion):
+        text = motion.text.strip()
+        if motion.scale != scale:  # q = motion.scale * f(t) in SI; the file multiplies by scale
+            text = f"{motion.scale / scale!r}*({text})"
+        return {"kind": "expression", "q": text}
+    if isinstance(motion, _motion.TableMotion):
+        if table_file is None:
+            raise ValueError("a motion table is written beside the model file; give save() a path")
+        return {"kind": "table", "file": table_file}
+    raise ValueError(f"a driver motion of type {type(motion).__name__} cannot be written to a "
+                     f"model file")
+
+
+def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) -> dict:
+    """The model as the structure of a model file, in the model's own units.
+
+    Parameters
+    ----------
+    model : Model
+    table_files : dict, optional
+        File name (relative to the model file) of each table-driven joint's motion table.
+
+    Returns
+    -------
+    dict
+        Sections as :func:`linkdyn.model_from_dict` reads them; numbers in ``model.length_unit``
+        and ``model.angle_unit`` (mass kg, inertia kg length^2).
+    """
+    L, A = LENGTH_UNITS[model.length_unit], ANGLE_UNITS[model.angle_unit]
+    table_files = table_files or {}
+    out: dict = {"mechanism": {"name": model.name}}
+    if model.description:
+        out["mechanism"]["description"] = model.description
+    out["mechanism"]["gravity"] = _vec(model.gravity)
+    out["units"] = {"length": model.length_unit, "angle": model.angle_unit}
+    bodies = []
+    for b in model.bodies:
+        entry: dict = {"name": b.name, "points": {k: _vec(v, L) for k, v in b.points.items()}}
+        if b.name != GROUND:
+            entry.update(mass=_num(b.mass), com=_vec(b.com, L), inertia=_num(b.inertia / L ** 2))
+        bodies.append(entry)
+    out["bodies"] = bodies
+    joints = []
+    for j in model.joints:
+        entry = {"name": j.name, "type": j.kind,
+                 "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
+        if j.kind != REVOLUTE:
+            entry.update(axis=_vec(j.axis), angle=_num(j.angle / A))
+        joints.append(entry)
+    out["joints"] = joints
+
+    def scale_of(joint: str) -> float:
+        return A if model.joint(joint).kind == REVOLUTE else L
+
+    out["drivers"] = [{"joint": d.joint, "motion": _motion_dict(d.motion, scale_of(d.joint),
+                                                                table_files.get(d.joint))}
+                      for d in model.drivers]
+    loads = []
+    for ld in model.loads:
+        entry = {"kind": ld.kind}
+        if ld.name:
+            entry["name"] = ld.name
+        entry["body"] = ld.body
+        if ld.point is not None:
+            entry["point"] = ld.point
+        if ld.kind in ("force", "torque"):
+            entry["value"] = _load_value(ld.value, ld.kind == "force")
+        elif ld.kind in ("spring", "damper"):
+            entry.update(body2=ld.body2, point2=ld.point2)
+            if ld.kind == "spring":  # N/m -> N/length unit; m -> length unit
+                entry.update(stiffness=_num(ld.stiffness * L), free_length=_num(ld.free_length / L))
+            else:
+                entry["damping"] = _num(ld.damping * L)
+        else:
+            raise ValueError(f"a load of kind '{ld.kind}' cannot be written to a model file yet")
+        loads.append(entry)
+    out["loads"] = loads
+    assembly = {}
+    if model.assembly_phi:
+        assembly["phi"] = {b: _num(v / A) for b, v in model.assembly_phi.items()}
+    if model.assembly_q:
+        assembly["q"] = {j: _num(v / scale_of(j)) for j, v in model.assembly_q.items()}
+    if assembly:
+        out["assembly"] = assembly
+    if model.cut is not None:
+        out["topology"] = {"cut": list(model.cut)}
+    analysis: dict = {}
+    if model.duration is not None:
+        analysis["duration"] = _num(model.duration)
+    if model.cycles is not None:
+        analysis["cycles"] = _num(model.cycles)
+    if model.samples is not None:
+        analysis["samples"] = int(model.samples)
+    if model.path_point is not None:
+        analysis["path_point"] = model.path_point
+    if model.path_range is not None:
+        s = scale_of(model.drivers[0].joint) if model.drivers else A
+        analysis["path_range"] = [_num(x / s) for x in model.path_range]
+    if analysis:
+        out["analysis"] = analysis
+    return {k: v for k, v in out.items() if v != []}
+
+
+# --- TOML -------------------------------------------------------------------------------------
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            raise ValueError(f"cannot write the non-finite number {v} to a model file")
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v, ensure_ascii=False)  # a TOML basic string
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_toml_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def _key(k: str) -> str:
+    return k if k and all(c.isalnum() or c in "_-" for c in k) else json.dumps(k)
+
+
+def dumps_toml(data: dict) -> str:
+    """TOML text of a model-file structure: ``[section]`` tables, ``[[section]]`` arrays of
+    tables, every nested table written inline."""
+    lines: list[str] = []
+    for name, section in data.items():
+        entries = section if isinstance(section, list) else [section]
+        header = f"[[{name}]]" if isinstance(section, list) else f"[{name}]"
+        for entry in entries:
+            lines.append(header)
+            lines.extend(f"{_key(k)} = {_toml_value(v)}" for k, v in entry.items())
+            lines.append("")
+    return "\n".join(lines)
+
+
+def save(model: Model, path: str | os.PathLike) -> Path:
+    """Write ``model`` as a TOML model file that :func:`linkdyn.load` reads back to it.
+
+    Parameters
+    ----------
+    model : Model
+    path : str or os.PathLike
+        The ``.toml`` file to write. A driver's motion table goes beside it as
+        ``<stem>.<joint>.csv`` (t in s, q in the file's angle or length unit).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    path = Path(path)
+    L, A = LENGTH_UNITS[model.length_unit], ANGLE_UNITS[model.angle_unit]
+    tables = {d.joint: d.motion for d in model.drivers if isinstance(d.motion, _motion.TableMotion)}
+    names = {j: f"{path.stem}.{j}.csv" for j in tables}
+    text = dumps_toml(model_to_dict(model, table_files=names))
+    for j, motion in tables.items():
+        unit = A if model.joint(j).kind == REVOLUTE else L
+        q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
+        rows = "\n".join(f"{ti!r},{qi!r}" for ti, qi in zip(motion.t.tolist(), q.tolist()))
+        (path.parent / names[j]).write_text("t,q\n" + rows + "\n", encoding="utf-8")
+    path.write_text(text, encoding="utf-8")
+    return path
