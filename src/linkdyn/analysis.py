@@ -14,7 +14,8 @@ from . import compiled, kinematics, loads as loads_mod, reactions as reactions_m
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import AssemblyError
-from .model import PRISMATIC, Model
+from . import joints as jk
+from .model import Model
 
 SINGULAR = 1e-10  # relative pivot of J_dep below which a position counts as singular
 
@@ -110,12 +111,11 @@ class Solution:
             cols[f"omega_{b.name}"] = self.omega(b.name)
             cols[f"alpha_{b.name}"] = self.alpha(b.name)
         for k, d in enumerate(m.drivers):
-            word = "force" if m.joint(d.joint).kind == PRISMATIC else "tau"
-            cols[f"{word}_{d.joint}"] = self.dyn.tau[..., k]
+            cols[f"{jk.get(m.joint(d.joint).kind).effort}_{d.joint}"] = self.dyn.tau[..., k]
         for j, w in zip(m.joints, self.reactions.on_second):
-            cols[f"Fx_{j.name}"], cols[f"Fy_{j.name}"] = w[1], w[2]
-            if j.kind == PRISMATIC:
-                cols[f"M_{j.name}"] = w[0]
+            # the columns the joint's kind reports, of [M, Fx, Fy]
+            for name in jk.get(j.kind).reaction:
+                cols[f"{name}_{j.name}"] = w[{"M": 0, "Fx": 1, "Fy": 2}[name]]
         for b in m.moving_bodies:
             for name in b.points:
                 xy = self.point(b.name, name)
@@ -171,7 +171,7 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     t = np.asarray(t, dtype=float)
-    fast = compiled.use_compiled(backend, t.size * len(models))
+    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     kin = kinematics.solve(models if designs else model, t,
                            backend="compiled" if fast else "numpy")
     model = models[0]

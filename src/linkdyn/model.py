@@ -15,7 +15,6 @@ import numpy as np
 GROUND = "ground"
 REVOLUTE = "revolute"
 PRISMATIC = "prismatic"
-JOINT_KINDS = (REVOLUTE, PRISMATIC)
 
 
 class Motion(Protocol):
@@ -57,11 +56,12 @@ class Joint:
     Attributes
     ----------
     name : str
-    kind : {'revolute', 'prismatic'}
+    kind : str
+        A kind registered in :mod:`linkdyn.joints` (``'revolute'``, ``'prismatic'``, ...).
     body_a, point_a, body_b, point_b : str
         ``connect = ["body_a.point_a", "body_b.point_b"]``.
     axis : ndarray (2,)
-        Prismatic only: unit sliding direction in ``body_a``'s frame.
+        Kinds with an axis only: unit sliding direction in ``body_a``'s frame.
     angle : float
         Prismatic only: fixed angle of ``body_b``'s frame relative to ``body_a``'s, rad.
     """

@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ModelError
-from .model import GROUND, PRISMATIC, REVOLUTE
+from . import joints as jk
+from .model import GROUND
 
 DEG = 180.0 / math.pi
 MAX_POINTS = 20000  # samples drawn per curve; longer runs are strided for the figures
@@ -92,14 +93,14 @@ def fig_joints(sol):
     prismatic in m, m/s, m/s^2)."""
     m, k = sol.model, _stride(len(sol.t))
     t = sol.t[k]
-    groups = [g for g in ([j for j in m.joints if j.kind == REVOLUTE],
-                          [j for j in m.joints if j.kind == PRISMATIC]) if g]
+    groups = [g for g in ([j for j in m.joints if jk.get(j.kind).angular],
+                          [j for j in m.joints if not jk.get(j.kind).angular]) if g]
     fig = _figure(6.4 * len(groups), 8.0)
     axes = np.asarray(fig.subplots(3, len(groups), sharex=True, squeeze=False))
     rows = (("q", "angle", "displacement", ("deg", "m")), ("qd", "rate", "rate", ("rad/s", "m/s")),
             ("qdd", "acceleration", "acceleration", ("rad/s²", "m/s²")))
     for c, js in enumerate(groups):
-        rev = js[0].kind == REVOLUTE
+        rev = jk.get(js[0].kind).angular
         for r, (key, wr, wp, units) in enumerate(rows):
             ax = axes[r, c]
             for j in js:
@@ -108,7 +109,7 @@ def fig_joints(sol):
                         label=j.name)
             word = wr if rev else wp
             _style(ax, "t (s)" if r == 2 else "", f"{units[0 if rev else 1]}",
-                   f"Joint {word}s ({'revolute' if rev else 'prismatic'})")
+                   f"Joint {word}s ({'angular' if rev else 'linear'})")
             ax.legend(fontsize=8, ncols=min(len(js), 4), loc="best")
     fig.suptitle(f"{m.name}: joint motion (q = second body relative to first)", fontsize=11)
     return fig
@@ -119,7 +120,7 @@ def fig_efforts(sol):
     m, k = sol.model, _stride(len(sol.t))
     t = sol.t[k]
     groups = [(u, [(n, d) for n, d in enumerate(m.drivers)
-                   if (m.joint(d.joint).kind == REVOLUTE) == (u == "N m")]) for u in ("N m", "N")]
+                   if jk.get(m.joint(d.joint).kind).angular == (u == "N m")]) for u in ("N m", "N")]
     groups = [g for g in groups if g[1]]
     fig = _figure(7.0, 2.6 * max(len(groups), 1) + 0.6)
     axes = np.atleast_1d(fig.subplots(max(len(groups), 1), 1, sharex=True, squeeze=False)[:, 0])
@@ -154,7 +155,7 @@ def fig_reactions(sol):
         ax = fig.add_subplot(gs[1 + n // ncol, n % ncol], sharex=ax0)
         ax.plot(t, F[:, n, 0], lw=1.4, color=PALETTE[0], label="Fx")
         ax.plot(t, F[:, n, 1], lw=1.4, color=PALETTE[3], label="Fy")
-        if j.kind == PRISMATIC:
+        if "M" in jk.get(j.kind).reaction:
             ax2 = ax.twinx()
             ax2.plot(t, sol.reactions.moment[k, n], lw=1.2, ls="--", color=PALETTE[2], label="M")
             ax2.set_ylabel("M (N m)", color=PALETTE[2])
@@ -177,19 +178,20 @@ def fig_multipliers(sol):
     for ax, c in zip(axes, cuts):
         comps = [(n, lbl) for n, lbl in enumerate(labels) if lbl[0] == c]
         jt = m.joint(c)
-        if jt.kind == PRISMATIC:
-            (n0, l0), (n1, l1) = comps
-            ax.plot(t, sol.dyn.lam[k, n1], lw=1.5, color=PALETTE[0], label=f"λ {l1[1]} (N)")
+        forces = [(n, lbl) for n, lbl in comps if lbl[2] == "N"]
+        moments = [(n, lbl) for n, lbl in comps if lbl[2] != "N"]
+        # forces on the panel's axis, moments (N m) on a twin axis
+        for (n, lbl), col in zip(forces, (PALETTE[0], PALETTE[3])):
+            ax.plot(t, sol.dyn.lam[k, n], lw=1.5, color=col,
+                    label=f"λ {lbl[1]}" + (" (N)" if moments else ""))
+        if moments:
             ax2 = ax.twinx()
-            ax2.plot(t, sol.dyn.lam[k, n0], lw=1.3, ls="--", color=PALETTE[3],
-                     label=f"λ {l0[1]} (N m)")
-            ax2.set_ylabel("N m")
+            for n, lbl in moments:
+                ax2.plot(t, sol.dyn.lam[k, n], lw=1.3, ls="--", color=PALETTE[3],
+                         label=f"λ {lbl[1]} ({lbl[2]})")
+            ax2.set_ylabel(moments[0][1][2])
             ax2.legend(fontsize=8, loc="lower right")
-            unit = "N"
-        else:
-            for (n, lbl), col in zip(comps, (PALETTE[0], PALETTE[3])):
-                ax.plot(t, sol.dyn.lam[k, n], lw=1.5, color=col, label=f"λ {lbl[1]}")
-            unit = "N"
+        unit = "N"
         _style(ax, "t (s)", unit, f"Cut joint {c}: reaction of {jt.body_a} on {jt.body_b}")
         ax.legend(fontsize=8, loc="upper right")
     fig.suptitle(f"{m.name}: cut-joint multipliers λ", fontsize=11)

@@ -66,13 +66,13 @@ class Reactions:
 
 
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
-    """Wrenches (3, T) of the cut-joint multipliers ``lam`` (2 n_cut, T) on every body about O_i."""
+    """Wrenches (3, T) of the cut-joint multipliers ``lam`` (n_rows, T) on every body about O_i."""
     lay = kin.layout
     w = [np.zeros((3,) + kin.shape) for _ in range(lay.topo.n)]
     for k, c in enumerate(lay.cuts):
         r_pa, r_pb, e_a = _cut_frames(lay, kin.pose, c)
         # S^T lam acts at the cut point on the second body, its opposite on the first
-        on_b = jk.cut_wrench(c.kind, e_a, lam[2 * k:2 * k + 2])
+        on_b = jk.get(c.kind).cut_wrench(e_a, lam[lay.topo.row_slice(k)])
         w[c.b] = w[c.b] + shift_wrench(on_b, r_pb - kin.pose.r[c.b])
         w[c.a] = w[c.a] - shift_wrench(on_b, r_pb - kin.pose.r[c.a])
     return w
@@ -106,5 +106,5 @@ def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactio
             on_b[j] = shift_wrench(-on_child, kin.pose.r[i] - r_pb)
     for k, c in enumerate(lay.cuts):
         _, _, e_a = _cut_frames(lay, kin.pose, c)
-        on_b[c.joint] = jk.cut_wrench(c.kind, e_a, lam[2 * k:2 * k + 2])
+        on_b[c.joint] = jk.get(c.kind).cut_wrench(e_a, lam[topo.row_slice(k)])
     return Reactions(on_b, R)

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import ModelError
-from .model import GROUND, PRISMATIC, REVOLUTE, Model
+from . import joints as jk
+from .model import GROUND, Model
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,8 @@ class Topology:
         ``+1`` if body i is its tree joint's second body (``connect[1]``), ``-1`` if the first.
     cut : tuple[int, ...]
         Indices into ``model.joints`` of the cut joints.
+    rows : tuple[int, ...]
+        Loop-closure rows of each cut joint, from its kind (``JointKind.rows``).
     driven : tuple[int, ...]
         Body index whose tree joint each driver moves, in the order of ``model.drivers``.
     dependent : tuple[int, ...]
@@ -41,7 +44,7 @@ class Topology:
         ``ancestors[i, k]``: body k's tree joint lies on the path from the ground to body i
         (k = i included).
     mobility : int
-        Grübler–Kutzbach: ``3 (n - 1) - 2 j``.
+        Grübler–Kutzbach: ``3 (n - 1)`` minus the rows every joint's kind removes.
     """
 
     bodies: tuple[str, ...]
@@ -49,6 +52,7 @@ class Topology:
     tree_joint: tuple[int, ...]
     sign: tuple[int, ...]
     cut: tuple[int, ...]
+    rows: tuple[int, ...]
     driven: tuple[int, ...]
     dependent: tuple[int, ...]
     ancestors: np.ndarray
@@ -63,6 +67,16 @@ class Topology:
     def n_loops(self) -> int:
         return len(self.cut)
 
+    @property
+    def n_rows(self) -> int:
+        """Loop-closure rows of all cut joints together."""
+        return sum(self.rows)
+
+    def row_slice(self, k: int) -> slice:
+        """The rows of cut joint k (``cut[k]``) in the stacked closure arrays."""
+        start = sum(self.rows[:k])
+        return slice(start, start + self.rows[k])
+
     def children(self, i: int) -> list[int]:
         return [k for k in range(1, self.n) if self.parent[k] == i]
 
@@ -71,13 +85,14 @@ def build(model: Model) -> Topology:
     """Choose the spanning tree and cut joints of ``model`` and check its mobility.
 
     Kruskal's algorithm over the joints, driven joints first, sliders last, otherwise in file
-    order, skipping joints the user asked to cut: every joint that would close a cycle is cut.
+    order, skipping joints the user asked to cut and kinds that cannot be tree joints (a slot):
+    every joint that would close a cycle is cut.
 
     Raises
     ------
     ModelError
-        A body not connected to the ground, a driven joint that would have to be cut, or a
-        mobility that differs from the number of drivers.
+        An unknown joint kind, a body not connected to the ground, a driven joint that would have
+        to be cut, or a mobility that differs from the number of drivers.
     """
     src = model.source
     names = [b.name for b in model.bodies]
@@ -85,6 +100,13 @@ def build(model: Model) -> Topology:
     joints = model.joints
     driven_names = [d.joint for d in model.drivers]
     user_cut = set(model.cut or ())
+    kinds = []
+    for k, jt in enumerate(joints):
+        try:
+            kinds.append(jk.get(jt.kind))
+        except jk.UnknownJointKind as exc:
+            raise ModelError(str(exc), file=src, field=f"joints[{k}].type",
+                             fix="Set type to one of " + ", ".join(jk.names())) from None
 
     # union-find over bodies
     root = list(range(len(names)))
@@ -98,12 +120,18 @@ def build(model: Model) -> Topology:
     # driven joints first (never cut), sliders last (a cut slider leaves loops that close in
     # closed form, see kinematics.dyads), otherwise file order
     order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_names,
-                                                      joints[j].kind == PRISMATIC, j))
+                                                      not kinds[j].angular, j))
     tree, cut = [], []
     for j in order:
         jt = joints[j]
         a, b = find(index[jt.body_a]), find(index[jt.body_b])
-        if jt.name in user_cut or a == b:
+        if jt.name in driven_names and not kinds[j].tree:
+            raise ModelError(
+                f"joint '{jt.name}' is a {jt.kind} joint, which cannot be driven (it leaves "
+                f"{kinds[j].freedoms} relative freedoms and is always cut)",
+                file=src, field="drivers",
+                fix="Drive a revolute or prismatic joint of the mechanism instead")
+        if jt.name in user_cut or a == b or not kinds[j].tree:
             if jt.name in driven_names:
                 raise ModelError(
                     f"driven joint '{jt.name}' closes a loop formed by other driven joints",
@@ -156,16 +184,17 @@ def build(model: Model) -> Topology:
             ancestors[i, k] = True
             k = parent[k]
 
-    # Grübler–Kutzbach: each revolute or prismatic joint removes two of the three planar freedoms
-    mobility = 3 * (n - 1) - 2 * len(joints)
+    # Grübler–Kutzbach: each joint removes its kind's rows of the three planar freedoms
+    removed = sum(k.rows for k in kinds)
+    mobility = 3 * (n - 1) - removed
     if mobility != len(model.drivers):
-        kinds = {REVOLUTE: 0, PRISMATIC: 0}
-        for jt in joints:
-            kinds[jt.kind] += 1
+        count = {k.name: sum(1 for x in kinds if x is k) for k in kinds}
+        terms = " - ".join(f"{k.rows}*{count[k.name]}" for k in {k.name: k for k in kinds}.values())
         need = "add" if mobility > len(model.drivers) else "remove"
         raise ModelError(
-            f"the mechanism has mobility {mobility} (Grübler–Kutzbach: 3*({n}-1) - 2*{len(joints)}"
-            f" with {n} bodies including the ground and {len(joints)} joints) but "
+            f"the mechanism has mobility {mobility} (Grübler–Kutzbach: 3*({n}-1)"
+            + (f" - {terms}" if terms else "") + f" with {n} bodies including the ground and "
+            + ", ".join(f"{c} {name}" for name, c in count.items()) + " joints) but "
             f"{len(model.drivers)} driver(s)",
             file=src, field="drivers",
             fix=(f"{need.capitalize()} {abs(mobility - len(model.drivers))} driver(s), "
@@ -177,5 +206,6 @@ def build(model: Model) -> Topology:
     driven = tuple(tree_of_joint[next(j for j, jt in enumerate(joints) if jt.name == name)]
                    for name in driven_names)
     dependent = tuple(i for i in range(1, n) if i not in driven)
-    return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign),
-                    tuple(sorted(cut)), driven, dependent, ancestors, mobility)
+    cut = tuple(sorted(cut))
+    return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign), cut,
+                    tuple(kinds[j].rows for j in cut), driven, dependent, ancestors, mobility)

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import REVOLUTE
 
 try:  # optional: the numpy path is complete without it
     import numba
@@ -37,8 +36,9 @@ except ImportError:  # pragma: no cover - depends on the environment
 BACKENDS = ("auto", "numpy", "compiled")
 AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" compiles
 
-# joint kind codes inside the kernels
+# joint kind codes inside the kernels, and the kinds (linkdyn.joints) they have code for
 GROUND, REV, PRI = 0, 1, 2
+CODES = {"revolute": REV, "prismatic": PRI}
 # dyad shape codes (linkdyn.kinematics.dyads)
 SPLIT, CHAIN, SLIDE, SWING = 0, 1, 2, 3
 DYAD_SHAPES = {"split": SPLIT, "chain": CHAIN, "slide": SLIDE, "swing": SWING}
@@ -111,16 +111,32 @@ def screw_views(x, i, d, ks):
     return x[i, 0, d, ks], x[i, 1, d, ks], x[i, 2, d, ks]
 
 
-def use_compiled(backend: str | None = None, samples: int = 0) -> bool:
+def unsupported(kinds) -> list[str]:
+    """The joint kinds among ``kinds`` that the kernels have no code for."""
+    return sorted({k for k in kinds if k not in CODES})
+
+
+def use_compiled(backend: str | None = None, samples: int = 0, kinds=()) -> bool:
     """Whether to run the compiled kernels for ``backend`` (default: ``LINKDYN_BACKEND`` or
-    ``"auto"``, which uses them when numba is installed and the batch has at least
-    :data:`AUTO_MIN_SAMPLES` ``samples``)."""
+    ``"auto"``, which uses them when numba is installed, the batch has at least
+    :data:`AUTO_MIN_SAMPLES` ``samples`` and the kernels know every joint kind in ``kinds``).
+
+    Raises
+    ------
+    ValueError
+        An unknown backend, or ``"compiled"`` asked for a model with a joint kind the kernels
+        do not support (``"auto"`` then runs numpy).
+    """
     backend = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
+    missing = unsupported(kinds)
+    if backend == "compiled" and missing:
+        raise ValueError(f"the compiled backend does not support {', '.join(missing)} joints; "
+                         "use backend='numpy' or 'auto' (which runs numpy for this model)")
     if backend == "compiled" and numba is None:
         raise ImportError("the compiled backend needs numba: pip install 'linkdyn[fast]'")
-    return backend == "compiled" or (backend == "auto" and numba is not None
+    return backend == "compiled" or (backend == "auto" and numba is not None and not missing
                                       and samples >= AUTO_MIN_SAMPLES)
 
 
@@ -184,10 +200,16 @@ def _numbers(xs, d: int) -> np.ndarray:
 
 
 def pack(lay, n_joints: int) -> Packed:
-    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs)."""
+    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs).
+
+    Raises ValueError for a joint kind the kernels have no code for (see :func:`use_compiled`).
+    """
     topo = lay.topo
     n = topo.n
-    kind = np.array([GROUND] + [REV if k == REVOLUTE else PRI for k in lay.kind[1:]], np.int64)
+    missing = unsupported(list(lay.kind[1:]) + [c.kind for c in lay.cuts])
+    if missing:
+        raise ValueError(f"the compiled kernels do not support {', '.join(missing)} joints")
+    kind = np.array([GROUND] + [CODES[k] for k in lay.kind[1:]], np.int64)
     driver_of = np.full(n, -1, np.int64)
     driver_of[list(topo.driven)] = np.arange(len(topo.driven))
     ints = np.array(topo.ancestors, np.int64)
@@ -203,7 +225,7 @@ def pack(lay, n_joints: int) -> Packed:
         drv=np.array(topo.driven, np.int64), driver_of=driver_of,
         tree_joint=np.array(topo.tree_joint, np.int64), n_joints=n_joints,
         cut_a=np.array([c.a for c in cuts], np.int64), cut_b=np.array([c.b for c in cuts], np.int64),
-        cut_kind=np.array([REV if c.kind == REVOLUTE else PRI for c in cuts], np.int64),
+        cut_kind=np.array([CODES[c.kind] for c in cuts], np.int64),
         cut_joint=np.array([c.joint for c in cuts], np.int64), side=side, dyads=dy,
         joint_point=joint_point, axis=_vectors(lay.axis), com=_vectors(lay.com),
         angle=_numbers(lay.angle, d), mass=_numbers(lay.mass, d),

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model import REVOLUTE
+from .. import joints as jk
 
 
 def driver_power(sol) -> np.ndarray:
@@ -85,7 +85,7 @@ def driver_energy(sol, fluctuation: float = 0.02) -> dict:
         de = energy_fluctuation(tk[cyc], pk[cyc])
         entry["energy_fluctuation_J"], entry["fluctuation_over"] = de, over
         speed = _constant_speed(d)
-        if m.joint(d.joint).kind == REVOLUTE and speed:
+        if jk.get(m.joint(d.joint).kind).angular and speed:
             entry["flywheel"] = {"speed_fluctuation": float(fluctuation),
                                  "mean_speed_rad_s": abs(speed),
                                  "inertia_kg_m2": flywheel_inertia(de, speed, fluctuation)}

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError
-from ..model import GROUND, REVOLUTE
+from .. import joints as jk
+from ..model import GROUND
 from ..planar import dot, perp
 from .energy import driver_energy
 from .fourbar import four_bars, mechanical_advantage, transmission_angle
@@ -71,7 +72,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
     for k, d in enumerate(m.drivers):
         tau = sol.dyn.tau[..., k]
         peak, at = _peak(t, tau)
-        unit = "N" if m.joint(d.joint).kind != REVOLUTE else "N m"
+        unit = "N m" if jk.get(m.joint(d.joint).kind).angular else "N"
         out["drivers"][d.joint] = {
             "effort": "force" if unit == "N" else "torque", "unit": unit,
             "peak": peak, "peak_time_s": at,
@@ -81,7 +82,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         f = np.linalg.norm(sol.reactions.force[..., k, :], axis=-1)
         peak, at = _peak(t, f)
         entry = {"peak_force_N": peak, "peak_time_s": at}
-        if j.kind != REVOLUTE:
+        if "M" in jk.get(j.kind).reaction:
             entry["peak_moment_Nm"] = _peak(t, sol.reactions.moment[..., k])[0]
         out["reactions"][j.name] = entry
     for fb in four_bars(m):
@@ -105,9 +106,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
     out["joint_travel"] = {}
     for j in m.joints:
         lo, hi = joint_travel(sol, j.name)
-        entry = {"unit": "rad" if j.kind == REVOLUTE else "m", "min": lo, "max": hi,
-                 "range": hi - lo}
-        if j.kind == REVOLUTE:
+        angular = jk.get(j.kind).angular
+        entry = {"unit": "rad" if angular else "m", "min": lo, "max": hi, "range": hi - lo}
+        if angular:
             entry["full_turn"] = bool(hi - lo >= TWO_PI * (1 - 1e-9))
         out["joint_travel"][j.name] = entry
     ws = shaking_wrench(sol)
@@ -164,9 +165,10 @@ def health(sol) -> dict:
     dep = np.array(topo.dependent, int)
     cond = None
     if len(dep) and np.any(ok):
-        rows = np.array([1.0 / float(np.min(lay.size)) if (c.kind == REVOLUTE or r == 1) else 1.0
-                         for c in lay.cuts for r in (0, 1)])
-        cols = np.array([1.0 if lay.kind[i] == REVOLUTE else float(np.min(lay.size)) for i in dep])
+        rows = np.array([1.0 / float(np.min(lay.size)) if unit == "m" else 1.0
+                         for c in lay.cuts for unit in jk.get(c.kind).row_units])
+        cols = np.array([1.0 if jk.get(lay.kind[i]).angular else float(np.min(lay.size))
+                         for i in dep])
         Jd = kin.J[ok][..., dep - 1] * rows[:, None] * cols
         cond = float(np.max(np.linalg.cond(Jd)))
     return {

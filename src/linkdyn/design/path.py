@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ModelError
-from ..model import GROUND, PRISMATIC, Model
+from .. import joints as jk
+from ..model import GROUND, Model
 from .fourbar import _other
 from ..planar import cross, first
 
@@ -72,7 +73,7 @@ def _in_range(model: Model, q: np.ndarray, q_range) -> np.ndarray:
     """Samples whose first driver coordinate lies in ``q_range = (a, b)``; for a revolute
     driver the angles from a counter-clockwise to b, taken modulo 2 pi."""
     a, b = (float(x) for x in q_range)
-    if model.joint(model.drivers[0].joint).kind == PRISMATIC:
+    if not jk.get(model.joint(model.drivers[0].joint).kind).angular:
         return (q >= min(a, b) - 1e-12) & (q <= max(a, b) + 1e-12)
     if b - a >= TWO_PI:
         return np.isfinite(q)

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..kinematics import point_acceleration
-from ..model import GROUND, REVOLUTE
+from .. import joints as jk
+from ..model import GROUND
 from ..planar import cross, first, last, rotate
 
 
@@ -40,10 +41,12 @@ def shaking_wrench(sol) -> np.ndarray:
         n = np.array(sol.reactions.moment[..., k])
         if j.name in drivers:
             tau = sol.dyn.tau[..., drivers[j.name]]
-            if j.kind == REVOLUTE:
-                n = n + tau
-            else:  # along the axis, fixed in the first body; its line passes the joint points
-                f = f + tau[..., None] * last(rotate(sol.phi(j.body_a), np.asarray(j.axis, float)))
+            # the actuator's tau p (p of the second body; a slider's axis is fixed in the first
+            # body and its line passes the joint points)
+            e = rotate(sol.phi(j.body_a), np.asarray(j.axis, float))
+            p = np.broadcast_to(jk.get(j.kind).motion_vector(1.0, e, np.ndim(tau)),
+                                (3,) + np.shape(tau))
+            n, f = n + tau * p[0], f + tau[..., None] * last(p[1:])
         r = sol.point(j.body_b, j.point_b)
         sign = 1.0 if j.body_b == GROUND else -1.0
         out[..., 0] += sign * (n + cross(first(r), first(f)))

@@ -34,9 +34,10 @@ class DynamicSolution:
 
     Attributes
     ----------
-    lam : ndarray (T, 2 n_cut)
-        Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second (N);
-        prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
+    lam : ndarray (T, n_rows)
+        Cut-joint multipliers, each cut's kind's rows in turn (``topo.rows``): revolute
+        ``[Fx, Fy]`` by the first body on the second (N); prismatic ``[M, F_n]`` (N m about the
+        second body's point; N along the axis normal); slot ``[F_n]`` (N along the slot normal).
     tau : ndarray (T, n_drivers)
         Driver efforts in the order of ``model.drivers``, N m or N.
     kinetic_energy : ndarray (T,)

@@ -22,9 +22,10 @@ Matrices (per sample)
     Block lower-triangular (eq. 9): block ``(i, j) = A(r_i - r_j)`` when joint j lies on the
     tree path from the ground to body i (``j = i`` included), zero otherwise.
 ``N_d``
-    Block-diagonal (eq. 9), column i is the joint-motion propagation vector ``p_i`` (eq. 3):
-    revolute ``[s, 0, 0]``, prismatic ``[0, s e]``, ``s = +1`` if body i is the joint's second
-    body. ``N = N_l N_d`` (eq. 8) maps the tree joint rates to the stacked twists.
+    Block-diagonal (eq. 9), column i is the joint-motion propagation vector ``p_i`` (eq. 3)
+    given by the joint's kind (:meth:`linkdyn.joints.JointKind.motion_vector`): revolute
+    ``[s, 0, 0]``, prismatic ``[0, s e]``, ``s = +1`` if body i is the joint's second body.
+    ``N = N_l N_d`` (eq. 8) maps the tree joint rates to the stacked twists.
 ``M``
     Block-diagonal generalized mass about O_i (eq. 10),
     ``M_i = [[I_O, -m d_y, m d_x], [-m d_y, m, 0], [m d_x, 0, m]]`` with ``d`` from O_i to the
@@ -35,8 +36,9 @@ Matrices (per sample)
     term is ``[0, -m w^2 d]``.
 ``S_c``, ``G_c``, ``J``
     For a cut joint c between bodies a (first) and b (second), at the second body's point P:
-    the cut-row selection ``S_c`` (revolute: ``[[0, 1, 0], [0, 0, 1]]``; prismatic: ``[[1, 0, 0],
-    [0, n_x, n_y]]`` with ``n`` the axis normal, fixed in a). ``G_c = U_b^T A(P - r_b)^T S_c^T
+    the cut-row selection ``S_c`` (rows x 3, the kind's :meth:`~linkdyn.joints.JointKind.selection`;
+    revolute: ``[[0, 1, 0], [0, 0, 1]]``; prismatic: ``[[1, 0, 0], [0, n_x, n_y]]``; slot:
+    ``[[0, n_x, n_y]]``, with ``n`` the axis normal, fixed in a). ``G_c = U_b^T A(P - r_b)^T S_c^T
     - U_a^T A(P - r_a)^T S_c^T`` places the cut wrench ``S_c^T lam`` on b (and its opposite on
     a) about their O's, so ``w^lam = G lam`` (eqs. 16-19), and ``J = G^T N`` is the constraint
     Jacobian ``S [A_{P,j} p_j ...]`` of eqs. (20-24).
@@ -60,7 +62,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import KinematicSolution
-from ..model import REVOLUTE, Model
+from .. import joints as jk
+from ..model import Model
 
 
 @dataclass(frozen=True)
@@ -71,9 +74,10 @@ class DenseSolution:
     ----------
     tau : ndarray (..., T, n_drivers)
         Driver efforts, order of ``model.drivers``, N m or N.
-    lam : ndarray (..., T, 2 n_cut)
-        Cut-joint multipliers: revolute ``[Fx, Fy]`` by the first body on the second, N;
-        prismatic ``[M, F_n]`` (N m about the second body's point; N along the axis normal).
+    lam : ndarray (..., T, n_rows)
+        Cut-joint multipliers, each cut's rows in turn: revolute ``[Fx, Fy]`` by the first body
+        on the second, N; prismatic ``[M, F_n]`` (N m about the second body's point; N along the
+        axis normal); slot ``[F_n]``.
     force : ndarray (..., T, n_joints, 2)
         Reaction force by each joint's first body on its second, global, N (model joint order).
     moment : ndarray (..., T, n_joints)
@@ -81,7 +85,7 @@ class DenseSolution:
         (~0 for revolute joints: a residual, not forced to zero).
     twist : ndarray (..., T, n, 3)
         ``N qd`` (eq. 8) in tree order (ground row zero), for checking the kinematics.
-    J : ndarray (..., T, 2 n_cut, n - 1)
+    J : ndarray (..., T, n_rows, n - 1)
         Constraint Jacobian ``G^T N`` (eqs. 20-24).
     Q : ndarray (..., T, n - 1)
         ``N^T (M td + W M E t - w_ext)``, the right-hand side of eq. (27).
@@ -154,16 +158,16 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
         jt = model.joints[topo.tree_joint[i]]
         own = jt.point_b if jt.body_b == names[i] else jt.point_a
         origin.append(np.asarray(bodies[i].points[own], float))
-    n_cut = len(topo.cut)
+    n_rows = topo.n_rows
     nj = len(model.joints)
 
     batch = np.shape(kin.valid)       # (..., T)
     tau = np.full(batch + (len(model.drivers),), np.nan)
-    lam = np.full(batch + (2 * n_cut,), np.nan)
+    lam = np.full(batch + (n_rows,), np.nan)
     force = np.full(batch + (nj, 2), np.nan)
     moment = np.full(batch + (nj,), np.nan)
     twist_out = np.full(batch + (n, 3), np.nan)
-    J_out = np.full(batch + (2 * n_cut, m), np.nan)
+    J_out = np.full(batch + (n_rows, m), np.nan)
     Q_out = np.full(batch + (m,), np.nan)
 
     def blk(i):
@@ -186,6 +190,11 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
             local = np.asarray(bodies[i].points[name], float) - origin[i]
             return r[i] + _rot(phi[i]) @ local
 
+        def axis(jt):
+            """A joint's unit axis, fixed in its first body, global."""
+            e = _rot(phi[names.index(jt.body_a)]) @ np.asarray(jt.axis, float)
+            return e / np.linalg.norm(e)
+
         # --- DeNOC matrices N_l, N_d (eqs. 8-9) -----------------------------------------------
         N_l = np.zeros((3 * m, 3 * m))
         N_d = np.zeros((3 * m, m))
@@ -195,14 +204,8 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
                     N_l[blk(i), blk(j)] = propagation(r[i] - r[j])
             jt = model.joints[topo.tree_joint[i]]
             s = 1.0 if jt.body_b == names[i] else -1.0
-            if jt.kind == REVOLUTE:
-                N_d[blk(i), i - 1] = [s, 0.0, 0.0]                       # p_i = [e; 0]  (eq. 3)
-            else:
-                # axis fixed in the joint's first body, global
-                first = names.index(jt.body_a)
-                e = _rot(phi[first]) @ np.asarray(jt.axis, float)
-                e = e / np.linalg.norm(e)
-                N_d[blk(i), i - 1] = [0.0, s * e[0], s * e[1]]           # p_i = [0; e]  (eq. 3)
+            # p_i (eq. 3): revolute [s, 0, 0], prismatic [0, s e]
+            N_d[blk(i), i - 1] = jk.get(jt.kind).motion_vector(s, axis(jt), 0)
         N = N_l @ N_d
 
         # tree joint rates in tree order; N qd must reproduce the twists (eq. 8)
@@ -229,20 +232,15 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
         w_star = M @ td + WMEt - w_ext[idx][1:].reshape(-1)
 
         # --- cut joints: S_c, G_c and J = G^T N (eqs. 16-24) -----------------------------------
-        G = np.zeros((3 * m, 2 * n_cut))
+        G = np.zeros((3 * m, n_rows))
         S_list = []
         for k, j in enumerate(topo.cut):
             jt = model.joints[j]
             a, b = names.index(jt.body_a), names.index(jt.body_b)
             P = point(b, jt.point_b)
-            if jt.kind == REVOLUTE:
-                S = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
-            else:
-                e = _rot(phi[a]) @ np.asarray(jt.axis, float)
-                e = e / np.linalg.norm(e)
-                S = np.array([[1.0, 0.0, 0.0], [0.0, -e[1], e[0]]])
+            S = jk.get(jt.kind).selection(axis(jt))
             S_list.append(S)
-            cols = slice(2 * k, 2 * k + 2)
+            cols = topo.row_slice(k)
             if b > 0:
                 G[blk(b), cols] += propagation(P - r[b]).T @ S.T
             if a > 0:
@@ -257,7 +255,7 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
         Q = N.T @ w_star
         Q_out[idx] = Q
         x = np.linalg.solve(np.hstack((J.T, D)), Q)
-        lam_i, tau_i = x[:2 * n_cut], x[2 * n_cut:]
+        lam_i, tau_i = x[:n_rows], x[n_rows:]
         lam[idx], tau[idx] = lam_i, tau_i
 
         # --- reactions: every body's wrench balance, B R = w_star - G lam ----------------------
@@ -274,7 +272,6 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
             if jt.body_b == names[i]:
                 # child is the second body: R_i is already by A on B about B's point O_i
                 w_ab = R[i - 1].copy()
-                first = p
             else:
                 # child is the first body: by A on B = -R_i, moved to B's point (on the parent)
                 P_b = point(p, jt.point_b)
@@ -282,20 +279,14 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
                 arm = r[i] - P_b
                 n_b = -R[i - 1, 0] + arm[0] * f[1] - arm[1] * f[0]
                 w_ab = np.array([n_b, f[0], f[1]])
-                first = i
             if i in driven:
-                # the actuator applies tau on B (a moment; or a force along the axis through
-                # B's point) and -tau on A: not part of the reaction
-                tau_d = tau_i[driven[i]]
-                if jt.kind == REVOLUTE:
-                    w_ab[0] -= tau_d
-                else:
-                    e = _rot(phi[first]) @ np.asarray(jt.axis, float)
-                    w_ab[1:] -= tau_d * e / np.linalg.norm(e)
+                # the actuator applies tau p (p of the second body: a moment; or a force along
+                # the axis through B's point) on B and -tau p on A: not part of the reaction
+                w_ab -= tau_i[driven[i]] * jk.get(jt.kind).motion_vector(1.0, axis(jt), 0)
             force[idx][j] = w_ab[1:]
             moment[idx][j] = w_ab[0]
         for k, j in enumerate(topo.cut):
-            w_ab = S_list[k].T @ lam_i[2 * k:2 * k + 2]   # on the second body, about its point
+            w_ab = S_list[k].T @ lam_i[topo.row_slice(k)]   # on the second body, about its point
             force[idx][j] = w_ab[1:]
             moment[idx][j] = w_ab[0]
 

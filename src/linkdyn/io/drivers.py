@@ -10,7 +10,8 @@ import numpy as np
 
 from .. import expr as _expr
 from .. import motion as _motion
-from ..model import REVOLUTE, Driver, Joint
+from .. import joints as jk
+from ..model import Driver, Joint
 from .reader import _Reader, _expr_fix, _type_name
 
 MOTION_KEYS = {"constant_speed": ("kind", "speed", "rpm", "start"),
@@ -27,7 +28,11 @@ def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tu
         if joint in drivers:
             r.fail(f"{f}.joint", f"joint '{joint}' is already driven by {drivers[joint][0]}",
                    "Give each joint at most one driver; remove one of them")
-        revolute = joints[joint].kind == REVOLUTE
+        kind = jk.get(joints[joint].kind)
+        if kind.effort is None:
+            r.fail(f"{f}.joint", f"joint '{joint}' is a {kind.name} joint, which cannot be driven",
+                   "Drive one of the mechanism's revolute or prismatic joints instead")
+        revolute = kind.angular
         motion, period = _motion_of(r, entry["motion"], f"{f}.motion", revolute)
         description = motion.describe("rad" if revolute else "m")
         drivers[joint] = (f, Driver(joint, motion, description=description, period=period))

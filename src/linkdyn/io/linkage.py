@@ -8,11 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from ..model import GROUND, JOINT_KINDS, REVOLUTE, Body, Joint
+from .. import joints as jk
+from ..model import GROUND, Body, Joint
 from .reader import _Reader, _did_you_mean, _entry_field, _type_name
 
 BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about")
-JOINT_KEYS = ("name", "type", "connect", "axis", "angle")
+JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
+    key for kind in jk.REGISTRY.values() for key in kind.keys))
 
 
 def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
@@ -106,7 +108,7 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
         if name in joints:
             r.fail(f"joints[{i}].name", f"duplicate joint name '{name}'",
                    "Give every joint a different name")
-        kind = r.choice(entry["type"], f"{f}.type", JOINT_KINDS, "joint type")
+        kind = r.choice(entry["type"], f"{f}.type", jk.names(), "joint type")
         conn = entry["connect"]
         if not isinstance(conn, list) or len(conn) != 2:
             r.fail(f"{f}.connect", f"expected two \"body.point\" strings, got {_type_name(conn)}",
@@ -116,17 +118,20 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
         if a == b:
             r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
                    "A joint joins two different bodies; check the body names in connect")
-        if kind == REVOLUTE:
-            for key in ("axis", "angle"):
-                if key in entry:
-                    r.fail(f"{f}.{key}", f"a revolute joint has no {key}",
-                           f'Remove {key}, or set type = "prismatic" for a slider')
-            joints[name] = Joint(name, kind, a, pa, b, pb)
-            continue
-        axis = r.vector(entry.get("axis", [1.0, 0.0]), f"{f}.axis")
-        if np.hypot(*axis) == 0:
-            r.fail(f"{f}.axis", "the sliding axis is zero",
-                   f"Give the sliding direction in the frame of body '{a}', e.g. axis = [1, 0]")
-        angle = r.number(entry.get("angle", 0.0), f"{f}.angle", r.angle_name) * r.angle
-        joints[name] = Joint(name, kind, a, pa, b, pb, axis=axis / np.hypot(*axis), angle=angle)
+        accepts = jk.get(kind).keys
+        for key in ("axis", "angle"):
+            if key in entry and key not in accepts:
+                takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
+                r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
+                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
+        extra = {}
+        if "axis" in accepts:
+            axis = r.vector(entry.get("axis", [1.0, 0.0]), f"{f}.axis")
+            if np.hypot(*axis) == 0:
+                r.fail(f"{f}.axis", "the axis is zero",
+                       f"Give the sliding direction in the frame of body '{a}', e.g. axis = [1, 0]")
+            extra["axis"] = axis / np.hypot(*axis)
+        if "angle" in accepts:
+            extra["angle"] = r.number(entry.get("angle", 0.0), f"{f}.angle", r.angle_name) * r.angle
+        joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
     return joints

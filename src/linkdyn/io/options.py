@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..model import GROUND, REVOLUTE
+from .. import joints as jk
+from ..model import GROUND
 from .reader import _Reader, _type_name
 
 
@@ -20,7 +21,7 @@ def _assembly(r: _Reader, section: Any, bodies, joints) -> tuple[dict, dict]:
     q: dict[str, float] = {}
     for j, v in r.table(section.get("q", {}), "assembly.q", joints, noun="joint",
                         what="joints").items():
-        scale, unit = ((r.angle, r.angle_name) if joints[j].kind == REVOLUTE
+        scale, unit = ((r.angle, r.angle_name) if jk.get(joints[j].kind).angular
                        else (r.length, r.length_name))
         q[j] = r.number(v, f"assembly.q.{j}", unit) * scale
     return phi, q
@@ -77,7 +78,7 @@ def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
     if "path_range" in section:
         first = next(iter(drivers.values()), None)
         # without drivers the mobility check reports the real problem
-        revolute = first is None or joints[first[1].joint].kind == REVOLUTE
+        revolute = first is None or jk.get(joints[first[1].joint].kind).angular
         lo, hi = r.vector(section["path_range"], "analysis.path_range",
                           "rad or deg" if revolute else "length unit")
         scale = r.angle if revolute else r.length

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import REVOLUTE
+from .. import joints as jk
 from ..planar import cross, dot, perp, rotate_cs
 
 
@@ -53,14 +53,16 @@ def plan(lay) -> tuple[Dyad, ...] | None:
             on_a = {j for j in range(1, topo.n) if topo.ancestors[c.a, j] and not topo.ancestors[c.b, j]}
             on_b = {j for j in range(1, topo.n) if topo.ancestors[c.b, j] and not topo.ancestors[c.a, j]}
             unknown = sorted((on_a | on_b) - known)
-            if len(unknown) != 2 or any(lay.kind[j] != REVOLUTE for j in unknown):
+            cut = jk.get(c.kind).dyad
+            if (len(unknown) != 2 or cut not in ("R", "P")
+                    or any(jk.get(lay.kind[j]).dyad != "R" for j in unknown)):
                 continue
             j1, j2 = unknown
-            if c.kind != REVOLUTE and (j1 in on_a) != (j2 in on_a):
+            if cut == "P" and (j1 in on_a) != (j2 in on_a):
                 # a slider cut between the two unknown joints' sides: RPR
                 upper, lower = (j1, j2) if j1 in on_a else (j2, j1)
                 out.append(Dyad(k, upper, lower, "swing"))
-            elif c.kind != REVOLUTE:  # a slider cut with both unknown joints on one side: RRP
+            elif cut == "P":  # a slider cut with both unknown joints on one side: RRP
                 upper, lower = (j1, j2) if topo.ancestors[j2, j1] else (j2, j1)
                 out.append(Dyad(k, upper, lower, "slide", "a" if j1 in on_a else "b"))
             elif (j1 in on_a) != (j2 in on_a):

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import AssemblyError
-from ..model import REVOLUTE, Model
+from .. import joints as jk
+from ..model import Model
 from ..planar import solve_small, wrap
 from . import dyads
 from .layout import Layout
@@ -25,10 +26,12 @@ STEP_LENGTH = 0.02   # fraction of the mechanism's size between continuation nod
 
 
 def _scaled(lay: Layout, g: np.ndarray) -> np.ndarray:
-    """Closure residual (2 n_cut, ...) made dimensionless (lengths / size), max over rows."""
-    rows = []
-    for k, c in enumerate(lay.cuts):
-        rows += [g[2 * k] / (lay.size if c.kind == REVOLUTE else 1.0), g[2 * k + 1] / lay.size]
+    """Closure residual (n_rows, ...) made dimensionless (lengths / size), max over rows."""
+    rows, k = [], 0
+    for c in lay.cuts:
+        for unit in jk.get(c.kind).row_units:
+            rows.append(g[k] / lay.size if unit == "m" else g[k])
+            k += 1
     if not rows:
         return np.zeros(g.shape[1:])
     return np.max(np.abs(np.stack(rows)), axis=0)
@@ -78,7 +81,7 @@ def _guess(model: Model, lay: Layout) -> np.ndarray:
         jt = model.joints[topo.tree_joint[i]]
         if jt.name in model.assembly_q:
             q[i] = model.assembly_q[jt.name]
-        elif jt.kind == REVOLUTE and jt.body_a in phi and jt.body_b in phi:
+        elif jk.get(jt.kind).angular and jt.body_a in phi and jt.body_b in phi:
             q[i] = phi[jt.body_b] - phi[jt.body_a]
     return q
 
@@ -110,13 +113,13 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
         rng = np.random.default_rng(0)
         starts = np.repeat(q0[..., None], 64, axis=-1)
         for i in dep:
-            starts[i] = (rng.uniform(-np.pi, np.pi, 64) if lay.kind[i] == REVOLUTE
+            starts[i] = (rng.uniform(-np.pi, np.pi, 64) if jk.get(lay.kind[i]).angular
                          else rng.uniform(-2, 2, 64) * lay.size)
         qs, errs = newton(lay, starts, maxiter=60, damped=True)  # batch (D, 64)
         ok = errs <= ACCEPT
         # distance to the guess: angles modulo 2 pi, slider travel relative to the size
         gap = qs[dep] - q0[dep, :, None]
-        rev = np.array([lay.kind[i] == REVOLUTE for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
+        rev = np.array([jk.get(lay.kind[i]).angular for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
         dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / np.min(lay.size))), axis=0)
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
@@ -152,7 +155,7 @@ def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.nda
     step between consecutive nodes."""
     probe = np.linspace(start, end, 4097)
     qp, _, _ = driver_values(model, probe)
-    step = np.array([STEP_ANGLE if lay.kind[i] == REVOLUTE else STEP_LENGTH * np.min(lay.size)
+    step = np.array([STEP_ANGLE if jk.get(lay.kind[i]).angular else STEP_LENGTH * np.min(lay.size)
                      for i in lay.topo.driven])[:, None]
     moves = np.max(np.abs(np.diff(qp, axis=1)) / step, axis=0) if len(step) else np.zeros(4096)
     travel = np.concatenate(([0.0], np.cumsum(moves)))
@@ -217,7 +220,7 @@ def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: floa
     x, _ = dependent_rates(lay, J, nqd.reshape(shape))
     ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
     for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
-        if lay.kind[i] == REVOLUTE:
+        if jk.get(lay.kind[i]).angular:
             step = np.where(ok[..., 1:] & ok[..., :-1], wrap(np.diff(Q[i], axis=-1)), 0.0)
             path = np.concatenate((np.zeros(step.shape[:-1] + (1,)), np.cumsum(step, -1)), -1)
             Q[i] = np.where(ok, q0[i][..., None] + path - path[..., k0:k0 + 1], np.nan)

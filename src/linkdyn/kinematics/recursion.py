@@ -54,9 +54,8 @@ def forward_positions(lay: Layout, q: np.ndarray) -> Pose:
         k = topo.parent[i]
         # joint point on the parent, then the child placed by the joint kind
         r_joint = r[k] + rotate_cs(c[k], s[k], lay.joint_point[i])
-        phi_i, c_i, s_i, r_i, e_i = jk.place_child(
-            lay.kind[i], topo.sign[i], q[i], lay.angle[i], lay.axis[i], phi[k], c[k], s[k],
-            r_joint)
+        phi_i, c_i, s_i, r_i, e_i = jk.get(lay.kind[i]).place_child(
+            topo.sign[i], q[i], lay.angle[i], lay.axis[i], phi[k], c[k], s[k], r_joint)
         phi.append(phi_i), c.append(c_i), s.append(s_i), r.append(r_i), e.append(e_i)
     return Pose(phi, c, s, r, e)
 
@@ -67,23 +66,25 @@ def _cut_frames(lay: Layout, pose: Pose, c: Cut):
 
 
 def closure_residual(lay: Layout, pose: Pose) -> np.ndarray:
-    """Loop-closure residual of all cuts (2 n_cut, ...): m for positions, rad for angles."""
+    """Loop-closure residual of all cuts (n_rows, ...): m for positions, rad for angles; each
+    cut contributes its kind's rows (``topo.rows``)."""
     out = []
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        out.append(jk.cut_residual(c.kind, c.angle, pose.phi[c.a], pose.phi[c.b], e_a, r_pa, r_pb))
+        out.append(jk.get(c.kind).cut_residual(c.angle, pose.phi[c.a], pose.phi[c.b], e_a, r_pa,
+                                               r_pb))
     return np.concatenate(out) if out else np.zeros((0,) + pose.phi[0].shape)
 
 
 def motion_vectors(lay: Layout, pose: Pose) -> list:
     """Joint-motion propagation vectors ``p_i`` (3, ...) of all tree joints (eq. 3)."""
     topo, ndim = lay.topo, pose.phi[0].ndim
-    return [None] + [jk.motion_vector(lay.kind[i], topo.sign[i], pose.e[i], ndim)
+    return [None] + [jk.get(lay.kind[i]).motion_vector(topo.sign[i], pose.e[i], ndim)
                      for i in range(1, topo.n)]
 
 
 def closure_jacobian(lay: Layout, pose: Pose, p: list) -> np.ndarray:
-    """Loop-closure Jacobian ``J`` (2 n_cut, n - 1, ...): tree joint rates to the cut rows.
+    """Loop-closure Jacobian ``J`` (n_rows, n - 1, ...): tree joint rates to the cut rows.
 
     Column k of cut c is ``S_c A(r_Pb - r_k) p_k``, with sign +1 if joint k is on the path to
     the cut's second body, -1 if on the path to its first, 0 if on both or neither (eqs. 20-24).
@@ -92,14 +93,15 @@ def closure_jacobian(lay: Layout, pose: Pose, p: list) -> np.ndarray:
     rows = []
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
+        kind = jk.get(c.kind)
         side = topo.ancestors[c.b].astype(int) - topo.ancestors[c.a].astype(int)
         cols = []
         for k in range(1, topo.n):
             if side[k] == 0:
-                cols.append(np.zeros((2,) + shape))
+                cols.append(np.zeros((kind.rows,) + shape))
                 continue
             x = side[k] * shift_twist(np.broadcast_to(p[k], (3,) + shape), r_pb - pose.r[k])
-            cols.append(jk.cut_rows(c.kind, e_a, x))
+            cols.append(kind.cut_rows(e_a, x))
         rows.append(np.stack(cols, axis=1))
     return np.concatenate(rows) if rows else np.zeros((0, topo.n - 1) + shape)
 
@@ -111,8 +113,8 @@ def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
     for i in range(1, topo.n):
         k = topo.parent[i]
         # t_i = A(r_i - r_p) t_p + p_i qd_i      (eq. 2)
-        tw.append(jk.add_motion(lay.kind[i], topo.sign[i], pose.e[i],
-                                shift_twist(tw[k], pose.r[i] - pose.r[k]), qd[i]))
+        tw.append(jk.get(lay.kind[i]).add_motion(topo.sign[i], pose.e[i],
+                                                 shift_twist(tw[k], pose.r[i] - pose.r[k]), qd[i]))
     return tw
 
 
@@ -124,12 +126,12 @@ def forward_twist_rates(lay: Layout, pose: Pose, p: list, tw: list, qd: np.ndarr
     for i in range(1, topo.n):
         k = topo.parent[i]
         # td_i = A td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i
-        kind, sign, e = lay.kind[i], topo.sign[i], pose.e[i]
-        td_i = jk.add_motion(kind, sign, e, shift_twist(td[k], pose.r[i] - pose.r[k]), qdd[i])
+        kind, sign, e = jk.get(lay.kind[i]), topo.sign[i], pose.e[i]
+        td_i = kind.add_motion(sign, e, shift_twist(td[k], pose.r[i] - pose.r[k]), qdd[i])
         w_k = tw[k][0]
         td_i[1] -= w_k * (tw[i][2] - tw[k][2])
         td_i[2] += w_k * (tw[i][1] - tw[k][1])
-        jk.add_motion_rate(kind, sign, e, tw[k if sign > 0 else i][0], td_i, qd[i])
+        kind.add_motion_rate(sign, e, tw[k if sign > 0 else i][0], td_i, qd[i])
         td.append(td_i)
     return td
 
@@ -144,7 +146,7 @@ def _at_point(t_x, td_x, r_x, r_pt, v_pt):
 
 
 def closure_bias(lay: Layout, pose: Pose, tw: list, td: list) -> np.ndarray:
-    """Rate of the cut rows ``d/dt (S x)`` (2 n_cut, ...) for the given twist rates, ``x`` being
+    """Rate of the cut rows ``d/dt (S x)`` (n_rows, ...) for the given twist rates, ``x`` being
     the relative twist of the cut's second body to its first at the cut point."""
     out = []
     for c in lay.cuts:
@@ -152,8 +154,8 @@ def closure_bias(lay: Layout, pose: Pose, tw: list, td: list) -> np.ndarray:
         v_pb = shift_twist(tw[c.b], r_pb - pose.r[c.b])[1:]
         tb, ab = _at_point(tw[c.b], td[c.b], pose.r[c.b], r_pb, v_pb)
         ta, aa = _at_point(tw[c.a], td[c.a], pose.r[c.a], r_pb, v_pb)
-        out.append(jk.cut_rows(c.kind, e_a, ab - aa)
-                   + jk.cut_rows_rate(c.kind, e_a, tw[c.a][0], tb - ta))
+        kind = jk.get(c.kind)
+        out.append(kind.cut_rows(e_a, ab - aa) + kind.cut_rows_rate(e_a, tw[c.a][0], tb - ta))
     return np.concatenate(out) if out else np.zeros((0,) + tw[0].shape[1:])
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from .. import joints as jk
 from ..errors import ModelError
 from .. import compiled
-from ..model import REVOLUTE, Model
+from ..model import Model
 from ..planar import last, shift_twist, solve_small, stack_last
 from . import compiled as kc
 from . import dyads
@@ -46,8 +46,8 @@ class KinematicSolution:
         Joint-motion propagation vectors ``p_i`` of the tree joints.
     twists, rates : list of ndarray (3, T)
         Twists ``[w, vx, vy]`` at O_i and their time derivatives.
-    jacobian : ndarray (2 n_cut, n - 1, T)
-        Loop-closure Jacobian.
+    jacobian : ndarray (n_rows, n - 1, T)
+        Loop-closure Jacobian, each cut joint's rows (``layout.topo.rows``) in turn.
     pivot : ndarray (T,)
         Smallest relative pivot of ``J_dep`` (~0 at a singular position).
     residual : ndarray (T,)
@@ -56,7 +56,7 @@ class KinematicSolution:
     arrays : dict or None
         Set by the compiled kernels (:mod:`linkdyn.compiled`): the contiguous arrays the
         per-body lists above are views of, batch flattened to (D, T): ``c``, ``s`` (n, D, T),
-        ``r``, ``e`` (n, 2, D, T), ``tw``, ``twd`` (n, 3, D, T), ``J`` (2 n_cut, n - 1, D, T).
+        ``r``, ``e`` (n, 2, D, T), ``tw``, ``twd`` (n, 3, D, T), ``J`` (n_rows, n - 1, D, T).
     """
 
     layout: Layout
@@ -122,7 +122,7 @@ class KinematicSolution:
 
     @cached_property
     def J(self) -> np.ndarray:
-        """Loop-closure Jacobian (T, 2 n_cut, n - 1)."""
+        """Loop-closure Jacobian (T, n_rows, n - 1)."""
         return last(self.jacobian, 2)
 
     def point(self, body: str, name: str) -> np.ndarray:
@@ -176,7 +176,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
                          fix="Pass t = numpy.linspace(0, duration, samples)")
     dep, drv = list(topo.dependent), list(topo.driven)
     qdrv, qddrv, qdddrv = driver_values(models[0], t)
-    fast = compiled.use_compiled(backend, t.size * len(models))
+    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     packed = compiled.pack(lay, len(models[0].joints)) if fast else None
     out = None  # the compiled kernel's arrays
     # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
@@ -299,7 +299,8 @@ def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
     def each(key, lead):  # per-entity views with the batch shape
         return list(out[key].reshape(lead + shape))
     q, qd, qdd = (each(k, (n,)) for k in ("q", "qd", "qdd"))
-    e = [x if lay.kind[i] not in ("", REVOLUTE) else None for i, x in enumerate(each("e", (n, 2)))]
+    e = [x if i and "axis" in jk.get(lay.kind[i]).keys else None
+         for i, x in enumerate(each("e", (n, 2)))]
     pose = Pose(each("phi", (n,)), each("c", (n,)), each("s", (n,)), each("r", (n, 2)), e)
     cols = [[None] * len(model.joints) for _ in range(3)]
     for i in range(1, n):
@@ -307,7 +308,7 @@ def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
         cols[0][j], cols[1][j], cols[2][j] = q[i], qd[i], qdd[i]
     for c, motion in zip(lay.cuts, each("cut", (nc, 3))):
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
-    J = out["J"].reshape((2 * nc, n - 1) + shape)
+    J = out["J"].reshape((topo.n_rows, n - 1) + shape)
     p = motion_vectors(lay, pose)
     if not np.all(valid):  # the constant p_i of revolute joints too, as the numpy path does
         p = [None] + [np.where(valid, x, np.nan) for x in p[1:]]
@@ -334,7 +335,7 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
             aa = point_acceleration(tw[a], twd[a], r_pa - pose.r[a])
             ab = point_acceleration(tw[b], twd[b], r_pb - pose.r[b])
             return r_pb - r_pa, vb - va, ab - aa
-        motion = jk.joint_motion(c.kind, e, (pose.phi[a], tw[a][0], twd[a][0]),
-                                 (pose.phi[b], tw[b][0], twd[b][0]), points)
+        motion = jk.get(c.kind).joint_motion(e, (pose.phi[a], tw[a][0], twd[a][0]),
+                                             (pose.phi[b], tw[b][0], twd[b][0]), points)
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
     return tuple(cols)

@@ -7,7 +7,8 @@ import math
 
 import numpy as np
 
-from ..model import GROUND, PRISMATIC, REVOLUTE
+from .. import joints as jk
+from ..model import GROUND
 
 MAX_FRAMES = 2000
 DEG = 180.0 / math.pi
@@ -46,17 +47,15 @@ def joint_roles(sol) -> dict[str, str]:
 def multiplier_labels(sol) -> list[tuple[str, str, str]]:
     """``(joint, component label, unit)`` for each column of ``dyn.lam``.
 
-    A cut revolute joint carries the force ``[lam_x, lam_y]`` (global, by the joint's first body
-    on its second); a cut prismatic joint the moment and the force normal to its axis.
+    Each cut joint's kind names its rows (``JointKind.multipliers``): a cut revolute joint
+    carries the force ``[lam_x, lam_y]`` (global, by the joint's first body on its second); a
+    cut prismatic joint the moment and the force normal to its axis; a slot the normal force.
     """
     m = sol.model
     out = []
     for c in sol.topology.cut:
         j = m.joints[int(c)]
-        if j.kind == PRISMATIC:
-            out += [(j.name, "moment", "N m"), (j.name, "normal force", "N")]
-        else:
-            out += [(j.name, "x", "N"), (j.name, "y", "N")]
+        out += [(j.name, label, unit) for label, unit in jk.get(j.kind).multipliers]
     return out
 
 
@@ -155,7 +154,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
         entry = {"name": j.name, "kind": j.kind, "a": a_id, "b": b_id, "role": roles[j.name],
                  "ground": GROUND in (j.body_a, j.body_b), "color": jcolor[j.name],
                  "first": j.body_a, "second": j.body_b}
-        if j.kind == PRISMATIC:
+        if "axis" in jk.get(j.kind).keys:
             phi_a = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
             ang = phi_a + math.atan2(float(j.axis[1]), float(j.axis[0])) + np.zeros(len(sol.t))
             entry["angle"] = _num(ang[idx], 6)
@@ -188,14 +187,14 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
 
     # ---- plot series and panels
     plots = []
-    deg = {j.name: DEG if j.kind == REVOLUTE else 1.0 for j in joints}
+    deg = {j.name: DEG if jk.get(j.kind).angular else 1.0 for j in joints}
     kin_names = {"q": ("Joint angles", "Joint displacements"),
                  "qd": ("Joint rates", "Joint rates"),
                  "qdd": ("Joint accelerations", "Joint accelerations")}
     units = {"q": ("deg", "m"), "qd": ("rad/s", "m/s"), "qdd": ("rad/s²", "m/s²")}
     for kind in ("q", "qd", "qdd"):
         for rev in (True, False):
-            js = [j for j in joints if (j.kind == REVOLUTE) == rev]
+            js = [j for j in joints if jk.get(j.kind).angular == rev]
             if not js:
                 continue
             scale = (lambda j: deg[j.name]) if kind == "q" else (lambda j: 1.0)
@@ -209,7 +208,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
     for unit, word in (("N m", "torque"), ("N", "force")):
         ser = []
         for k, d in enumerate(m.drivers):
-            if (m.joint(d.joint).kind == REVOLUTE) != (unit == "N m"):
+            if jk.get(m.joint(d.joint).kind).angular != (unit == "N m"):
                 continue
             key = add(f"tau:{d.joint}", sol.dyn.tau[..., k])
             ser.append({"key": key, "label": d.joint, "color": jcolor[d.joint]})
@@ -229,7 +228,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
         plots.append({"section": "Driver efforts and joint reactions",
                       "title": f"Reaction at {j.name} ({j.body_a} on {j.body_b})",
                       "unit": "N", "series": ser})
-    prism = [(k, j) for k, j in enumerate(joints) if j.kind == PRISMATIC]
+    prism = [(k, j) for k, j in enumerate(joints) if "M" in jk.get(j.kind).reaction]
     if prism:
         ser = [{"key": add(f"M:{j.name}", sol.reactions.moment[..., k]), "label": j.name,
                 "color": jcolor[j.name]} for k, j in prism]
@@ -273,7 +272,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
     for d in m.drivers:
-        if m.joint(d.joint).kind == REVOLUTE:
+        if jk.get(m.joint(d.joint).kind).angular:
             q = np.asarray(cols[f"q_{d.joint}"])[idx] * DEG
             dq = np.diff(q)
             if len(q) > 1 and np.all(np.isfinite(q)) and (np.all(dq > 0) or np.all(dq < 0)):

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import GROUND, PRISMATIC
+from .. import joints as jk
+from ..model import GROUND
 from .data import joint_roles
 
 
@@ -248,7 +249,7 @@ def model_html(sol) -> str:
     rows = ""
     for j in m.joints:
         extra = ""
-        if j.kind == PRISMATIC:
+        if "axis" in jk.get(j.kind).keys:
             extra = f"axis ({fmt(float(j.axis[0]))}, {fmt(float(j.axis[1]))}) in {_e(j.body_a)}"
         rows += (f"<tr><th>{_e(j.name)}</th><td>{_e(j.kind)}</td><td>{_e(j.body_a)}."
                  f"{_e(j.point_a)} → {_e(j.body_b)}.{_e(j.point_b)}</td>"
