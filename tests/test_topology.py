@@ -6,6 +6,7 @@ model reads as "Hoeken, except ...".
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 
 import numpy as np
@@ -262,3 +263,47 @@ def test_topology_is_static_integers():
     for seq in (topo.parent, topo.tree_joint, topo.sign, topo.cut, topo.driven, topo.dependent):
         assert isinstance(seq, tuple) and all(isinstance(x, int) for x in seq)
     assert set(topo.sign[1:]) <= {1, -1}
+
+
+def _chain_model(n: int):
+    """A serial chain of ``n`` driven revolute links built in Python (no file)."""
+    from linkdyn.model import Body, Driver, Joint, Model
+    from linkdyn.motion import ConstantSpeed
+
+    pts = {"A": np.zeros(2), "B": np.array([1.0, 0.0])}
+    bodies = [Body("ground", {"A": np.zeros(2)})] + [
+        Body(f"b{i}", pts, mass=1.0, inertia=1.0) for i in range(1, n + 1)]
+    joints = [Joint(f"J{i}", "revolute", "ground" if i == 1 else f"b{i - 1}",
+                    "A" if i == 1 else "B", f"b{i}", "A") for i in range(1, n + 1)]
+    drivers = tuple(Driver(f"J{i}", ConstantSpeed(1.0)) for i in range(1, n + 1))
+    return Model("chain", tuple(bodies), tuple(joints), drivers)
+
+
+@pytest.mark.parametrize("n", [20_000, 60_000])
+def test_topology_is_linear_in_bodies(n):
+    import time
+
+    mech = _chain_model(n)
+    start = time.perf_counter()
+    topo = topology.build(mech)
+    elapsed = time.perf_counter() - start
+    assert elapsed < 1.5, f"{n}-body chain took {elapsed:.2f} s"   # was 16 s (20,000), a hang (60,000)
+    assert topo.n == n + 1 and topo.parent == (-1, *range(n)) and topo.cut == ()
+    assert topo.tree_joint[1:] == tuple(range(n)) and set(topo.sign[1:]) == {1}
+    assert topo.driven == tuple(range(1, n + 1)) and topo.dependent == ()
+    short = dataclasses.replace(mech, drivers=mech.drivers[1:])      # the error path too
+    start = time.process_time()
+    with pytest.raises(ModelError, match=f"mobility {n} .* but {n - 1} driver"):
+        topology.build(short)
+    assert time.process_time() - start < 1.5
+
+
+def test_ancestors_follow_the_parents():
+    topo = build(example_text("stephenson"))
+    for i in range(topo.n):        # independent walk up the tree
+        path, k = set(), i
+        while k > 0:
+            path.add(k)
+            k = topo.parent[k]
+        assert set(np.flatnonzero(topo.ancestors[i])) == path
+    assert topo.ancestors is topo.ancestors and not topo.ancestors.flags.writeable

@@ -8,8 +8,9 @@ always kept in the tree.
 
 from __future__ import annotations
 
-from collections import deque
+from collections import Counter, deque
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -40,11 +41,12 @@ class Topology:
         Body index whose tree joint each driver moves, in the order of ``model.drivers``.
     dependent : tuple[int, ...]
         Bodies whose tree joint is not driven (their rates follow from loop closure).
-    ancestors : ndarray (n, n) bool
-        ``ancestors[i, k]``: body k's tree joint lies on the path from the ground to body i
-        (k = i included).
     mobility : int
         Grübler–Kutzbach: ``3 (n - 1)`` minus the rows every joint's kind removes.
+    ancestors : ndarray (n, n) bool
+        ``ancestors[i, k]``: body k's tree joint lies on the path from the ground to body i
+        (k = i included). Computed on first read (it is quadratic in bodies; building the
+        topology is linear).
     """
 
     bodies: tuple[str, ...]
@@ -55,7 +57,6 @@ class Topology:
     rows: tuple[int, ...]
     driven: tuple[int, ...]
     dependent: tuple[int, ...]
-    ancestors: np.ndarray
     mobility: int
 
     @property
@@ -80,6 +81,17 @@ class Topology:
     def children(self, i: int) -> list[int]:
         return [k for k in range(1, self.n) if self.parent[k] == i]
 
+    @cached_property
+    def ancestors(self) -> np.ndarray:
+        # row i = row parent[i] plus k = i itself (parent[i] < i, so rows fill in order)
+        n = self.n
+        out = np.zeros((n, n), dtype=bool)
+        for i in range(1, n):
+            out[i] = out[self.parent[i]]
+            out[i, i] = True
+        out.flags.writeable = False
+        return out
+
 
 def build(model: Model) -> Topology:
     """Choose the spanning tree and cut joints of ``model`` and check its mobility.
@@ -99,6 +111,7 @@ def build(model: Model) -> Topology:
     index = {name: k for k, name in enumerate(names)}
     joints = model.joints
     driven_names = [d.joint for d in model.drivers]
+    driven_set = set(driven_names)
     user_cut = set(model.cut or ())
     kinds = []
     for k, jt in enumerate(joints):
@@ -119,20 +132,20 @@ def build(model: Model) -> Topology:
 
     # driven joints first (never cut), sliders last (a cut slider leaves loops that close in
     # closed form, see kinematics.dyads), otherwise file order
-    order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_names,
+    order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_set,
                                                       not kinds[j].angular, j))
     tree, cut = [], []
     for j in order:
         jt = joints[j]
         a, b = find(index[jt.body_a]), find(index[jt.body_b])
-        if jt.name in driven_names and not kinds[j].tree:
+        if jt.name in driven_set and not kinds[j].tree:
             raise ModelError(
                 f"joint '{jt.name}' is a {jt.kind} joint, which cannot be driven (it leaves "
                 f"{kinds[j].freedoms} relative freedoms and is always cut)",
                 file=src, field="drivers",
                 fix="Drive a revolute or prismatic joint of the mechanism instead")
         if jt.name in user_cut or a == b or not kinds[j].tree:
-            if jt.name in driven_names:
+            if jt.name in driven_set:
                 raise ModelError(
                     f"driven joint '{jt.name}' closes a loop formed by other driven joints",
                     file=src, field="drivers",
@@ -162,33 +175,28 @@ def build(model: Model) -> Topology:
         adj[joints[j].body_a].append(j)
         adj[joints[j].body_b].append(j)
     bodies, parent, tree_joint, sign = [GROUND], [-1], [-1], [0]
+    number = {GROUND: 0}                                    # body name -> tree index
     queue = deque([GROUND])
     while queue:
         here = queue.popleft()
         for j in adj[here]:
             jt = joints[j]
             child, s = (jt.body_b, 1) if jt.body_a == here else (jt.body_a, -1)
-            if child in bodies:
+            if child in number:
                 continue
+            number[child] = len(bodies)
             bodies.append(child)
-            parent.append(bodies.index(here))
+            parent.append(number[here])
             tree_joint.append(j)
             sign.append(s)
             queue.append(child)
-
     n = len(bodies)
-    ancestors = np.zeros((n, n), dtype=bool)
-    for i in range(1, n):
-        k = i
-        while k > 0:
-            ancestors[i, k] = True
-            k = parent[k]
 
     # Grübler–Kutzbach: each joint removes its kind's rows of the three planar freedoms
     removed = sum(k.rows for k in kinds)
     mobility = 3 * (n - 1) - removed
     if mobility != len(model.drivers):
-        count = {k.name: sum(1 for x in kinds if x is k) for k in kinds}
+        count = Counter(k.name for k in kinds)                  # kinds in order of first use
         terms = " - ".join(f"{k.rows}*{count[k.name]}" for k in {k.name: k for k in kinds}.values())
         need = "add" if mobility > len(model.drivers) else "remove"
         raise ModelError(
@@ -203,9 +211,10 @@ def build(model: Model) -> Topology:
                  "The joints over-constrain the bodies; remove joints or add bodies"))
 
     tree_of_joint = {tree_joint[i]: i for i in range(1, n)}
-    driven = tuple(tree_of_joint[next(j for j, jt in enumerate(joints) if jt.name == name)]
-                   for name in driven_names)
-    dependent = tuple(i for i in range(1, n) if i not in driven)
+    joint_index = {jt.name: j for j, jt in enumerate(joints)}
+    driven = tuple(tree_of_joint[joint_index[name]] for name in driven_names)
+    driven_bodies = set(driven)
+    dependent = tuple(i for i in range(1, n) if i not in driven_bodies)
     cut = tuple(sorted(cut))
     return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign), cut,
-                    tuple(kinds[j].rows for j in cut), driven, dependent, ancestors, mobility)
+                    tuple(kinds[j].rows for j in cut), driven, dependent, mobility)
