@@ -10,6 +10,7 @@ import tomllib
 import numpy as np
 import pytest
 
+from linkdyn.expr import Expr
 from linkdyn.errors import ModelError
 from linkdyn.io import load_model, model_from_dict
 
@@ -205,6 +206,8 @@ def assert_same(a, b, where="model"):
             assert_same(x, y, f"{where}[{i}]")
     elif isinstance(a, np.ndarray):
         np.testing.assert_array_equal(a, b, err_msg=where)
+    elif isinstance(a, Expr):  # equal expressions are one object
+        assert a is b, where
     elif hasattr(a, "evaluate"):  # a Motion
         t = np.linspace(0.0, 2.0, 7)
         for x, y in zip(a.evaluate(t), b.evaluate(t)):
