@@ -306,6 +306,8 @@ def test_python_api_table_equals_the_csv(tmp_path):
     mech = linkdyn.load(path)
     t = np.linspace(0.0, period(mech), 13)
     df = linkdyn.analyze(mech, t).to_dataframe()
+    assert df.index.name == "t" and df.attrs["units"]["t"] == "s"
+    df = df.reset_index()
     assert list(df.columns) == header
     assert df.shape == data.shape
     np.testing.assert_array_equal(df.to_numpy(), data)

@@ -169,6 +169,88 @@ def test_summary_tables_render_known_and_unknown_keys():
     assert report.fmt(0.5) == "0.5000"
 
 
+# ---------------------------------------------------------------------------- in a notebook
+
+def _solution(example, t):
+    return linkdyn.analyze(linkdyn.load(linkdyn.example_path(example)), t, backend="numpy")
+
+
+@pytest.mark.parametrize("example", ["hoeken", "slider_crank", "fivebar", "stephenson"])
+def test_point_velocity_and_acceleration_columns_match_finite_differences(example):
+    # at three times t0: central differences of the positions (h = 1e-5 s for the velocity,
+    # 1e-4 s for the acceleration) against the vx_/vy_/ax_/ay_ columns, relative to each
+    # point's peak speed or acceleration over the run
+    m = linkdyn.load(linkdyn.example_path(example))
+    period = m.drivers[0].period or 1.0
+    run = linkdyn.analyze(m, np.linspace(0.0, period, 73), backend="numpy").columns
+    t0 = np.array([0.13, 0.41, 0.77]) * period
+    hv, ha = 1e-5 * period, 1e-4 * period
+    t = np.concatenate([t0, t0 - hv, t0 + hv, t0 - ha, t0 + ha])
+    cols = linkdyn.analyze(m, t, backend="numpy").columns
+    names = [c[2:] for c in cols if c.startswith("x_")]
+    assert names and all(f"ay_{n}" in cols for n in names)
+    order = list(cols)  # after SPEC's columns, which end with kinetic_energy
+    assert order.index(f"vx_{names[0]}") > order.index("kinetic_energy")
+    # scales: the point's own peak, at least a thousandth of the fastest point's (a pivot's
+    # velocity is zero)
+    vmax = max(np.max(np.hypot(run[f"vx_{n}"], run[f"vy_{n}"])) for n in names)
+    amax = max(np.max(np.hypot(run[f"ax_{n}"], run[f"ay_{n}"])) for n in names)
+    assert vmax > 0 and amax > 0
+    for n in names:
+        vscale = max(np.max(np.hypot(run[f"vx_{n}"], run[f"vy_{n}"])), 1e-3 * vmax)
+        ascale = max(np.max(np.hypot(run[f"ax_{n}"], run[f"ay_{n}"])), 1e-3 * amax)
+        for c in "xy":
+            x = cols[f"{c}_{n}"]
+            v_fd = (x[6:9] - x[3:6]) / (2 * hv)
+            a_fd = (x[12:15] - 2 * x[0:3] + x[9:12]) / ha ** 2
+            np.testing.assert_allclose(cols[f"v{c}_{n}"][:3], v_fd, rtol=0, atol=1e-7 * vscale,
+                                       err_msg=f"v{c}_{n}")
+            np.testing.assert_allclose(cols[f"a{c}_{n}"][:3], a_fd, rtol=0, atol=1e-5 * ascale,
+                                       err_msg=f"a{c}_{n}")
+
+
+def test_reaction_carries_the_prismatic_moment_and_units_follow_the_columns():
+    sol = _solution("inverted_slider_crank", np.linspace(0.0, 0.2, 21))
+    cols, units = sol.columns, sol.units
+    prism = [j.name for j in sol.model.joints if j.kind == "prismatic"]
+    assert prism
+    for j in sol.model.joints:
+        r = sol.reaction(j.name)
+        want = [f"Fx_{j.name}", f"Fy_{j.name}"] + ([f"M_{j.name}"] if j.name in prism else [])
+        assert r.shape == (21, len(want))
+        np.testing.assert_array_equal(r, np.stack([cols[c] for c in want], axis=-1))
+    # this guide carries a moment well above rounding noise
+    m = sol.reaction(prism[0])[:, 2]
+    assert np.max(np.abs(m)) > 1e-9 * np.max(np.abs(sol.reaction(prism[0])[:, :2]))
+    assert list(units) == list(cols)
+    j_rev = next(j.name for j in sol.model.joints if j.kind == "revolute")
+    assert (units[f"q_{j_rev}"], units[f"qd_{prism[0]}"], units[f"M_{prism[0]}"]) == (
+        "rad", "m/s", "N m")
+    assert units["kinetic_energy"] == "J" and units["tau_J1"] == "N m"
+    assert all(units[c] == "m/s^2" for c in cols if c.startswith(("ax_", "ay_")))
+
+
+def test_notebook_display_is_short_and_dataframe_is_indexed_by_time():
+    pd = pytest.importorskip("pandas")
+    sol = _solution("hoeken", np.linspace(0.0, 4 / 3, 361))
+    text = repr(sol)
+    assert len(text) < 600 and "Hoeken" in text and "361 samples" in text
+    tau = sol.columns["tau_J1"]
+    k = int(np.argmax(np.abs(tau)))
+    assert f"{tau[k]:+.4g} N m at t = {sol.t[k]:.4g} s" in text  # the peak keeps its sign
+    page = sol._repr_html_()
+    assert len(page) < 3000 and "<table>" in page and f"{tau[k]:+.4g}" in page
+    df = sol.to_dataframe()
+    assert isinstance(df, pd.DataFrame) and df.index.name == "t"
+    np.testing.assert_array_equal(df.index.to_numpy(), sol.t)
+    assert list(df.columns) == list(sol.columns)[1:]
+    assert df.attrs["units"] == sol.units and df.attrs["units"]["phi_crank"] == "rad"
+    # a batch of designs displays too, without any per-sample dump
+    m = sol.model
+    batch = linkdyn.analyze([m, m], np.linspace(0.0, 1.0, 50), backend="numpy")
+    assert "2 designs x 50 samples" in repr(batch) and len(repr(batch)) < 300
+
+
 # ---------------------------------------------------------------------------- in the browser
 
 def test_page_loads_without_errors(page):

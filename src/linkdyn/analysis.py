@@ -76,8 +76,27 @@ class Solution:
         return self.dyn.tau[..., k]
 
     def reaction(self, joint: str) -> np.ndarray:
-        """Force (T, 2) by the joint's first body on its second, N."""
-        return self.reactions.force[..., self._joint(joint), :]
+        """Reaction by the joint's first body on its second, global components.
+
+        Returns
+        -------
+        ndarray (T, 2) ``[Fx, Fy]`` N for a revolute joint (which transmits no moment), or
+        (T, 3) ``[Fx, Fy, M]`` (N, N and N m, the moment about the second body's joint point)
+        for a prismatic joint: the ``Fx_``, ``Fy_`` (and ``M_``) columns of ``results.csv``.
+        """
+        k = self._joint(joint)
+        force = self.reactions.force[..., k, :]
+        if "M" not in jk.get(self.model.joints[k].kind).reaction:
+            return force
+        return np.concatenate([force, self.reactions.moment[..., k, None]], axis=-1)
+
+    def point_velocity(self, body: str, point: str) -> np.ndarray:
+        """Velocity (T, 2) of a named point, global components, m/s."""
+        return self.kin.point_velocity(body, point)
+
+    def point_acceleration(self, body: str, point: str) -> np.ndarray:
+        """Acceleration (T, 2) of a named point, global components, m/s^2."""
+        return self.kin.point_acceleration(body, point)
 
     def _joint(self, name: str) -> int:
         return [j.name for j in self.model.joints].index(name)
@@ -99,49 +118,155 @@ class Solution:
 
     # --- tables -----------------------------------------------------------------------------
     @cached_property
-    def columns(self) -> dict[str, np.ndarray]:
-        """All result columns of SPEC's ``results.csv``, in order: name -> (T,) array, SI."""
+    def _table(self) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """The result columns and their units, built together (one place names both)."""
         m, kin = self.model, self.kin
-        cols: dict[str, np.ndarray] = {"t": self.t}
+        cols: dict[str, np.ndarray] = {}
+        units: dict[str, str] = {}
+
+        def put(name, values, unit):
+            cols[name], units[name] = values, unit
+
+        put("t", self.t, "s")
         q, qd, qdd = kin.joint_motion
         for k, j in enumerate(m.joints):
-            cols[f"q_{j.name}"], cols[f"qd_{j.name}"], cols[f"qdd_{j.name}"] = q[k], qd[k], qdd[k]
+            u = "rad" if jk.get(j.kind).angular else "m"
+            put(f"q_{j.name}", q[k], u)
+            put(f"qd_{j.name}", qd[k], f"{u}/s")
+            put(f"qdd_{j.name}", qdd[k], f"{u}/s^2")
         for b in m.moving_bodies:
-            cols[f"phi_{b.name}"] = self.phi(b.name)
-            cols[f"omega_{b.name}"] = self.omega(b.name)
-            cols[f"alpha_{b.name}"] = self.alpha(b.name)
+            put(f"phi_{b.name}", self.phi(b.name), "rad")
+            put(f"omega_{b.name}", self.omega(b.name), "rad/s")
+            put(f"alpha_{b.name}", self.alpha(b.name), "rad/s^2")
         for k, d in enumerate(m.drivers):
-            cols[f"{jk.get(m.joint(d.joint).kind).effort}_{d.joint}"] = self.dyn.tau[..., k]
+            kind = jk.get(m.joint(d.joint).kind)
+            put(f"{kind.effort}_{d.joint}", self.dyn.tau[..., k],
+                "N m" if kind.angular else "N")
         for j, w in zip(m.joints, self.reactions.on_second):
             # the columns the joint's kind reports, of [M, Fx, Fy]
             for name in jk.get(j.kind).reaction:
-                cols[f"{name}_{j.name}"] = w[{"M": 0, "Fx": 1, "Fy": 2}[name]]
-        for b in m.moving_bodies:
-            for name in b.points:
-                xy = self.point(b.name, name)
-                cols[f"x_{b.name}.{name}"] = xy[..., 0]
-                cols[f"y_{b.name}.{name}"] = xy[..., 1]
-        cols["kinetic_energy"] = self.kinetic_energy
+                put(f"{name}_{j.name}", w[{"M": 0, "Fx": 1, "Fy": 2}[name]],
+                    "N m" if name == "M" else "N")
+        points = [(b.name, p) for b in m.moving_bodies for p in b.points]
+        for b, p in points:
+            xy = self.point(b, p)
+            put(f"x_{b}.{p}", xy[..., 0], "m")
+            put(f"y_{b}.{p}", xy[..., 1], "m")
+        put("kinetic_energy", self.kinetic_energy, "J")
         if self.loads.has_potential:
-            cols["potential_energy"] = self.potential_energy
+            put("potential_energy", self.potential_energy, "J")
+        # beyond SPEC's list (which ends at kinetic_energy): each named point's velocity and
+        # acceleration, global components
+        for b, p in points:
+            v, a = self.point_velocity(b, p), self.point_acceleration(b, p)
+            put(f"vx_{b}.{p}", v[..., 0], "m/s")
+            put(f"vy_{b}.{p}", v[..., 1], "m/s")
+            put(f"ax_{b}.{p}", a[..., 0], "m/s^2")
+            put(f"ay_{b}.{p}", a[..., 1], "m/s^2")
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
-        return cols
+        return cols, units
+
+    @property
+    def columns(self) -> dict[str, np.ndarray]:
+        """All result columns of ``results.csv``, in order: name -> (T,) array, SI.
+
+        SPEC's columns up to ``kinetic_energy``, then ``potential_energy`` (with gravity or
+        springs), then each named point's velocity ``vx_<body>.<point>``, ``vy_`` (m/s) and
+        acceleration ``ax_``, ``ay_`` (m/s^2), global components.
+        """
+        return self._table[0]
+
+    @property
+    def units(self) -> dict[str, str]:
+        """Unit of every column of :attr:`columns` (``'rad/s'``, ``'N m'``, ``'m/s^2'``...)."""
+        return self._table[1]
 
     def to_dataframe(self):
-        """The columns as a pandas DataFrame (needs the optional ``pandas``)."""
+        """The result columns as a pandas DataFrame indexed by ``t`` (s).
+
+        Every other column of ``results.csv`` is a column, in the same order; their units are
+        in ``df.attrs["units"]`` (column name -> unit, ``t`` included). ``df.reset_index()``
+        gives the exact table of ``results.csv``. Needs the optional ``pandas``.
+        """
         try:
             import pandas as pd
         except ImportError as exc:  # pragma: no cover - depends on the environment
             raise ImportError("to_dataframe needs pandas: pip install 'linkdyn[pandas]'") from exc
         if self.valid.ndim > 1:
             raise ValueError("to_dataframe needs a single design; index the design first")
-        return pd.DataFrame(self.columns)
+        names, data = self.to_array()  # one float block, not one block per column
+        df = pd.DataFrame(data[:, 1:], columns=names[1:],
+                          index=pd.Index(data[:, 0], name=names[0]))
+        df.attrs["units"] = dict(self.units)
+        return df
 
     def to_array(self) -> tuple[list[str], np.ndarray]:
         """Column names and a (T, n_columns) array, without pandas."""
         names = list(self.columns)
         return names, np.stack([self.columns[k] for k in names], axis=-1)
+
+    # --- display in a notebook or a console -------------------------------------------------
+    def _headline(self) -> str:
+        m, t = self.model, np.asarray(self.t)
+        lead = self.valid.shape[:-1]
+        designs = f"{lead[0]} designs x " if lead else ""
+        span = f"{t[0]:.4g}..{t[-1]:.4g} s" if t.size else "no samples"
+        return (f"{m.name or 'mechanism'}: {designs}{t.size} samples, t = {span}, "
+                f"{len(m.moving_bodies)} moving bodies, {len(m.joints)} joints, "
+                f"{self.topology.n_loops} loops")
+
+    def key_numbers(self) -> list[tuple[str, str]]:
+        """The few numbers to look at first, as ``(label, text)``: each driver effort's signed
+        peak (largest magnitude) with its time, the largest joint force and the invalid
+        samples. Empty for a batch of designs (index one design first)."""
+        if self.valid.ndim > 1 or not len(self.t):
+            return []
+        t, rows = np.asarray(self.t), []
+        cols, units = self.columns, self.units
+        for d in self.model.drivers:
+            name = next(n for n in (f"tau_{d.joint}", f"force_{d.joint}") if n in cols)
+            k = _nanargmax(np.abs(cols[name]))
+            if k is not None:
+                rows.append((f"peak {name}", f"{cols[name][k]:+.4g} {units[name]} at "
+                                             f"t = {t[k]:.4g} s"))
+        f = np.linalg.norm(self.reactions.force, axis=-1)  # (T, n_joints)
+        if f.size and np.any(np.isfinite(f)):
+            k, j = np.unravel_index(np.nanargmax(f), f.shape)
+            rows.append(("largest joint force", f"{f[k, j]:.4g} N at {self.model.joints[j].name}, "
+                                                f"t = {t[k]:.4g} s"))
+        ke = cols["kinetic_energy"]
+        if np.any(np.isfinite(ke)):
+            rows.append(("kinetic energy", f"{np.nanmin(ke):.4g}..{np.nanmax(ke):.4g} J"))
+        bad = int(np.sum(~self.valid))
+        if bad:
+            rows.append(("invalid samples", f"{bad} (NaN rows)"))
+        return rows
+
+    def __repr__(self) -> str:
+        rows = "".join(f"\n  {k}: {v}" for k, v in self.key_numbers())
+        return f"<linkdyn.Solution {self._headline()}{rows}>"
+
+    def _repr_html_(self) -> str:
+        import html
+        e = html.escape
+        m = self.model
+        rows = "".join(f"<tr><th style='text-align:left'>{e(k)}</th><td>{e(v)}</td></tr>"
+                       for k, v in self.key_numbers())
+        drivers = ", ".join(f"{d.joint}: {d.description}" for d in m.drivers)
+        cut = ", ".join(m.joints[int(c)].name for c in self.topology.cut) or "none"
+        return (f"<div class='linkdyn-solution'><b>linkdyn.Solution</b> "
+                f"{e(self._headline())}<br>"
+                f"<small>mobility {self.topology.mobility}; cut joints {e(cut)}; drivers "
+                f"{e(drivers)}</small><table>{rows}</table>"
+                f"<small>{len(self.units)} columns: <code>sol.to_dataframe()</code>; "
+                f"units in <code>df.attrs['units']</code></small></div>")
+
+
+def _nanargmax(x) -> int | None:
+    """Index of the largest finite value of ``x``, or None if there is none."""
+    x = np.asarray(x, float)
+    return int(np.nanargmax(x)) if np.any(np.isfinite(x)) else None
 
 
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:

@@ -250,7 +250,7 @@ def write_parquet(sol, path: Path) -> None:
     except ImportError:
         raise ModelError("--format parquet needs pyarrow", field="--format",
                          fix="pip install 'linkdyn[parquet]', or use --format csv") from None
-    sol.to_dataframe().to_parquet(path, index=False)
+    sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
 
 
 def print_summary(s: dict) -> None:
