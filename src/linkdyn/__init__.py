@@ -16,6 +16,7 @@ from .errors import AssemblyError, LinkdynError, ModelError
 from .io import load_model, model_from_dict
 from .io.writer import model_to_dict, save
 from .model import Body, Driver, Joint, Load, Model
+from .studies import sweep
 
 __version__ = "0.1.0"
 
@@ -29,4 +30,4 @@ def example_path(name: str):
 
 __all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",
            "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
-           "example_path", "save", "model_to_dict"]
+           "example_path", "save", "model_to_dict", "sweep"]

@@ -269,6 +269,22 @@ def _nanargmax(x) -> int | None:
     return int(np.nanargmax(x)) if np.any(np.isfinite(x)) else None
 
 
+def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
+    """The error of the first invalid sample, at time ``t_k`` (s) with closure ``residual``:
+    a singular position if the loops close there, else a position the mechanism cannot reach.
+    ``analyze`` raises it; a sweep records its text as an invalid design's reason."""
+    drivers = {d.joint: float(v) for d, v in
+               zip(model.drivers, kinematics.driver_values(model, np.array([float(t_k)]))[0][0])}
+    closes = bool(residual <= kinematics.ACCEPT)  # closes, but singular
+    return AssemblyError(
+        "the mechanism passes a singular (toggle or dead-centre) position" if closes else
+        "the loops stop closing: the mechanism cannot reach this driver position",
+        file=model.source, time=float(t_k), drivers=drivers,
+        fix=("Change the link lengths or the driver's range so it avoids the toggle, or pass "
+             "--allow-singular to keep the other samples" if closes else
+             "Limit the driver's range (duration) or change the link lengths"))
+
+
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
 
@@ -310,14 +326,5 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
-        drivers = {d.joint: float(v) for d, v in
-                   zip(model.drivers, kinematics.driver_values(model, kin.t[k:k + 1])[0][0])}
-        closes = bool(kin.residual[k] <= kinematics.ACCEPT)  # closes, but singular
-        raise AssemblyError(
-            "the mechanism passes a singular (toggle or dead-centre) position" if closes else
-            "the loops stop closing: the mechanism cannot reach this driver position",
-            file=model.source, time=float(kin.t[k]), drivers=drivers,
-            fix=("Change the link lengths or the driver's range so it avoids the toggle, or pass "
-                 "--allow-singular to keep the other samples" if closes else
-                 "Limit the driver's range (duration) or change the link lengths"))
+        raise failure(model, kin.t[k], kin.residual[k])
     return Solution(model, kin, applied, dyn, react, valid)

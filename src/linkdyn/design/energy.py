@@ -24,20 +24,36 @@ def driver_power(sol) -> np.ndarray:
 
 
 def _cumtrapz(t, y):
-    return np.concatenate(([0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))))
+    """Running trapezoid integral of y (..., T) over t (T,), starting at 0."""
+    steps = np.cumsum(0.5 * (y[..., 1:] + y[..., :-1]) * np.diff(t), axis=-1)
+    return np.concatenate((np.zeros(steps.shape[:-1] + (1,)), steps), axis=-1)
 
 
-def energy_fluctuation(t, power) -> float:
-    """``max E - min E`` of ``E(t) = int (P - P_mean) dt`` over the samples given, J."""
+def energy_fluctuation(t, power):
+    """``max E - min E`` of ``E(t) = int (P - P_mean) dt`` over the samples given, J.
+
+    ``t`` (T,) s; ``power`` (..., T) W (any leading design axes): a float for one design, an
+    array (...,) for many."""
     t, power = np.asarray(t, float), np.asarray(power, float)
     work = _cumtrapz(t, power)
-    e = work - work[-1] * (t - t[0]) / (t[-1] - t[0])
-    return float(np.max(e) - np.min(e))
+    e = work - work[..., -1:] * (t - t[0]) / (t[-1] - t[0])
+    out = np.max(e, axis=-1) - np.min(e, axis=-1)
+    return float(out) if out.ndim == 0 else out
 
 
-def flywheel_inertia(delta_e: float, omega_mean: float, fluctuation: float = 0.02) -> float:
-    """Flywheel inertia ``Delta E / (C_s omega_mean^2)``, kg m^2."""
-    return float(delta_e / (fluctuation * omega_mean ** 2))
+def first_cycle(t, period) -> tuple[np.ndarray, str]:
+    """Samples (T,) bool of one cycle: the first driver period if the run covers it, else the
+    whole run; and a label saying which."""
+    span = t[-1] - t[0]
+    if period and span >= period * (1 - 1e-9):
+        return t <= t[0] + period * (1 + 1e-9), "first cycle"
+    return np.ones(len(t), bool), "run (shorter than one cycle)" if period else "run"
+
+
+def flywheel_inertia(delta_e, omega_mean, fluctuation: float = 0.02):
+    """Flywheel inertia ``Delta E / (C_s omega_mean^2)``, kg m^2 (float, or array for arrays)."""
+    out = np.asarray(delta_e, float) / (fluctuation * np.asarray(omega_mean, float) ** 2)
+    return float(out) if out.ndim == 0 else out
 
 
 def _constant_speed(d) -> float | None:
@@ -73,13 +89,7 @@ def driver_energy(sol, fluctuation: float = 0.02) -> dict:
             "mean_power_W": float(_cumtrapz(tk, pk)[-1] / span) if span > 0 else None,
             "max_power_W": float(np.max(pk)), "min_power_W": float(np.min(pk))})
         # one cycle: the first driver period if the run covers it, else the whole run
-        period = d.period
-        if period and span >= period * (1 - 1e-9):
-            cyc = tk <= tk[0] + period * (1 + 1e-9)
-            over = "first cycle"
-        else:
-            cyc = np.ones(len(tk), bool)
-            over = "run (shorter than one cycle)" if period else "run"
+        cyc, over = first_cycle(tk, d.period)
         if np.sum(cyc) < 2:
             continue
         de = energy_fluctuation(tk[cyc], pk[cyc])

@@ -181,6 +181,13 @@ def transmission_angle(sol, fb: FourBar) -> np.ndarray:
     return np.arccos(np.clip(c, -1.0, 1.0))
 
 
+def transmission_worst(mu):
+    """Distance of the transmission angle from the folded positions, ``min(mu, pi - mu)`` (same
+    shape as ``mu``, rad): 90 deg is ideal, 0 a toggle. Its minimum over a run is the sweep
+    metric ``min_transmission_angle`` and the summary's ``worst``."""
+    return np.minimum(mu, np.pi - mu)
+
+
 def velocity_ratio(sol, fb: FourBar) -> np.ndarray:
     """``omega_out / omega_in`` (T,), both relative to the loop's frame (signed)."""
     w_f = sol.omega(fb.frame)

@@ -10,19 +10,36 @@ from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
 from .energy import driver_energy
-from .fourbar import four_bars, mechanical_advantage, transmission_angle
+from .fourbar import four_bars, mechanical_advantage, transmission_angle, transmission_worst
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
+
+
+def peak(x):
+    """Largest |x| over the last (time) axis, finite samples only: (...,) for x (..., T); NaN
+    where no sample is finite. The ``peak`` of every summary entry and of the sweep metrics."""
+    x = np.abs(np.asarray(x, float))
+    ok = np.any(np.isfinite(x), axis=-1)
+    out = np.max(np.where(np.isfinite(x), x, -np.inf), axis=-1)
+    return np.where(ok, out, np.nan)
+
+
+def rms(x):
+    """Root mean square over the last (time) axis, finite samples only: (...,) for x (..., T)."""
+    x = np.asarray(x, float)
+    ok = np.isfinite(x)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.sqrt(np.sum(np.where(ok, x, 0.0) ** 2, axis=-1) / np.sum(ok, axis=-1))
 
 
 def _peak(t, x):
     """Largest |x| (over the finite samples) and its time."""
     k = int(np.nanargmax(np.abs(x)))
-    return float(np.abs(x[k])), float(t[k])
+    return float(peak(x)), float(t[k])
 
 
 def _rms(x):
-    return float(np.sqrt(np.nanmean(np.asarray(x) ** 2)))
+    return float(rms(x))
 
 
 def _extremes(t, x) -> dict:
@@ -87,7 +104,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         out["reactions"][j.name] = entry
     for fb in four_bars(m):
         mu = np.degrees(transmission_angle(sol, fb))
-        kmin = int(np.nanargmin(np.minimum(mu, 180 - mu)))
+        kmin = int(np.nanargmin(np.degrees(transmission_worst(np.radians(mu)))))
         ta = {"min": float(np.nanmin(mu)), "max": float(np.nanmax(mu)),
               "worst": float(mu[kmin]), "worst_time_s": float(t[kmin])}
         ta["min_time_s"] = float(t[int(np.nanargmin(mu))])

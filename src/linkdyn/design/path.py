@@ -15,6 +15,8 @@ Path straightness (:func:`path_straightness`)
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..errors import ModelError
@@ -112,18 +114,57 @@ def path_straightness(sol, point: str, q_range=None) -> dict:
                          field="--path-range",
                          fix="Give a range A:B of the first driver's coordinate (rad or m) that "
                              "the run covers, with at least 3 samples")
-    pts = xy[sel]
-    c = pts.mean(axis=0)
-    # principal axis of the scatter: the total-least-squares line
-    _, _, vt = np.linalg.svd(pts - c, full_matrices=False)
-    u = vt[0] * (1.0 if vt[0][np.argmax(np.abs(vt[0]))] > 0 else -1.0)
-    along = (pts - c) @ u
-    dev = cross(first(u), first(pts - c))  # signed distance from the line
+    c, u, dev = line_fit(xy, sel)
+    along = np.where(sel, np.sum((xy - c) * u, axis=-1), np.nan)
     return {"point": point,
             "range": None if q_range is None else [float(x) for x in q_range],
             "samples": int(np.sum(sel)),
             "centroid_m": c.tolist(), "direction": u.tolist(),
-            "max_deviation_m": float(np.max(np.abs(dev))),
-            "rms_deviation_m": float(np.sqrt(np.mean(dev ** 2))),
-            "band_m": float(np.max(dev) - np.min(dev)),
-            "length_m": float(np.max(along) - np.min(along))}
+            "max_deviation_m": float(max_deviation(dev)),
+            "rms_deviation_m": float(np.sqrt(np.nanmean(dev ** 2))),
+            "band_m": float(np.nanmax(dev) - np.nanmin(dev)),
+            "length_m": float(np.nanmax(along) - np.nanmin(along))}
+
+
+def line_fit(xy, sel):
+    """Total-least-squares line through the selected samples of a path, batched.
+
+    Parameters
+    ----------
+    xy : ndarray (..., T, 2)
+        Path, m, global frame.
+    sel : ndarray (..., T) bool
+        Samples to fit (broadcast against ``xy[..., 0]``); non-finite points are left out.
+
+    Returns
+    -------
+    c : ndarray (..., 2)
+        Centroid of the selected samples, m.
+    u : ndarray (..., 2)
+        Unit direction of the line, its largest component positive.
+    dev : ndarray (..., T)
+        Signed perpendicular distance of each sample from the line, m (NaN where not selected).
+    """
+    sel = np.broadcast_to(sel, xy.shape[:-1]) & np.all(np.isfinite(xy), axis=-1)
+    n = np.sum(sel, axis=-1)
+    p = np.where(sel[..., None], xy, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.sum(p, axis=-2) / n[..., None]
+    d = np.where(sel[..., None], xy - c[..., None, :], 0.0)
+    # principal axis of the scatter S = sum d d^T: angle theta with tan 2 theta = 2 Sxy / (Sxx - Syy)
+    sxx, syy = np.sum(d[..., 0] ** 2, -1), np.sum(d[..., 1] ** 2, -1)
+    sxy = np.sum(d[..., 0] * d[..., 1], -1)
+    theta = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    u = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
+    big = np.take_along_axis(u, np.argmax(np.abs(u), axis=-1)[..., None], axis=-1)
+    u = np.where(big < 0, -u, u)
+    dev = np.where(sel, cross(first(u[..., None, :]), first(d)), np.nan)
+    return c, u, dev
+
+
+def max_deviation(dev):
+    """Largest perpendicular distance (...,) m from the fitted line, over the selected samples
+    (``dev`` from :func:`line_fit`; NaN where none is selected)."""
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a design without samples is NaN
+        return np.nanmax(np.abs(dev), axis=-1)

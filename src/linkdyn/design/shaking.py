@@ -32,7 +32,7 @@ def shaking_wrench(sol) -> np.ndarray:
     """
     m = sol.model
     drivers = {d.joint: k for k, d in enumerate(m.drivers)}
-    out = np.zeros(sol.t.shape + (3,))
+    out = np.zeros(sol.kin.shape + (3,))
     for k, j in enumerate(m.joints):
         if (j.body_a == GROUND) == (j.body_b == GROUND):
             continue
@@ -70,7 +70,7 @@ def inertia_wrench(sol) -> np.ndarray:
     moment about the global origin. Equals the shaking wrench when no loads act."""
     kin = sol.kin
     lay, pose = kin.layout, kin.pose
-    out = np.zeros((3,) + sol.t.shape)
+    out = np.zeros((3,) + sol.kin.shape)
     for i in range(1, lay.topo.n):
         # mass centre: r_G = r_i + d, a_G = a_i + alpha perp(d) - w^2 d
         d = pose.rotate(i, lay.com[i])

@@ -19,8 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import expr as _expr
+from .. import joints as jk
 from .. import motion as _motion
-from ..model import GROUND, REVOLUTE, Model
+from ..model import GROUND, Model
 from .loads import _TimeFunction
 from .units import ANGLE_UNITS, LENGTH_UNITS
 
@@ -95,13 +96,16 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
     for j in model.joints:
         entry = {"name": j.name, "type": j.kind,
                  "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
-        if j.kind != REVOLUTE:
-            entry.update(axis=_vec(j.axis), angle=_num(j.angle / A))
+        keys = jk.get(j.kind).keys
+        if "axis" in keys:
+            entry["axis"] = _vec(j.axis)
+        if "angle" in keys:
+            entry["angle"] = _num(j.angle / A)
         joints.append(entry)
     out["joints"] = joints
 
     def scale_of(joint: str) -> float:
-        return A if model.joint(joint).kind == REVOLUTE else L
+        return A if jk.get(model.joint(joint).kind).angular else L
 
     out["drivers"] = [{"joint": d.joint, "motion": _motion_dict(d.motion, scale_of(d.joint),
                                                                 table_files.get(d.joint))}
@@ -211,7 +215,7 @@ def save(model: Model, path: str | os.PathLike) -> Path:
     names = {j: f"{path.stem}.{j}.csv" for j in tables}
     text = dumps_toml(model_to_dict(model, table_files=names))
     for j, motion in tables.items():
-        unit = A if model.joint(j).kind == REVOLUTE else L
+        unit = A if jk.get(model.joint(j).kind).angular else L
         q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
         rows = "\n".join(f"{ti!r},{qi!r}" for ti, qi in zip(motion.t.tolist(), q.tolist()))
         (path.parent / names[j]).write_text("t,q\n" + rows + "\n", encoding="utf-8")

@@ -8,6 +8,8 @@ predictor and a Newton corrector per node (a loop over driver steps, never over 
 
 from __future__ import annotations
 
+from dataclasses import fields, replace
+
 import numpy as np
 
 from ..errors import AssemblyError
@@ -15,7 +17,7 @@ from .. import joints as jk
 from ..model import Model
 from ..planar import solve_small, wrap
 from . import dyads
-from .layout import Layout
+from .layout import Cut, Layout
 from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
                         motion_vectors)
 
@@ -50,8 +52,9 @@ def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
     pose = forward_positions(lay, q)
     g = closure_residual(lay, pose)
     err = _scaled(lay, g)
+    stalled = np.zeros(err.shape, bool)  # damped: no step length decreased the residual
     for _ in range(maxiter):
-        active = err > TOL
+        active = (err > TOL) & ~stalled
         if not np.any(active):
             break
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))[:, dep - 1]
@@ -68,6 +71,17 @@ def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
             if not damped or not np.any(worse):
                 break
             step = np.where(worse, step / 2, step)
+        if damped:
+            # a point where 30 halvings do not decrease the residual stays as it is and drops out
+            # (otherwise it would keep every other point of the batch iterating)
+            stuck = ~(err_t < err) & active
+            stalled |= stuck
+            keep = stuck.reshape((1,) * (q.ndim - stuck.ndim) + stuck.shape)
+            trial = np.where(keep, q, trial)
+            if np.any(stuck):
+                pose_t = forward_positions(lay, trial)
+                g_t = closure_residual(lay, pose_t)
+                err_t = _scaled(lay, g_t)
         q, pose, g, err = trial, pose_t, g_t, err_t
     return q, err
 
@@ -92,6 +106,33 @@ def _drivers_at(model: Model, lay: Layout, q_drv: np.ndarray) -> dict[str, float
             for k, i in enumerate(topo.driven)}
 
 
+def _designs(lay: Layout, idx: np.ndarray) -> Layout:
+    """The designs ``idx`` of a stacked layout (every number's design axis is its axis -2)."""
+    def take(x):
+        if isinstance(x, np.ndarray):
+            return x[..., idx, :] if x.ndim >= 2 else x
+        if isinstance(x, tuple):
+            return tuple(take(v) for v in x)
+        if isinstance(x, dict):
+            return {k: take(v) for k, v in x.items()}
+        if isinstance(x, Cut):
+            return replace(x, pa=take(x.pa), pb=take(x.pb), axis=take(x.axis), angle=take(x.angle))
+        return x
+
+    return replace(lay, **{f.name: take(getattr(lay, f.name)) for f in fields(lay)
+                           if f.name not in ("topo", "kind", "dyads")})
+
+
+def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
+                  design: int | None = None) -> AssemblyError:
+    """The error of a design that cannot be assembled at ``t0`` (driver values ``q_drv0``)."""
+    return AssemblyError(
+        "the mechanism cannot be assembled: the loops do not close"
+        + (f" (design {design})" if design is not None else ""),
+        file=model.source, time=t0, drivers=_drivers_at(model, lay, q_drv0),
+        fix="Check the link lengths and the [assembly] guess")
+
+
 def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
              raise_error: bool = True) -> np.ndarray:
     """Assembled tree coordinates (n, D) of D designs at the first sample, on the branch of
@@ -111,29 +152,28 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
     failed = ~(err <= ACCEPT)
     if np.any(failed):
         rng = np.random.default_rng(0)
-        starts = np.repeat(q0[..., None], 64, axis=-1)
+        # restart the failed designs only: their layout, batch (F, 64)
+        idx = np.flatnonzero(failed)
+        lay_f = _designs(lay, idx) if len(models) > 1 else lay
+        starts = np.repeat(q0[:, idx, None], 64, axis=-1)
         for i in dep:
             starts[i] = (rng.uniform(-np.pi, np.pi, 64) if jk.get(lay.kind[i]).angular
-                         else rng.uniform(-2, 2, 64) * lay.size)
-        qs, errs = newton(lay, starts, maxiter=60, damped=True)  # batch (D, 64)
+                         else rng.uniform(-2, 2, 64) * lay_f.size)
+        qs, errs = newton(lay_f, starts, maxiter=60, damped=True)
         ok = errs <= ACCEPT
         # distance to the guess: angles modulo 2 pi, slider travel relative to the size
-        gap = qs[dep] - q0[dep, :, None]
+        gap = qs[dep] - q0[dep][:, idx, None]
         rev = np.array([jk.get(lay.kind[i]).angular for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
         dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / np.min(lay.size))), axis=0)
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
-        rescued = failed & np.any(ok, axis=-1)
-        q[:, rescued] = pick[:, rescued]
-        failed &= ~rescued
+        rescued = np.any(ok, axis=-1)
+        q[:, idx[rescued]] = pick[:, rescued]
+        failed[idx[rescued]] = False
         if np.any(failed):
             if raise_error:
                 d = int(np.argmax(failed))
-                raise AssemblyError(
-                    "the mechanism cannot be assembled: the loops do not close"
-                    + (f" (design {d})" if len(models) > 1 else ""),
-                    file=models[d].source, time=t0, drivers=_drivers_at(models[d], lay, q_drv0),
-                    fix="Check the link lengths and the [assembly] guess")
+                raise not_assembled(models[d], lay, q_drv0, t0, d if len(models) > 1 else None)
             q[:, failed] = np.nan
     return q
 

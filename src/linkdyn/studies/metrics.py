@@ -1,0 +1,180 @@
+"""Design metrics: one number per design, from a solved run of one design or of a batch.
+
+Each metric is computed by the same functions the summary of ``linkdyn analyze`` uses
+(:mod:`linkdyn.design`), over the last (time) axis, so a metric of a sweep equals the one of
+``analyze`` for that design. All values SI:
+
+``peak_<effort column>``, ``rms_<effort column>``
+    Largest |effort| and its root mean square over the run for each driver, e.g. ``peak_tau_J1``
+    (N m) or ``rms_force_J4`` (N) (:func:`linkdyn.design.overview.peak`, ``rms``).
+``peak_F_<joint>``
+    Largest joint force magnitude ``|(Fx, Fy)|`` of each joint, N.
+``min_transmission_angle``
+    Over the run and every four-bar loop, the smallest ``min(mu, pi - mu)`` of the transmission
+    angle mu, rad (90 deg ideal, 0 a toggle) (:func:`linkdyn.design.fourbar.transmission_worst`).
+``path_deviation``
+    Largest perpendicular distance of the path point from its total-least-squares line over the
+    path range (the model's ``[analysis] path_point`` and ``path_range``, or given), m
+    (:func:`linkdyn.design.path.line_fit`).
+``peak_shaking_force``
+    Largest magnitude of the shaking force on the ground, N (:func:`linkdyn.design.shaking_force`).
+``flywheel_inertia``
+    Flywheel that keeps the first constant-speed revolute driver within a coefficient of speed
+    fluctuation C_s (default 0.02) over its first cycle, kg m^2
+    (:func:`linkdyn.design.energy.energy_fluctuation`, ``flywheel_inertia``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..design import four_bars, shaking_force, transmission_angle
+from ..design.energy import driver_power, energy_fluctuation, first_cycle, flywheel_inertia
+from ..design.fourbar import transmission_worst
+from ..design.overview import peak, rms
+from ..design.path import _in_range, _parse_point, default_path_point, line_fit, max_deviation
+from ..errors import ModelError
+from .. import joints as jk
+from ..model import Model
+from ..motion import ConstantSpeed
+
+__all__ = ["names", "evaluate", "path_spec"]
+
+
+def _effort(model: Model, joint: str) -> str:
+    return f"{jk.get(model.joint(joint).kind).effort}_{joint}"
+
+
+def _flywheel_driver(model: Model) -> int | None:
+    return next((k for k, d in enumerate(model.drivers)
+                 if isinstance(d.motion, ConstantSpeed) and d.motion.speed
+                 and jk.get(model.joint(d.joint).kind).angular), None)
+
+
+def path_spec(model: Model, path_point=None, path_range=None):
+    """The path point (``'BODY.POINT'`` or None) and range (rad or m, or None) of
+    ``path_deviation``: the ones given, else the model's ``[analysis]`` ones, else the only free
+    coupler point over the whole run."""
+    point = path_point or model.path_point or default_path_point(model)
+    q_range = path_range if path_range is not None else (model.path_range if point else None)
+    if point:
+        _parse_point(model, point)
+    return point, q_range
+
+
+def names(model: Model, *, path_point=None) -> list[str]:
+    """Every metric this model has, in table order."""
+    out = []
+    for d in model.drivers:
+        out += [f"peak_{_effort(model, d.joint)}", f"rms_{_effort(model, d.joint)}"]
+    out += [f"peak_F_{j.name}" for j in model.joints]
+    if four_bars(model):
+        out.append("min_transmission_angle")
+    if path_spec(model, path_point)[0]:
+        out.append("path_deviation")
+    out.append("peak_shaking_force")
+    if _flywheel_driver(model) is not None:
+        out.append("flywheel_inertia")
+    return out
+
+
+def check_names(model: Model, wanted, *, path_point=None) -> list[str]:
+    """``wanted`` (None: all) checked against :func:`names`, with the closest spelling."""
+    from ..io.reader import _did_you_mean
+
+    have = names(model, path_point=path_point)
+    if wanted is None:
+        return have
+    for w in wanted:
+        if w not in have:
+            raise ModelError(f"no metric '{w}' for this model", field="--metric",
+                             fix=_did_you_mean(w, have, "metrics"))
+    return list(wanted)
+
+
+def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
+             fluctuation: float = 0.02) -> dict[str, np.ndarray]:
+    """Metrics of a solved run.
+
+    Parameters
+    ----------
+    sol : Solution
+        Of one design (arrays (T, ...)) or of D designs (arrays (D, T, ...)).
+    wanted : sequence of str, optional
+        Metric names (default: all of :func:`names`).
+    models : sequence of Model, optional
+        The D designs' models, when their drivers' speeds differ (``flywheel_inertia``).
+    path_point, path_range : optional
+        For ``path_deviation`` (see :func:`path_spec`).
+    fluctuation : float
+        Coefficient of speed fluctuation C_s of ``flywheel_inertia``.
+
+    Returns
+    -------
+    dict
+        Name -> ndarray of the batch shape (``()`` for one design, ``(D,)`` for D), SI. Samples
+        that are not valid (NaN) are left out; a design without a valid sample gets NaN.
+    """
+    m = sol.model
+    wanted = check_names(m, wanted, path_point=path_point)
+    out: dict[str, np.ndarray] = {}
+    want = set(wanted)
+    for k, d in enumerate(m.drivers):
+        col = _effort(m, d.joint)
+        tau = sol.dyn.tau[..., k]
+        if f"peak_{col}" in want:
+            out[f"peak_{col}"] = peak(tau)
+        if f"rms_{col}" in want:
+            out[f"rms_{col}"] = rms(tau)
+    for k, j in enumerate(m.joints):
+        if f"peak_F_{j.name}" in want:
+            out[f"peak_F_{j.name}"] = peak(np.linalg.norm(sol.reactions.force[..., k, :], axis=-1))
+    if "min_transmission_angle" in want:
+        worst = [lowest(transmission_worst(transmission_angle(sol, fb))) for fb in four_bars(m)]
+        out["min_transmission_angle"] = np.min(worst, axis=0)
+    if "path_deviation" in want:
+        out["path_deviation"] = _path_deviation(sol, path_point, path_range)
+    if "peak_shaking_force" in want:
+        out["peak_shaking_force"] = peak(np.linalg.norm(shaking_force(sol), axis=-1))
+    if "flywheel_inertia" in want:
+        out["flywheel_inertia"] = _flywheel(sol, models, fluctuation)
+    return {w: out[w] for w in wanted}
+
+
+def lowest(x):
+    """Smallest x over the last (time) axis, finite samples only; NaN where none is finite."""
+    ok = np.isfinite(x)
+    return np.where(np.any(ok, axis=-1), np.min(np.where(ok, x, np.inf), axis=-1), np.nan)
+
+
+def _path_deviation(sol, path_point, path_range):
+    m = sol.model
+    point, q_range = path_spec(m, path_point, path_range)
+    body, name = point.split(".")
+    xy = sol.point(body, name)
+    sel = np.ones(xy.shape[:-1], bool)
+    if q_range is not None and m.drivers:
+        k = [j.name for j in m.joints].index(m.drivers[0].joint)
+        sel = _in_range(m, sol.kin.q[..., k], q_range)
+    c, u, dev = line_fit(xy, sel)
+    dev = np.where(np.sum(np.isfinite(dev), axis=-1)[..., None] >= 3, dev, np.nan)
+    return max_deviation(dev)
+
+
+def _flywheel(sol, models, fluctuation):
+    m, t = sol.model, sol.t
+    k = _flywheel_driver(m)
+    power = driver_power(sol)[..., k]
+    speeds = np.broadcast_to(np.array(
+        [mm.drivers[k].motion.speed for mm in models] if models is not None
+        else m.drivers[k].motion.speed, float), power.shape[:-1])
+    out = np.full(power.shape[:-1], np.nan)
+    # one cycle per distinct driver speed (all designs share it unless the speed is varied)
+    for w in np.unique(speeds):
+        group = speeds == w
+        cyc, _ = first_cycle(t, 2 * np.pi / abs(w))
+        p = power[group][..., cyc] if power.ndim > 1 else power[cyc]
+        ok = np.all(np.isfinite(p), axis=-1)
+        de = energy_fluctuation(t[cyc], np.where(ok[..., None], p, 0.0))
+        out[group] = np.where(ok, flywheel_inertia(de, w, fluctuation), np.nan)
+    return out

@@ -1,0 +1,393 @@
+"""Sweeps: many designs of one model, each solved and reduced to its metrics.
+
+A sweep is a table of designs (one row of parameter values each, in the file's units), cut into
+chunks. A chunk builds its designs' models, solves them as one batch (``linkdyn.analyze`` over a
+design axis), keeps only the metrics (:mod:`.metrics`) and drops the time histories, so memory is
+bounded by the chunk whatever the number of designs. Chunks run in this process, in local worker
+processes, or on a Dask cluster, with the same results. With an output directory each finished
+chunk is written at once (``chunks/chunk-<k>.parquet``), so a killed sweep resumes without
+computing a finished chunk again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis import SINGULAR, analyze, failure
+from ..errors import AssemblyError, ModelError
+from ..kinematics import driver_values
+from ..kinematics.positions import not_assembled
+from . import metrics as metrics_mod
+from .params import Space
+
+METHODS = ("grid", "random", "lhs", "sobol")
+CHUNK_SAMPLES = 200_000  # design-samples per chunk: ~100-200 MB of time histories at most
+
+
+def _pandas():
+    try:
+        import pandas as pd
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError("sweeps need pandas: pip install 'linkdyn[parquet]'") from exc
+    return pd
+
+
+# --- the designs ------------------------------------------------------------------------------
+
+def sample(bounds, method: str = "sobol", n: int | None = None, seed: int | None = 0,
+           counts=None) -> np.ndarray:
+    """Parameter values (D, P) covering the box ``bounds`` ((lo, hi) per parameter).
+
+    Parameters
+    ----------
+    method : {'grid', 'random', 'lhs', 'sobol'}
+        ``grid``: every combination of ``counts[k]`` evenly spaced values per parameter (both ends
+        included; a count missing takes ``round(n ** (1 / P))``, at least 2); ``random``: uniform;
+        ``lhs``: Latin hypercube; ``sobol``: scrambled Sobol points (scipy.stats.qmc).
+    n : int
+        Number of designs (not for a grid with every count given).
+    seed : int or None
+        Seed of the random, LHS and Sobol points (the same seed gives the same designs).
+    """
+    lo = np.array([b[0] for b in bounds], float)
+    hi = np.array([b[1] for b in bounds], float)
+    P = len(lo)
+    if method not in METHODS:
+        raise ModelError(f"unknown method '{method}'", field="--method",
+                         fix="Use one of " + ", ".join(METHODS))
+    if method == "grid":
+        counts = list(counts or [None] * P)
+        default = max(2, int(round((n or 2 ** P) ** (1.0 / P))))
+        axes = [np.linspace(a, b, c or default) if (c or default) > 1 else np.array([a])
+                for a, b, c in zip(lo, hi, counts)]
+        return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=-1)
+    if not n or n < 1:
+        raise ModelError("the number of designs must be at least 1", field="--designs",
+                         fix="Give --designs N")
+    if method == "random":
+        u = np.random.default_rng(seed).random((n, P))
+    else:
+        import warnings
+
+        from scipy.stats import qmc
+        gen = (qmc.LatinHypercube(d=P, seed=seed) if method == "lhs"
+               else qmc.Sobol(d=P, scramble=True, seed=seed))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # Sobol balance wants a power of 2; any n is fine
+            u = gen.random(n)
+    return lo + u * (hi - lo)
+
+
+# --- one chunk --------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Task:
+    """Everything a worker needs to evaluate designs (pickled to processes and Dask workers)."""
+
+    space: Space
+    t: np.ndarray
+    metrics: tuple[str, ...]
+    backend: str | None = None
+    path_point: str | None = None
+    path_range: tuple | None = None
+    fluctuation: float = 0.02
+
+
+def _reason(err) -> str:
+    """An error's text without the file name (the same for every design)."""
+    err.file = ""
+    return str(err)
+
+
+def evaluate(task: Task, values) -> dict[str, np.ndarray]:
+    """Validity, reason and metrics of designs ``values`` (D, P).
+
+    A design is valid when its model is valid, it assembles, and every sample closes clear of a
+    singular position; otherwise ``valid`` is False, its metrics NaN and ``reason`` the message
+    ``linkdyn.analyze`` would raise for it alone (without the file name).
+
+    Returns
+    -------
+    dict
+        ``valid`` (D,) bool, ``reason`` (D,) object (str, '' when valid) and each metric (D,).
+    """
+    values = np.asarray(values, float).reshape(-1, len(task.space.params))
+    D = len(values)
+    models, errors = task.space.models(values)
+    valid = np.zeros(D, bool)
+    reason = np.array([_reason(e) if e is not None else "" for e in errors], dtype=object)
+    out = {name: np.full(D, np.nan) for name in task.metrics}
+    ok = [k for k in range(D) if models[k] is not None]
+    if ok:
+        batch = [models[k] for k in ok]
+        sol = analyze(batch, task.t, backend=task.backend)
+        good = np.all(sol.valid, axis=-1)
+        kin = sol.kin
+        for j in np.flatnonzero(~good):  # the message analyze would give this design alone
+            m = batch[j]
+            if not np.isfinite(kin.residual[j, 0]) and not np.any(sol.valid[j]):
+                q0 = driver_values(m, np.zeros(1))[0][:, 0]
+                err: AssemblyError = not_assembled(m, kin.layout, q0, 0.0)
+            else:
+                i = int(np.argmin(sol.valid[j]))
+                err = failure(m, task.t[i], kin.residual[j, i])
+            reason[ok[j]] = _reason(err)
+        values_m = metrics_mod.evaluate(sol, task.metrics, models=batch,
+                                        path_point=task.path_point, path_range=task.path_range,
+                                        fluctuation=task.fluctuation)
+        idx = np.array(ok)
+        valid[idx] = good
+        for name, v in values_m.items():
+            out[name][idx] = np.where(good, v, np.nan)
+    return {"valid": valid, "reason": reason, **out}
+
+
+def _run_chunk(task: Task, k: int, values, outdir: str | None):
+    """Evaluate chunk ``k`` and, with an output directory, write it (atomically)."""
+    cols = evaluate(task, values)
+    if outdir is not None:
+        _write_chunk(Path(outdir), k, cols)
+    return k, cols
+
+
+def _chunk_path(outdir: Path, k: int) -> Path:
+    return outdir / "chunks" / f"chunk-{k:06d}.parquet"
+
+
+def _write_chunk(outdir: Path, k: int, cols) -> None:
+    pd = _pandas()
+    path = _chunk_path(outdir, k)
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+    pd.DataFrame(cols).to_parquet(tmp, index=False)
+    os.replace(tmp, path)  # a chunk file exists only when complete
+
+
+def _read_chunk(outdir: Path, k: int) -> dict:
+    df = _pandas().read_parquet(_chunk_path(outdir, k))
+    return {c: df[c].to_numpy() for c in df.columns}
+
+
+# --- the sweep --------------------------------------------------------------------------------
+
+class Progress:
+    """A progress line on stderr: designs done, rate (design-samples/s) and time left."""
+
+    def __init__(self, total: int, samples: int, stream=None, every: float = 0.5):
+        self.total, self.samples, self.stream, self.every = total, samples, stream or sys.stderr, every
+        self.start = time.perf_counter()
+        self.last = -1e9
+        self.done = 0
+        self.new = 0
+
+    def update(self, designs: int, computed: bool, final: bool = False) -> None:
+        self.done += designs
+        self.new += designs if computed else 0
+        now = time.perf_counter()
+        if not final and now - self.last < self.every:
+            return
+        self.last = now
+        el = now - self.start
+        rate = self.new / el if el > 0 else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else float("nan")
+        bar = "#" * int(30 * self.done / max(self.total, 1))
+        self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} designs  "
+                          f"{rate * self.samples:.3g} design-samples/s  "
+                          f"{'left ' + _duration(left) if self.done < self.total else 'done'}   ")
+        if final:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def _duration(s: float) -> str:
+    if not np.isfinite(s):
+        return "?"
+    return f"{s:.0f} s" if s < 120 else f"{s / 60:.1f} min"
+
+
+def _fingerprint(task: Task, values: np.ndarray, chunk: int) -> str:
+    h = hashlib.sha256()
+    h.update(json.dumps(task.space.data, sort_keys=True, default=str).encode())
+    h.update(json.dumps([task.space.paths, list(task.metrics), task.path_point,
+                         None if task.path_range is None else list(task.path_range),
+                         task.fluctuation, chunk]).encode())
+    h.update(np.ascontiguousarray(task.t).tobytes())
+    h.update(np.ascontiguousarray(values).tobytes())
+    return h.hexdigest()
+
+
+def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | None = None,
+        workers: int = 1, scheduler=None, progress: bool = False, _stop_after: int | None = None):
+    """Evaluate designs ``values`` (D, P) in chunks; the table of designs (pandas DataFrame).
+
+    Parameters
+    ----------
+    outdir : path, optional
+        Write each finished chunk to ``outdir/chunks/`` and, at the end, ``designs.parquet`` and
+        ``summary.json`` there (then the chunks are removed).
+    resume : bool
+        Keep the finished chunks of an interrupted sweep of the same study in ``outdir`` and
+        compute only the others (a different study there is an error).
+    chunk : int, optional
+        Designs per chunk (default: ``CHUNK_SAMPLES`` design-samples).
+    workers : int
+        Local worker processes (1: this process).
+    scheduler : str or distributed.Client, optional
+        Run the chunks on this Dask cluster instead (address such as ``tcp://host:8786``).
+
+    Returns
+    -------
+    (DataFrame, dict)
+        The table (one row per design: ``design``, the parameters, ``valid``, ``reason``, the
+        metrics) and run statistics (chunks computed and reused, seconds, rate).
+    """
+    pd = _pandas()
+    values = np.asarray(values, float).reshape(-1, len(task.space.params))
+    D, T = len(values), len(task.t)
+    chunk = int(chunk or max(1, CHUNK_SAMPLES // max(T, 1)))
+    starts = list(range(0, D, chunk))
+    results: dict[int, dict] = {}
+    out = Path(outdir) if outdir is not None else None
+    if out is not None:
+        fp = _fingerprint(task, values, chunk)
+        state = out / "chunks" / "study.json"
+        if state.is_file() and resume:
+            old = json.loads(state.read_text()).get("fingerprint")
+            if old != fp:
+                raise ModelError("the directory holds chunks of a different study",
+                                 field=str(out), fix="Give the same model, --vary ranges, "
+                                 "method, designs and samples to resume, or another -o directory")
+            for k in range(len(starts)):
+                if _chunk_path(out, k).is_file():
+                    results[k] = _read_chunk(out, k)
+        elif (out / "chunks").exists() and not resume:
+            shutil.rmtree(out / "chunks")
+        (out / "chunks").mkdir(parents=True, exist_ok=True)
+        state.write_text(json.dumps({"fingerprint": fp, "designs": D, "chunk": chunk}))
+    reused = len(results)
+    bar = Progress(D, T) if progress else None
+    if bar:
+        for k in results:
+            bar.update(len(results[k]["valid"]), computed=False)
+    todo = [k for k in range(len(starts)) if k not in results]
+    t0 = time.perf_counter()
+    outs = None if out is None else str(out)
+
+    def done(k, cols):
+        results[k] = cols
+        if bar:
+            bar.update(len(cols["valid"]), computed=True)
+        if _stop_after is not None and len(results) - reused >= _stop_after:
+            raise KeyboardInterrupt(f"stopped after {_stop_after} chunks (test hook)")
+
+    part = {k: values[starts[k]:starts[k] + chunk] for k in todo}
+    if scheduler is not None:
+        _run_dask(scheduler, task, part, outs, done)
+    elif workers > 1 and len(todo) > 1:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            pending = {pool.submit(_run_chunk, task, k, part[k], outs) for k in todo}
+            try:
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in finished:
+                        done(*f.result())
+            except BaseException:
+                for f in pending:
+                    f.cancel()
+                raise
+    else:
+        for k in todo:
+            done(*_run_chunk(task, k, part[k], outs))
+    seconds = time.perf_counter() - t0
+    if bar:
+        bar.update(0, computed=False, final=True)
+    cols = {name: np.concatenate([results[k][name] for k in range(len(starts))])
+            for name in ("valid", "reason", *task.metrics)}
+    table = {"design": np.arange(D)}
+    table.update({p.path: values[:, i] for i, p in enumerate(task.space.params)})
+    table.update(cols)
+    df = pd.DataFrame(table)
+    df["valid"] = df["valid"].astype(bool)
+    df["reason"] = df["reason"].astype(str)
+    computed = len(todo)
+    stats = {"chunks": len(starts), "chunks_computed": computed, "chunks_reused": reused,
+             "designs_per_chunk": chunk, "seconds": seconds,
+             "design_samples_per_s": (sum(len(part[k]) for k in todo) * T / seconds
+                                      if seconds > 0 and computed else None)}
+    return df, stats
+
+
+def _run_dask(scheduler, task, part, outs, done) -> None:
+    try:
+        from distributed import Client, as_completed
+    except ImportError as exc:
+        raise ModelError("--scheduler needs Dask", field="--scheduler",
+                         fix="pip install 'linkdyn[dask]'") from exc
+    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    try:
+        task_f = client.scatter(task, broadcast=True)
+        futures = [client.submit(_run_chunk, task_f, k, v, outs, pure=False)
+                   for k, v in part.items()]
+        try:
+            for f in as_completed(futures):
+                done(*f.result())
+        except BaseException:
+            client.cancel(futures)
+            raise
+    finally:
+        if client is not scheduler:
+            client.close()
+
+
+def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None) -> dict:
+    """``summary.json`` of a sweep: what was varied, how many designs are valid, and for each
+    metric its range over the valid designs and the design where it is smallest."""
+    valid = df["valid"].to_numpy()
+    out = {"model": task.space.source, "designs": int(len(df)), "valid": int(valid.sum()),
+           "invalid": int((~valid).sum()), "samples": int(len(task.t)),
+           "duration_s": float(task.t[-1] - task.t[0]) if len(task.t) else 0.0,
+           "method": method, "seed": seed,
+           "parameters": [{"path": p.path, "unit": p.unit, "base": p.base,
+                           **({"low": float(b[0]), "high": float(b[1])} if b is not None else {})}
+                          for p, b in zip(task.space.params, bounds or [None] * len(
+                              task.space.params))],
+           "metrics": {}, "run": stats}
+    reasons = df.loc[~df["valid"], "reason"].value_counts()
+    out["invalid_reasons"] = {str(k): int(v) for k, v in list(reasons.items())[:10]}
+    for name in task.metrics:
+        col = df[name].to_numpy(float)
+        if not np.any(np.isfinite(col)):
+            out["metrics"][name] = None
+            continue
+        k = int(np.nanargmin(col))
+        out["metrics"][name] = {"min": float(np.nanmin(col)), "max": float(np.nanmax(col)),
+                                "min_design": int(df["design"].iloc[k])}
+    return out
+
+
+def write_results(outdir, df, summary_data: dict) -> None:
+    """Write ``designs.parquet`` and ``summary.json`` (each complete or absent), then drop the
+    chunks."""
+    out = Path(outdir)
+    tmp = out / "designs.parquet.tmp"
+    df.to_parquet(tmp, index=False)
+    os.replace(tmp, out / "designs.parquet")
+    tmp = out / "summary.json.tmp"
+    tmp.write_text(json.dumps(summary_data, indent=2, default=_json_default) + "\n")
+    os.replace(tmp, out / "summary.json")
+    shutil.rmtree(out / "chunks", ignore_errors=True)
+
+
+def _json_default(x):
+    if isinstance(x, np.generic):
+        return x.item()
+    raise TypeError(type(x).__name__)
