@@ -460,7 +460,7 @@ BAD = {
         "cycles = 1", "cycles = 1\nduration = 2.0", "analysis",
         ["either duration or cycles", "Remove one"]),
     "samples too few": (
-        "samples = 361", "samples = 1", "analysis.samples", [">= 2", "samples = 361"]),
+        "samples = 361", "samples = 1", "analysis.samples", ["from 2 to 10,000,000", "samples = 361"]),
     "TOML syntax error": (
         "mass = 1.5", "mass = ", _SYNTAX_LINE, ["invalid TOML", "Invalid value", "key = value"]),
 }
@@ -542,3 +542,148 @@ def test_rpm_on_prismatic_driver(tmp_path):
     with pytest.raises(ModelError) as e:
         load_model(write(tmp_path, text))
     assert e.value.field == "drivers[0].motion.rpm" and "cm/s" in str(e.value)
+
+
+# ------------------------------------------- extreme inputs (issue 11): clear, fast, never echoed
+
+def _load_error(path, **kw) -> ModelError:
+    """The ModelError of loading ``path``, within 2 s of CPU time, whose message is short."""
+    import time
+    start = time.process_time()
+    with pytest.raises(ModelError) as info:
+        load_model(path, **kw)
+    assert time.process_time() - start < 2.0
+    assert len(str(info.value)) < 600 and "\n" not in str(info.value)
+    return info.value
+
+
+def test_only_regular_files_of_bounded_size_are_read(tmp_path):
+    import os
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)                                     # reading it would block forever
+    assert "named pipe (FIFO), not a regular file" in str(_load_error(fifo))
+    zero = tmp_path / "zero.toml"
+    zero.symlink_to("/dev/zero")                        # reading it would never end
+    assert "character device, not a regular file" in str(_load_error(zero))
+    (tmp_path / "dir.toml").mkdir()
+    assert "a directory" in str(_load_error(tmp_path / "dir.toml"))
+    big = write(tmp_path, "# " + "x" * 10_000_000 + "\n" + HOEKEN)
+    assert "more than the limit of 10,000,000 bytes" in str(_load_error(big))
+    with pytest.raises(TypeError, match="path"):
+        load_model(5)
+
+
+@pytest.mark.parametrize("name, text, field, parts", [
+    ("toml 500 deep", HOEKEN.replace("[analysis]", "[analysis]\nx = " + "[" * 500 + "]" * 500),
+     "", ["nested too deeply"]),
+    ("toml 100 deep", HOEKEN.replace("[analysis]", "[analysis]\nx = " + "[" * 100 + "]" * 100),
+     "analysis.x[0][0][0]", ["nested more than 64 levels"]),
+    ("400 digits", HOEKEN.replace("mass = 1.5", "mass = 1" + "0" * 399), "bodies.crank.mass",
+     ["finite number", "integer of about 400 digits"]),
+    ("5000 digits", HOEKEN.replace("mass = 1.5", "mass = 1" + "0" * 4999), _SYNTAX_LINE,
+     ["5,000 digits", "key 'mass'", "at most 17 significant digits"]),
+    ("huge com", HOEKEN.replace("com = [19.05, 0]", "com = [19.05, 1e308]"),
+     "bodies.crank.com[1]", ["magnitude of 1e+308 mm is out of range", "1e+12"]),
+    ("tiny speed", HOEKEN.replace("rpm = 45.0", "speed = 1e-300"), "drivers[0].motion.speed",
+     ["out of range", "1e-30"]),
+    ("rpm -1e308", HOEKEN.replace("rpm = 45.0", "rpm = -1e308"), "drivers[0].motion.rpm",
+     ["magnitude of -1e+308 rev/min"]),
+    ("samples 1e308", HOEKEN.replace("samples = 361", "samples = 1e308"), "analysis.samples",
+     ["from 2 to 10,000,000", "1e+308"]),
+    ("samples 1e12", HOEKEN.replace("samples = 361", "samples = 1000000000000"),
+     "analysis.samples", ["from 2 to 10,000,000"]),
+    ("20 MB line", HOEKEN + "\nbad = " + "x" * 2_000_000 + "\n", f"line {HOEKEN.count(chr(10)) + 2}",
+     ["invalid TOML", "(2,000,006 characters)"]),
+    ("1 MB name", HOEKEN.replace('name = "crank"', 'name = "' + "c" * 1_000_000 + '"', 1),
+     "bodies[1].name", ["longer than 100 characters", "(1,000,000 characters)"]),
+    ("1 MB key", HOEKEN.replace("mass = 1.5", "k" * 1_000_000 + " = 1\nmass = 1.5", 1),
+     "bodies.crank", ["unknown key 'kkkkkkkk", "(1,000,000 characters)"]),
+    ("1 MB reference", HOEKEN.replace('"crank.O1"', '"' + "c" * 1_000_000 + '.O1"', 1),
+     "joints.J1.connect[1]", ["unknown body 'cccc", "(1,000,000 characters)"]),
+    ("1 MB formula", HOEKEN.replace(_RPM, '{ kind = "expression", q = "' + "t+" * 500_000 + 't" }'),
+     "drivers[0].motion.q", ["longer than the limit of 10,000 characters"]),
+], ids=lambda x: x if isinstance(x, str) and len(x) < 20 else "")
+def test_extreme_values_get_a_short_message_naming_the_field(tmp_path, name, text, field, parts):
+    err = _load_error(write(tmp_path, text))
+    assert err.field.startswith(field) if field.endswith("]") else err.field == field, str(err)
+    for part in parts:
+        assert part in str(err), str(err)
+
+
+def test_json_nested_100000_deep_and_long_integers(tmp_path):
+    data = json.dumps(tomllib.loads(HOEKEN))
+    deep = write(tmp_path, data[:-1] + ', "x": ' + "[" * 100_000 + "]" * 100_000 + "}", "deep.json")
+    assert "nested too deeply" in str(_load_error(deep))
+    long = write(tmp_path, data.replace('"mass": 1.5', '"mass": 1' + "0" * 5000), "long.json")
+    assert "5,001 digits" in str(_load_error(long))
+    dup = write(tmp_path, data[:-1] + ', "units": {}}', "dup.json")
+    assert "key 'units' appears twice" in str(_load_error(dup))
+
+
+SINE_ROWS = "t,q\n" + "".join(f"{t:.3f},{10 * math.sin(t):.6f}\n" for t in np.linspace(0, 2, 21))
+
+
+def test_table_files_are_confined_to_the_model_folder(tmp_path):
+    model_dir = tmp_path / "model"
+    (model_dir / "profiles").mkdir(parents=True)
+    (tmp_path / "secret.txt").write_text("t,q\nSECRET-LINE-2\n")
+    (model_dir / "profiles" / "ok.csv").write_text(SINE_ROWS)
+    (model_dir / "link.csv").symlink_to(tmp_path / "secret.txt")
+
+    def with_table(file):
+        return write(model_dir, HOEKEN.replace(_RPM, f'{{ kind = "table", file = "{file}" }}')
+                     .replace("cycles = 1", "duration = 1.5"))
+
+    for file in ("../secret.txt", str(tmp_path / "secret.txt"), "link.csv",
+                 "profiles/../../secret.txt"):
+        err = _load_error(with_table(file))
+        assert err.field == "drivers[0].motion.file"
+        assert "outside the model file's folder" in str(err) and "allow_outside=True" in str(err)
+        assert "SECRET" not in str(err)
+    # explicitly allowed: read, and its content is quoted only as a short excerpt
+    err = _load_error(with_table("../secret.txt"), allow_outside=True)
+    assert "line 2" in str(err) and "'SECRET-LINE-2'" in str(err)
+    (tmp_path / "secret.txt").write_text("t,q\n" + "S" * 1_000_000 + "\n")
+    err = _load_error(with_table("../secret.txt"), allow_outside=True)
+    assert "(1,000,000 characters)" in str(err) and "S" * 100 not in str(err)
+    (drv,) = load_model(with_table("profiles/ok.csv")).drivers       # inside: fine
+    assert drv.motion.origin == "profiles/ok.csv"
+    fifo = model_dir / "fifo.csv"
+    import os
+    os.mkfifo(fifo)
+    assert "named pipe" in str(_load_error(with_table("fifo.csv")))
+
+
+def test_a_table_that_does_not_cover_the_run_names_its_range(tmp_path):
+    import linkdyn
+    path = tmp_path / "hoeken.toml"
+    text = HOEKEN.replace(_RPM, '{ kind = "table", file = "crank.csv" }').replace("cycles = 1",
+                                                                                  "duration = 1.5")
+    (tmp_path / "crank.csv").write_text(SINE_ROWS)                  # t from 0 to 2 s
+    path.write_text(text)
+    model = load_model(path)
+    with pytest.raises(ModelError) as info:
+        linkdyn.analyze(model, np.linspace(0.0, 3.0, 7))             # ends before the run
+    err = info.value
+    assert err.file == str(path) and err.field == "drivers[0].motion.file"
+    assert "'crank.csv' covers t = 0 to 2 s, but the run needs t = 0 to 3 s" in str(err)
+    late = "t,q\n" + "".join(f"{t:.3f},{t:.3f}\n" for t in np.linspace(0.5, 2, 7))
+    (tmp_path / "crank.csv").write_text(late)                         # starts after t = 0
+    with pytest.raises(ModelError, match=r"covers t = 0.5 to 2 s, but the run needs t = 0 to"):
+        linkdyn.analyze(load_model(path), np.linspace(0.0, 1.0, 5))
+
+
+def test_cli_refuses_outside_tables_unless_allowed(tmp_path):
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+
+    (tmp_path / "model").mkdir()
+    (tmp_path / "crank.csv").write_text(SINE_ROWS)
+    path = write(tmp_path / "model", HOEKEN.replace(_RPM, '{ kind = "table", file = "../crank.csv" }')
+                 .replace("cycles = 1", "duration = 1.5"))
+    refused = CliRunner().invoke(main, ["check", str(path)])
+    assert refused.exit_code == 2 and "outside the model file's folder" in refused.output
+    assert "--allow-outside-tables" in refused.output
+    allowed = CliRunner().invoke(main, ["check", "--allow-outside-tables", str(path)])
+    assert allowed.exit_code == 0 and "model OK" in allowed.output, allowed.output

@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from linkdyn.errors import ModelError
 from linkdyn.expr import ExpressionError
 from linkdyn.motion import ConstantSpeed, ExpressionMotion, TableMotion
 
@@ -145,12 +146,21 @@ def test_table_is_cubic_exact_and_scaled():
     assert m.describe("m") == "table of 6 rows, t from 0 to 2 s, q x 0.001 to m"
 
 
-def test_table_outside_its_range_is_nan():
-    m = sine_table()
-    q, qd, qdd = m.evaluate(np.array([[-1e-9, 0.0], [2 * np.pi, 7.0]]))
-    for a in (q, qd, qdd):
-        assert np.isnan(a[0, 0]) and np.isnan(a[1, 1])
-        assert np.isfinite(a[0, 1]) and np.isfinite(a[1, 0])
+def test_table_outside_its_range_names_the_table_its_range_and_the_run():
+    m = sine_table()                                     # t from 0 to 2 pi
+    q, qd, qdd = m.evaluate(np.array([[-1e-12, 0.0], [2 * np.pi * (1 + 1e-12), np.pi]]))
+    for a in (q, qd, qdd):                               # rounding at the ends is tolerated
+        assert np.all(np.isfinite(a))
+    np.testing.assert_allclose(q[0], np.sin(0.0), atol=1e-12)
+    for t, run in (([0.0, 7.0], "t = 0 to 7 s"), ([-0.5, 1.0], "t = -0.5 to 1 s")):
+        with pytest.raises(ModelError) as info:
+            m.evaluate(np.array(t))
+        assert "covers t = 0 to 6.28319 s" in str(info.value) and run in str(info.value)
+    located = TableMotion(m.t, m.q, origin="lift.csv", model="m.toml", model_field="drivers[0].motion.file")
+    with pytest.raises(ModelError) as info:
+        located.evaluate(np.linspace(0.0, 10.0, 5))
+    e = info.value
+    assert e.file == "m.toml" and e.field == "drivers[0].motion.file" and "'lift.csv'" in e.message
 
 
 def test_table_is_frozen_and_owns_its_data():

@@ -86,13 +86,19 @@ def example(name, list_):
 
 # ---------------------------------------------------------------------------- check
 
+_ALLOW_OUTSIDE = click.option(
+    "--allow-outside-tables", "allow_outside", is_flag=True,
+    help="Read motion tables outside the model file's folder (refused by default).")
+
+
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
-def check(model):
+@_ALLOW_OUTSIDE
+def check(model, allow_outside):
     """Validate MODEL and describe it without solving."""
     from . import design, io, topology
 
-    mech = io.load_model(model)
+    mech = io.load_model(model, allow_outside=allow_outside)
     topo = topology.build(mech)
     click.echo(f"{mech.name}  ({model})")
     if mech.description:
@@ -339,8 +345,9 @@ def _path_range(text):
 @click.option("--path-range", metavar="A:B",
               help="Range of the first driver's coordinate for --path-point, rad (m for a "
                    "slider); default: the whole run.")
+@_ALLOW_OUTSIDE
 def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singular, fluctuation,
-            path_point, path_range, plots_):
+            path_point, path_range, plots_, allow_outside):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -349,7 +356,7 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
     q_range = _path_range(path_range)
-    mech = io.load_model(model)
+    mech = io.load_model(model, allow_outside=allow_outside)
     t = _times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:

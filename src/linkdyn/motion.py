@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from .errors import ModelError
 from .expr import Expr, parse
 
 __all__ = ["ConstantSpeed", "ExpressionMotion", "TableMotion"]
@@ -115,7 +116,9 @@ class TableMotion:
     """q(t) interpolated through a table by a cubic spline (not-a-knot ends).
 
     qd and qdd are the exact first and second derivatives of that spline (continuous: the spline
-    is C2). Outside ``[t[0], t[-1]]`` all three are NaN (no extrapolation, no exception).
+    is C2). It is not extrapolated: evaluating at a time outside ``[t[0], t[-1]]`` (beyond a
+    rounding tolerance) raises :class:`~linkdyn.errors.ModelError` naming the table, its time
+    range and the times asked for.
 
     Attributes
     ----------
@@ -125,6 +128,9 @@ class TableMotion:
         Joint coordinates in the table's units.
     scale : float
         Factor to SI (rad or m), e.g. pi/180 for degrees.
+    origin, model, model_field : str
+        For messages: the table's file as the model names it, the model file and the field
+        that names the table (e.g. ``drivers[0].motion.file``); '' when built in Python.
 
     Raises
     ------
@@ -136,6 +142,9 @@ class TableMotion:
     t: np.ndarray
     q: np.ndarray
     scale: float = 1.0
+    origin: str = field(default="", compare=False)
+    model: str = field(default="", compare=False)
+    model_field: str = field(default="", compare=False)
     spline: CubicSpline = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -161,26 +170,35 @@ class TableMotion:
         object.__setattr__(self, "spline", CubicSpline(t, q, bc_type="not-a-knot", extrapolate=False))
 
     @classmethod
-    def from_csv(cls, path: str | Path, scale: float = 1.0) -> TableMotion:
+    def from_csv(cls, path: str | Path, scale: float = 1.0, *, origin: str | None = None,
+                 model: str = "", field: str = "") -> TableMotion:
         """Read a two-column CSV file ``t,q`` (s, table units) with an optional header line.
 
-        Blank lines and lines starting with ``#`` are skipped.
+        Blank lines and lines starting with ``#`` are skipped. Only a regular file of at most
+        10 MB is read (see :func:`linkdyn.io.files.read_text`). Messages quote at most a short,
+        escaped excerpt of a line. ``origin`` (default: ``path``), ``model`` and ``field`` are
+        kept for messages.
 
         Raises
         ------
         FileNotFoundError
             If ``path`` does not exist (the message contains the path).
         ValueError
-            For a line that is not two numbers (the message names the file and line), or a table
-            rejected by the constructor (the message names the file).
+            For a file that is not a regular UTF-8 file of at most 10 MB, a line that is not two
+            numbers (the message names the file and line), or a table rejected by the constructor
+            (the message names the file).
         """
+        from .io.files import read_text      # here: linkdyn.io imports this module
+
         path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"motion table file not found: {path}")
+        if not path.exists():
+            raise FileNotFoundError(f"motion table file not found: {_excerpt(str(path), 200)}")
         try:
-            lines = path.read_text(encoding="utf-8-sig").splitlines()
+            lines = read_text(path).splitlines()
         except UnicodeDecodeError:
-            raise ValueError(f"{path}: not a UTF-8 text file") from None
+            raise ValueError(f"{_excerpt(str(path), 200)}: not a UTF-8 text file") from None
+        except ValueError as e:                               # not a regular file, too large
+            raise ValueError(f"{_excerpt(str(path), 200)} {e}") from None
         rows, header_allowed = [], True
         for n, line in enumerate(lines, start=1):
             text = line.strip()
@@ -193,9 +211,10 @@ class TableMotion:
                 if header_allowed and not _is_number(fields[0]):
                     header_allowed = False
                     continue
-                raise ValueError(f"{path}, line {n}: expected two numbers 't,q', got {text!r}") from None
+                raise ValueError(f"{path}, line {n}: expected two numbers 't,q', "
+                                 f"got {_excerpt(text)}") from None
             if not (math.isfinite(ti) and math.isfinite(qi)):
-                raise ValueError(f"{path}, line {n}: t and q must be finite, got {text!r}")
+                raise ValueError(f"{path}, line {n}: t and q must be finite, got {_excerpt(text)}")
             if rows and ti <= rows[-1][0]:
                 raise ValueError(f"{path}, line {n}: t = {ti:.6g} does not increase "
                                  f"(previous t = {rows[-1][0]:.6g})")
@@ -203,19 +222,44 @@ class TableMotion:
             header_allowed = False
         t, q = np.array(rows, dtype=np.float64).reshape(-1, 2).T
         try:
-            return cls(t, q, scale)
+            return cls(t, q, scale, origin=str(path) if origin is None else origin, model=model,
+                       model_field=field)
         except ValueError as exc:
             raise ValueError(f"{path}: {exc}") from None
 
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(q, qd, qdd)`` at times ``t`` (s, any shape); shape of ``t``; NaN outside the table."""
+        """``(q, qd, qdd)`` at times ``t`` (s, any shape); shape of ``t``.
+
+        Raises
+        ------
+        ModelError
+            If a time lies outside the table's range (beyond rounding), naming the table, its
+            range and the run's times.
+        """
         t = _time(t)
+        t0, t1 = float(self.t[0]), float(self.t[-1])
+        if t.size:
+            lo, hi = float(np.min(t)), float(np.max(t))     # NaN times stay NaN below
+            tol = 1e-9 * max(t1 - t0, abs(t0), abs(t1))        # rounding of the run's times
+            if lo < t0 - tol or hi > t1 + tol:
+                name = f"motion table {_excerpt(self.origin, 80)}" if self.origin else "the motion table"
+                raise ModelError(
+                    f"{name} covers t = {t0:.6g} to {t1:.6g} s, but the run needs t = {lo:.6g} "
+                    f"to {hi:.6g} s", file=self.model, field=self.model_field,
+                    fix="Extend the table to cover the run, or run within its time range "
+                        "(a shorter duration, or fewer cycles)")
+            t = np.clip(t, t0, t1)
         return tuple(self.scale * self.spline(t, nu) for nu in (0, 1, 2))
 
     def describe(self, unit: str = "rad") -> str:
         """E.g. ``'table of 37 rows, t from 0 to 2 s'``."""
         factor = "" if self.scale == 1 else f", q x {self.scale:.6g} to {unit}"
         return f"table of {len(self.t)} rows, t from {self.t[0]:.4g} to {self.t[-1]:.4g} s{factor}"
+
+
+def _excerpt(text: str, n: int = 40) -> str:
+    """A quoted, escaped excerpt of at most ``n`` characters of text from a file."""
+    return repr(text) if len(text) <= n else repr(text[:n]) + f"... ({len(text):,} characters)"
 
 
 def _is_number(text: str) -> bool:

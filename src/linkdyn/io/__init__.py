@@ -24,7 +24,8 @@ from .drivers import MOTION_KEYS, _drivers
 from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _joints
 from .loads import LOAD_KEYS, _loads
 from .options import _analysis, _assembly, _topology
-from .reader import _Reader, _type_name
+from .files import MAX_FILE_BYTES, FileRefused, read_text
+from .reader import _quote, _Reader, _shorten, _type_name
 from .syntax import _parse_json, _parse_toml
 from .units import ANGLE_UNITS, LENGTH_UNITS, _units
 
@@ -35,13 +36,17 @@ SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "assem
             "analysis")
 
 
-def load_model(path: str | os.PathLike) -> Model:
+def load_model(path: str | os.PathLike, *, allow_outside: bool = False) -> Model:
     """Read a model file (``.toml`` or ``.json``), validate it and return it in SI units.
 
     Parameters
     ----------
     path : str or os.PathLike
-        The model file. Files it refers to (motion tables) are looked up relative to its directory.
+        The model file: a regular file of at most 10 MB. Files it refers to (motion tables) are
+        looked up relative to its directory.
+    allow_outside : bool
+        Allow motion tables outside the model file's directory (by ``..``, an absolute path or
+        a symbolic link). By default a table must lie in that directory or below it.
 
     Returns
     -------
@@ -52,24 +57,32 @@ def load_model(path: str | os.PathLike) -> Model:
     ModelError
         For any invalid content, naming the file, the field and the fix.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"load_model: path must be a str or os.PathLike, got {type(path).__name__}")
     file = os.fspath(path)
     suffix = Path(file).suffix.lower()
     if suffix not in (".toml", ".json"):
-        raise ModelError(f"unknown model file type '{suffix or '(none)'}'", file=file,
+        raise ModelError(f"unknown model file type {_quote(suffix or '(none)')}", file=file,
                          fix="Name the file *.toml (TOML) or *.json (JSON)")
     try:
-        text = Path(file).read_bytes().decode("utf-8-sig")
+        text = read_text(file)
     except FileNotFoundError:
         raise ModelError("file not found", file=file,
                          fix="Check the path and the current directory") from None
+    except FileRefused as e:
+        raise ModelError(f"the model file {e}", file=file,
+                         fix=f"Give a model file (a regular file of at most {MAX_FILE_BYTES:,} "
+                             "bytes)") from None
     except (OSError, UnicodeDecodeError) as e:
-        raise ModelError(f"cannot read the file ({e})", file=file,
+        raise ModelError(f"cannot read the file ({_shorten(str(e), 120)})", file=file,
                          fix="Give a readable UTF-8 text file") from None
     data = _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
-    return model_from_dict(data, source=file, base_dir=Path(file).parent)
+    return model_from_dict(data, source=file, base_dir=Path(file).parent,
+                           allow_outside=allow_outside)
 
 
-def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike = ".") -> Model:
+def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike = ".",
+                    allow_outside: bool = False) -> Model:
     """Validate a parsed model (the structure of a model file) and return it in SI units.
 
     Parameters
@@ -79,9 +92,12 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     source : str
         File name used in error messages and stored as ``Model.source``.
     base_dir : str or os.PathLike
-        Directory that relative ``file`` paths (motion tables) are resolved against.
+        Directory that relative ``file`` paths (motion tables) are resolved against; tables must
+        lie in it or below it unless ``allow_outside``.
+    allow_outside : bool
+        Allow motion tables outside ``base_dir``.
     """
-    r = _Reader(source, Path(base_dir))
+    r = _Reader(source, Path(base_dir), allow_outside=allow_outside)
     if not isinstance(data, dict):
         r.fail("", f"expected a table of sections, got {_type_name(data)}",
                "Give the model as a dict such as {'bodies': [...], 'joints': [...]}")

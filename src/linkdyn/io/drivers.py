@@ -4,6 +4,8 @@ of samples), in rad for a revolute joint and m for a prismatic one."""
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -12,7 +14,7 @@ from .. import expr as _expr
 from .. import motion as _motion
 from .. import joints as jk
 from ..model import Driver, Joint
-from .reader import _Reader, _expr_fix, _type_name
+from .reader import _quote, _Reader, _expr_fix, _shorten, _type_name
 
 MOTION_KEYS = {"constant_speed": ("kind", "speed", "rpm", "start"),
                "expression": ("kind", "q"), "table": ("kind", "file")}
@@ -74,17 +76,37 @@ def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
         except _expr.ExpressionError as e:
             r.fail(f"{f}.q", str(e).rstrip("."), _expr_fix(unit))
         if not all(np.all(np.isfinite(v)) for v in q):
-            r.fail(f"{f}.q", f"q = {text!r} or its derivatives are not finite at t = 0",
+            r.fail(f"{f}.q", f"q = {_quote(text)} or its derivatives are not finite at t = 0",
                    "The analysis starts at t = 0; give a formula defined there")
         return motion, None
     if "file" not in spec:
         r.fail(f"{f}.file", "missing required key 'file'", 'Add file = "profile.csv" (columns t, q)')
-    path = r.base_dir / r.string(spec["file"], f"{f}.file")
-    if not path.is_file():
-        r.fail(f"{f}.file", f"table file not found: looked for '{path}'",
+    name = r.string(spec["file"], f"{f}.file")
+    if "\0" in name:
+        r.fail(f"{f}.file", f"table file name {_quote(name)} contains a NUL character",
+               "Give the path of a CSV file relative to the model file's directory")
+    path = r.base_dir / name
+    if not r.allow_outside and not _inside(path, r.base_dir):
+        r.fail(f"{f}.file", f"table file {_quote(name)} is outside the model file's folder",
+               "A motion table must lie in the model file's folder or below it (symbolic links "
+               "resolved); move it there, or allow tables elsewhere explicitly (Python: "
+               "load_model(..., allow_outside=True); command line: --allow-outside-tables)")
+    if not os.path.lexists(path):
+        r.fail(f"{f}.file", f"table file not found: looked for {_quote(str(path), 120)}",
                "Give the path of a CSV file relative to the model file's directory")
     try:
-        return _motion.TableMotion.from_csv(path, scale=scale), None
+        table = _motion.TableMotion.from_csv(path, scale=scale, model=r.file,
+                                             field=f"{f}.file", origin=name)
     except (OSError, ValueError) as e:
-        r.fail(f"{f}.file", f"invalid motion table: {str(e).rstrip('.')}",
+        r.fail(f"{f}.file", f"invalid motion table {_quote(name)}: "
+               f"{_shorten(str(e).rstrip('.'), 300)}",
                f"Give a CSV file with columns t (s, increasing) and q ({unit})")
+    return table, None
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    """Whether ``path`` lies in ``folder`` or below it once symbolic links are resolved."""
+    try:
+        return path.resolve().is_relative_to(folder.resolve())
+    except (OSError, RuntimeError, ValueError):          # a link loop, an invalid name
+        return False

@@ -7,7 +7,7 @@ from typing import Any
 
 from .. import joints as jk
 from ..model import GROUND
-from .reader import _Reader, _type_name
+from .reader import MAX_SAMPLES, _Reader, _type_name
 
 
 def _assembly(r: _Reader, section: Any, bodies, joints) -> tuple[dict, dict]:
@@ -62,10 +62,10 @@ def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
     samples = None
     if "samples" in section:
         s = section["samples"]
-        if (isinstance(s, bool) or not isinstance(s, (int, float)) or not float(s).is_integer()
-                or s < 2):
-            r.fail("analysis.samples", f"expected a whole number >= 2, got {_type_name(s)}",
-                   "Write e.g. samples = 361")
+        if (isinstance(s, bool) or not isinstance(s, (int, float))
+                or not (2 <= s <= MAX_SAMPLES) or not float(s).is_integer()):
+            r.fail("analysis.samples", f"expected a whole number from 2 to {MAX_SAMPLES:,}, "
+                   f"got {_type_name(s)}", "Write e.g. samples = 361")
         samples = int(s)
     path_point = None
     if "path_point" in section:

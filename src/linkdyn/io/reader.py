@@ -20,6 +20,26 @@ from .. import expr as _expr
 from ..errors import ModelError
 
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_\-]*\Z")
+MAX_NAME = 100              # characters of a body, point, joint or load name
+MAX_MAGNITUDE = 1e12        # largest magnitude of a number in a model file, in the file's units
+MIN_MAGNITUDE = 1e-30       # smallest non-zero magnitude
+MAX_SAMPLES = 10_000_000    # [analysis] samples
+
+
+def _quote(value: Any, n: int = 40) -> str:
+    """A value from the file for a message: quoted, escaped and shortened (never echoed whole)."""
+    if isinstance(value, str):
+        if len(value) <= n:
+            return repr(value)
+        return repr(value[:n]) + f"... ({len(value):,} characters)"
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**n:
+        digits = int(abs(value).bit_length() * 0.30103) + 1
+        return f"an integer of about {digits:,} digits"
+    return _shorten(repr(value), n)
+
+
+def _shorten(text: str, n: int = 40) -> str:
+    return text if len(text) <= n else text[:n - 3] + "..."
 
 
 def _did_you_mean(word: Any, choices, what: str) -> str:
@@ -28,7 +48,7 @@ def _did_you_mean(word: Any, choices, what: str) -> str:
     if not choices:
         return f"There are no {what} to choose from"
     text = ""
-    if isinstance(word, str):
+    if isinstance(word, str) and len(word) <= MAX_NAME:
         lower = {c.lower(): c for c in choices}
         close = ([lower[word.lower()]] if word.lower() in lower
                  else difflib.get_close_matches(word, choices, n=1, cutoff=0.5))
@@ -42,12 +62,12 @@ def _type_name(value: Any) -> str:
     if isinstance(value, bool):
         return f"the boolean {str(value).lower()}"
     if isinstance(value, str):
-        return f"the string {value!r}"
+        return f"the string {_quote(value)}"
     if isinstance(value, dict):
         return "a table"
     if isinstance(value, list):
         return f"a list of {_count(len(value))}"
-    return f"{value!r}"
+    return _quote(value)
 
 
 @dataclass
@@ -60,6 +80,7 @@ class _Reader:
     angle: float = 1.0
     length_name: str = "m"
     angle_name: str = "rad"
+    allow_outside: bool = False      # motion tables may lie outside base_dir
 
     def fail(self, field: str, message: str, fix: str) -> NoReturn:
         raise ModelError(message, file=self.file, field=field, fix=fix)
@@ -72,7 +93,7 @@ class _Reader:
                       f"Write it as [{field}] or {{ key = value, ... }}")
         for key in value:
             if key not in keys:
-                self.fail(field, f"unknown {noun} '{key}'", _did_you_mean(key, keys, what) + (
+                self.fail(field, f"unknown {noun} {_quote(key)}", _did_you_mean(key, keys, what) + (
                     f". {note}" if note else ""))
         for key in required:
             if key not in value:
@@ -97,9 +118,17 @@ class _Reader:
             hint = " without quotes" if isinstance(value, str) and _is_float(value) else ""
             self.fail(field, f"expected a number{' in' + u if u else ''}, got {_type_name(value)}",
                       f"Write a plain number{hint}, e.g. {_key(field)} = 1.5")
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:                                    # an integer beyond 1.8e308
+            x = math.inf if value > 0 else -math.inf
         if not math.isfinite(x):
-            self.fail(field, f"must be a finite number, got {x}", fix or "Give a finite value")
+            self.fail(field, f"must be a finite number, got {_quote(value)}",
+                      fix or f"Give a finite value of magnitude at most {MAX_MAGNITUDE:g}{u}")
+        if abs(x) > MAX_MAGNITUDE or 0 < abs(x) < MIN_MAGNITUDE:
+            self.fail(field, f"magnitude of {x:g}{u} is out of range",
+                      f"Give 0 or a magnitude from {MIN_MAGNITUDE:g} to {MAX_MAGNITUDE:g}{u} "
+                      f"(linkdyn's limits for a number in a model file)")
         if positive and x <= 0:
             self.fail(field, f"must be positive, got {x:g}{u}", fix or f"Give a value > 0{u}")
         if nonnegative and x < 0:
@@ -122,21 +151,24 @@ class _Reader:
 
     def name(self, value: Any, field: str) -> str:
         self.string(value, field)
+        if len(value) > MAX_NAME:
+            self.fail(field, f"name {_quote(value)} is longer than {MAX_NAME} characters",
+                      "Give a shorter name")
         if not _NAME.match(value):
-            self.fail(field, f"invalid name {value!r}",
+            self.fail(field, f"invalid name {_quote(value)}",
                       "Use letters, digits, '_' and '-' only (no dots or spaces)")
         return value
 
     def choice(self, value: Any, field: str, choices, what: str, plural: str = "") -> str:
         if not isinstance(value, str) or value not in choices:
-            self.fail(field, f"unknown {what} {value!r}" if isinstance(value, str)
+            self.fail(field, f"unknown {what} {_quote(value)}" if isinstance(value, str)
                       else f"expected the name of a {what}, got {_type_name(value)}",
                       _did_you_mean(value, choices, plural or f"{what}s"))
         return value
 
     def point(self, body: str, points: dict, value: Any, field: str) -> str:
         if not isinstance(value, str) or value not in points:
-            self.fail(field, f"body '{body}' has no point {value!r}",
+            self.fail(field, f"body '{body}' has no point {_quote(value)}",
                       _did_you_mean(value, points, f"points of '{body}'"))
         return value
 
@@ -171,4 +203,5 @@ def _is_float(text: str) -> bool:
 def _entry_field(section: str, i: int, entry: Any) -> str:
     """``bodies.crank`` for an entry with a valid name, else ``bodies[1]`` (0-based)."""
     name = entry.get("name") if isinstance(entry, dict) else None
-    return f"{section}.{name}" if isinstance(name, str) and _NAME.match(name) else f"{section}[{i}]"
+    return (f"{section}.{name}" if isinstance(name, str) and len(name) <= MAX_NAME
+            and _NAME.match(name) else f"{section}[{i}]")
