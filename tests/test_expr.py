@@ -392,3 +392,42 @@ def test_messages_never_echo_a_huge_token():
         with pytest.raises(ExpressionError) as info:
             parse(text)
         assert len(str(info.value)) < 400
+
+
+def test_expression_errors_are_linkdyn_model_errors():
+    from linkdyn.errors import LinkdynError, ModelError
+    assert issubclass(ExpressionError, ModelError) and issubclass(ExpressionError, LinkdynError)
+    with pytest.raises(ModelError) as info:
+        parse("sinn(t)")
+    assert info.value.exit_code == 2 and "did you mean 'sin'" in str(info.value)
+
+
+# random token soups: parse answers with an Expr or an ExpressionError, never anything else
+_PIECES = ["t", "x", "1", "2.5", "1e3", "pi", "sin", "abs", "min", "clip", "where", "(", ")", ",",
+           "+", "-", "*", "/", "**", "<", ">=", "==", "^", "%", ".", "[", "]", "'s'", "1j", " ",
+           "__import__", "lambda", "if", "not"]
+
+
+def test_random_token_soups_never_crash():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    @settings(max_examples=300, deadline=None, database=None)
+    @given(st.lists(st.sampled_from(_PIECES), max_size=25))
+    def check(pieces):
+        text = "".join(pieces)
+        try:
+            e = parse(text, variables=("t", "x"))
+        except ExpressionError as err:
+            assert "\n" not in str(err) and len(str(err)) < 500
+            return
+        with np.errstate(all="ignore"):
+            value = e.evaluate(t=np.array([0.3, 1.7]), x=0.5)
+            assert value.shape == (2,)
+            for v in ("t", "x"):                  # derivatives exist and evaluate
+                assert e.diff(v).evaluate(t=np.array([0.3, 1.7]), x=0.5).shape == (2,)
+        assert parse(str(e), variables=("t", "x")) is e or np.allclose(
+            parse(str(e), variables=("t", "x")).evaluate(t=0.3, x=0.5), e.evaluate(t=0.3, x=0.5),
+            equal_nan=True)
+
+    check()

@@ -225,3 +225,17 @@ def test_from_csv_bad_content_names_the_file_and_line(tmp_path, text, message):
     with pytest.raises(ValueError, match=message) as info:
         TableMotion.from_csv(path)
     assert str(path) in str(info.value)
+
+
+def test_invalid_values_are_model_errors_and_value_errors(tmp_path):
+    from linkdyn.errors import LinkdynError
+    for make in (lambda: ConstantSpeed(math.inf), lambda: ExpressionMotion("sinn(t)"),
+                 lambda: TableMotion(np.arange(3.0), np.arange(3.0))):
+        with pytest.raises(ModelError) as info:
+            make()
+        assert isinstance(info.value, ValueError) and isinstance(info.value, LinkdynError)
+    (tmp_path / "p.csv").write_text("t,q\n0,0\n1,1\n" + "9" * 100_000 + ",x\n")
+    with pytest.raises(ModelError) as info:
+        TableMotion.from_csv(tmp_path / "p.csv")
+    assert info.value.field == "line 4" and "(100,002 characters)" in str(info.value)
+    assert len(str(info.value)) < 300

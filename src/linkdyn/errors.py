@@ -63,3 +63,11 @@ class AssemblyError(LinkdynError):
             parts.append(f"at t = {self.time:.6g} s" + (f" ({drv})" if drv else ""))
         text = ": ".join(parts + [self.message])
         return f"{text}. {self.fix}" if self.fix else text
+
+
+class InvalidValue(ModelError, ValueError):
+    """An invalid value given in Python (a formula's text, a motion's number or table rows).
+
+    A :class:`ModelError` (exit status 2, the field in its message) that is also a ``ValueError``,
+    so code that catches ``ValueError`` keeps working.
+    """

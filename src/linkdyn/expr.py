@@ -35,6 +35,8 @@ import weakref
 
 import numpy as np
 
+from .errors import InvalidValue
+
 __all__ = ["Expr", "ExpressionError", "parse", "CONSTANTS", "FUNCTIONS", "MAX_LENGTH",
            "MAX_DEPTH", "MAX_NODES"]
 
@@ -84,8 +86,11 @@ _PRECEDENCE = {"+": 1, "-": 1, "*": 2, "/": 2, "neg": 3, "**": 4,   # others (at
                **dict.fromkeys(COMPARISONS, 0)}
 
 
-class ExpressionError(ValueError):
-    """Text that is not an allowed expression (one-line message naming the offending token)."""
+class ExpressionError(InvalidValue):
+    """Text that is not an allowed expression (one-line message naming the offending token).
+
+    A :class:`~linkdyn.errors.ModelError` (so a ``LinkdynError``) and a ``ValueError``.
+    """
 
 
 # ------------------------------------------------------------------------------ the tree

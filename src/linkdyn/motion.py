@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .errors import ModelError
+from .errors import InvalidValue, ModelError
 from .expr import Expr, parse
 
 __all__ = ["ConstantSpeed", "ExpressionMotion", "TableMotion"]
@@ -28,7 +28,8 @@ def _time(t) -> np.ndarray:
 def _finite(name: str, value: float) -> float:
     value = float(value)
     if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value}")
+        raise InvalidValue(f"{name} must be a finite number, got {value}", field=name,
+                           fix="Give a finite value")
     return value
 
 
@@ -150,19 +151,21 @@ class TableMotion:
     def __post_init__(self):
         t, q = _time(self.t).copy(), _time(self.q).copy()
         if t.ndim != 1 or q.shape != t.shape:
-            raise ValueError(f"a motion table needs two columns of equal length (t, q), "
-                             f"got shapes {t.shape} and {q.shape}")
+            raise InvalidValue(f"a motion table needs two columns of equal length (t, q), "
+                               f"got shapes {t.shape} and {q.shape}", field="t, q")
         if len(t) < 4:
-            raise ValueError(f"a motion table needs at least 4 rows for a cubic spline, got {len(t)}")
+            raise InvalidValue(f"a motion table needs at least 4 rows for a cubic spline, "
+                               f"got {len(t)}", field="t, q")
         bad = np.flatnonzero(~(np.isfinite(t) & np.isfinite(q)))
         if bad.size:
             i = bad[0]
-            raise ValueError(f"row {i + 1} of the motion table is not finite (t = {t[i]}, q = {q[i]})")
+            raise InvalidValue(f"row {i + 1} of the motion table is not finite "
+                               f"(t = {t[i]}, q = {q[i]})", field="t, q")
         bad = np.flatnonzero(np.diff(t) <= 0)
         if bad.size:
             i = bad[0] + 1
-            raise ValueError(f"times of a motion table must strictly increase: row {i + 1} has "
-                             f"t = {t[i]:.6g} after t = {t[i - 1]:.6g}")
+            raise InvalidValue(f"times of a motion table must strictly increase: row {i + 1} has "
+                               f"t = {t[i]:.6g} after t = {t[i - 1]:.6g}", field="t")
         t.flags.writeable = q.flags.writeable = False
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "q", q)
@@ -196,9 +199,9 @@ class TableMotion:
         try:
             lines = read_text(path).splitlines()
         except UnicodeDecodeError:
-            raise ValueError(f"{_excerpt(str(path), 200)}: not a UTF-8 text file") from None
+            raise InvalidValue("not a UTF-8 text file", file=str(path)) from None
         except ValueError as e:                               # not a regular file, too large
-            raise ValueError(f"{_excerpt(str(path), 200)} {e}") from None
+            raise InvalidValue(f"the file {e}", file=str(path)) from None
         rows, header_allowed = [], True
         for n, line in enumerate(lines, start=1):
             text = line.strip()
@@ -211,21 +214,23 @@ class TableMotion:
                 if header_allowed and not _is_number(fields[0]):
                     header_allowed = False
                     continue
-                raise ValueError(f"{path}, line {n}: expected two numbers 't,q', "
-                                 f"got {_excerpt(text)}") from None
+                raise InvalidValue(f"expected two numbers 't,q', got {_excerpt(text)}",
+                                   file=str(path), field=f"line {n}") from None
             if not (math.isfinite(ti) and math.isfinite(qi)):
-                raise ValueError(f"{path}, line {n}: t and q must be finite, got {_excerpt(text)}")
+                raise InvalidValue(f"t and q must be finite, got {_excerpt(text)}", file=str(path),
+                                   field=f"line {n}")
             if rows and ti <= rows[-1][0]:
-                raise ValueError(f"{path}, line {n}: t = {ti:.6g} does not increase "
-                                 f"(previous t = {rows[-1][0]:.6g})")
+                raise InvalidValue(f"t = {ti:.6g} does not increase "
+                                   f"(previous t = {rows[-1][0]:.6g})", file=str(path),
+                                   field=f"line {n}")
             rows.append((ti, qi))
             header_allowed = False
         t, q = np.array(rows, dtype=np.float64).reshape(-1, 2).T
         try:
             return cls(t, q, scale, origin=str(path) if origin is None else origin, model=model,
                        model_field=field)
-        except ValueError as exc:
-            raise ValueError(f"{path}: {exc}") from None
+        except InvalidValue as exc:
+            raise InvalidValue(exc.message, file=str(path), fix=exc.fix) from None
 
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(q, qd, qdd)`` at times ``t`` (s, any shape); shape of ``t``.
