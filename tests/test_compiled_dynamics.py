@@ -40,7 +40,8 @@ def numpy_kinematics(model, t):
 def both(model, kin):
     """(numpy dyn, numpy reactions), (compiled dyn, compiled reactions) on ``kin``."""
     first = model if isinstance(model, linkdyn.Model) else list(model)[0]
-    applied = loads_mod.wrenches(first, kin)
+    # a batch's loads come from its layout, per design
+    applied = loads_mod.wrenches(model if isinstance(model, linkdyn.Model) else None, kin)
     dyn = denoc.solve(kin, applied)
     ref = (dyn, reactions.solve(first, kin, dyn))
     return ref, compiled.solve(kin, applied, pack(kin.layout, len(first.joints)), internals=True)
@@ -289,7 +290,7 @@ def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
     models = [hoeken_design(38.1), hoeken_design(42.0)][:designs]
     kin = numpy_kinematics(models if designs > 1 else models[0], times(models[0], 21))
     D = designs
-    applied = loads_mod.wrenches(models[0], kin)
+    applied = loads_mod.wrenches(models[0] if designs == 1 else None, kin)
     packed = pack(kin.layout, len(models[0].joints))
     compiled.solve(kin, applied, packed)   # no loads at all
     assert seen[-1].shape == (4, 3, D, 1) and not np.any(seen[-1])

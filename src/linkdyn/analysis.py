@@ -10,7 +10,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import compiled, kinematics, loads as loads_mod, reactions as reactions_mod
+from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import AssemblyError
@@ -24,15 +24,21 @@ SINGULAR = 1e-10  # relative pivot of J_dep below which a position counts as sin
 class Solution:
     """Everything computed for a model at the times ``t``.
 
+    For a batch of D designs (``analyze([m0, m1, ...], t)``) every per-sample array has a
+    leading design axis, ``(D, T, ...)``; ``design(k)`` gives design k's own solution.
+
     Attributes
     ----------
     model : Model
+        The mechanism (design 0 of a batch: it names the columns, which all designs share).
     kin : kinematics.KinematicSolution
     loads : loads.Loads
     dyn : dynamics.DynamicSolution
     reactions : reactions.Reactions
-    valid : ndarray (T,) bool
+    valid : ndarray (T,) or (D, T) bool
         Samples where the loops close and the position is not singular.
+    designs : tuple of Model
+        The D models of a batch; empty for a single mechanism.
     """
 
     model: Model
@@ -41,6 +47,31 @@ class Solution:
     dyn: denoc.DynamicSolution
     reactions: reactions_mod.Reactions
     valid: np.ndarray
+    designs: tuple = ()
+
+    # --- designs ----------------------------------------------------------------------------
+    @property
+    def batched(self) -> bool:
+        """Whether this is a batch of designs (arrays with a leading design axis)."""
+        return bool(self.designs)
+
+    @property
+    def n_designs(self) -> int:
+        """Number of designs: D for a batch, 1 for a single mechanism."""
+        return len(self.designs) if self.designs else 1
+
+    def design(self, k: int) -> Solution:
+        """Design k's own solution out of a batch: every array sliced to that design
+        (``(T, ...)``), its model as ``model``, and so its ``columns``, ``to_dataframe()``,
+        ``effort()`` ... as if it had been solved alone. Negative ``k`` counts from the end;
+        a single mechanism is its own design 0.
+        """
+        k = batch.check_index(k, self.n_designs)
+        if not self.batched:
+            return self
+        return Solution(self.designs[k], batch.kinematics(self.kin, k),
+                        batch.loads(self.loads, k), batch.dynamics(self.dyn, k),
+                        batch.reactions(self.reactions, k), self.valid[k])
 
     @property
     def t(self) -> np.ndarray:
@@ -274,7 +305,7 @@ def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
     a singular position if the loops close there, else a position the mechanism cannot reach.
     ``analyze`` raises it; a sweep records its text as an invalid design's reason."""
     drivers = {d.joint: float(v) for d, v in
-               zip(model.drivers, kinematics.driver_values(model, np.array([float(t_k)]))[0][0])}
+               zip(model.drivers, kinematics.driver_values(model, np.array([float(t_k)]))[0][:, 0])}
     closes = bool(residual <= kinematics.ACCEPT)  # closes, but singular
     return AssemblyError(
         "the mechanism passes a singular (toggle or dead-centre) position" if closes else
@@ -291,9 +322,13 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     Parameters
     ----------
     model : Model or sequence of Model
-        One mechanism, or D designs of one topology (geometry, masses and inertias may
-        differ; drivers and loads are the first design's). With designs every per-sample
-        array has shape (D, T, ...) and bad designs are flagged in ``valid``, never raised.
+        One mechanism, or D designs of one topology (the same bodies, joints, drivers, cut
+        joints and load kinds), each with its own numbers: geometry, masses, inertias, gravity,
+        load values (constant or formulas), spring and damper constants and free lengths,
+        driver motions. With designs every per-sample array has shape (D, T, ...) (a list of
+        one model too), a design that cannot be assembled or passes a singular position is
+        flagged in ``valid`` (NaN rows), never raised, and ``Solution.design(k)`` gives one
+        design's solution.
     t : array_like (T,)
         Sample times, s.
     allow_singular : bool
@@ -305,6 +340,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
 
     Raises
     ------
+    ModelError
+        Designs whose topology differs (naming the design and what differs).
     AssemblyError
         The mechanism cannot be assembled, stops closing, or passes a singular position, at the
         first such time (unless ``allow_singular``, which leaves NaN rows flagged in ``valid``).
@@ -316,7 +353,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     kin = kinematics.solve(models if designs else model, t,
                            backend="compiled" if fast else "numpy")
     model = models[0]
-    applied = loads_mod.wrenches(model, kin)
+    # a batch: gravity, loads' values, springs and dampers from the layout, per design
+    applied = loads_mod.wrenches(None if designs else model, kin)
     if fast:
         dyn, react = compiled_dynamics.solve(kin, applied,
                                              compiled.pack(kin.layout, len(model.joints)))
@@ -327,4 +365,4 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
         raise failure(model, kin.t[k], kin.residual[k])
-    return Solution(model, kin, applied, dyn, react, valid)
+    return Solution(model, kin, applied, dyn, react, valid, tuple(models) if designs else ())

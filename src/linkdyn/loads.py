@@ -8,11 +8,12 @@ sample).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .kinematics import KinematicSolution
+from .kinematics.layout import load_rows
 from .model import Model
 from .planar import cross, dot, shift_twist, stack_last, twist
 
@@ -61,38 +62,52 @@ def _add_force(w, kin, i, r, f):
     w[i] = w[i] + twist(cross(r - kin.pose.r[i], f), f)
 
 
-def wrenches(model: Model, kin: KinematicSolution) -> Loads:
-    """Applied wrenches of ``model.loads`` and gravity over the kinematic solution ``kin``."""
+def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
+    """Applied wrenches of the loads and gravity over the kinematic solution ``kin``.
+
+    Parameters
+    ----------
+    model : Model or None
+        One mechanism whose gravity and loads act (``kin`` of that mechanism, no design axis);
+        None (or the sequence of a batch's models) takes each design's gravity, load values,
+        spring and damper constants from ``kin.layout``, where the kinematics put them.
+    kin : KinematicSolution
+    """
     lay = kin.layout
+    if isinstance(model, Model):
+        if lay.designs:
+            raise ValueError("a batch of designs takes its loads from kin.layout: pass None")
+        lay = replace(lay, gravity=np.asarray(model.gravity, float).reshape(2),
+                      loads=load_rows(model, lay.topo))
     topo = lay.topo
-    index = {name: k for k, name in enumerate(topo.bodies)}
     shape = kin.shape
     # no load: one zero wrench shared by every body, broadcast over the samples
     zero = np.broadcast_to(np.zeros((3,) + (1,) * len(shape)), (3,) + shape)
     w = [zero] * topo.n
     pe = np.zeros(shape)
     power = np.zeros(shape)
-    g = np.asarray(model.gravity, float)
+    g = lay.gravity   # (2,), or (2, D, 1) per design
     has_pe = bool(np.any(g != 0))
     # gravity: m g at the mass centre; potential -m g . r_C
     if has_pe:
         for i in range(1, topo.n):
             r_c = kin.pose.point(i, lay.com[i])
-            _add_force(w, kin, i, r_c, lay.mass[i] * np.broadcast_to(g[:, None], r_c.shape))
+            f = np.stack([np.broadcast_to(lay.mass[i] * g[k], r_c.shape[1:]) for k in range(2)])
+            _add_force(w, kin, i, r_c, f)
             pe -= lay.mass[i] * (g[0] * r_c[0] + g[1] * r_c[1])
-    for load in model.loads:
-        i = index[load.body]
+    for load in lay.loads:
+        i = load.body
         if load.kind == "force":
             r, v = _point(kin, i, load.point)
-            f = np.moveaxis(np.broadcast_to(load.value(kin.t), shape + (2,)), -1, 0)
+            f = np.broadcast_to(lay.load_values(load, kin.t), (2,) + shape)
             _add_force(w, kin, i, r, f)
             power += dot(f, v)
         elif load.kind == "torque":
-            tq = np.broadcast_to(load.value(kin.t), shape)
+            tq = np.broadcast_to(lay.load_values(load, kin.t), shape)
             w[i] = w[i] + twist(tq, np.zeros((2,) + shape))
             power += tq * kin.twists[i][0]
         else:  # spring or damper between two points, force along the line joining them
-            j = index[load.body2]
+            j = load.body2
             r1, v1 = _point(kin, i, load.point)
             r2, v2 = _point(kin, j, load.point2)
             d = r2 - r1

@@ -575,7 +575,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
     cosines and sines ``cQ``, ``sQ`` of ``s Qn``), the loops are closed dyad by dyad from the
     node nearest to each time clamped to ``[lo, hi]`` (D,), in the assembly ``modes``
     (n_dyads, D); without (K = 0), ``q_in`` (n, D, T) already closes them. Driver coordinates,
-    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, T).
+    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T).
     """
     n, nc, nd, nv = len(tree), len(cuts), len(dep), len(drv)
     D, T, from_nodes = size.shape[0], t_s.shape[0], nodes.shape[0] > 0
@@ -604,7 +604,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
                     _coordinates(tree, i, q_in[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
             for j in range(nv):
                 i = drv[j]
-                _coordinates(tree, i, q_drv[j, ks], q[i, d, ks], cq[i], sq[i], nb)
+                _coordinates(tree, i, q_drv[j, d, ks], q[i, d, ks], cq[i], sq[i], nb)
             # positions, the loops closed in closed form from the nodes
             _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             if from_nodes:
@@ -616,12 +616,12 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
                 qdd[dep[m], d, ks] = 0.0
             for j in range(nv):
-                qd[drv[j], d, ks], qdd[drv[j], d, ks] = qd_drv[j, ks], qdd_drv[j, ks]
+                qd[drv[j], d, ks], qdd[drv[j], d, ks] = qd_drv[j, d, ks], qdd_drv[j, d, ks]
             for row in range(nd):
                 acc = rhs[row]   # the sum over the drivers, negated once summed
                 acc[:nb] = 0.0
                 for j in range(nv):
-                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, ks]
+                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, d, ks]
                     for k in range(nb):
                         acc[k] += J_rj[k] * qd_j[k]
                 for k in range(nb):
@@ -647,7 +647,8 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
 
 def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
         lo=None, hi=None, modes=()) -> dict:
-    """Run :func:`kernel` at the times ``t`` (T,) with the driver values (n_drivers, T).
+    """Run :func:`kernel` at the times ``t`` (T,) with the driver values (n_drivers, T), or
+    (n_drivers, D, T) per design.
 
     Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
     the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
@@ -688,8 +689,9 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
     cuts = np.stack([P.cut_a, P.cut_b, P.cut_kind], axis=1).reshape(nc, 3)
     geo = np.concatenate([P.joint_point, P.axis, P.angle[..., None]], axis=-1)
     cgeo = np.concatenate([P.cut_pa, P.cut_pb, P.cut_axis, P.cut_angle[..., None]], axis=-1)
-    drivers = [np.ascontiguousarray(np.broadcast_to(x, (len(P.drv), T)), dtype=float)
-               for x in (q_drv, qd_drv, qdd_drv)]
+    drivers = [np.ascontiguousarray(np.broadcast_to(
+        np.reshape(x, (len(P.drv), -1, T)), (len(P.drv), D, T)), dtype=float)
+        for x in (q_drv, qd_drv, qdd_drv)]
     kernel(tree, P.ancestors, P.dep, P.drv, cuts, P.side, P.dyads, geo, cgeo, P.size,
            t, np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in, *drivers, *out.values(),
            min(BLOCK, T))

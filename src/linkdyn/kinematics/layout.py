@@ -1,13 +1,17 @@
-"""Geometry compiled from a model along its spanning tree, for one design or a batch of designs."""
+"""The numeric layout: a model's numbers arranged along its spanning tree, for one design or a
+batch of designs sharing one topology (a design axis on every number that may differ)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, fields, replace
+from functools import partial
+from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import ModelError
 from ..model import Model
+from ..motion import ConstantSpeed
 from ..planar import rotate
 from ..topology import Topology, build
 from . import dyads
@@ -29,13 +33,43 @@ class Cut:
 
 
 @dataclass(frozen=True)
+class LoadRow:
+    """One applied load of the model (``model.loads[k]``) in tree indices.
+
+    ``kind`` as in :class:`~linkdyn.model.Load`; ``body`` (tree index) and ``point`` (a name
+    of ``Layout.points[body]``), for a spring or damper also ``body2``, ``point2`` (else -1,
+    None). ``stiffness`` N/m, ``free_length`` m, ``damping`` N s/m: floats, or (D, 1) with
+    designs. ``values``: the load's value as a function of time, one per design (one for a
+    single mechanism); see :func:`evaluate_designs`.
+    """
+
+    kind: str
+    name: str
+    body: int
+    point: str | None
+    body2: int
+    point2: str | None
+    stiffness: Any
+    free_length: Any
+    damping: Any
+    values: tuple
+
+
+@dataclass(frozen=True)
 class Layout:
-    """Geometry compiled from a model for its topology, SI, in tree order (index 0 = ground).
+    """The numbers of a model for its topology, SI, in tree order (index 0 = ground).
 
     ``joint_point[i]``: body i's parent's joint point relative to O_parent, parent frame, (2,).
     ``points[i]``: dict of body i's named points relative to O_i, body frame.
     ``axis[i]``: slider axis of body i's tree joint in the parent's frame.
     ``origin[i]``: O_i in body i's own frame. ``size``: characteristic length, m.
+    ``gravity``: (2,) m/s^2, global frame. ``motions[k]``: the motions of driver k
+    (``model.drivers[k]``, moving tree joint ``topo.driven[k]``), one per design.
+    ``loads``: one :class:`LoadRow` per ``model.loads`` entry.
+
+    ``designs``: 0 for one mechanism; D for D stacked designs (:func:`stack_layouts`), where
+    every number gains a design axis shaped to broadcast against ``(D, T)`` batches: vectors
+    ``(2, D, 1)``, scalars ``(D, 1)``.
     """
 
     topo: Topology
@@ -51,6 +85,136 @@ class Layout:
     cuts: tuple[Cut, ...]
     size: float
     dyads: tuple | None = None  # closed-form plan (linkdyn.dyads), None: Newton's method
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    motions: tuple = ()
+    loads: tuple = ()
+    designs: int = 0
+
+    def take(self, idx) -> Layout:
+        """The designs ``idx`` (integer array) of stacked designs, stacked (every number's
+        design axis is its axis -2; motions and load values keep those designs' functions)."""
+        idx = np.asarray(idx, int)
+
+        def take(x):
+            if isinstance(x, np.ndarray):
+                return x[..., idx, :] if x.ndim >= 2 else x
+            if isinstance(x, tuple):
+                return tuple(take(v) for v in x)
+            if isinstance(x, dict):
+                return {k: take(v) for k, v in x.items()}
+            if isinstance(x, Cut):
+                return replace(x, pa=take(x.pa), pb=take(x.pb), axis=take(x.axis),
+                               angle=take(x.angle))
+            if isinstance(x, LoadRow):
+                return replace(x, stiffness=take(x.stiffness), free_length=take(x.free_length),
+                               damping=take(x.damping), values=tuple(x.values[i] for i in idx))
+            return x
+        if not self.designs:
+            raise ValueError("take(idx) needs a layout of stacked designs")
+        return replace(self, **{f.name: take(getattr(self, f.name)) for f in fields(self)
+                                if f.name not in ("topo", "kind", "dyads", "motions", "designs")},
+                       motions=tuple(tuple(m[i] for i in idx) for m in self.motions),
+                       designs=len(idx))
+
+    def design(self, k: int) -> Layout:
+        """Design k of stacked designs as the layout of that one mechanism (no design axis)."""
+        if not self.designs:
+            raise ValueError("design(k) needs a layout of stacked designs")
+        k = range(self.designs)[k]   # an IndexError out of range; negative k counts back
+
+        def vec(x):   # (2, D, 1) -> (2,)
+            return np.asarray(x, float)[:, k, 0].copy()
+
+        def num(x):   # (D, 1) -> float
+            return float(np.asarray(x, float)[k, 0])
+        cuts = tuple(replace(c, pa=vec(c.pa), pb=vec(c.pb), axis=vec(c.axis), angle=num(c.angle))
+                     for c in self.cuts)
+        loads = tuple(replace(r, stiffness=num(r.stiffness), free_length=num(r.free_length),
+                              damping=num(r.damping), values=(r.values[k],)) for r in self.loads)
+        return replace(
+            self, joint_point=tuple(map(vec, self.joint_point)), axis=tuple(map(vec, self.axis)),
+            angle=tuple(map(num, self.angle)), origin=tuple(map(vec, self.origin)),
+            points=tuple({name: vec(x) for name, x in pts.items()} for pts in self.points),
+            com=tuple(map(vec, self.com)), mass=tuple(map(num, self.mass)),
+            inertia=tuple(map(num, self.inertia)), cuts=cuts, size=num(self.size),
+            gravity=vec(self.gravity), motions=tuple((m[k],) for m in self.motions),
+            loads=loads, designs=0)
+
+    def driver_values(self, t: np.ndarray):
+        """Driver coordinates, rates and accelerations at the times ``t`` (T,): each
+        (n_drivers, T), or (n_drivers, D, T) with designs (rad or m, per s, per s^2); read-only
+        views where the designs share a motion."""
+        return motion_values(self.motions, t, self.designs)
+
+    def load_values(self, row: LoadRow, t: np.ndarray) -> np.ndarray:
+        """A load's value at the times ``t`` (T,), components first: (T,) for a torque, (2, T)
+        for a force; with designs (D, T) and (2, D, T)."""
+        t = np.asarray(t, dtype=float)
+        comps = (2,) if row.kind == "force" else ()
+        (v,) = evaluate_designs(row.values, t, partial(_load_value, comps=comps), self.designs)
+        return np.moveaxis(v, -1, 0) if row.kind == "force" else v
+
+
+def motion_values(motions: tuple, t: np.ndarray, designs: int = 0):
+    """Coordinates, rates and accelerations of the drivers' ``motions`` (per driver, one motion
+    per design) at the times ``t`` (T,): each (n_drivers, T), or (n_drivers, D, T) for D
+    ``designs``; read-only views of a motion's arrays where they can be (one driver, or
+    designs sharing a motion)."""
+    t = np.asarray(t, dtype=float)
+    shape = ((designs,) if designs else ()) + t.shape
+    if not motions:
+        z = np.zeros((0,) + shape)
+        return z, z, z
+    vals = [evaluate_designs(m, t, _motion_values, designs) for m in motions]
+    if len(vals) == 1:   # one driver: views of its arrays, no copy
+        return tuple(np.broadcast_to(x, shape)[None] for x in vals[0])
+    return tuple(np.stack([np.broadcast_to(v[k], shape) for v in vals]) for k in range(3))
+
+
+def _motion_values(motion, t):
+    return motion.evaluate(t)
+
+
+def _load_value(value, t, comps=()):
+    """A load's ``value(t)``, broadcast to ``t.shape + comps`` (a constant may ignore t)."""
+    return (np.broadcast_to(np.asarray(value(t), dtype=float), t.shape + comps),)
+
+
+def evaluate_designs(functions: tuple, t: np.ndarray, call: Callable, designs: int = 0):
+    """Evaluate one function of time per design at the times ``t`` (T,).
+
+    ``call(f, t)`` returns a tuple of arrays ``t.shape + extra`` for the function ``f``. With
+    ``designs == 0`` (one mechanism) that tuple is returned as it is; else each array gains a
+    leading design axis, (D, T, ...). Designs that share a function (equal objects) share one
+    evaluation, returned as a read-only broadcast when all do; constant-speed motions of all
+    designs are evaluated at once from their speeds and starts.
+    """
+    if not designs:
+        return call(functions[0], t)
+    if all(type(f) is ConstantSpeed for f in functions):
+        # q = start + speed t, for every design at once
+        speed = np.array([f.speed for f in functions])[:, None]
+        start = np.array([f.start for f in functions])[:, None]
+        return start + speed * t, np.broadcast_to(speed, (designs,) + t.shape), \
+            np.zeros((designs,) + t.shape)
+    groups: dict = {}
+    for d, f in enumerate(functions):
+        try:
+            key = (0, f, type(f))
+            hash(key)
+        except TypeError:   # an unhashable function: compared by identity
+            key = (1, id(f))
+        groups.setdefault(key, []).append(d)
+    if len(groups) == 1:
+        return tuple(np.broadcast_to(v, (designs,) + v.shape) for v in call(functions[0], t))
+    out = None
+    for idx in groups.values():
+        vals = call(functions[idx[0]], t)
+        if out is None:
+            out = [np.empty((designs,) + v.shape) for v in vals]
+        for o, v in zip(out, vals):
+            o[idx] = v
+    return tuple(out)
 
 
 def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
@@ -90,13 +254,70 @@ def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
     size = float(np.max(np.ptp(allpts, axis=0))) if len(allpts) > 1 else 1.0
     lay = Layout(topo, tuple(kind), tuple(joint_point), tuple(axis), tuple(angle), tuple(origin),
                  points, com, tuple(float(b.mass) for b in bodies),
-                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0)
+                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0,
+                 gravity=np.asarray(model.gravity, float).reshape(2),
+                 motions=tuple((d.motion,) for d in model.drivers),
+                 loads=load_rows(model, topo))
     return replace(lay, dyads=dyads.plan(lay))
+
+
+def load_rows(model: Model, topo: Topology) -> tuple[LoadRow, ...]:
+    """The :class:`LoadRow` of each of ``model.loads`` (one design), bodies as tree indices."""
+    pos = {name: k for k, name in enumerate(topo.bodies)}
+    return tuple(LoadRow(ld.kind, ld.name, pos[ld.body], ld.point,
+                         pos[ld.body2] if ld.body2 is not None else -1, ld.point2,
+                         float(ld.stiffness), float(ld.free_length), float(ld.damping),
+                         (ld.value,)) for ld in model.loads)
+
+
+def _shape(model: Model) -> dict[str, tuple]:
+    """What designs of one batch must share, by what a message names: bodies, joints (name,
+    kind, the bodies they connect), the driven joints, the loads' kinds and bodies, the cut."""
+    return {
+        "bodies": tuple(b.name for b in model.bodies),
+        "joints": tuple((j.name, j.kind, j.body_a, j.body_b) for j in model.joints),
+        "drivers": tuple(d.joint for d in model.drivers),
+        "loads": tuple((ld.kind, ld.body, ld.body2) for ld in model.loads),
+        "topology.cut": model.cut,
+    }
+
+
+def compile_designs(models: list[Model]) -> Layout:
+    """The stacked layout (:func:`stack_layouts`) of D designs of one topology.
+
+    Raises
+    ------
+    ModelError
+        A design whose bodies, joints, driven joints, loads (kinds and bodies) or cut joints
+        differ from design 0's, naming the design and what differs.
+    """
+    first = _shape(models[0])
+    for k, m in enumerate(models[1:], 1):
+        for what, value in _shape(m).items():
+            if value != first[what]:
+                raise ModelError(
+                    f"design {k} differs from design 0 in its {what.split('.')[-1]}: "
+                    f"{_differ(value, first[what])}", file=m.source, field=what,
+                    fix="Designs of one batch vary numbers only (geometry, masses, gravity, "
+                        "loads' values, drivers' motions); analyze other mechanisms separately")
+    topo = build(models[0])
+    return stack_layouts([compile_layout(m, topo) for m in models])
+
+
+def _differ(value, ref) -> str:
+    """The first entry where ``value`` differs from ``ref``, as text."""
+    if not isinstance(value, tuple) or not isinstance(ref, tuple):
+        return f"{value!r} instead of {ref!r}"
+    for a, b in zip(value, ref):
+        if a != b:
+            return f"{a!r} instead of {b!r}"
+    return f"{len(value)} entries instead of {len(ref)}"
 
 
 def stack_layouts(layouts: list[Layout]) -> Layout:
     """One layout for several designs of the same topology: every number gains a design axis,
-    shaped to broadcast against ``(D, T)`` batches (vectors ``(2, D, 1)``, scalars ``(D, 1)``).
+    shaped to broadcast against ``(D, T)`` batches (vectors ``(2, D, 1)``, scalars ``(D, 1)``);
+    the motions and load values keep one function per design.
     """
     first = layouts[0]
     topo = first.topo
@@ -107,6 +328,10 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
         if not same:
             raise ModelError(f"design {k} has a different topology from design 0",
                              field="designs", fix="Vary numbers only, not bodies or joints")
+        if (len(lay.motions), [(r.kind, r.body, r.body2) for r in lay.loads]) != (
+                len(first.motions), [(r.kind, r.body, r.body2) for r in first.loads]):
+            raise ModelError(f"design {k} has other drivers or loads than design 0",
+                             field="designs", fix="Vary the loads' and drivers' numbers only")
 
     def vec(xs):
         return np.stack([np.asarray(x, float) for x in xs], axis=-1)[..., None]
@@ -126,7 +351,16 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
                  for k, c in enumerate(first.cuts))
     points = tuple({name: vec([l.points[i][name] for l in layouts]) for name in first.points[i]}
                    for i in range(topo.n))
+    loads = tuple(replace(row, stiffness=num([l.loads[k].stiffness for l in layouts]),
+                          free_length=num([l.loads[k].free_length for l in layouts]),
+                          damping=num([l.loads[k].damping for l in layouts]),
+                          values=tuple(l.loads[k].values[0] for l in layouts))
+                  for k, row in enumerate(first.loads))
     return Layout(topo, first.kind, per_body("joint_point"), per_body("axis"),
                   per_body_num("angle"), per_body("origin"), points, per_body("com"),
                   per_body_num("mass"), per_body_num("inertia"), cuts,
-                  num([l.size for l in layouts]), first.dyads)
+                  num([l.size for l in layouts]), first.dyads,
+                  gravity=vec([l.gravity for l in layouts]),
+                  motions=tuple(tuple(l.motions[k][0] for l in layouts)
+                                for k in range(len(first.motions))),
+                  loads=loads, designs=len(layouts))

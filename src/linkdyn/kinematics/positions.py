@@ -8,8 +8,6 @@ predictor and a Newton corrector per node (a loop over driver steps, never over 
 
 from __future__ import annotations
 
-from dataclasses import fields, replace
-
 import numpy as np
 
 from ..errors import AssemblyError
@@ -17,7 +15,7 @@ from .. import joints as jk
 from ..model import Model
 from ..planar import solve_small, wrap
 from . import dyads
-from .layout import Cut, Layout
+from .layout import Layout, motion_values
 from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
                         motion_vectors)
 
@@ -106,23 +104,6 @@ def _drivers_at(model: Model, lay: Layout, q_drv: np.ndarray) -> dict[str, float
             for k, i in enumerate(topo.driven)}
 
 
-def _designs(lay: Layout, idx: np.ndarray) -> Layout:
-    """The designs ``idx`` of a stacked layout (every number's design axis is its axis -2)."""
-    def take(x):
-        if isinstance(x, np.ndarray):
-            return x[..., idx, :] if x.ndim >= 2 else x
-        if isinstance(x, tuple):
-            return tuple(take(v) for v in x)
-        if isinstance(x, dict):
-            return {k: take(v) for k, v in x.items()}
-        if isinstance(x, Cut):
-            return replace(x, pa=take(x.pa), pb=take(x.pb), axis=take(x.axis), angle=take(x.angle))
-        return x
-
-    return replace(lay, **{f.name: take(getattr(lay, f.name)) for f in fields(lay)
-                           if f.name not in ("topo", "kind", "dyads")})
-
-
 def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
                   design: int | None = None) -> AssemblyError:
     """The error of a design that cannot be assembled at ``t0`` (driver values ``q_drv0``)."""
@@ -146,7 +127,8 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
     dep = list(topo.dependent)
     # batch shape (D, 1): the trailing axis stands for time, so design arrays broadcast
     q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]
-    q0[list(topo.driven)] = q_drv0[:, None, None]
+    q_drv0 = np.reshape(q_drv0, (len(topo.driven), -1))   # (n_drivers, 1 or D)
+    q0[list(topo.driven)] = q_drv0[..., None]
     q, err = newton(lay, q0, maxiter=60, damped=True)
     q0, q, err = q0[..., 0], q[..., 0], err[..., 0]
     failed = ~(err <= ACCEPT)
@@ -154,7 +136,7 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
         rng = np.random.default_rng(0)
         # restart the failed designs only: their layout, batch (F, 64)
         idx = np.flatnonzero(failed)
-        lay_f = _designs(lay, idx) if len(models) > 1 else lay
+        lay_f = lay.take(idx) if lay.designs else lay
         starts = np.repeat(q0[:, idx, None], 64, axis=-1)
         for i in dep:
             starts[i] = (rng.uniform(-np.pi, np.pi, 64) if jk.get(lay.kind[i]).angular
@@ -173,31 +155,30 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
         if np.any(failed):
             if raise_error:
                 d = int(np.argmax(failed))
-                raise not_assembled(models[d], lay, q_drv0, t0, d if len(models) > 1 else None)
+                raise not_assembled(models[d], lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)], t0,
+                                    d if len(models) > 1 else None)
             q[:, failed] = np.nan
     return q
 
 
-def driver_values(model: Model, t: np.ndarray):
-    """Driver coordinates, rates, accelerations, each (n_drivers, T) (read-only: with one
-    driver, views of its arrays)."""
-    vals = [d.motion.evaluate(t) for d in model.drivers]
-    if not vals:
-        z = np.zeros((0,) + t.shape)
-        return z, z, z
-    if len(vals) == 1:   # one driver: views of its arrays, no copy
-        return tuple(np.broadcast_to(x, t.shape)[None] for x in vals[0])
-    return tuple(np.stack([np.broadcast_to(v[k], t.shape) for v in vals]) for k in range(3))
+def driver_values(source, t: np.ndarray):
+    """Driver coordinates, rates, accelerations of a model or layout (:meth:`Layout.
+    driver_values`): each (n_drivers, T), or (n_drivers, D, T) for a layout of D designs."""
+    if isinstance(source, Layout):
+        return source.driver_values(t)
+    return motion_values(tuple((d.motion,) for d in source.drivers), t)
 
 
-def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.ndarray:
-    """Continuation times from ``start`` to ``end`` (either order): the drivers move at most one
-    step between consecutive nodes."""
+def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
+    """Continuation times from ``start`` to ``end`` (either order): the drivers of every design
+    move at most one step between consecutive nodes."""
     probe = np.linspace(start, end, 4097)
-    qp, _, _ = driver_values(model, probe)
+    qp, _, _ = lay.driver_values(probe)
+    qp = qp.reshape(len(qp), -1, len(probe))   # (n_drivers, designs, probes)
     step = np.array([STEP_ANGLE if jk.get(lay.kind[i]).angular else STEP_LENGTH * np.min(lay.size)
-                     for i in lay.topo.driven])[:, None]
-    moves = np.max(np.abs(np.diff(qp, axis=1)) / step, axis=0) if len(step) else np.zeros(4096)
+                     for i in lay.topo.driven])[:, None, None]
+    moves = (np.max(np.abs(np.diff(qp, axis=-1)) / step, axis=(0, 1)) if len(step)
+             else np.zeros(4096))
     travel = np.concatenate(([0.0], np.cumsum(moves)))
     if not travel[-1] > 0:
         return np.array([start, end])
@@ -205,30 +186,37 @@ def _travel_nodes(model: Model, lay: Layout, start: float, end: float) -> np.nda
     return np.interp(np.linspace(0, travel[-1], n), travel, probe)
 
 
-def _follow(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None):
+def _at_node(x: np.ndarray, k: int, ndim: int) -> np.ndarray:
+    """Driver values ``x`` (n_drivers, [D,] K) at node k, shaped to broadcast against
+    coordinates of ``ndim`` axes ((n,), or (n, D, 1) for designs)."""
+    x = x[..., k]
+    return x.reshape(x.shape + (1,) * (ndim - x.ndim))
+
+
+def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None):
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
     Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
     interval ``reach`` (..., 2) over which each branch was followed."""
     if lay.dyads is not None:
-        return _follow_dyads(model, lay, q0, lo, hi, modes)
+        return _follow_dyads(lay, q0, lo, hi, modes)
     if q0.ndim == 1:
-        return _follow_newton(model, lay, q0, lo, hi)
+        return _follow_newton(lay, q0, lo, hi)
     # designs: Newton's batch is (D, 1), the trailing axis standing for time
-    nodes, Q, QD, reach = _follow_newton(model, lay, q0[..., None], lo, hi)
+    nodes, Q, QD, reach = _follow_newton(lay, q0[..., None], lo, hi)
     return nodes, Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
 
 
-def _follow_newton(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float):
+def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float):
     """:func:`_follow` by Newton continuation, node by node."""
     nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
     for end in (hi, lo):
         if end == 0.0:
             reach.append(np.zeros(q0.shape[1:]))
             continue
-        nd = _travel_nodes(model, lay, 0.0, end)
-        Qe, QDe, last = _continuation(model, lay, q0, nd)
+        nd = _travel_nodes(lay, 0.0, end)
+        Qe, QDe, last = _continuation(lay, q0, nd)
         reach.append(last)
         if end < 0:
             nd, Qe, QDe = nd[::-1], Qe[..., ::-1], QDe[..., ::-1]
@@ -242,17 +230,17 @@ def _follow_newton(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: flo
             np.stack([reach[1], reach[0]], axis=-1))
 
 
-def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: float, modes):
+def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes):
     """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
     in closed form in the assembly ``modes``, and the dependent angles are unwrapped along the
     nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
-    nodes = np.unique(np.concatenate((_travel_nodes(model, lay, 0.0, lo),
-                                      _travel_nodes(model, lay, 0.0, hi))))
+    nodes = np.unique(np.concatenate((_travel_nodes(lay, 0.0, lo),
+                                      _travel_nodes(lay, 0.0, hi))))
     k0 = int(np.searchsorted(nodes, 0.0))
-    nq, nqd, _ = driver_values(model, nodes)
-    shape = (-1,) + (1,) * (q0.ndim - 1) + (len(nodes),)
+    nq, nqd, _ = lay.driver_values(nodes)   # (n_drivers, [D,] K): the shape of Q[drv]
+    shape = (len(drv),) + q0.shape[1:] + (len(nodes),)
     Q = np.repeat(q0[..., None], len(nodes), axis=-1)
     Q[drv] = nq.reshape(shape)
     Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
@@ -275,32 +263,32 @@ def _follow_dyads(model: Model, lay: Layout, q0: np.ndarray, lo: float, hi: floa
     return nodes, Q, QD, reach
 
 
-def _continuation(model: Model, lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
+def _continuation(lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
     """Follow the branch from ``q_start`` (n, ...) through the node times: a predictor
     ``q += qd dt`` and a Newton corrector per node. Returns node coordinates and rates
     (n, ..., K) and the last node time (...) where the loops still close."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
-    nq, nqd, _ = driver_values(model, nodes)
+    nq, nqd, _ = lay.driver_values(nodes)
     Q = np.full(q_start.shape + (len(nodes),), np.nan)
     QD = np.full(q_start.shape + (len(nodes),), np.nan)
     q = q_start.copy()
     last_ok = np.full(q_start.shape[1:], np.nan)
     alive = np.isfinite(q_start[0])
     for k in range(len(nodes)):
-        q[drv] = nq[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
+        q[drv] = _at_node(nq, k, q.ndim)
         if k:
             q[dep] = Q[dep, ..., k - 1] + QD[dep, ..., k - 1] * (nodes[k] - nodes[k - 1])
         q, err = newton(lay, q)
         pose = forward_positions(lay, q)
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
-        x, _ = dependent_rates(lay, J, nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1)))
+        x, _ = dependent_rates(lay, J, _at_node(nqd, k, q.ndim))
         alive = alive & (err <= ACCEPT) & np.all(np.isfinite(x), axis=0)
         if not np.any(alive):
             break  # every branch ends here; samples beyond are flagged
         Q[..., k] = np.where(alive, q, np.nan)
         QD[..., k] = 0.0
-        QD[drv, ..., k] = nqd[:, k].reshape((-1,) + (1,) * (q.ndim - 1))
+        QD[drv, ..., k] = _at_node(nqd, k, q.ndim)
         QD[dep, ..., k] = np.where(alive, x, np.nan)
         last_ok = np.where(alive, nodes[k], last_ok)
         q = np.where(alive, q, np.nan)

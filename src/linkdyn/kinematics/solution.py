@@ -18,8 +18,8 @@ from ..model import Model
 from ..planar import last, shift_twist, solve_small, stack_last
 from . import compiled as kc
 from . import dyads
-from .layout import Layout, compile_layout, stack_layouts
-from .positions import (ACCEPT, _correct, _follow, assemble, driver_values, newton)
+from .layout import Layout, compile_designs, compile_layout
+from .positions import ACCEPT, _correct, _follow, assemble, newton
 from .recursion import (Pose, _cut_frames, closure_bias, closure_jacobian, dependent_rates,
                         forward_positions, forward_twist_rates, forward_twists, motion_vectors,
                         point_acceleration)
@@ -156,9 +156,10 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
     Parameters
     ----------
     model : Model or sequence of Model
-        One mechanism, or D designs of the same topology (their numbers may differ; drivers and
-        loads are those of the first). With designs every array gains a leading axis D, and a
-        design that cannot be assembled is NaN instead of raising.
+        One mechanism, or D designs of the same topology, each with its own numbers (geometry,
+        masses, gravity, loads' values, drivers' motions). With designs every array gains a
+        leading axis D (a sequence of one model too), and a design that cannot be assembled is
+        NaN instead of raising.
     t : array_like (T,)
         Sample times, s.
     backend : {'auto', 'numpy', 'compiled'}, optional
@@ -166,33 +167,34 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
         :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
         numba is installed and the batch is large).
     """
-    models = [model] if isinstance(model, Model) else list(model)
-    lay = layout or (compile_layout(models[0]) if len(models) == 1 else
-                     stack_layouts([compile_layout(m) for m in models]))
+    single = isinstance(model, Model)
+    models = [model] if single else list(model)
+    if not models:
+        raise ModelError("no designs to solve", fix="Pass a model or a non-empty list of models")
+    lay = layout or (compile_layout(model) if single else compile_designs(models))
     topo = lay.topo
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or len(t) < 1:
         raise ModelError("time samples must be a 1-D array with at least one sample",
                          fix="Pass t = numpy.linspace(0, duration, samples)")
     dep, drv = list(topo.dependent), list(topo.driven)
-    qdrv, qddrv, qdddrv = driver_values(models[0], t)
+    # driver coordinates, rates, accelerations: (n_drivers, T), with designs (n_drivers, D, T)
+    qdrv, qddrv, qdddrv = lay.driver_values(t)
     fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     packed = compiled.pack(lay, len(models[0].joints)) if fast else None
     out = None  # the compiled kernel's arrays
     # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
     # branch to the samples
-    q_start = assemble(models, lay, driver_values(models[0], np.zeros(1))[0][:, 0], 0.0,
-                       raise_error=len(models) == 1)
-    single = len(models) == 1
+    q_start = assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0,
+                       raise_error=single)
     if single:
         q_start = q_start[:, 0]
-    lay_q = np.zeros(0) if single else np.zeros((len(models), 1))  # design axis vs (D, T)
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
     # the dyads' assembly modes, (..., 1) each: the branch along the nodes and the samples
     modes = (None if lay.dyads is None else
              dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions))
     if dep and hi > lo:
-        nodes, Q, QD, reach = _follow(models[0], lay, q_start, lo, hi, modes)
+        nodes, Q, QD, reach = _follow(lay, q_start, lo, hi, modes)
         # a guess for every sample from the nodes; samples past the last node followed start
         # from that node
         lo_ok, hi_ok = reach[..., :1], reach[..., 1:]
@@ -224,7 +226,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
                 h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
                 h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
                 q = h00 * at(Q, j) + h10 * at(QD, j) + h01 * at(Q, j + 1) + h11 * at(QD, j + 1)
-            q[drv] = qdrv if single else qdrv[:, None] + lay_q
+            q[drv] = qdrv
             q = np.where(np.isfinite(q), q, 0.0)
             q, pose, p, J, err = _correct(lay, q, modes)
         # the branch ends at the first sample past the last node that does not close
@@ -236,7 +238,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
             err = np.where(cut_off, np.inf, err)
     else:
         q = np.repeat(q_start[..., None], len(t), axis=-1)
-        q[drv] = qdrv if single else qdrv[:, None] + lay_q
+        q[drv] = qdrv
         q, err = newton(lay, q)
         if packed is None:
             pose = forward_positions(lay, q)
@@ -246,8 +248,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
         if out is None:   # the loops are closed: the kernel does the rest
             out = kc.run(packed, t, qdrv, qddrv, qdddrv, q=q)
         return _from_kernel(models[0], lay, t, out, err)
-    qd_drv, qdd_drv = (x if single else x[:, None] + lay_q for x in (qddrv, qdddrv))
-    return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qd_drv, qdd_drv, err)
+    return _rates_and_accelerations(models[0], lay, t, q, pose, p, J, qddrv, qdddrv, err)
 
 
 def _rates_and_accelerations(model, lay, t, q, pose, p, J, qd_drv, qdd_drv, err):
