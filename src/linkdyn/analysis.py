@@ -13,7 +13,7 @@ import numpy as np
 from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
-from .errors import AssemblyError
+from .errors import AssemblyError, ModelError
 from . import joints as jk
 from .model import Model
 
@@ -348,6 +348,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     """
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
+    if not models:
+        raise ModelError("no designs to solve", fix="Pass a model or a non-empty list of models")
     t = np.asarray(t, dtype=float)
     fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     kin = kinematics.solve(models if designs else model, t,
