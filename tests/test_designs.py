@@ -180,9 +180,11 @@ def test_design_api():
     assert one.effort("J1").shape == T.shape
     assert one.reaction("J2").shape == T.shape + (2,)
     assert one.point("coupler", "P").shape == T.shape + (2,)
-    assert one.to_dataframe().shape == (len(T), len(one.columns))
+    df = one.to_dataframe()
+    assert len(df) == len(T) and np.array_equal(df["tau_J1"].to_numpy(), one.columns["tau_J1"])
     with pytest.raises(ValueError):
         sol.to_dataframe()
+    assert repr(sol) and sol._repr_html_() and repr(one)
     # a single mechanism is its own design 0; a list of one model is a batch of one
     single = linkdyn.analyze(designs[0], T, backend="numpy")
     assert single.design(0) is single and single.n_designs == 1 and not single.batched
