@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import shutil
 import subprocess
@@ -555,3 +556,147 @@ def test_allow_singular_keeps_the_other_samples_as_nan_rows(tmp_path):
     assert np.all(np.abs(rows["q_J1"][bad] - math.pi) < 1e-9) or np.all(np.isnan(rows["q_J1"][bad]))
     assert np.isfinite(rows["t"]).all()
     assert np.isfinite(rows["tau_J1"][~bad]).all() and (~bad).sum() >= 30
+
+
+# ------------------------------------------------------------------------------- outputs
+
+def snapshot(folder: Path) -> dict:
+    """Every entry below ``folder``: relative path -> (bytes, mtime_ns) for files, None for
+    folders."""
+    return {str(p.relative_to(folder)): (p.read_bytes(), p.stat().st_mtime_ns) if p.is_file()
+            else None for p in sorted(folder.rglob("*"))}
+
+
+@pytest.fixture(scope="module")
+def report_run(tmp_path_factory) -> Path:
+    """One successful run's outputs (csv, summary, report, plots), made once."""
+    out = tmp_path_factory.mktemp("report-run") / "out"
+    res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, "--samples", 9, "--report")
+    assert res.exit_code == 0, res.output
+    return out
+
+
+@pytest.fixture
+def earlier_results(report_run, tmp_path) -> Path:
+    """A folder holding a successful run's outputs and an unrelated file of the user's."""
+    out = tmp_path / "runs" / "hoeken"
+    shutil.copytree(report_run, out)
+    (out / "notes.txt").write_text("the user's own notes\n")
+    assert {"results.csv", "summary.json", "report.html", "notes.txt"} <= {
+        p.name for p in out.iterdir()}
+    return out
+
+
+@pytest.mark.parametrize("failure", ["cannot assemble", "bad model", "bad option"])
+def test_a_failing_run_leaves_earlier_results_byte_for_byte_untouched(failure, tmp_path,
+                                                                      earlier_results):
+    out = earlier_results
+    before, around = snapshot(out), snapshot(out.parent)
+    if failure == "cannot assemble":   # ground pivots too far apart: exit 3
+        model = write(tmp_path, edit(HOEKEN, "O4 = [89.5, 0.0] }", "O4 = [400.0, 0.0] }"))
+        args, code = [], 3
+    elif failure == "bad model":
+        model = write(tmp_path, edit(HOEKEN, "mass = 5.0", "mass = -5.0"))
+        args, code = [], 2
+    else:
+        model, args, code = linkdyn.example_path("hoeken"), ["--fluctuation", "-1"], 2
+    # in a subprocess once (the real exit status and stderr), in process for the others
+    runner = run_process if failure == "cannot assemble" else run
+    res = runner("analyze", model, "-o", out, "--samples", 9, "--report", *args)
+    assert_user_error(res, code)
+    assert snapshot(out) == before
+    assert snapshot(out.parent) == around      # no temporary folder left beside it either
+
+
+def test_a_writer_that_fails_leaves_nothing(tmp_path, earlier_results):
+    from linkdyn.outputs import write_outputs
+
+    def broken(path):
+        raise RuntimeError("disk on fire")
+
+    files = {"summary.json": lambda p: p.write_text("{}"), "report.html": broken}
+    fresh = tmp_path / "a" / "b" / "out"
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        write_outputs(fresh, files)
+    assert not (tmp_path / "a").exists()       # not even the parents created for it
+    out = earlier_results
+    before, around = snapshot(out), snapshot(out.parent)
+    with pytest.raises(RuntimeError):
+        write_outputs(out, files)
+    assert snapshot(out) == before and snapshot(out.parent) == around
+
+
+def test_a_new_run_replaces_only_what_linkdyn_wrote(tmp_path, earlier_results):
+    out = earlier_results
+    plots = {p.name for p in out.glob("plot_*")}
+    assert plots
+    (out / "plot_mine.txt").write_text("not a linkdyn output")
+    res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, "--samples", 9,
+              "--format", "parquet")
+    assert res.exit_code == 0, res.output
+    # the earlier csv, report and plots would disagree with the new run: gone; the user's
+    # files stay as they were
+    assert sorted(p.name for p in out.iterdir()) == [
+        "notes.txt", "plot_mine.txt", "results.parquet", "summary.json"]
+    assert (out / "notes.txt").read_text() == "the user's own notes\n"
+    res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, "--samples", 9)
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in out.iterdir()) == [
+        "notes.txt", "plot_mine.txt", "results.csv", "summary.json"]
+    assert not list(tmp_path.glob("**/.linkdyn-*"))
+
+
+def test_a_new_output_folder_gets_the_usual_permissions(tmp_path):
+    out = tmp_path / "new"
+    res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, "--samples", 5)
+    assert res.exit_code == 0, res.output
+    probe = tmp_path / "probe"
+    probe.mkdir()
+    assert out.stat().st_mode == probe.stat().st_mode
+
+
+@pytest.mark.parametrize("where", ["file", "into a file", "devnull", "proc"])
+def test_output_folder_that_cannot_be_one_exits_2_naming_o(where, tmp_path):
+    afile = write(tmp_path, "not a folder\n", "afile.txt")
+    target = {"file": afile, "into a file": afile / "out", "devnull": Path(os.devnull),
+              "proc": Path("/proc/linkdyn-no-such-folder")}[where]
+    if where == "proc" and not Path("/proc/self").exists():
+        pytest.skip("no /proc here")
+    before = snapshot(tmp_path)
+    runner = run_process if where == "devnull" else run
+    res = runner("analyze", linkdyn.example_path("hoeken"), "-o", target, "--samples", 5)
+    line = assert_user_error(res, 2, "-o", str(target))
+    assert "cannot write the outputs" in line
+    assert res.stdout == ""
+    assert snapshot(tmp_path) == before
+
+
+def test_unwritable_output_folder_exits_2_naming_o(tmp_path):
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        res = run("analyze", linkdyn.example_path("hoeken"), "-o", locked / "out",
+                  "--samples", 5)
+        if os.geteuid() == 0:            # root writes anywhere: only check that it worked
+            assert res.exit_code == 0, res.output
+        else:
+            assert_user_error(res, 2, "-o", "not writable")
+            assert list(locked.iterdir()) == []
+    finally:
+        locked.chmod(0o700)
+
+
+def test_samples_further_apart_than_a_turn_finish_with_one_summary(tmp_path):
+    # 10 samples over 20 crank turns, and 361 over a million seconds: the summary used to
+    # crash after the files were written (exit 1, traceback)
+    for args in (["--samples", 10, "--cycles", 20], ["--duration", "1e6"]):
+        out = tmp_path / "out"
+        res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, *args)
+        assert res.exit_code == 0 and "Traceback" not in res.output, res.output
+        assert res.stdout.startswith("Hoeken straight-line linkage:")
+        assert f"wrote {out / 'results.csv'}, {out / 'summary.json'}" in res.stdout
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["driver_energy"]["J1"]["energy_fluctuation_J"] is None
+        assert "energy fluctuation n/a" in res.stdout
+        shutil.rmtree(out)

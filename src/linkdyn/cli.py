@@ -7,10 +7,8 @@ passes a singular position. User errors print one message and no traceback.
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import sys
-import tempfile
 import threading
 import time
 from importlib import resources
@@ -20,6 +18,7 @@ import click
 import numpy as np
 
 from .errors import LinkdynError, ModelError
+from .outputs import ANALYSIS_OUTPUTS, check_outdir, write_outputs
 
 EXAMPLES = "examples"
 
@@ -203,22 +202,6 @@ class _Progress:
         click.echo("\r" + line[:width].ljust(width), file=self.stream, nl=False)
 
 
-def _write_outputs(outdir: Path, files: dict[str, callable], progress=None) -> None:
-    """Write every output into a temporary folder, then move them into place: no partial
-    output is left behind if anything fails."""
-    outdir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".linkdyn-", dir=outdir))
-    try:
-        for name, write in files.items():
-            if progress is not None:
-                progress.step(f"writing {name}")
-            write(tmp / name)
-        for name in files:
-            os.replace(tmp / name, outdir / name)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-
-
 def _json_safe(x):
     """JSON-ready copy of ``x``: NaN and infinities become null (strict JSON has neither)."""
     if isinstance(x, dict):
@@ -259,55 +242,70 @@ def write_parquet(sol, path: Path) -> None:
     sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
 
 
-def print_summary(s: dict) -> None:
-    click.echo(f"{s['model']}: {s['samples']} samples over {s['duration_s']:.6g} s")
-    click.echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
-               f"{', '.join(s['cut_joints']) or 'none'}")
+def summary_text(s: dict) -> str:
+    """The printed summary of an ``analyze`` run, from its summary dict (computed before any
+    file is written, so a failure here leaves nothing behind)."""
+    lines: list[str] = []
+    echo = lines.append
+
+    def num(x, fmt, scale=1.0):  # a figure the run could not give (None or NaN) is "n/a"
+        return "n/a" if x is None or not np.isfinite(x) else format(x * scale, fmt)
+
+    echo(f"{s['model']}: {s['samples']} samples over {num(s['duration_s'], '.6g')} s")
+    echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
+         f"{', '.join(s['cut_joints']) or 'none'}")
     for fb in s["four_bars"]:
         ta = fb["transmission_angle_deg"]
-        click.echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
-                   f"{fb['links']['output']}: {fb['grashof']}; transmission angle "
-                   f"{ta['min']:.2f}..{ta['max']:.2f} deg")
+        echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
+             f"{fb['links']['output']}: {fb['grashof']}; transmission angle "
+             f"{num(ta['min'], '.2f')}..{num(ta['max'], '.2f')} deg")
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
-            click.echo(f"    mechanical advantage |w_in/w_out| {ma['min']:.4g}..{ma['max']:.4g}"
-                       f"{frame}")
+            echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
+                 f"{num(ma['max'], '.4g')}{frame}")
     for j, d in s["drivers"].items():
-        click.echo(f"  driver {j}: peak {d['effort']} {d['peak']:.6g} {d['unit']} at "
-                   f"t = {d['peak_time_s']:.4g} s, RMS {d['rms']:.6g} {d['unit']}")
+        echo(f"  driver {j}: peak {d['effort']} {num(d['peak'], '.6g')} {d['unit']} at "
+             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {num(d['rms'], '.6g')} {d['unit']}")
     for j, e in s.get("driver_energy", {}).items():
         if e["work_J"] is not None:
             fw = e["flywheel"]
-            fly = (f"; flywheel {fw['inertia_kg_m2']:.4g} kg m^2 for C_s = "
-                   f"{fw['speed_fluctuation']:.3g}" if fw else "")
-            click.echo(f"  driver {j}: work {e['work_J']:.4g} J (+{e['positive_work_J']:.4g} / "
-                       f"{e['negative_work_J']:.4g}), energy fluctuation "
-                       f"{e['energy_fluctuation_J']:.4g} J{fly}")
+            fly = (f"; flywheel {num(fw['inertia_kg_m2'], '.4g')} kg m^2 for C_s = "
+                   f"{num(fw['speed_fluctuation'], '.3g')}" if fw else "")
+            echo(f"  driver {j}: work {num(e['work_J'], '.4g')} J "
+                 f"(+{num(e['positive_work_J'], '.4g')} / "
+                 f"{num(e['negative_work_J'], '.4g')}), energy fluctuation "
+                 f"{num(e['energy_fluctuation_J'], '.4g')} J{fly}")
     if "shaking" in s:
         f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
-        click.echo(f"  shaking force peak {f['peak']:.6g} N at t = {f['peak_time_s']:.4g} s, RMS "
-                   f"{f['rms']:.6g} N; shaking moment (about the origin) peak {mz['peak']:.6g} N m")
+        echo(f"  shaking force peak {num(f['peak'], '.6g')} N at t = "
+             f"{num(f['peak_time_s'], '.4g')} s, RMS {num(f['rms'], '.6g')} N; shaking moment "
+             f"(about the origin) peak {num(mz['peak'], '.6g')} N m")
     ps = s.get("path_straightness")
     if ps:
-        click.echo(f"  path of {ps['point']}: deviation from a straight line max "
-                   f"{ps['max_deviation_m'] * 1e3:.4g} mm, RMS "
-                   f"{ps['rms_deviation_m'] * 1e3:.4g} mm over {ps['length_m'] * 1e3:.4g} mm"
-                   + ("" if ps["range"] is None else
-                      f" (driver range {ps['range'][0]:.4g}..{ps['range'][1]:.4g})"))
-    click.echo("  peak reactions:")
+        echo(f"  path of {ps['point']}: deviation from a straight line max "
+             f"{num(ps['max_deviation_m'], '.4g', 1e3)} mm, RMS "
+             f"{num(ps['rms_deviation_m'], '.4g', 1e3)} mm over "
+             f"{num(ps['length_m'], '.4g', 1e3)} mm"
+             + ("" if ps["range"] is None else
+                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')})"))
+    echo("  peak reactions:")
     for j, r in s["reactions"].items():
-        extra = f", moment {r['peak_moment_Nm']:.6g} N m" if "peak_moment_Nm" in r else ""
-        click.echo(f"    {j:8s} {r['peak_force_N']:.6g} N at t = {r['peak_time_s']:.4g} s{extra}")
+        extra = f", moment {num(r['peak_moment_Nm'], '.6g')} N m" if "peak_moment_Nm" in r else ""
+        echo(f"    {j:8s} {num(r['peak_force_N'], '.6g')} N at t = "
+             f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
-    def num(x, fmt):
-        return "n/a" if x is None else format(x, fmt)
-    click.echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
-               f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
-               f"condition number {num(h['worst_condition_number'], '.3g')}")
+    echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
+         f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
+         f"condition number {num(h['worst_condition_number'], '.3g')}")
     if s["invalid_samples"]:
-        click.echo(f"  WARNING: {s['invalid_samples']} samples that do not close or sit at a singular "
-                   "position are written as NaN rows")
+        echo(f"  WARNING: {s['invalid_samples']} samples that do not close or sit at a singular "
+             "position are written as NaN rows")
+    return "\n".join(lines)
+
+
+def print_summary(s: dict) -> None:
+    click.echo(summary_text(s))
 
 
 def _path_range(text):
@@ -324,7 +322,7 @@ def _path_range(text):
 
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
-@click.option("-o", "--outdir", default="out", show_default=True, type=click.Path(file_okay=False),
+@click.option("-o", "--outdir", default="out", show_default=True, type=click.Path(),
               help="Folder for results.csv, summary.json (and the report).")
 @click.option("--samples", type=int, help="Number of samples (both ends included).")
 @click.option("--duration", type=float, help="Duration in s.")
@@ -355,18 +353,20 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
     if duration is not None and cycles is not None:
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
+    check_outdir(outdir)
     q_range = _path_range(path_range)
     mech = io.load_model(model, allow_outside=allow_outside)
     t = _times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
+        # everything is computed (solution, summary, its text) before any file is written
         progress.step(f"solving {len(t)} samples")
         sol = run(mech, t, allow_singular=allow_singular)
         progress.step("summary")
         summ = design.summary(sol, fluctuation=fluctuation,
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)
-        out = Path(outdir)
+        text = summary_text(summ)
         files = {
             "results.csv" if fmt == "csv" else "results.parquet":
                 (lambda p: write_csv(sol, p)) if fmt == "csv" else
@@ -381,16 +381,16 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
             from . import plots as plots_mod
             files.update(plots_mod.outputs(sol))
         progress.total = 2 + len(files)
-        _write_outputs(out, files, progress)
-    print_summary(summ)
-    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+        written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS, progress=progress)
+    click.echo(text)
+    click.echo(f"wrote {', '.join(map(str, written))}")
 
 
 # ---------------------------------------------------------------------------- reproduce
 
 @main.command()
 @click.argument("name")
-@click.option("-o", "--outdir", type=click.Path(file_okay=False),
+@click.option("-o", "--outdir", type=click.Path(),
               help="Output folder [default: out/reproduce-NAME].")
 def reproduce(name, outdir):
     """Reproduce a published example: its figures (PNG), results.csv and a README.
@@ -400,12 +400,13 @@ def reproduce(name, outdir):
     """
     from . import plots
 
+    out = Path(outdir or f"out/reproduce-{name}")
+    check_outdir(out)
     sol, figs = plots.reproduce(name)
     files = {"results.csv": lambda p: write_csv(sol, p), **figs}
-    out = Path(outdir or f"out/reproduce-{name}")
-    _write_outputs(out, files)
+    written = write_outputs(out, files, owned=tuple(files))
     click.echo(f"{sol.model.name}: {len(sol.t)} samples over {sol.t[-1] - sol.t[0]:.6g} s")
-    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+    click.echo(f"wrote {', '.join(map(str, written))}")
     click.echo(f"see {out / 'README.txt'} for what each figure shows and the sign conventions")
 
 

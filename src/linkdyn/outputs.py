@@ -1,0 +1,200 @@
+"""All-or-nothing output folders for the commands that write files.
+
+Every command that writes results (``analyze``, ``reproduce``, and any new one) goes through
+:func:`write_outputs`, so a failed run never leaves a half-written folder and a successful one
+never leaves a stale file of an earlier run beside the new ones.
+
+How a new command uses it::
+
+    from linkdyn.outputs import check_outdir, write_outputs
+
+    check_outdir(outdir)                      # early, before the long work: -o is usable
+    sol = ...                                 # compute everything; raise on any error
+    files = {"designs.parquet": lambda p: table.to_parquet(p),
+             "summary.json": lambda p: p.write_text(text)}
+    written = write_outputs(outdir, files, owned=("designs.parquet", "summary.json"))
+
+Each value of ``files`` writes one file at the path it is given (inside a temporary folder);
+``owned`` lists the names (shell patterns) the command writes, so an earlier run's file of that
+family that this run does not write (``results.csv`` when writing ``results.parquet``, a plot
+no longer drawn) is removed. Nothing else in the folder is touched.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+
+from .errors import ModelError
+
+#: Files ``linkdyn analyze`` (and ``simulate``) write: the results in one format, the summary,
+#: the report and the static plots.
+ANALYSIS_OUTPUTS = ("results.csv", "results.parquet", "summary.json", "report.html",
+                    "plot_*.png", "plot_*.svg")
+
+
+def _error(outdir, why: str, option: str) -> ModelError:
+    return ModelError(f"cannot write the outputs to '{outdir}': {why}", field=option,
+                      fix=f"Give {option} a folder you can write to (it is created if missing)")
+
+
+def check_outdir(outdir, option: str = "-o") -> None:
+    """Check, without creating anything, that ``outdir`` can be an output folder.
+
+    It must be a folder or not exist yet; then its nearest existing ancestor must be a folder
+    one can write in. Call it before the long work so a bad ``-o`` fails at once.
+
+    Raises
+    ------
+    ModelError
+        Naming ``option`` (exit status 2): the path or one of its ancestors is a file, a
+        device (``/dev/null``) or a folder one cannot write in.
+    """
+    path = Path(os.path.abspath(outdir))
+    try:
+        for p in (path, *path.parents):
+            if not os.path.lexists(p):
+                continue
+            if not p.is_dir():
+                what = "is not a folder" if p == path else f"'{p}' is a file, not a folder"
+                raise _error(outdir, what, option)
+            if not os.access(p, os.W_OK | os.X_OK):
+                raise _error(outdir, f"'{p}' is not writable", option)
+            return
+    except OSError as err:
+        raise _error(outdir, err.strerror or str(err), option) from None
+
+
+def write_outputs(outdir, files: Mapping[str, Callable[[Path], object]], *,
+                  owned: Iterable[str] = ANALYSIS_OUTPUTS, option: str = "-o",
+                  progress=None) -> list[Path]:
+    """Write every file of ``files`` into ``outdir``, all or nothing.
+
+    The files are written into a temporary folder beside ``outdir`` (inside it when the parent
+    is on another file system or not writable), then moved into place only when every writer
+    has succeeded: a new ``outdir`` is the renamed temporary folder, an existing one receives
+    each file by an atomic replace. Then the files of an earlier run that match ``owned`` and
+    were not written now are removed. Nothing else in ``outdir`` is touched; on any failure
+    the temporary folder and any folder created for it are removed.
+
+    Parameters
+    ----------
+    outdir : str or PathLike
+        The output folder (created with its parents if missing).
+    files : mapping of str to callable
+        ``{file name: writer}``; ``writer(path)`` writes that file at ``path``. Names are plain
+        file names (no folders).
+    owned : iterable of str
+        Names or shell patterns of the files this command writes (default: those of
+        ``analyze``); stale ones are removed.
+    option : str
+        The option that named ``outdir``, for messages.
+    progress : object with ``step(label)``, optional
+        Told before each file is written.
+
+    Returns
+    -------
+    list of Path
+        ``outdir / name`` for every file written, in the order of ``files``.
+
+    Raises
+    ------
+    ModelError
+        ``outdir`` cannot be written (exit status 2, naming ``option``).
+    Exception
+        Whatever a writer raises, after cleaning up.
+    """
+    for name in files:
+        if not name or os.path.basename(name) != name or name in (".", ".."):
+            raise ValueError(f"output names are plain file names, got {name!r}")
+    check_outdir(outdir, option)
+    out = Path(os.path.abspath(outdir))
+    created: list[Path] = []          # folders made here, removed again on failure
+    tmp = None
+    try:
+        try:
+            for p in reversed((out.parent, *out.parent.parents)):
+                if not os.path.lexists(p):
+                    p.mkdir()
+                    created.append(p)
+            fresh = not os.path.lexists(out)
+            tmp = Path(tempfile.mkdtemp(prefix=f".linkdyn-{out.name}-", dir=_tmp_base(out, fresh)))
+            os.chmod(tmp, 0o777 & ~_umask())  # as a plain mkdir would (it may become outdir)
+        except OSError as err:
+            raise _error(outdir, err.strerror or str(err), option) from None
+        for name, write in files.items():
+            if progress is not None:
+                progress.step(f"writing {name}")
+            try:
+                write(tmp / name)
+            except OSError as err:
+                raise _error(outdir, f"writing {name}: {err.strerror or err}", option) from None
+        try:
+            _move_into_place(tmp, out, fresh, list(files))
+        except OSError as err:
+            raise _error(outdir, err.strerror or str(err), option) from None
+        tmp = None
+        created.clear()
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        for p in reversed(created):
+            try:
+                p.rmdir()
+            except OSError:
+                pass
+    _remove_stale(out, files, owned)
+    return [Path(outdir) / name for name in files]
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _tmp_base(out: Path, fresh: bool) -> Path:
+    """Folder for the temporary folder: beside ``out`` when that is on the same file system
+    (so files move by rename), else inside ``out``."""
+    if fresh:
+        return out.parent
+    if (os.access(out.parent, os.W_OK | os.X_OK)
+            and os.stat(out.parent).st_dev == os.stat(out).st_dev):
+        return out.parent
+    return out
+
+
+def _move_into_place(tmp: Path, out: Path, fresh: bool, names: list[str]) -> None:
+    if fresh:
+        try:
+            os.rename(tmp, out)  # the whole folder appears at once
+            return
+        except OSError:
+            out.mkdir(exist_ok=True)  # created meanwhile: move file by file
+    for name in names:
+        os.replace(tmp / name, out / name)
+    if tmp.parent != out:
+        tmp.rmdir()
+    else:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _remove_stale(out: Path, files: Mapping, owned: Iterable[str]) -> None:
+    """Remove files of an earlier run (names matching ``owned``) that this run did not write."""
+    patterns = tuple(owned)
+    try:
+        entries = list(os.scandir(out))
+    except OSError:
+        return
+    for e in entries:
+        if e.name in files or not any(fnmatch.fnmatchcase(e.name, p) for p in patterns):
+            continue
+        if e.is_file(follow_symlinks=False) or e.is_symlink():
+            try:
+                os.unlink(e.path)
+            except OSError:
+                pass
