@@ -166,7 +166,7 @@ class _Progress:
         self.on = bool(getattr(self.stream, "isatty", lambda: False)())
         self.total, self.done, self.label = total, -1, ""
         self.delay, self.t0, self.shown = (0.0 if big else delay), time.monotonic(), False
-        self._stop = threading.Event()
+        self._stop, self._lock = threading.Event(), threading.Lock()
         self._thread = threading.Thread(target=self._run, daemon=True)
 
     def __enter__(self):
@@ -187,6 +187,8 @@ class _Progress:
 
     def step(self, label: str) -> None:
         self.done, self.label = self.done + 1, label
+        if self.shown:  # once the bar is up, a new step shows at once, not at the next tick
+            self._draw()
 
     def _run(self) -> None:
         while not self._stop.wait(0.0 if not self.shown and self.delay == 0 else 0.25):
@@ -195,6 +197,10 @@ class _Progress:
                 self._draw()
 
     def _draw(self) -> None:
+        with self._lock:  # the ticker thread and step() both draw
+            self._draw_line()
+
+    def _draw_line(self) -> None:
         n = 24 * max(self.done, 0) // max(self.total, 1)
         line = (f"  [{'#' * n}{'-' * (24 - n)}] {min(max(self.done, 0), self.total)}/"
                 f"{self.total} {time.monotonic() - self.t0:5.1f} s  {self.label}")
