@@ -142,16 +142,23 @@ def test_page_data_matches_the_solution():
     np.testing.assert_allclose(d["series"]["tau:J1"], sol.dyn.tau[:, 0], rtol=1e-4, atol=1e-9)
     np.testing.assert_allclose(d["series"]["F:J2"],
                                np.linalg.norm(sol.reactions.force[:, 1], axis=-1), rtol=1e-4)
-    np.testing.assert_allclose(d["series"]["lam:J4:x"], sol.dyn.lam[:, 0], rtol=1e-4, atol=1e-9)
+    # the cut joint's multipliers are its reaction: one panel, no duplicate λ panel
+    np.testing.assert_allclose(d["series"]["Fx:J4"], sol.dyn.lam[:, 0], rtol=1e-4,
+                               atol=1e-9 * np.max(np.abs(sol.dyn.lam)))
+    titles = [p["title"] for p in d["plots"]]
+    assert "Reaction at J4 (ground on rocker), cut joint: λ" in titles
+    assert not any(t.startswith("λ") for t in titles) and len(set(titles)) == len(titles)
     np.testing.assert_allclose(d["series"]["q:J3"], np.degrees(sol.kin.q[:, 2]), rtol=1e-4)
     xy = sol.point("coupler", "P")
     np.testing.assert_allclose(d["geom"]["points"]["coupler.P"]["x"], xy[:, 0], rtol=1e-5)
     assert d["geom"]["traces"] == ["coupler.P"]
     shapes = {b["name"]: b["shape"] for b in d["geom"]["bodies"]}
     assert shapes == {"crank": "bar", "coupler": "line", "rocker": "bar"}
-    assert [p["title"] for p in d["plots"]][:3] == ["Joint angles", "Joint rates",
-                                                   "Joint accelerations"]
-    assert {s["label"] for p in d["plots"] for s in p["series"]} >= {"λ x", "λ y", "Fx", "Fy"}
+    assert titles[:3] == ["Joint angles", "Joint angular rates", "Joint angular accelerations"]
+    assert {s["label"] for p in d["plots"] for s in p["series"]} >= {"Fx", "Fy"}
+    # the coupler point's speed along its path is plotted: |v| from the vx_, vy_ columns
+    np.testing.assert_allclose(d["series"]["v:coupler.P"],
+                               np.hypot(*sol.point_velocity("coupler", "P").T), rtol=1e-4)
 
 
 def test_summary_tables_render_known_and_unknown_keys():
@@ -415,3 +422,139 @@ def test_singular_samples_are_gaps_not_errors(browser, tmp_path):
         assert pg.errors == []
     finally:
         pg.close()
+
+
+# ---------------------------------------------------------------------------- acceptance, every example
+
+EXAMPLES = sorted(p.stem for p in linkdyn.example_path("hoeken").parent.glob("*.toml"))
+SIZES = [(1440, 900), (390, 844)]
+
+
+@pytest.fixture(scope="module")
+def example_runs(tmp_path_factory):
+    """Each bundled example analyzed once with --report: (report.html, results.csv columns)."""
+    cache = {}
+
+    from linkdyn.cli import _times, write_csv
+
+    def get(example):
+        if example not in cache:  # what `analyze --report` writes, without the static figures
+            out = tmp_path_factory.mktemp(example)
+            mech = linkdyn.load(linkdyn.example_path(example))
+            sol = linkdyn.analyze(mech, _times(mech, None, None, None))
+            report.outputs(sol, design.summary(sol))["report.html"](out / "report.html")
+            write_csv(sol, out / "results.csv")
+            names = (out / "results.csv").read_text().splitlines()[0].split(",")
+            data = np.loadtxt(out / "results.csv", delimiter=",", skiprows=1, ndmin=2)
+            cache[example] = out / "report.html", dict(zip(names, data.T))
+        return cache[example]
+    return get
+
+
+# page series key -> (results.csv column, factor to the page's unit)
+def _column_of(key: str) -> tuple[str, float] | None:
+    kind, _, name = key.partition(":")
+    table = {"tau": ("tau_", "force_"), "Fx": ("Fx_",), "Fy": ("Fy_",), "M": ("M_",),
+             "q": ("q_",), "qd": ("qd_",), "qdd": ("qdd_",), "ke": None}
+    if key == "ke":
+        return "kinetic_energy", 1.0
+    if kind not in table or table[kind] is None:
+        return None
+    return next(((p + name, 1.0) for p in table[kind]), None)
+
+
+@pytest.mark.parametrize("size", SIZES, ids=lambda s: f"{s[0]}x{s[1]}")
+@pytest.mark.parametrize("example", EXAMPLES)
+def test_report_acceptance(browser, example_runs, example, size):
+    path, csv = example_runs(example)
+    pg = Page(browser, path, width=size[0], height=size[1])
+    p = pg.page
+    try:
+        D = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent)")
+        n = len(D["t"])
+        assert n == len(csv["t"])  # the default runs are short: one frame per sample
+        # no horizontal overflow
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0]
+        # every control can be clicked: the element itself is what a click at its centre hits
+        blocked = p.evaluate("""() => {
+            const out = [];
+            const all = [...document.querySelectorAll('.controls button, .controls select, ' +
+                '.controls input, .plotbar select, .keyitem, #plots .panel:first-of-type button')];
+            for (const e of all) {
+                if (!e.offsetParent) continue;
+                e.scrollIntoView({block: 'center'});
+                const r = e.getBoundingClientRect();
+                const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+                if (!(hit === e || e.contains(hit) || (hit && hit.control === e)))
+                    out.push((e.id || e.className || e.tagName) + ' under ' +
+                             (hit ? hit.tagName + '.' + hit.className : 'nothing'));
+            }
+            return out;
+        }""")
+        assert blocked == []
+        if size[0] < 500:  # phone: touch targets of 44 px
+            small = p.evaluate("""() => [...document.querySelectorAll('.controls button, .keyitem')]
+                .filter(e => e.offsetParent && e.getBoundingClientRect().height < 44)
+                .map(e => e.id || e.textContent.slice(0, 20))""")
+            assert small == []
+            assert p.locator("#anim").bounding_box()["height"] >= 250
+        # no series of pure rounding noise is drawn
+        scale = {"N": max(np.max(np.abs(v)) for k, v in csv.items() if k.startswith(("Fx_", "Fy_")))}
+        for spec in D["plots"]:
+            for s in spec["series"]:
+                col = _column_of(s["key"])
+                if col and col[0].startswith(("Fx_", "Fy_")):
+                    assert np.max(np.abs(csv[col[0]])) > 1e-12 * scale["N"], s["key"]
+        # the jump to each peak lands on the peak's frame, and the address keeps it
+        for item in D["key"]:
+            if item["frame"] is None or not item["label"].startswith(("max ", "min ")):
+                continue
+            if not item["label"].split()[1] in ("torque", "force"):
+                continue
+            col = ("tau_" if "torque" in item["label"] else "force_") + item["label"].split()[-1]
+            btn = p.locator(f".keyitem[data-frame='{item['frame']}']").first
+            btn.click()
+            k = pg.frame()
+            assert k == item["frame"]
+            pick = np.argmax if item["label"].startswith("max") else np.argmin
+            assert csv[col][k] == csv[col][pick(csv[col])], (item, k)
+            assert item["value"] == pytest.approx(csv[col][k], rel=1e-12)
+            p.wait_for_function(f"location.hash === '#frame={k}'", timeout=3000)
+        # hover readouts equal results.csv at the hovered frame, on the first panels
+        panels = p.locator("#plots .panel")
+        checked = 0
+        efforts = [n for n, s in enumerate(D["plots"]) if s["title"].startswith("Driver")]
+        for at in sorted({0, 2, *efforts, len(D["plots"]) - 1}):
+            spec = D["plots"][at]
+            cols = [(s["key"], _column_of(s["key"])) for s in spec["series"]]
+            svg = panels.nth(at).locator("svg")
+            svg.scroll_into_view_if_needed()
+            box = svg.bounding_box()
+            p.mouse.move(box["x"] + 0.57 * box["width"], box["y"] + 0.5 * box["height"])
+            tip = panels.nth(at).locator(".tooltip")
+            k = int(tip.get_attribute("data-frame"))
+            for key, col in cols:
+                if not col:
+                    continue
+                text = tip.locator(f"b[data-key='{key}']").inner_text().split()[0]
+                want = csv[col[0]][k] * (np.degrees(1) if spec["unit"] == "deg" else 1.0)
+                peak = np.max(np.abs(csv[col[0]])) * (np.degrees(1) if spec["unit"] == "deg" else 1)
+                assert float(text) == pytest.approx(want, abs=1e-3 * peak + 1e-12), (key, k)
+                checked += 1
+        assert checked >= 2
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def test_summary_tables_show_rounding_noise_as_zero_and_angles_in_degrees():
+    sol = _solution("slider_crank", np.linspace(0.0, 0.2, 61))
+    s = design.summary(sol)
+    assert 0 < abs(s["driver_energy"]["J1"]["work_J"]) < 1e-9  # a whole cycle: noise
+    assert 0 < s["reactions"]["J4"]["peak_moment_Nm"] < 1e-9
+    page = report.summary_html(s, report.keys.scales(sol))
+    body = page[:page.index("Numerical health")]  # residuals are meant to be tiny there
+    assert "e-1" not in body  # no 1e-15-sized number printed as data
+    assert "<th>J1</th><td>0</td><td>20.19</td>" in body  # the cycle's net work
+    assert "mean speed (rad/s)" in page and "rad (s)" not in page
+    assert "<td>deg</td><td>0</td><td>360.0</td>" in page  # joint travel in degrees

@@ -18,9 +18,10 @@ document.
 
 from .data import (BODY_COLORS, DEG, M_COLOR, MAX_FRAMES, PALETTE, X_COLOR, Y_COLOR,
                    frame_indices, joint_roles, multiplier_labels, page_data)
+from .keys import key_results
 from .page import outputs, render
 from .tables import fmt, key_results_html, model_html, pretty_key, summary_html
 
-__all__ = ["outputs", "render", "page_data", "frame_indices", "joint_roles", "multiplier_labels",
+__all__ = ["outputs", "render", "page_data", "key_results", "frame_indices", "joint_roles", "multiplier_labels",
            "fmt", "pretty_key", "summary_html", "key_results_html", "model_html", "MAX_FRAMES",
            "DEG", "PALETTE", "BODY_COLORS", "X_COLOR", "Y_COLOR", "M_COLOR"]

@@ -9,6 +9,7 @@ import numpy as np
 
 from .. import joints as jk
 from ..model import GROUND
+from .keys import driver_position, is_noise, key_results, scales
 
 MAX_FRAMES = 2000
 DEG = 180.0 / math.pi
@@ -21,11 +22,20 @@ BODY_COLORS = ("#3b75af", "#e1812c", "#3a923a", "#c03d3e", "#9372b2", "#845b53",
 X_COLOR, Y_COLOR, M_COLOR = "#1f77b4", "#ff7f0e", "#2ca02c"
 
 
-def frame_indices(n: int, max_frames: int = MAX_FRAMES) -> np.ndarray:
-    """At most ``max_frames`` evenly spread sample indices of ``n``, both ends included."""
+def frame_indices(n: int, max_frames: int = MAX_FRAMES, keep=()) -> np.ndarray:
+    """At most ``max_frames`` evenly spread sample indices of ``n``, both ends included, plus
+    the samples ``keep`` (the key results' peaks, so a jump lands on the peak itself)."""
     if n <= max_frames:
         return np.arange(n)
-    return np.unique(np.round(np.linspace(0, n - 1, max_frames)).astype(int))
+    keep = np.unique(np.array([k for k in keep if k is not None], dtype=int))
+    base = np.round(np.linspace(0, n - 1, max(2, max_frames - len(keep)))).astype(int)
+    idx = np.unique(np.concatenate([base, keep]))
+    missing = max_frames - len(idx)
+    if missing > 0:  # a kept sample was already there: split the widest gaps
+        gaps = np.diff(idx)
+        wide = np.sort(np.argsort(-gaps, kind="stable")[:missing])
+        idx = np.unique(np.concatenate([idx, idx[wide] + gaps[wide] // 2]))
+    return idx
 
 
 def _num(a, sig: int = 5) -> list:
@@ -61,7 +71,7 @@ def multiplier_labels(sol) -> list[tuple[str, str, str]]:
 
 def _known_column(name: str) -> bool:
     prefixes = ("q_", "qd_", "qdd_", "phi_", "omega_", "alpha_", "tau_", "force_", "Fx_", "Fy_",
-                "M_", "x_", "y_")
+                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_")
     return name == "t" or name.startswith(prefixes) or name in ("kinetic_energy",
                                                                "potential_energy")
 
@@ -108,10 +118,24 @@ def _ground_outline(ground, used: set) -> list[str]:
     return [f"{GROUND}.{p}" for p in (outline if shape == "polygon" else pts)]
 
 
-def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
-    """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI)."""
+def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
+    """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI).
+
+    ``key`` lists the key results (:func:`.keys.key_results`), each with the page ``frame``
+    where it occurs; ``zero`` names the series left out of the plots as rounding noise (below
+    ``keys.NOISE`` of their unit family's scale).
+    """
     m = sol.model
-    idx = frame_indices(len(sol.t), max_frames)
+    keyres = key_results(sol, summary)
+    idx = frame_indices(len(sol.t), max_frames, [it["k"] for it in keyres])
+    for it in keyres:
+        k = it.pop("k")
+        it["frame"] = None if k is None else int(np.searchsorted(idx, k))
+        it["t"] = None if k is None else float(sol.t[k])
+        pos = driver_position(sol, k)
+        it["at"] = None if pos is None or not math.isfinite(pos[1]) else list(pos)
+        if not math.isfinite(it["value"]):
+            it["value"] = None
     t = np.asarray(sol.t)[idx]
     cols = sol.columns
     joints = list(m.joints)
@@ -186,25 +210,46 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
     fmax = float(np.nanmax(np.linalg.norm(sol.reactions.force, axis=-1))) if joints else 0.0
 
     # ---- plot series and panels
-    plots = []
+    plots, zero = [], []
+    fam = scales(sol)
+    cut = {m.joints[int(c)].name for c in sol.topology.cut}
+
+    def panel(section, title, unit, ser, family=None):
+        """A panel of the series that are not rounding noise (noise: listed in ``zero``)."""
+        if family is not None:
+            noise = [s for s in ser if is_noise(series[s["key"]], fam[family])]
+            zero.extend(f"{title}: {s['label']}" for s in noise)
+            for s in noise:  # shown as exact zeros in readouts
+                series[s["key"]] = [0.0 if v is not None else None for v in series[s["key"]]]
+            ser = [s for s in ser if s not in noise]
+        if ser:
+            plots.append({"section": section, "title": title, "unit": unit, "series": ser})
+
     deg = {j.name: DEG if jk.get(j.kind).angular else 1.0 for j in joints}
-    kin_names = {"q": ("Joint angles", "Joint displacements"),
-                 "qd": ("Joint rates", "Joint rates"),
-                 "qdd": ("Joint accelerations", "Joint accelerations")}
-    units = {"q": ("deg", "m"), "qd": ("rad/s", "m/s"), "qdd": ("rad/s²", "m/s²")}
-    for kind in ("q", "qd", "qdd"):
+    motion = "Joint motion (relative joint coordinates q)"
+    names = {True: ("Joint angles", "Joint angular rates", "Joint angular accelerations"),
+             False: ("Slider displacements", "Slider rates", "Slider accelerations")}
+    units = {True: ("deg", "rad/s", "rad/s²"), False: ("m", "m/s", "m/s²")}
+    for n, kind in enumerate(("q", "qd", "qdd")):
         for rev in (True, False):
             js = [j for j in joints if jk.get(j.kind).angular == rev]
-            if not js:
-                continue
-            scale = (lambda j: deg[j.name]) if kind == "q" else (lambda j: 1.0)
-            ser = [{"key": add(f"{kind}:{j.name}", cols[f"{kind}_{j.name}"] * scale(j)),
-                    "label": j.name, "color": jcolor[j.name]} for j in js]
-            title = kin_names[kind][0 if rev else 1]
-            plots.append({"section": "Joint motion (relative joint coordinates q)",
-                          "title": title, "unit": units[kind][0 if rev else 1], "series": ser})
+            if js:
+                scale = (lambda j: deg[j.name]) if kind == "q" else (lambda j: 1.0)
+                panel(motion, names[rev][n], units[rev][n],
+                      [{"key": add(f"{kind}:{j.name}", cols[f"{kind}_{j.name}"] * scale(j)),
+                        "label": j.name, "color": jcolor[j.name]} for j in js])
+
+    # the speed and acceleration of the traced points (a coupler point's speed along its path)
+    pm = [pid for pid in traces if f"vx_{pid}" in cols]
+    if pm:
+        for word, c, unit in (("Speed", "v", "m/s"), ("Acceleration", "a", "m/s²")):
+            panel("Point motion", f"{word} of traced points", unit,
+                  [{"key": add(f"{c}:{pid}", np.hypot(cols[f"{c}x_{pid}"], cols[f"{c}y_{pid}"])),
+                    "label": pid, "color": PALETTE[n % len(PALETTE)]}
+                   for n, pid in enumerate(pm)])
 
     drivers = []
+    efforts = "Driver efforts and joint reactions"
     for unit, word in (("N m", "torque"), ("N", "force")):
         ser = []
         for k, d in enumerate(m.drivers):
@@ -215,44 +260,35 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
             drivers.append({"joint": d.joint, "key": key, "unit": unit, "word": word,
                             "q": f"q:{d.joint}", "qunit": "deg" if unit == "N m" else "m",
                             "color": jcolor[d.joint]})
-        if ser:
-            plots.append({"section": "Driver efforts and joint reactions",
-                          "title": f"Driver {word}", "unit": unit, "series": ser})
-    plots.append({"section": "Driver efforts and joint reactions",
-                  "title": "Reaction force magnitude |F|", "unit": "N",
-                  "series": [{"key": f"F:{j.name}", "label": j.name, "color": jcolor[j.name]}
-                             for j in joints]})
+        panel(efforts, f"Driver {word}", unit, ser)
+    panel(efforts, "Reaction force magnitude |F|", "N",
+          [{"key": f"F:{j.name}", "label": j.name, "color": jcolor[j.name]} for j in joints],
+          "N")
     for k, j in enumerate(joints):
-        ser = [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
-               {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}]
-        plots.append({"section": "Driver efforts and joint reactions",
-                      "title": f"Reaction at {j.name} ({j.body_a} on {j.body_b})",
-                      "unit": "N", "series": ser})
+        # a cut joint's reaction is its multipliers λ: one panel shows both
+        panel(efforts, f"Reaction at {j.name} ({j.body_a} on {j.body_b})"
+              + (", cut joint: λ" if j.name in cut else ""), "N",
+              [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
+               {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}], "N")
     prism = [(k, j) for k, j in enumerate(joints) if "M" in jk.get(j.kind).reaction]
     if prism:
-        ser = [{"key": add(f"M:{j.name}", sol.reactions.moment[..., k]), "label": j.name,
-                "color": jcolor[j.name]} for k, j in prism]
-        plots.append({"section": "Driver efforts and joint reactions",
-                      "title": "Prismatic reaction moments", "unit": "N m", "series": ser})
-
-    labels = multiplier_labels(sol)
-    for c in dict.fromkeys(lbl[0] for lbl in labels):
-        comps = [(k, lbl) for k, lbl in enumerate(labels) if lbl[0] == c]
-        for unit in dict.fromkeys(lbl[2] for _, lbl in comps):
-            ser = [{"key": add(f"lam:{c}:{lbl[1]}", sol.dyn.lam[..., k]),
-                    "label": f"λ {lbl[1]}", "color": (X_COLOR, Y_COLOR)[n % 2]}
-                   for n, (k, lbl) in enumerate(comps) if lbl[2] == unit]
-            plots.append({"section": "Cut-joint multipliers λ (reaction at the cut joint)",
-                          "title": f"λ at cut joint {c}", "unit": unit, "series": ser})
+        panel(efforts, "Guide reaction moments", "N m",
+              [{"key": add(f"M:{j.name}", sol.reactions.moment[..., k]), "label": j.name,
+                "color": jcolor[j.name]} for k, j in prism], "N m")
 
     try:
         from .. import design
         fbs = design.four_bars(m)
         for n, fb in enumerate(fbs):
             key = add(f"mu:{n}", np.degrees(design.transmission_angle(sol, fb)))
-            plots.append({"section": "Design", "title": f"Transmission angle "
-                          f"({fb.coupler} / {fb.output})", "unit": "deg",
-                          "series": [{"key": key, "label": "μ", "color": PALETTE[n]}]})
+            panel("Design", f"Transmission angle ({fb.coupler} / {fb.output})", "deg",
+                  [{"key": key, "label": "μ", "color": PALETTE[n % len(PALETTE)]}])
+        ws = design.shaking_wrench(sol)
+        panel("Design", "Shaking force on the frame", "N",
+              [{"key": add("shake:Fx", ws[..., 1]), "label": "Fx", "color": X_COLOR},
+               {"key": add("shake:Fy", ws[..., 2]), "label": "Fy", "color": Y_COLOR}], "N")
+        panel("Design", "Shaking moment on the frame (about the origin)", "N m",
+              [{"key": add("shake:M", ws[..., 0]), "label": "M", "color": M_COLOR}], "N m")
     except Exception:  # pragma: no cover - a design helper must never break the report
         pass
     energy = [{"key": add("ke", cols["kinetic_energy"]), "label": "kinetic",
@@ -260,14 +296,14 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
     if "potential_energy" in cols:
         energy.append({"key": add("pe", cols["potential_energy"]), "label": "potential",
                        "color": PALETTE[1]})
-    plots.append({"section": "Design", "title": "Energy", "unit": "J", "series": energy})
+    panel("Design", "Energy", "J", energy, "J")
     for n, name in enumerate(c for c in cols if not _known_column(c)):
         vals = np.asarray(cols[name], float)
         if vals.shape != np.shape(sol.t):
             continue
-        plots.append({"section": "Other result columns", "title": name, "unit": "",
-                      "series": [{"key": add(f"col:{name}", vals), "label": name,
-                                  "color": PALETTE[n % len(PALETTE)]}]})
+        panel("Other result columns", name, "",
+              [{"key": add(f"col:{name}", vals), "label": name,
+                "color": PALETTE[n % len(PALETTE)]}])
 
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
@@ -289,6 +325,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES) -> dict:
         "plots": plots,
         "xaxes": xaxes,
         "drivers": drivers,
+        "key": keyres,
+        "zero": zero,
         "geom": {"points": points, "bodies": bodies, "joints": jlist, "traces": traces,
                  "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
                             float(hi[0] + margin), float(hi[1] + margin)],

@@ -9,6 +9,7 @@ from importlib import resources
 from pathlib import Path
 
 from .data import MAX_FRAMES, page_data
+from .keys import scales
 from .tables import key_results_html, model_html, summary_html
 
 
@@ -25,7 +26,7 @@ def outputs(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> dict:
 
 def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     """The whole page as a string."""
-    data = page_data(sol, max_frames=max_frames)
+    data = page_data(sol, max_frames=max_frames, summary=summary)
     m = sol.model
     blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
     blob = blob.replace("</", "<\\/")  # never close the <script> early
@@ -36,8 +37,8 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
     return _PAGE.format(
         title=title, css=_asset("report.css"), js=_asset("report.js"), data=blob, desc=desc,
-        note=html.escape(note), summary=summary_html(summary), model=model_html(sol),
-        key=key_results_html(summary),
+        note=html.escape(note), summary=summary_html(summary, scales(sol)), model=model_html(sol),
+        key=key_results_html(data["key"]),
         version=html.escape(_version()))
 
 
@@ -76,8 +77,8 @@ the time cursor; keys: space play/pause, ← → step.</p>
     <svg id="anim" role="img" aria-label="animation of the mechanism"></svg>
     <div class="controls">
       <button id="play" type="button" title="play / pause (space)">▶ Play</button>
-      <button id="stepback" type="button" title="previous frame (←)">◀</button>
-      <button id="step" type="button" title="next frame (→)">▶|</button>
+      <button id="stepback" type="button" title="previous frame (←)" aria-label="previous frame">◀</button>
+      <button id="step" type="button" title="next frame (→)" aria-label="next frame">▶|</button>
       <input id="scrubber" type="range" min="0" max="0" value="0" step="1"
              aria-label="time">
       <label>speed <select id="speed">
@@ -88,7 +89,7 @@ the time cursor; keys: space play/pause, ← → step.</p>
     <div class="controls toggles">
       <label><input type="checkbox" id="show-labels" checked> labels</label>
       <label><input type="checkbox" id="show-traces" checked> traced points</label>
-      <label><input type="checkbox" id="show-forces"> reaction forces</label>
+      <label><input type="checkbox" id="show-forces"> forces</label>
       <span id="ratenote" class="note"></span>
     </div>
   </div>
@@ -97,9 +98,12 @@ the time cursor; keys: space play/pause, ← → step.</p>
     <div id="frameinfo" class="note"></div>
     <div id="drivers"></div>
     <div id="loaded" class="loaded"></div>
-    <table id="jointforces" class="grid small"></table>
-    {key}
+    <div class="scroll"><table id="jointforces" class="grid small"></table></div>
   </aside>
+</section>
+<section class="keys">
+<h2>Key results <span class="note">click one to show that instant</span></h2>
+{key}
 </section>
 <section>
   <div class="plotbar"><h2>Plots</h2>
@@ -108,11 +112,11 @@ the time cursor; keys: space play/pause, ← → step.</p>
 </section>
 <section class="tables">
 <h2>Summary</h2>
-{summary}
+<div class="scroll">{summary}</div>
 </section>
 <section class="tables">
 <h2>Model</h2>
-{model}
+<div class="scroll">{model}</div>
 </section>
 <footer class="note">linkdyn {version} · recursive DeNOC kinematics and inverse dynamics</footer>
 <script id="linkdyn-data" type="application/json">{data}</script>

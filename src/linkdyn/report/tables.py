@@ -42,7 +42,39 @@ def fmt(v) -> str:
 
 _UNITS = {"N": "N", "Nm": "N m", "s": "s", "deg": "deg", "m": "m", "mm": "mm", "W": "W",
           "J": "J", "kg": "kg", "rad": "rad", "rel": "relative", "kgm2": "kg m²",
-          "kg_m2": "kg m²", "rpm": "rpm", "pct": "%", "percent": "%"}
+          "kg_m2": "kg m²", "rpm": "rpm", "pct": "%", "percent": "%", "rad_s": "rad/s",
+          "m_s": "m/s", "rad_s2": "rad/s²", "m_s2": "m/s²", "N_m": "N m"}
+
+
+def _denoise(x, noise: float = 1e-12):
+    """A copy of the summary with rounding noise shown as zero: in each dict, a number below
+    ``noise`` of the largest magnitude among its siblings of the same unit suffix (``work_J``
+    beside ``positive_work_J``, ``mean_power_W`` beside ``max_power_W``) becomes 0."""
+    if isinstance(x, list):
+        return [_denoise(v, noise) for v in x]
+    if not isinstance(x, dict):
+        return x
+    out = {k: _denoise(v, noise) for k, v in x.items()}
+    nums = {k: v for k, v in out.items() if isinstance(v, float) and math.isfinite(v)}
+    for suffix in {k.rsplit("_", 1)[-1] for k in nums if "_" in k}:
+        same = {k: v for k, v in nums.items() if k.endswith("_" + suffix)}
+        top = max(abs(v) for v in same.values())
+        for k, v in same.items():
+            if abs(v) <= noise * top:
+                out[k] = 0.0
+    return out
+
+
+def _travel_in_degrees(travel: dict) -> dict:
+    """Joint travel as the page shows angles: degrees (a length stays in m)."""
+    out = {}
+    for j, e in travel.items():
+        if isinstance(e, dict) and e.get("unit") == "rad":
+            e = {k: (math.degrees(v) if k in ("min", "max", "range") and isinstance(v, float)
+                     else v) for k, v in e.items()}
+            e["unit"] = "deg"
+        out[j] = e
+    return out
 
 
 def pretty_key(key: str) -> str:
@@ -96,10 +128,26 @@ def _value_html(v) -> str:
     return _e(fmt(v))
 
 
-def summary_html(s: dict) -> str:
+def summary_html(s: dict, scales: dict | None = None) -> str:
     """The summary (``summary.json``) as tables: known sections laid out for a designer, any
-    other key rendered generically."""
-    s = dict(s)
+    other key rendered generically. Rounding noise shows as 0: a value below 1e-12 of its
+    siblings of the same unit, or a reaction moment below 1e-12 of ``scales['N m']``
+    (:func:`.keys.scales`)."""
+    s = _denoise(dict(s))
+    if scales and isinstance(s.get("reactions"), dict):
+        s["reactions"] = {j: {k: (0.0 if k == "peak_moment_Nm" and isinstance(v, float)
+                                  and abs(v) <= 1e-12 * scales.get("N m", 0.0) else v)
+                              for k, v in r.items()} for j, r in s["reactions"].items()}
+    if isinstance(s.get("joint_travel"), dict):
+        s["joint_travel"] = _travel_in_degrees(s["joint_travel"])
+    ps = s.get("path_straightness")
+    if isinstance(ps, dict):  # lengths in mm, the range in the driver's display unit
+        ps = dict(ps)
+        for k in [k for k in ps if k.endswith("_m") and isinstance(ps[k], (int, float))]:
+            ps[k[:-2] + "_mm"] = ps.pop(k) * 1e3
+        if isinstance(ps.get("range"), (list, tuple)) and ps.get("range_unit", "rad") == "rad":
+            ps["range_deg"] = [math.degrees(v) for v in ps.pop("range")]
+        s["path_straightness"] = ps
     parts = []
     run_keys = ("model", "samples", "duration_s", "mobility", "loops", "cut_joints",
                 "spanning_tree", "invalid_samples")
@@ -181,48 +229,45 @@ def summary_html(s: dict) -> str:
     return "\n".join(parts)
 
 
-def key_results_html(s: dict) -> str:
-    """The few numbers a designer looks at first (beside the animation)."""
-    rows = []
-    for j, d in (s.get("drivers") or {}).items():
-        rows.append((f"peak {d.get('effort', 'effort')} {j}",
-                     f"{fmt(d.get('peak'))} {d.get('unit', '')} at t = "
-                     f"{fmt(d.get('peak_time_s'))} s"))
-        rows.append((f"RMS {d.get('effort', 'effort')} {j}",
-                     f"{fmt(d.get('rms'))} {d.get('unit', '')}"))
-    reactions = s.get("reactions") or {}
-    if reactions:
-        j, r = max(reactions.items(), key=lambda kv: kv[1].get("peak_force_N") or 0.0)
-        rows.append(("highest joint load", f"{j}: {fmt(r.get('peak_force_N'))} N at t = "
-                                           f"{fmt(r.get('peak_time_s'))} s"))
-    fbs = s.get("four_bars") or []
-    for fb in fbs:
-        ta = fb.get("transmission_angle_deg", {})
-        links = fb.get("links", {})
-        which = (f" {links.get('coupler', '')}/{links.get('output', '')}"
-                 if len(fbs) > 1 else "")
-        rows.append((f"transmission angle{which}",
-                     f"{fmt(ta.get('min'))} .. {fmt(ta.get('max'))} deg"))
-        rows.append((f"Grashof type{which}", str(fb.get("grashof", ""))))
-    shaking = (s.get("shaking") or {}).get("force_N")
-    if isinstance(shaking, dict) and "peak" in shaking:
-        rows.append(("shaking force", f"peak {fmt(shaking['peak'])} N, RMS "
-                                      f"{fmt(shaking.get('rms'))} N"))
-    for j, e in (s.get("driver_energy") or {}).items():
-        fw = e.get("flywheel") if isinstance(e, dict) else None
-        if isinstance(fw, dict) and fw.get("inertia_kg_m2") is not None:
-            rows.append((f"flywheel {j}", f"{fmt(fw['inertia_kg_m2'])} kg m² for C_s = "
-                                          f"{fmt(fw.get('speed_fluctuation'))}"))
-    ps = s.get("path_straightness")
-    if isinstance(ps, dict) and ps.get("max_deviation_m") is not None:
-        rows.append((f"straightness of {ps.get('point', 'path')}",
-                     f"max deviation {fmt(ps['max_deviation_m'] * 1e3)} mm over "
-                     f"{fmt((ps.get('length_m') or 0.0) * 1e3)} mm"
-                     + (" (whole run)" if ps.get("range") is None else "")))
-    if s.get("invalid_samples"):
-        rows.append(("WARNING", f"{s['invalid_samples']} singular samples (NaN)"))
-    body = "".join(f"<tr><th>{_e(k)}</th><td>{_e(v)}</td></tr>" for k, v in rows)
-    return f"<h3>Key results</h3><table class='kv key'>{body}</table>" if rows else ""
+def key_value(item: dict) -> str:
+    """A key result's value as text: 4 significant digits, a sign on signed quantities."""
+    v = item.get("value")
+    text = fmt(v)
+    if item.get("signed") and isinstance(v, float) and v > 0:
+        text = "+" + text
+    return f"{text} {item.get('unit', '')}".strip()
+
+
+def key_where(item: dict) -> str:
+    """Where a key result occurs: ``t = 0.7944 s · J1 = 286.0 deg``."""
+    if item.get("t") is None:
+        return ""
+    at = item.get("at")
+    return f"t = {fmt(item['t'])} s" + (f" · {at[0]} = {fmt(at[1])} {at[2]}" if at else "")
+
+
+def key_results_html(items: list) -> str:
+    """The key results (:func:`.keys.key_results` with their page frames), grouped; a result
+    that occurs at one sample is a button that moves the animation there (``data-frame``)."""
+    groups: dict[str, list] = {}
+    for it in items:
+        groups.setdefault(it["group"], []).append(it)
+    out = []
+    for g, its in groups.items():
+        cells = []
+        for it in its:
+            inner = (f"<span class='kl'>{_e(it['label'])}</span>"
+                     f"<span class='kv'>{_e(key_value(it))}</span>"
+                     f"<span class='kt'>{_e(key_where(it))}"
+                     + (f"{' · ' if key_where(it) else ''}{_e(it['note'])}" if it.get("note")
+                        else "") + "</span>")
+            if it.get("frame") is not None:
+                cells.append(f"<button type='button' class='keyitem' data-frame='{it['frame']}' "
+                             f"title='show this instant'>{inner}</button>")
+            else:
+                cells.append(f"<div class='keyitem'>{inner}</div>")
+        out.append(f"<div class='keygroup'><h3>{_e(g)}</h3>{''.join(cells)}</div>")
+    return "<div class='keygrid'>" + "".join(out) + "</div>" if out else ""
 
 
 def model_html(sol) -> str:

@@ -388,20 +388,95 @@
         h("span", "", it, s.label);
         return h("b", "", it, "");
       });
+      var hover = el("line", {"class": "hoverline", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
+      hover.style.display = "none";
       var hit = el("rect", {x: x0, y: y1, width: x1 - x0, height: y0 - y1, fill: "transparent"}, svg);
-      var pick = function (e) {
+      var at = function (e) {
         var r = svg.getBoundingClientRect(), vx = (e.clientX - r.left) / r.width * PW;
         var xv = xr[0] + (vx - x0) / (x1 - x0) * (xr[1] - xr[0]);
-        var k = xmode.key === "t" ? lowerBound(T, xv) : nearest(xs, xv);
-        pause(); setFrame(k);
+        return xmode.key === "t" ? lowerBound(T, xv) : nearest(xs, xv);
       };
+      var pick = function (e) { pause(); setFrame(at(e)); };
+      // hover: a readout of every series at the frame under the pointer (the cursor stays)
+      var readout = function (e) {
+        var k = at(e), x = xs[k];
+        hover.style.display = fin(x) ? "" : "none";
+        if (fin(x)) { hover.setAttribute("x1", sx(x).toFixed(1)); hover.setAttribute("x2", sx(x).toFixed(1)); }
+        tip.innerHTML = "";
+        tip.setAttribute("data-frame", String(k));
+        h("div", "tt", tip, "t = " + fmt(T[k], 5) + " s" + (xmode.key === "t" ? "" : ", " + xmode.label.replace(/ \(.*\)$/, "") + " = " + fmtS(xmode.key, x)));
+        spec.series.forEach(function (s) {
+          var row = h("div", "tr", tip), sw = h("i", "", row); sw.style.background = s.color;
+          h("span", "", row, s.label + " ");
+          var b = h("b", "", row, fmtS(s.key, S[s.key][k]) + (spec.unit ? " " + spec.unit : ""));
+          b.setAttribute("data-key", s.key);
+        });
+        var pr = panel.getBoundingClientRect();
+        tip.style.display = "block";
+        var left = e.clientX - pr.left + 14;
+        if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
+        tip.style.left = left + "px";
+        tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
+      };
+      var tip = h("div", "tooltip", panel);
       var down = false;
       hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); });
-      hit.addEventListener("pointermove", function (e) { if (down) pick(e); });
+      hit.addEventListener("pointermove", function (e) { if (down) pick(e); readout(e); });
       hit.addEventListener("pointerup", function () { down = false; });
-      plots.push({spec: spec, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, y0: y0, y1: y1});
+      hit.addEventListener("pointerleave", function () { tip.style.display = "none"; hover.style.display = "none"; });
+      exportButtons(panel, spec, svg);
+      plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, y0: y0, y1: y1});
     });
   }
+  // export: a panel's series as CSV (every page frame), the panel as SVG or PNG
+  function download(name, blob) {
+    var a = document.createElement("a");
+    a.href = URL.createObjectURL(blob); a.download = name;
+    document.body.appendChild(a); a.click(); a.remove();
+    setTimeout(function () { URL.revokeObjectURL(a.href); }, 1000);
+  }
+  function slug(s) { return s.replace(/[^A-Za-z0-9]+/g, "_").replace(/^_|_$/g, "").toLowerCase(); }
+  function panelCSV(spec) {
+    var head = ["t_s"].concat(spec.series.map(function (s) { return s.label + (spec.unit ? " (" + spec.unit + ")" : ""); }));
+    var lines = [head.map(function (c) { return '"' + c.replace(/"/g, '""') + '"'; }).join(",")];
+    for (var k = 0; k < N; k++)
+      lines.push([T[k]].concat(spec.series.map(function (s) { var v = S[s.key][k]; return fin(v) ? v : ""; })).join(","));
+    return lines.join("\n") + "\n";
+  }
+  function panelSVG(svg) {
+    var c = svg.cloneNode(true);
+    c.setAttribute("xmlns", NS); c.setAttribute("width", PW); c.setAttribute("height", PH);
+    var st = document.createElementNS(NS, "style");
+    st.textContent = "text{font-family:DejaVu Sans,Helvetica,Arial,sans-serif}.ptitle{font-size:12.5px;font-weight:bold}" +
+      ".tick{font-size:10.5px;fill:#444}.axis{stroke:#888}.gridl{stroke:#eceff2}.zero{stroke:#b9c0c7}" +
+      ".cursor{stroke:#c62828;stroke-width:1.3}.hoverline{display:none}.series{fill:none;stroke-width:1.6}";
+    c.insertBefore(st, c.firstChild);
+    var bg = document.createElementNS(NS, "rect");
+    bg.setAttribute("width", PW); bg.setAttribute("height", PH); bg.setAttribute("fill", "#fff");
+    c.insertBefore(bg, st.nextSibling);
+    return new XMLSerializer().serializeToString(c);
+  }
+  function exportButtons(panel, spec, svg) {
+    var bar = h("div", "pexport", panel), name = slug(spec.title);
+    var b1 = h("button", "", bar, "CSV"); b1.type = "button"; b1.title = "the panel's series as CSV";
+    b1.addEventListener("click", function () { download(name + ".csv", new Blob([panelCSV(spec)], {type: "text/csv"})); });
+    var b2 = h("button", "", bar, "SVG"); b2.type = "button";
+    b2.addEventListener("click", function () { download(name + ".svg", new Blob([panelSVG(svg)], {type: "image/svg+xml"})); });
+    var b3 = h("button", "", bar, "PNG"); b3.type = "button";
+    b3.addEventListener("click", function () {
+      var img = new Image(), url = URL.createObjectURL(new Blob([panelSVG(svg)], {type: "image/svg+xml"}));
+      img.onload = function () {
+        var cv = document.createElement("canvas"); cv.width = PW * 2; cv.height = PH * 2;
+        var cx = cv.getContext("2d"); cx.scale(2, 2); cx.drawImage(img, 0, 0);
+        URL.revokeObjectURL(url);
+        cv.toBlob(function (blob) { download(name + ".png", blob); }, "image/png");
+      };
+      img.src = url;
+    });
+  }
+  window.__linkdynExport = {csv: function (n) { return panelCSV(D.plots[n]); },
+                            svg: function (n) { return panelSVG(plots[n].svg); }};
+
   function drawPlots(k) {
     plots.forEach(function (p) {
       var x = p.xs[k], cx = fin(x) ? p.sx(x).toFixed(1) : -10;
@@ -433,7 +508,7 @@
     drawPlots(k);
     drawInfo(k, best);
     if (!fromScrub) scrub.value = String(k);
-    if (!playing) simT = T[k];
+    if (!playing) { simT = T[k]; keepHash(); }
   }
   function tick(now) {
     if (!playing) return;
@@ -454,7 +529,7 @@
     btnPlay.textContent = "❚❚ Pause";
     requestAnimationFrame(tick);
   }
-  function pause() { playing = false; btnPlay.textContent = "▶ Play"; }
+  function pause() { var was = playing; playing = false; btnPlay.textContent = "▶ Play"; if (was) keepHash(); }
   btnPlay.addEventListener("click", function () { if (playing) pause(); else play(); });
   document.getElementById("step").addEventListener("click", function () { pause(); setFrame(frame + 1); });
   document.getElementById("stepback").addEventListener("click", function () { pause(); setFrame(frame - 1); });
@@ -476,6 +551,35 @@
     else if (e.key === "ArrowLeft") { pause(); setFrame(frame - 1); }
   });
 
+  // key results: a click shows that instant
+  Array.prototype.forEach.call(document.querySelectorAll(".keyitem[data-frame]"), function (b) {
+    b.addEventListener("click", function () {
+      pause(); setFrame(parseInt(b.getAttribute("data-frame"), 10));
+      var box = document.querySelector(".animbox").getBoundingClientRect();
+      if (box.bottom < 0 || box.top > window.innerHeight) document.querySelector(".animbox").scrollIntoView({block: "start"});
+    });
+  });
+  if (D.zero && D.zero.length) {
+    var zn = h("p", "note", document.getElementById("plots"));
+    zn.textContent = "Not plotted, zero to rounding (below 1e-12 of their scale): " + D.zero.join("; ") + ".";
+  }
+
+  // the frame is kept in the page address (#frame=K), so a link or a reload shows that instant
+  function frameFromHash() {
+    var m = /(?:^#|&)frame=(\d+)/.exec(location.hash);
+    return m ? Math.max(0, Math.min(N - 1, parseInt(m[1], 10))) : null;
+  }
+  var hashTimer = null;
+  function keepHash() {
+    if (playing) return;
+    clearTimeout(hashTimer);
+    hashTimer = setTimeout(function () {
+      try { history.replaceState(null, "", "#frame=" + frame); } catch (err) { /* file: in some browsers */ }
+    }, 150);
+  }
+  window.addEventListener("hashchange", function () { var k = frameFromHash(); if (k !== null && k !== frame) { pause(); setFrame(k); } });
+
   buildPlots();
-  setFrame(0);
+  var k0 = frameFromHash();
+  setFrame(k0 === null ? 0 : k0);
 })();

@@ -1,0 +1,168 @@
+"""The key results a designer acts on, taken from the motion: each one a number with the sample
+where it occurs (so the page can jump there), its time and the first driver's position.
+
+Every peak keeps its sign (the largest and the smallest value of a signed quantity are both
+listed); magnitudes (joint forces, the shaking force) are listed with the sample of their peak.
+A value below ``NOISE`` of its unit family's scale is rounding noise and is reported as zero.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import joints as jk
+from ..model import GROUND
+
+NOISE = 1e-12  # relative to the scale of the quantity's unit family
+
+
+def scales(sol) -> dict[str, float]:
+    """Scale of each unit family over the run: ``'N'`` the largest joint force or driver force,
+    ``'N m'`` the largest driver torque or force times the mechanism's size, ``'J'`` the largest
+    kinetic energy. A series whose peak is below ``NOISE`` of its family's scale is rounding
+    noise (a revolute cut's moment, a balanced pivot's force)."""
+    m = sol.model
+
+    def peak(x):
+        x = np.abs(np.asarray(x, float))
+        return float(np.nanmax(x)) if x.size and np.any(np.isfinite(x)) else 0.0
+
+    f = peak(sol.reactions.force) if len(m.joints) else 0.0
+    torques = [sol.dyn.tau[..., k] for k, d in enumerate(m.drivers)
+               if jk.get(m.joint(d.joint).kind).angular]
+    forces = [sol.dyn.tau[..., k] for k, d in enumerate(m.drivers)
+              if not jk.get(m.joint(d.joint).kind).angular]
+    f = max([f] + [peak(x) for x in forces])
+    pts = [np.asarray(xy, float) for b in m.bodies for xy in b.points.values()]
+    size = float(np.ptp(np.array(pts), axis=0).max()) if len(pts) > 1 else 1.0
+    n_m = max([f * size] + [peak(x) for x in torques])
+    e = peak(sol.columns["kinetic_energy"])
+    if "potential_energy" in sol.columns:
+        e = max(e, peak(sol.columns["potential_energy"]))
+    return {"N": f, "N m": n_m, "J": e}
+
+
+def is_noise(values, scale: float) -> bool:
+    """Whether every finite value is below ``NOISE`` of ``scale`` (all zero counts)."""
+    v = np.abs(np.asarray(values, float))
+    v = v[np.isfinite(v)]
+    return bool(v.size == 0 or np.max(v) <= NOISE * scale)
+
+
+def _k(x, pick) -> int | None:
+    x = np.asarray(x, float)
+    if not np.any(np.isfinite(x)):
+        return None
+    return int(pick(x))
+
+
+def key_results(sol, summary: dict | None = None) -> list[dict]:
+    """The key results, in reading order.
+
+    Each item: ``group``, ``label``, ``value`` (float, SI but angles in deg), ``unit``,
+    ``signed`` (show the sign), ``k`` (sample index where it occurs, or None), ``note``.
+    """
+    from .. import design
+
+    m, summary = sol.model, summary or {}
+    items: list[dict] = []
+    sc = scales(sol)
+
+    def add(group, label, x, k, unit, *, signed=False, scale=None, note=""):
+        v = float(x[k]) if k is not None else float("nan")
+        if scale is not None and abs(v) <= NOISE * scale:
+            v = 0.0
+        items.append({"group": group, "label": label, "value": v, "unit": unit,
+                      "signed": signed, "k": k, "note": note})
+
+    # driver efforts: the largest and the smallest (signed), the RMS
+    for k, d in enumerate(m.drivers):
+        angular = jk.get(m.joint(d.joint).kind).angular
+        tau, unit = sol.dyn.tau[..., k], ("N m" if angular else "N")
+        word = "torque" if angular else "force"
+        add("Driver efforts", f"max {word} {d.joint}", tau, _k(tau, np.nanargmax), unit,
+            signed=True, scale=sc[unit])
+        add("Driver efforts", f"min {word} {d.joint}", tau, _k(tau, np.nanargmin), unit,
+            signed=True, scale=sc[unit])
+        rms = float(np.sqrt(np.nanmean(np.asarray(tau, float) ** 2)))
+        items.append({"group": "Driver efforts", "label": f"RMS {word} {d.joint}",
+                      "value": rms, "unit": unit, "signed": False, "k": None, "note": ""})
+
+    # joint loads: the peak force of every joint (bearing sizing); a guide's side load
+    for k, j in enumerate(m.joints):
+        f = np.linalg.norm(sol.reactions.force[..., k, :], axis=-1)
+        add("Joint loads", f"peak |F| {j.name}", f, _k(f, np.nanargmax), "N", scale=sc["N"],
+            note=f"{j.body_a} on {j.body_b}")
+        kind = jk.get(j.kind)
+        if not kind.angular and "axis" in kind.keys:  # a guide: its normal force
+            n = _guide_normal(sol, j)
+            side = np.sum(sol.reactions.force[..., k, :] * n, axis=-1)
+            kk = _k(np.abs(side), np.nanargmax)
+            add("Joint loads", f"side load {j.name}", side, kk, "N", signed=True,
+                scale=sc["N"], note="normal to the guide, + to its left")
+            if "M" in kind.reaction:
+                M = sol.reactions.moment[..., k]
+                if not is_noise(M, sc["N m"]):
+                    add("Joint loads", f"guide moment {j.name}", M, _k(np.abs(M), np.nanargmax),
+                        "N m", signed=True, scale=sc["N m"])
+
+    # motion quality of every four-bar loop: transmission angle, mechanical advantage
+    for fb in design.four_bars(m):
+        which = f"{fb.coupler}/{fb.output}"
+        mu = np.degrees(design.transmission_angle(sol, fb))
+        add("Four-bar loops", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg")
+        add("Four-bar loops", f"max transmission angle {which}", mu, _k(mu, np.nanargmax), "deg")
+        ma = np.asarray(design.mechanical_advantage(sol, fb), float)
+        add("Four-bar loops", f"min mechanical advantage {which}", ma, _k(ma, np.nanargmin), "",
+            note="|ω_in / ω_out|")
+        add("Four-bar loops", f"max mechanical advantage {which}", ma, _k(ma, np.nanargmax), "",
+            note="|ω_in / ω_out|")
+
+    # balancing: what the frame feels
+    ws = design.shaking_wrench(sol)
+    fs = np.linalg.norm(ws[..., 1:], axis=-1)
+    add("Shaking (on the frame)", "peak shaking force", fs, _k(fs, np.nanargmax), "N",
+        scale=sc["N"])
+    ms = ws[..., 0]
+    add("Shaking (on the frame)", "max shaking moment", ms, _k(ms, np.nanargmax), "N m",
+        signed=True, scale=sc["N m"], note="about the global origin")
+    add("Shaking (on the frame)", "min shaking moment", ms, _k(ms, np.nanargmin), "N m",
+        signed=True, scale=sc["N m"], note="about the global origin")
+
+    # energy
+    ke = np.asarray(sol.columns["kinetic_energy"], float)
+    add("Energy", "max kinetic energy", ke, _k(ke, np.nanargmax), "J", scale=sc["J"])
+    add("Energy", "min kinetic energy", ke, _k(ke, np.nanargmin), "J", scale=sc["J"])
+    for j, e in (summary.get("driver_energy") or {}).items():
+        fw = e.get("flywheel") if isinstance(e, dict) else None
+        if isinstance(fw, dict) and fw.get("inertia_kg_m2") is not None:
+            items.append({"group": "Energy", "label": f"flywheel on {j}",
+                          "value": float(fw["inertia_kg_m2"]), "unit": "kg m²", "signed": False,
+                          "k": None, "note": f"for C_s = {fw.get('speed_fluctuation')}"})
+    ps = summary.get("path_straightness")
+    if isinstance(ps, dict) and ps.get("max_deviation_m") is not None:
+        items.append({"group": "Path", "label": f"straightness of {ps.get('point', 'path')}",
+                      "value": float(ps["max_deviation_m"]) * 1e3, "unit": "mm",
+                      "signed": False, "k": None,
+                      "note": f"max deviation over {float(ps.get('length_m') or 0) * 1e3:.4g} mm"
+                              + (" (whole run)" if ps.get("range") is None else "")})
+    return items
+
+
+def _guide_normal(sol, j) -> np.ndarray:
+    """Unit normal (T, 2) of a guide's axis, global, to the axis's left."""
+    phi = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
+    a = np.arctan2(float(j.axis[1]), float(j.axis[0])) + np.asarray(phi) + np.zeros(np.shape(sol.t))
+    return np.stack([-np.sin(a), np.cos(a)], axis=-1)
+
+
+def driver_position(sol, k: int) -> tuple[str, float, str] | None:
+    """``(joint, value, unit)`` of the first driver at sample ``k`` (deg for an angle, mm for
+    a length)."""
+    if not sol.model.drivers or k is None:
+        return None
+    d = sol.model.drivers[0]
+    q = float(sol.columns[f"q_{d.joint}"][k])
+    if jk.get(sol.model.joint(d.joint).kind).angular:
+        return d.joint, float(np.degrees(q)), "deg"
+    return d.joint, q * 1e3, "mm"
