@@ -206,3 +206,20 @@ def test_designs_of_other_topologies_are_refused():
             linkdyn.analyze([m, m, bad], T, backend="numpy")
     with pytest.raises(ModelError, match="no designs"):
         linkdyn.analyze([], T, backend="numpy")
+
+
+def test_continuation_steps_cover_every_design():
+    # the node grid is sized by the largest driver travel over the designs, computed from each
+    # distinct motion once (of the constant speeds, the fastest): it equals the brute force
+    from linkdyn.kinematics.layout import motion_steps
+    from linkdyn.motion import ConstantSpeed, ExpressionMotion
+    probe = np.linspace(-0.5, 2.0, 257)
+    speeds = [ConstantSpeed(s, start=b) for s, b in ((3.0, 0.1), (-7.5, 2.0), (5.0, -1.0))]
+    wave = ExpressionMotion("0.9*sin(9*t) + t")   # rate up to 9.1 rad/s
+    motions = ((speeds[0], wave, speeds[1], speeds[2], speeds[0]),)
+    brute = np.max([np.abs(np.diff(m.evaluate(probe)[0])) for m in motions[0]], axis=0)
+    got = motion_steps(motions, probe)
+    assert got.shape == (1, 256)
+    assert np.allclose(got[0], brute, rtol=1e-12, atol=1e-15)
+    # the formula is faster than 7.5 rad/s only at some probes: both bound the steps
+    assert np.any(got[0] > 7.5 * 2.5 / 256 * (1 + 1e-9)) and np.any(np.isclose(got[0], 7.5 * 2.5 / 256))

@@ -180,6 +180,36 @@ def _load_value(value, t, comps=()):
     return (np.broadcast_to(np.asarray(value(t), dtype=float), t.shape + comps),)
 
 
+def _groups(functions) -> dict:
+    """The designs sharing each function (equal objects; an unhashable one by identity):
+    key -> list of design indices, in order of first use."""
+    groups: dict = {}
+    for d, f in enumerate(functions):
+        try:
+            key = (0, f, type(f))
+            hash(key)
+        except TypeError:
+            key = (1, id(f))
+        groups.setdefault(key, []).append(d)
+    return groups
+
+
+def motion_steps(motions: tuple, probe: np.ndarray) -> np.ndarray:
+    """The largest travel ``|q(probe[j + 1]) - q(probe[j])|`` of each driver between
+    consecutive probe times over all designs, (n_drivers, P - 1): each distinct motion evaluated
+    once, and of the constant speeds only the fastest (memory of one design, any number of
+    designs)."""
+    out = []
+    for funcs in motions:
+        uniq = [funcs[idx[0]] for idx in _groups(funcs).values()]
+        const = [f for f in uniq if type(f) is ConstantSpeed]
+        if len(const) > 1:   # the fastest constant speed travels furthest at every step
+            fastest = max(const, key=lambda f: abs(f.speed))
+            uniq = [f for f in uniq if type(f) is not ConstantSpeed] + [fastest]
+        out.append(np.max([np.abs(np.diff(f.evaluate(probe)[0])) for f in uniq], axis=0))
+    return np.array(out).reshape(len(motions), len(probe) - 1)
+
+
 def evaluate_designs(functions: tuple, t: np.ndarray, call: Callable, designs: int = 0):
     """Evaluate one function of time per design at the times ``t`` (T,).
 
@@ -197,14 +227,7 @@ def evaluate_designs(functions: tuple, t: np.ndarray, call: Callable, designs: i
         start = np.array([f.start for f in functions])[:, None]
         return start + speed * t, np.broadcast_to(speed, (designs,) + t.shape), \
             np.zeros((designs,) + t.shape)
-    groups: dict = {}
-    for d, f in enumerate(functions):
-        try:
-            key = (0, f, type(f))
-            hash(key)
-        except TypeError:   # an unhashable function: compared by identity
-            key = (1, id(f))
-        groups.setdefault(key, []).append(d)
+    groups = _groups(functions)
     if len(groups) == 1:
         return tuple(np.broadcast_to(v, (designs,) + v.shape) for v in call(functions[0], t))
     out = None

@@ -15,7 +15,7 @@ from .. import joints as jk
 from ..model import Model
 from ..planar import solve_small, wrap
 from . import dyads
-from .layout import Layout, motion_values
+from .layout import Layout, motion_steps, motion_values
 from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
                         motion_vectors)
 
@@ -173,11 +173,10 @@ def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
     """Continuation times from ``start`` to ``end`` (either order): the drivers of every design
     move at most one step between consecutive nodes."""
     probe = np.linspace(start, end, 4097)
-    qp, _, _ = lay.driver_values(probe)
-    qp = qp.reshape(len(qp), -1, len(probe))   # (n_drivers, designs, probes)
     step = np.array([STEP_ANGLE if jk.get(lay.kind[i]).angular else STEP_LENGTH * np.min(lay.size)
-                     for i in lay.topo.driven])[:, None, None]
-    moves = (np.max(np.abs(np.diff(qp, axis=-1)) / step, axis=(0, 1)) if len(step)
+                     for i in lay.topo.driven])[:, None]
+    # the largest driver travel between probes, over the drivers and the designs, in steps
+    moves = (np.max(motion_steps(lay.motions, probe) / step, axis=0) if len(step)
              else np.zeros(4096))
     travel = np.concatenate(([0.0], np.cumsum(moves)))
     if not travel[-1] > 0:
