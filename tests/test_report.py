@@ -542,6 +542,40 @@ def test_report_acceptance(browser, example_runs, example, size):
                 assert float(text) == pytest.approx(want, abs=1e-3 * peak + 1e-12), (key, k)
                 checked += 1
         assert checked >= 2
+        # forces drawn: each arrow's length over the legend's scale is the joint force of
+        # results.csv at three frames; no two labels' boxes overlap (forces on and off)
+        overlap = """() => {
+            const b = [...document.querySelectorAll('#anim .labels text')]
+                .filter(e => e.style.display !== 'none' && e.getClientRects().length &&
+                             getComputedStyle(e.parentNode).display !== 'none')
+                .map(e => [e.textContent, e.getBoundingClientRect()]);
+            const out = [];
+            for (let i = 0; i < b.length; i++) for (let j = i + 1; j < b.length; j++) {
+                const [p, q] = [b[i][1], b[j][1]];
+                if (p.left < q.right - 0.5 && q.left < p.right - 0.5 &&
+                    p.top < q.bottom - 0.5 && q.top < p.bottom - 0.5) out.push(b[i][0] + ' / ' + b[j][0]);
+            }
+            return out;
+        }"""
+        p.locator("#anim").scroll_into_view_if_needed()
+        assert p.evaluate(overlap) == []
+        p.check("#show-forces")
+        legend = p.locator("#force-legend")
+        scale = float(legend.get_attribute("data-length")) / float(legend.get_attribute("data-force"))
+        for k in (n // 5, n // 2, 4 * n // 5):
+            p.eval_on_selector("#scrubber", f"s => {{ s.value = '{k}'; s.dispatchEvent(new Event('input')); }}")
+            arrows = p.eval_on_selector_all(".farrow[data-joint]", """as => as.map(a => [
+                a.getAttribute('data-joint'), a.style.display !== 'none',
+                Math.hypot(a.getAttribute('x2') - a.getAttribute('x1'),
+                           a.getAttribute('y2') - a.getAttribute('y1'))])""")
+            assert len(arrows) == len([c for c in csv if c.startswith("Fx_")])
+            for joint, shown, length in arrows:
+                f = np.hypot(csv[f"Fx_{joint}"][k], csv[f"Fy_{joint}"][k])
+                if shown:
+                    assert length / scale == pytest.approx(f, rel=2e-3, abs=0.02 / scale), (joint, k)
+                else:  # left out only when shorter than 2 units of the drawing
+                    assert f * scale <= 2.0 + 1e-9, (joint, k)
+            assert p.evaluate(overlap) == [], k
         assert pg.errors == []
     finally:
         pg.close()

@@ -305,6 +305,33 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
               [{"key": add(f"col:{name}", vals), "label": name,
                 "color": PALETTE[n % len(PALETTE)]}])
 
+    # external loads drawn on the animation: forces at their points, torques on their bodies
+    drawn_loads = []
+    for n, ld in enumerate(m.loads):
+        if ld.kind not in ("force", "torque"):
+            continue
+        try:
+            lay = sol.kin.layout
+            v = np.asarray(lay.load_values(lay.loads[n], sol.t), float)
+        except Exception:  # pragma: no cover - a load the page cannot evaluate is not drawn
+            continue
+        label = ld.name or f"{ld.kind} on {ld.body}"
+        if ld.kind == "force" and ld.point:
+            v = np.broadcast_to(v, (2, len(sol.t)))
+            drawn_loads.append({"kind": "force", "at": f"{ld.body}.{ld.point}", "label": label,
+                                "x": add(f"load:{n}:x", v[0]), "y": add(f"load:{n}:y", v[1])})
+        elif ld.kind == "torque":
+            v = np.broadcast_to(v, (len(sol.t),))
+            pts = list(m.body(ld.body).points)
+            drawn_loads.append({"kind": "torque", "at": f"{ld.body}.{pts[0]}", "label": label,
+                                "m": add(f"load:{n}:m", v)})
+    # the shaking force is drawn at the centre of the ground pivots
+    pivots = [p for p in _ground_outline(ground, used)]
+    shaking = None
+    if "shake:Fx" in series and pivots:
+        c = np.mean([ground.points[p.split(".", 1)[1]] for p in pivots], axis=0)
+        shaking = {"x": float(c[0]), "y": float(c[1]), "fx": "shake:Fx", "fy": "shake:Fy"}
+
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
     for d in m.drivers:
@@ -331,5 +358,5 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                  "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
                             float(hi[0] + margin), float(hi[1] + margin)],
                  "ground": _ground_outline(ground, used),
-                 "fmax": fmax},
+                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking},
     }

@@ -114,11 +114,17 @@
   var mk = el("marker", {id: "arrowhead", viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
                          markerHeight: 7, orient: "auto-start-reverse"}, defs);
   el("path", {d: "M0,0 L10,5 L0,10 z", fill: "#c62828"}, mk);
+  [["arrow-load", "#1565c0"], ["arrow-shake", "#6a1b9a"], ["arrow-drv", "#2e7d32"]].forEach(function (m) {
+    var k = el("marker", {id: m[0], viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
+                          markerHeight: 7, orient: "auto-start-reverse"}, defs);
+    el("path", {d: "M0,0 L10,5 L0,10 z", fill: m[1]}, k);
+  });
 
   var gGround = el("g", {}, anim), gTraces = el("g", {}, anim), gBodies = el("g", {}, anim),
-      gSliders = el("g", {}, anim), gJoints = el("g", {}, anim), gForces = el("g", {}, anim),
-      gLabels = el("g", {}, anim);
-  gForces.style.display = "none";
+      gSliders = el("g", {}, anim), gForces = el("g", {}, anim), gJoints = el("g", {}, anim),
+      gLabels = el("g", {"class": "labels"}, anim), gFLabels = el("g", {"class": "labels flabels"}, anim);
+  gForces.style.display = gFLabels.style.display = "none";
+  var showForces = false, showLabels = true;
 
   // scale bar: a round length about a fifth of the view
   (function () {
@@ -168,7 +174,7 @@
     }
     el("path", {d: d, fill: "none", stroke: color, "stroke-width": 1.6, opacity: 0.45}, gTraces);
     var dot = el("circle", {r: 4, fill: color, stroke: "#fff", "stroke-width": 1.2}, gTraces);
-    var lab = el("text", {"font-size": 12, fill: color, "font-weight": "bold"}, gLabels);
+    var lab = el("text", {"font-size": 12, fill: "#222", "font-weight": "bold"}, gLabels);
     lab.textContent = id.split(".")[1];
     return {id: id, dot: dot, lab: lab};
   });
@@ -201,13 +207,129 @@
   var joints = G.joints.map(function (j) {
     var c = j.kind === "revolute" ? el("circle", {r: 5.5, fill: "#fff", stroke: "#222", "stroke-width": 2}, gJoints)
                                   : el("circle", {r: 3, fill: "#222"}, gJoints);
-    var lab = el("text", {"font-size": 11.5, fill: "#333"}, gLabels);
+    var lab = el("text", {"font-size": 11.5, fill: "#222"}, gLabels);
     lab.textContent = j.name;
-    var arrow = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)"}, gForces);
-    return {j: j, c: c, lab: lab, arrow: arrow};
+    var arrow = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)",
+                            "class": "farrow", "data-joint": j.name}, gForces);
+    var flab = el("text", {"font-size": 11, fill: "#c62828"}, gFLabels);
+    return {j: j, c: c, lab: lab, arrow: arrow, flab: flab};
   });
   var ring = el("circle", {r: 11, fill: "none", stroke: "#c62828", "stroke-width": 2.5}, gJoints);
-  var fscale = G.fmax > 0 ? 0.18 * VW / G.fmax : 0;
+
+  // forces: one scale (viewBox units per N) for every arrow, shown by a legend bar of a round
+  // force; the largest force drawn is about a fifth of the view
+  function seriesMax(key) {
+    var a = S[key], m = 0;
+    if (!a) return 0;
+    for (var i = 0; i < a.length; i++) if (fin(a[i]) && Math.abs(a[i]) > m) m = Math.abs(a[i]);
+    return m;
+  }
+  function hyp(kx, ky) {
+    var m = 0;
+    for (var i = 0; i < N; i++) { var v = Math.hypot(S[kx][i], S[ky][i]); if (fin(v) && v > m) m = v; }
+    return m;
+  }
+  var fall = G.fmax || 0;
+  (G.loads || []).forEach(function (l) { if (l.kind === "force") fall = Math.max(fall, hyp(l.x, l.y)); });
+  if (G.shaking) fall = Math.max(fall, hyp(G.shaking.fx, G.shaking.fy));
+  D.drivers.forEach(function (d) { if (d.unit === "N") fall = Math.max(fall, seriesMax(d.key)); });
+  var fscale = fall > 0 ? 0.2 * Math.min(VW, VH * 1.6) / fall : 0;
+  var fleg = null;
+  if (fscale > 0) {
+    var mag = Math.pow(10, Math.floor(Math.log10(fall / 2.5)));
+    var Fr = [1, 2, 5, 10].map(function (f) { return f * mag; }).filter(function (v) { return v <= fall / 2.5 * 1.0001; }).pop() || mag;
+    var lx1 = VW - 14, lx0 = lx1 - Fr * fscale, ly = VH - 12;
+    fleg = el("g", {id: "force-legend", "data-force": Fr, "data-length": (Fr * fscale).toFixed(4)}, gForces);
+    el("line", {x1: lx0, y1: ly, x2: lx1, y2: ly, stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)"}, fleg);
+    el("text", {x: lx0 - 6, y: ly + 4, "text-anchor": "end", "font-size": 12, fill: "#c62828", "class": "legtext"}, fleg).textContent =
+      "force scale: " + fmt(Fr, 3) + " N";
+  }
+  window.__linkdynForces = {scale: fscale};
+  // external loads, the driver efforts and the shaking force on the frame
+  var loadArrows = (G.loads || []).map(function (l) {
+    var a = l.kind === "force" ? el("line", {stroke: "#1565c0", "stroke-width": 2.2, "marker-end": "url(#arrow-load)", "class": "farrow"}, gForces)
+                               : el("path", {fill: "none", stroke: "#1565c0", "stroke-width": 2, "marker-end": "url(#arrow-load)"}, gForces);
+    var t = el("text", {"font-size": 11, fill: "#1565c0"}, gFLabels);
+    return {l: l, a: a, t: t};
+  });
+  var drvArrows = D.drivers.map(function (d) {
+    var j = G.joints.filter(function (x) { return x.name === d.joint; })[0];
+    var a = d.unit === "N m" ? el("path", {fill: "none", stroke: "#2e7d32", "stroke-width": 2.4, "marker-end": "url(#arrow-drv)"}, gForces)
+                             : el("line", {stroke: "#2e7d32", "stroke-width": 2.4, "marker-end": "url(#arrow-drv)", "class": "farrow"}, gForces);
+    var t = el("text", {"font-size": 11, fill: "#2e7d32"}, gFLabels);
+    return {d: d, j: j, a: a, t: t};
+  });
+  var shake = G.shaking ? {a: el("line", {stroke: "#6a1b9a", "stroke-width": 2.4, "marker-end": "url(#arrow-shake)", "class": "farrow"}, gForces),
+                           t: el("text", {"font-size": 11, fill: "#6a1b9a"}, gFLabels)} : null;
+  function arc(x, y, r, m) {  // a 270-degree arc around (x, y), counter-clockwise for m > 0
+    var a0 = Math.PI * 0.75, a1 = a0 + (m >= 0 ? 1 : -1) * Math.PI * 1.5;
+    var p0 = [x + r * Math.cos(a0), y - r * Math.sin(a0)], p1 = [x + r * Math.cos(a1), y - r * Math.sin(a1)];
+    return "M" + p0[0].toFixed(1) + "," + p0[1].toFixed(1) + " A" + r + "," + r + " 0 1 " + (m >= 0 ? 0 : 1) + " " + p1[0].toFixed(1) + "," + p1[1].toFixed(1);
+  }
+  function setLine(a, x, y, fx, fy) {
+    var ok = fin(fx) && fin(fy) && fscale > 0 && Math.hypot(fx, fy) * fscale > 2;
+    a.style.display = ok ? "" : "none";
+    if (ok) {
+      a.setAttribute("x1", x.toFixed(2)); a.setAttribute("y1", y.toFixed(2));
+      a.setAttribute("x2", (x + fx * fscale).toFixed(2)); a.setAttribute("y2", (y - fy * fscale).toFixed(2));
+    }
+    return ok;
+  }
+
+  // ------------------------------------------------------------------ label placement
+  // each label goes to the first of a ring of positions around its anchor whose box overlaps
+  // no label placed before it and no pivot; sizes in screen pixels whatever the zoom
+  var textScale = 1;
+  function updateTextScale() {
+    var w = anim.getBoundingClientRect().width;
+    textScale = w > 0 ? Math.max(1, VW / w) : 1;
+    anim.style.setProperty("--ts", textScale);
+  }
+  var widthCache = {};
+  function textBox(node, fs) {
+    var key = node.textContent + "|" + fs + "|" + (node.getAttribute("font-weight") || "") + (node.getAttribute("font-style") || "");
+    if (!(key in widthCache)) {
+      node.setAttribute("font-size", fs);
+      var w = 0;
+      try { w = node.getComputedTextLength(); } catch (err) { w = 0; }
+      widthCache[key] = w > 0 ? w : 0.62 * fs * node.textContent.length;
+    }
+    return [widthCache[key], fs];
+  }
+  var DIRS = [[1, -1], [1, 1], [-1, -1], [-1, 1], [0, -1], [0, 1], [1, 0], [-1, 0]];
+  function overlaps(b, boxes) {
+    for (var i = 0; i < boxes.length; i++) {
+      var o = boxes[i];
+      if (b[0] < o[2] && o[0] < b[2] && b[1] < o[3] && o[1] < b[3]) return true;
+    }
+    return false;
+  }
+  function place(items, obstacles) {
+    var placed = obstacles.slice();
+    items.forEach(function (it) {
+      if (it.node.style.display === "none" || !fin(it.x) || !fin(it.y)) return;
+      var fs = it.fs * textScale, wh = textBox(it.node, fs), w = wh[0] + 2, hgt = fs * 1.05;
+      var pad = 2 * textScale, best = null;
+      var dirs = it.prefer ? [it.prefer].concat(DIRS) : DIRS;
+      for (var ring = 0; ring < 4 && !best; ring++) {
+        var r = (it.r || 6) * textScale + ring * 10 * textScale;
+        for (var n = 0; n < dirs.length; n++) {
+          var dx = dirs[n][0], dy = dirs[n][1];
+          var x0 = it.x + dx * r - (dx < 0 ? w : dx === 0 ? w / 2 : 0);
+          var y0 = it.y + dy * r - (dy < 0 ? hgt : dy === 0 ? hgt / 2 : 0);
+          var b = [x0 - pad, y0 - pad, x0 + w + pad, y0 + hgt + pad];
+          if (b[0] < 0 || b[2] > VW || b[1] < 0 || b[3] > VH) continue;
+          if (!overlaps(b, placed)) { best = b; break; }
+        }
+      }
+      if (!best) { it.node.style.display = "none"; return; }  // no room: left out this frame
+      placed.push(best);
+      it.node.setAttribute("font-size", fs.toFixed(2));
+      it.node.setAttribute("text-anchor", "start");
+      it.node.setAttribute("x", (best[0] + pad).toFixed(1));
+      it.node.setAttribute("y", (best[1] + pad + 0.8 * hgt).toFixed(1));
+    });
+  }
 
   function drawAnim(k) {
     bodies.forEach(function (o) {
@@ -243,10 +365,8 @@
         var L = Math.hypot(dx, dy) || 1; nx = dy / L; ny = -dx / L;
         if (ny > 0) { nx = -nx; ny = -ny; }
       }
-      // anchor the text on the side it is pushed to, so it never lies across the body
-      o.lab.setAttribute("text-anchor", nx < -0.35 ? "end" : nx > 0.35 ? "start" : "middle");
-      o.lab.setAttribute("x", (cx + 12 * nx).toFixed(1));
-      o.lab.setAttribute("y", (cy + 12 * ny + 4 + (ny > -0.35 ? 0 : -2)).toFixed(1));
+      o.ax = cx; o.ay = cy;
+      o.pref = [Math.abs(nx) < 0.35 ? 0 : nx > 0 ? 1 : -1, Math.abs(ny) < 0.35 ? 0 : ny > 0 ? 1 : -1];
     });
     sliders.forEach(function (o) {
       var p = P(o.j.b, k), a = o.j.angle[k];
@@ -260,17 +380,56 @@
       o.c.style.display = o.lab.style.display = ok ? "" : "none";
       if (!ok) { o.arrow.style.display = "none"; return; }
       var x = X(p[0]), y = Y(p[1]);
+      o.x = x; o.y = y;
       o.c.setAttribute("cx", x.toFixed(1)); o.c.setAttribute("cy", y.toFixed(1));
-      o.lab.setAttribute("x", (x + 8).toFixed(1)); o.lab.setAttribute("y", (y - 8).toFixed(1));
       var fx = S["Fx:" + o.j.name][k], fy = S["Fy:" + o.j.name][k], f = S["F:" + o.j.name][k];
       if (fin(f) && f > bestF) { bestF = f; best = n; }
-      var ok2 = fin(fx) && fin(fy) && fscale > 0 && f * fscale > 2;
-      o.arrow.style.display = ok2 ? "" : "none";
-      if (ok2) {
-        o.arrow.setAttribute("x1", x.toFixed(1)); o.arrow.setAttribute("y1", y.toFixed(1));
-        o.arrow.setAttribute("x2", (x + fx * fscale).toFixed(1)); o.arrow.setAttribute("y2", (y - fy * fscale).toFixed(1));
-      }
+      var ok2 = setLine(o.arrow, x, y, fx, fy);
+      o.arrow.setAttribute("data-f", fin(f) ? f : "");
+      o.flab.style.display = ok2 && showForces ? "" : "none";
+      o.flab.textContent = o.j.name + " " + fmtS("F:" + o.j.name, f) + " N";
+      o.tip = ok2 ? [x + fx * fscale, y - fy * fscale] : null;
     });
+    loadArrows.forEach(function (o) {
+      var p = P(o.l.at, k), x = X(p[0]), y = Y(p[1]), ok = fin(x) && fin(y);
+      if (o.l.kind === "force") {
+        var fx = S[o.l.x][k], fy = S[o.l.y][k];
+        ok = ok && setLine(o.a, x, y, fx, fy);
+        o.t.textContent = o.l.label + " " + fmt(Math.hypot(fx, fy), 4) + " N";
+        o.tip = ok ? [x + fx * fscale, y - fy * fscale] : null;
+      } else {
+        var m = S[o.l.m][k];
+        ok = ok && fin(m) && m !== 0;
+        o.a.style.display = ok ? "" : "none";
+        if (ok) o.a.setAttribute("d", arc(x, y, 20, m));
+        o.t.textContent = o.l.label + " " + fmt(m, 4) + " N m";
+        o.tip = ok ? [x + 20, y - 20] : null;
+      }
+      o.t.style.display = ok && showForces ? "" : "none";
+    });
+    drvArrows.forEach(function (o) {
+      var v = S[o.d.key][k], ok = o.j && fin(v);
+      if (!ok) { o.a.style.display = o.t.style.display = "none"; o.tip = null; return; }
+      var p = P(o.j.b, k), x = X(p[0]), y = Y(p[1]);
+      if (o.d.unit === "N m") {
+        o.a.style.display = v !== 0 ? "" : "none";
+        o.a.setAttribute("d", arc(x, y, 17, v));
+        o.tip = [x - 17, y - 17];
+      } else {  // a driver force along the joint's axis, on its second body
+        var ang = o.j.angle ? o.j.angle[k] : 0;
+        ok = setLine(o.a, x, y, v * Math.cos(ang), v * Math.sin(ang));
+        o.tip = ok ? [x + v * Math.cos(ang) * fscale, y - v * Math.sin(ang) * fscale] : null;
+      }
+      o.t.textContent = "driver " + o.d.joint + " " + fmtS(o.d.key, v) + " " + o.d.unit;
+      o.t.style.display = showForces ? "" : "none";
+    });
+    if (shake) {
+      var sfx = S[G.shaking.fx][k], sfy = S[G.shaking.fy][k], sx0 = X(G.shaking.x), sy0 = Y(G.shaking.y);
+      var sok = setLine(shake.a, sx0, sy0, sfx, sfy);
+      shake.t.textContent = "shaking " + fmt(Math.hypot(sfx, sfy), 4) + " N";
+      shake.t.style.display = sok && showForces ? "" : "none";
+      shake.tip = sok ? [sx0 + sfx * fscale, sy0 - sfy * fscale] : null;
+    }
     ring.style.display = best >= 0 ? "" : "none";
     if (best >= 0) { ring.setAttribute("cx", joints[best].c.getAttribute("cx")); ring.setAttribute("cy", joints[best].c.getAttribute("cy")); }
     traces.forEach(function (o) {
@@ -278,8 +437,23 @@
       o.dot.style.display = o.lab.style.display = ok ? "" : "none";
       if (!ok) return;
       o.dot.setAttribute("cx", X(p[0]).toFixed(1)); o.dot.setAttribute("cy", Y(p[1]).toFixed(1));
-      o.lab.setAttribute("x", (X(p[0]) + 7).toFixed(1)); o.lab.setAttribute("y", (Y(p[1]) + 15).toFixed(1));
+      o.x = X(p[0]); o.y = Y(p[1]);
     });
+    // labels: pivots are obstacles; joint names first, then traced points, bodies, forces
+    var obst = [], r = 6.5 * textScale;
+    joints.forEach(function (o) { if (o.c.style.display !== "none" && fin(o.x)) obst.push([o.x - r, o.y - r, o.x + r, o.y + r]); });
+    var items = [];
+    if (showLabels) {
+      joints.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 11.5, r: 7}); });
+      traces.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 12, r: 6}); });
+      bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6, prefer: o.pref}); });
+    }
+    if (showForces) {
+      joints.forEach(function (o) { if (o.tip) items.push({node: o.flab, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
+      loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
+      if (shake && shake.tip) items.push({node: shake.t, x: shake.tip[0], y: shake.tip[1], fs: 11, r: 3});
+    }
+    place(items, obst);
     return best;
   }
 
@@ -540,9 +714,15 @@
     var o = document.createElement("option"); o.value = String(n); o.textContent = a.label; selX.appendChild(o);
   });
   selX.addEventListener("change", function () { xmode = D.xaxes[parseInt(selX.value, 10)]; buildPlots(); drawPlots(frame); });
-  document.getElementById("show-labels").addEventListener("change", function (e) { gLabels.style.display = e.target.checked ? "" : "none"; });
+  document.getElementById("show-labels").addEventListener("change", function (e) { showLabels = e.target.checked; gLabels.style.display = showLabels ? "" : "none"; setFrame(frame); });
   document.getElementById("show-traces").addEventListener("change", function (e) { gTraces.style.display = e.target.checked ? "" : "none"; });
-  document.getElementById("show-forces").addEventListener("change", function (e) { gForces.style.display = e.target.checked ? "" : "none"; });
+  document.getElementById("show-forces").addEventListener("change", function (e) {
+    showForces = e.target.checked;
+    gForces.style.display = gFLabels.style.display = showForces ? "" : "none";
+    setFrame(frame);
+  });
+  window.addEventListener("resize", function () { updateTextScale(); setFrame(frame); });
+  updateTextScale();
   document.addEventListener("keydown", function (e) {
     var tag = (e.target && e.target.tagName) || "";
     if (tag === "INPUT" || tag === "SELECT" || tag === "BUTTON") return;
