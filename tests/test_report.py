@@ -592,3 +592,70 @@ def test_summary_tables_show_rounding_noise_as_zero_and_angles_in_degrees():
     assert "<th>J1</th><td>0</td><td>20.19</td>" in body  # the cycle's net work
     assert "mean speed (rad/s)" in page and "rad (s)" not in page
     assert "<td>deg</td><td>0</td><td>360.0</td>" in page  # joint travel in degrees
+
+
+# ---------------------------------------------------------------------------- compare
+
+def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
+    import json
+    text = linkdyn.example_path("hoeken").read_text("utf-8")
+    a, b = tmp_path / "hoeken.toml", tmp_path / "heavy.toml"
+    a.write_text(text, "utf-8")
+    # the variant: a coupler twice as heavy (mass and inertia), so its loads differ
+    heavy = text.replace("mass = 5.0", "mass = 10.0", 1).replace("inertia = 88473.60",
+                                                                 "inertia = 176947.20", 1)
+    assert heavy != text
+    b.write_text(heavy, "utf-8")
+    runner = CliRunner()
+    res = runner.invoke(main, ["compare", str(a), str(b), "-o", str(tmp_path / "cmp")])
+    assert res.exit_code == 0, res.output
+    assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == ["compare.html",
+                                                                     "compare.json"]
+    page = (tmp_path / "cmp" / "compare.html").read_text("utf-8")
+    blob = page.split('type="application/json">', 1)[1].split("</script>", 1)[0]
+    data = json.loads(blob)
+    assert [d["name"] for d in data["designs"]] == ["hoeken", "heavy"]
+    own = {}
+    for path in (a, b):
+        out = tmp_path / f"own-{path.stem}"
+        assert runner.invoke(main, ["analyze", str(path), "-o", str(out)]).exit_code == 0
+        own[path.stem] = json.loads((out / "summary.json").read_text())
+    peaks = []
+    for d in data["designs"]:
+        s, key = own[d["name"]], {it["label"]: it for it in d["key"]}
+        # the driver's peak |torque| of its own run is its max or min on the page, signed
+        top = max(key["max torque J1"]["value"], -key["min torque J1"]["value"])
+        assert top == pytest.approx(s["drivers"]["J1"]["peak"], rel=1e-12)
+        for j, r in s["reactions"].items():
+            assert key[f"peak |F| {j}"]["value"] == pytest.approx(r["peak_force_N"], rel=1e-12)
+            assert key[f"peak |F| {j}"]["t"] == pytest.approx(r["peak_time_s"], rel=1e-12)
+        assert key["peak shaking force"]["value"] == pytest.approx(
+            s["shaking"]["force_N"]["peak"], rel=1e-12)
+        # and the table beside the curves shows that number
+        assert f"<b>{report.tables.key_value(key['max torque J1'])}</b>" in page
+        peaks.append(top)
+    assert peaks[0] != pytest.approx(peaks[1], rel=1e-3)  # the designs do differ
+    saved = json.loads((tmp_path / "cmp" / "compare.json").read_text())
+    assert saved["heavy"]["summary"]["drivers"] == own["heavy"]["drivers"]
+    # the page: curves of both designs in every panel, a hover readout per design
+    pg = Page.__new__(Page)
+    pg.page = browser.new_page(viewport={"width": 1440, "height": 900})
+    errors = []
+    pg.page.on("pageerror", lambda e: errors.append(str(e)))
+    pg.page.goto((tmp_path / "cmp" / "compare.html").as_uri())
+    pg.page.wait_for_function("window.__linkdynCompare === true")
+    n = len(data["panels"])
+    assert n >= 5 and pg.page.locator("#plots path.series").count() == 2 * n
+    svg = pg.page.locator("#plots .panel svg").first
+    box = svg.bounding_box()
+    pg.page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
+    assert pg.page.locator("#plots .tooltip b[data-design]").count() == 2
+    assert errors == []
+    pg.page.close()
+
+
+def test_compare_needs_two_models(tmp_path):
+    res = CliRunner().invoke(main, ["compare", str(linkdyn.example_path("hoeken")),
+                                    "-o", str(tmp_path / "c")])
+    assert res.exit_code == 2 and "at least two" in res.output
+    assert not (tmp_path / "c").exists()

@@ -392,6 +392,59 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 
+# ---------------------------------------------------------------------------- compare
+
+@main.command()
+@click.argument("models", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("-o", "--outdir", default="out/compare", show_default=True, type=click.Path(),
+              help="Folder for compare.html and compare.json.")
+@click.option("--samples", type=int, help="Number of samples of each design (both ends "
+              "included) [default: each model's own].")
+@click.option("--duration", type=float, help="Duration in s of every design.")
+@click.option("--cycles", type=float, help="Duration in driver revolutions of every design.")
+@click.option("--fluctuation", type=float, default=0.02, show_default=True,
+              help="Coefficient of speed fluctuation C_s for the flywheel size.")
+@_ALLOW_OUTSIDE
+def compare(models, outdir, samples, duration, cycles, fluctuation, allow_outside):
+    """Compare designs MODELS... on one page: curves overlaid, key results side by side.
+
+    Each design is solved and summarized as `linkdyn analyze` does with the same options, so
+    each column of the page holds that design's own numbers.
+    """
+    from . import design, io
+    from .analysis import analyze as run
+    from .report import compare as compare_mod
+
+    if duration is not None and cycles is not None:
+        raise ModelError("give --duration or --cycles, not both", field="--duration",
+                         fix="Drop one of them")
+    if len(models) < 2:
+        raise ModelError("compare needs at least two model files", field="MODELS",
+                         fix="Give two or more model files, e.g. linkdyn compare a.toml b.toml")
+    check_outdir(outdir)
+    runs, names = [], []
+    for path in models:
+        mech = io.load_model(path, allow_outside=allow_outside)
+        sol = run(mech, _times(mech, samples, duration, cycles))
+        summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
+                              default_range=mech.path_range)
+        name = Path(path).stem
+        name = name if name not in names else f"{name} ({len(names) + 1})"
+        names.append(name)
+        runs.append((name, sol, summ))
+    page = compare_mod.render_compare(runs)
+    data = {name: {"file": str(path), "summary": _json_safe(summ)}
+            for (name, _, summ), path in zip(runs, models)}
+    files = {"compare.html": lambda p: p.write_text(page, encoding="utf-8"),
+             "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
+    written = write_outputs(outdir, files, owned=tuple(files))
+    for name, sol, summ in runs:
+        peaks = ", ".join(f"{j} peak {d['effort']} {d['peak']:.6g} {d['unit']}"
+                          for j, d in summ["drivers"].items())
+        click.echo(f"{name}: {summ['model']}, {summ['samples']} samples; {peaks}")
+    click.echo(f"wrote {', '.join(map(str, written))}")
+
+
 # ---------------------------------------------------------------------------- reproduce
 
 @main.command()

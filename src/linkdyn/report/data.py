@@ -287,7 +287,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         panel("Design", "Shaking force on the frame", "N",
               [{"key": add("shake:Fx", ws[..., 1]), "label": "Fx", "color": X_COLOR},
                {"key": add("shake:Fy", ws[..., 2]), "label": "Fy", "color": Y_COLOR}], "N")
-        panel("Design", "Shaking moment on the frame (about the origin)", "N m",
+        panel("Design", "Shaking moment (about the origin)", "N m",
               [{"key": add("shake:M", ws[..., 0]), "label": "M", "color": M_COLOR}], "N m")
     except Exception:  # pragma: no cover - a design helper must never break the report
         pass

@@ -1,0 +1,107 @@
+/* linkdyn compare: every design's curves overlaid, with a hover readout. Inlined into
+   compare.html; reads the JSON in #linkdyn-data; no network, no library. */
+(function () {
+  "use strict";
+  var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
+  var NS = "http://www.w3.org/2000/svg";
+  var PW = 360, PH = 220, ML = 52, MR = 14, MT = 22, MB = 32;
+  var xmode = D.xaxes[0], box = document.getElementById("plots"), sel = document.getElementById("xaxis");
+  function el(tag, attrs, parent) {
+    var e = document.createElementNS(NS, tag);
+    for (var k in attrs) e.setAttribute(k, attrs[k]);
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function h(tag, cls, parent, text) {
+    var e = document.createElement(tag);
+    if (cls) e.className = cls;
+    if (text !== undefined) e.textContent = text;
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function fin(v) { return v !== null && v !== undefined && isFinite(v); }
+  function fmt(v) {
+    if (!fin(v)) return "–";
+    var a = Math.abs(v);
+    if (a === 0) return "0";
+    if (a >= 1e-3 && a < 1e6) return v.toFixed(Math.max(0, 3 - Math.floor(Math.log10(a))));
+    return v.toExponential(3);
+  }
+  function niceStep(span, n) {
+    var s0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(s0))), r = s0 / mag;
+    return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * mag;
+  }
+  function range(arrs) {
+    var lo = Infinity, hi = -Infinity;
+    arrs.forEach(function (a) { a.forEach(function (v) { if (fin(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); } }); });
+    if (!(hi >= lo)) { lo = -1; hi = 1; }
+    if (hi - lo <= 1e-12 * Math.max(Math.abs(lo), Math.abs(hi), 1e-300)) { var p = Math.abs(hi) * 0.1 || 1; lo -= p; hi += p; }
+    return [lo, hi];
+  }
+  function nearest(a, x) {
+    var best = 0, bd = Infinity;
+    for (var i = 0; i < a.length; i++) if (fin(a[i]) && Math.abs(a[i] - x) < bd) { bd = Math.abs(a[i] - x); best = i; }
+    return best;
+  }
+  function build() {
+    box.innerHTML = "";
+    D.panels.forEach(function (spec) {
+      var panel = h("div", "panel", box), svg = el("svg", {viewBox: "0 0 " + PW + " " + PH}, panel);
+      var xs = D.designs.map(function (d) { return d.series[xmode.key]; });
+      var ys = D.designs.map(function (d) { return d.series[spec.key]; });
+      var xr = range(xs), yr = range(ys), pad = 0.05 * (yr[1] - yr[0]);
+      yr = [yr[0] - pad, yr[1] + pad];
+      var x0 = ML, x1 = PW - MR, y0 = PH - MB, y1 = MT;
+      var sx = function (v) { return x0 + (v - xr[0]) / (xr[1] - xr[0]) * (x1 - x0); };
+      var sy = function (v) { return y0 - (v - yr[0]) / (yr[1] - yr[0]) * (y0 - y1); };
+      var st = niceStep(yr[1] - yr[0], 5), v;
+      for (v = Math.ceil(yr[0] / st) * st; v <= yr[1]; v += st) {
+        el("line", {x1: x0, x2: x1, y1: sy(v), y2: sy(v), "class": "gridl"}, svg);
+        el("text", {x: x0 - 4, y: sy(v) + 3.5, "text-anchor": "end", "class": "tick"}, svg).textContent = +v.toPrecision(6);
+      }
+      var xt = niceStep(xr[1] - xr[0], 6);
+      for (v = Math.ceil(xr[0] / xt) * xt; v <= xr[1]; v += xt)
+        el("text", {x: sx(v), y: y0 + 15, "text-anchor": "middle", "class": "tick"}, svg).textContent = +v.toPrecision(6);
+      el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
+      el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
+      el("text", {x: x1, y: PH - 3, "text-anchor": "end", "class": "tick"}, svg).textContent = xmode.label;
+      el("text", {x: 6, y: 14, "class": "ptitle"}, svg).textContent = spec.title + (spec.unit ? "  (" + spec.unit + ")" : "");
+      D.designs.forEach(function (d, n) {
+        var path = "", pen = false;
+        for (var k = 0; k < ys[n].length; k++) {
+          if (fin(xs[n][k]) && fin(ys[n][k])) { path += (pen ? "L" : "M") + sx(xs[n][k]).toFixed(1) + "," + sy(ys[n][k]).toFixed(1); pen = true; }
+          else pen = false;
+        }
+        el("path", {d: path, "class": "series", stroke: d.color, "data-design": n}, svg);
+      });
+      var leg = h("div", "legend", panel);
+      D.designs.forEach(function (d) { var it = h("span", "", leg), sw = h("i", "", it); sw.style.background = d.color; h("span", "", it, d.name); });
+      var line = el("line", {"class": "hoverline", y1: y0, y2: y1}, svg), tip = h("div", "tooltip", panel);
+      line.style.display = "none";
+      var hit = el("rect", {x: x0, y: y1, width: x1 - x0, height: y0 - y1, fill: "transparent"}, svg);
+      hit.addEventListener("pointermove", function (e) {
+        var r = svg.getBoundingClientRect(), xv = xr[0] + ((e.clientX - r.left) / r.width * PW - x0) / (x1 - x0) * (xr[1] - xr[0]);
+        tip.innerHTML = "";
+        h("div", "tt", tip, xmode.label + " = " + fmt(xv));
+        D.designs.forEach(function (d, n) {
+          var k = nearest(xs[n], xv), row = h("div", "tr", tip), sw = h("i", "", row);
+          sw.style.background = d.color;
+          h("span", "", row, d.name + " ");
+          var b = h("b", "", row, fmt(ys[n][k]) + (spec.unit ? " " + spec.unit : ""));
+          b.setAttribute("data-design", n); b.setAttribute("data-frame", k);
+        });
+        line.setAttribute("x1", sx(xv)); line.setAttribute("x2", sx(xv)); line.style.display = "";
+        var pr = panel.getBoundingClientRect();
+        tip.style.display = "block";
+        var left = e.clientX - pr.left + 14;
+        if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
+        tip.style.left = left + "px"; tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
+      });
+      hit.addEventListener("pointerleave", function () { tip.style.display = "none"; line.style.display = "none"; });
+    });
+  }
+  D.xaxes.forEach(function (a, n) { var o = document.createElement("option"); o.value = n; o.textContent = a.label; sel.appendChild(o); });
+  sel.addEventListener("change", function () { xmode = D.xaxes[+sel.value]; build(); });
+  build();
+  window.__linkdynCompare = true;
+})();
