@@ -118,7 +118,7 @@ def build(model: Model) -> Topology:
         try:
             kinds.append(jk.get(jt.kind))
         except jk.UnknownJointKind as exc:
-            raise ModelError(str(exc), file=src, field=f"joints[{k}].type",
+            raise ModelError(str(exc), file=src, field=f"joints.{jt.name}.type",
                              fix="Set type to one of " + ", ".join(jk.names())) from None
 
     # union-find over bodies
@@ -160,6 +160,15 @@ def build(model: Model) -> Topology:
             linked = any(find(index[b]) == find(index[GROUND])
                          for j in cut if name in (joints[j].body_a, joints[j].body_b)
                          for b in (joints[j].body_a, joints[j].body_b))
+            touching = [j for j, jt in enumerate(joints) if name in (jt.body_a, jt.body_b)]
+            held = [joints[j] for j in touching]
+            if touching and not any(kinds[j].tree for j in touching):
+                raise ModelError(
+                    f"body '{name}' is held only by {held[0].kind} joint(s) "
+                    + ", ".join(f"'{jt.name}'" for jt in held) + f", which cannot place it (a "
+                    f"{held[0].kind} joint leaves {kinds[joints.index(held[0])].freedoms} "
+                    "relative freedoms)", file=src, field=f"bodies.{name}",
+                    fix="Connect the body by a revolute or prismatic joint too, e.g. a guide")
             if user_cut and linked:
                 raise ModelError(
                     f"cutting {sorted(user_cut)} leaves body '{name}' without a path to the ground",
