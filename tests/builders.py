@@ -26,6 +26,13 @@ def rev(name, a, b):
     return Joint(name, REVOLUTE, ba, pa, bb, pb)
 
 
+def slot(name, a, b, axis=(1.0, 0.0)):
+    """Slot joint ``connect = [a, b]``: b's pin on the line through a's point along ``axis``
+    (a's frame)."""
+    (ba, pa), (bb, pb) = a.split("."), b.split(".")
+    return Joint(name, "slot", ba, pa, bb, pb, np.array(axis, float))
+
+
 def pri(name, a, b, axis=(1.0, 0.0), angle=0.0):
     """Prismatic joint ``connect = [a, b]``, axis in the first body's frame, angle in rad."""
     (ba, pa), (bb, pb) = a.split("."), b.split(".")

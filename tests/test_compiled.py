@@ -17,11 +17,12 @@ import pytest
 
 import linkdyn
 from linkdyn import compiled, kinematics
-from linkdyn.cli import example_names, example_text
+from linkdyn.cli import example_text
 from linkdyn.io import model_from_dict
 from linkdyn.kinematics import compiled as kc
 
-from test_compiled_dynamics import hoeken_design, same, slider_crank_design
+from test_compiled_dynamics import (KERNEL_EXAMPLES, KERNEL_MODELS, hoeken_design, same,
+                                   slider_crank_design)
 from test_dynamics import MODELS, times
 
 
@@ -86,7 +87,7 @@ def solve_both(model, t):
     return fast, kinematics.solve(model, t, backend="numpy")
 
 
-@pytest.mark.parametrize("name", example_names())
+@pytest.mark.parametrize("name", KERNEL_EXAMPLES)
 def test_bundled_examples(name):
     model = linkdyn.load(linkdyn.example_path(name))
     fast, ref = solve_both(model, around(model))
@@ -94,7 +95,7 @@ def test_bundled_examples(name):
     check_kinematics(fast, ref)
 
 
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize("name", KERNEL_MODELS)
 def test_dynamics_test_models(name):
     """Sliders in the tree, at the cut and driven; two drivers; joints declared child-first."""
     model = MODELS[name]()

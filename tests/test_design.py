@@ -120,6 +120,7 @@ def test_hoeken_numbers_match_its_table():
     ("fivebar", []),
     ("slider_crank", []),
     ("inverted_slider_crank", []),
+    ("scotch_yoke", []),
 ])
 def test_grashof_type_of_every_four_bar_loop_of_the_examples(name, expected):
     found = design.four_bars(linkdyn.load(linkdyn.example_path(name)))

@@ -36,7 +36,7 @@ from linkdyn.dynamics import dense
 from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-from builders import DEG, RPM, body, pri, rev
+from builders import DEG, RPM, body, pri, rev, slot
 
 RTOL = 1e-9
 
@@ -211,6 +211,37 @@ def five_bar():
                                "link4": 2.04})
 
 
+def scotch_yoke():
+    """Crank pin in the vertical slot of a yoke sliding on the ground (a slot joint whose slot
+    translates), working load, damper, gravity."""
+    bodies = (
+        body("ground", {"O": (0, 0), "G": (0, 0)}),
+        body("crank", {"O": (0, 0), "A": (60, 0)}, 0.4, (30, 4), 120.0),
+        body("yoke", {"C": (0, 0), "P": (200, 0)}, 1.5, (80, 10), 9000.0),
+    )
+    joints = (rev("J1", "ground.O", "crank.O"), pri("J2", "ground.G", "yoke.C"),
+              slot("J3", "yoke.C", "crank.A", (0.0, 1.0)))
+    loads = (force("yoke", "P", -150.0, 0.0, 20.0), damper("yoke", "P", "ground", "O", 3.0))
+    return Model("scotch-yoke", bodies, joints, (Driver("J1", ConstantSpeed(120 * RPM, 0.2)),),
+                 loads, GRAVITY, assembly_phi={"crank": 0.2, "yoke": 0.0},
+                 assembly_q={"J2": 0.0588})
+
+
+def slotted_lever():
+    """Quick-return crank and slotted lever: the crank pin slides and turns in a slot of the
+    lever, offset 10 mm from its pivot line (a slot joint whose slot turns)."""
+    bodies = (
+        body("ground", {"O2": (0, 0), "O4": (0, -150)}),
+        body("crank", {"O2": (0, 0), "A": (75, 0)}, 0.4, (37.5, 2), 187.5),
+        body("lever", {"O4": (0, 0), "S": (0, 10), "T": (300, 0)}, 1.2, (150, 5), 9000.0),
+    )
+    joints = (rev("J1", "ground.O2", "crank.O2"), slot("J3", "lever.S", "crank.A", (1.0, 0.0)),
+              rev("J4", "ground.O4", "lever.O4"))
+    loads = (force("lever", "T", -30.0, 10.0, 5.0), torque("lever", -2.0, 2.0))
+    return Model("slotted lever", bodies, joints, (Driver("J1", ConstantSpeed(60 * RPM, 0.3)),),
+                 loads, GRAVITY, assembly_phi={"crank": 0.3, "lever": 1.0})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-loaded": lambda: hoeken(True),
@@ -223,6 +254,8 @@ MODELS = {
     "stephenson": stephenson,
     "watt2": watt2,
     "five-bar": five_bar,
+    "scotch-yoke": scotch_yoke,
+    "slotted-lever": slotted_lever,
 }
 
 
@@ -397,23 +430,34 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1}  # reaction unknowns per joint, by kind
+
+
+def joint_columns(model):
+    """First column of each joint's reaction unknowns, and the number of them all."""
+    start = np.cumsum([0] + [UNKNOWNS[j.kind] for j in model.joints])
+    return [int(x) for x in start[:-1]], int(start[-1])
+
+
 def ne_system(sol):
     """The simultaneous Newton–Euler equations ``K x = rhs`` of all moving bodies.
 
-    Unknowns x: per joint (model order) two — revolute ``[Fx, Fy]`` by the first body on the
+    Unknowns x: per joint (model order) — revolute ``[Fx, Fy]`` by the first body on the
     second; prismatic ``[F_n, M]`` (normal force along n = perp(axis), moment by the first on
-    the second about the second body's point) — then one effort per driver (revolute: a moment
-    on the second body; prismatic: a force along the axis through the second body's point).
+    the second about the second body's point); slot ``[F_n]`` (normal force through the pin) —
+    then one effort per driver (revolute: a moment on the second body; prismatic: a force along
+    the axis through the second body's point).
     Rows per moving body: ``sum F = m a_C`` (x, y) and ``sum M_C = I_C alpha``.
-    Returns K (T, 3 nb, 2 nj + nd), rhs (T, 3 nb), the axis normals, the body states.
+    Returns K (T, 3 nb, n_unknowns + nd), rhs (T, 3 nb), the axis normals, the body states.
     """
     model = sol.model
     states = body_states(sol)
     names = [b.name for b in model.moving_bodies]
     row = {b: 3 * k for k, b in enumerate(names)}
     T = sol.t.shape
-    nj, nd = len(model.joints), len(model.drivers)
-    K = np.zeros(T + (3 * len(names), 2 * nj + nd))
+    nd = len(model.drivers)
+    col, nj = joint_columns(model)
+    K = np.zeros(T + (3 * len(names), nj + nd))
     rhs = np.zeros(T + (3 * len(names),))
 
     def put(b, col, f, x, mz=0.0):
@@ -428,8 +472,9 @@ def ne_system(sol):
     normals = {}
     for k, jt in enumerate(model.joints):
         x = sol.point(jt.body_b, jt.point_b)
+        c0 = col[k]
         if jt.kind == REVOLUTE:
-            for c, f in ((2 * k, np.array([1.0, 0.0])), (2 * k + 1, np.array([0.0, 1.0]))):
+            for c, f in ((c0, np.array([1.0, 0.0])), (c0 + 1, np.array([0.0, 1.0]))):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
@@ -438,13 +483,14 @@ def ne_system(sol):
             e = rot(phi_a, np.asarray(jt.axis, float) / np.linalg.norm(jt.axis))
             n = perp(e)
             normals[jt.name] = (e, n)
-            put(jt.body_b, 2 * k, n, x)
-            put(jt.body_a, 2 * k, -n, x)
-            put(jt.body_b, 2 * k + 1, zero, x, 1.0)
-            put(jt.body_a, 2 * k + 1, zero, x, -1.0)
+            put(jt.body_b, c0, n, x)
+            put(jt.body_a, c0, -n, x)
+            if jt.kind == PRISMATIC:
+                put(jt.body_b, c0 + 1, zero, x, 1.0)
+                put(jt.body_a, c0 + 1, zero, x, -1.0)
     for d, drv in enumerate(model.drivers):
         jt = model.joint(drv.joint)
-        c = 2 * nj + d
+        c = nj + d
         x = sol.point(jt.body_b, jt.point_b)
         if jt.kind == REVOLUTE:
             put(jt.body_b, c, zero, x, 1.0)
@@ -467,16 +513,19 @@ def ne_solve(sol):
     K, rhs, normals, _ = ne_system(sol)
     assert K.shape[-1] == K.shape[-2], "mobility != drivers"
     x = np.linalg.solve(K, rhs[..., None])[..., 0]
+    col, n_unknowns = joint_columns(model)
     nj = len(model.joints)
     force = np.zeros(sol.t.shape + (nj, 2))
     moment = np.zeros(sol.t.shape + (nj,))
     for k, jt in enumerate(model.joints):
+        c = col[k]
         if jt.kind == REVOLUTE:
-            force[..., k, :] = x[..., 2 * k:2 * k + 2]
+            force[..., k, :] = x[..., c:c + 2]
         else:
-            force[..., k, :] = x[..., 2 * k, None] * normals[jt.name][1]
-            moment[..., k] = x[..., 2 * k + 1]
-    return force, moment, x[..., 2 * nj:]
+            force[..., k, :] = x[..., c, None] * normals[jt.name][1]
+            if jt.kind == PRISMATIC:
+                moment[..., k] = x[..., c + 1]
+    return force, moment, x[..., n_unknowns:]
 
 
 def reported_unknowns(sol):
@@ -488,9 +537,11 @@ def reported_unknowns(sol):
         f = sol.reactions.force[..., k, :]
         if jt.kind == REVOLUTE:
             parts.append(f)
-        else:
+        elif jt.kind == PRISMATIC:
             n = normals[jt.name][1]
             parts.append(np.stack((np.sum(f * n, -1), sol.reactions.moment[..., k]), -1))
+        else:  # a slot: the normal force only
+            parts.append(np.sum(f * normals[jt.name][1], -1)[..., None])
     parts.append(sol.dyn.tau)
     return np.concatenate(parts, axis=-1)
 
@@ -513,8 +564,9 @@ def test_recursive_matches_dense(name):
     fs = force_scale(d.force)
     for k, c in enumerate(kin.layout.topo.cut):
         # a prismatic cut's moment multiplier is a moment: scale it by the force scale x size
-        check(sol.dyn.lam[..., 2 * k:2 * k + 2], d.lam[..., 2 * k:2 * k + 2],
-              scale=max(np.max(np.abs(d.lam[..., 2 * k:2 * k + 2])), fs * size_of(model)),
+        rows = kin.layout.topo.row_slice(k)
+        check(sol.dyn.lam[..., rows], d.lam[..., rows],
+              scale=max(np.max(np.abs(d.lam[..., rows])), fs * size_of(model)),
               what=f"lambda at {model.joints[c].name}")
     check_reactions(sol.reactions.force, sol.reactions.moment, d.force, d.moment, model,
                     size_of(model), what="recursive vs dense")
@@ -654,7 +706,7 @@ def load_geometry(sol):
 
 
 @pytest.mark.parametrize("name", ["hoeken-loaded", "slider-crank", "inverted-slider-crank",
-                                  "boom", "stephenson", "watt2", "five-bar"])
+                                  "boom", "stephenson", "watt2", "five-bar", "slotted-lever"])
 def test_statics_by_virtual_work(name):
     model = MODELS[name]()
     dyn_sol = solution(name)
@@ -753,9 +805,9 @@ def test_body_wrench_balance_with_reported_reactions(name):
     assert np.max(rel) <= RTOL, f"wrench balance residual {np.max(rel):.3e}"
     fs = force_scale(sol.reactions.force)
     for k, jt in enumerate(model.joints):
-        if jt.kind == REVOLUTE:
+        if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        else:
+        if jt.kind != REVOLUTE:  # prismatic and slot reactions are normal to the axis
             e = normals[jt.name][0]
             along = np.sum(sol.reactions.force[..., k, :] * e, -1)
             assert np.max(np.abs(along)) <= RTOL * fs
@@ -919,7 +971,7 @@ def test_random_slider_cranks(case):
 
 
 @pytest.mark.parametrize("name", ["hoeken-loaded", "inverted-slider-crank", "five-bar",
-                                  "stephenson"])
+                                  "stephenson", "slotted-lever"])
 def test_batch_equals_loop(name):
     model = MODELS[name]()
     t = times(model, 5)[:4] * 0.25                     # a quarter of the cycle, 4 samples

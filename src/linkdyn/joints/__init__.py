@@ -8,11 +8,12 @@ write a module defining a :class:`JointKind` subclass and its instance ``KIND``,
 
 from __future__ import annotations
 
-from . import prismatic, revolute
+from . import prismatic, revolute, slot
 from .base import JointKind, line_motion
 
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
-REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND)}
+REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
+                                                       slot.KIND)}
 
 
 class UnknownJointKind(ValueError):
