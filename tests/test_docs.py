@@ -262,3 +262,69 @@ def test_relative_links_point_to_existing_pages_and_headings(page):
         elif anchor and anchor not in anchors(read(target) if target else text):
             bad.append(f"{target}#{anchor}")
     assert not bad, f"docs/{page}: broken links {sorted(set(bad))}"
+
+
+# ------------------------------------------------------------------------------- examples in the docs
+
+def _fenced_after(text: str, marker: str) -> str:
+    """The first fenced block after ``marker`` in ``text``."""
+    start = text.index("```", text.index(marker))
+    start = text.index("\n", start) + 1
+    return text[start:text.index("```", start)]
+
+
+def _same_text(doc: str, got: str) -> None:
+    """Line by line and word by word; numbers to 4 digits, and two numbers below 1e-9 (rounding
+    residuals) count as equal."""
+    num = re.compile(r"^[-+(]?\d[\d.e+-]*")
+    doc_lines, got_lines = doc.strip().splitlines(), got.strip().splitlines()
+    assert len(doc_lines) == len(got_lines), (doc, got)
+    for dl, gl in zip(doc_lines, got_lines):
+        dw = re.findall(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?|[^\s\d]+", dl)
+        gw = re.findall(r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?|[^\s\d]+", gl)
+        assert len(dw) == len(gw), (dl, gl)
+        for a, b in zip(dw, gw):
+            if num.match(a) and num.match(b):
+                x, y = float(a), float(b)
+                assert abs(x) < 1e-9 and abs(y) < 1e-9 or x == pytest.approx(y, rel=1e-3), (dl, gl)
+            else:
+                assert a == b, (dl, gl)
+
+
+def test_cli_sample_output_is_what_the_bundled_model_prints(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "hoeken.toml").write_text(linkdyn.example_path("hoeken").read_text("utf-8"))
+    res = CliRunner().invoke(main, ["analyze", "hoeken.toml", "-o", "out/hoeken"])
+    assert res.exit_code == 0, res.output
+    _same_text(_fenced_after(read("cli.md"), "`linkdyn analyze hoeken.toml -o out/hoeken` prints"),
+               res.output)
+
+
+def test_cli_rocker_driven_example_fails_as_documented(tmp_path, monkeypatch):
+    # the documented sed edits of the bundled Hoeken model, then the documented error
+    block = _fenced_after(read("cli.md"), "A model driven past a position it cannot reach")
+    text = linkdyn.example_path("hoeken").read_text("utf-8")
+    for old, new in re.findall(r"-e 's/(.*?)/(.*?)/'", block):
+        old = old.replace("\\[", "[").replace("\\]", "]").lstrip("^")
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "rocker_driven.toml").write_text(text)
+    res = CliRunner().invoke(main, ["analyze", "rocker_driven.toml", "--duration", "4"])
+    assert res.exit_code == 3
+    want = next(ln for ln in block.splitlines() if ln.startswith("error:"))
+    _same_text(want, res.output.strip())
+    assert not (tmp_path / "out").exists()
+
+
+def test_model_format_complete_example_is_the_bundled_hoeken(tmp_path):
+    import numpy as np
+    block = _fenced_after(read("model-format.md"), "## A complete example")
+    (tmp_path / "doc.toml").write_text(block)
+    doc, bundled = linkdyn.load(tmp_path / "doc.toml"), linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, 4 / 3, 61)
+    a, b = linkdyn.analyze(doc, t).columns, linkdyn.analyze(bundled, t).columns
+    assert list(a) == list(b)
+    for k in b:
+        np.testing.assert_allclose(a[k], b[k], rtol=0, atol=1e-12 * np.max(np.abs(b[k])) + 1e-300,
+                                   err_msg=k)
