@@ -21,6 +21,7 @@ force into the crank's generalized force.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import xml.etree.ElementTree as ET
 
@@ -275,3 +276,105 @@ def test_efforts_and_loop_forces_match_mujoco(case):
         err = np.max(np.abs(ref - mj)) / np.max(np.abs(ref))
         assert err <= RTOL, f"{case}: reaction at {name} differs from MuJoCo by {err:.2e}"
         assert np.max(np.abs(lams[:, c, 1])) <= 1e-9 * np.max(np.abs(ref))
+
+
+# ----------------------------------------------------------------------------------------------
+# the slot joint (pin in slot)
+#
+# MuJoCo has no point-on-line equality, so the slot's one constraint row is built here from
+# MuJoCo's point Jacobians: the pin's velocity as a point of the pin body minus the velocity of
+# the slotted body's point at the pin, along the slot's normal n. MuJoCo's M, bias forces and
+# applied loads of the open tree (slot removed) then give [tau; lam] by least squares; lam n is
+# the force of the slotted body on the pin, linkdyn's reaction at the slot.
+
+
+def _slot_cases():
+    from linkdyn import example_path, load
+    from test_dynamics import slotted_lever
+
+    yoke = load(example_path("scotch_yoke"))
+    return {
+        # the crank accelerates, so inertia of every kind enters
+        "scotch-yoke": dataclasses.replace(
+            yoke, drivers=(Driver("J1", ExpressionMotion("12*t + 1.5*sin(5*t)")),)),
+        "slotted-lever": dataclasses.replace(
+            slotted_lever(), drivers=(Driver("J1", ExpressionMotion("0.3 + 6*t + sin(3*t)")),)),
+    }
+
+
+@pytest.mark.parametrize("case", ["scotch-yoke", "slotted-lever"])
+def test_slot_joint_matches_mujoco(case):
+    model = _slot_cases()[case]
+    slot = next(j for j in model.joints if j.kind == "slot")
+    t = np.linspace(0.0, 1.0, 9) + 0.01
+    sol = analyze(model, t)
+    xml, tree = mjcf(dataclasses.replace(
+        model, joints=tuple(j for j in model.joints if j is not slot), cut=()))
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    nv = m.nv
+    assert nv == len(tree) == len(model.bodies) - 1 and m.neq == 0
+    dof = {jt.name: m.jnt_dofadr[m.joint(jt.name).id] for _, jt in tree.values()}
+    taus, lams, normals = [], [], []
+    for k in range(len(t)):
+        qacc = np.zeros(nv)
+        for child, (parent, jt) in tree.items():
+            d.qpos[m.jnt_qposadr[m.joint(jt.name).id]] = _relative(sol, child, parent, jt, "q")[k]
+            d.qvel[dof[jt.name]] = _relative(sol, child, parent, jt, "qd")[k]
+            qacc[dof[jt.name]] = _relative(sol, child, parent, jt, "qdd")[k]
+        mujoco.mj_forward(m, d)
+        for b in model.moving_bodies:
+            for name in b.points:
+                xyz = d.site_xpos[m.site(f"{b.name}.{name}").id]
+                np.testing.assert_allclose(xyz[[0, 2]], sol.point(b.name, name)[k], atol=1e-12)
+        M = np.zeros((nv, nv))
+        mujoco.mj_fullM(m, d, M)
+        # the slot row: n . (J_pin on b - J_point at the pin on a), n normal to the slot
+        pin = d.site_xpos[m.site(f"{slot.body_b}.{slot.point_b}").id].copy()
+        jac = []
+        for body in (slot.body_b, slot.body_a):
+            jp = np.zeros((3, nv))
+            if body != "ground":
+                mujoco.mj_jac(m, d, jp, None, pin, m.body(body).id)
+            jac.append(jp)
+        phi_a = 0.0 if slot.body_a == "ground" else sol.phi(slot.body_a)[k]
+        c, s = math.cos(phi_a), math.sin(phi_a)
+        e = np.array([c * slot.axis[0] - s * slot.axis[1], s * slot.axis[0] + c * slot.axis[1]])
+        n = np.array([-e[1], e[0]])
+        row = np.array([n[0], 0.0, n[1]]) @ (jac[0] - jac[1])
+        # linkdyn's rates keep the pin in the slot
+        assert abs(row @ d.qvel) <= 1e-12 * np.linalg.norm(row) * np.linalg.norm(d.qvel)
+        q_loads = np.zeros(nv)
+        for ld in model.loads:
+            bid = m.body(ld.body).id
+            if ld.kind == "force":
+                f = np.asarray(ld.value(t[k]), float)
+                point = d.site_xpos[m.site(f"{ld.body}.{ld.point}").id].copy()
+                mujoco.mj_applyFT(m, d, np.array([f[0], 0.0, f[1]]), np.zeros(3), point, bid,
+                                  q_loads)
+            elif ld.kind == "torque":
+                tq = float(np.asarray(ld.value(t[k])))
+                mujoco.mj_applyFT(m, d, np.zeros(3), np.array([0.0, -tq, 0.0]),
+                                  d.xipos[bid].copy(), bid, q_loads)
+            else:  # pragma: no cover - the cases here have no springs or dampers
+                raise NotImplementedError(ld.kind)
+        S = np.zeros((nv, len(model.drivers)))
+        for c_, drv in enumerate(model.drivers):
+            jt = model.joint(drv.joint)
+            child = next(ch for ch, (_, j) in tree.items() if j.name == jt.name)
+            S[dof[jt.name], c_] = 1.0 if jt.body_b == child else -1.0
+        rhs = M @ qacc + d.qfrc_bias - q_loads
+        A = np.hstack((S, row[:, None]))
+        x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
+        assert np.linalg.norm(A @ x - rhs) <= 1e-10 * np.linalg.norm(rhs)
+        taus.append(x[:len(model.drivers)])
+        lams.append(x[-1])
+        normals.append(n)
+    taus, force = np.array(taus), np.array(lams)[:, None] * np.array(normals)
+    for c_, drv in enumerate(model.drivers):
+        ref = sol.effort(drv.joint)
+        err = np.max(np.abs(ref - taus[:, c_])) / np.max(np.abs(ref))
+        assert err <= RTOL, f"{case}: tau_{drv.joint} differs from MuJoCo by {err:.2e}"
+    ref = sol.reaction(slot.name)
+    err = np.max(np.abs(ref - force)) / np.max(np.abs(ref))
+    assert err <= RTOL, f"{case}: slot reaction differs from MuJoCo by {err:.2e}"
