@@ -12,8 +12,12 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.interpolate import CubicSpline
+
+if TYPE_CHECKING:                            # imported when a table is built (scipy takes ~1 s)
+    from scipy.interpolate import CubicSpline
 
 from .errors import InvalidValue, ModelError
 from .expr import Expr, parse
@@ -170,6 +174,8 @@ class TableMotion:
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "q", q)
         object.__setattr__(self, "scale", _finite("scale", self.scale))
+        from scipy.interpolate import CubicSpline
+
         object.__setattr__(self, "spline", CubicSpline(t, q, bc_type="not-a-knot", extrapolate=False))
 
     @classmethod

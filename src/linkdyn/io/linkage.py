@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import joints as jk
 from ..model import GROUND, Body, Joint
-from .reader import _Reader, _did_you_mean, _entry_field, _type_name
+from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
 
 BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about")
 JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
@@ -84,7 +84,7 @@ def _check_ground(r: _Reader, entries: list) -> None:
     if close.startswith("Did you mean"):
         fix = f'{close.split("?")[0]}? Rename it "ground"'
     elif massless:
-        fix = (f"If body '{massless[0]}' is the fixed frame, rename it \"ground\"; "
+        fix = (f"If body {_quote(massless[0])} is the fixed frame, rename it \"ground\"; "
                f"otherwise a{fix[1:]}")
     r.fail("bodies", "no body is named 'ground'", fix)
 
