@@ -431,3 +431,12 @@ def test_random_token_soups_never_crash():
             equal_nan=True)
 
     check()
+
+
+def test_evaluation_gives_inf_and_nan_without_warnings():
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                   # a RuntimeWarning would fail here
+        assert float(parse("1/t")(0.0)) == math.inf
+        assert np.isnan(parse("log(t)")(-1.0)) and np.isnan(parse("(-1)**t")(0.5))
+        assert float(parse("9**9**9")(0.0)) == math.inf

@@ -116,7 +116,7 @@ class Expr:
         Names of the variables the expression depends on.
     """
 
-    __slots__ = ("op", "args", "variables", "_negative", "_program", "__weakref__")
+    __slots__ = ("op", "args", "variables", "_negative", "_program", "_hash", "__weakref__")
     _table: weakref.WeakValueDictionary = weakref.WeakValueDictionary()
 
     def __new__(cls, op: str, args: tuple = ()):
@@ -138,11 +138,21 @@ class Expr:
         put(self, "_negative", _signed(self) or op in ("*", "/") and (
             _signed(args[0]) or args[0].op in ("*", "/") and _signed(args[0].args[0])))
         put(self, "_program", None)
+        put(self, "_hash", hash(key))                            # children's hashes are cached
         cls._table[key] = self
         return self
 
     def __init__(self, op: str, args: tuple = ()):
         pass
+
+    def __eq__(self, other) -> bool:
+        # equal expressions are normally one object; the structural test covers two built at
+        # once by two threads (its recursion stops at the first shared child)
+        return self is other or (isinstance(other, Expr) and self._hash == other._hash
+                                 and self.op == other.op and self.args == other.args)
+
+    def __hash__(self) -> int:
+        return self._hash
 
     def __setattr__(self, name, value):
         raise AttributeError(f"an Expr is immutable (cannot set {name!r})")
@@ -173,7 +183,7 @@ class Expr:
         ndarray
             Of the broadcast shape of the inputs; float64 (complex128 if an input is complex,
             which allows complex-step derivative checks). Outside a function's domain the
-            result is NaN (NumPy rules), never an exception.
+            result is NaN (NumPy rules), never an exception or a warning; an overflow gives inf.
         """
         arrays = {k: _as_array(v) for k, v in values.items()}
         missing = sorted(self.variables - arrays.keys())
@@ -181,7 +191,8 @@ class Expr:
             raise ValueError(f"no value given for variable(s) {', '.join(missing)} of "
                              f"{_label(self, 60)}")
         shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
-        return _evaluate(self, arrays) + np.zeros(shape)
+        with np.errstate(all="ignore"):          # inf and NaN are results, checked by the caller
+            return _evaluate(self, arrays) + np.zeros(shape)
 
     def __call__(self, t) -> np.ndarray:
         """Evaluate at ``t`` (array_like, any shape): shorthand for ``evaluate(t=t)``."""
