@@ -247,27 +247,29 @@ def key_where(item: dict) -> str:
 
 
 def key_results_html(items: list) -> str:
-    """The key results (:func:`.keys.key_results` with their page frames), grouped; a result
-    that occurs at one sample is a button that moves the animation there (``data-frame``)."""
-    groups: dict[str, list] = {}
+    """The key results (:func:`.keys.key_results` with their page frames) in one dense grid,
+    in reading order, each tagged with its group; a result that occurs at one sample is a
+    button that moves the animation there (``data-frame``)."""
+    cells, groups = [], []
     for it in items:
-        groups.setdefault(it["group"], []).append(it)
-    out = []
-    for g, its in groups.items():
-        cells = []
-        for it in its:
-            inner = (f"<span class='kl'>{_e(it['label'])}</span>"
-                     f"<span class='kv'>{_e(key_value(it))}</span>"
-                     f"<span class='kt'>{_e(key_where(it))}"
-                     + (f"{' · ' if key_where(it) else ''}{_e(it['note'])}" if it.get("note")
-                        else "") + "</span>")
-            if it.get("frame") is not None:
-                cells.append(f"<button type='button' class='keyitem' data-frame='{it['frame']}' "
-                             f"title='show this instant'>{inner}</button>")
-            else:
-                cells.append(f"<div class='keyitem'>{inner}</div>")
-        out.append(f"<div class='keygroup'><h3>{_e(g)}</h3>{''.join(cells)}</div>")
-    return "<div class='keygrid'>" + "".join(out) + "</div>" if out else ""
+        if it["group"] not in groups:
+            groups.append(it["group"])
+        g = groups.index(it["group"])
+        where = key_where(it)
+        inner = (f"<span class='kl'>{_e(it['label'])}</span>"
+                 f"<span class='kv'>{_e(key_value(it))}</span>"
+                 f"<span class='kt'>{_e(where)}"
+                 + (f"{' · ' if where else ''}{_e(it['note'])}" if it.get("note") else "")
+                 + "</span>")
+        attrs = f"class='keyitem g{g % 6}' data-group='{_e(it['group'])}'"
+        if it.get("frame") is not None:
+            cells.append(f"<button type='button' {attrs} data-frame='{it['frame']}' "
+                         f"title='{_e(it['group'])}: show this instant'>{inner}</button>")
+        else:
+            cells.append(f"<div {attrs} title='{_e(it['group'])}'>{inner}</div>")
+    legend = "".join(f"<span class='keytag g{n % 6}'>{_e(g)}</span>" for n, g in enumerate(groups))
+    return (f"<div class='keylegend'>{legend}</div><div class='keygrid'>{''.join(cells)}</div>"
+            if cells else "")
 
 
 def model_html(sol) -> str:
