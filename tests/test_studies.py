@@ -179,3 +179,105 @@ def test_sample_methods_cover_the_box_and_repeat_with_a_seed():
     lhs = sample(bounds, "lhs", 10, seed=0)  # one point in each tenth of every axis
     assert sorted(np.floor(lhs[:, 0] * 10).astype(int)) == list(range(10))
     assert grid({"a": [1, 2], "b": [3, 4, 5]})["b"].tolist() == [3, 4, 5, 3, 4, 5]
+
+
+# --- optimize ---------------------------------------------------------------------------------
+
+def test_optimize_beats_a_sobol_sweep_of_the_same_space_with_fewer_designs():
+    from linkdyn.studies.optimize import optimize
+    box = {"bodies.ground.points.O4[0]": (80.0, 100.0),
+           "bodies.coupler.points.O3[0]": (110.0, 125.0)}
+    res = optimize(HOEKEN, box, T, "peak_tau_J1", ["path_deviation<=0.1mm"], seed=0,
+                   popsize=8, maxiter=15, backend="numpy")
+    values = sample(list(box.values()), "sobol", 1024, seed=0)
+    df = linkdyn.sweep(HOEKEN, dict(zip(box, values.T)), T,
+                       metrics=["peak_tau_J1", "path_deviation"], backend="numpy")
+    feasible = df[df.valid & (df.path_deviation <= 1e-4)]
+    assert len(feasible) > 0 and res.feasible
+    assert res.metrics["path_deviation"] <= 1e-4
+    assert res.metrics["peak_tau_J1"] <= feasible.peak_tau_J1.min()
+    assert res.evaluations < len(df)
+    # the reported design is the model written out: it analyzes to the reported metrics
+    again = evaluate_metrics(linkdyn.analyze(
+        linkdyn.model_from_dict(res.data, base_dir="."), T, backend="numpy"))
+    assert again["peak_tau_J1"] == pytest.approx(res.metrics["peak_tau_J1"], rel=1e-12)
+    # the same seed gives the same design
+    res2 = optimize(HOEKEN, box, T, "peak_tau_J1", ["path_deviation<=0.1mm"], seed=0,
+                    popsize=8, maxiter=15, backend="numpy")
+    assert res2.values == res.values
+
+
+def test_constraints_read_units_and_refuse_nonsense():
+    from linkdyn.studies.optimize import parse_constraint
+    c = parse_constraint("path_deviation<=0.1mm")
+    assert (c.metric, c.upper, c.value) == ("path_deviation", True, pytest.approx(1e-4))
+    c = parse_constraint("min_transmission_angle >= 40 deg")
+    assert (c.upper, c.value) == (False, pytest.approx(np.radians(40)))
+    with pytest.raises(ModelError, match="METRIC<=VALUE"):
+        parse_constraint("path_deviation == 3")
+
+
+# --- command line -----------------------------------------------------------------------------
+
+def _cli(*args):
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_sweep_command_writes_the_table_and_summary(tmp_path):
+    import json
+
+    import pandas as pd
+    r = _cli("sweep", HOEKEN, "--vary", "bodies.ground.points.O4[0]=80:100:3",
+             "--vary", "bodies.coupler.points.O3[0]=110:120:2", "--samples", 61,
+             "--metric", "peak_tau_J1", "--metric", "path_deviation", "-o", tmp_path)
+    assert r.exit_code == 0, r.output
+    df = pd.read_parquet(tmp_path / "designs.parquet")
+    assert list(df.columns) == ["design", "bodies.ground.points.O4[0]",
+                                "bodies.coupler.points.O3[0]", "valid", "reason", "peak_tau_J1",
+                                "path_deviation"]
+    assert df["bodies.ground.points.O4[0]"].tolist() == [80, 80, 90, 90, 100, 100]
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["designs"] == 6 and s["method"] == "grid"
+    assert s["metrics"]["peak_tau_J1"]["min"] == df.peak_tau_J1.min()
+    assert not (tmp_path / "chunks").exists()
+    # the same designs from a CSV file give the same table
+    csv = tmp_path / "designs.csv"
+    df[["bodies.ground.points.O4[0]", "bodies.coupler.points.O3[0]"]].to_csv(csv, index=False)
+    r = _cli("sweep", HOEKEN, "--designs-csv", csv, "--samples", 61, "--metric", "peak_tau_J1",
+             "--metric", "path_deviation", "-o", tmp_path / "csv")
+    assert r.exit_code == 0, r.output
+    assert pd.read_parquet(tmp_path / "csv" / "designs.parquet").equals(df)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--vary", "bodies.crank.mass=1:2:3:4"], ["cannot read --vary"]),
+    (["--vary", "bodies.crank.mas=1:2"], ["bodies.crank.mas", "Did you mean 'mass'"]),
+    (["--vary", "bodies.crank.mass=-1:2"], ["must be positive"]),
+    (["--vary", "bodies.crank.mass=1:1.8", "--metric", "peak_tau"], ["no metric 'peak_tau'"]),
+    ([], ["nothing to vary"]),
+])
+def test_sweep_command_bad_input_exits_2_with_one_message(tmp_path, args, words):
+    r = _cli("sweep", HOEKEN, *args, "--samples", 11, "-o", tmp_path / "o")
+    assert r.exit_code == 2
+    for w in words:
+        assert w in r.output
+    assert "Traceback" not in r.output
+    assert not (tmp_path / "o" / "designs.parquet").exists()
+
+
+def test_optimize_command_writes_a_model_that_analyzes_to_its_metrics(tmp_path):
+    import json
+    r = _cli("optimize", HOEKEN, "--vary", "bodies.ground.points.O4[0]=85:95",
+             "--minimize", "peak_tau_J1", "--constraint", "path_deviation<=0.2mm",
+             "--samples", 61, "--popsize", 5, "--maxiter", 4, "--backend", "numpy", "-o", tmp_path)
+    assert r.exit_code == 0, r.output
+    info = json.loads((tmp_path / "optimize.json").read_text())
+    best = linkdyn.load(tmp_path / "best.toml")
+    got = evaluate_metrics(linkdyn.analyze(best, T, backend="numpy"), ["peak_tau_J1"])
+    assert got["peak_tau_J1"] == pytest.approx(info["metrics"]["peak_tau_J1"], rel=1e-12)
+    assert best.body("ground").points["O4"][0] == pytest.approx(
+        info["parameters"]["bodies.ground.points.O4[0]"] * 1e-3, rel=1e-15)
+    assert (tmp_path / "summary.json").is_file()

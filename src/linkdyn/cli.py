@@ -471,3 +471,12 @@ def reproduce(name, outdir):
 
 if __name__ == "__main__":  # pragma: no cover
     main()
+
+
+# ---------------------------------------------------------------------------- design studies
+
+from .studies.cli import optimize as _optimize_command  # noqa: E402  (needs the helpers above)
+from .studies.cli import sweep as _sweep_command  # noqa: E402
+
+main.add_command(_sweep_command, "sweep")
+main.add_command(_optimize_command, "optimize")

@@ -4,7 +4,7 @@
   file's units, applied to the parsed file and rebuilt by :func:`linkdyn.model_from_dict`;
 - :mod:`.metrics`: the per-design metrics (peak and RMS efforts, joint forces, transmission
   angle, path deviation, shaking force, flywheel), from the functions the summary uses;
-- :mod:`.sweep`: designs in chunks, locally, in worker processes or on a Dask cluster, resumable;
+- :mod:`.runner`: designs in chunks, locally, in worker processes or on a Dask cluster, resumable;
 - :mod:`.optimize`: differential evolution over the same space, one generation per batch.
 """
 
@@ -16,7 +16,7 @@ from .metrics import check_names
 from .metrics import evaluate as evaluate_metrics
 from .metrics import names as metric_names
 from .params import Parameter, Space, check_ranges, resolve, space
-from .sweep import Task, run, sample
+from .runner import Task, run, sample
 
 __all__ = ["sweep", "grid", "sample", "space", "resolve", "check_ranges", "Parameter", "Space",
            "metric_names", "evaluate_metrics", "Task", "run"]
@@ -85,7 +85,7 @@ def sweep(model, params, t, metrics=None, *, outdir=None, resume=False, workers:
     df, stats = run(task, values, outdir=outdir, resume=resume, chunk=chunk, workers=workers,
                     scheduler=scheduler, progress=progress)
     if outdir is not None:
-        from .sweep import summary, write_results
+        from .runner import summary, write_results
         write_results(outdir, df, summary(task, df, stats))
     df.attrs["stats"] = stats
     return df

@@ -250,10 +250,15 @@ def resolve(data: dict, path: str, *, source: str = "") -> Parameter:
 
 def with_values(data: dict, params, values) -> dict:
     """A copy of ``data`` with each parameter set to its value (the original is unchanged)."""
-    out = copy.deepcopy(data)
+    out = dict(data)
+    copied = {()}  # containers already copied: only those on a parameter's path are
     for p, v in zip(params, np.asarray(values, float).ravel()):
         cur = out
-        for k in p.keys[:-1]:
+        for depth, k in enumerate(p.keys[:-1]):
+            key = p.keys[:depth + 1]
+            if key not in copied:
+                cur[k] = copy.copy(cur[k])
+                copied.add(key)
             cur = cur[k]
         cur[p.keys[-1]] = float(v)
     return out

@@ -1,0 +1,257 @@
+"""``linkdyn sweep`` and ``linkdyn optimize``: the command-line face of :mod:`linkdyn.studies`."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..cli import _json_safe, _path_range, _times, _write_outputs
+from ..errors import ModelError
+
+_VARY = re.compile(r"\s*([^=\s]+)\s*=\s*([^:]+):([^:]+?)(?::(\d+))?\s*\Z")
+
+
+def parse_vary(texts) -> tuple[list[str], list[tuple[float, float]], list[int | None]]:
+    """``PATH=LO:HI[:N]`` options -> paths, bounds, counts (None where no N)."""
+    paths, bounds, counts = [], [], []
+    for text in texts:
+        m = _VARY.match(text)
+        try:
+            lo, hi = float(m.group(2)), float(m.group(3))
+        except (AttributeError, ValueError):
+            raise ModelError(f"cannot read --vary {text!r}", field="--vary",
+                             fix="Write PATH=LO:HI or PATH=LO:HI:N in the file's units, e.g. "
+                                 "--vary bodies.ground.points.O4[0]=80:100:11") from None
+        n = int(m.group(4)) if m.group(4) else None
+        if n is not None and n < 1:
+            raise ModelError(f"--vary {text!r} asks for {n} values", field="--vary",
+                             fix="Give N >= 1")
+        paths.append(m.group(1))
+        bounds.append((lo, hi))
+        counts.append(n)
+    return paths, bounds, counts
+
+
+def _common(f):
+    """Options shared by sweep and optimize."""
+    for opt in reversed([
+        click.option("--vary", "vary", multiple=True, metavar="PATH=LO:HI[:N]",
+                     help="A design parameter: dotted field path of the model file, its range in "
+                          "the file's units and, for a grid, its number of values. Repeat."),
+        click.option("--samples", type=int, help="Samples per design (default: the model's)."),
+        click.option("--duration", type=float, help="Duration in s."),
+        click.option("--cycles", type=float, help="Duration in driver revolutions."),
+        click.option("--seed", type=int, default=0, show_default=True,
+                     help="Seed of the random, LHS and Sobol designs and of the optimizer."),
+        click.option("--path-point", metavar="BODY.POINT",
+                     help="Point of path_deviation (default: the model's [analysis] path_point)."),
+        click.option("--path-range", metavar="A:B",
+                     help="Range of the first driver's coordinate for path_deviation, rad or m "
+                          "(default: the model's [analysis] path_range)."),
+        click.option("--fluctuation", type=float, default=0.02, show_default=True,
+                     help="Coefficient of speed fluctuation of flywheel_inertia."),
+        click.option("--backend", type=click.Choice(["auto", "numpy", "compiled"]),
+                     default="auto", show_default=True, help="Per-sample kernels."),
+    ]):
+        f = opt(f)
+    return f
+
+
+def _setup(model, vary, samples, duration, cycles):
+    from .params import check_ranges, space
+
+    if duration is not None and cycles is not None:
+        raise ModelError("give --duration or --cycles, not both", field="--duration",
+                         fix="Drop one of them")
+    paths, bounds, counts = parse_vary(vary)
+    sp = space(model, paths)
+    check_ranges(sp, bounds)
+    t = _times(sp.model(), samples, duration, cycles)
+    return sp, t, bounds, counts
+
+
+def _show_progress(flag):
+    return flag if flag is not None else bool(getattr(sys.stderr, "isatty", lambda: False)())
+
+
+@click.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@_common
+@click.option("--method", type=click.Choice(["grid", "random", "lhs", "sobol"]),
+              help="How designs fill the ranges (default: grid if every --vary gives N, "
+                   "else sobol).")
+@click.option("--designs", type=int, help="Number of designs (random, lhs, sobol; for a grid, "
+                                          "the total when N is not given). Default 1024.")
+@click.option("--designs-csv", type=click.Path(dir_okay=False),
+              help="Evaluate the designs of a CSV file instead: a header of field paths, one "
+                   "row per design, in the file's units.")
+@click.option("--metric", "metrics", multiple=True,
+              help="A metric to keep (repeat; default: every metric of the model).")
+@click.option("-o", "--outdir", default="out", show_default=True,
+              type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Local worker processes.")
+@click.option("--scheduler", metavar="ADDRESS",
+              help="Run on this Dask cluster (e.g. tcp://host:8786) instead of local processes.")
+@click.option("--chunk", type=int, help="Designs per chunk (default: 200 000 design-samples).")
+@click.option("--resume", is_flag=True,
+              help="Continue an interrupted sweep in OUTDIR: finished chunks are kept.")
+@click.option("--progress/--no-progress", default=None,
+              help="Progress bar on stderr (default: when stderr is a terminal).")
+def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, fluctuation,
+          backend, method, designs, designs_csv, metrics, outdir, workers, scheduler, chunk,
+          resume, progress):
+    """Solve many designs of MODEL; one row of metrics per design.
+
+    Writes OUTDIR/designs.parquet (the parameters, valid, reason and the metrics of every design)
+    and OUTDIR/summary.json. Finished chunks go to OUTDIR/chunks/ as they finish, so --resume
+    after an interruption computes only what is missing.
+    """
+    from . import runner as sweep_mod
+    from .metrics import check_names
+
+    if workers < 1:
+        raise ModelError(f"--workers must be at least 1, got {workers}", field="--workers",
+                         fix="Give --workers 1 or more")
+    if designs_csv:
+        if vary:
+            raise ModelError("give --vary or --designs-csv, not both", field="--designs-csv",
+                             fix="Drop one of them")
+        values, paths = _read_designs(designs_csv)
+        from .params import space
+        sp = space(model, paths)
+        t = _times(sp.model(), samples, duration, cycles)
+        bounds = None
+        method = "csv"
+    else:
+        if not vary:
+            raise ModelError("nothing to vary", field="--vary",
+                             fix="Give --vary PATH=LO:HI[:N] (e.g. bodies.crank.mass=1:2) or "
+                                 "--designs-csv FILE")
+        sp, t, bounds, counts = _setup(model, vary, samples, duration, cycles)
+        method = method or ("grid" if all(counts) else "sobol")
+        values = sweep_mod.sample(bounds, method, designs or (None if method == "grid" else 1024),
+                                  seed, counts)
+    q_range = _path_range(path_range)
+    names = tuple(check_names(sp.model(), list(metrics) or None, path_point=path_point))
+    task = sweep_mod.Task(sp, t, names, None if backend == "auto" else backend, path_point,
+                          q_range, fluctuation)
+    out = Path(outdir)
+    df, stats = sweep_mod.run(task, values, outdir=out, resume=resume, chunk=chunk,
+                              workers=workers, scheduler=scheduler,
+                              progress=_show_progress(progress))
+    summ = sweep_mod.summary(task, df, stats, bounds=bounds, method=method, seed=seed)
+    sweep_mod.write_results(out, df, _json_safe(summ))
+    rate = stats["design_samples_per_s"]
+    click.echo(f"{summ['designs']} designs x {len(t)} samples: {summ['valid']} valid, "
+               f"{summ['invalid']} invalid; {stats['chunks_computed']} chunks computed"
+               + (f", {stats['chunks_reused']} reused" if stats["chunks_reused"] else "")
+               + (f" in {stats['seconds']:.3g} s ({rate:.3g} design-samples/s)" if rate else ""))
+    for name, m in summ["metrics"].items():
+        if m is not None:
+            click.echo(f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g}  (lowest: design "
+                       f"{m['min_design']})")
+    click.echo(f"wrote {out / 'designs.parquet'}, {out / 'summary.json'}")
+
+
+def _read_designs(path):
+    """Designs of a CSV file: (values (D, P), paths)."""
+    try:
+        import pandas as pd
+        df = pd.read_csv(path)
+    except FileNotFoundError:
+        raise ModelError("file not found", file=path, fix="Check the path") from None
+    except Exception as e:  # pandas' parser errors
+        raise ModelError(f"cannot read the designs ({e})", file=path,
+                         fix="Give a CSV file: a header of field paths, one row per design") \
+            from None
+    if df.empty or not len(df.columns):
+        raise ModelError("no designs in the file", file=path,
+                         fix="Give a header of field paths and one row per design")
+    try:
+        values = df.to_numpy(float)
+    except ValueError:
+        raise ModelError("every value must be a number", file=path,
+                         fix="Give numbers in the file's units") from None
+    if not np.all(np.isfinite(values)):
+        r = int(np.argmax(~np.all(np.isfinite(values), axis=1)))
+        raise ModelError(f"row {r + 1} has a missing or non-finite value", file=path,
+                         fix="Give a number in every column of every row")
+    return values, [str(c).strip() for c in df.columns]
+
+
+@click.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@_common
+@click.option("--minimize", required=True, metavar="METRIC", help="The metric to minimize.")
+@click.option("--constraint", "constraints", multiple=True, metavar='"METRIC<=VALUE"',
+              help="A constraint on a metric (<= or >=; SI, or a unit such as mm, deg). Repeat.")
+@click.option("--popsize", type=int, default=15, show_default=True,
+              help="Differential evolution: population per parameter.")
+@click.option("--maxiter", type=int, default=60, show_default=True,
+              help="Differential evolution: largest number of generations.")
+@click.option("-o", "--outdir", default="out", show_default=True,
+              type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--report", is_flag=True, help="Also write the best design's report.html.")
+def optimize(model, vary, samples, duration, cycles, seed, path_point, path_range, fluctuation,
+             backend, minimize, constraints, popsize, maxiter, outdir, report):
+    """Minimize a metric of MODEL over --vary ranges, subject to --constraint.
+
+    Differential evolution (a generation solved as one batch of designs), then a batched
+    compass search. Writes OUTDIR/best.toml (the model file with the best values),
+    OUTDIR/optimize.json and the best design's OUTDIR/summary.json (and report.html).
+    """
+    from .. import design
+    from ..analysis import analyze
+    from ..io.writer import dumps_toml
+    from .optimize import optimize as run
+
+    if not vary:
+        raise ModelError("nothing to vary", field="--vary", fix="Give --vary PATH=LO:HI")
+    paths, bounds, _ = parse_vary(vary)
+    q_range = _path_range(path_range)
+    sp, t, bounds, _ = _setup(model, vary, samples, duration, cycles)
+    res = run(model, dict(zip(paths, bounds)), t, minimize, constraints, seed=seed,
+              popsize=popsize, maxiter=maxiter, backend=None if backend == "auto" else backend,
+              path_point=path_point, path_range=q_range, fluctuation=fluctuation)
+    best = res.model
+    sol = analyze(best, t, allow_singular=True)
+    summ = design.summary(sol, fluctuation=fluctuation, path_point=path_point or best.path_point,
+                          path_range=q_range, default_range=best.path_range)
+    info = {"model": os.fspath(model), "minimize": minimize,
+            "constraints": [str(c) for c in res_constraints(constraints)],
+            "feasible": res.feasible, "parameters": res.values, "metrics": res.metrics,
+            "evaluations": res.evaluations, "generations": res.generations,
+            "seconds": res.seconds, "seed": seed, "samples": len(t),
+            "history": res.history}
+    files = {"best.toml": lambda p: p.write_text(
+                 f"# {minimize} minimized by linkdyn optimize from {Path(model).name}\n"
+                 + dumps_toml(res.data), encoding="utf-8"),
+             "optimize.json": lambda p: p.write_text(json.dumps(_json_safe(info), indent=2)),
+             "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
+                                                               allow_nan=False))}
+    if report:
+        from .. import plots as plots_mod
+        from .. import report as report_mod
+        files.update(report_mod.outputs(sol, summ))
+        files.update(plots_mod.outputs(sol))
+    out = Path(outdir)
+    _write_outputs(out, files)
+    state = "feasible" if res.feasible else "NOT feasible (no design met every constraint)"
+    click.echo(f"best design ({state}) after {res.evaluations} designs in {res.seconds:.3g} s:")
+    for p, v in res.values.items():
+        click.echo(f"  {p} = {v:.6g}")
+    for n, v in res.metrics.items():
+        click.echo(f"  {n} = {v:.6g}")
+    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+
+
+def res_constraints(texts):
+    from .optimize import parse_constraint
+    return [parse_constraint(c) for c in texts]

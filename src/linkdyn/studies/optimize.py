@@ -1,0 +1,198 @@
+"""Optimization over design parameters: minimize a metric subject to metric constraints.
+
+The global search is scipy's differential evolution with the population evaluated as one batch
+of designs per generation (``vectorized=True``: one ``analyze`` over a design axis, never a loop
+over designs). The local polish that follows is a compass search, also batched: each step solves
+the 2 P designs one step along each parameter axis at once, keeps the best and halves the step
+when none improves. Constraints are met by ranking (Deb's rule): a feasible design beats any
+infeasible one, infeasible ones compare by their total violation, a design that cannot be
+solved comes last.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ModelError
+from .metrics import check_names
+from .params import Space, check_ranges, space, with_values
+from .runner import Task, evaluate
+
+_CONSTRAINT = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(<=|>=|<|>)\s*([-+0-9.eE]+)\s*([A-Za-z ]*)\s*\Z")
+_UNITS = {"": 1.0, "m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254, "rad": 1.0,
+          "deg": np.pi / 180, "N": 1.0, "Nm": 1.0, "N m": 1.0, "kg m^2": 1.0, "kgm2": 1.0}
+BIG = 1e30  # score of an infeasible design, plus its violation
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """``metric <= value`` (or ``>=``), value in SI."""
+
+    metric: str
+    upper: bool
+    value: float
+
+    def violation(self, x: np.ndarray) -> np.ndarray:
+        """How far (SI, >= 0) each metric value is outside the bound; NaN where not solved."""
+        return np.maximum(x - self.value, 0.0) if self.upper else np.maximum(self.value - x, 0.0)
+
+    def __str__(self) -> str:
+        return f"{self.metric} {'<=' if self.upper else '>='} {self.value:g}"
+
+
+def parse_constraint(text: str) -> Constraint:
+    """``'path_deviation<=0.1mm'`` -> Constraint (units m, mm, cm, in, rad, deg, N, N m)."""
+    m = _CONSTRAINT.match(text) if isinstance(text, str) else None
+    if m is None or m.group(4).strip() not in _UNITS:
+        raise ModelError(f"cannot read the constraint {text!r}", field="--constraint",
+                         fix='Write METRIC<=VALUE or METRIC>=VALUE with an optional unit, e.g. '
+                             '"path_deviation<=0.1mm" (SI when no unit is given)')
+    try:
+        value = float(m.group(3)) * _UNITS[m.group(4).strip()]
+    except ValueError:
+        raise ModelError(f"cannot read the number in {text!r}", field="--constraint",
+                         fix="Write a plain number, e.g. 1e-4") from None
+    return Constraint(m.group(1), m.group(2).startswith("<"), value)
+
+
+@dataclass
+class Result:
+    """What :func:`optimize` found.
+
+    Attributes
+    ----------
+    values : dict[str, float]
+        The best design's parameters, in the file's units.
+    metrics : dict[str, float]
+        Its objective and constraint metrics, SI.
+    feasible : bool
+        It meets every constraint (and is valid).
+    data : dict
+        The model file's structure with the best values (write it with
+        :func:`linkdyn.io.writer.dumps_toml`).
+    model : Model
+    evaluations, generations : int
+        Designs solved, and generations of the global search.
+    seconds : float
+    history : list of float
+        Best score after each generation and polish step.
+    """
+
+    values: dict
+    metrics: dict
+    feasible: bool
+    data: dict
+    model: object
+    evaluations: int = 0
+    generations: int = 0
+    seconds: float = 0.0
+    history: list = field(default_factory=list)
+
+
+class _Objective:
+    """Scores of a batch of designs: the objective where feasible, else BIG + violation."""
+
+    def __init__(self, task: Task, minimize: str, constraints):
+        self.task, self.minimize, self.constraints = task, minimize, list(constraints)
+        self.evaluations = 0
+        self.best = (np.inf, None, None)  # score, values, metrics
+
+    def scores(self, x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        cols = evaluate(self.task, x)
+        self.evaluations += len(x)
+        f = cols[self.minimize]
+        viol = sum((c.violation(cols[c.metric]) / max(abs(c.value), 1e-300)
+                    for c in self.constraints), np.zeros(len(x)))
+        score = np.where(viol > 0, BIG * (1.0 + viol), f)
+        score = np.where(cols["valid"] & np.isfinite(score), score, np.inf)
+        k = int(np.argmin(score))
+        if score[k] < self.best[0]:
+            self.best = (float(score[k]), x[k].copy(),
+                         {n: float(cols[n][k]) for n in dict.fromkeys(
+                             [self.minimize] + [c.metric for c in self.constraints])})
+        return score
+
+
+def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int | None = 0,
+             popsize: int = 15, maxiter: int = 60, tol: float = 1e-6, polish: bool = True,
+             backend: str | None = None, path_point=None, path_range=None,
+             fluctuation: float = 0.02) -> Result:
+    """Minimize a metric over design parameters, subject to metric constraints.
+
+    Parameters
+    ----------
+    model : str, os.PathLike, dict or Model
+        As for :func:`linkdyn.sweep`.
+    bounds : dict
+        ``{path: (lo, hi)}`` in the file's units.
+    t : array_like (T,)
+        Sample times, s.
+    minimize : str
+        A metric name (see :mod:`linkdyn.studies.metrics`).
+    constraints : sequence of str or Constraint
+        E.g. ``"path_deviation<=0.1mm"``.
+    seed : int or None
+        Seeds the differential evolution: the same seed gives the same result.
+    popsize, maxiter, tol
+        Of :func:`scipy.optimize.differential_evolution` (population ``popsize * P``).
+    polish : bool
+        Refine the best design by a batched compass search.
+
+    Returns
+    -------
+    Result
+    """
+    from scipy.optimize import differential_evolution
+
+    start = time.perf_counter()
+    cons = [c if isinstance(c, Constraint) else parse_constraint(c) for c in constraints]
+    sp: Space = space(model, list(bounds))
+    lohi = [tuple(float(v) for v in bounds[p]) for p in bounds]
+    check_ranges(sp, lohi)
+    base = sp.model()
+    names = tuple(dict.fromkeys(check_names(base, [minimize] + [c.metric for c in cons],
+                                            path_point=path_point)))
+    task = Task(sp, np.asarray(t, float), names, backend, path_point,
+                None if path_range is None else tuple(path_range), fluctuation)
+    obj = _Objective(task, minimize, cons)
+    history: list[float] = []
+
+    def batch(xT):  # scipy passes the population as (P, S)
+        return obj.scores(np.asarray(xT).T)
+
+    res = differential_evolution(batch, lohi, seed=seed, popsize=popsize, maxiter=maxiter,
+                                 tol=tol, polish=False, vectorized=True, updating="deferred",
+                                 init="sobol", callback=lambda *a, **k: history.append(
+                                     obj.best[0]))
+    if polish and obj.best[1] is not None:
+        _compass(obj, np.array(lohi), history)
+    score, x, mets = obj.best
+    if x is None:
+        raise ModelError("no design in the ranges could be solved", field="--vary",
+                         fix="Widen or move the ranges, or check the model at their centre")
+    data = with_values(sp.data, sp.params, x)
+    return Result(values={p.path: float(v) for p, v in zip(sp.params, x)}, metrics=mets,
+                  feasible=bool(score < BIG), data=data, model=sp.model(x),
+                  evaluations=obj.evaluations, generations=int(res.nit),
+                  seconds=time.perf_counter() - start, history=history)
+
+
+def _compass(obj: _Objective, lohi: np.ndarray, history: list, steps: int = 40) -> None:
+    """Batched compass search from the best design: 2 P trial designs per step, one solve."""
+    lo, hi = lohi[:, 0], lohi[:, 1]
+    step = 0.02 * (hi - lo)
+    for _ in range(steps):
+        x0 = obj.best[1]
+        trials = np.clip(x0 + np.concatenate([np.diag(step), -np.diag(step)]), lo, hi)
+        before = obj.best[0]
+        obj.scores(trials)
+        history.append(obj.best[0])
+        if not obj.best[0] < before:
+            step = step / 2
+            if np.all(step < 1e-6 * (hi - lo)):
+                break
