@@ -29,7 +29,7 @@ from .reader import _quote, _Reader, _shorten, _type_name
 from .syntax import _parse_json, _parse_toml
 from .units import ANGLE_UNITS, LENGTH_UNITS, _units
 
-__all__ = ["load_model", "model_from_dict", "LENGTH_UNITS", "ANGLE_UNITS", "SECTIONS",
+__all__ = ["load_model", "read_model_data", "model_from_dict", "LENGTH_UNITS", "ANGLE_UNITS", "SECTIONS",
            "BODY_KEYS", "JOINT_KEYS", "MOTION_KEYS", "LOAD_KEYS"]
 
 SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "assembly", "topology",
@@ -60,6 +60,18 @@ def load_model(path: str | os.PathLike, *, allow_outside: bool = False) -> Model
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"load_model: path must be a str or os.PathLike, got {type(path).__name__}")
     file = os.fspath(path)
+    data = read_model_data(file)
+    return model_from_dict(data, source=file, base_dir=Path(file).parent,
+                           allow_outside=allow_outside)
+
+
+def read_model_data(path: str | os.PathLike) -> dict:
+    """The parsed structure of a model file (``.toml`` or ``.json``), not yet validated: what
+    :func:`model_from_dict` takes. The same checks of the file as :func:`load_model`."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError("read_model_data: path must be a str or os.PathLike, got "
+                        f"{type(path).__name__}")
+    file = os.fspath(path)
     suffix = Path(file).suffix.lower()
     if suffix not in (".toml", ".json"):
         raise ModelError(f"unknown model file type {_quote(suffix or '(none)')}", file=file,
@@ -76,9 +88,7 @@ def load_model(path: str | os.PathLike, *, allow_outside: bool = False) -> Model
     except (OSError, UnicodeDecodeError) as e:
         raise ModelError(f"cannot read the file ({_shorten(str(e), 120)})", file=file,
                          fix="Give a readable UTF-8 text file") from None
-    data = _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
-    return model_from_dict(data, source=file, base_dir=Path(file).parent,
-                           allow_outside=allow_outside)
+    return _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
 
 
 def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike = ".",

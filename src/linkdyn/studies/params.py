@@ -21,9 +21,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ModelError
-from ..io import model_from_dict
+from ..io import model_from_dict, read_model_data
 from ..io.reader import _did_you_mean
-from ..io.syntax import _parse_json, _parse_toml
 from ..model import Model
 
 _TOKEN = re.compile(r"([A-Za-z0-9_\-]+)((?:\[\d+\])*)\Z")
@@ -94,21 +93,6 @@ class Space:
                 models.append(None)
                 errors.append(e)
         return models, errors
-
-
-def read_model_data(path: str | os.PathLike) -> dict:
-    """The parsed structure of a model file (TOML or JSON), for :func:`space`."""
-    file = os.fspath(path)
-    suffix = Path(file).suffix.lower()
-    if suffix not in (".toml", ".json"):
-        raise ModelError(f"unknown model file type '{suffix or '(none)'}'", file=file,
-                         fix="Name the file *.toml (TOML) or *.json (JSON)")
-    try:
-        text = Path(file).read_bytes().decode("utf-8-sig")
-    except OSError as e:
-        raise ModelError(f"cannot read the file ({e.strerror or e})", file=file,
-                         fix="Check the path and the current directory") from None
-    return _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
 
 
 def space(model, paths, *, source: str | None = None) -> Space:
