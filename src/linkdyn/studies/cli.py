@@ -11,8 +11,9 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..cli import _json_safe, _path_range, _times, _write_outputs
+from ..cli import _json_safe, _path_range, _times
 from ..errors import ModelError
+from ..outputs import check_outdir, write_outputs
 
 _VARY = re.compile(r"\s*([^=\s]+)\s*=\s*([^:]+):([^:]+?)(?::(\d+))?\s*\Z")
 
@@ -119,6 +120,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     if workers < 1:
         raise ModelError(f"--workers must be at least 1, got {workers}", field="--workers",
                          fix="Give --workers 1 or more")
+    check_outdir(outdir)
     if designs_csv:
         if vary:
             raise ModelError("give --vary or --designs-csv, not both", field="--designs-csv",
@@ -214,6 +216,7 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
 
     if not vary:
         raise ModelError("nothing to vary", field="--vary", fix="Give --vary PATH=LO:HI")
+    check_outdir(outdir)
     paths, bounds, _ = parse_vary(vary)
     q_range = _path_range(path_range)
     sp, t, bounds, _ = _setup(model, vary, samples, duration, cycles)
@@ -242,7 +245,8 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
         files.update(report_mod.outputs(sol, summ))
         files.update(plots_mod.outputs(sol))
     out = Path(outdir)
-    _write_outputs(out, files)
+    write_outputs(out, files, owned=("best.toml", "optimize.json", "summary.json", "report.html",
+                                     "plot_*.png", "plot_*.svg"))
     state = "feasible" if res.feasible else "NOT feasible (no design met every constraint)"
     click.echo(f"best design ({state}) after {res.evaluations} designs in {res.seconds:.3g} s:")
     for p, v in res.values.items():

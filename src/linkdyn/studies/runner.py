@@ -375,16 +375,15 @@ def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None)
 
 
 def write_results(outdir, df, summary_data: dict) -> None:
-    """Write ``designs.parquet`` and ``summary.json`` (each complete or absent), then drop the
-    chunks."""
-    out = Path(outdir)
-    tmp = out / "designs.parquet.tmp"
-    df.to_parquet(tmp, index=False)
-    os.replace(tmp, out / "designs.parquet")
-    tmp = out / "summary.json.tmp"
-    tmp.write_text(json.dumps(summary_data, indent=2, default=_json_default) + "\n")
-    os.replace(tmp, out / "summary.json")
-    shutil.rmtree(out / "chunks", ignore_errors=True)
+    """Write ``designs.parquet`` and ``summary.json`` (both or neither, by
+    :func:`linkdyn.outputs.write_outputs`), then drop the chunks."""
+    from ..outputs import write_outputs
+
+    text = json.dumps(summary_data, indent=2, default=_json_default) + "\n"
+    write_outputs(Path(outdir), {
+        "designs.parquet": lambda p: df.to_parquet(p, index=False),
+        "summary.json": lambda p: p.write_text(text)}, owned=("designs.parquet", "summary.json"))
+    shutil.rmtree(Path(outdir) / "chunks", ignore_errors=True)
 
 
 def _json_default(x):
