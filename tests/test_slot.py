@@ -13,7 +13,9 @@ b. a slot is a revolute joint plus a prismatic one through a massless block: the
    lever equals the inverted slider-crank with a massless block, joint by joint;
 c. finite differences of the slot coordinate when the slot turns (the n_dot terms);
 d. the slot's place in the model: reader, topology (always cut, one row, Gruebler), and the
-   compiled backend (auto runs numpy; an explicit "compiled" says it cannot).
+   compiled backend (auto runs numpy; an explicit "compiled" says it cannot);
+e. random slotted levers (geometry, masses, loads, gravity) equal to their massless-block
+   equivalent.
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import linkdyn
 from linkdyn import compiled, joints, kinematics, topology
@@ -29,8 +33,10 @@ from linkdyn.analysis import analyze
 from linkdyn.cli import example_text
 from linkdyn.errors import ModelError
 from linkdyn.io import model_from_dict
-from linkdyn.model import Joint
+from linkdyn.model import Driver, Joint, Load, Model
+from linkdyn.motion import ConstantSpeed
 
+from builders import RPM, body, pri, rev, slot
 from test_dynamics import check, inverted_slider_crank, size_of, slotted_lever, times
 
 G = 9.81
@@ -236,3 +242,62 @@ def test_a_slot_joint_is_not_a_tree_joint():
     with pytest.raises(NotImplementedError, match="slot joint cannot be a tree joint"):
         joints.get("slot").motion_vector(1, None, 0)
     assert isinstance(Joint("J", "slot", "a", "p", "b", "q"), Joint)
+
+
+# ----------------------------------------------------------------------------------------------
+# e. property-based: random slotted levers against their massless-block equivalent
+
+
+@st.composite
+def slotted_levers(draw):
+    """A crank (radius r) driving a lever pivoted at distance d below it through a pin in a slot
+    offset ``off`` from the lever's pivot line; random masses, loads and gravity."""
+    f = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+    r = f(20, 80)
+    d = r + f(30, 150)
+    off = f(-10, 10)
+    mass = [f(0.1, 2.0) for _ in range(2)]
+    g = (f(-10, 10), f(-10, 10))
+    load = (f(-50, 50), f(-50, 50))
+    torque = f(-5, 5)
+    theta0 = f(-3, 3)
+    return r, d, off, mass, g, load, torque, theta0
+
+
+def _lever_models(case):
+    r, d, off, (m1, m2), g, load, torque, theta0 = case
+    crank = body("crank", {"O2": (0, 0), "A": (r, 0)}, m1, (0.4 * r, 3), m1 * r**2 / 12)
+    lever = body("lever", {"O4": (0, 0), "S": (0, off), "T": (2.5 * d, 0)}, m2, (d, 4),
+                 m2 * (2.5 * d) ** 2 / 12)
+    ground = body("ground", {"O2": (0, 0), "O4": (0, -d)})
+    loads = (Load("force", "lever", "T", value=lambda t: np.array(load)),
+             Load("torque", "lever", value=lambda t: torque + 0.0 * np.asarray(t)))
+    drivers = (Driver("J1", ConstantSpeed(60 * RPM, theta0)),)
+    phi_lever = float(np.arctan2(r * np.sin(theta0) + d, r * np.cos(theta0)))
+    a = Model("slot", (ground, crank, lever),
+              (rev("J1", "ground.O2", "crank.O2"), slot("J3", "lever.S", "crank.A"),
+               rev("J4", "ground.O4", "lever.O4")), drivers, loads, np.array(g),
+              assembly_phi={"crank": theta0, "lever": phi_lever})
+    block = body("block", {"A": (0, 0)})
+    b = Model("block", (ground, crank, block, lever),
+              (rev("J1", "ground.O2", "crank.O2"), rev("J2", "crank.A", "block.A"),
+               pri("J3", "lever.S", "block.A"), rev("J4", "ground.O4", "lever.O4")),
+              drivers, loads, np.array(g),
+              assembly_phi={"crank": theta0, "lever": phi_lever, "block": phi_lever},
+              assembly_q={"J3": float(np.hypot(r * np.cos(theta0), r * np.sin(theta0) + d))})
+    return a, b
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(slotted_levers())
+def test_random_slotted_levers_equal_their_massless_block_equivalent(case):
+    a_model, b_model = _lever_models(case)
+    t = np.linspace(0.0, 1.0, 9)
+    a, b = analyze(a_model, t), analyze(b_model, t)
+    check(a.phi("lever"), b.phi("lever"), 1e-10, scale=np.pi, what="lever angle")
+    check(a.dyn.tau, b.dyn.tau, 1e-9, what="crank torque")
+    fs = np.max(np.abs(b.reactions.force))
+    for name in ("J1", "J4"):
+        check(a.reaction(name), b.reaction(name), 1e-9, scale=fs, what=f"reaction {name}")
+    check(a.reaction("J3"), b.reaction("J3")[:, :2], 1e-9, scale=fs, what="pin force")
+    check(a.columns["qdd_J3"], b.columns["qdd_J3"], 1e-9, what="slot acceleration")
