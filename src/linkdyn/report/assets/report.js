@@ -287,7 +287,8 @@
   }
   var widthCache = {};
   function textBox(node, fs) {
-    var key = node.textContent + "|" + fs + "|" + (node.getAttribute("font-weight") || "") + (node.getAttribute("font-style") || "");
+    // digits share one width: "J3 135.8 N" and "J3 121.4 N" are measured once
+    var key = node.textContent.replace(/[0-9]/g, "0") + "|" + fs + "|" + (node.getAttribute("font-weight") || "") + (node.getAttribute("font-style") || "");
     if (!(key in widthCache)) {
       node.setAttribute("font-size", fs);
       var w = 0;
@@ -690,6 +691,7 @@
       var inc = (now - last) / 1000 * speed * rate;
       simT += inc;
       window.__linkdynPlayed += inc;  // simulated seconds played in all, for tests
+      window.__linkdynTick = now;     // the frame time that total belongs to
       if (simT > T[N - 1]) simT = T[0] + ((simT - T[0]) % span);
     }
     last = now;
