@@ -403,11 +403,13 @@ def test_summary_is_json_and_keeps_its_keys():
 def test_cli_options_reach_the_summary(tmp_path):
     path = str(linkdyn.example_path("hoeken"))
     res = CliRunner().invoke(main, ["analyze", path, "-o", str(tmp_path), "--fluctuation", "0.05",
-                                    "--path-point", "coupler.P", "--path-range", "1.9199:4.3633"])
+                                    "--path-point", "coupler.P", "--path-range", "110:250"])
     assert res.exit_code == 0, res.output
     s = json.loads((tmp_path / "summary.json").read_text())
     assert s["driver_energy"]["J1"]["flywheel"]["speed_fluctuation"] == 0.05
-    assert s["path_straightness"]["range"] == [1.9199, 4.3633]
+    # the range is in the file's angle unit (Hoeken's is deg); summary.json holds it in SI
+    assert s["path_straightness"]["range"] == pytest.approx(np.radians([110, 250]), rel=1e-15)
+    assert s["path_straightness"]["range_unit"] == "rad"
     assert "flywheel" in res.output and "shaking force" in res.output
     bad = CliRunner().invoke(main, ["analyze", path, "-o", str(tmp_path / "x"),
                                     "--path-range", "1:x"])

@@ -5,7 +5,9 @@ This module is the one obvious entry point; each stage it calls can be used alon
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -13,7 +15,7 @@ import numpy as np
 from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
-from .errors import AssemblyError, ModelError
+from .errors import AssemblyError, ModelError, quiet, quiet_numerics  # noqa: F401
 from . import joints as jk
 from .model import Model
 
@@ -316,13 +318,137 @@ def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
              "Limit the driver's range (duration) or change the link lengths"))
 
 
+def _arguments(model, t, allow_singular, backend):
+    """``analyze``'s arguments checked and normalized: ``(model, t, backend)``.
+
+    Raises TypeError naming the parameter for a wrong type and ModelError (field ``model``,
+    ``t``, ``backend`` or ``LINKDYN_BACKEND``) for a wrong value.
+    """
+    if isinstance(model, (str, os.PathLike)):
+        from .io import load_model
+        model = load_model(model)
+    elif not isinstance(model, Model):
+        if isinstance(model, (bytes, dict)) or not isinstance(model, Iterable):
+            raise TypeError("analyze: model must be a Model, a path to a model file or a "
+                            f"sequence of Models, not {type(model).__name__}")
+        model = list(model)
+        if not model:
+            raise ModelError("no designs: model is an empty sequence", field="model",
+                             fix="Pass a Model, a model file's path, or a non-empty list of Models")
+        for k, m in enumerate(model):
+            if not isinstance(m, Model):
+                raise TypeError(f"analyze: model[{k}] must be a Model, not {type(m).__name__}")
+    if isinstance(t, (str, bytes)):
+        raise TypeError(f"analyze: t must be an array of times (s), not {type(t).__name__}")
+    try:
+        t = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"analyze: t must be an array of times (s), not {type(t).__name__}") \
+            from None
+    if t.ndim != 1 or t.size < 1:
+        raise ModelError(f"the times must be a 1-D array of at least one time, got shape "
+                         f"{t.shape}", field="t",
+                         fix="Pass t = numpy.linspace(0, duration, samples)")
+    if not np.all(np.isfinite(t)):
+        k = int(np.argmin(np.isfinite(t)))
+        raise ModelError(f"t[{k}] = {t[k]} is not a finite time", field="t",
+                         fix="Pass finite times, e.g. numpy.linspace(0, duration, samples)")
+    if not isinstance(allow_singular, (bool, np.bool_)):
+        raise TypeError(f"analyze: allow_singular must be True or False, not "
+                        f"{type(allow_singular).__name__}")
+    if backend is not None and not isinstance(backend, str):
+        raise TypeError(f"analyze: backend must be a str, not {type(backend).__name__}")
+    field = "backend" if backend else "LINKDYN_BACKEND"
+    name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
+    if name not in compiled.BACKENDS:
+        raise ModelError(f"unknown backend '{name}'", field=field,
+                         fix=f"Use one of {', '.join(compiled.BACKENDS)}"
+                             + ("" if backend else ", or unset LINKDYN_BACKEND"))
+    first = model if isinstance(model, Model) else model[0]
+    missing = compiled.unsupported(j.kind for j in first.joints)
+    if name == "compiled" and missing:
+        raise ModelError(f"the compiled backend does not support {', '.join(missing)} joints",
+                         field=field, fix="Use the numpy or auto backend")
+    return model, t, name
+
+
+def _load_field(model, k: int) -> str:
+    name = model.loads[k].name
+    return f"loads.{name}" if name else f"loads[{k}]"
+
+
+def _at(model, time: float) -> dict:
+    """Where an AssemblyError happens: the file, the time and the drivers' values."""
+    q = kinematics.driver_values(model, np.array([time]))[0][:, 0]
+    return dict(file=model.source, time=time,
+                drivers={d.joint: float(v) for d, v in zip(model.drivers, q)})
+
+
+def _check_drivers(model, time: float) -> None:
+    """Raise, naming the driver, if a driver's motion is not finite at ``time``."""
+    values = kinematics.driver_values(model, np.array([time]))
+    for i, d in enumerate(model.drivers):
+        if not all(np.isfinite(x[i, 0]) for x in values):
+            raise AssemblyError(f"the motion of driver {d.joint} (drivers[{i}].motion) is not "
+                                "finite at this time", **_at(model, time),
+                                fix="Check its formula or table, or shorten the run")
+
+
+def _finite(model, kin, applied, dyn, react, valid, stop: bool):
+    """``valid`` and every output of the sample finite. With ``stop``, the first valid sample
+    with a non-finite output raises an AssemblyError naming its time and its cause: a driver's
+    motion, a load (by its field), gravity, or the output that overflows."""
+    outputs = {"joint motion": (kin.q, kin.qd, kin.qdd), "driver effort": (dyn.tau,),
+               "reaction": (react.force, react.moment), "kinetic energy": (dyn.kinetic_energy,)}
+    ok = valid
+    for arrays in outputs.values():
+        for a in arrays:
+            if not np.isfinite(np.sum(a)):  # one pass when all is well; NaN rows land here too
+                ok = ok & np.all(np.isfinite(a).reshape(valid.shape + (-1,)), axis=-1)
+    if not stop or not np.any(valid & ~ok):
+        return ok
+    k = int(np.argmax(valid & ~ok))
+    tk = kin.t[k:k + 1]
+    where = _at(model, float(tk[0]))
+    _check_drivers(model, float(tk[0]))
+    one = kinematics.solve(model, tk, backend="numpy") if kin.t.size > 1 else kin
+    for i, load in enumerate(model.loads):
+        w = loads_mod.wrenches(replace(model, loads=(load,), gravity=(0.0, 0.0)), one)
+        if all(np.all(np.isfinite(x)) for x in w.wrenches + [w.on_ground]):
+            continue
+        if load.kind in ("spring", "damper") and load.body2 is not None:
+            gap = one.point(load.body, load.point) - one.point(load.body2, load.point2)
+            if np.all(gap == 0):  # coincident points: the line of action is undefined
+                raise AssemblyError(
+                    f"the {load.kind} {_load_field(model, i)} joins two points that coincide "
+                    "at this time, so the direction of its force is undefined", **where,
+                    fix="Attach it to points that stay apart" + (
+                        ", or give it free_length = 0 (its force is then k times the "
+                        "distance vector)" if load.kind == "spring" else ""))
+        raise AssemblyError(f"the {load.kind} {_load_field(model, i)} is not finite at this "
+                            "time", **where,
+                            fix="Check its value or formula (a division by zero, the log of a "
+                                "negative number, an overflow) and its numbers")
+    w = loads_mod.wrenches(replace(model, loads=()), one)
+    if not all(np.all(np.isfinite(x)) for x in w.wrenches):
+        raise AssemblyError("gravity times a body's mass is not finite", **where,
+                            fix="Check mechanism.gravity and the bodies' masses")
+    bad = next(name for name, arrays in outputs.items() for a in arrays
+               if not np.all(np.isfinite(a[k])))
+    raise AssemblyError(f"the {bad} is not finite at this time: a number of the model is too "
+                        "large (or too small) to compute with", **where,
+                        fix="Check the model's masses, inertias, lengths, loads and driver "
+                            "speeds for extreme values")
+
+
+@quiet
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
 
     Parameters
     ----------
-    model : Model or sequence of Model
-        One mechanism, or D designs of one topology (the same bodies, joints, drivers, cut
+    model : Model, str, PathLike or sequence of Model
+        One mechanism (or the path of its model file), or D designs of one topology (the same bodies, joints, drivers, cut
         joints and load kinds), each with its own numbers: geometry, masses, inertias, gravity,
         load values (constant or formulas), spring and damper constants and free lengths,
         driver motions. With designs every per-sample array has shape (D, T, ...) (a list of
@@ -343,9 +469,16 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     ModelError
         Designs whose topology differs (naming the design and what differs).
     AssemblyError
-        The mechanism cannot be assembled, stops closing, or passes a singular position, at the
-        first such time (unless ``allow_singular``, which leaves NaN rows flagged in ``valid``).
+        The mechanism cannot be assembled, stops closing, passes a singular position, or gives a
+        non-finite number (a load formula, an overflow), at the first such time (unless
+        ``allow_singular``, which leaves NaN rows flagged in ``valid``).
+    ModelError
+        A model file that cannot be read (``model`` given as a path), an empty sequence of
+        designs, times that are not finite, an unknown backend.
+    TypeError
+        An argument of the wrong type (the message names it).
     """
+    model, t, backend = _arguments(model, t, allow_singular, backend)
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     if not models:
@@ -366,5 +499,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
+        _check_drivers(model, float(kin.t[k]))  # a motion that overflows, not the loops
         raise failure(model, kin.t[k], kin.residual[k])
+    # every number finite, or the run stops naming the time and the cause
+    valid = _finite(model, kin, applied, dyn, react, valid, not (allow_singular or designs))
     return Solution(model, kin, applied, dyn, react, valid, tuple(models) if designs else ())

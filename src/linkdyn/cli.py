@@ -7,6 +7,7 @@ passes a singular position. User errors print one message and no traceback.
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sys
 import threading
@@ -32,8 +33,11 @@ class _Group(click.Group):
     """Maps user errors to their exit status; click's own usage errors exit 2."""
 
     def invoke(self, ctx):
+        from .errors import quiet_numerics
+
         try:
-            return super().invoke(ctx)
+            with quiet_numerics():  # a bad number is reported by the checks, not as a warning
+                return super().invoke(ctx)
         except LinkdynError as err:
             _fail(err)
 
@@ -122,6 +126,8 @@ def check(model, allow_outside):
     click.echo(f"mobility (Grübler–Kutzbach): {topo.mobility}; drivers: {len(mech.drivers)}")
     for d in mech.drivers:
         click.echo(f"  {d.joint}: {d.description}")
+    if topo.n_loops and not (mech.assembly_phi or mech.assembly_q):
+        click.echo("assembly: " + _assembly_at_zero(mech, topo))
     for fb in design.four_bars(mech):
         L = ", ".join(f"{k} {v * 1e3:.6g} mm" for k, v in
                       zip(("ground", "input", "coupler", "output"), fb.lengths))
@@ -129,30 +135,86 @@ def check(model, allow_outside):
     click.echo("model OK")
 
 
+def _assembly_at_zero(mech, topo) -> str:
+    """``check``'s account of the assembly mode a model without a guess gets at t = 0."""
+    from . import kinematics
+    from .errors import AssemblyError
+
+    if topo.mobility != len(mech.drivers):
+        return "no [assembly] guess in the model (not assembled: the drivers do not match " \
+               "the mobility)"
+    try:
+        kin = kinematics.solve(mech, np.zeros(1), backend="numpy")
+    except AssemblyError:
+        return ("no [assembly] guess in the model, and the loops do not close at t = 0 from "
+                "zero angles (analyze stops with exit status 3)")
+    phi = {b.name: float(kin.pose.phi[kin.layout.topo.bodies.index(b.name)][0])
+           for b in mech.moving_bodies}
+    return assembly_words(phi, 0.0)
+
+
 # ---------------------------------------------------------------------------- analyze
 
+BYTES_PER_VALUE = 64   # peak memory of a run per result column and sample (measured ~32 B)
+
+
+def _memory() -> float:
+    """Physical memory of this machine, bytes (inf if unknown)."""
+    try:
+        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return float("inf")
+
+
 def _times(mech, samples, duration, cycles) -> np.ndarray:
-    """Sample times: the options, else the model's [analysis], else 361 samples of one cycle."""
+    """Sample times: the options, else the model's [analysis], else 361 samples of one cycle.
+
+    Each number is checked where it comes from (the option, or the model's ``analysis.*``
+    field): at least 2 samples, and no more than the memory of the machine holds; a finite,
+    positive duration; cycles only for a driver turning at constant speed.
+    """
+    n_field = "--samples" if samples is not None else "analysis.samples"
     if samples is None:
         samples = mech.samples or 361
     if samples < 2:
-        raise ModelError(f"--samples must be at least 2, got {samples}", field="--samples",
+        raise ModelError(f"{n_field} must be at least 2, got {samples}", field=n_field,
                          fix="Give --samples 2 or more")
-    if cycles is not None and not cycles > 0:
-        raise ModelError(f"--cycles must be positive, got {cycles}", field="--cycles",
-                         fix="Give a positive number of driver turns")
+    columns = (2 + 5 * len(mech.joints) + 3 * len(mech.moving_bodies) + len(mech.drivers)
+               + 2 * sum(len(b.points) for b in mech.moving_bodies))
+    need = float(samples) * columns * BYTES_PER_VALUE
+    if need > _memory():
+        raise ModelError(f"{samples} samples would need about {need / 1e9:.3g} GB of memory, more "
+                         f"than this machine has ({_memory() / 1e9:.3g} GB)", field=n_field,
+                         fix="Give fewer samples, or split the run into parts with --duration")
     if duration is None and cycles is None:
         duration, cycles = mech.duration, mech.cycles
+        d_field, c_field = "analysis.duration", "analysis.cycles"
+    else:
+        d_field, c_field = "--duration", "--cycles"
+    if cycles is not None and not (cycles > 0 and np.isfinite(cycles)):
+        raise ModelError(f"{c_field} must be a positive number, got {cycles}", field=c_field,
+                         fix="Give a positive, finite number of driver turns")
     if duration is None:
         periods = [d.period for d in mech.drivers if d.period]
         if not periods:
+            if cycles is not None:
+                raise ModelError("a cycle is one turn of a driver turning at constant speed, and "
+                                 "no driver of this model does", field=c_field,
+                                 fix="Give --duration T (s) instead")
             raise ModelError("no duration: the drivers do not rotate at constant speed, so "
                              "a cycle is undefined", field="analysis.duration",
                              fix="Give --duration T (s) or [analysis] duration")
         duration = (1.0 if cycles is None else cycles) * periods[0]
-    if not duration > 0:
-        raise ModelError(f"duration must be positive, got {duration}", field="--duration",
-                         fix="Give a positive duration in s")
+        if not np.isfinite(duration):  # a speed so small that a turn takes forever
+            k = next(k for k, d in enumerate(mech.drivers) if d.period)
+            raise ModelError(f"a turn of driver {mech.drivers[k].joint} takes {periods[0]:.6g} "
+                             "s at this speed, so a cycle cannot be sampled",
+                             field=f"drivers[{k}].motion",
+                             fix="Give --duration T (s), or a larger speed")
+        d_field = c_field if cycles is not None else d_field
+    if not (duration > 0 and np.isfinite(duration)):
+        raise ModelError(f"the duration must be positive and finite (s), got "
+                         f"{duration}", field=d_field, fix="Give a positive duration in s")
     return np.linspace(0.0, float(duration), int(samples))
 
 
@@ -260,10 +322,15 @@ def summary_text(s: dict) -> str:
     echo(f"{s['model']}: {s['samples']} samples over {num(s['duration_s'], '.6g')} s")
     echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
          f"{', '.join(s['cut_joints']) or 'none'}")
+    asm = s.get("assembly")
+    if asm and not asm["guess"] and s["loops"]:
+        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'])}")
     for fb in s["four_bars"]:
         ta = fb["transmission_angle_deg"]
         echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
-             f"{fb['links']['output']}: {fb['grashof']}; transmission angle "
+             f"{fb['links']['output']}: {fb['grashof']}"
+             + (f"; {fb['motion']['words']}" if fb.get("motion", {}).get("words") else "")
+             + "; transmission angle "
              f"{num(ta['min'], '.2f')}..{num(ta['max'], '.2f')} deg")
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
@@ -294,7 +361,8 @@ def summary_text(s: dict) -> str:
              f"{num(ps['rms_deviation_m'], '.4g', 1e3)} mm over "
              f"{num(ps['length_m'], '.4g', 1e3)} mm"
              + ("" if ps["range"] is None else
-                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')})"))
+                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')}"
+                f" {ps.get('range_unit', 'rad')})"))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         extra = f", moment {num(r['peak_moment_Nm'], '.6g')} N m" if "peak_moment_Nm" in r else ""
@@ -310,20 +378,62 @@ def summary_text(s: dict) -> str:
     return "\n".join(lines)
 
 
+def assembly_words(phi: dict, time: float) -> str:
+    """The assembly mode chosen without an ``[assembly]`` guess, in words."""
+    angles = ", ".join(f"phi_{b} = {np.degrees(v):.4g} deg" for b, v in phi.items()
+                       if v is not None)
+    return (f"no [assembly] guess in the model: solved from zero angles, the mechanism starts "
+            f"(t = {time:.4g} s) with {angles}; give [assembly] phi near another position to "
+            "choose another assembly mode")
+
+
 def print_summary(s: dict) -> None:
     click.echo(summary_text(s))
 
 
 def _path_range(text):
-    """``'A:B'`` -> (A, B) floats, or None."""
+    """``'A:B'`` -> (A, B) finite floats, or None."""
     if text is None:
         return None
     try:
         a, b = (float(x) for x in text.split(":"))
     except ValueError:
         raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
-                         fix="Give two numbers, e.g. --path-range 1.92:4.36") from None
+                         fix="Give two numbers, e.g. --path-range 110:250") from None
+    if not (np.isfinite(a) and np.isfinite(b)):
+        raise ModelError(f"--path-range must be two finite numbers, got '{text}'",
+                         field="--path-range", fix="Give two numbers, e.g. --path-range 110:250")
     return a, b
+
+
+def _driver_unit(mech) -> tuple[str, float]:
+    """Unit name of the first driver's coordinate in the model file, and SI per unit."""
+    from . import joints as jk
+    from .io.units import ANGLE_UNITS, LENGTH_UNITS
+
+    if jk.get(mech.joint(mech.drivers[0].joint).kind).angular:
+        return mech.angle_unit, ANGLE_UNITS[mech.angle_unit]
+    return mech.length_unit, LENGTH_UNITS[mech.length_unit]
+
+
+def _check_path_range(sol, text: str, given, si) -> None:
+    """Raise, naming --path-range, unless the run has 3 samples or more in the range ``si``
+    (the ``given`` range in the file's unit)."""
+    from .design.path import _in_range
+
+    mech = sol.model
+    unit, scale = _driver_unit(mech)
+    joint = mech.drivers[0].joint
+    q = sol.kin.q[..., [j.name for j in mech.joints].index(joint)]
+    n = int(np.sum(_in_range(mech, q, si) & np.isfinite(q)))
+    if n >= 3:
+        return
+    lo, hi = float(np.nanmin(q)) / scale, float(np.nanmax(q)) / scale
+    raise ModelError(f"the run never reaches the range {given[0]:g}..{given[1]:g} {unit} of "
+                     f"q_{joint} with the 3 samples a line needs (it holds {n}); this run "
+                     f"covers {lo:.6g}..{hi:.6g} {unit}", field="--path-range",
+                     fix=f"Give a range A:B of the first driver's coordinate that the run "
+                         f"covers, in the model file's unit ({unit})")
 
 
 @main.command()
@@ -347,8 +457,8 @@ def _path_range(text):
               help="Point whose path straightness is reported (default: the only free "
                    "coupler point, if any).")
 @click.option("--path-range", metavar="A:B",
-              help="Range of the first driver's coordinate for --path-point, rad (m for a "
-                   "slider); default: the whole run.")
+              help="Range of the first driver's coordinate for --path-point, in the model "
+                   "file's angle unit (length unit for a slider); default: the whole run.")
 @_ALLOW_OUTSIDE
 def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singular, fluctuation,
             path_point, path_range, plots_, allow_outside):
@@ -360,8 +470,12 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
     check_outdir(outdir)
-    q_range = _path_range(path_range)
+    given = _path_range(path_range)
     mech = io.load_model(model, allow_outside=allow_outside)
+    if given is not None and not mech.drivers:
+        raise ModelError("--path-range is a range of the first driver, and the model has "
+                         "none", field="--path-range", fix="Drop --path-range")
+    q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
     t = _times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
@@ -369,6 +483,8 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
         progress.step(f"solving {len(t)} samples")
         sol = run(mech, t, allow_singular=allow_singular)
         progress.step("summary")
+        if q_range is not None:
+            _check_path_range(sol, path_range, given, q_range)
         summ = design.summary(sol, fluctuation=fluctuation,
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import warnings
+
 
 class LinkdynError(Exception):
     """Base class of errors meant for the user (no traceback is shown for these)."""
@@ -71,3 +75,24 @@ class InvalidValue(ModelError, ValueError):
     A :class:`ModelError` (exit status 2, the field in its message) that is also a ``ValueError``,
     so code that catches ``ValueError`` keeps working.
     """
+
+
+@contextlib.contextmanager
+def quiet_numerics():
+    """Run numpy without printing floating-point ``RuntimeWarning``s: a number that is not
+    finite is found and reported by the checks (an error naming the field or the time, or a NaN
+    row flagged as invalid), never as a warning with a source path."""
+    import numpy as np
+
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        yield
+
+
+def quiet(func):
+    """Decorator: run ``func`` under :func:`quiet_numerics`."""
+    @functools.wraps(func)
+    def run(*args, **kwargs):
+        with quiet_numerics():
+            return func(*args, **kwargs)
+    return run

@@ -118,13 +118,16 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
                 tension = load.stiffness * (length - load.free_length)
                 pe += 0.5 * load.stiffness * (length - load.free_length) ** 2
                 has_pe = True
+                # zero free length: the force k d, defined also where the two points meet
+                f = np.where(np.asarray(load.free_length) == 0, load.stiffness * d, tension * u)
             else:
                 # damper: tension c dl/dt
                 rate = dot(u, v2 - v1)
                 tension = load.damping * rate
                 power -= load.damping * rate ** 2
-            _add_force(w, kin, i, r1, tension * u)
-            _add_force(w, kin, j, r2, -tension * u)
+                f = tension * u
+            _add_force(w, kin, i, r1, f)
+            _add_force(w, kin, j, r2, -f)
     # the ground's O_0 is the global origin: w[0] is the load on the ground about it, which does
     # no work and is not part of the moving bodies' balance
     on_ground, w[0] = w[0], zero

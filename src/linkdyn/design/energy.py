@@ -51,8 +51,10 @@ def first_cycle(t, period) -> tuple[np.ndarray, str]:
 
 
 def flywheel_inertia(delta_e, omega_mean, fluctuation: float = 0.02):
-    """Flywheel inertia ``Delta E / (C_s omega_mean^2)``, kg m^2 (float, or array for arrays)."""
-    out = np.asarray(delta_e, float) / (fluctuation * np.asarray(omega_mean, float) ** 2)
+    """Flywheel inertia ``Delta E / (C_s omega_mean^2)``, kg m^2 (float, or array for arrays;
+    inf where ``C_s omega_mean^2`` underflows to zero, as for ``omega_mean = 1e-300``)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.asarray(delta_e, float) / (fluctuation * np.asarray(omega_mean, float) ** 2)
     return float(out) if out.ndim == 0 else out
 
 
@@ -95,8 +97,10 @@ def driver_energy(sol, fluctuation: float = 0.02) -> dict:
         de = energy_fluctuation(tk[cyc], pk[cyc])
         entry["energy_fluctuation_J"], entry["fluctuation_over"] = de, over
         speed = _constant_speed(d)
-        if jk.get(m.joint(d.joint).kind).angular and speed:
+        inertia = flywheel_inertia(de, speed, fluctuation) if speed else None
+        # a speed so small that no finite flywheel holds it: no flywheel is given
+        if jk.get(m.joint(d.joint).kind).angular and speed and np.isfinite(inertia):
             entry["flywheel"] = {"speed_fluctuation": float(fluctuation),
                                  "mean_speed_rad_s": abs(speed),
-                                 "inertia_kg_m2": flywheel_inertia(de, speed, fluctuation)}
+                                 "inertia_kg_m2": inertia}
     return out

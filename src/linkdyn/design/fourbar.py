@@ -68,14 +68,15 @@ class FourBar:
 
     @property
     def grashof(self) -> str:
-        """Grashof classification: which links can rotate fully relative to the frame."""
+        """Grashof classification: which links can rotate fully relative to the frame (what
+        the loop's lengths allow; :func:`link_travel` gives what a run does)."""
         return {
             "change-point": "change-point (s + l = p + q: passes a folded position)",
             "triple-rocker": "non-Grashof triple-rocker (no link rotates fully)",
             "double-crank": "Grashof double-crank (drag link)",
             "crank-rocker": "Grashof crank-rocker",
-            "double-rocker": "Grashof double-rocker (the coupler rotates fully)",
-            "rocker-crank": "Grashof rocker-crank (the output rotates fully)",
+            "double-rocker": "Grashof double-rocker (the coupler can rotate fully)",
+            "rocker-crank": "Grashof rocker-crank (the output can rotate fully)",
         }[self.type]
 
 
@@ -202,3 +203,37 @@ def mechanical_advantage(sol, fb: FourBar) -> np.ndarray:
     w_f = sol.omega(fb.frame)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.abs((sol.omega(fb.input) - w_f) / (sol.omega(fb.output) - w_f))
+
+
+def link_travel(sol, fb: FourBar) -> dict:
+    """What the run does with the loop's links: for the input, coupler and output, the travel
+    of its angle relative to the frame over the valid samples, deg (max - min of the
+    continuous angle ``phi_link - phi_frame``), and whether it turns fully (360 deg or more).
+
+    The Grashof class says which links *can* rotate fully; this says which do in the run (a
+    rocker-crank driven through its rocker's partial swing only rocks its output).
+    """
+    phi_f = sol.phi(fb.frame)
+    out = {}
+    for role in ("input", "coupler", "output"):
+        rel = np.degrees(sol.phi(getattr(fb, role)) - phi_f)
+        rel = rel[np.isfinite(rel)]
+        travel = float(np.max(rel) - np.min(rel)) if rel.size else None
+        out[role] = {"travel_deg": travel,
+                     "full_turn": None if travel is None else bool(travel >= 360.0 * (1 - 1e-9))}
+    return out
+
+
+def travel_words(travel: dict) -> str:
+    """``link_travel`` in words: 'in this run the input turns fully, the output swings 77.6
+    deg'."""
+    parts = []
+    for role in ("input", "output"):
+        t = travel[role]
+        if t["travel_deg"] is None:
+            continue
+        turns = t["travel_deg"] / 360.0
+        parts.append(f"the {role} " + (
+            f"swings {t['travel_deg']:.4g} deg" if not t["full_turn"] else
+            "turns fully" if turns < 1.0 + 1e-6 else f"turns fully ({turns:.3g} turns)"))
+    return ("in this run " + ", ".join(parts)) if parts else ""

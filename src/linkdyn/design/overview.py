@@ -5,12 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, quiet
 from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
 from .energy import driver_energy
-from .fourbar import four_bars, mechanical_advantage, transmission_angle, transmission_worst
+from .fourbar import (four_bars, link_travel, mechanical_advantage, transmission_angle,
+                      transmission_worst, travel_words)
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
 
@@ -48,6 +49,7 @@ def _extremes(t, x) -> dict:
             "max": float(x[kmax]), "max_time_s": float(t[kmax])}
 
 
+@quiet
 def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             path_range=None, default_range=None) -> dict:
     """Summary of a solution as plain JSON-ready data (SI units).
@@ -85,6 +87,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         "reactions": {},
         "four_bars": [],
         "invalid_samples": int(np.sum(~valid)),
+        "assembly": assembly(sol),
     }
     for k, d in enumerate(m.drivers):
         tau = sol.dyn.tau[..., k]
@@ -118,6 +121,8 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
                                    "coupler", "output"), fb.lengths)),
             "grashof": fb.grashof,
             "type": fb.type,
+            # what the run does, beside what the lengths allow
+            "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb))),
             "transmission_angle_deg": ta,
             "mechanical_advantage": _extremes(t, mechanical_advantage(sol, fb))})
     out["joint_travel"] = {}
@@ -147,12 +152,25 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             out["path_straightness"] = path_straightness(
                 sol, point, default_range if path_range is None else path_range)
         except ModelError:
-            if path_range is not None or default_range is None:
-                raise
-            # the default range does not fit this run: measure the whole run
-            out["path_straightness"] = path_straightness(sol, point, None)
+            if path_range is not None:
+                raise  # a range the user asked for and the run does not reach
+            # the default range does not fit this run: measure the whole run, if it has the
+            # three samples a line needs (else no straightness is reported)
+            if default_range is not None and np.sum(valid) >= 3:
+                out["path_straightness"] = path_straightness(sol, point, None)
     out["health"] = health(sol)
     return out
+
+
+def assembly(sol) -> dict:
+    """How the run was assembled: ``guess`` (whether the model's ``[assembly]`` gave one; if
+    not, the closure was solved from zero angles and the assembly mode is the one found
+    nearest them) and ``start_phi_rad``, every moving body's angle at the first sample."""
+    m = sol.model
+    first = {b.name: float(sol.phi(b.name)[..., 0]) if sol.phi(b.name).ndim == 1 else None
+             for b in m.moving_bodies}
+    return {"guess": bool(m.assembly_phi or m.assembly_q), "start_time_s": float(sol.t[0]),
+            "start_phi_rad": first}
 
 
 def health(sol) -> dict:

@@ -118,6 +118,8 @@ def path_straightness(sol, point: str, q_range=None) -> dict:
     along = np.where(sel, np.sum((xy - c) * u, axis=-1), np.nan)
     return {"point": point,
             "range": None if q_range is None else [float(x) for x in q_range],
+            "range_unit": None if q_range is None else (
+                "rad" if jk.get(m.joint(m.drivers[0].joint).kind).angular else "m"),
             "samples": int(np.sum(sel)),
             "centroid_m": c.tolist(), "direction": u.tolist(),
             "max_deviation_m": float(max_deviation(dev)),

@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..errors import ModelError
+from ..errors import ModelError, quiet
 from ..model import Model
 from .drivers import MOTION_KEYS, _drivers
 from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _joints
@@ -36,6 +36,7 @@ SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "assem
             "analysis")
 
 
+@quiet
 def load_model(path: str | os.PathLike, *, allow_outside: bool = False) -> Model:
     """Read a model file (``.toml`` or ``.json``), validate it and return it in SI units.
 
@@ -91,6 +92,7 @@ def read_model_data(path: str | os.PathLike) -> dict:
     return _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
 
 
+@quiet
 def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike = ".",
                     allow_outside: bool = False) -> Model:
     """Validate a parsed model (the structure of a model file) and return it in SI units.

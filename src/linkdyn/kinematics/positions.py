@@ -158,6 +158,33 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
                 raise not_assembled(models[d], lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)], t0,
                                     d if len(models) > 1 else None)
             q[:, failed] = np.nan
+    return _nearest_turn(lay, q, q0)
+
+
+def _nearest_turn(lay: Layout, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
+    """``q`` (n, ...) with each dependent angle moved by whole turns so that every body's
+    absolute angle lies within half a turn of the guess ``q0`` (of zero where the model gives
+    no guess): Newton's steps may wind an angle by many turns, which closes the loops as well
+    but is not the start the user described.
+
+    Body by body in tree order: ``e_i = e_parent + sign_i (q_i - q0_i)`` is body i's angle
+    minus its guess; a dependent revolute coordinate takes ``-round(e_i / 2 pi)`` turns.
+    """
+    topo = lay.topo
+    dep = set(topo.dependent)
+    q = np.array(q, dtype=float)
+    e = [np.zeros(q.shape[1:])] * topo.n
+    for i in range(1, topo.n):
+        if not jk.get(lay.kind[i]).angular:
+            e[i] = e[topo.parent[i]]
+            continue
+        s = topo.sign[i] or 1
+        e_i = e[topo.parent[i]] + s * (q[i] - q0[i])
+        if i in dep:
+            turns = np.where(np.isfinite(e_i), np.round(e_i / (2 * np.pi)), 0.0)
+            q[i] = q[i] - s * 2 * np.pi * turns
+            e_i = e_i - 2 * np.pi * turns
+        e[i] = e_i
     return q
 
 
