@@ -700,4 +700,13 @@ def test_samples_further_apart_than_a_turn_finish_with_one_summary(tmp_path):
         summary = json.loads((out / "summary.json").read_text())
         assert summary["driver_energy"]["J1"]["energy_fluctuation_J"] is None
         assert "energy fluctuation n/a" in res.stdout
+        # and the summary says its figures are those of the samples, not of the motion
+        assert summary["sampling"]["coarse"] is True
+        assert "NOTE: the samples are up to" in res.stdout
         shutil.rmtree(out)
+    # 9 samples over a turn (45 deg apart) resolve it: no note
+    res = run("analyze", linkdyn.example_path("hoeken"), "-o", tmp_path / "out", "--samples", 9)
+    assert res.exit_code == 0 and "NOTE" not in res.stdout, res.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["sampling"] == {"driver_step": {"J1": pytest.approx(math.pi / 4)},
+                                   "coarse": False}

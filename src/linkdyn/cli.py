@@ -372,6 +372,12 @@ def summary_text(s: dict) -> str:
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
          f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
          f"condition number {num(h['worst_condition_number'], '.3g')}")
+    smp = s.get("sampling")
+    if smp and smp["coarse"]:
+        step = max(smp["driver_step"].values())
+        echo(f"  NOTE: the samples are up to {np.degrees(step):.4g} deg of driver travel apart: "
+             "peaks, travel, work and the path are those of the samples, not of the motion "
+             "between them; give more --samples to resolve it")
     if s["invalid_samples"]:
         echo(f"  WARNING: {s['invalid_samples']} samples that do not close or sit at a singular "
              "position are written as NaN rows")

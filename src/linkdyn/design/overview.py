@@ -88,6 +88,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         "four_bars": [],
         "invalid_samples": int(np.sum(~valid)),
         "assembly": assembly(sol),
+        "sampling": sampling(sol),
     }
     for k, d in enumerate(m.drivers):
         tau = sol.dyn.tau[..., k]
@@ -171,6 +172,26 @@ def assembly(sol) -> dict:
              for b in m.moving_bodies}
     return {"guess": bool(m.assembly_phi or m.assembly_q), "start_time_s": float(sol.t[0]),
             "start_phi_rad": first}
+
+
+COARSE_STEP = np.pi / 2   # rad of a revolute driver between samples beyond which a run is coarse
+
+
+def sampling(sol) -> dict:
+    """How finely the run samples the motion: ``driver_step`` (the largest change of each
+    driver's coordinate between consecutive samples, rad or m) and ``coarse`` (True when a
+    revolute driver moves more than a quarter turn between samples: peaks, travel, work and the
+    path are then those of the samples, not of the motion between them)."""
+    m = sol.model
+    names = [j.name for j in m.joints]
+    steps, coarse = {}, False
+    for d in m.drivers:
+        q = np.asarray(sol.kin.q[..., names.index(d.joint)])
+        dq = np.abs(np.diff(q, axis=-1))
+        step = float(np.nanmax(dq)) if dq.size and np.any(np.isfinite(dq)) else 0.0
+        steps[d.joint] = step
+        coarse |= bool(jk.get(m.joint(d.joint).kind).angular and step > COARSE_STEP)
+    return {"driver_step": steps, "coarse": coarse}
 
 
 def health(sol) -> dict:
