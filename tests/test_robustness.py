@@ -465,3 +465,16 @@ def test_the_ci_entry_point_says_it_is_ci():
     lines = (Path(__file__).parents[1] / ".ci" / "run").read_text().splitlines()
     export = next(k for k, ln in enumerate(lines) if ln.strip() == "export CI=true")
     assert export < next(k for k, ln in enumerate(lines) if ln.strip().startswith("make test"))
+
+
+def test_running_out_of_memory_names_samples(tmp_path, monkeypatch):
+    import linkdyn.analysis
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(linkdyn.analysis, "analyze", no_memory)
+    out = tmp_path / "out"
+    user_error(run("analyze", model(tmp_path), "-o", out, "--samples", 5), 2, "--samples",
+               "memory")
+    nothing_written(out)

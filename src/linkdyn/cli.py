@@ -487,7 +487,12 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
     with progress:
         # everything is computed (solution, summary, its text) before any file is written
         progress.step(f"solving {len(t)} samples")
-        sol = run(mech, t, allow_singular=allow_singular)
+        try:
+            sol = run(mech, t, allow_singular=allow_singular)
+        except MemoryError:  # below the estimate of _times, yet more than is free now
+            raise ModelError(f"not enough free memory for {len(t)} samples", field="--samples",
+                             fix="Give fewer samples, or split the run into parts with "
+                                 "--duration") from None
         progress.step("summary")
         if q_range is not None:
             _check_path_range(sol, path_range, given, q_range)
