@@ -15,7 +15,7 @@ import numpy as np
 from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
-from .errors import AssemblyError, ModelError, quiet, quiet_numerics  # noqa: F401
+from .errors import AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics  # noqa: F401
 from . import joints as jk
 from .model import Model
 
@@ -361,13 +361,13 @@ def _arguments(model, t, allow_singular, backend):
     field = "backend" if backend else "LINKDYN_BACKEND"
     name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
     if name not in compiled.BACKENDS:
-        raise ModelError(f"unknown backend '{name}'", field=field,
+        raise InvalidValue(f"unknown backend '{name}'", field=field,
                          fix=f"Use one of {', '.join(compiled.BACKENDS)}"
                              + ("" if backend else ", or unset LINKDYN_BACKEND"))
     first = model if isinstance(model, Model) else model[0]
     missing = compiled.unsupported(j.kind for j in first.joints)
     if name == "compiled" and missing:
-        raise ModelError(f"the compiled backend does not support {', '.join(missing)} joints",
+        raise InvalidValue(f"the compiled backend does not support {', '.join(missing)} joints",
                          field=field, fix="Use the numpy or auto backend")
     return model, t, name
 
