@@ -448,8 +448,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     Parameters
     ----------
     model : Model, str, PathLike or sequence of Model
-        One mechanism (or the path of its model file), or D designs of one topology (the same bodies, joints, drivers, cut
-        joints and load kinds), each with its own numbers: geometry, masses, inertias, gravity,
+        One mechanism (or the path of its model file), or D designs of one topology (the same
+        bodies, joints, drivers, cut joints and load kinds), each with its own numbers: geometry, masses, inertias, gravity,
         load values (constant or formulas), spring and damper constants and free lengths,
         driver motions. With designs every per-sample array has shape (D, T, ...) (a list of
         one model too), a design that cannot be assembled or passes a singular position is
