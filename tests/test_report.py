@@ -359,7 +359,7 @@ def test_screenshot_is_not_blank(page):
 
 
 @pytest.mark.parametrize("example", ["slider_crank", "inverted_slider_crank", "stephenson",
-                                     "fivebar"])
+                                     "fivebar", "scotch_yoke"])
 def test_other_mechanisms_render_and_play(browser, tmp_path, example):
     out = _analyze(tmp_path, example, "--report")
     pg = Page(browser, out / "report.html", width=1200, height=900)
@@ -369,6 +369,8 @@ def test_other_mechanisms_render_and_play(browser, tmp_path, example):
         pg.page.click("#play")
         if example in ("slider_crank", "inverted_slider_crank"):  # a slider block is drawn
             assert pg.page.locator("#anim rect[rx]").count() == 1
+        if example == "scotch_yoke":  # the yoke's slider block and its slot around the pin
+            assert pg.page.locator("#anim rect[rx]").count() == 2
         if example == "stephenson":  # the ternary coupler is a filled plate
             assert pg.page.locator("#anim polygon[fill-opacity]").count() == 1
         if example == "fivebar":  # two drivers

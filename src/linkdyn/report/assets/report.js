@@ -194,12 +194,16 @@
     return {b: b, node: node, lab: lab};
   });
 
-  // sliders (prismatic joints): a block along the axis at the second body's point
-  var sliders = G.joints.filter(function (j) { return j.kind === "prismatic"; }).map(function (j) {
-    var body = G.bodies.filter(function (b) { return b.name === j.second; })[0];
-    var g = el("g", {}, gSliders);
-    el("rect", {x: -18, y: -9, width: 36, height: 18, rx: 2, fill: body ? body.color : "#888",
-                "fill-opacity": 0.85, stroke: "#333", "stroke-width": 1.5}, g);
+  // sliders (prismatic joints): a block along the axis at the second body's point; slots: the
+  // first body's slot, an outline along the axis around the pin
+  var sliders = G.joints.filter(function (j) { return j.kind === "prismatic" || j.kind === "slot"; }).map(function (j) {
+    var slot = j.kind === "slot";
+    var body = G.bodies.filter(function (b) { return b.name === (slot ? j.first : j.second); })[0];
+    var color = body ? body.color : "#888", g = el("g", {}, gSliders);
+    el("rect", slot ? {x: -26, y: -7, width: 52, height: 14, rx: 7, fill: "none", stroke: color,
+                       "stroke-width": 3}
+                    : {x: -18, y: -9, width: 36, height: 18, rx: 2, fill: color,
+                       "fill-opacity": 0.85, stroke: "#333", "stroke-width": 1.5}, g);
     return {j: j, g: g};
   });
 
