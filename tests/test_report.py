@@ -8,6 +8,7 @@ Playwright is missing; with ``CI=true`` they fail instead, so CI cannot pass wit
 from __future__ import annotations
 
 import io
+import json
 import os
 import re
 import shutil
@@ -662,3 +663,13 @@ def test_compare_needs_two_models(tmp_path):
                                     "-o", str(tmp_path / "c")])
     assert res.exit_code == 2 and "at least two" in res.output
     assert not (tmp_path / "c").exists()
+
+
+def test_printed_summary_shows_rounding_noise_as_zero(tmp_path):
+    res = CliRunner().invoke(main, ["analyze", str(linkdyn.example_path("slider_crank")),
+                                    "-o", str(tmp_path / "o"), "--samples", 73])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert 0 < abs(summary["driver_energy"]["J1"]["work_J"]) < 1e-9  # the file keeps it
+    assert "driver J1: work 0 J (+" in res.output
+    assert re.search(r"J4 +\S+ N at t = \S+ s, moment 0 N m", res.output)

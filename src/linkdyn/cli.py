@@ -313,6 +313,9 @@ def write_parquet(sol, path: Path) -> None:
 def summary_text(s: dict) -> str:
     """The printed summary of an ``analyze`` run, from its summary dict (computed before any
     file is written, so a failure here leaves nothing behind)."""
+    from .report.tables import denoise
+
+    s = denoise(s)  # a rounding residual (a cycle's net work of 1e-16 J) prints as 0
     lines: list[str] = []
     echo = lines.append
 
@@ -365,7 +368,10 @@ def summary_text(s: dict) -> str:
                 f" {ps.get('range_unit', 'rad')})"))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
-        extra = f", moment {num(r['peak_moment_Nm'], '.6g')} N m" if "peak_moment_Nm" in r else ""
+        m = r.get("peak_moment_Nm")
+        if m is not None and r.get("peak_force_N") and abs(m) <= 1e-12 * r["peak_force_N"]:
+            m = 0.0  # rounding noise: below 1e-12 of the joint's force times a metre
+        extra = f", moment {num(m, '.6g')} N m" if "peak_moment_Nm" in r else ""
         echo(f"    {j:8s} {num(r['peak_force_N'], '.6g')} N at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]

@@ -46,15 +46,15 @@ _UNITS = {"N": "N", "Nm": "N m", "s": "s", "deg": "deg", "m": "m", "mm": "mm", "
           "m_s": "m/s", "rad_s2": "rad/s²", "m_s2": "m/s²", "N_m": "N m"}
 
 
-def _denoise(x, noise: float = 1e-12):
+def denoise(x, noise: float = 1e-12):
     """A copy of the summary with rounding noise shown as zero: in each dict, a number below
     ``noise`` of the largest magnitude among its siblings of the same unit suffix (``work_J``
     beside ``positive_work_J``, ``mean_power_W`` beside ``max_power_W``) becomes 0."""
     if isinstance(x, list):
-        return [_denoise(v, noise) for v in x]
+        return [denoise(v, noise) for v in x]
     if not isinstance(x, dict):
         return x
-    out = {k: _denoise(v, noise) for k, v in x.items()}
+    out = {k: denoise(v, noise) for k, v in x.items()}
     nums = {k: v for k, v in out.items() if isinstance(v, float) and math.isfinite(v)}
     for suffix in {k.rsplit("_", 1)[-1] for k in nums if "_" in k}:
         same = {k: v for k, v in nums.items() if k.endswith("_" + suffix)}
@@ -133,7 +133,7 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
     other key rendered generically. Rounding noise shows as 0: a value below 1e-12 of its
     siblings of the same unit, or a reaction moment below 1e-12 of ``scales['N m']``
     (:func:`.keys.scales`)."""
-    s = _denoise(dict(s))
+    s = denoise(dict(s))
     if scales and isinstance(s.get("reactions"), dict):
         s["reactions"] = {j: {k: (0.0 if k == "peak_moment_Nm" and isinstance(v, float)
                                   and abs(v) <= 1e-12 * scales.get("N m", 0.0) else v)
