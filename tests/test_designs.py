@@ -223,3 +223,42 @@ def test_continuation_steps_cover_every_design():
     assert np.allclose(got[0], brute, rtol=1e-12, atol=1e-15)
     # the formula is faster than 7.5 rad/s only at some probes: both bound the steps
     assert np.any(got[0] > 7.5 * 2.5 / 256 * (1 + 1e-9)) and np.any(np.isclose(got[0], 7.5 * 2.5 / 256))
+
+
+def variant(m: linkdyn.Model, f: float) -> linkdyn.Model:
+    """Model ``m`` with its numbers changed by the factor ``f`` (about 1): masses, inertias,
+    gravity (turned and scaled), load values and constants, constant driver speeds."""
+    from linkdyn.motion import ConstantSpeed
+    turn = np.array([[np.cos(f - 1), -np.sin(f - 1)], [np.sin(f - 1), np.cos(f - 1)]])
+    g = f * turn @ np.asarray(m.gravity) + (f - 1) * np.array([0.0, -9.81])
+
+    def load(ld):
+        value = ld.value if ld.value is None else (lambda t, v=ld.value: f * np.asarray(v(t)))
+        return dataclasses.replace(ld, value=value, stiffness=f * ld.stiffness,
+                                   free_length=ld.free_length * (2 - f), damping=f * ld.damping)
+
+    def driver(d):
+        mo = d.motion
+        if isinstance(mo, ConstantSpeed):
+            mo = ConstantSpeed(mo.speed * f, start=mo.start + (f - 1) * 0.1)
+        return dataclasses.replace(d, motion=mo)
+    return dataclasses.replace(
+        m, gravity=g, loads=tuple(map(load, m.loads)), drivers=tuple(map(driver, m.drivers)),
+        bodies=tuple(dataclasses.replace(b, mass=b.mass * f, inertia=b.inertia * f ** 2)
+                     for b in m.bodies))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", ["fivebar", "slider_crank", "inverted_slider_crank", "watt2"])
+def test_bundled_examples_batch_equals_one_by_one(name, backend):
+    # two drivers (fivebar), sliders and a moving slide line, a six-bar: every design its own
+    import golden
+    m, t = golden.times(name)
+    t = t[::3]
+    designs = [variant(m, f) for f in (1.0, 1.04, 0.97)]
+    sol = linkdyn.analyze(designs, t, backend=backend, allow_singular=True)
+    for k, d in enumerate(designs):
+        alone = linkdyn.analyze(d, t, backend=backend, allow_singular=True)
+        assert np.array_equal(sol.valid[k], alone.valid) and alone.valid.any()
+        assert_same(sol.design(k).columns, alone.columns, 1e-12, f"{name} design {k}")
+    assert np.max(np.abs(sol.dyn.tau[1] - sol.dyn.tau[0])) > 1e-3 * np.max(np.abs(sol.dyn.tau[0]))

@@ -71,9 +71,10 @@ class Solution:
         k = batch.check_index(k, self.n_designs)
         if not self.batched:
             return self
-        return Solution(self.designs[k], batch.kinematics(self.kin, k),
-                        batch.loads(self.loads, k), batch.dynamics(self.dyn, k),
-                        batch.reactions(self.reactions, k), self.valid[k])
+        kin = batch.kinematics(self.kin, k)
+        return Solution(self.designs[k], kin, batch.loads(self.loads, k, kin.layout),
+                        batch.dynamics(self.dyn, k), batch.reactions(self.reactions, k),
+                        self.valid[k])
 
     @property
     def t(self) -> np.ndarray:

@@ -14,6 +14,8 @@ from functools import partial
 
 import numpy as np
 
+from .loads import has_potential
+
 
 def take(x, k: int):
     """Design k of a component-first array ``(..., D, T)``: ``(..., T)``. An array broadcast
@@ -43,11 +45,12 @@ def kinematics(kin, k: int):
         residual=kin.residual[k], valid=kin.valid[k], arrays=arrays)
 
 
-def loads(ld, k: int):
-    """Design k of a batch :class:`~linkdyn.loads.Loads`."""
+def loads(ld, k: int, layout):
+    """Design k of a batch :class:`~linkdyn.loads.Loads`; ``layout``: that design's
+    (whether it has a potential energy is its own)."""
     return replace(ld, wrenches=take_each(ld.wrenches, k),
                    potential_energy=ld.potential_energy[k], power=ld.power[k],
-                   on_ground=take(ld.on_ground, k))
+                   on_ground=take(ld.on_ground, k), has_potential=has_potential(layout))
 
 
 def _dynamics_internals(internals, k: int) -> tuple:

@@ -51,6 +51,12 @@ class Loads:
         return stack_last(self.wrenches)
 
 
+def has_potential(lay) -> bool:
+    """Whether the loads of layout ``lay`` (any of its designs) have a potential energy:
+    gravity or springs."""
+    return bool(np.any(lay.gravity != 0)) or any(r.kind == "spring" for r in lay.loads)
+
+
 def _point(kin: KinematicSolution, i: int, name: str):
     """Global position and velocity (2, T) of body i's named point."""
     a = kin.pose.rotate(i, kin.layout.points[i][name])
@@ -87,9 +93,9 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
     pe = np.zeros(shape)
     power = np.zeros(shape)
     g = lay.gravity   # (2,), or (2, D, 1) per design
-    has_pe = bool(np.any(g != 0))
+    has_pe = has_potential(lay)
     # gravity: m g at the mass centre; potential -m g . r_C
-    if has_pe:
+    if np.any(g != 0):
         for i in range(1, topo.n):
             r_c = kin.pose.point(i, lay.com[i])
             f = np.stack([np.broadcast_to(lay.mass[i] * g[k], r_c.shape[1:]) for k in range(2)])
@@ -117,7 +123,6 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
                 # tension k (l - l0) pulls the two points together
                 tension = load.stiffness * (length - load.free_length)
                 pe += 0.5 * load.stiffness * (length - load.free_length) ** 2
-                has_pe = True
                 # zero free length: the force k d, defined also where the two points meet
                 f = np.where(np.asarray(load.free_length) == 0, load.stiffness * d, tension * u)
             else:
