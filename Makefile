@@ -17,7 +17,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 $(VENV)/.installed-fast: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[fast]"
+	$(BIN)/python -m pip install --quiet -e ".[fast,parquet]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
@@ -32,6 +32,7 @@ bench: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/bench_hoeken.py
 	$(BIN)/python benchmarks/bench_kernels.py
 	$(BIN)/python benchmarks/bench_ceiling.py
+	$(BIN)/python benchmarks/bench_sweep.py
 
 accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py

@@ -203,13 +203,9 @@ def check(out, mech, t):
             assert err <= 1e-9 * scale, f"{key}: {err}"
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--samples", type=int, default=1_000_000)
-    ap.add_argument("--repeat", type=int, default=5)
-    args = ap.parse_args()
-    one_core()
-    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+def setup(mech):
+    """The hand-written kernel bound to Hoeken's numbers: ``run(t, out)`` fills ``out``
+    ((ROWS_KIN or ROWS_ALL, T)) at the times ``t`` and returns it."""
     lay = compile_layout(mech)
     (cut,) = lay.cuts
     u, v, pa, pb = lay.joint_point[2], lay.joint_point[3], cut.pa, cut.pb
@@ -223,13 +219,25 @@ def main():
     r2, r3 = s0.pose.r[2][:, 0], s0.pose.r[3][:, 0]
     (dx, dy), (ex, ey) = pa - r2, r3 - r2
     side = float(np.sign(dx * ey - dy * ex))
-    T = args.samples
-    t = np.linspace(0.0, mech.drivers[0].period, T)
 
     def run(t, out):
         HOEKEN[len(out) == ROWS_ALL](t, w, u, v, pa, pb, side, float(lay.size), mass, i_o,
                                     com, out)
         return out
+
+    return run
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--samples", type=int, default=1_000_000)
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    one_core()
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    run = setup(mech)
+    T = args.samples
+    t = np.linspace(0.0, mech.drivers[0].period, T)
 
     def best(fn):
         return best_time(fn, args.repeat)

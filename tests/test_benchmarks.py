@@ -39,3 +39,9 @@ def test_bench_ceiling():
     out = run("bench_ceiling.py", "--samples", "3000", "--repeat", "1")
     assert out.count("ceiling, hand-written compiled kernel") == 2
     assert "47 numbers per sample" in out and "59 numbers per sample" in out
+
+
+def test_bench_sweep():
+    out = run("bench_sweep.py", "--designs", "12", "--samples", "20", "--no-ceiling")
+    for words in ("one worker", "workers", "peak memory at 3 designs", "per core"):
+        assert words in out

@@ -1,0 +1,119 @@
+"""How fast does a design sweep run, and how much memory does it take?
+
+Hoeken's linkage with its ground distance (``bodies.ground.points.O4[0]``, 60-120 mm) and its
+coupler length (``bodies.coupler.points.O3[0]``, 90-140 mm) varied over Sobol designs, 360
+samples per design (one crank turn), metrics ``peak_tau_J1`` and ``path_deviation`` kept per
+design, the default backend choice (compiled with numba). Each run is a fresh process, so its
+peak memory (resident set of the process and of its worker processes) is that run's alone. It
+prints design-samples per second on one worker and on every core, the peak memory at two numbers
+of designs (memory is bounded by the chunk, not by the number of designs), and the ratio to the
+hand-written compiled kernel of ``bench_ceiling.py`` (the full analysis of this one four-bar)
+measured in the same run, per core.
+
+Targets (issue 14): 1e6 designs x 360 samples in under 60 s on the 2-core machine, that is at
+least 3e6 design-samples/s per core; peak memory under 1 GB at any number of designs.
+
+Usage: python benchmarks/bench_sweep.py [--designs N] [--samples T] [--no-ceiling]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import resource  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import linkdyn  # noqa: E402
+from linkdyn.studies import sample  # noqa: E402
+
+BOX = {"bodies.ground.points.O4[0]": (60.0, 120.0), "bodies.coupler.points.O3[0]": (90.0, 140.0)}
+METRICS = ["peak_tau_J1", "path_deviation"]
+TARGET_PER_CORE = 3e6  # design-samples/s
+TARGET_MEMORY = 1 << 30  # bytes
+
+
+def child(designs: int, samples: int, workers: int) -> dict:
+    """One sweep in this process (and its workers): rate and peak memory."""
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, mech.drivers[0].period, samples)
+    values = sample(list(BOX.values()), "sobol", designs, seed=0)
+    linkdyn.sweep(linkdyn.example_path("hoeken"), dict(zip(BOX, values[:4].T)), t,
+                  metrics=METRICS)  # imports and the compiled kernels' first load
+    t0 = time.perf_counter()
+    df = linkdyn.sweep(linkdyn.example_path("hoeken"), dict(zip(BOX, values.T)), t,
+                       metrics=METRICS, workers=workers)
+    seconds = time.perf_counter() - t0
+    rss = [resource.getrusage(w).ru_maxrss * 1024 for w in (resource.RUSAGE_SELF,
+                                                             resource.RUSAGE_CHILDREN)]
+    return {"designs": designs, "samples": samples, "workers": workers, "seconds": seconds,
+            "rate": designs * samples / seconds, "valid": int(df.valid.sum()),
+            "peak_bytes": max(rss)}
+
+
+def in_fresh_process(designs: int, samples: int, workers: int) -> dict:
+    done = subprocess.run([sys.executable, __file__, "--child", str(designs), str(samples),
+                           str(workers)], capture_output=True, text=True, timeout=3600)
+    if done.returncode:
+        raise SystemExit(done.stderr[-2000:])
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def ceiling_rate(samples: int) -> float:
+    """Design-samples per second of the hand-written compiled kernel (full analysis), one core,
+    over as many samples as the sweep's designs x samples (at most 4e6)."""
+    from bench_ceiling import ROWS_ALL, setup
+    from bench_hoeken import best_time
+
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    run = setup(mech)
+    t = np.linspace(0.0, mech.drivers[0].period, samples)
+    run(t[:100], np.empty((ROWS_ALL, 100)))  # compile
+    return samples / best_time(lambda: run(t, np.empty((ROWS_ALL, samples))), 3)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--designs", type=int, default=10_000)
+    ap.add_argument("--samples", type=int, default=360)
+    ap.add_argument("--no-ceiling", action="store_true",
+                    help="skip the hand-written kernel (its compile takes about a minute)")
+    ap.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        print(json.dumps(child(*args.child)))
+        return
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    D, T = args.designs, args.samples
+    print(f"Hoeken sweep: {D} Sobol designs x {T} samples, ground distance and coupler length "
+          f"varied, metrics {', '.join(METRICS)}")
+    one = in_fresh_process(D, T, 1)
+    allc = in_fresh_process(D, T, cores) if cores > 1 else one
+    small = in_fresh_process(max(D // 4, 1), T, 1)
+    ceiling = None if args.no_ceiling else ceiling_rate(min(D * T, 4_000_000))
+    for label, r in (("one worker", one), (f"{cores} workers", allc)):
+        print(f"  {label:<11} {r['rate']:10.4g} design-samples/s  ({r['seconds']:.3g} s, "
+              f"{r['valid']} valid, peak memory {r['peak_bytes'] / 2**20:.0f} MB)")
+    print(f"  peak memory at {small['designs']} designs {small['peak_bytes'] / 2**20:.0f} MB, "
+          f"at {D} designs {one['peak_bytes'] / 2**20:.0f} MB (one worker): target < 1 GB "
+          f"{'met' if max(one['peak_bytes'], allc['peak_bytes']) < TARGET_MEMORY else 'NOT met'}")
+    per_core = allc["rate"] / cores
+    if ceiling:
+        print(f"  hand-written compiled kernel (bench_ceiling, full analysis, one core) "
+              f"{ceiling:.4g} samples/s: the sweep on one worker runs at "
+              f"{one['rate'] / ceiling:.2%} of it")
+    print(f"  per core on {cores} workers {per_core:.4g} design-samples/s: target "
+          f"{TARGET_PER_CORE:.0e} {'met' if per_core >= TARGET_PER_CORE else 'NOT met'}; "
+          f"1e6 designs x 360 samples would take {1e6 * 360 / allc['rate']:.0f} s (target 60 s)")
+
+
+if __name__ == "__main__":
+    main()
