@@ -5,9 +5,13 @@ the example's default run (its ``[analysis]`` duration or cycles, else one cycle
 ``analyze`` times), recorded with the numpy backend. ``tests/test_golden.py`` holds both backends
 to these numbers, so a refactoring of the core cannot change a result unnoticed.
 
-Regenerate (only when an output is meant to change, and say why in the commit)::
+Record a bundled example added since (the stored ones are kept as they are)::
 
     PYTHONPATH=src python tests/golden.py
+
+Re-record every example (only when an output is meant to change; say why in the commit)::
+
+    PYTHONPATH=src python tests/golden.py --all
 """
 
 from __future__ import annotations
@@ -35,10 +39,10 @@ def key(example: str, column: str) -> str:
     return f"{example}/{column}"
 
 
-def record() -> dict[str, np.ndarray]:
-    """Every column of every example, keyed ``example/column``, on the numpy backend."""
+def record(names=EXAMPLES) -> dict[str, np.ndarray]:
+    """Every column of the examples ``names``, keyed ``example/column``, on the numpy backend."""
     out = {}
-    for name in EXAMPLES:
+    for name in names:
         mech, t = times(name)
         sol = linkdyn.analyze(mech, t, backend="numpy")
         for col, values in sol.columns.items():
@@ -47,7 +51,10 @@ def record() -> dict[str, np.ndarray]:
 
 
 if __name__ == "__main__":
-    data = record()
+    import sys
+    stored = {} if "--all" in sys.argv[1:] or not PATH.exists() else dict(np.load(PATH))
+    have = {k.split("/")[0] for k in stored}
+    data = {**stored, **record([n for n in EXAMPLES if n not in have])}
     np.savez_compressed(PATH, **data)
-    print(f"{PATH.name}: {len(EXAMPLES)} examples, {len(data)} columns, "
+    print(f"{PATH.name}: {len({k.split('/')[0] for k in data})} examples, {len(data)} columns, "
           f"{PATH.stat().st_size} bytes")

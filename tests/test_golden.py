@@ -1,6 +1,7 @@
 """Golden outputs: every column of every bundled example, on both backends, against the
-numbers stored in ``tests/data/golden.npz`` (recorded by ``tests/golden.py`` before the core was
-restructured for issue 12).
+numbers stored in ``tests/data/golden.npz`` (recorded by ``tests/golden.py``: the first seven
+examples before the core was restructured for issue 12, the Scotch yoke once it was bundled). A
+backend that does not support an example's joint kinds skips it.
 
 Each column must agree to 1e-12 of its scale: the column's peak, or the peak of its family of
 the same unit in that example when larger (a column that is rounding noise, as the angle of a
@@ -44,8 +45,11 @@ def scales(columns: dict[str, np.ndarray]) -> dict[str, float]:
 
 
 def test_stored_file_covers_every_example():
-    # the record holds each bundled example that existed when it was made, with its columns
-    assert len(STORED_EXAMPLES) >= 7
+    # the record holds every bundled example (the first seven as they were before issue 12's
+    # restructuring; an example added since is recorded by `python tests/golden.py`)
+    assert len(STORED_EXAMPLES) >= 8
+    missing = set(golden.EXAMPLES) - set(STORED_EXAMPLES)
+    assert not missing, f"not recorded: {sorted(missing)}; run: PYTHONPATH=src python tests/golden.py"
     assert set(STORED_EXAMPLES) <= set(golden.EXAMPLES)
     assert golden.PATH.stat().st_size < 1_000_000
 
@@ -54,6 +58,8 @@ def test_stored_file_covers_every_example():
 @pytest.mark.parametrize("example", STORED_EXAMPLES)
 def test_outputs_match_stored(example, backend):
     mech, t = golden.times(example)
+    if backend == "compiled" and compiled.unsupported([j.kind for j in mech.joints]):
+        pytest.skip(f"the compiled kernels do not support {example}'s joint kinds")
     cols = linkdyn.analyze(mech, t, backend=backend).columns
     stored = {k.split("/", 1)[1]: STORED[k] for k in STORED.files
               if k.split("/")[0] == example}
