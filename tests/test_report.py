@@ -673,3 +673,18 @@ def test_printed_summary_shows_rounding_noise_as_zero(tmp_path):
     assert 0 < abs(summary["driver_energy"]["J1"]["work_J"]) < 1e-9  # the file keeps it
     assert "driver J1: work 0 J (+" in res.output
     assert re.search(r"J4 +\S+ N at t = \S+ s, moment 0 N m", res.output)
+
+
+def test_slider_dyad_transmission_angle_is_the_closed_form():
+    # offset slider-crank (crank r = 50 mm, rod L = 180 mm, slide 20 mm above the crank axis):
+    # the rod's angle to the slide is asin((r sin q - e) / L); the transmission angle is its
+    # complement (the rod against the slide's normal)
+    sol = _solution("slider_crank", np.linspace(0.0, 0.2, 121))
+    items = {it["label"]: it for it in report.key_results(sol)}
+    item = items["min transmission angle rod/slider"]
+    q = sol.columns["q_J1"]
+    mu = 90.0 - np.degrees(np.abs(np.arcsin((0.05 * np.sin(q) - 0.02) / 0.18)))
+    assert item["value"] == pytest.approx(np.min(mu), rel=1e-9)
+    assert item["k"] == int(np.argmin(mu))
+    d = report.page_data(sol)
+    np.testing.assert_allclose(d["series"]["mu_s:0"], mu, rtol=1e-4)

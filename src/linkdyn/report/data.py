@@ -283,6 +283,11 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
             key = add(f"mu:{n}", np.degrees(design.transmission_angle(sol, fb)))
             panel("Design", f"Transmission angle ({fb.coupler} / {fb.output})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[n % len(PALETTE)]}])
+        from .keys import guide_transmission_angle, slider_rods
+        for n, (g, rod, pin, other) in enumerate(slider_rods(m)):
+            key = add(f"mu_s:{n}", guide_transmission_angle(sol, g, rod, pin, other))
+            panel("Design", f"Transmission angle ({rod} / {g.body_b})", "deg",
+                  [{"key": key, "label": "μ", "color": PALETTE[(n + 3) % len(PALETTE)]}])
         ws = design.shaking_wrench(sol)
         panel("Design", "Shaking force on the frame", "N",
               [{"key": add("shake:Fx", ws[..., 1]), "label": "Fx", "color": X_COLOR},

@@ -118,6 +118,14 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
         add("Four-bar loops", f"max mechanical advantage {which}", ma, _k(ma, np.nanargmax), "",
             note="|ω_in / ω_out|")
 
+    # the RRP dyad of each guide: transmission angle between the rod that drives the slider
+    # and the guide's normal (90 deg: the rod pushes along the guide)
+    for j, rod, pin, other in slider_rods(m):
+        mu = guide_transmission_angle(sol, j, rod, pin, other)
+        which = f"{rod}/{j.body_b if rod != j.body_b else j.body_a}"
+        add("Slider dyads", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg",
+            note="rod against the guide's normal")
+
     # balancing: what the frame feels
     ws = design.shaking_wrench(sol)
     fs = np.linalg.norm(ws[..., 1:], axis=-1)
@@ -147,6 +155,40 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
                       "note": f"max deviation over {float(ps.get('length_m') or 0) * 1e3:.4g} mm"
                               + (" (whole run)" if ps.get("range") is None else "")})
     return items
+
+
+def slider_rods(m) -> list:
+    """``(guide joint, rod, rod's pin point on the slider, rod's other joint point)`` for each
+    guide fixed on the ground (a joint with an axis, not angular) whose slider is pinned to a
+    rod with a second joint: the slider-crank's RRP dyads. (A guide on a moving link, as in an
+    inverted slider-crank, has another transmission angle and is left out.)"""
+    out = []
+    for g in m.joints:
+        kind = jk.get(g.kind)
+        if kind.angular or "axis" not in kind.keys or g.body_a != GROUND:
+            continue
+        slider = g.body_b
+        for r in m.joints:
+            if r is g or not jk.get(r.kind).angular or slider not in (r.body_a, r.body_b):
+                continue
+            rod, pin = (r.body_a, r.point_a) if r.body_b == slider else (r.body_b, r.point_b)
+            if rod in (GROUND, g.body_a):
+                continue
+            others = [(j.point_a if j.body_a == rod else j.point_b) for j in m.joints
+                      if j is not r and rod in (j.body_a, j.body_b)]
+            others = [p for p in others if p != pin]
+            if others:
+                out.append((g, rod, pin, others[0]))
+    return out
+
+
+def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:
+    """(T,) deg: the angle between the rod (its pin on the slider to its other joint) and the
+    guide's normal, in [0, 90]."""
+    d = np.asarray(sol.point(rod, other)) - np.asarray(sol.point(rod, pin))
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    c = np.abs(np.sum(d * _guide_normal(sol, g), axis=-1))  # cos of the angle to the normal
+    return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
 
 
 def _guide_normal(sol, j) -> np.ndarray:
