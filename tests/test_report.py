@@ -688,3 +688,23 @@ def test_slider_dyad_transmission_angle_is_the_closed_form():
     assert item["k"] == int(np.argmin(mu))
     d = report.page_data(sol)
     np.testing.assert_allclose(d["series"]["mu_s:0"], mu, rtol=1e-4)
+
+
+def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
+    p = page.page
+    spec = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent).plots[0]")
+    with p.expect_download() as dl:
+        p.locator("#plots .panel").first.locator(".pexport button", has_text="CSV").click()
+    text = open(dl.value.path(), encoding="utf-8").read().splitlines()
+    assert dl.value.suggested_filename == "joint_angles.csv"
+    assert text[0].startswith('"t_s","J1 (deg)"') and len(text) == 1 + 361
+    row = [float(v) for v in text[180].split(",")]
+    series = p.evaluate("k => [JSON.parse(document.getElementById('linkdyn-data').textContent)"
+                        ".series[k][179]]", spec["series"][1]["key"])
+    assert row[2] == series[0]
+    svg = p.evaluate("window.__linkdynExport.svg(0)")
+    assert svg.startswith("<svg") and "Joint angles" in svg and "<path" in svg
+    with p.expect_download() as dl:
+        p.locator("#plots .panel").first.locator(".pexport button", has_text="PNG").click()
+    assert open(dl.value.path(), "rb").read(8) == b"\x89PNG\r\n\x1a\n"
+    assert page.errors == []
