@@ -135,7 +135,7 @@
     el("line", {x1: x0, y1: y0 - 4, x2: x0, y2: y0 + 4, stroke: "#444", "stroke-width": 2}, gGround);
     el("line", {x1: x0 + w, y1: y0 - 4, x2: x0 + w, y2: y0 + 4, stroke: "#444", "stroke-width": 2}, gGround);
     var txt = L >= 1 ? fmt(L, 3) + " m" : fmt(L * 1000, 3) + " mm";
-    el("text", {x: x0 + w + 6, y: y0 + 4, "font-size": 12, fill: "#444"}, gGround).textContent = txt;
+    el("text", {x: x0 + w + 6, y: y0 + 4, "font-size": 12, fill: "#444", "class": "legtext"}, gGround).textContent = txt;
   })();
 
   // ground link: a dashed line through the ground pivots
@@ -287,7 +287,10 @@
   function updateTextScale() {
     var w = anim.getBoundingClientRect().width;
     textScale = w > 0 ? Math.max(1, VW / w) : 1;
-    anim.style.setProperty("--ts", textScale);
+    // the scale bars' texts: 12 px on the screen whatever the zoom
+    Array.prototype.forEach.call(anim.querySelectorAll(".legtext"), function (t) {
+      t.setAttribute("font-size", (12 * textScale).toFixed(1));
+    });
   }
   var widthCache = {};
   function textBox(node, fs) {
