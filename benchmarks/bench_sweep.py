@@ -4,7 +4,8 @@ Hoeken's linkage with its ground distance (``bodies.ground.points.O4[0]``, 60-12
 coupler length (``bodies.coupler.points.O3[0]``, 90-140 mm) varied over Sobol designs, 360
 samples per design (one crank turn), metrics ``peak_tau_J1`` and ``path_deviation`` kept per
 design, the default backend choice (compiled with numba). Each run is a fresh process, so its
-peak memory (resident set of the process and of its worker processes) is that run's alone. It
+peak memory (the largest resident set of the process or of any one of its worker processes) is
+that run's alone; with K workers the machine holds about K + 1 such processes. It
 prints design-samples per second on one worker and on every core, the peak memory at two numbers
 of designs (memory is bounded by the chunk, not by the number of designs), and the ratio to the
 hand-written compiled kernel of ``bench_ceiling.py`` (the full analysis of this one four-bar)
@@ -101,7 +102,7 @@ def main():
     ceiling = None if args.no_ceiling else ceiling_rate(min(D * T, 4_000_000))
     for label, r in (("one worker", one), (f"{cores} workers", allc)):
         print(f"  {label:<11} {r['rate']:10.4g} design-samples/s  ({r['seconds']:.3g} s, "
-              f"{r['valid']} valid, peak memory {r['peak_bytes'] / 2**20:.0f} MB)")
+              f"{r['valid']} valid, peak memory of a process {r['peak_bytes'] / 2**20:.0f} MB)")
     print(f"  peak memory at {small['designs']} designs {small['peak_bytes'] / 2**20:.0f} MB, "
           f"at {D} designs {one['peak_bytes'] / 2**20:.0f} MB (one worker): target < 1 GB "
           f"{'met' if max(one['peak_bytes'], allc['peak_bytes']) < TARGET_MEMORY else 'NOT met'}")

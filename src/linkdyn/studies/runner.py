@@ -188,13 +188,19 @@ class Progress:
         self.last = -1e9
         self.done = 0
         self.new = 0
+        self.last_done = -1
 
     def update(self, designs: int, computed: bool, final: bool = False) -> None:
         self.done += designs
         self.new += designs if computed else 0
         now = time.perf_counter()
-        if not final and now - self.last < self.every:
+        if not final and now - self.last < self.every and self.done < self.total:
             return
+        if final and self.last_done == self.done:  # the line already shows the end
+            self.stream.write("\n")
+            self.stream.flush()
+            return
+        self.last_done = self.done
         self.last = now
         el = now - self.start
         rate = self.new / el if el > 0 else 0.0
