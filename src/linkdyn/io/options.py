@@ -35,10 +35,12 @@ def _topology(r: _Reader, section: Any, joints, drivers) -> tuple[str, ...] | No
     if not isinstance(cut, list):
         r.fail("topology.cut", f"expected a list of joint names, got {_type_name(cut)}",
                'Write cut = ["J4"]')
+    seen = set()
     for k, j in enumerate(cut):
         r.choice(j, f"topology.cut[{k}]", joints, "joint")
-        if j in cut[:k]:
+        if j in seen:
             r.fail(f"topology.cut[{k}]", f"joint '{j}' is listed twice", "List each cut joint once")
+        seen.add(j)
         if j in drivers:
             r.fail(f"topology.cut[{k}]", f"joint '{j}' is driven ({drivers[j][0]}) and cannot be cut",
                    "Cut another joint of the same loop, or remove cut to choose automatically")

@@ -46,7 +46,18 @@ def _too_long_integer(text: str, file: str, error: Exception) -> ModelError:
 
 def _check_nesting(data, file: str) -> None:
     """Refuse tables and arrays nested deeper than MAX_NESTING (iteratively, naming the path)."""
-    stack = [(data, "", 0)]
+    stack = [(data, 0)]
+    while stack:                                     # fast pass: depths only
+        value, depth = stack.pop()
+        if depth > MAX_NESTING:
+            break
+        if isinstance(value, dict):
+            stack.extend((v, depth + 1) for v in value.values() if isinstance(v, (dict, list)))
+        elif isinstance(value, list):
+            stack.extend((v, depth + 1) for v in value if isinstance(v, (dict, list)))
+    else:
+        return
+    stack = [(data, "", 0)]                          # again, naming the path
     while stack:
         value, path, depth = stack.pop()
         if depth > MAX_NESTING:
