@@ -240,8 +240,9 @@ def evaluate_designs(functions: tuple, t: np.ndarray, call: Callable, designs: i
     return tuple(out)
 
 
-def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
-    """Geometry of ``model`` arranged along the tree of ``topo`` (built if not given)."""
+def compile_layout(model: Model, topo: Topology | None = None, *, plan: bool = True) -> Layout:
+    """Geometry of ``model`` arranged along the tree of ``topo`` (built if not given); with
+    ``plan``, the closed-form dyad plan (which depends on the topology only)."""
     topo = topo or build(model)
     bodies = [model.body(name) for name in topo.bodies]
     pos = {name: k for k, name in enumerate(topo.bodies)}
@@ -281,7 +282,7 @@ def compile_layout(model: Model, topo: Topology | None = None) -> Layout:
                  gravity=np.asarray(model.gravity, float).reshape(2),
                  motions=tuple((d.motion,) for d in model.drivers),
                  loads=load_rows(model, topo))
-    return replace(lay, dyads=dyads.plan(lay))
+    return replace(lay, dyads=dyads.plan(lay)) if plan else lay
 
 
 def load_rows(model: Model, topo: Topology) -> tuple[LoadRow, ...]:
@@ -324,7 +325,8 @@ def compile_designs(models: list[Model]) -> Layout:
                     fix="Designs of one batch vary numbers only (geometry, masses, gravity, "
                         "loads' values, drivers' motions); analyze other mechanisms separately")
     topo = build(models[0])
-    return stack_layouts([compile_layout(m, topo) for m in models])
+    # one tree and one dyad plan for all: stack_layouts keeps design 0's plan
+    return stack_layouts([compile_layout(m, topo, plan=k == 0) for k, m in enumerate(models)])
 
 
 def _differ(value, ref) -> str:
