@@ -17,6 +17,7 @@ from .io import load_model, model_from_dict
 from .io.writer import model_to_dict, save
 from .model import Body, Driver, Joint, Load, Model
 from .studies import sweep
+from .studies.optimize import optimize
 
 __version__ = "0.1.0"
 
@@ -30,4 +31,4 @@ def example_path(name: str):
 
 __all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",
            "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
-           "example_path", "save", "model_to_dict", "sweep"]
+           "example_path", "save", "model_to_dict", "sweep", "optimize"]
