@@ -399,13 +399,21 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
     """``valid`` and every output of the sample finite. With ``stop``, the first valid sample
     with a non-finite output raises an AssemblyError naming its time and its cause: a driver's
     motion, a load (by its field), gravity, or the output that overflows."""
-    outputs = {"joint motion": (kin.q, kin.qd, kin.qdd), "driver effort": (dyn.tau,),
-               "reaction": (react.force, react.moment), "kinetic energy": (dyn.kinetic_energy,)}
+    # the outputs as stored (no stacked copies): (array, axis holding other than samples)
+    outputs = {"joint motion": [(x, None) for part in kin.joint_motion for x in part],
+               "driver effort": [(dyn.tau, -1)],
+               "reaction": [(w, 0) for w in react.on_second],
+               "kinetic energy": [(dyn.kinetic_energy, None)]}
+
+    def finite(a, axis):  # (*valid.shape) bool: the sample's numbers of ``a`` are finite
+        f = np.isfinite(a)
+        return f if axis is None else np.all(f, axis=axis)
+
     ok = valid
     for arrays in outputs.values():
-        for a in arrays:
+        for a, axis in arrays:
             if not np.isfinite(np.sum(a)):  # one pass when all is well; NaN rows land here too
-                ok = ok & np.all(np.isfinite(a).reshape(valid.shape + (-1,)), axis=-1)
+                ok = ok & finite(a, axis)
     if not stop or not np.any(valid & ~ok):
         return ok
     k = int(np.argmax(valid & ~ok))
@@ -434,8 +442,8 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
     if not all(np.all(np.isfinite(x)) for x in w.wrenches):
         raise AssemblyError("gravity times a body's mass is not finite", **where,
                             fix="Check mechanism.gravity and the bodies' masses")
-    bad = next(name for name, arrays in outputs.items() for a in arrays
-               if not np.all(np.isfinite(a[k])))
+    bad = next(name for name, arrays in outputs.items() for a, axis in arrays
+               if not finite(a, axis)[k])
     raise AssemblyError(f"the {bad} is not finite at this time: a number of the model is too "
                         "large (or too small) to compute with", **where,
                         fix="Check the model's masses, inertias, lengths, loads and driver "
