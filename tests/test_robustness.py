@@ -66,6 +66,15 @@ ODD = [True, "", "x", [], {}, [1.0], [1.0, 2.0, 3.0], {"a": 1}, "1/0", "log(-1)"
        "(-1)**t", "sqrt(-t)", "t/(t-t)", "exp(1e6*t)", "sin(t", "__import__('os')", "0*t + 1e308"]
 
 
+def scaled(value, factor):
+    """``value * factor``, or ``value`` itself where that overflows (an earlier mutation may
+    have left an integer of 400 digits)."""
+    try:
+        return value * factor
+    except OverflowError:
+        return value
+
+
 @st.composite
 def mutants(draw):
     """A bundled example's parsed TOML with one to three mutations: a value replaced (extreme,
@@ -105,11 +114,13 @@ def mutants(draw):
             new = draw(st.sampled_from(ODD))
         elif how == "name":
             new = draw(st.sampled_from(names_in(d)))
+        elif how == "mild" and (not isinstance(value, (int, float)) or isinstance(value, bool)):
+            new = draw(st.sampled_from(ODD))      # no number left to change mildly
         elif how == "mild":   # a plausible change that usually keeps the model valid
-            new = draw(st.sampled_from([value * 0.5, value * 1.5, value + 1, -value, 1e12,
+            new = draw(st.sampled_from([scaled(value, 0.5), scaled(value, 1.5), -value, 1e12,
                                         1e-30, 0.0]))
         elif how == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
-            new = value * draw(st.sampled_from([-1.0, 0.0, 1e-9, 1e6, 1e200]))
+            new = scaled(value, draw(st.sampled_from([-1.0, 0.0, 1e-9, 1e6, 1e200])))
         elif how == "delete" and isinstance(parent, dict):
             del parent[key]
             changes.append(("delete", path))
