@@ -298,3 +298,39 @@ def test_driver_speed_and_load_parameters_are_per_design():
         for name, v in single.items():
             assert df[name][k] == pytest.approx(float(v), rel=1e-9, abs=1e-12), name
     assert len(set(df.peak_tau_J1.round(9))) == 3 and df.valid.all()
+
+
+def test_a_sweep_killed_by_sigkill_resumes_from_its_chunks(tmp_path):
+    """The command line killed mid-run (SIGKILL: no clean-up at all) and run again with --resume:
+    the finished chunks are reused and the table is that of an uninterrupted run."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import pandas as pd
+    args = ["sweep", str(HOEKEN), "--vary", "bodies.ground.points.O4[0]=80:100",
+            "--vary", "bodies.coupler.points.O3[0]=110:120", "--designs", "120", "--samples", "31",
+            "--chunk", "2", "--metric", "peak_tau_J1", "--backend", "numpy", "--no-progress"]
+    cmd = [sys.executable, "-c", "from linkdyn.cli import main; main()"]
+    proc = subprocess.Popen(cmd + args + ["-o", str(tmp_path / "a")], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, env=os.environ.copy())
+    chunks = tmp_path / "a" / "chunks"
+    deadline = time.monotonic() + 120
+    while len(list(chunks.glob("chunk-*.parquet"))) < 3 and time.monotonic() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = len(list(chunks.glob("chunk-*.parquet")))
+    assert 3 <= done < 60 and not (tmp_path / "a" / "designs.parquet").exists()
+    r = _cli(*args, "-o", tmp_path / "a", "--resume")
+    assert r.exit_code == 0, r.output
+    run_stats = json.loads((tmp_path / "a" / "summary.json").read_text())["run"]
+    assert run_stats["chunks_reused"] >= done and run_stats["chunks"] == 60
+    assert run_stats["chunks_computed"] == 60 - run_stats["chunks_reused"]
+    r = _cli(*args, "-o", tmp_path / "b")
+    assert r.exit_code == 0, r.output
+    assert pd.read_parquet(tmp_path / "a" / "designs.parquet").equals(
+        pd.read_parquet(tmp_path / "b" / "designs.parquet"))
