@@ -578,6 +578,87 @@ def compare(models, outdir, samples, duration, cycles, fluctuation, allow_outsid
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 
+# ---------------------------------------------------------------------------- simulate
+
+def simulation_summary(sol, summ: dict) -> dict:
+    """``summ`` (of :func:`linkdyn.design.summary`) with the simulation's figures added."""
+    s = dict(summ)
+    s["simulation"] = {
+        "free_joints": list(sol.free),
+        **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations")},
+        "energy_balance_drift_rel": sol.energy_drift,
+        "closure_residual_max_rel": sol.stats["closure_residual"],
+        "free_effort_residual_rel": sol.stats["free_effort_residual"],
+        "energy_J": {"kinetic_start": float(sol.kinetic_energy[0]),
+                     "kinetic_end": float(sol.kinetic_energy[-1]),
+                     "potential_start": float(sol.potential_energy[0]),
+                     "potential_end": float(sol.potential_energy[-1]),
+                     "work": float(sol.work[-1])},
+    }
+    return s
+
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("-o", "--outdir", default="out", show_default=True, type=click.Path(file_okay=False),
+              help="Folder for results.csv, summary.json (and the report).")
+@click.option("--duration", type=float, help="Duration in s [default: [analysis] duration].")
+@click.option("--samples", type=int, help="Number of output samples, both ends included "
+              "[default: [analysis] samples, else 501].")
+@click.option("--rtol", type=float, default=1e-8, show_default=True,
+              help="Relative tolerance of the ODE solver.")
+@click.option("--atol", type=float, default=1e-10, show_default=True,
+              help="Absolute tolerance of the ODE solver (rad, m, per s, J).")
+@click.option("--method", type=click.Choice(["DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"]),
+              default="DOP853", show_default=True,
+              help="scipy ODE solver; Radau or BDF for stiff springs.")
+@click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
+              show_default=True)
+@click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
+def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report):
+    """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
+    dynamics); drivers, if any, still prescribe their joints. Writes the same results as
+    analyze, plus potential_energy and work, and the energy balance in the summary."""
+    from . import design, io
+    from .forward import simulate as run
+
+    mech = io.load_model(model)
+    duration = mech.duration if duration is None else duration
+    if duration is None:
+        raise ModelError("no duration to simulate", field="--duration",
+                         fix="Give --duration T (s) or [analysis] duration")
+    if not duration > 0:
+        raise ModelError(f"duration must be positive, got {duration}", field="--duration",
+                         fix="Give a positive duration in s")
+    samples = samples if samples is not None else (mech.samples or 501)
+    if samples < 2:
+        raise ModelError(f"--samples must be at least 2, got {samples}", field="--samples",
+                         fix="Give --samples 2 or more")
+    t = np.linspace(0.0, float(duration), int(samples))
+    sol = run(mech, t, rtol=rtol, atol=atol, method=method)
+    summ = simulation_summary(sol, design.summary(sol))
+    out = Path(outdir)
+    files = {
+        "results.csv" if fmt == "csv" else "results.parquet":
+            (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
+        "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
+                                                          allow_nan=False)),
+    }
+    if report:
+        from . import plots as plots_mod
+        from . import report as report_mod
+        files.update(report_mod.outputs(sol, summ))
+        files.update(plots_mod.outputs(sol))
+    _write_outputs(out, files)
+    print_summary(summ)
+    sim = summ["simulation"]
+    click.echo(f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
+               f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
+               f"{sim['rhs_evaluations']} evaluations; energy balance drift "
+               f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)")
+    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+
+
 # ---------------------------------------------------------------------------- reproduce
 
 @main.command()

@@ -14,6 +14,7 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
+from . import joints as jk
 from .model import Model
 from .planar import cross, dot, shift_twist, stack_last, twist
 
@@ -68,6 +69,22 @@ def _add_force(w, kin, i, r, f):
     w[i] = w[i] + twist(cross(r - kin.pose.r[i], f), f)
 
 
+def values(lay, load, kin: KinematicSolution) -> np.ndarray:
+    """A load's value at the samples of ``kin``, components first: ``value(t)``, or for a formula
+    in joint coordinates and rates (its ``state_variables``, e.g. ``qd_J1``)
+    ``value(t, motion)`` with ``motion = kin.joint_motion`` (SI, model joint order)."""
+    f = load.values[0]
+    if not getattr(f, "state_variables", ()):
+        return lay.load_values(load, kin.t)
+    if lay.designs:   # one function per design, each with its design's motion
+        q, qd, _ = kin.joint_motion
+        v = np.stack([load.values[min(d, len(load.values) - 1)](
+            kin.t, ([x[d] for x in q], [x[d] for x in qd])) for d in range(lay.designs)])
+    else:
+        v = f(kin.t, kin.joint_motion[:2])
+    return np.moveaxis(v, -1, 0) if load.kind == "force" else v
+
+
 def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
     """Applied wrenches of the loads and gravity over the kinematic solution ``kin``.
 
@@ -105,13 +122,29 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
         i = load.body
         if load.kind == "force":
             r, v = _point(kin, i, load.point)
-            f = np.broadcast_to(lay.load_values(load, kin.t), (2,) + shape)
+            f = np.broadcast_to(values(lay, load, kin), (2,) + shape)
             _add_force(w, kin, i, r, f)
             power += dot(f, v)
         elif load.kind == "torque":
-            tq = np.broadcast_to(lay.load_values(load, kin.t), shape)
+            tq = np.broadcast_to(values(lay, load, kin), shape)
             w[i] = w[i] + twist(tq, np.zeros((2,) + shape))
             power += tq * kin.twists[i][0]
+        elif load.kind in ("joint_torque", "joint_force"):
+            a = load.body2
+            x = np.broadcast_to(values(lay, load, kin), shape)
+            if load.kind == "joint_torque":
+                # a torque x on the joint's second body and -x on its first
+                w[i] = w[i] + twist(x, np.zeros((2,) + shape))
+                w[a] = w[a] - twist(x, np.zeros((2,) + shape))
+            else:
+                # a force x e along the axis (fixed in the first body) at the second body's
+                # point, and -x e on the first body at the same place
+                r_b, _ = _point(kin, i, load.point)
+                e = kin.pose.rotate(a, load.axis)
+                _add_force(w, kin, i, r_b, x * e)
+                _add_force(w, kin, a, r_b, -x * e)
+            # its power: the effort times the joint's rate
+            power += x * kin.joint_motion[1][load.joint]
         else:  # spring or damper between two points, force along the line joining them
             j = load.body2
             r1, v1 = _point(kin, i, load.point)

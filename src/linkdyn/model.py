@@ -92,9 +92,12 @@ class Load:
 
     ``kind`` is one of ``force`` (``value`` N, global frame, at ``body.point``), ``torque`` (``value``
     N m on ``body``), ``spring`` and ``damper`` (between ``body.point`` and ``body2.point2``;
-    ``stiffness`` N/m, ``free_length`` m, ``damping`` N s/m). A ``value`` is a callable of time
+    ``stiffness`` N/m, ``free_length`` m, ``damping`` N s/m), ``joint_torque`` / ``joint_force``
+    (``value`` N m or N inside the revolute or prismatic joint ``joint``: on its second body,
+    ``body``, and minus that on its first, ``body2``). A ``value`` is a callable of time
     returning the shape of ``t`` plus the load's components, so constant and time-varying loads
-    share one path.
+    share one path; one whose ``state_variables`` is not empty also takes the joints' motion
+    (see :func:`linkdyn.loads.evaluate`).
     """
 
     kind: str
@@ -107,6 +110,7 @@ class Load:
     free_length: float = 0.0
     damping: float = 0.0
     name: str = ""
+    joint: str = ""
 
 
 @dataclass(frozen=True)
@@ -130,6 +134,9 @@ class Model:
     cut : tuple[str, ...] or None
         Joints to cut; ``None`` chooses automatically.
     duration, cycles, samples : optional analysis defaults.
+    initial_q, initial_qd : dict[str, float]
+        ``[initial]``: coordinates (rad or m) and rates (per s) of the free degrees of freedom at
+        t = 0, by joint name (``simulate``; an empty ``initial_q`` takes them from the assembly).
     path_point : str or None
         ``BODY.POINT`` whose path straightness the summary reports.
     path_range : (float, float) or None
@@ -159,6 +166,8 @@ class Model:
     path_range: tuple[float, float] | None = None
     length_unit: str = "m"
     angle_unit: str = "rad"
+    initial_q: dict[str, float] = field(default_factory=dict)
+    initial_qd: dict[str, float] = field(default_factory=dict)
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

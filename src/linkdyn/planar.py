@@ -215,6 +215,33 @@ def first(x: np.ndarray) -> np.ndarray:
     return np.moveaxis(x, -1, 0)
 
 
+LAPACK_FROM = 6   # systems of this size and larger go to LAPACK (the loops grow as n^3)
+
+
+def _solve_lapack(K, b, n, shape):
+    """:func:`solve_small` by LAPACK for larger systems (long chains of loops): the same
+    results and the same relative pivot (of an LU factorization with partial pivoting)."""
+    from scipy.linalg import lu
+
+    A = np.empty(shape + (n, n))
+    B = np.empty(shape + (n,))
+    for i in range(n):
+        B[..., i] = b[i]
+        for j in range(n):
+            A[..., i, j] = K[i][j]
+    scale = np.max(np.abs(A), axis=(-2, -1))
+    finite = np.all(np.isfinite(A), axis=(-2, -1)) & np.all(np.isfinite(B), axis=-1)
+    A = np.where(finite[..., None, None], A, np.eye(n))
+    U = lu(A)[2]
+    rel = np.min(np.abs(np.diagonal(U, axis1=-2, axis2=-1)), axis=-1) / np.where(
+        scale > 0, scale, 1.0)
+    bad = ~(rel > 1e-13) | ~finite
+    x = np.linalg.solve(np.where(bad[..., None, None], np.eye(n), A),
+                        np.where(bad[..., None], 0.0, B)[..., None])[..., 0]
+    x = np.where(bad[..., None], np.nan, x)
+    return np.moveaxis(x, -1, 0), np.where(finite, rel, np.nan)
+
+
 def solve_small(K, b):
     """Solve many small systems ``K x = b`` by Gaussian elimination with partial pivoting.
 
@@ -237,6 +264,8 @@ def solve_small(K, b):
     n = len(b)
     shape = np.broadcast_shapes(*(np.shape(K[i][j]) for i in range(n) for j in range(n)),
                                 *(np.shape(b[i]) for i in range(n)))
+    if n >= LAPACK_FROM:
+        return _solve_lapack(K, b, n, shape)
     A = [[np.broadcast_to(K[i][j], shape) for j in range(n)] + [np.broadcast_to(b[i], shape)]
          for i in range(n)]
     scale = np.max(np.abs(np.stack([A[i][j] for i in range(n) for j in range(n)])), axis=0)

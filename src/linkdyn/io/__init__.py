@@ -23,7 +23,7 @@ from ..model import Model
 from .drivers import MOTION_KEYS, _drivers
 from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _joints
 from .loads import LOAD_KEYS, _loads
-from .options import _analysis, _assembly, _topology
+from .options import _analysis, _assembly, _initial, _topology
 from .files import MAX_FILE_BYTES, FileRefused, read_text
 from .reader import _quote, _Reader, _shorten, _type_name
 from .syntax import _parse_json, _parse_toml
@@ -33,7 +33,7 @@ __all__ = ["load_model", "read_model_data", "model_from_dict", "LENGTH_UNITS", "
            "BODY_KEYS", "JOINT_KEYS", "MOTION_KEYS", "LOAD_KEYS"]
 
 SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "assembly", "topology",
-            "analysis")
+            "analysis", "initial")
 
 
 @quiet
@@ -123,8 +123,9 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     bodies = _bodies(r, data.get("bodies"))
     joints = _joints(r, data.get("joints", []), bodies)
     drivers = _drivers(r, data.get("drivers", []), joints)
-    loads = _loads(r, data.get("loads", []), bodies)
+    loads = _loads(r, data.get("loads", []), bodies, joints)
     phi, q = _assembly(r, data.get("assembly", {}), bodies, joints)
+    initial_q, initial_qd = _initial(r, data.get("initial", {}), joints, drivers)
     cut = _topology(r, data.get("topology", {}), joints, drivers)
     duration, cycles, samples, path_point, path_range = _analysis(
         r, data.get("analysis", {}), drivers, bodies, joints)
@@ -133,4 +134,4 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
                  assembly_phi=phi, assembly_q=q, cut=cut, duration=duration, cycles=cycles,
                  samples=samples, source=source, description=description,
                  path_point=path_point, path_range=path_range, length_unit=r.length_name,
-                 angle_unit=r.angle_name)
+                 angle_unit=r.angle_name, initial_q=initial_q, initial_qd=initial_qd)

@@ -1,4 +1,5 @@
-"""``[[loads]]``: point forces and torques (numbers or formulas of t), springs and dampers."""
+"""``[[loads]]``: point forces and torques (numbers or formulas of t and of the joints' motion),
+loads inside joints, springs and dampers."""
 
 from __future__ import annotations
 
@@ -7,45 +8,86 @@ from typing import Any
 
 import numpy as np
 
-from ..model import GROUND, Body, Load
+from .. import expr as _expr
+from ..model import GROUND, REVOLUTE, Body, Joint, Load
 from .reader import _Reader, _count, _entry_field, _type_name
 
 LOAD_KEYS = {"force": ("kind", "name", "body", "point", "value"),
              "torque": ("kind", "name", "body", "value"),
              "spring": ("kind", "name", "body", "point", "body2", "point2", "stiffness",
                         "free_length"),
-             "damper": ("kind", "name", "body", "point", "body2", "point2", "damping")}
+             "damper": ("kind", "name", "body", "point", "body2", "point2", "damping"),
+             "joint_torque": ("kind", "name", "joint", "value"),
+             "joint_force": ("kind", "name", "joint", "value")}
 
 
 @dataclass(frozen=True)
 class _TimeFunction:
-    """A load value: each component a constant or an expression of t; shape ``t.shape + shape``."""
+    """A load value: each component a constant or a formula of t and of the joints' motion;
+    shape ``t.shape + shape`` (the batch shape of the motion when it is given).
+
+    ``state`` lists the joint variables the formulas use as ``(name, joint, k, unit)``: ``k``
+    0 for the coordinate ``q_<joint>``, 1 for the rate ``qd_<joint>``; ``unit`` is the SI size
+    of the file's unit (formulas read the file's angle or length unit, per second for rates).
+    """
 
     components: tuple  # floats or linkdyn.expr.Expr
     vector: bool
+    state: tuple = ()
 
-    def __call__(self, t) -> np.ndarray:
-        t = np.asarray(t, dtype=float)
-        out = np.stack([np.broadcast_to(c(t) if callable(c) else c, t.shape).astype(float)
-                        for c in self.components], axis=-1)
+    @property
+    def state_variables(self) -> tuple[str, ...]:
+        return tuple(v[0] for v in self.state)
+
+    def __call__(self, t, motion=None) -> np.ndarray:
+        values = {"t": np.asarray(t, dtype=float)}
+        for name, joint, k, unit in self.state:
+            values[name] = np.asarray(motion[joint][k]) / unit
+        shape = np.broadcast_shapes(*(v.shape for v in values.values()))
+        out = np.stack([np.broadcast_to(c.evaluate(**values) if isinstance(c, _expr.Expr) else c,
+                                        shape).astype(float) for c in self.components], axis=-1)
         return out if self.vector else out[..., 0]
 
 
-def _load_value(r: _Reader, value: Any, f: str, vector: bool) -> _TimeFunction:
+def _variables(r: _Reader, joints: dict[str, Joint]) -> dict[str, tuple]:
+    """Joint variables a load formula may use: ``q_<joint>``, ``qd_<joint>`` -> (joint, k, unit)."""
+    out = {}
+    for name, j in joints.items():
+        unit = r.angle if j.kind == REVOLUTE else r.length
+        out[f"q_{name}"], out[f"qd_{name}"] = (name, 0, unit), (name, 1, unit)
+    return {k: v for k, v in out.items() if k.isidentifier()}
+
+
+def _load_value(r: _Reader, value: Any, f: str, vector: bool, unit: str = "N m",
+                joints: dict[str, Joint] | None = None) -> _TimeFunction:
+    state = _variables(r, joints or {})
+    used: dict[str, tuple] = {}
+
     def component(c: Any, field: str, unit: str):
-        return r.expression(c, field, unit) if isinstance(c, str) else r.number(c, field, unit)
+        if not isinstance(c, str):
+            return r.number(c, field, unit)
+        try:
+            e = _expr.parse(c, variables=("t", *state))
+        except _expr.ExpressionError as err:
+            r.fail(field, str(err).rstrip("."),
+                   f"Write a formula giving {unit} of time t (s) and of joint coordinates "
+                   f"q_<joint> and rates qd_<joint> (file units); see docs/model-format.md")
+        used.update({v: state[v] for v in e.variables if v in state})
+        return e
 
     if vector:
         if not isinstance(value, list) or len(value) != 2:
             got = _count(len(value)) if isinstance(value, list) else _type_name(value)
             r.fail(f, f"expected [fx, fy] (2 numbers or formulas of t), got {got}",
                    'Write value = [-20.0, 35.0] (N, global frame) or value = ["10*sin(t)", "0"]')
-        return _TimeFunction(tuple(component(c, f"{f}[{k}]", "N") for k, c in enumerate(value)),
-                             vector=True)
-    return _TimeFunction((component(value, f, "N m"),), False)
+        comps = tuple(component(c, f"{f}[{k}]", "N") for k, c in enumerate(value))
+        return _TimeFunction(comps, True, tuple((k, *v) for k, v in sorted(used.items())))
+    comp = component(value, f, unit)
+    return _TimeFunction((comp,), False, tuple((k, *v) for k, v in sorted(used.items())))
 
 
-def _loads(r: _Reader, entries: Any, bodies: dict[str, Body]) -> list[Load]:
+def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
+           joints: dict[str, Joint] | None = None) -> list[Load]:
     loads: list[Load] = []
     L, Lu = r.length, r.length_name
     for i, entry in enumerate(r.entries(entries, "loads")):
@@ -57,6 +99,20 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body]) -> list[Load]:
         need = tuple(k for k in LOAD_KEYS[kind] if k != "name")
         r.table(entry, f, LOAD_KEYS[kind], required=need, what=f'keys for kind = "{kind}"')
         name = r.name(entry["name"], f"{f}.name") if "name" in entry else ""
+        if kind in ("joint_torque", "joint_force"):
+            # an effort inside a joint: on its second body, minus that on the first
+            joint = r.choice(entry["joint"], f"{f}.joint", joints or {}, "joint")
+            jt = joints[joint]
+            want = "joint_torque" if jt.kind == REVOLUTE else "joint_force"
+            if kind != want:
+                r.fail(f"{f}.kind", f"joint '{joint}' is {jt.kind}: its load is a {want}",
+                       f'Write kind = "{want}" (a torque in a revolute joint, a force along a '
+                       "prismatic joint's axis)")
+            value = _load_value(r, entry["value"], f"{f}.value", False,
+                                "N m" if kind == "joint_torque" else "N", joints)
+            loads.append(Load(kind, jt.body_b, jt.point_b, value, jt.body_a, jt.point_a,
+                              name=name, joint=joint))
+            continue
         body = r.choice(entry["body"], f"{f}.body", bodies, "body", "bodies")
         point = (r.point(body, bodies[body].points, entry["point"], f"{f}.point")
                  if "point" in entry else None)
@@ -64,7 +120,7 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body]) -> list[Load]:
             if body == GROUND:
                 r.fail(f"{f}.body", f"a {kind} on the ground has no effect",
                        "Apply it to a moving body")
-            value = _load_value(r, entry["value"], f"{f}.value", vector=kind == "force")
+            value = _load_value(r, entry["value"], f"{f}.value", kind == "force", "N m", joints)
             loads.append(Load(kind, body, point, value, name=name))
             continue
         body2 = r.choice(entry["body2"], f"{f}.body2", bodies, "body", "bodies")

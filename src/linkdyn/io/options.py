@@ -27,6 +27,27 @@ def _assembly(r: _Reader, section: Any, bodies, joints) -> tuple[dict, dict]:
     return phi, q
 
 
+def _initial(r: _Reader, section: Any, joints, drivers) -> tuple[dict, dict]:
+    """``[initial]``: coordinates ``q`` (rad or m) and rates ``qd`` (rad/s or m/s) of the free
+    degrees of freedom at t = 0, SI. Their number is checked against the mobility by
+    :func:`linkdyn.forward.partition`."""
+    section = r.table(section, "initial", ("q", "qd"))
+    out: list[dict] = []
+    for key, per in (("q", ""), ("qd", "/s")):
+        values: dict[str, float] = {}
+        for j, v in r.table(section.get(key, {}), f"initial.{key}", joints, noun="joint",
+                            what="joints").items():
+            if j in drivers:
+                r.fail(f"initial.{key}.{j}", f"joint '{j}' is driven ({drivers[j][0]}): its "
+                       "motion is prescribed, not free",
+                       "Name only the joints of the free degrees of freedom")
+            scale, unit = ((r.angle, r.angle_name) if joints[j].kind == REVOLUTE
+                           else (r.length, r.length_name))
+            values[j] = r.number(v, f"initial.{key}.{j}", unit + per) * scale
+        out.append(values)
+    return out[0], out[1]
+
+
 def _topology(r: _Reader, section: Any, joints, drivers) -> tuple[str, ...] | None:
     section = r.table(section, "topology", ("cut",))
     if "cut" not in section:

@@ -53,6 +53,8 @@ class LoadRow:
     free_length: Any
     damping: Any
     values: tuple
+    joint: int = -1          # joint_torque / joint_force: the joint (model order), else -1
+    axis: Any = None         # joint_force: the joint's axis in its first body's frame
 
 
 @dataclass(frozen=True)
@@ -291,7 +293,15 @@ def load_rows(model: Model, topo: Topology) -> tuple[LoadRow, ...]:
     return tuple(LoadRow(ld.kind, ld.name, pos[ld.body], ld.point,
                          pos[ld.body2] if ld.body2 is not None else -1, ld.point2,
                          float(ld.stiffness), float(ld.free_length), float(ld.damping),
-                         (ld.value,)) for ld in model.loads)
+                         (ld.value,), *_in_joint(model, ld)) for ld in model.loads)
+
+
+def _in_joint(model: Model, ld) -> tuple:
+    """``(joint index, axis)`` of a load inside a joint, else ``(-1, None)``."""
+    if not getattr(ld, "joint", ""):
+        return -1, None
+    k = [j.name for j in model.joints].index(ld.joint)
+    return k, np.asarray(model.joints[k].axis, float)
 
 
 def _shape(model: Model) -> dict[str, tuple]:

@@ -1,0 +1,432 @@
+"""``simulate(model, t)``: forward dynamics of the free degrees of freedom (docs/theory.md, F1-F9).
+
+A mechanism whose mobility exceeds its number of drivers has ``f`` free degrees of freedom. One
+joint coordinate per free freedom (``[initial]``) joins the drivers' as an *independent*
+coordinate of the spanning tree; the other tree coordinates are dependent, fixed by the
+cut-joint constraints (coordinate partitioning, F1).
+
+- Positions: the dependent coordinates close the loops by Newton's method at every evaluation
+  (from the previous step's state extrapolated), so the motion never drifts off the
+  constraint manifold; rates follow from ``J qd = 0`` and are consistent by construction (F2).
+- Dynamics: the DeNOC inverse dynamics gives the effort ``tau_f`` that an actuator in each
+  free joint would need for given accelerations. It is affine in the free accelerations,
+  ``tau_f = H qdd_f + h`` (F4); ``h`` is the effort at ``qdd_f = 0`` and column k of the
+  generalized inertia ``H`` the change for a unit ``qdd_f[k]`` (F5), all 1 + f evaluations in
+  one batch of the recursion. No actuator acts there (loads inside joints are applied loads),
+  so ``qdd_f = -H^{-1} h`` (F6).
+- Integration: ``y = [q_f, qd_f, W]`` (W the work of drivers and non-conservative loads, F8)
+  by a scipy ODE solver (explicit RK45/DOP853/RK23, implicit Radau/BDF, or LSODA) with the
+  user's tolerances; outputs at the requested times from each step's dense output, then every
+  ``analyze`` quantity recomputed at those states by the same stages as ``analyze``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+
+import numpy as np
+
+from . import kinematics, loads as loads_mod, reactions as reactions_mod
+from .analysis import SINGULAR, Solution
+from .dynamics import denoc
+from .errors import AssemblyError, ModelError
+from .kinematics.layout import Layout, compile_layout
+from .kinematics.positions import ACCEPT, _guess, assemble, driver_values
+from .kinematics.state import at_state, close
+from .model import REVOLUTE, Driver, Model
+from .planar import solve_small
+from .topology import build
+
+METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
+MAX_STEPS = 50_000
+MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
+
+
+class _Free:
+    """Motion placeholder of a free coordinate: the integrator supplies its values."""
+
+    def evaluate(self, t):
+        z = np.zeros(np.shape(t))
+        return z, z, z
+
+
+@dataclass(frozen=True)
+class Partition:
+    """The independent coordinates of a simulation.
+
+    Attributes
+    ----------
+    model : Model
+        The user's model.
+    inner : Model
+        The same with one placeholder driver per free coordinate after the real drivers, so
+        the topology keeps the free joints in the tree and lists them in ``driven``.
+    layout : Layout
+        ``inner``'s layout; ``layout.topo.driven[:n_drivers]`` are the driven bodies, the rest
+        the free ones.
+    free : tuple[str, ...]
+        Joints whose coordinates are integrated.
+    """
+
+    model: Model
+    inner: Model
+    layout: Layout
+    free: tuple[str, ...]
+
+    @property
+    def n_drivers(self) -> int:
+        return len(self.model.drivers)
+
+
+def mobility(model: Model) -> int:
+    """Grübler–Kutzbach mobility ``3 (n - 1) - 2 j``."""
+    return 3 * (len(model.bodies) - 1) - 2 * len(model.joints)
+
+
+def partition(model: Model, free: tuple[str, ...] | None = None) -> Partition:
+    """Choose the free coordinates: ``free``, else those named in ``[initial]``, else the first
+    joints (file order) that leave the dependent coordinates solvable at the assembly.
+
+    Raises
+    ------
+    ModelError
+        No free freedom, or ``[initial]`` naming an unknown or driven joint or the wrong count.
+    """
+    src = model.source
+    nf = mobility(model) - len(model.drivers)
+    if nf <= 0:
+        raise ModelError(
+            f"the mechanism has no free degree of freedom (mobility {mobility(model)}, "
+            f"{len(model.drivers)} driver(s)): its motion is prescribed", file=src,
+            field="drivers" if nf == 0 else "joints",
+            fix="Use `linkdyn analyze` for a fully driven mechanism, or remove a driver to let "
+                "that joint move under the loads")
+    driven = {d.joint for d in model.drivers}
+    names = [j.name for j in model.joints]
+    section = "initial.q" if model.initial_q else "initial.qd"
+    given = tuple(free or model.initial_q or model.initial_qd)
+    for j in given:
+        if j not in names:
+            import difflib
+            close_ = difflib.get_close_matches(j, names, n=1)
+            raise ModelError(f"unknown joint '{j}'", file=src, field=f"{section}.{j}",
+                             fix=(f"Did you mean '{close_[0]}'? " if close_ else "")
+                             + f"Valid joints: {', '.join(names)}")
+        if j in driven:
+            raise ModelError(f"joint '{j}' is driven: its motion is prescribed, not free",
+                             file=src, field=f"{section}.{j}",
+                             fix="Name the joints of the free degrees of freedom only")
+    if model.initial_q and model.initial_qd and set(model.initial_qd) - set(model.initial_q):
+        j = sorted(set(model.initial_qd) - set(model.initial_q))[0]
+        raise ModelError(f"joint '{j}' has a rate but no coordinate in [initial]", file=src,
+                         field=f"initial.qd.{j}",
+                         fix=f"Give rates of the joints in initial.q ({', '.join(model.initial_q)})")
+    if given:
+        if len(given) != nf:
+            raise ModelError(
+                f"[initial] names {len(given)} joint(s) but the mechanism has {nf} free degree(s)"
+                f" of freedom (mobility {mobility(model)} minus {len(model.drivers)} driver(s))",
+                file=src, field=section,
+                fix=f"Give exactly {nf} joint coordinate(s), one per free degree of freedom")
+        return _partition(model, given)
+    # automatic: the first combination whose dependent coordinates are solvable at the assembly
+    candidates = [j.name for j in model.joints if j.name not in driven]
+    last_error = None
+    for combo in itertools.islice(itertools.combinations(candidates, nf), 200):
+        try:
+            part = _partition(model, combo)
+            q0 = _start(part)
+        except (ModelError, AssemblyError) as err:
+            last_error = err
+            continue
+        kin = at_state(part.inner, part.layout, np.zeros(1), q0[list(part.layout.topo.driven)]
+                       [:, None], np.zeros((len(combo) + part.n_drivers, 1)),
+                       np.zeros((len(combo) + part.n_drivers, 1)), q0[:, None])
+        if kin.valid[0] and kin.pivot[0] > 1e-6:
+            return part
+    if isinstance(last_error, AssemblyError):
+        raise last_error
+    raise ModelError("no choice of free joint coordinates describes the mechanism at its "
+                     "assembly", file=src, field="initial",
+                     fix="Name the free joints in [initial] q = { J = value }")
+
+
+def _partition(model: Model, free) -> Partition:
+    # a free joint stays in the tree: a [topology] cut naming one gives way to the automatic
+    cut = None if model.cut and set(model.cut) & set(free) else model.cut
+    inner = replace(model, cut=cut, drivers=model.drivers + tuple(
+        Driver(j, _Free(), "free (integrated)") for j in free))
+    return Partition(model, inner, compile_layout(inner, build(inner)), tuple(free))
+
+
+def _start(part: Partition) -> np.ndarray:
+    """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
+    ``[initial] q`` (else the ``[assembly]`` guess)."""
+    lay, topo = part.layout, part.layout.topo
+    guess = _guess(part.inner, lay)
+    q_drv = driver_values(part.model, np.zeros(1))[0][:, 0]
+    q_free = [part.model.initial_q.get(j, guess[topo.driven[part.n_drivers + k]])
+              for k, j in enumerate(part.free)]
+    return assemble([part.inner], lay, np.concatenate((q_drv, q_free)), 0.0)[:, 0]
+
+
+@dataclass(frozen=True)
+class Simulation(Solution):
+    """A :class:`~linkdyn.analysis.Solution` computed by :func:`simulate`.
+
+    Extra attributes
+    ----------------
+    work : ndarray (T,)
+        Work done since t = 0 by the drivers and the non-conservative loads (forces, torques,
+        dampers, loads inside joints), J.
+    free : tuple[str, ...]
+        The joints whose coordinates were integrated.
+    stats : dict
+        ``method``, ``rtol``, ``atol``, ``steps``, ``rhs_evaluations``, ``free_effort_residual``
+        (largest effort the free joints would need at the output states, relative to the
+        largest effort or load, ~0 when the accelerations solve F6).
+    """
+
+    work: np.ndarray = field(default=None)
+    free: tuple = ()
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy (T,): kinetic plus potential, J."""
+        return self.kinetic_energy + self.potential_energy
+
+    @cached_property
+    def energy_drift(self) -> float:
+        """Energy balance (F9): largest ``|E - E(0) - W|`` relative to the largest energy
+        (kinetic, potential variation, or work) of the run."""
+        e = self.energy - self.energy[0] - self.work
+        scale = max(float(np.max(np.abs(self.kinetic_energy))),
+                    float(np.ptp(self.potential_energy)), float(np.max(np.abs(self.work))))
+        return float(np.max(np.abs(e)) / scale) if scale > 0 else 0.0
+
+    @cached_property
+    def columns(self) -> dict[str, np.ndarray]:
+        cols = dict(Solution.columns.func(self))
+        cols.setdefault("potential_energy", np.broadcast_to(self.potential_energy, self.t.shape))
+        cols["work"] = self.work
+        return cols
+
+
+class _System:
+    """The ODE ``y' = F(t, y)`` of F7 with ``y = [q_f, qd_f, W]`` and the branch it follows."""
+
+    def __init__(self, part: Partition, q0: np.ndarray, qd0: np.ndarray):
+        self.part, self.lay = part, part.layout
+        self.nd, self.nf = part.n_drivers, len(part.free)
+        self.free_rows = list(self.lay.topo.driven[self.nd:])
+        # the reference state (t, tree q, tree qd) the guesses are extrapolated from
+        self.ref = (0.0, q0, qd0)
+        self.last = None
+        self.nfev = 0
+
+    def guess(self, t) -> np.ndarray:
+        """Tree coordinates (n, T) near the solution at ``t`` (T,): the reference extrapolated
+        with its rates (so a motion passing a singular position keeps its direction)."""
+        t0, q, qd = self.ref
+        return q[:, None] + qd[:, None] * (np.asarray(t) - t0)
+
+    def evaluate(self, t, q_f, qd_f, guess):
+        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+
+        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0),
+        the power of drivers and non-conservative loads (T,), and the closed tree coordinates
+        and rates (n, T).
+        """
+        nd, nf = self.nd, self.nf
+        part, lay = self.part, self.lay
+        q_d, qd_d, qdd_d = driver_values(part.model, t)
+        k = nd + nf
+        q_ind = np.concatenate((q_d, q_f))[:, None]              # (k, 1, T)
+        qd_ind = np.concatenate((qd_d, qd_f))[:, None]
+        # sample 0: qdd_f = 0; sample 1 + j: qdd_f = e_j (unit acceleration)          (F5)
+        qdd_ind = np.zeros((k, 1 + nf, len(t)))
+        qdd_ind[:nd] = qdd_d[:, None]
+        for j in range(nf):
+            qdd_ind[nd + j, 1 + j] = 1.0
+        kin = at_state(part.inner, lay, t, q_ind, qd_ind, qdd_ind, guess[:, None])
+        applied = loads_mod.wrenches(part.model, kin)
+        dyn = denoc.solve(kin, applied)
+        tau = np.moveaxis(dyn.tau, -1, 0)                        # (k, 1 + nf, T)
+        # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
+        h = tau[nd:, 0]
+        H = tau[nd:, 1:] - h[:, None]                            # (row, column, T)
+        # no actuator in a free joint: H qdd_f = -h                             (F6)
+        qdd_f, _ = solve_small(H, -h) if nf else (np.zeros((0, len(t))), None)
+        # drivers' efforts at the solution (affine in qdd_f) and the power balance   (F8)
+        tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", tau[:nd, 1:] - tau[:nd, :1], qdd_f)
+        power = applied.power[0] + np.sum(tau_d * qd_d, axis=0)
+        ok = kin.valid[0] & (kin.pivot[0] > SINGULAR) & (dyn.pivot[0] > SINGULAR)
+        qdd_f = np.where(ok, qdd_f, np.nan)
+        topo = lay.topo
+        qt = np.stack([np.zeros(len(t))] + [kin.joint_motion[0][topo.tree_joint[i]][0]
+                                             for i in range(1, topo.n)])
+        qdt = np.stack([np.zeros(len(t))] + [kin.joint_motion[1][topo.tree_joint[i]][0]
+                                              for i in range(1, topo.n)])
+        return qdd_f, kin, power, qt, qdt
+
+    def __call__(self, t, y):
+        nf = self.nf
+        self.nfev += 1
+        tt = np.array([t])
+        qdd, _, power, qt, qdt = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
+                                               self.guess(tt))
+        self.last = (t, y.copy(), qt[:, 0], qdt[:, 0])
+        return np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
+
+    def accept(self, t, y):
+        """Move the reference to an accepted step's end ``(t, y)``."""
+        if self.last is not None and self.last[0] == t and np.array_equal(self.last[1], y):
+            _, _, q, qd = self.last
+        else:
+            self(t, y)
+            _, _, q, qd = self.last
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
+            self.ref = (t, q, qd)
+            return True
+        return False
+
+
+def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
+             method: str = "DOP853", free: tuple[str, ...] | None = None,
+             max_steps: int = MAX_STEPS) -> Simulation:
+    """Integrate the free degrees of freedom of ``model`` from ``[initial]`` and return every
+    ``analyze`` quantity at the times ``t``.
+
+    Parameters
+    ----------
+    model : Model
+        Drivers, where present, still prescribe their joints (their efforts are reported).
+    t : array_like (T,)
+        Output times, s, ascending, ``t[0] >= 0``; the state at t = 0 is ``[initial]``.
+    rtol, atol : float
+        Relative and absolute tolerances of the ODE solver (absolute in rad, m, rad/s, m/s, J).
+    method : {'DOP853', 'RK45', 'RK23', 'Radau', 'BDF', 'LSODA'}
+        scipy ODE solver: explicit Runge-Kutta, or implicit (Radau, BDF) for stiff springs.
+    free : tuple of str, optional
+        The free joints (default: those of ``[initial]``, else chosen automatically).
+
+    Returns
+    -------
+    Simulation
+        A :class:`~linkdyn.analysis.Solution` with ``work``, ``energy_drift`` and ``stats``.
+
+    Raises
+    ------
+    ModelError
+        No free freedom, an invalid ``[initial]``, bad times or options.
+    AssemblyError
+        The mechanism cannot be assembled at t = 0, or locks (cannot move on: singular
+        position, loops that stop closing) or the integration fails, naming the time.
+    """
+    import scipy.integrate as si
+
+    src = model.source
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or len(t) < 1 or not np.all(np.isfinite(t)) or t[0] < 0 or np.any(np.diff(t) < 0):
+        raise ModelError("output times must be a 1-D ascending array starting at t >= 0",
+                         file=src, field="t", fix="Pass t = numpy.linspace(0, duration, samples)")
+    if method not in METHODS:
+        raise ModelError(f"unknown integration method '{method}'", field="--method",
+                         fix=f"Use one of {', '.join(METHODS)}")
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if not (np.isfinite(tol) and tol > 0):
+            raise ModelError(f"{name} must be a positive number, got {tol}", field=f"--{name}",
+                             fix=f"Give e.g. --{name} 1e-8")
+    part = partition(model, free)
+    lay, topo = part.layout, part.layout.topo
+    nd, nf = part.n_drivers, len(part.free)
+    q0 = _start(part)
+    # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
+    qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
+    q_f0 = q0[list(topo.driven[nd:])]
+    system = _System(part, q0, np.zeros(topo.n))
+    _, _, _, q_t, qd_t = system.evaluate(np.zeros(1), q_f0[:, None], qd_free0[:, None],
+                                         q0[:, None])
+    if not np.all(np.isfinite(qd_t)):
+        raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
+                            fix="Start the free joints ([initial] q) away from the toggle")
+    system.ref = (0.0, q_t[:, 0], qd_t[:, 0])
+    y0 = np.concatenate((q_f0, qd_free0, [0.0]))
+
+    t_end = float(t[-1])
+    Y = np.full((2 * nf + 1, len(t)), np.nan)
+    guesses = np.full((topo.n, len(t)), np.nan)
+    at0 = t <= 0.0
+    Y[:, at0] = y0[:, None]
+    guesses[:, at0] = q0[:, None]
+    steps = 0
+    if t_end > 0:
+        solver = getattr(si, method)(system, 0.0, y0, t_end, rtol=rtol, atol=atol)
+        while solver.status == "running":
+            t_old, before = solver.t, system.ref
+            message = solver.step()
+            steps += 1
+            # a motion approaching a position it cannot pass (a dead point of the free
+            # coordinates) has accelerations growing without bound: its steps collapse
+            failed = (solver.status == "failed" or not np.all(np.isfinite(solver.y))
+                      or (solver.status == "running"
+                          and solver.step_size < MIN_STEP * max(t_end, 1.0))
+                      or not system.accept(solver.t, solver.y))
+            if failed or steps > max_steps:
+                raise AssemblyError(
+                    f"the integration needs more than {max_steps} steps" if not failed else
+                    "the mechanism locks or reaches a position it cannot pass (a singular "
+                    "position, or loops that stop closing)" + (f"; the solver says: {message}"
+                                                               if message else ""),
+                    file=src, time=float(t_old),
+                    fix="Check the loads and [initial]; a stiff spring needs --method Radau "
+                        "or BDF; or shorten --duration to the time given")
+            inside = (t > t_old) & (t <= solver.t)
+            if np.any(inside):
+                # outputs from the step's dense output; their guesses from the step's start
+                Y[:, inside] = solver.dense_output()(t[inside])
+                guesses[:, inside] = _hermite(before, system.ref, t[inside])
+    nfev = system.nfev
+    return _outputs(part, t, Y, guesses, dict(method=method, rtol=rtol, atol=atol, steps=steps,
+                                              rhs_evaluations=nfev))
+
+
+def _hermite(a, b, t):
+    """Tree coordinates (n, T) at ``t`` by the cubic Hermite through the states ``a`` and ``b``,
+    each ``(time, q (n,), qd (n,))``: the guesses of the output samples within a step."""
+    (t0, q0, v0), (t1, q1, v1) = a, b
+    h = t1 - t0
+    u = (np.asarray(t) - t0) / h
+    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
+    return (q0[:, None] * h00 + v0[:, None] * (h * h10) + q1[:, None] * h01
+            + v1[:, None] * (h * h11))
+
+
+def _outputs(part: Partition, t, Y, guesses, stats) -> Simulation:
+    """Every ``analyze`` quantity at the output states: the free accelerations (F6), then the
+    kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as ``analyze``."""
+    model, lay = part.model, part.layout
+    nd, nf = part.n_drivers, len(part.free)
+    system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
+    q_f, qd_f = Y[:nf], Y[nf:2 * nf]
+    qdd_f, _, _, _, _ = system.evaluate(t, q_f, qd_f, guesses)
+    q_d, qd_d, qdd_d = driver_values(model, t)
+    kin = at_state(part.inner, lay, t, np.concatenate((q_d, q_f)), np.concatenate((qd_d, qd_f)),
+                   np.concatenate((qdd_d, qdd_f)), guesses)
+    applied = loads_mod.wrenches(model, kin)
+    dyn = denoc.solve(kin, applied)
+    react = reactions_mod.solve(part.inner, kin, dyn)
+    # the free joints' efforts vanish at the solution of F6: what is left is rounding
+    # scale: the generalized forces of the loads alone and of the inertia alone (Q + loads')
+    _, q_loads = denoc.reduce(kin, applied.wrenches)
+    scale = max(float(np.nanmax(np.abs(q_loads), initial=0.0)),
+                float(np.nanmax(np.abs(dyn.Q.T + q_loads), initial=0.0)), 1e-300)
+    stats["free_effort_residual"] = float(np.nanmax(np.abs(dyn.tau[..., nd:])) / scale) if nf else 0.0
+    stats["closure_residual"] = float(np.nanmax(kin.residual)) if len(t) else 0.0
+    valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
+    dyn = replace(dyn, tau=dyn.tau[..., :nd])
+    return Simulation(model, kin, applied, dyn, react, valid, work=Y[2 * nf],
+                      free=part.free, stats=stats)
