@@ -208,11 +208,18 @@ class Simulation(Solution):
         return float(np.max(np.abs(e)) / scale) if scale > 0 else 0.0
 
     @cached_property
-    def columns(self) -> dict[str, np.ndarray]:
-        cols = dict(Solution.columns.func(self))
-        cols.setdefault("potential_energy", np.broadcast_to(self.potential_energy, self.t.shape))
-        cols["work"] = self.work
-        return cols
+    def _table(self) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """``analyze``'s columns, with ``potential_energy`` always (after ``kinetic_energy``)
+        and ``work`` (J) last."""
+        cols, units = Solution._table.func(self)
+        out_c, out_u = {}, {}
+        for k, v in cols.items():
+            out_c[k], out_u[k] = v, units[k]
+            if k == "kinetic_energy" and "potential_energy" not in cols:
+                out_c["potential_energy"] = np.broadcast_to(self.potential_energy, self.t.shape)
+                out_u["potential_energy"] = "J"
+        out_c["work"], out_u["work"] = self.work, "J"
+        return out_c, out_u
 
 
 class _System:

@@ -14,7 +14,6 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
-from . import joints as jk
 from .model import Model
 from .planar import cross, dot, shift_twist, stack_last, twist
 

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from .. import expr as _expr
-from ..model import GROUND, REVOLUTE, Body, Joint, Load
+from .. import joints as jk
+from ..model import GROUND, Body, Joint, Load
 from .reader import _Reader, _count, _entry_field, _type_name
 
 LOAD_KEYS = {"force": ("kind", "name", "body", "point", "value"),
@@ -53,7 +54,7 @@ def _variables(r: _Reader, joints: dict[str, Joint]) -> dict[str, tuple]:
     """Joint variables a load formula may use: ``q_<joint>``, ``qd_<joint>`` -> (joint, k, unit)."""
     out = {}
     for name, j in joints.items():
-        unit = r.angle if j.kind == REVOLUTE else r.length
+        unit = r.angle if jk.get(j.kind).angular else r.length
         out[f"q_{name}"], out[f"qd_{name}"] = (name, 0, unit), (name, 1, unit)
     return {k: v for k, v in out.items() if k.isidentifier()}
 
@@ -103,7 +104,7 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             # an effort inside a joint: on its second body, minus that on the first
             joint = r.choice(entry["joint"], f"{f}.joint", joints or {}, "joint")
             jt = joints[joint]
-            want = "joint_torque" if jt.kind == REVOLUTE else "joint_force"
+            want = "joint_torque" if jk.get(jt.kind).angular else "joint_force"
             if kind != want:
                 r.fail(f"{f}.kind", f"joint '{joint}' is {jt.kind}: its load is a {want}",
                        f'Write kind = "{want}" (a torque in a revolute joint, a force along a '

@@ -41,7 +41,7 @@ def _initial(r: _Reader, section: Any, joints, drivers) -> tuple[dict, dict]:
                 r.fail(f"initial.{key}.{j}", f"joint '{j}' is driven ({drivers[j][0]}): its "
                        "motion is prescribed, not free",
                        "Name only the joints of the free degrees of freedom")
-            scale, unit = ((r.angle, r.angle_name) if joints[j].kind == REVOLUTE
+            scale, unit = ((r.angle, r.angle_name) if jk.get(joints[j].kind).angular
                            else (r.length, r.length_name))
             values[j] = r.number(v, f"initial.{key}.{j}", unit + per) * scale
         out.append(values)
