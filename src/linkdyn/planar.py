@@ -215,7 +215,7 @@ def first(x: np.ndarray) -> np.ndarray:
     return np.moveaxis(x, -1, 0)
 
 
-LAPACK_FROM = 6   # systems of this size and larger go to LAPACK (the loops grow as n^3)
+LAPACK_FROM = 8   # systems of this size and larger go to LAPACK (the loops grow as n^3)
 
 
 def _solve_lapack(K, b, n, shape):
