@@ -27,9 +27,10 @@ class _TimeFunction:
     """A load value: each component a constant or a formula of t and of the joints' motion;
     shape ``t.shape + shape`` (the batch shape of the motion when it is given).
 
-    ``state`` lists the joint variables the formulas use as ``(name, joint, k, unit)``: ``k``
-    0 for the coordinate ``q_<joint>``, 1 for the rate ``qd_<joint>``; ``unit`` is the SI size
-    of the file's unit (formulas read the file's angle or length unit, per second for rates).
+    ``state`` lists the joint variables the formulas use as ``(name, joint, k, unit)``: ``joint``
+    the joint's index in the model, ``k`` 0 for the coordinate ``q_<joint>``, 1 for the rate
+    ``qd_<joint>``; ``unit`` the SI size of the file's unit (formulas read the file's angle or
+    length unit, per second for rates). ``motion`` is ``(q, qd)``, per-joint lists of SI arrays.
     """
 
     components: tuple  # floats or linkdyn.expr.Expr
@@ -43,7 +44,7 @@ class _TimeFunction:
     def __call__(self, t, motion=None) -> np.ndarray:
         values = {"t": np.asarray(t, dtype=float)}
         for name, joint, k, unit in self.state:
-            values[name] = np.asarray(motion[joint][k]) / unit
+            values[name] = np.asarray(motion[k][joint]) / unit
         shape = np.broadcast_shapes(*(v.shape for v in values.values()))
         out = np.stack([np.broadcast_to(c.evaluate(**values) if isinstance(c, _expr.Expr) else c,
                                         shape).astype(float) for c in self.components], axis=-1)
@@ -53,9 +54,9 @@ class _TimeFunction:
 def _variables(r: _Reader, joints: dict[str, Joint]) -> dict[str, tuple]:
     """Joint variables a load formula may use: ``q_<joint>``, ``qd_<joint>`` -> (joint, k, unit)."""
     out = {}
-    for name, j in joints.items():
+    for index, (name, j) in enumerate(joints.items()):
         unit = r.angle if jk.get(j.kind).angular else r.length
-        out[f"q_{name}"], out[f"qd_{name}"] = (name, 0, unit), (name, 1, unit)
+        out[f"q_{name}"], out[f"qd_{name}"] = (index, 0, unit), (index, 1, unit)
     return {k: v for k, v in out.items() if k.isidentifier()}
 
 
