@@ -182,3 +182,134 @@ def test_cli_simulate_errors(tmp_path):
                                   str(out), "--duration", "0.1"])
     assert r.exit_code == 2 and "linkdyn analyze" in r.output
     assert not out.exists() or not any(out.iterdir())
+
+
+# ---------------------------------------------------------------------------- loads of the state
+
+def test_state_loads_and_joint_torques_in_analyze():
+    """A torsion spring written as a joint_torque in q_J2 (deg) equals the same torque written
+    as two torque loads of time; the joint's reaction excludes it, its power is counted."""
+    d = tomllib.loads(linkdyn.example_path("hoeken").read_text())
+    d["loads"] = [{"kind": "joint_torque", "joint": "J2", "value": "-0.02*(q_J2 - 30) + 0.001*qd_J2"}]
+    m = linkdyn.model_from_dict(d)
+    t = np.linspace(0.0, 1.0, 9)
+    sol = linkdyn.analyze(m, t)
+    q2, qd2 = np.degrees(sol.columns["q_J2"]), np.degrees(sol.columns["qd_J2"])
+    torque = -0.02 * (q2 - 30) + 0.001 * qd2
+    # the same torque on the coupler and its reaction on the crank, as loads of time
+    d2 = dict(d, loads=[{"kind": "torque", "body": "coupler", "value": 0.0},
+                        {"kind": "torque", "body": "crank", "value": 0.0}])
+    m2 = linkdyn.model_from_dict(d2)
+    spline = lambda k: (lambda tt: np.interp(tt, t, k * torque))  # noqa: E731
+    m2 = replace(m2, loads=(replace(m2.loads[0], value=spline(1.0)),
+                            replace(m2.loads[1], value=spline(-1.0))))
+    ref = linkdyn.analyze(m2, t)
+    assert np.allclose(sol.effort("J1"), ref.effort("J1"), rtol=1e-12, atol=1e-12)
+    assert np.allclose(sol.reactions.force, ref.reactions.force, rtol=1e-12, atol=1e-12)
+    assert np.allclose(sol.loads.power, ref.loads.power, rtol=1e-12, atol=1e-12)
+    # a joint_force needs a prismatic joint, and a formula names only known variables
+    d["loads"] = [{"kind": "joint_force", "joint": "J2", "value": 1.0}]
+    with pytest.raises(ModelError, match=r"loads\[0\]\.kind: joint 'J2' is revolute"):
+        linkdyn.model_from_dict(d)
+    d["loads"] = [{"kind": "joint_torque", "joint": "J2", "value": "q_J7"}]
+    with pytest.raises(ModelError, match=r"loads\[0\]\.value"):
+        linkdyn.model_from_dict(d)
+
+
+def test_round_trip_efforts_of_analyze_reproduce_the_motion():
+    """analyze's driver torque for a prescribed motion, applied as a joint_torque in simulate
+    (no driver), reproduces that motion."""
+    from scipy.interpolate import CubicSpline
+    from linkdyn.motion import ExpressionMotion
+    d = fourbar_dict()
+    d.pop("initial")
+    driven = linkdyn.model_from_dict(d)
+    motion = ExpressionMotion("0.3 + 6.0*t + 0.4*sin(5*t)")
+    driven = replace(driven, drivers=(linkdyn.Driver("J1", motion),))
+    tf = np.linspace(0.0, 0.4, 801)
+    tau = linkdyn.analyze(driven, tf).effort("J1")
+    spline = CubicSpline(tf, tau)
+    free = replace(driven, drivers=(), initial_q={"J1": 0.3}, initial_qd={"J1": 8.0},
+                   loads=(Load("joint_torque", "crank", "O1", lambda tt: spline(tt), "ground",
+                               "O1", joint="J1"),))
+    t = np.linspace(0.0, 0.4, 9)
+    sol = simulate(free, t, rtol=1e-10, atol=1e-12)
+    q, qd, _ = motion.evaluate(t)
+    assert np.max(np.abs(sol.columns["q_J1"] - q)) < 1e-7
+    assert np.max(np.abs(sol.columns["qd_J1"] - qd)) < 1e-6
+    # the work of the joint torque is the driver's work of analyze
+    ref = linkdyn.analyze(driven, t)
+    assert np.allclose(sol.kinetic_energy, ref.kinetic_energy, rtol=1e-6)
+
+
+# ---------------------------------------------------------------------------- through singular positions
+
+def ladder(n, phi0=math.pi / 4):
+    """n parallelogram windows in a row: n + 1 unit bars pinned to the ground 1 m apart, their
+    tips joined by n unit bars; 1 kg uniform bars, gravity -y."""
+    bodies = [Body("ground", {f"G{k}": P(k, 0) for k in range(n + 1)})]
+    joints = []
+    for k in range(n + 1):
+        bodies.append(Body(f"V{k}", {"O": P(0, 0), "T": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
+        joints.append(Joint(f"G{k}", "revolute", "ground", f"G{k}", f"V{k}", "O"))
+    for k in range(1, n + 1):
+        bodies.append(Body(f"H{k}", {"A": P(0, 0), "B": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
+        joints.append(Joint(f"A{k}", "revolute", f"V{k - 1}", "T", f"H{k}", "A"))
+        joints.append(Joint(f"B{k}", "revolute", f"H{k}", "B", f"V{k}", "T"))
+    phi = {f"V{k}": phi0 for k in range(n + 1)} | {f"H{k}": 0.0 for k in range(1, n + 1)}
+    return Model(f"ladder{n}", tuple(bodies), tuple(joints), gravity=P(0, -G),
+                 assembly_phi=phi, initial_q={"G0": phi0})
+
+
+def test_parallelogram_chain_falls_flat_and_through():
+    n = 10
+    t = np.linspace(0.0, 1.2, 13)
+    sol = simulate(ladder(n), t, rtol=1e-8, atol=1e-10)
+    # one coordinate: every vertical bar turns by phi, the horizontal ones translate:
+    # A phi'' = -g B cos(phi), A = (n + 1) m L^2 / 3 + n m L^2, B = (n + 1) m L / 2 + n m L
+    a, b = (n + 1) / 3 + n, (n + 1) / 2 + n
+    ref = reference(lambda t, y: [y[1], -G * b * math.cos(y[0]) / a], [math.pi / 4, 0.0], t)
+    phi = sol.columns["q_G0"]
+    assert phi.min() < -math.pi          # through flat (0) and flat again (-pi)
+    assert np.max(np.abs(phi - ref[0])) < 1e-6
+    # every window stays a parallelogram (the branch its velocity leads to)
+    for k in range(n + 1):
+        assert np.max(np.abs(sol.columns[f"q_G{k}"] - phi)) < 1e-9
+    assert sol.stats["closure_residual"] <= 1e-12
+    assert np.all(sol.valid)
+
+
+# ---------------------------------------------------------------------------- MuJoCo
+
+def test_released_four_bar_matches_mujoco():
+    """Hoeken's four-bar released from rest under gravity, against MuJoCo simulating the same
+    open tree closed by a stiff ``connect`` (RK4, small steps) over a short horizon."""
+    mujoco = pytest.importorskip("mujoco")
+    import xml.etree.ElementTree as ET
+    from test_mujoco import _relative, hoeken, mjcf
+
+    model = replace(hoeken((0.0, -G)), drivers=(), initial_q={"J1": 0.5})
+    t = np.linspace(0.0, 0.25, 6)
+    sol = simulate(model, t, rtol=1e-10, atol=1e-12)
+    xml, tree = mjcf(model)
+    root = ET.fromstring(xml)
+    root.find("option").set("timestep", "2e-5")
+    root.find("option").set("integrator", "RK4")
+    for c in root.iter("connect"):
+        c.set("solref", "4e-5 1")
+        c.set("solimp", "0.9999 0.9999 0.001")
+    m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    d = mujoco.MjData(m)
+    for child, (parent, jt) in tree.items():
+        d.qpos[m.joint(jt.name).qposadr[0]] = _relative(sol, child, parent, jt, "q")[0]
+    crank = []
+    steps = int(round(t[-1] / 2e-5 / (len(t) - 1)))
+    for k in range(len(t)):
+        crank.append(d.qpos[m.joint("J1").qposadr[0]])
+        for _ in range(steps):
+            mujoco.mj_step(m, d)
+    swing = np.ptp(sol.columns["q_J1"])
+    assert swing > 0.1
+    # MuJoCo's constraint made stiff and its steps small: both agree to the tolerances
+    err = np.max(np.abs(np.array(crank) - sol.columns["q_J1"]))
+    assert err < 1e-8 * swing            # measured 4.5e-11 * swing
