@@ -125,7 +125,9 @@ def test_example_list_names_every_bundled_model():
     names = [line.split()[0] for line in res.stdout.splitlines() if line.strip()]
     files = sorted(p.name[:-5] for p in (Path(linkdyn.__file__).parent / "examples").iterdir()
                    if p.name.endswith(".toml"))
-    assert names == files == EXAMPLES
+    # then the models for `linkdyn simulate` (examples/simulate)
+    from linkdyn.cli import simulation_example_names
+    assert names == files + simulation_example_names() and files == EXAMPLES
     assert len(files) >= 7 and "hoeken" in names
     # each line carries the model's [mechanism] name
     assert "Hoeken straight-line linkage" in res.stdout

@@ -25,8 +25,14 @@ load = load_model
 
 
 def example_path(name: str):
-    """Path of a bundled example model, e.g. ``example_path("hoeken")``."""
-    return resources.files("linkdyn").joinpath("examples", f"{name}.toml")
+    """Path of a bundled example model, e.g. ``example_path("hoeken")``; the models for
+    ``simulate`` live in ``examples/simulate`` (e.g. ``example_path("hoeken_motor")``)."""
+    path = resources.files("linkdyn").joinpath("examples", f"{name}.toml")
+    if not path.is_file():
+        other = resources.files("linkdyn").joinpath("examples", "simulate", f"{name}.toml")
+        if other.is_file():
+            return other
+    return path
 
 
 __all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",

@@ -61,11 +61,22 @@ def example_names() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
 
 
+def simulation_example_names() -> list[str]:
+    """Names of the bundled models for ``linkdyn simulate`` (free degrees of freedom, no
+    driver for each: ``examples/simulate/``)."""
+    files = resources.files("linkdyn").joinpath(EXAMPLES, "simulate").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
 def example_text(name: str) -> str:
-    """TOML text of a bundled example."""
+    """TOML text of a bundled example (``analyze`` or ``simulate`` models)."""
     names = example_names()
+    if name not in names and name in simulation_example_names():
+        return resources.files("linkdyn").joinpath(EXAMPLES, "simulate",
+                                                   name + ".toml").read_text("utf-8")
     if name not in names:
         import difflib
+        names = names + simulation_example_names()
         close = difflib.get_close_matches(name, names, n=1)
         raise ModelError(f"no bundled example named '{name}'", field="NAME",
                          fix=(f"Did you mean '{close[0]}'? " if close else "")
@@ -83,6 +94,9 @@ def example(name, list_):
         for n in example_names():
             desc = tomllib.loads(example_text(n)).get("mechanism", {}).get("name", "")
             click.echo(f"{n:24s} {desc}")
+        for n in simulation_example_names():
+            desc = tomllib.loads(example_text(n)).get("mechanism", {}).get("name", "")
+            click.echo(f"{n:24s} {desc} (linkdyn simulate)")
         return
     click.echo(example_text(name), nl=False)
 
@@ -615,14 +629,16 @@ def simulation_summary(sol, summ: dict) -> dict:
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
 @click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
-def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report):
+@_ALLOW_OUTSIDE
+def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report, allow_outside):
     """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
     from . import design, io
     from .forward import simulate as run
 
-    mech = io.load_model(model)
+    check_outdir(outdir)
+    mech = io.load_model(model, allow_outside=allow_outside)
     duration = mech.duration if duration is None else duration
     if duration is None:
         raise ModelError("no duration to simulate", field="--duration",
@@ -635,9 +651,15 @@ def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report):
         raise ModelError(f"--samples must be at least 2, got {samples}", field="--samples",
                          fix="Give --samples 2 or more")
     t = np.linspace(0.0, float(duration), int(samples))
+    # everything is computed (solution, summary, its text) before any file is written
     sol = run(mech, t, rtol=rtol, atol=atol, method=method)
     summ = simulation_summary(sol, design.summary(sol))
-    out = Path(outdir)
+    sim = summ["simulation"]
+    text = summary_text(summ) + "\n" + (
+        f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
+        f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
+        f"{sim['rhs_evaluations']} evaluations; energy balance drift "
+        f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)")
     files = {
         "results.csv" if fmt == "csv" else "results.parquet":
             (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
@@ -649,14 +671,9 @@ def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report):
         from . import report as report_mod
         files.update(report_mod.outputs(sol, summ))
         files.update(plots_mod.outputs(sol))
-    _write_outputs(out, files)
-    print_summary(summ)
-    sim = summ["simulation"]
-    click.echo(f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
-               f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
-               f"{sim['rhs_evaluations']} evaluations; energy balance drift "
-               f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)")
-    click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+    written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS)
+    click.echo(text)
+    click.echo(f"wrote {', '.join(map(str, written))}")
 
 
 # ---------------------------------------------------------------------------- reproduce
