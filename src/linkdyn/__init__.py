@@ -12,6 +12,7 @@ from __future__ import annotations
 from importlib import resources
 
 from .analysis import Solution, analyze
+from .forward import Simulation, simulate
 from .errors import AssemblyError, LinkdynError, ModelError
 from .io import load_model, model_from_dict
 from .io.writer import model_to_dict, save
@@ -35,6 +36,7 @@ def example_path(name: str):
     return path
 
 
-__all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "Model", "Body",
+__all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "simulate",
+           "Simulation", "Model", "Body",
            "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
            "example_path", "save", "model_to_dict", "sweep", "optimize"]

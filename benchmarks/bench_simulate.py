@@ -1,0 +1,166 @@
+"""Work-precision of ``linkdyn.simulate`` beside MuJoCo on the same models, in the same run.
+
+Two models:
+  1. Hoeken's four-bar with its flywheel run up from rest by a motor's torque-speed line
+     (the bundled ``hoeken_motor``; the motor torque is a joint_torque in qd_J1);
+  2. a chain of N parallelogram windows (unit bars, 1 kg) falling under gravity from 45
+     degrees, flat (a singular position) and through.
+For each: a tight-tolerance linkdyn run is the reference; then linkdyn at several tolerances and
+MuJoCo (the same open tree closed by stiff ``connect`` constraints, RK4, driven from Python: the
+motor torque set every step) at several time steps, each with its wall time, steps, right-hand
+side evaluations (linkdyn), energy drift (linkdyn's energy balance) and trajectory error: the
+largest deviation of the free joint's angle from the reference at the output samples, relative
+to its range. Last, the time of one right-hand-side evaluation of Hoeken.
+
+Usage: python benchmarks/bench_simulate.py [--duration T] [--windows N] [--chain-duration T]
+       [--tols 1e-4,1e-6,1e-8] [--steps 1e-3,1e-4] [--samples S]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import math  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import xml.etree.ElementTree as ET  # noqa: E402
+from dataclasses import replace  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import linkdyn  # noqa: E402
+from linkdyn.forward import _start, _System, partition, simulate  # noqa: E402
+from linkdyn.model import Body, Joint, Model  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+TARGET_RHS = 50e-6   # s per right-hand side of Hoeken (issue 13)
+
+
+def chain(n: int, phi0: float = math.pi / 4) -> Model:
+    """n parallelogram windows: n + 1 unit bars pinned to the ground 1 m apart, tips joined by
+    n unit bars, cut at the B joints (as MuJoCo's tree is)."""
+    P = lambda *xy: np.array(xy, float)  # noqa: E731
+    bodies = [Body("ground", {f"G{k}": P(k, 0) for k in range(n + 1)})]
+    joints = []
+    for k in range(n + 1):
+        bodies.append(Body(f"V{k}", {"O": P(0, 0), "T": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
+        joints.append(Joint(f"G{k}", "revolute", "ground", f"G{k}", f"V{k}", "O"))
+    for k in range(1, n + 1):
+        bodies.append(Body(f"H{k}", {"A": P(0, 0), "B": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
+        joints.append(Joint(f"A{k}", "revolute", f"V{k - 1}", "T", f"H{k}", "A"))
+        joints.append(Joint(f"B{k}", "revolute", f"H{k}", "B", f"V{k}", "T"))
+    phi = {f"V{k}": phi0 for k in range(n + 1)} | {f"H{k}": 0.0 for k in range(1, n + 1)}
+    return Model(f"chain{n}", tuple(bodies), tuple(joints), gravity=P(0, -9.81),
+                 assembly_phi=phi, initial_q={"G0": phi0},
+                 cut=tuple(f"B{k}" for k in range(1, n + 1)))
+
+
+def mujoco_run(model, ref, t, dt, free, motor=None):
+    """MuJoCo from linkdyn's initial state: the free joint's angle at the times t, wall time."""
+    import mujoco
+    from test_mujoco import _relative, mjcf
+
+    xml, tree = mjcf(model)
+    root = ET.fromstring(xml)
+    root.find("option").set("timestep", repr(dt))
+    root.find("option").set("integrator", "RK4")
+    for c in root.iter("connect"):
+        c.set("solref", f"{2 * dt!r} 1")
+        c.set("solimp", "0.9999 0.9999 0.001")
+    m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    d = mujoco.MjData(m)
+    for child, (parent, jt) in tree.items():
+        d.qpos[m.joint(jt.name).qposadr[0]] = _relative(ref, child, parent, jt, "q")[0]
+        d.qvel[m.joint(jt.name).dofadr[0]] = _relative(ref, child, parent, jt, "qd")[0]
+    adr, dof = m.joint(free).qposadr[0], m.joint(free).dofadr[0]
+    per = int(round((t[1] - t[0]) / dt))
+    out = np.empty(len(t))
+    start = time.perf_counter()
+    for k in range(len(t)):
+        out[k] = d.qpos[adr]
+        for _ in range(per if k < len(t) - 1 else 0):
+            if motor is not None:
+                d.qfrc_applied[dof] = motor(d.qvel[dof])
+            mujoco.mj_step(m, d)
+    return out, time.perf_counter() - start
+
+
+def table(name, model, t, free, tols, steps, ref_tol, motor=None):
+    print(f"\n{name}: {t[-1]:g} s, {len(t)} output samples; reference linkdyn DOP853 rtol "
+          f"{ref_tol:g}")
+    start = time.perf_counter()
+    ref = simulate(model, t, rtol=ref_tol, atol=ref_tol * 1e-2)
+    print(f"  reference: {time.perf_counter() - start:.2f} s, {ref.stats['steps']} steps, "
+          f"energy drift {ref.energy_drift:.1e}")
+    q_ref = ref.columns[f"q_{free}"]
+    scale = float(np.ptp(q_ref)) or 1.0
+    print(f"  {'solver':30s} {'wall s':>8s} {'steps':>7s} {'RHS':>7s} {'energy':>9s} "
+          f"{'error':>9s}")
+    for tol in tols:
+        start = time.perf_counter()
+        s = simulate(model, t, rtol=tol, atol=tol * 1e-2)
+        wall = time.perf_counter() - start
+        err = float(np.max(np.abs(s.columns[f"q_{free}"] - q_ref))) / scale
+        print(f"  {'linkdyn DOP853 rtol ' + format(tol, 'g'):30s} {wall:8.2f} "
+              f"{s.stats['steps']:7d} {s.stats['rhs_evaluations']:7d} "
+              f"{s.energy_drift:9.1e} {err:9.1e}")
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        print("  (MuJoCo not installed)")
+        return
+    for dt in steps:
+        q, wall = mujoco_run(model, ref, t, dt, free, motor)
+        err = float(np.max(np.abs(q - q_ref))) / scale
+        print(f"  {'MuJoCo RK4 dt ' + format(dt, 'g'):30s} {wall:8.2f} "
+              f"{int(round(t[-1] / dt)):7d} {'':>7s} {'':>9s} {err:9.1e}")
+
+
+def rhs_time(model, repeat=200):
+    part = partition(model)
+    q0 = _start(part)
+    system = _System(part, q0, np.zeros(len(q0)))
+    y = np.array([0.1, 3.0, 0.0])
+    system(0.0, y)
+    best = math.inf
+    for _ in range(3):
+        start = time.perf_counter()
+        for _ in range(repeat):
+            system(0.0, y)
+        best = min(best, (time.perf_counter() - start) / repeat)
+    return best
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=2.0, help="Hoeken run-up, s")
+    ap.add_argument("--windows", type=int, default=20)
+    ap.add_argument("--chain-duration", type=float, default=0.6)
+    ap.add_argument("--tols", default="1e-4,1e-6,1e-8")
+    ap.add_argument("--steps", default="1e-3,1e-4", help="MuJoCo time steps, s")
+    ap.add_argument("--samples", type=int, default=21)
+    ap.add_argument("--repeat", type=int, default=200)
+    a = ap.parse_args()
+    tols = [float(x) for x in a.tols.split(",")]
+    steps = [float(x) for x in a.steps.split(",")]
+
+    hoeken = linkdyn.load(linkdyn.example_path("hoeken_motor"))
+    hoeken = replace(hoeken, cut=("J4",))
+    w0 = 270 * math.pi / 180
+    table("Hoeken + flywheel run up by a motor line", hoeken,
+          np.linspace(0.0, a.duration, a.samples), "J1", tols, steps, 1e-11,
+          motor=lambda w: 3.2 * (1 - w / w0))
+    table(f"{a.windows}-window parallelogram chain under gravity", chain(a.windows),
+          np.linspace(0.0, a.chain_duration, a.samples), "G0", tols, steps, 1e-10)
+    rhs = rhs_time(hoeken, a.repeat)
+    print(f"\none right-hand side of Hoeken (numpy): {rhs * 1e6:.0f} us "
+          f"(target {TARGET_RHS * 1e6:.0f} us: {'met' if rhs < TARGET_RHS else 'NOT met'})")
+
+
+if __name__ == "__main__":
+    main()
