@@ -50,5 +50,5 @@ def test_bench_sweep():
 def test_bench_simulate():
     out = run("bench_simulate.py", "--duration", "0.1", "--windows", "2", "--chain-duration",
               "0.05", "--tols", "1e-4", "--steps", "1e-3", "--samples", "3", "--repeat", "2")
-    assert out.count("linkdyn DOP853 rtol") == 2 and out.count("MuJoCo RK4") == 2
+    assert out.count("  linkdyn DOP853 rtol 0.0001") == 2 and out.count("MuJoCo RK4 dt") == 2
     assert "one right-hand side of Hoeken" in out
