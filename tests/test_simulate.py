@@ -361,3 +361,19 @@ def test_stiff_toggle_implicit_methods_agree():
     bdf = simulate(m, t, rtol=1e-7, atol=1e-9, method="BDF")
     assert np.allclose(radau.columns["q_J1"], bdf.columns["q_J1"], atol=1e-5)
     assert radau.energy_drift < 1e-5 and np.all(radau.work[1:] < 0)  # the damper takes energy
+
+
+def test_simulation_models_round_trip_through_save(tmp_path):
+    from linkdyn.cli import simulation_example_names
+    for name in simulation_example_names():
+        m = linkdyn.load(linkdyn.example_path(name))
+        back = linkdyn.load(linkdyn.save(m, tmp_path / f"{name}.toml"))
+        for a, b in ((m.initial_q, back.initial_q), (m.initial_qd, back.initial_qd)):
+            assert a.keys() == b.keys()
+            assert all(math.isclose(a[k], b[k], rel_tol=1e-12, abs_tol=1e-15) for k in a)
+        assert [(x.kind, x.joint, x.body) for x in m.loads] == \
+            [(x.kind, x.joint, x.body) for x in back.loads]
+        for x, y in zip(m.loads, back.loads):
+            if x.value is not None:
+                assert [str(c) for c in x.value.components] == \
+                    [str(c) for c in y.value.components]

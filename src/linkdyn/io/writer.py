@@ -115,6 +115,10 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         entry = {"kind": ld.kind}
         if ld.name:
             entry["name"] = ld.name
+        if ld.kind in ("joint_torque", "joint_force"):   # inside a joint: named by the joint
+            entry.update(joint=ld.joint, value=_load_value(ld.value, False))
+            loads.append(entry)
+            continue
         entry["body"] = ld.body
         if ld.point is not None:
             entry["point"] = ld.point
@@ -137,6 +141,13 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         assembly["q"] = {j: _num(v / scale_of(j)) for j, v in model.assembly_q.items()}
     if assembly:
         out["assembly"] = assembly
+    initial = {}
+    if model.initial_q:
+        initial["q"] = {j: _num(v / scale_of(j)) for j, v in model.initial_q.items()}
+    if model.initial_qd:
+        initial["qd"] = {j: _num(v / scale_of(j)) for j, v in model.initial_qd.items()}
+    if initial:
+        out["initial"] = initial
     if model.cut is not None:
         out["topology"] = {"cut": list(model.cut)}
     analysis: dict = {}
