@@ -708,3 +708,71 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
         p.locator("#plots .panel").first.locator(".pexport button", has_text="PNG").click()
     assert open(dl.value.path(), "rb").read(8) == b"\x89PNG\r\n\x1a\n"
     assert page.errors == []
+
+
+# ------------------------------------------------ link-frame forces and instant centres
+
+def test_reaction_local_is_the_global_reaction_turned_into_the_second_body():
+    from linkdyn.planar import rotate
+    for example in ("hoeken", "inverted_slider_crank"):
+        sol = _solution(example, np.linspace(0.0, 0.5, 13))
+        for j in sol.model.joints:
+            f = sol.reaction(j.name)[:, :2]
+            phi = 0.0 * sol.t if j.body_b == "ground" else sol.phi(j.body_b)
+            want = rotate(-phi, f.T).T  # R(-phi_b) f, through planar.rotate
+            scale = np.max(np.abs(f))
+            np.testing.assert_allclose(sol.reaction_local(j.name), want, rtol=0,
+                                       atol=1e-12 * scale, err_msg=j.name)
+
+
+def test_reaction_local_of_a_spun_bar_is_its_centripetal_pull():
+    # a uniform 0.4 m bar of 2 kg turned at a constant 120 rpm about one end, no gravity: the
+    # pivot pulls the centre of mass (0.2 m out) inward, -m w^2 d along the bar, 0 across it
+    data = {"mechanism": {"name": "spun bar", "gravity": [0.0, 0.0]},
+            "bodies": [{"name": "ground", "points": {"O": [0.0, 0.0]}},
+                       {"name": "bar", "points": {"O": [0.0, 0.0], "A": [0.4, 0.0]},
+                        "mass": 2.0, "com": [0.2, 0.0], "inertia": 2.0 * 0.4 ** 2 / 12}],
+            "joints": [{"name": "J1", "type": "revolute", "connect": ["ground.O", "bar.O"]}],
+            "drivers": [{"joint": "J1", "motion": {"kind": "constant_speed", "rpm": 120.0}}]}
+    m = linkdyn.io.model_from_dict(data)
+    sol = linkdyn.analyze(m, np.linspace(0.0, 0.5, 7), backend="numpy")
+    w = 120.0 * 2 * np.pi / 60
+    want = np.tile([-2.0 * w ** 2 * 0.2, 0.0], (7, 1))
+    np.testing.assert_allclose(sol.reaction_local("J1"), want, rtol=0, atol=1e-9 * 2 * w ** 2 * 0.2)
+    # the global force turns with the bar while its local components stay put
+    assert np.ptp(sol.reaction("J1")[:, 0]) > 1.0
+
+
+def _line_intersection(p1, p2, p3, p4):
+    """(T, 2) intersection of the lines p1p2 and p3p4 (each (T, 2))."""
+    d1, d2 = p2 - p1, p4 - p3
+    den = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    s = ((p3 - p1)[:, 0] * d2[:, 1] - (p3 - p1)[:, 1] * d2[:, 0]) / den
+    return p1 + s[:, None] * d1
+
+
+def test_instant_centres_are_the_closed_forms_on_hoeken():
+    sol = _solution("hoeken", np.linspace(0.0, 4 / 3, 37)[:-1])
+    size = 0.2304  # the coupler's length, m
+    # the crank and the rocker turn about their ground pivots
+    for body, pivot in (("crank", [0.0, 0.0]), ("rocker", [0.0895, 0.0])):
+        ic = sol.instant_centre(body)
+        np.testing.assert_allclose(ic, np.tile(pivot, (36, 1)), rtol=0, atol=1e-9 * size)
+    # the coupler's: where the crank line O1-O2 meets the rocker line O4-O3 (Kennedy)
+    want = _line_intersection(sol.point("crank", "O1"), sol.point("crank", "O2"),
+                              sol.point("rocker", "O4"), sol.point("rocker", "O3"))
+    ic = sol.instant_centre("coupler")
+    far = np.hypot(*want.T)
+    err = np.hypot(*(ic - want).T) / np.maximum(size, far)
+    assert np.all(err < 1e-9), err.max()
+    # the coupler really is at rest there: v = v_O2 + omega z x (ic - O2) = 0
+    r = ic - sol.point("coupler", "O2")
+    v = sol.point_velocity("coupler", "O2") + sol.omega("coupler")[:, None] * np.stack(
+        [-r[:, 1], r[:, 0]], axis=-1)
+    assert np.max(np.abs(v)) < 1e-9 * np.max(np.abs(sol.point_velocity("coupler", "P")))
+
+
+def test_a_translating_body_has_no_instant_centre():
+    sol = _solution("slider_crank", np.linspace(0.0, 0.2, 9))
+    slider = next(j.body_b for j in sol.model.joints if j.kind == "prismatic")
+    assert np.all(np.isnan(sol.instant_centre(slider)))

@@ -124,6 +124,47 @@ class Solution:
             return force
         return np.concatenate([force, self.reactions.moment[..., k, None]], axis=-1)
 
+    def reaction_local(self, joint: str) -> np.ndarray:
+        """The joint's reaction force in its second body's frame (bearing loads).
+
+        The force by the joint's first body on its second, ``f_b = R(-phi_b) f``, where ``f``
+        is :meth:`reaction`'s global force and ``phi_b`` the second body's absolute angle (0
+        for the ground): component 0 lies along the body's x axis (along a link drawn on its x
+        axis), component 1 across it. Over a cycle its tip traces the pin's polar load diagram.
+
+        Returns
+        -------
+        ndarray (T, 2) ``[F_along, F_across]`` N (``(D, T, 2)`` for a batch).
+        """
+        k = self._joint(joint)
+        f = self.reactions.force[..., k, :]
+        b = self.model.joints[k].body_b
+        phi = np.zeros(f.shape[:-1]) if b == self.topology.bodies[0] else self.phi(b)
+        c, s = np.cos(phi), np.sin(phi)
+        # f_b = R(-phi_b) f = [c fx + s fy, -s fx + c fy]
+        return np.stack([c * f[..., 0] + s * f[..., 1], c * f[..., 1] - s * f[..., 0]], axis=-1)
+
+    def instant_centre(self, body: str, rtol: float = 1e-9) -> np.ndarray:
+        """Instant centre of velocity (T, 2) of a moving body, global frame, m.
+
+        ``r_IC = r_O + perp(v_O) / omega`` for the body's origin O (velocity ``v_O``, angular
+        velocity ``omega``; ``perp`` turns by +90 deg), the point of the body that is at rest.
+        NaN where the body barely turns, ``|omega| <= rtol`` times the fastest body's peak
+        ``|omega|`` over the run (a translating body's centre is at infinity), and where the
+        sample is not valid.
+        """
+        i = self.body_index(body)
+        tw = self.kin.twists[i]
+        w = tw[0]
+        scale = max((float(np.nanmax(np.abs(self.kin.twists[j][0]), initial=0.0))
+                     for j in range(1, self.topology.n)), default=0.0)
+        turning = (np.abs(w) > rtol * scale) & np.asarray(self.valid, bool)
+        w_safe = np.where(turning, w, 1.0)
+        r = self.kin.pose.r[i]
+        # r_IC = r_O + perp(v_O) / omega, perp(v) = (-v_y, v_x)
+        ic = np.stack([r[0] - tw[2] / w_safe, r[1] + tw[1] / w_safe], axis=-1)
+        return np.where(turning[..., None], ic, np.nan)
+
     def point_velocity(self, body: str, point: str) -> np.ndarray:
         """Velocity (T, 2) of a named point, global components, m/s."""
         return self.kin.point_velocity(body, point)
