@@ -580,9 +580,97 @@ def test_report_acceptance(browser, example_runs, example, size):
                 else:  # left out only when shorter than 2 units of the drawing
                     assert f * scale <= 2.0 + 1e-9, (joint, k)
             assert p.evaluate(overlap) == [], k
+        _check_link_frame_panels_and_instant_centres(p, D, csv, overlap)
         assert pg.errors == []
     finally:
         pg.close()
+
+
+def _hover(p, at, fx=0.57, fy=0.5):
+    """Hover panel ``at`` at a fraction of its plot; the tooltip's frame and locator."""
+    panel = p.locator("#plots .panel").nth(at)
+    svg = panel.locator("svg")
+    svg.scroll_into_view_if_needed()
+    box = svg.bounding_box()
+    p.mouse.move(box["x"] + fx * box["width"], box["y"] + fy * box["height"])
+    tip = panel.locator(".tooltip")
+    return int(tip.get_attribute("data-frame")), tip
+
+
+def _check_link_frame_panels_and_instant_centres(p, D, csv, overlap):
+    """The link-frame force panels and polar diagrams read results.csv's reactions turned by
+    -phi of the second body; the output-versus-input panel reads its phi_ columns; each
+    instant-centre marker sits at r_P + perp(v_P)/omega from results.csv."""
+    n = len(D["t"])
+    joints = {j["name"]: j for j in D["geom"]["joints"]}
+    fscale = max(np.max(np.abs(v)) for c, v in csv.items() if c.startswith(("Fx_", "Fy_")))
+
+    def local(joint, k):  # independent: the csv's global force turned by -phi_b
+        b = joints[joint]["second"]
+        phi = csv[f"phi_{b}"][k] if f"phi_{b}" in csv else 0.0
+        fx, fy = csv[f"Fx_{joint}"][k], csv[f"Fy_{joint}"][k]
+        return (np.cos(phi) * fx + np.sin(phi) * fy, -np.sin(phi) * fx + np.cos(phi) * fy)
+
+    titles = [s["title"] for s in D["plots"]]
+    assert any(t.startswith("Reaction along") for t in titles) or all(
+        np.max(np.abs(csv[c])) <= 1e-12 * fscale for c in csv if c.startswith(("Fx_", "Fy_")))
+    polar = [i for i, s in enumerate(D["plots"]) if s.get("kind") == "polar"]
+    pins = [j for j, e in joints.items() if e["kind"] == "revolute"
+            and np.max(np.hypot(csv[f"Fx_{j}"], csv[f"Fy_{j}"])) > 1e-12 * fscale]
+    assert len(polar) == len(pins)  # one polar diagram per loaded pin
+    for k in (n // 7, 3 * n // 5):
+        for j in joints:
+            want = local(j, k)
+            for c, w in zip("ac", want):
+                assert D["series"][f"F{c}:{j}"][k] == pytest.approx(w, abs=1e-4 * fscale), (j, k)
+    if polar:  # hover the first: the readout is the turned force at the hovered frame
+        at = polar[0]
+        joint = D["plots"][at]["x"]["key"].split(":", 1)[1]
+        k, tip = _hover(p, at, 0.3, 0.4)
+        across = float(tip.locator(f"b[data-key='Fc:{joint}']").inner_text().split()[0])
+        assert across == pytest.approx(local(joint, k)[1], abs=1e-3 * fscale), k
+    oi = [i for i, s in enumerate(D["plots"]) if s["title"].startswith("Output versus input")]
+    drv = [c.split("_", 1)[1] for c in csv if c.startswith(("tau_", "force_"))]
+    if len(drv) == 1:  # shown when some link turns, and not just with the driver
+        q = csv[f"q_{drv[0]}"]
+        turning = [c for c in csv if c.startswith("phi_") and np.ptp(np.unwrap(csv[c])) > 1e-6
+                   and np.ptp(np.unwrap(csv[c]) - q) > 1e-6]
+        assert bool(oi) == bool(turning), turning
+    if oi:  # the hovered frame's link angles, in degrees, equal phi_ of results.csv
+        k, tip = _hover(p, oi[0])
+        for s in D["plots"][oi[0]]["series"]:
+            got = float(tip.locator(f"b[data-key='{s['key']}']").inner_text().split()[0])
+            want = np.degrees(csv[f"phi_{s['label']}"][k])
+            assert (got - want + 180) % 360 - 180 == pytest.approx(0, abs=0.05), (s, k)
+    # instant centres: hidden until toggled, then at r_P + perp(v_P)/omega
+    B = D["geom"]["bounds"]
+    sc = min(640 / (B[2] - B[0]), 520 / (B[3] - B[1]))
+    p.locator("#anim").scroll_into_view_if_needed()
+    assert p.eval_on_selector("#anim g.ics", "g => getComputedStyle(g).display") == "none"
+    p.check("#show-ics")
+    seen = 0
+    for k in (n // 4, 2 * n // 3):
+        p.eval_on_selector("#scrubber", f"s => {{ s.value = '{k}'; s.dispatchEvent(new Event('input')); }}")
+        marks = p.eval_on_selector_all(".icmark", """ms => ms.map(m => [m.getAttribute('data-body'),
+            m.style.display !== 'none', m.getAttribute('transform')])""")
+        assert len(marks) == len(D["geom"]["ics"])
+        for body, shown, tr in marks:
+            pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
+            w = csv[f"omega_{body}"][k]
+            with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: no centre
+                x = csv[f"x_{body}.{pt}"][k] - csv[f"vy_{body}.{pt}"][k] / w
+                y = csv[f"y_{body}.{pt}"][k] + csv[f"vx_{body}.{pt}"][k] / w
+            X, Y = (x - B[0]) * sc, (B[3] - y) * sc
+            inside = 1 < X < (B[2] - B[0]) * sc - 1 and 1 < Y < (B[3] - B[1]) * sc - 1
+            if shown:
+                got = [float(v) for v in re.match(r"translate\(([^,]+),([^)]+)\)", tr).groups()]
+                assert got == pytest.approx([X, Y], abs=0.2), (body, k)
+                seen += 1
+            else:
+                assert not inside or abs(w) < 1e-6, (body, k)
+        assert p.evaluate(overlap) == [], k
+    assert seen > 0 or not D["geom"]["ics"]
+    p.uncheck("#show-ics")
 
 
 def test_summary_tables_show_rounding_noise_as_zero_and_angles_in_degrees():

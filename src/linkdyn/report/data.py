@@ -239,6 +239,35 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                       [{"key": add(f"{kind}:{j.name}", cols[f"{kind}_{j.name}"] * scale(j)),
                         "label": j.name, "color": jcolor[j.name]} for j in js])
 
+    # output versus input: each moving body's absolute angle against the one driver's
+    # coordinate (bodies that only translate, or turn with the driver, left out)
+    if len(m.drivers) == 1:
+        d = m.drivers[0]
+        q = np.asarray(cols[f"q_{d.joint}"], float)
+        ang = jk.get(m.joint(d.joint).kind).angular
+        qs = q * (DEG if ang else 1.0)
+        ser = []
+        for n, b in enumerate(m.moving_bodies):
+            phi = np.asarray(sol.phi(b.name), float)
+            ok = np.isfinite(phi)
+            if ok.sum() < 2:
+                continue
+            phi = np.where(ok, phi, 0.0)
+            phi[ok] = np.unwrap(phi[ok])
+            span = np.ptp(phi[ok])
+            if span <= 1e-9 or (ang and np.ptp((phi - q)[ok]) <= 1e-9 * max(span, 1.0)):
+                continue
+            ser.append({"key": add(f"phi:{b.name}", np.where(ok, phi * DEG, np.nan)),
+                        "label": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)]})
+        if ser:
+            key = f"q:{d.joint}"
+            if key not in series:
+                add(key, qs)
+            plots.append({"section": "Link motion", "title": "Output versus input: link angles",
+                          "unit": "deg", "series": ser,
+                          "x": {"key": key, "label": f"{d.joint} {'angle (deg)' if ang else '(m)'}",
+                                "short": d.joint, "angle": ang}})
+
     # the speed and acceleration of the traced points (a coupler point's speed along its path)
     pm = [pid for pid in traces if f"vx_{pid}" in cols]
     if pm:
@@ -270,6 +299,25 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
               + (", cut joint: λ" if j.name in cut else ""), "N",
               [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
                {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}], "N")
+    # the reactions in the second body's frame (Solution.reaction_local): along and across
+    # the link each acts on, and each pin's polar load diagram (the force's tip over the run)
+    local = "Joint forces in the link's frame"
+    for j in joints:
+        f = sol.reaction_local(j.name)
+        add(f"Fa:{j.name}", f[..., 0])
+        add(f"Fc:{j.name}", f[..., 1])
+    for word, c in (("along", "a"), ("across", "c")):
+        panel(local, f"Reaction {word} the body it acts on (its x axis)", "N",
+              [{"key": f"F{c}:{j.name}", "label": f"{j.name} on {j.body_b}",
+                "color": jcolor[j.name]} for j in joints], "N")
+    for j in joints:
+        if j.kind != "revolute" or is_noise(series[f"F:{j.name}"], fam["N"]):
+            continue
+        plots.append({"section": local, "kind": "polar", "unit": "N",
+                      "title": f"Polar load at {j.name} in {j.body_b}'s frame",
+                      "x": {"key": f"Fa:{j.name}", "label": "along (N)", "short": "along"},
+                      "series": [{"key": f"Fc:{j.name}", "label": "across",
+                                  "color": jcolor[j.name]}]})
     prism = [(k, j) for k, j in enumerate(joints) if "M" in jk.get(j.kind).reaction]
     if prism:
         panel(efforts, "Guide reaction moments", "N m",
@@ -347,6 +395,17 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                 xaxes.append({"key": f"q:{d.joint}", "label": f"{d.joint} angle (deg)"})
             break
 
+    # instant centres of velocity of the moving bodies (Solution.instant_centre); null where
+    # a body translates
+    ics = []
+    for k, b in enumerate(m.moving_bodies):
+        ic = np.asarray(sol.instant_centre(b.name))
+        if not np.any(np.isfinite(ic[..., 0])):
+            continue
+        ics.append({"body": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)],
+                    "x": add(f"ic:{b.name}:x", ic[..., 0], 6),
+                    "y": add(f"ic:{b.name}:y", ic[..., 1], 6)})
+
     margin = 0.07 * size
     return {
         "name": m.name,
@@ -363,5 +422,5 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                  "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
                             float(hi[0] + margin), float(hi[1] + margin)],
                  "ground": _ground_outline(ground, used),
-                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking},
+                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking, "ics": ics},
     }

@@ -90,6 +90,7 @@ the time cursor; keys: space play/pause, ← → step.</p>
       <label><input type="checkbox" id="show-labels" checked> labels</label>
       <label><input type="checkbox" id="show-traces" checked> traced points</label>
       <label><input type="checkbox" id="show-forces"> forces</label>
+      <label><input type="checkbox" id="show-ics"> instant centres</label>
       <span id="ratenote" class="note"></span>
     </div>
   </div>

@@ -220,6 +220,20 @@
   });
   var ring = el("circle", {r: 11, fill: "none", stroke: "#c62828", "stroke-width": 2.5}, gJoints);
 
+  // instant centres of velocity (toggle, off by default): a small crossed ring per moving body
+  // in its colour, labelled I_body; none while the body translates or when out of view
+  var gIC = el("g", {"class": "ics"}, anim), gICLabels = el("g", {"class": "labels iclabels"}, anim);
+  gIC.style.display = gICLabels.style.display = "none";
+  var showICs = false;
+  var ics = (G.ics || []).map(function (c) {
+    var g = el("g", {"class": "icmark", "data-body": c.body}, gIC);
+    el("circle", {r: 5, fill: "#fff", stroke: c.color, "stroke-width": 2}, g);
+    el("path", {d: "M-7,0H7M0,-7V7", stroke: c.color, "stroke-width": 1.5}, g);
+    var lab = el("text", {"font-size": 11, fill: c.color, "font-weight": "bold", "class": "iclabel"}, gICLabels);
+    lab.textContent = "I " + c.body;
+    return {c: c, g: g, lab: lab};
+  });
+
   // forces: one scale (viewBox units per N) for every arrow, shown by a legend bar of a round
   // force; the largest force drawn is about a fifth of the view
   function seriesMax(key) {
@@ -447,6 +461,13 @@
       o.dot.setAttribute("cx", X(p[0]).toFixed(1)); o.dot.setAttribute("cy", Y(p[1]).toFixed(1));
       o.x = X(p[0]); o.y = Y(p[1]);
     });
+    ics.forEach(function (o) {
+      var x = S[o.c.x][k], y = S[o.c.y][k], ok = fin(x) && fin(y);
+      if (ok) { o.x = X(x); o.y = Y(y); ok = o.x >= 0 && o.x <= VW && o.y >= 0 && o.y <= VH; }
+      o.g.style.display = o.lab.style.display = ok ? "" : "none";
+      if (!ok) { o.x = o.y = NaN; return; }
+      o.g.setAttribute("transform", "translate(" + o.x.toFixed(1) + "," + o.y.toFixed(1) + ") scale(" + textScale.toFixed(3) + ")");
+    });
     // labels: pivots are obstacles; joint names first, then traced points, bodies, forces
     var obst = [], r = 6.5 * textScale;
     joints.forEach(function (o) { if (o.c.style.display !== "none" && fin(o.x)) obst.push([o.x - r, o.y - r, o.x + r, o.y + r]); });
@@ -456,6 +477,7 @@
       traces.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 12, r: 6}); });
       bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6, prefer: o.pref}); });
     }
+    if (showICs) ics.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8}); });
     if (showForces) {
       joints.forEach(function (o) { if (o.tip) items.push({node: o.flab, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
       loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
@@ -515,10 +537,13 @@
   function buildPlots() {
     container.innerHTML = "";
     plots = [];
-    var xs = S[xmode.key], xr = range([xs]);
-    if (xmode.key === "t") xr = [T[0], T[N - 1] > T[0] ? T[N - 1] : T[0] + 1];
+    var xsT = S[xmode.key], xrT = range([xsT]);
+    if (xmode.key === "t") xrT = [T[0], T[N - 1] > T[0] ? T[N - 1] : T[0] + 1];
     var sec = null, grid = null;
     D.plots.forEach(function (spec) {
+      // a panel with its own x series (output versus input, a polar load diagram) keeps it
+      var xm = spec.x || xmode, xs = spec.x ? S[spec.x.key] : xsT, xr = spec.x ? range([xs]) : xrT;
+      var polar = spec.kind === "polar", angleX = spec.x ? !!spec.x.angle : xmode.key !== "t";
       if (spec.section !== sec) {
         sec = spec.section;
         h("h3", "psec", container, sec);
@@ -527,8 +552,17 @@
       var panel = h("div", "panel", grid);
       var svg = el("svg", {viewBox: "0 0 " + PW + " " + PH}, panel);
       var yr = range(spec.series.map(function (s) { return S[s.key]; }));
-      var pad = 0.05 * (yr[1] - yr[0]); yr = [yr[0] - pad, yr[1] + pad];
       var x0 = ML, x1 = PW - MR, y0 = PH - MB, y1 = MT;
+      if (polar) {  // the origin in view and one scale on both axes (N per px alike)
+        xr = [Math.min(xr[0], 0), Math.max(xr[1], 0)]; yr = [Math.min(yr[0], 0), Math.max(yr[1], 0)];
+        var u = Math.max((xr[1] - xr[0]) / (x1 - x0), (yr[1] - yr[0]) / (y0 - y1)) * 1.1;
+        var cxr = (xr[0] + xr[1]) / 2, cyr = (yr[0] + yr[1]) / 2;
+        xr = [cxr - u * (x1 - x0) / 2, cxr + u * (x1 - x0) / 2];
+        yr = [cyr - u * (y0 - y1) / 2, cyr + u * (y0 - y1) / 2];
+      } else {
+        var pad = 0.05 * (yr[1] - yr[0]); yr = [yr[0] - pad, yr[1] + pad];
+        if (spec.x) { var padx = 0.02 * (xr[1] - xr[0]); xr = [xr[0] - padx, xr[1] + padx]; }
+      }
       var sx = function (v) { return x0 + (v - xr[0]) / (xr[1] - xr[0]) * (x1 - x0); };
       var sy = function (v) { return y0 - (v - yr[0]) / (yr[1] - yr[0]) * (y0 - y1); };
       // grid and ticks
@@ -539,19 +573,19 @@
         el("text", {x: x0 - 4, y: yy + 3.5, "text-anchor": "end", "class": "tick"}, svg).textContent = tickText(v, ys);
       }
       var xst = niceStep(xr[1] - xr[0], 6);
-      if (xmode.key !== "t") {  // an angle in degrees: ticks on 15, 30, 45, 90... multiples
+      if (angleX) {  // an angle in degrees: ticks on 15, 30, 45, 90... multiples
         var dstep = [5, 10, 15, 30, 45, 90, 180, 360, 720, 1440].filter(function (d) { return d >= (xr[1] - xr[0]) / 8; })[0];
         if (dstep) xst = dstep;
       }
       for (v = Math.ceil(xr[0] / xst) * xst; v <= xr[1] + 1e-9 * xst; v += xst) {
         var xx = sx(v);
-        el("line", {x1: xx, x2: xx, y1: y0, y2: y1, "class": "gridl"}, svg);
+        el("line", {x1: xx, x2: xx, y1: y0, y2: y1, "class": polar && Math.abs(v) < xst * 1e-6 ? "zero" : "gridl"}, svg);
         el("line", {x1: xx, x2: xx, y1: y0, y2: y0 + 4, "class": "axis"}, svg);
         el("text", {x: xx, y: y0 + 15, "text-anchor": "middle", "class": "tick"}, svg).textContent = tickText(v, xst);
       }
       el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
       el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
-      el("text", {x: x1, y: PH - 3, "text-anchor": "end", "class": "tick"}, svg).textContent = xmode.label;
+      el("text", {x: x1, y: PH - 3, "text-anchor": "end", "class": "tick"}, svg).textContent = xm.label;
       el("text", {x: 6, y: 14, "class": "ptitle"}, svg).textContent = spec.title + (spec.unit ? "  (" + spec.unit + ")" : "");
       // series
       spec.series.forEach(function (s) {
@@ -562,7 +596,9 @@
         }
         el("path", {d: d, "class": "series", stroke: s.color}, svg);
       });
+      // the cursor: a vertical line, or on a polar diagram the force vector from the origin
       var cursor = el("line", {"class": "cursor", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
+      if (polar) cursor.setAttribute("class", "cursor polar");
       var dots = spec.series.map(function (s) { return el("circle", {r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, svg); });
       var leg = h("div", "legend", panel);
       var vals = spec.series.map(function (s) {
@@ -570,23 +606,34 @@
         h("span", "", it, s.label);
         return h("b", "", it, "");
       });
+      var xval = null;
+      if (spec.x) { var xit = h("span", "", leg); h("span", "", xit, spec.x.short || xm.label); xval = h("b", "", xit, ""); }
       var hover = el("line", {"class": "hoverline", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
       hover.style.display = "none";
       var hit = el("rect", {x: x0, y: y1, width: x1 - x0, height: y0 - y1, fill: "transparent"}, svg);
       var at = function (e) {
         var r = svg.getBoundingClientRect(), vx = (e.clientX - r.left) / r.width * PW;
         var xv = xr[0] + (vx - x0) / (x1 - x0) * (xr[1] - xr[0]);
-        return xmode.key === "t" ? lowerBound(T, xv) : nearest(xs, xv);
+        if (polar) {  // the sample whose point is nearest the pointer
+          var vy = (e.clientY - r.top) / r.height * PH, ya = S[spec.series[0].key], best = 0, bd = Infinity;
+          for (var i = 0; i < N; i++) {
+            if (!fin(xs[i]) || !fin(ya[i])) continue;
+            var dd = Math.pow(sx(xs[i]) - vx, 2) + Math.pow(sy(ya[i]) - vy, 2);
+            if (dd < bd) { bd = dd; best = i; }
+          }
+          return best;
+        }
+        return xm.key === "t" ? lowerBound(T, xv) : nearest(xs, xv);
       };
       var pick = function (e) { pause(); setFrame(at(e)); };
       // hover: a readout of every series at the frame under the pointer (the cursor stays)
       var readout = function (e) {
         var k = at(e), x = xs[k];
-        hover.style.display = fin(x) ? "" : "none";
+        hover.style.display = fin(x) && !polar ? "" : "none";
         if (fin(x)) { hover.setAttribute("x1", sx(x).toFixed(1)); hover.setAttribute("x2", sx(x).toFixed(1)); }
         tip.innerHTML = "";
         tip.setAttribute("data-frame", String(k));
-        h("div", "tt", tip, "t = " + fmt(T[k], 5) + " s" + (xmode.key === "t" ? "" : ", " + xmode.label.replace(/ \(.*\)$/, "") + " = " + fmtS(xmode.key, x)));
+        h("div", "tt", tip, "t = " + fmt(T[k], 5) + " s" + (xm.key === "t" ? "" : ", " + xm.label.replace(/ \(.*\)$/, "") + " = " + fmtS(xm.key, x) + (polar ? " " + spec.unit : "")));
         spec.series.forEach(function (s) {
           var row = h("div", "tr", tip), sw = h("i", "", row); sw.style.background = s.color;
           h("span", "", row, s.label + " ");
@@ -607,7 +654,7 @@
       hit.addEventListener("pointerup", function () { down = false; });
       hit.addEventListener("pointerleave", function () { tip.style.display = "none"; hover.style.display = "none"; });
       exportButtons(panel, spec, svg);
-      plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, y0: y0, y1: y1});
+      plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, xval: xval, polar: polar, y0: y0, y1: y1});
     });
   }
   // export: a panel's series as CSV (every page frame), the panel as SVG or PNG
@@ -619,10 +666,12 @@
   }
   function slug(s) { return s.replace(/[^A-Za-z0-9]+/g, "_").replace(/^_|_$/g, "").toLowerCase(); }
   function panelCSV(spec) {
-    var head = ["t_s"].concat(spec.series.map(function (s) { return s.label + (spec.unit ? " (" + spec.unit + ")" : ""); }));
+    // a panel with its own x series (spec.x) exports it after t
+    var xcol = spec.x ? [spec.x] : [];
+    var head = ["t_s"].concat(xcol.map(function (x) { return x.label; }), spec.series.map(function (s) { return s.label + (spec.unit ? " (" + spec.unit + ")" : ""); }));
     var lines = [head.map(function (c) { return '"' + c.replace(/"/g, '""') + '"'; }).join(",")];
     for (var k = 0; k < N; k++)
-      lines.push([T[k]].concat(spec.series.map(function (s) { var v = S[s.key][k]; return fin(v) ? v : ""; })).join(","));
+      lines.push([T[k]].concat(xcol.concat(spec.series).map(function (s) { var v = S[s.key][k]; return fin(v) ? v : ""; })).join(","));
     return lines.join("\n") + "\n";
   }
   function panelSVG(svg) {
@@ -662,7 +711,15 @@
   function drawPlots(k) {
     plots.forEach(function (p) {
       var x = p.xs[k], cx = fin(x) ? p.sx(x).toFixed(1) : -10;
-      p.cursor.setAttribute("x1", cx); p.cursor.setAttribute("x2", cx);
+      if (p.polar) {  // the force vector: from the origin to the current point
+        var py = S[p.spec.series[0].key][k], okp = fin(x) && fin(py);
+        p.cursor.style.display = okp ? "" : "none";
+        if (okp) {
+          p.cursor.setAttribute("x1", p.sx(0).toFixed(1)); p.cursor.setAttribute("y1", p.sy(0).toFixed(1));
+          p.cursor.setAttribute("x2", cx); p.cursor.setAttribute("y2", p.sy(py).toFixed(1));
+        }
+      } else { p.cursor.setAttribute("x1", cx); p.cursor.setAttribute("x2", cx); }
+      if (p.xval) p.xval.textContent = fmtS(p.spec.x.key, x);
       p.spec.series.forEach(function (s, n) {
         var y = S[s.key][k], ok = fin(y) && fin(x);
         p.dots[n].style.display = ok ? "" : "none";
@@ -728,6 +785,11 @@
   document.getElementById("show-forces").addEventListener("change", function (e) {
     showForces = e.target.checked;
     gForces.style.display = gFLabels.style.display = showForces ? "" : "none";
+    setFrame(frame);
+  });
+  document.getElementById("show-ics").addEventListener("change", function (e) {
+    showICs = e.target.checked;
+    gIC.style.display = gICLabels.style.display = showICs ? "" : "none";
     setFrame(frame);
   });
   window.addEventListener("resize", function () { updateTextScale(); setFrame(frame); });
