@@ -864,3 +864,35 @@ def test_a_translating_body_has_no_instant_centre():
     sol = _solution("slider_crank", np.linspace(0.0, 0.2, 9))
     slider = next(j.body_b for j in sol.model.joints if j.kind == "prismatic")
     assert np.all(np.isnan(sol.instant_centre(slider)))
+
+
+def test_compare_takes_a_sweeps_best_designs(tmp_path, monkeypatch):
+    pd = pytest.importorskip("pandas")
+    monkeypatch.chdir(tmp_path)  # the sweep names its model file relative to where it ran
+    (tmp_path / "hoeken.toml").write_text(linkdyn.example_path("hoeken").read_text("utf-8"))
+    runner = CliRunner()
+    res = runner.invoke(main, ["sweep", "hoeken.toml", "--vary", "bodies.coupler.mass=3:5:3",
+                               "--vary", "bodies.ground.points.O4[0]=85:95:2", "--samples", "19",
+                               "-o", "sw"])
+    assert res.exit_code == 0, res.output
+    df = pd.read_parquet(tmp_path / "sw" / "designs.parquet")
+    # a missing or unknown ranking metric: exit 2 naming --by and the metrics, nothing written
+    for extra in ([], ["--by", "nope"]):
+        bad = runner.invoke(main, ["compare", "--sweep", "sw", *extra, "-o", "bad"])
+        assert bad.exit_code == 2 and "--by" in bad.output and "peak_tau_J1" in bad.output
+        assert not (tmp_path / "bad").exists()
+    res = runner.invoke(main, ["compare", "hoeken.toml", "--sweep", "sw", "--by", "peak_tau_J1",
+                               "--best", "2", "--samples", "19", "-o", "cmp"])
+    assert res.exit_code == 0, res.output
+    saved = json.loads((tmp_path / "cmp" / "compare.json").read_text())
+    best = df[df["valid"]].sort_values("peak_tau_J1").head(2)
+    assert list(saved) == ["hoeken"] + [f"hoeken #{d}" for d in best["design"]]
+    for (_, row), name in zip(best.iterrows(), list(saved)[1:]):
+        entry = saved[name]
+        assert entry["sweep"]["parameters"] == {
+            p: row[p] for p in ("bodies.coupler.mass", "bodies.ground.points.O4[0]")}
+        # the design solved again on its own has the sweep's batch-computed metric
+        assert entry["summary"]["drivers"]["J1"]["peak"] == pytest.approx(
+            row["peak_tau_J1"], rel=1e-9)
+    peaks = [saved[n]["summary"]["drivers"]["J1"]["peak"] for n in saved]
+    assert peaks[1] <= peaks[2] and peaks[1] != pytest.approx(peaks[0], rel=1e-6)

@@ -542,9 +542,16 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
 # ---------------------------------------------------------------------------- compare
 
 @main.command()
-@click.argument("models", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.argument("models", nargs=-1, type=click.Path(dir_okay=False))
 @click.option("-o", "--outdir", default="out/compare", show_default=True, type=click.Path(),
               help="Folder for compare.html and compare.json.")
+@click.option("--sweep", "sweep_dir", type=click.Path(file_okay=False),
+              help="Also compare a sweep's best designs: the folder of its designs.parquet "
+                   "and summary.json.")
+@click.option("--by", "by_metric", metavar="METRIC",
+              help="The sweep metric that ranks its designs (lowest first); needed with --sweep.")
+@click.option("--best", "n_best", type=int, default=3, show_default=True,
+              help="How many of the sweep's best valid designs to compare.")
 @click.option("--samples", type=int, help="Number of samples of each design (both ends "
               "included) [default: each model's own].")
 @click.option("--duration", type=float, help="Duration in s of every design.")
@@ -552,7 +559,8 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
 @click.option("--fluctuation", type=float, default=0.02, show_default=True,
               help="Coefficient of speed fluctuation C_s for the flywheel size.")
 @_ALLOW_OUTSIDE
-def compare(models, outdir, samples, duration, cycles, fluctuation, allow_outside):
+def compare(models, outdir, samples, duration, cycles, fluctuation, sweep_dir, by_metric, n_best,
+            allow_outside):
     """Compare designs MODELS... on one page: curves overlaid, key results side by side.
 
     Each design is solved and summarized as `linkdyn analyze` does with the same options, so
@@ -565,23 +573,31 @@ def compare(models, outdir, samples, duration, cycles, fluctuation, allow_outsid
     if duration is not None and cycles is not None:
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
-    if len(models) < 2:
+    # each design: (file, its name, its model, what the sweep row holds or None)
+    designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
+               for path in models]
+    if sweep_dir is not None:
+        designs += _sweep_best(sweep_dir, by_metric, n_best)
+    elif by_metric is not None:
+        raise ModelError("--by ranks a sweep's designs, and no --sweep is given", field="--by",
+                         fix="Give --sweep OUTDIR of the sweep, or drop --by")
+    if len(designs) < 2:
         raise ModelError("compare needs at least two model files", field="MODELS",
-                         fix="Give two or more model files, e.g. linkdyn compare a.toml b.toml")
+                         fix="Give two or more model files, e.g. linkdyn compare a.toml b.toml, "
+                             "or a sweep's designs with --sweep DIR --by METRIC")
     check_outdir(outdir)
     runs, names = [], []
-    for path in models:
-        mech = io.load_model(path, allow_outside=allow_outside)
+    for path, stem, mech, _ in designs:
         sol = run(mech, _times(mech, samples, duration, cycles))
         summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
                               default_range=mech.path_range)
-        name = Path(path).stem
-        name = name if name not in names else f"{name} ({len(names) + 1})"
+        name = stem if stem not in names else f"{stem} ({len(names) + 1})"
         names.append(name)
         runs.append((name, sol, summ))
     page = compare_mod.render_compare(runs)
-    data = {name: {"file": str(path), "summary": _json_safe(summ)}
-            for (name, _, summ), path in zip(runs, models)}
+    data = {name: {"file": str(path), **({"sweep": row} if row else {}),
+                   "summary": _json_safe(summ)}
+            for (name, _, summ), (path, _, _, row) in zip(runs, designs)}
     files = {"compare.html": lambda p: p.write_text(page, encoding="utf-8"),
              "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
     written = write_outputs(outdir, files, owned=tuple(files))
@@ -590,6 +606,50 @@ def compare(models, outdir, samples, duration, cycles, fluctuation, allow_outsid
                           for j, d in summ["drivers"].items())
         click.echo(f"{name}: {summ['model']}, {summ['samples']} samples; {peaks}")
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _sweep_best(sweep_dir, metric, n_best) -> list:
+    """The ``n_best`` valid designs of a sweep with the lowest ``metric``: ``(file, name, model,
+    row)`` each, the model rebuilt from the sweep's base file and the design's parameter values
+    (``row``: the design number, its parameters in the file's units and its metric, SI)."""
+    from .studies import params as params_mod
+    from .studies.runner import _pandas
+
+    folder = Path(sweep_dir)
+    spec, table = folder / "summary.json", folder / "designs.parquet"
+    if not spec.is_file() or not table.is_file():
+        raise ModelError(f"{folder} holds no finished sweep (summary.json and designs.parquet)",
+                         field="--sweep", fix="Give the -o folder of a finished linkdyn sweep")
+    info = json.loads(spec.read_text("utf-8"))
+    df = _pandas().read_parquet(table)
+    metrics = [m for m in info.get("metrics", {})]
+    if metric is None or metric not in metrics:
+        what = "--sweep needs --by METRIC" if metric is None else f"no metric '{metric}' in {spec}"
+        raise ModelError(what, field="--by",
+                         fix="Rank by one of the sweep's metrics: " + ", ".join(metrics))
+    if n_best < 1:
+        raise ModelError(f"--best must be at least 1, not {n_best}", field="--best",
+                         fix="Give --best 1 or more")
+    base = Path(info["model"])
+    if not base.is_file() and (folder / base.name).is_file():
+        base = folder / base.name
+    if not base.is_file():
+        raise ModelError(f"the sweep's model file {info['model']} is not found", field="--sweep",
+                         fix="Run compare from the folder the sweep ran in (its summary.json "
+                             "names the model file relative to it)")
+    paths = [p["path"] for p in info["parameters"]]
+    sp = params_mod.space(str(base), paths)
+    ok = df[df["valid"] & df[metric].notna()].sort_values([metric, "design"], kind="stable")
+    if ok.empty:
+        raise ModelError(f"no valid design in {table} has a {metric}", field="--sweep",
+                         fix="Rank by another metric, or sweep other ranges")
+    out = []
+    for _, r in ok.head(n_best).iterrows():
+        values = [float(r[p]) for p in paths]
+        row = {"design": int(r["design"]), "parameters": dict(zip(paths, values)),
+               metric: float(r[metric])}
+        out.append((str(base), f"{base.stem} #{row['design']}", sp.model(values), row))
+    return out
 
 
 # ---------------------------------------------------------------------------- simulate
