@@ -586,6 +586,7 @@
       el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
       el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
       el("text", {x: x1, y: PH - 3, "text-anchor": "end", "class": "tick"}, svg).textContent = xm.label;
+      if (polar) el("text", {x: x0 + 4, y: y1 + 10, "class": "tick"}, svg).textContent = "↑ " + spec.series[0].label + " (" + spec.unit + ")";
       el("text", {x: 6, y: 14, "class": "ptitle"}, svg).textContent = spec.title + (spec.unit ? "  (" + spec.unit + ")" : "");
       // series
       spec.series.forEach(function (s) {
