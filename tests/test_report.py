@@ -160,6 +160,18 @@ def test_page_data_matches_the_solution():
     # the coupler point's speed along its path is plotted: |v| from the vx_, vy_ columns
     np.testing.assert_allclose(d["series"]["v:coupler.P"],
                                np.hypot(*sol.point_velocity("coupler", "P").T), rtol=1e-4)
+    # the link-frame forces, one polar diagram per pin, output versus input, instant centres
+    fl = sol.reaction_local("J2")
+    np.testing.assert_allclose(d["series"]["Fa:J2"], fl[:, 0], rtol=1e-4, atol=1e-9)
+    np.testing.assert_allclose(d["series"]["Fc:J2"], fl[:, 1], rtol=1e-4, atol=1e-9)
+    polar = [p for p in d["plots"] if p.get("kind") == "polar"]
+    assert [p["x"]["key"] for p in polar] == ["Fa:J1", "Fa:J2", "Fa:J3", "Fa:J4"]
+    oi = next(p for p in d["plots"] if p["title"].startswith("Output versus input"))
+    assert oi["x"]["key"] == "q:J1" and [s["label"] for s in oi["series"]] == ["coupler", "rocker"]
+    ics = {c["body"]: c for c in d["geom"]["ics"]}
+    assert set(ics) == {"crank", "coupler", "rocker"}
+    np.testing.assert_allclose(d["series"][ics["coupler"]["x"]],
+                               sol.instant_centre("coupler")[:, 0], rtol=1e-5)
 
 
 def test_summary_tables_render_known_and_unknown_keys():
