@@ -287,9 +287,14 @@ class Solution:
         lead = self.valid.shape[:-1]
         designs = f"{lead[0]} designs x " if lead else ""
         span = f"{t[0]:.4g}..{t[-1]:.4g} s" if t.size else "no samples"
-        return (f"{m.name or 'mechanism'}: {designs}{t.size} samples, t = {span}, "
-                f"{len(m.moving_bodies)} moving bodies, {len(m.joints)} joints, "
-                f"{self.topology.n_loops} loops")
+
+        def count(n, one, many):
+            return f"{n} {one if n == 1 else many}"
+
+        return (f"{m.name or 'mechanism'}: {designs}{count(t.size, 'sample', 'samples')}, "
+                f"t = {span}, {count(len(m.moving_bodies), 'moving body', 'moving bodies')}, "
+                f"{count(len(m.joints), 'joint', 'joints')}, "
+                f"{count(self.topology.n_loops, 'loop', 'loops')}")
 
     def key_numbers(self) -> list[tuple[str, str]]:
         """The few numbers to look at first, as ``(label, text)``: each driver effort's signed
