@@ -13,7 +13,7 @@ import html
 import json
 
 from .data import MAX_FRAMES, PALETTE, page_data
-from .page import _asset, _version
+from .page import _asset, _script, _version
 from .tables import fmt, key_value, key_where
 
 # panels overlaid: the sections and titles of page_data's plots worth comparing
@@ -79,7 +79,7 @@ def render_compare(runs, *, max_frames: int = MAX_FRAMES) -> str:
                     f"{html.escape(d['model'] or '')}, {fmt(d['samples'])} samples</li>"
                     for d in data["designs"])
     return _PAGE.format(title=html.escape(f"Comparison: {names}"), css=_asset("report.css"),
-                        js=_asset("compare.js"), data=blob, files=files,
+                        js=_script("compare.js"), data=blob, files=files,
                         table=key_table_html(data["designs"]), version=html.escape(_version()))
 
 

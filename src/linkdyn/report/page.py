@@ -36,7 +36,7 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
             if n < total else f"{total} samples")
     desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
     return _PAGE.format(
-        title=title, css=_asset("report.css"), js=_asset("report.js"), data=blob, desc=desc,
+        title=title, css=_asset("report.css"), js=_script("report.js"), data=blob, desc=desc,
         note=html.escape(note), summary=summary_html(summary, scales(sol)), model=model_html(sol),
         key=key_results_html(data["key"]),
         version=html.escape(_version()))
@@ -44,6 +44,12 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
 
 def _asset(name: str) -> str:
     return resources.files("linkdyn.report").joinpath("assets", name).read_text("utf-8")
+
+
+def _script(name: str) -> str:
+    """A page's script: the shared helpers of ``assets/common.js`` (the global ``LD``), then
+    the page's own ``assets/NAME``."""
+    return _asset("common.js") + "\n" + _asset(name)
 
 
 def _version() -> str:

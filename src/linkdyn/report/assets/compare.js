@@ -3,46 +3,10 @@
 (function () {
   "use strict";
   var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
-  var NS = "http://www.w3.org/2000/svg";
+  var el = LD.el, h = LD.h, fin = LD.fin, fmt = LD.fmt, nearest = LD.nearest, niceStep = LD.niceStep,
+      range = LD.range;
   var PW = 360, PH = 220, ML = 52, MR = 14, MT = 22, MB = 32;
   var xmode = D.xaxes[0], box = document.getElementById("plots"), sel = document.getElementById("xaxis");
-  function el(tag, attrs, parent) {
-    var e = document.createElementNS(NS, tag);
-    for (var k in attrs) e.setAttribute(k, attrs[k]);
-    if (parent) parent.appendChild(e);
-    return e;
-  }
-  function h(tag, cls, parent, text) {
-    var e = document.createElement(tag);
-    if (cls) e.className = cls;
-    if (text !== undefined) e.textContent = text;
-    if (parent) parent.appendChild(e);
-    return e;
-  }
-  function fin(v) { return v !== null && v !== undefined && isFinite(v); }
-  function fmt(v) {
-    if (!fin(v)) return "–";
-    var a = Math.abs(v);
-    if (a === 0) return "0";
-    if (a >= 1e-3 && a < 1e6) return v.toFixed(Math.max(0, 3 - Math.floor(Math.log10(a))));
-    return v.toExponential(3);
-  }
-  function niceStep(span, n) {
-    var s0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(s0))), r = s0 / mag;
-    return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * mag;
-  }
-  function range(arrs) {
-    var lo = Infinity, hi = -Infinity;
-    arrs.forEach(function (a) { a.forEach(function (v) { if (fin(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); } }); });
-    if (!(hi >= lo)) { lo = -1; hi = 1; }
-    if (hi - lo <= 1e-12 * Math.max(Math.abs(lo), Math.abs(hi), 1e-300)) { var p = Math.abs(hi) * 0.1 || 1; lo -= p; hi += p; }
-    return [lo, hi];
-  }
-  function nearest(a, x) {
-    var best = 0, bd = Infinity;
-    for (var i = 0; i < a.length; i++) if (fin(a[i]) && Math.abs(a[i] - x) < bd) { bd = Math.abs(a[i] - x); best = i; }
-    return best;
-  }
   function build() {
     box.innerHTML = "";
     D.panels.forEach(function (spec) {
@@ -91,11 +55,7 @@
           b.setAttribute("data-design", n); b.setAttribute("data-frame", k);
         });
         line.setAttribute("x1", sx(xv)); line.setAttribute("x2", sx(xv)); line.style.display = "";
-        var pr = panel.getBoundingClientRect();
-        tip.style.display = "block";
-        var left = e.clientX - pr.left + 14;
-        if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
-        tip.style.left = left + "px"; tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
+        LD.placeTip(tip, panel, e);
       });
       hit.addEventListener("pointerleave", function () { tip.style.display = "none"; line.style.display = "none"; });
     });

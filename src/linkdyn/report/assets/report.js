@@ -12,32 +12,9 @@
   window.__linkdynFrame = 0;
   window.__linkdynPlayed = 0;
 
-  // ------------------------------------------------------------------ helpers
-  function el(tag, attrs, parent) {
-    var e = document.createElementNS(NS, tag);
-    for (var k in attrs) e.setAttribute(k, attrs[k]);
-    if (parent) parent.appendChild(e);
-    return e;
-  }
-  function h(tag, cls, parent, text) {
-    var e = document.createElement(tag);
-    if (cls) e.className = cls;
-    if (text !== undefined) e.textContent = text;
-    if (parent) parent.appendChild(e);
-    return e;
-  }
-  function fin(v) { return v !== null && v !== undefined && isFinite(v); }
-  function fmt(v, sig) {
-    if (!fin(v)) return "–";
-    sig = sig || 4;
-    var a = Math.abs(v);
-    if (a === 0) return "0";
-    if (a >= 1e-3 && a < 1e6) {
-      var dec = Math.max(0, sig - 1 - Math.floor(Math.log10(a)));
-      return v.toFixed(dec);
-    }
-    return v.toExponential(sig - 1);
-  }
+  // ------------------------------------------------------------------ helpers (assets/common.js)
+  var el = LD.el, h = LD.h, fin = LD.fin, fmt = LD.fmt, nearest = LD.nearest, niceStep = LD.niceStep,
+      tickText = LD.tickText, range = LD.range;
   // a series' values with the decimals its peak needs for 4 significant digits, so numbers
   // near a zero crossing keep the same format
   var SCALE = {};
@@ -60,39 +37,6 @@
     if (x >= arr[hi]) return hi;
     while (hi - lo > 1) { var mid = (lo + hi) >> 1; if (arr[mid] <= x) lo = mid; else hi = mid; }
     return (x - arr[lo] <= arr[hi] - x) ? lo : hi;
-  }
-  function nearest(arr, x) {
-    var best = 0, bd = Infinity;
-    for (var i = 0; i < arr.length; i++) {
-      if (!fin(arr[i])) continue;
-      var d = Math.abs(arr[i] - x);
-      if (d < bd) { bd = d; best = i; }
-    }
-    return best;
-  }
-  function niceStep(span, n) {
-    var s0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(s0))), r = s0 / mag;
-    return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * mag;
-  }
-  function tickText(v, step) {
-    if (Math.abs(v) < step * 1e-6) v = 0;
-    var a = Math.max(Math.abs(v), step);
-    if (a >= 1e5 || step < 1e-4) return v.toExponential(Math.max(0, Math.round(Math.log10(a / step))));
-    var dec = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
-    return v.toFixed(dec);
-  }
-  function range(arrs) {
-    var lo = Infinity, hi = -Infinity;
-    arrs.forEach(function (a) {
-      for (var i = 0; i < a.length; i++) { var v = a[i]; if (fin(v)) { if (v < lo) lo = v; if (v > hi) hi = v; } }
-    });
-    if (!(hi >= lo)) { lo = -1; hi = 1; }
-    var scale = Math.max(Math.abs(lo), Math.abs(hi));
-    if (hi - lo <= 1e-9 * scale || hi === lo) {
-      var pad = scale > 0 ? 0.1 * scale : 1;
-      lo -= pad; hi += pad;
-    }
-    return [lo, hi];
   }
 
   // ------------------------------------------------------------------ animation
@@ -641,12 +585,7 @@
           var b = h("b", "", row, fmtS(s.key, S[s.key][k]) + (spec.unit ? " " + spec.unit : ""));
           b.setAttribute("data-key", s.key);
         });
-        var pr = panel.getBoundingClientRect();
-        tip.style.display = "block";
-        var left = e.clientX - pr.left + 14;
-        if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
-        tip.style.left = left + "px";
-        tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
+        LD.placeTip(tip, panel, e);
       };
       var tip = h("div", "tooltip", panel);
       var down = false;

@@ -1,0 +1,79 @@
+/* linkdyn pages: helpers shared by report.js, compare.js and sweep.js, inlined before each
+   page's own script as one global object, LD. No network, no library. */
+var LD = (function () {
+  "use strict";
+  // the SVG namespace, as the HTML parser gives it (no URL written in the page)
+  var NS = (function () { var d = document.createElement("div"); d.innerHTML = "<svg></svg>"; return d.firstChild.namespaceURI; })();
+  // an SVG element with attributes, appended to parent
+  function el(tag, attrs, parent) {
+    var e = document.createElementNS(NS, tag);
+    for (var k in attrs) e.setAttribute(k, attrs[k]);
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  // an HTML element with a class and text, appended to parent
+  function h(tag, cls, parent, text) {
+    var e = document.createElement(tag);
+    if (cls) e.className = cls;
+    if (text !== undefined) e.textContent = text;
+    if (parent) parent.appendChild(e);
+    return e;
+  }
+  function fin(v) { return v !== null && v !== undefined && isFinite(v); }
+  // sig significant digits (default 4), fixed between 1e-3 and 1e6, exponent outside
+  function fmt(v, sig) {
+    if (!fin(v)) return "–";
+    sig = sig || 4;
+    var a = Math.abs(v);
+    if (a === 0) return "0";
+    if (a >= 1e-3 && a < 1e6) return v.toFixed(Math.max(0, sig - 1 - Math.floor(Math.log10(a))));
+    return v.toExponential(sig - 1);
+  }
+  // index of the finite value of arr nearest x
+  function nearest(arr, x) {
+    var best = 0, bd = Infinity;
+    for (var i = 0; i < arr.length; i++) {
+      if (!fin(arr[i])) continue;
+      var d = Math.abs(arr[i] - x);
+      if (d < bd) { bd = d; best = i; }
+    }
+    return best;
+  }
+  // a round tick step (1, 2 or 5 x 10^k) giving about n ticks over span
+  function niceStep(span, n) {
+    var s0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(s0))), r = s0 / mag;
+    return (r < 1.5 ? 1 : r < 3 ? 2 : r < 7 ? 5 : 10) * mag;
+  }
+  // a tick label with the decimals its step needs
+  function tickText(v, step) {
+    if (Math.abs(v) < step * 1e-6) v = 0;
+    var a = Math.max(Math.abs(v), step);
+    if (a >= 1e5 || step < 1e-4) return v.toExponential(Math.max(0, Math.round(Math.log10(a / step))));
+    var dec = Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+    return v.toFixed(dec);
+  }
+  // [lo, hi] of the finite values of some arrays, widened when (nearly) constant
+  function range(arrs) {
+    var lo = Infinity, hi = -Infinity;
+    arrs.forEach(function (a) {
+      for (var i = 0; i < a.length; i++) { var v = a[i]; if (fin(v)) { if (v < lo) lo = v; if (v > hi) hi = v; } }
+    });
+    if (!(hi >= lo)) { lo = -1; hi = 1; }
+    var scale = Math.max(Math.abs(lo), Math.abs(hi));
+    if (hi - lo <= 1e-9 * scale || hi === lo) {
+      var pad = scale > 0 ? 0.1 * scale : 1;
+      lo -= pad; hi += pad;
+    }
+    return [lo, hi];
+  }
+  // place a tooltip next to the pointer, inside its panel
+  function placeTip(tip, panel, e) {
+    var pr = panel.getBoundingClientRect();
+    tip.style.display = "block";
+    var left = e.clientX - pr.left + 14;
+    if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
+    tip.style.left = left + "px"; tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
+  }
+  return {NS: NS, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
+          tickText: tickText, range: range, placeTip: placeTip};
+})();
