@@ -908,3 +908,50 @@ def test_compare_takes_a_sweeps_best_designs(tmp_path, monkeypatch):
             row["peak_tau_J1"], rel=1e-9)
     peaks = [saved[n]["summary"]["drivers"]["J1"]["peak"] for n in saved]
     assert peaks[1] <= peaks[2] and peaks[1] != pytest.approx(peaks[0], rel=1e-6)
+
+
+def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browser, tmp_path):
+    pd = pytest.importorskip("pandas")
+    from linkdyn.report.sweep import pareto_front
+    model = tmp_path / "hoeken.toml"
+    model.write_text(linkdyn.example_path("hoeken").read_text("utf-8"), "utf-8")
+    res = CliRunner().invoke(main, [
+        "sweep", str(model), "--vary", "bodies.ground.points.O4[0]=40:200:5",
+        "--vary", "bodies.coupler.points.O3[0]=60:140:4", "--samples", "41", "--metric",
+        "peak_tau_J1", "--metric", "path_deviation", "--backend", "numpy", "--report",
+        "-o", str(tmp_path / "s")])
+    assert res.exit_code == 0, res.output
+    df = pd.read_parquet(tmp_path / "s" / "designs.parquet")
+    pg = browser.new_page(viewport={"width": 1200, "height": 900})
+    errors = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.on("console", lambda m: m.type == "error" and errors.append(m.text))
+    pg.goto((tmp_path / "s" / "sweep.html").resolve().as_uri())
+    pg.wait_for_function("window.__linkdynSweep === true")
+    rows = lambda sel: sorted(pg.eval_on_selector_all(  # noqa: E731
+        sel, "es => es.map(e => +e.getAttribute('data-row'))"))
+    # default axes are the two metrics: one point per valid design (invalid ones have none)
+    valid = np.flatnonzero(df.valid.to_numpy()).tolist()
+    assert rows("#scatter circle.pt") == valid
+    v = df.valid.to_numpy()
+    front = pareto_front(np.where(v, df.peak_tau_J1, np.nan), np.where(v, df.path_deviation,
+                                                                        np.nan)).tolist()
+    assert rows("#scatter circle.front") == front
+    assert pg.locator("#scatter path.frontline").count() == 1
+    # parameters on both axes: every design, invalid ones grey, hidden by the checkbox
+    pg.select_option("#sx", "bodies.ground.points.O4[0]")
+    pg.select_option("#sy", "bodies.coupler.points.O3[0]")
+    assert rows("#scatter circle.pt") == list(range(len(df)))
+    assert rows("#scatter circle.invalid") == np.flatnonzero(~v).tolist()
+    pg.check("#hideinvalid")
+    assert rows("#scatter circle.pt") == valid
+    # hover reads the design's row; the best designs are the lowest valid ones
+    box = pg.locator("#scatter circle.pt").first.bounding_box()
+    pg.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    assert "design " in pg.inner_text("#scatter .tooltip")
+    best = df[df.valid].sort_values(["peak_tau_J1", "design"]).index[:3].tolist()
+    assert pg.eval_on_selector_all("#best tbody tr", "es => es.map(e => +e.dataset.row)") == best
+    assert "linkdyn compare --sweep" in pg.inner_text("#cmpcmd")
+    assert "--by peak_tau_J1" in pg.inner_text("#cmpcmd")
+    assert errors == []
+    pg.close()

@@ -3,6 +3,8 @@ and give the same table in this process, in worker processes and on a Dask clust
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -334,3 +336,65 @@ def test_a_sweep_killed_by_sigkill_resumes_from_its_chunks(tmp_path):
     assert r.exit_code == 0, r.output
     assert pd.read_parquet(tmp_path / "a" / "designs.parquet").equals(
         pd.read_parquet(tmp_path / "b" / "designs.parquet"))
+
+
+def _front_brute(a, b):
+    """The Pareto front (both minimized) by its definition, O(n^2): no other point is at most
+    as large in both and smaller in one."""
+    ok = np.isfinite(a) & np.isfinite(b)
+    return [i for i in range(len(a)) if ok[i] and not any(
+        ok[j] and a[j] <= a[i] and b[j] <= b[i] and (a[j] < a[i] or b[j] < b[i])
+        for j in range(len(a)))]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pareto_front_is_the_brute_force_front(seed):
+    from linkdyn.report.sweep import pareto_front
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 120))
+    a, b = rng.normal(size=n), rng.normal(size=n)
+    if seed % 2:  # ties, duplicates and gaps (the cases a sort gets wrong)
+        a, b = np.round(a, 0), np.round(b, 0)
+        a[rng.random(n) < 0.1] = np.nan
+        b[rng.random(n) < 0.1] = np.inf
+    got = pareto_front(a, b)
+    assert got.tolist() == _front_brute(a, b)
+    assert len(got) >= (1 if np.any(np.isfinite(a) & np.isfinite(b)) else 0)
+
+
+def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_path, monkeypatch):
+    import json
+
+    import pandas as pd
+    args = ["sweep", HOEKEN, "--vary", "bodies.ground.points.O4[0]=40:200:5",
+            "--vary", "bodies.coupler.points.O3[0]=60:140:4", "--samples", 41,
+            "--metric", "peak_tau_J1", "--metric", "path_deviation", "--backend", "numpy",
+            "--report"]
+    r = _cli(*args, "-o", tmp_path / "s")
+    assert r.exit_code == 0, r.output
+    df = pd.read_parquet(tmp_path / "s" / "designs.parquet")
+    assert 0 < df.valid.sum() < len(df)  # both kinds of design on the page
+    text = (tmp_path / "s" / "sweep.html").read_text("utf-8")
+    assert "http://" not in text and "https://" not in text and "<script src" not in text
+    blob = re.search(r'<script id="linkdyn-data" type="application/json">(.*?)</script>', text,
+                     re.S).group(1)
+    data = json.loads(blob)
+    assert data["design"] == df.design.tolist() and data["valid"] == df.valid.tolist()
+    for c in ["bodies.ground.points.O4[0]", "bodies.coupler.points.O3[0]", "peak_tau_J1",
+              "path_deviation"]:
+        want = df[c].to_numpy(float)
+        got = np.array([np.nan if v is None else v for v in data["cols"][c]])
+        np.testing.assert_array_equal(got, want)
+    from linkdyn.report.sweep import pareto_front
+    v = df.valid.to_numpy()
+    assert data["fronts"]["peak_tau_J1|path_deviation"] == pareto_front(
+        np.where(v, df.peak_tau_J1, np.nan), np.where(v, df.path_deviation, np.nan)).tolist()
+    # a page that cannot be written leaves no file at all
+    import linkdyn.report.sweep as page
+
+    def boom(*a, **k):
+        raise RuntimeError("page failed")
+    monkeypatch.setattr(page, "render_sweep", boom)
+    r = _cli(*args, "-o", tmp_path / "f")
+    assert r.exit_code != 0
+    assert not any((tmp_path / "f").glob("*.html")) and not any((tmp_path / "f").glob("*.parquet"))

@@ -105,9 +105,12 @@ def _show_progress(flag):
               help="Continue an interrupted sweep in OUTDIR: finished chunks are kept.")
 @click.option("--progress/--no-progress", default=None,
               help="Progress bar on stderr (default: when stderr is a terminal).")
+@click.option("--report", is_flag=True,
+              help="Also write OUTDIR/sweep.html: the scatter of any two columns, the Pareto "
+                   "front of two metrics and the best designs, one self-contained page.")
 def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, fluctuation,
           backend, method, designs, designs_csv, metrics, outdir, workers, scheduler, chunk,
-          resume, progress):
+          resume, progress, report):
     """Solve many designs of MODEL; one row of metrics per design.
 
     Writes OUTDIR/designs.parquet (the parameters, valid, reason and the metrics of every design)
@@ -149,7 +152,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                               workers=workers, scheduler=scheduler,
                               progress=_show_progress(progress))
     summ = sweep_mod.summary(task, df, stats, bounds=bounds, method=method, seed=seed)
-    sweep_mod.write_results(out, df, _json_safe(summ))
+    sweep_mod.write_results(out, df, _json_safe(summ), report=report)
     rate = stats["design_samples_per_s"]
     click.echo(f"{summ['designs']} designs x {len(t)} samples: {summ['valid']} valid, "
                f"{summ['invalid']} invalid; {stats['chunks_computed']} chunks computed"
@@ -159,7 +162,8 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
         if m is not None:
             click.echo(f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g}  (lowest: design "
                        f"{m['min_design']})")
-    click.echo(f"wrote {out / 'designs.parquet'}, {out / 'summary.json'}")
+    click.echo(f"wrote {out / 'designs.parquet'}, {out / 'summary.json'}"
+               + (f", {out / 'sweep.html'}" if report else ""))
 
 
 def _read_designs(path):

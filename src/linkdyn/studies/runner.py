@@ -380,15 +380,19 @@ def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None)
     return out
 
 
-def write_results(outdir, df, summary_data: dict) -> None:
-    """Write ``designs.parquet`` and ``summary.json`` (both or neither, by
-    :func:`linkdyn.outputs.write_outputs`), then drop the chunks."""
+def write_results(outdir, df, summary_data: dict, *, report: bool = False) -> None:
+    """Write ``designs.parquet`` and ``summary.json`` (and ``sweep.html`` with ``report``; all
+    or none, by :func:`linkdyn.outputs.write_outputs`), then drop the chunks."""
     from ..outputs import write_outputs
 
     text = json.dumps(summary_data, indent=2, default=_json_default) + "\n"
-    write_outputs(Path(outdir), {
-        "designs.parquet": lambda p: df.to_parquet(p, index=False),
-        "summary.json": lambda p: p.write_text(text)}, owned=("designs.parquet", "summary.json"))
+    files = {"designs.parquet": lambda p: df.to_parquet(p, index=False),
+             "summary.json": lambda p: p.write_text(text)}
+    if report:
+        from ..report.sweep import render_sweep
+        page = render_sweep(df, json.loads(text), os.fspath(outdir))
+        files["sweep.html"] = lambda p: p.write_text(page, encoding="utf-8")
+    write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json", "sweep.html"))
     shutil.rmtree(Path(outdir) / "chunks", ignore_errors=True)
 
 

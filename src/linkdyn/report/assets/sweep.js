@@ -1,0 +1,123 @@
+/* linkdyn sweep: the scatter of any two columns of a sweep's designs, the Pareto front of two
+   metrics (computed in Python) and the best designs of a metric. Inlined into sweep.html after
+   common.js; reads the JSON in #linkdyn-data; no network, no library. */
+(function () {
+  "use strict";
+  var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
+  var el = LD.el, h = LD.h, fin = LD.fin, fmt = LD.fmt, niceStep = LD.niceStep,
+      tickText = LD.tickText, range = LD.range;
+  var PW = 640, PH = 420, ML = 64, MR = 16, MT = 16, MB = 40;
+  var columns = D.params.concat(D.metrics), N = D.design.length;
+  var box = document.getElementById("scatter");
+  var sx = document.getElementById("sx"), sy = document.getElementById("sy");
+  var pa = document.getElementById("pa"), pb = document.getElementById("pb");
+  var hide = document.getElementById("hideinvalid");
+  var bm = document.getElementById("bm"), bn = document.getElementById("bn");
+
+  function fill(sel, names, k) {
+    names.forEach(function (c) { var o = h("option", "", sel, c); o.value = c; });
+    if (names.length) sel.value = names[Math.min(k, names.length - 1)];
+  }
+  function label(c) { return D.units[c] ? c + " (" + D.units[c] + ")" : c; }
+  // the front of the chosen pair of metrics: indices into the rows ([] for one metric twice)
+  function front() {
+    return D.fronts[pa.value + "|" + pb.value] || D.fronts[pb.value + "|" + pa.value] || [];
+  }
+  // one row of a design as readout lines
+  function rowLines(i) {
+    var out = ["design " + D.design[i] + (D.valid[i] ? "" : " (invalid: " + D.reason[i] + ")")];
+    columns.forEach(function (c) { out.push(label(c) + " = " + fmt(D.cols[c][i])); });
+    return out;
+  }
+
+  function draw() {
+    box.innerHTML = "";
+    var X = D.cols[sx.value], Y = D.cols[sy.value], fr = front(), onFront = {};
+    fr.forEach(function (i) { onFront[i] = true; });
+    var shown = [];
+    for (var i = 0; i < N; i++)
+      if (fin(X[i]) && fin(Y[i]) && (D.valid[i] || !hide.checked)) shown.push(i);
+    var xr = range([shown.map(function (i) { return X[i]; })]),
+        yr = range([shown.map(function (i) { return Y[i]; })]);
+    var px = 0.04 * (xr[1] - xr[0]), py = 0.05 * (yr[1] - yr[0]);
+    xr = [xr[0] - px, xr[1] + px]; yr = [yr[0] - py, yr[1] + py];
+    var svg = el("svg", {viewBox: "0 0 " + PW + " " + PH}, box);
+    var x0 = ML, x1 = PW - MR, y0 = PH - MB, y1 = MT;
+    var fx = function (v) { return x0 + (v - xr[0]) / (xr[1] - xr[0]) * (x1 - x0); };
+    var fy = function (v) { return y0 - (v - yr[0]) / (yr[1] - yr[0]) * (y0 - y1); };
+    // axes and ticks
+    var st = niceStep(yr[1] - yr[0], 6), v;
+    for (v = Math.ceil(yr[0] / st) * st; v <= yr[1]; v += st) {
+      el("line", {x1: x0, x2: x1, y1: fy(v), y2: fy(v), "class": "gridl"}, svg);
+      el("text", {x: x0 - 4, y: fy(v) + 3.5, "text-anchor": "end", "class": "tick"}, svg).textContent = tickText(v, st);
+    }
+    var xt = niceStep(xr[1] - xr[0], 7);
+    for (v = Math.ceil(xr[0] / xt) * xt; v <= xr[1]; v += xt)
+      el("text", {x: fx(v), y: y0 + 15, "text-anchor": "middle", "class": "tick"}, svg).textContent = tickText(v, xt);
+    el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
+    el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
+    el("text", {x: x1, y: PH - 4, "text-anchor": "end", "class": "tick"}, svg).textContent = label(sx.value);
+    el("text", {x: 4, y: 10, "class": "tick"}, svg).textContent = label(sy.value);
+    // the front as a staircase when the axes are its two metrics
+    var same = sx.value === pa.value && sy.value === pb.value, swap = sx.value === pb.value && sy.value === pa.value;
+    if ((same || swap) && fr.length) {
+      var pts = fr.slice().sort(function (i, j) { return X[i] - X[j] || Y[i] - Y[j]; }), d = "";
+      pts.forEach(function (i, k) { d += (k ? "L" : "M") + fx(X[i]).toFixed(1) + "," + fy(Y[i]).toFixed(1); });
+      el("path", {d: d, "class": "frontline"}, svg);
+    }
+    // one point per shown design; the front's in red, invalid ones grey
+    shown.forEach(function (i) {
+      var cls = "pt" + (D.valid[i] ? "" : " invalid") + (onFront[i] ? " front" : "");
+      el("circle", {cx: fx(X[i]).toFixed(1), cy: fy(Y[i]).toFixed(1), r: onFront[i] ? 4.5 : 3,
+                    "class": cls, "data-row": i}, svg);
+    });
+    document.getElementById("frontnote").textContent = pa.value === pb.value ? "choose two different metrics" :
+      fr.length + " designs on the front (red)" + (same || swap ? "" : "; plot these two metrics to see its line");
+    // hover readout: the nearest shown point
+    var tip = h("div", "tooltip", box), hot = null;
+    svg.addEventListener("pointermove", function (e) {
+      var r = svg.getBoundingClientRect(), mx = (e.clientX - r.left) / r.width * PW, my = (e.clientY - r.top) / r.height * PH;
+      var best = -1, bd = 400;
+      shown.forEach(function (i) { var dx = fx(X[i]) - mx, dy = fy(Y[i]) - my, dd = dx * dx + dy * dy; if (dd < bd) { bd = dd; best = i; } });
+      if (hot) hot.classList.remove("hot");
+      if (best < 0) { tip.style.display = "none"; hot = null; return; }
+      hot = svg.querySelector("circle[data-row='" + best + "']"); hot.classList.add("hot");
+      tip.innerHTML = "";
+      rowLines(best).forEach(function (t, k) { h("div", k ? "tr" : "tt", tip, t); });
+      tip.setAttribute("data-row", best);
+      LD.placeTip(tip, box, e);
+    });
+    svg.addEventListener("pointerleave", function () { tip.style.display = "none"; if (hot) hot.classList.remove("hot"); });
+  }
+
+  // the best valid designs of a metric, lowest first
+  function best() {
+    var m = bm.value, col = D.cols[m], n = +bn.value, t = document.getElementById("best");
+    var rows = [];
+    for (var i = 0; i < N; i++) if (D.valid[i] && fin(col[i])) rows.push(i);
+    rows.sort(function (i, j) { return col[i] - col[j] || i - j; });
+    rows = rows.slice(0, n);
+    t.innerHTML = "";
+    var hr = h("tr", "", h("thead", "", t));
+    h("th", "", hr, "design");
+    columns.forEach(function (c) { h("th", "", hr, label(c)); });
+    var tb = h("tbody", "", t);
+    rows.forEach(function (i) {
+      var tr = h("tr", "", tb);
+      tr.setAttribute("data-row", i);
+      h("td", "num", tr, String(D.design[i]));
+      columns.forEach(function (c) { var td = h("td", "num", tr, fmt(D.cols[c][i])); if (c === m) td.style.fontWeight = "bold"; });
+    });
+    document.getElementById("cmpcmd").textContent =
+      "linkdyn compare --sweep " + D.outdir + " --by " + m + " --best " + n + " -o " + D.outdir + "/compare";
+  }
+
+  // default axes: the first two metrics (the front's), else the first parameter and the metric
+  var two = D.metrics.length > 1;
+  fill(sx, columns, two ? D.params.length : 0); fill(sy, columns, D.params.length + (two ? 1 : 0));
+  fill(pa, D.metrics, 0); fill(pb, D.metrics, 1); fill(bm, D.metrics, 0);
+  [sx, sy, pa, pb, hide].forEach(function (s) { s.addEventListener("change", draw); });
+  [bm, bn].forEach(function (s) { s.addEventListener("change", best); });
+  draw(); best();
+  window.__linkdynSweep = true;
+})();

@@ -1,0 +1,136 @@
+"""``sweep.html``: a sweep's designs on one self-contained page: the scatter of any two columns,
+the Pareto front of two metrics and the best designs of a metric.
+
+The front is computed here, by :func:`pareto_front`, for every pair of metrics over the valid
+designs; the page only highlights it.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .page import _asset, _script, _version
+
+
+def pareto_front(a, b) -> np.ndarray:
+    """Indices of the Pareto front of two objectives, both minimized.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (n,)
+        The two objectives of ``n`` points; non-finite values take no part.
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        Increasing indices of the points that no other point dominates (``j`` dominates ``i``
+        when ``a[j] <= a[i]`` and ``b[j] <= b[i]``, one of them strictly). Equal points are
+        all on the front.
+    """
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    idx = np.flatnonzero(np.isfinite(a) & np.isfinite(b))
+    if not len(idx):
+        return idx
+    # sort by a, then b: a point is on the front when its b is the lowest of its equal-a group
+    # and strictly below every b of a strictly smaller a
+    o = idx[np.lexsort((b[idx], a[idx]))]
+    sa, sb = a[o], b[o]
+    start = np.flatnonzero(np.r_[True, sa[1:] != sa[:-1]])       # first of each equal-a group
+    group = np.cumsum(np.r_[True, sa[1:] != sa[:-1]]) - 1         # group of each sorted point
+    first = start[group]
+    before = np.r_[np.inf, np.minimum.accumulate(sb)][first]      # min b over smaller a
+    on = (sb == sb[first]) & (sb < before)
+    return np.sort(o[on])
+
+
+def _col(values) -> list:
+    """A column for JSON: finite floats, None elsewhere."""
+    return [float(v) if v is not None and math.isfinite(v) else None for v in values]
+
+
+def sweep_data(df, summary: dict, outdir: str = "OUTDIR") -> dict:
+    """The page's data: every design row, the column roles and the Pareto front of every pair of
+    metrics (indices into the rows, valid designs only)."""
+    params = [p["path"] for p in summary["parameters"]]
+    metrics = [m for m in summary["metrics"]]
+    valid = df["valid"].to_numpy(bool)
+    cols = {c: _col(df[c].to_numpy(float)) for c in params + metrics}
+    fronts = {}
+    for i, m1 in enumerate(metrics):
+        for m2 in metrics[i + 1:]:
+            a = np.where(valid, df[m1].to_numpy(float), np.nan)
+            b = np.where(valid, df[m2].to_numpy(float), np.nan)
+            fronts[f"{m1}|{m2}"] = pareto_front(a, b).tolist()
+    return {"design": [int(d) for d in df["design"]], "valid": valid.tolist(),
+            "reason": [str(r) if isinstance(r, str) else "" for r in df["reason"]],
+            "params": params, "units": {p["path"]: p.get("unit") or "" for p in summary["parameters"]},
+            "metrics": metrics, "cols": cols, "fronts": fronts, "outdir": outdir}
+
+
+def render_sweep(df, summary: dict, outdir: str = "OUTDIR") -> str:
+    """The whole sweep page as a string."""
+    data = sweep_data(df, summary, outdir)
+    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    model = summary.get("model")
+    title = html.escape(f"Sweep of {Path(model).name if model else 'a model'}")
+    note = html.escape(f"{summary['designs']} designs ({summary['valid']} valid, "
+                       f"{summary['invalid']} invalid) x {summary['samples']} samples, "
+                       f"method {summary.get('method')}")
+    return _PAGE.format(title=title, note=note, css=_asset("report.css"),
+                        js=_script("sweep.js"), data=blob, version=html.escape(_version()))
+
+
+_PAGE = """<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<meta name="generator" content="linkdyn {version}">
+<title>{title} — linkdyn</title>
+<style>
+{css}
+#scatter {{ max-width: 720px; }}
+#scatter circle.pt {{ fill: #1565c0; fill-opacity: 0.6; }}
+#scatter circle.pt.invalid {{ fill: #9e9e9e; fill-opacity: 0.5; }}
+#scatter circle.pt.front {{ fill: #c62828; fill-opacity: 1; }}
+#scatter circle.pt.hot {{ stroke: #000; stroke-width: 2; }}
+#scatter path.frontline {{ fill: none; stroke: #c62828; stroke-width: 1.5; }}
+</style>
+</head>
+<body>
+<header>
+<h1>{title}</h1>
+<p class="note">{note}. Parameters in the model file's units, metrics SI. Hover a point to read
+its design.</p>
+</header>
+<section>
+  <div class="plotbar"><h2>Designs</h2>
+  <label>x <select id="sx"></select></label>
+  <label>y <select id="sy"></select></label>
+  <label><input type="checkbox" id="hideinvalid"> hide invalid designs</label></div>
+  <div class="plotbar"><h2>Pareto front</h2>
+  <label>minimize <select id="pa"></select></label>
+  <label>and <select id="pb"></select></label>
+  <span id="frontnote" class="note"></span></div>
+  <div id="scatter" class="panel"></div>
+</section>
+<section class="tables">
+  <div class="plotbar"><h2>Best designs</h2>
+  <label>lowest <select id="bm"></select></label>
+  <label>how many <select id="bn"><option>3</option><option>5</option><option>10</option></select></label></div>
+  <div class="scroll"><table id="best" class="grid"></table></div>
+  <p class="note">Compare them curve by curve: <code id="cmpcmd"></code></p>
+</section>
+<footer class="note">linkdyn {version}</footer>
+<script id="linkdyn-data" type="application/json">{data}</script>
+<script>
+{js}
+</script>
+</body>
+</html>
+"""
