@@ -938,6 +938,12 @@ def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browse
                                                                         np.nan)).tolist()
     assert rows("#scatter circle.front") == front
     assert pg.locator("#scatter path.frontline").count() == 1
+    # log axes keep every (positive) point and the front
+    pg.check("#logx")
+    pg.check("#logy")
+    assert rows("#scatter circle.pt") == valid and rows("#scatter circle.front") == front
+    pg.uncheck("#logx")
+    pg.uncheck("#logy")
     # parameters on both axes: every design, invalid ones grey, hidden by the checkbox
     pg.select_option("#sx", "bodies.ground.points.O4[0]")
     pg.select_option("#sy", "bodies.coupler.points.O3[0]")
@@ -948,7 +954,11 @@ def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browse
     # hover reads the design's row; the best designs are the lowest valid ones
     box = pg.locator("#scatter circle.pt").first.bounding_box()
     pg.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    assert "design " in pg.inner_text("#scatter .tooltip")
+    first = int(pg.locator("#scatter circle.pt").first.get_attribute("data-row"))
+    tip = pg.inner_text("#scatter .tooltip")
+    assert f"design {df.design[first]}" in tip
+    shown = re.search(r"bodies\.ground\.points\.O4\[0\] \(mm\) = (\S+)", tip).group(1)
+    assert float(shown) == pytest.approx(df["bodies.ground.points.O4[0]"][first], rel=1e-3)
     best = df[df.valid].sort_values(["peak_tau_J1", "design"]).index[:3].tolist()
     assert pg.eval_on_selector_all("#best tbody tr", "es => es.map(e => +e.dataset.row)") == best
     assert "linkdyn compare --sweep" in pg.inner_text("#cmpcmd")

@@ -112,7 +112,9 @@ its design.</p>
   <div class="plotbar"><h2>Designs</h2>
   <label>x <select id="sx"></select></label>
   <label>y <select id="sy"></select></label>
-  <label><input type="checkbox" id="hideinvalid"> hide invalid designs</label></div>
+  <label><input type="checkbox" id="hideinvalid"> hide invalid designs</label>
+  <label><input type="checkbox" id="logx"> log x</label>
+  <label><input type="checkbox" id="logy"> log y</label></div>
   <div class="plotbar"><h2>Pareto front</h2>
   <label>minimize <select id="pa"></select></label>
   <label>and <select id="pb"></select></label>

@@ -32,7 +32,10 @@
 
   function draw() {
     box.innerHTML = "";
-    var X = D.cols[sx.value], Y = D.cols[sy.value], fr = front(), onFront = {};
+    // a log10 axis drops the designs whose value is not positive
+    var lx = document.getElementById("logx").checked, ly = document.getElementById("logy").checked;
+    var tr = function (a, lg) { return lg ? a.map(function (v) { return fin(v) && v > 0 ? Math.log10(v) : null; }) : a; };
+    var X = tr(D.cols[sx.value], lx), Y = tr(D.cols[sy.value], ly), fr = front(), onFront = {};
     fr.forEach(function (i) { onFront[i] = true; });
     var shown = [];
     for (var i = 0; i < N; i++)
@@ -56,9 +59,9 @@
       el("text", {x: fx(v), y: y0 + 15, "text-anchor": "middle", "class": "tick"}, svg).textContent = tickText(v, xt);
     el("line", {x1: x0, x2: x0, y1: y0, y2: y1, "class": "axis"}, svg);
     el("line", {x1: x0, x2: x1, y1: y0, y2: y0, "class": "axis"}, svg);
-    el("text", {x: x1, y: PH - 4, "text-anchor": "end", "class": "tick"}, svg).textContent = label(sx.value);
-    el("text", {x: 4, y: 10, "class": "tick"}, svg).textContent = label(sy.value);
-    // the front as a staircase when the axes are its two metrics
+    el("text", {x: x1, y: PH - 4, "text-anchor": "end", "class": "tick"}, svg).textContent = (lx ? "log10 " : "") + label(sx.value);
+    el("text", {x: 4, y: 10, "class": "tick"}, svg).textContent = (ly ? "log10 " : "") + label(sy.value);
+    // the front joined by a line when the axes are its two metrics
     var same = sx.value === pa.value && sy.value === pb.value, swap = sx.value === pb.value && sy.value === pa.value;
     if ((same || swap) && fr.length) {
       var pts = fr.slice().sort(function (i, j) { return X[i] - X[j] || Y[i] - Y[j]; }), d = "";
@@ -116,7 +119,7 @@
   var two = D.metrics.length > 1;
   fill(sx, columns, two ? D.params.length : 0); fill(sy, columns, D.params.length + (two ? 1 : 0));
   fill(pa, D.metrics, 0); fill(pb, D.metrics, 1); fill(bm, D.metrics, 0);
-  [sx, sy, pa, pb, hide].forEach(function (s) { s.addEventListener("change", draw); });
+  [sx, sy, pa, pb, hide, document.getElementById("logx"), document.getElementById("logy")].forEach(function (s) { s.addEventListener("change", draw); });
   [bm, bn].forEach(function (s) { s.addEventListener("change", best); });
   draw(); best();
   window.__linkdynSweep = true;
