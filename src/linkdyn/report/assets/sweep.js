@@ -74,7 +74,8 @@
       el("circle", {cx: fx(X[i]).toFixed(1), cy: fy(Y[i]).toFixed(1), r: onFront[i] ? 4.5 : 3,
                     "class": cls, "data-row": i}, svg);
     });
-    document.getElementById("frontnote").textContent = pa.value === pb.value ? "choose two different metrics" :
+    document.getElementById("frontnote").textContent = D.metrics.length < 2 ? "the front needs two metrics (sweep with two --metric or more)" :
+      pa.value === pb.value ? "choose two different metrics" :
       fr.length + " designs on the front (red)" + (same || swap ? "" : "; plot these two metrics to see its line");
     // hover readout: the nearest shown point
     var tip = h("div", "tooltip", box), hot = null;
