@@ -10,10 +10,9 @@ and its curves are the series of its own :func:`.data.page_data`, drawn together
 from __future__ import annotations
 
 import html
-import json
 
 from .data import MAX_FRAMES, PALETTE, page_data
-from .page import _asset, _script, _version
+from .page import html_page
 from .tables import fmt, key_value, key_where
 
 # panels overlaid: the sections and titles of page_data's plots worth comparing
@@ -73,31 +72,22 @@ def key_table_html(designs: list) -> str:
 def render_compare(runs, *, max_frames: int = MAX_FRAMES) -> str:
     """The whole comparison page as a string."""
     data = compare_data(runs, max_frames=max_frames)
-    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     names = ", ".join(d["name"] for d in data["designs"])
     files = "".join(f"<li style='color:{d['color']}'><b>{html.escape(d['name'])}</b>: "
                     f"{html.escape(d['model'] or '')}, {fmt(d['samples'])} samples</li>"
                     for d in data["designs"])
-    return _PAGE.format(title=html.escape(f"Comparison: {names}"), css=_asset("report.css"),
-                        js=_script("compare.js"), data=blob, files=files,
-                        table=key_table_html(data["designs"]), version=html.escape(_version()))
+    body = _BODY.format(title=html.escape(f"Comparison: {names}"), files=files,
+                        table=key_table_html(data["designs"]))
+    return html_page(title=html.escape(f"Comparison: {names}"), body=body, data=data,
+                     script="compare.js", css=_CSS)
 
 
-_PAGE = """<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<meta name="generator" content="linkdyn {version}">
-<title>{title} — linkdyn</title>
-<style>
-{css}
-table.cmp td {{ min-width: 9em; }}
-table.cmp tr.grp th {{ background: var(--panel); font-size: 12px; text-transform: uppercase; color: var(--muted); }}
-</style>
-</head>
-<body>
-<header>
+_CSS = """
+table.cmp td { min-width: 9em; }
+table.cmp tr.grp th { background: var(--panel); font-size: 12px; text-transform: uppercase; color: var(--muted); }
+"""
+
+_BODY = """<header>
 <h1>{title}</h1>
 <ul class="designs">{files}</ul>
 <p class="note">Angles in degrees, everything else SI. Each design solved as
@@ -112,11 +102,4 @@ table.cmp tr.grp th {{ background: var(--panel); font-size: 12px; text-transform
 <h2>Key results</h2>
 <div class="scroll">{table}</div>
 </section>
-<footer class="note">linkdyn {version}</footer>
-<script id="linkdyn-data" type="application/json">{data}</script>
-<script>
-{js}
-</script>
-</body>
-</html>
 """

@@ -28,18 +28,32 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     """The whole page as a string."""
     data = page_data(sol, max_frames=max_frames, summary=summary)
     m = sol.model
-    blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
-    blob = blob.replace("</", "<\\/")  # never close the <script> early
     title = html.escape(m.name or "mechanism")
     n, total = len(data["t"]), int(len(sol.t))
     note = (f"{total} samples; the page shows {n} of them evenly spaced (results.csv has all)"
             if n < total else f"{total} samples")
     desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
-    return _PAGE.format(
-        title=title, css=_asset("report.css"), js=_script("report.js"), data=blob, desc=desc,
-        note=html.escape(note), summary=summary_html(summary, scales(sol)), model=model_html(sol),
-        key=key_results_html(data["key"]),
-        version=html.escape(_version()))
+    body = _BODY.format(
+        title=title, desc=desc, note=html.escape(note),
+        summary=summary_html(summary, scales(sol)), model=model_html(sol),
+        key=key_results_html(data["key"]))
+    return html_page(title=title, kind="linkdyn report", body=body, data=data,
+                     script="report.js",
+                     footer="recursive DeNOC kinematics and inverse dynamics")
+
+
+def html_page(*, title: str, body: str, data: dict, script: str, kind: str = "linkdyn",
+              css: str = "", footer: str = "") -> str:
+    """One self-contained page: the shared head and ``report.css`` (plus the page's own
+    ``css``), its ``body``, ``data`` as JSON in ``#linkdyn-data`` and the script
+    ``common.js`` + ``assets/<script>``. ``title`` is already HTML-escaped."""
+    blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    blob = blob.replace("</", "<\\/")  # never close the <script> early
+    version = html.escape(_version())
+    return _SHELL.format(title=title, kind=kind, version=version,
+                         css=_asset("report.css") + css, body=body, data=blob,
+                         js=_script(script),
+                         footer=f"linkdyn {version}" + (f" · {footer}" if footer else ""))
 
 
 def _asset(name: str) -> str:
@@ -60,19 +74,28 @@ def _version() -> str:
         return ""
 
 
-_PAGE = """<!DOCTYPE html>
+_SHELL = """<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <meta name="generator" content="linkdyn {version}">
-<title>{title} — linkdyn report</title>
+<title>{title} — {kind}</title>
 <style>
 {css}
 </style>
 </head>
 <body>
-<header>
+{body}<footer class="note">{footer}</footer>
+<script id="linkdyn-data" type="application/json">{data}</script>
+<script>
+{js}
+</script>
+</body>
+</html>
+"""
+
+_BODY = """<header>
 <h1>{title}</h1>
 {desc}
 <p class="note">{note}. Angles in degrees, everything else SI. Click or drag on any plot to move
@@ -125,11 +148,4 @@ the time cursor; keys: space play/pause, ← → step.</p>
 <h2>Model</h2>
 <div class="scroll">{model}</div>
 </section>
-<footer class="note">linkdyn {version} · recursive DeNOC kinematics and inverse dynamics</footer>
-<script id="linkdyn-data" type="application/json">{data}</script>
-<script>
-{js}
-</script>
-</body>
-</html>
 """

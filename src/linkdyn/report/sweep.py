@@ -8,13 +8,12 @@ designs; the page only highlights it.
 from __future__ import annotations
 
 import html
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
-from .page import _asset, _script, _version
+from .page import html_page
 
 
 def pareto_front(a, b) -> np.ndarray:
@@ -75,35 +74,25 @@ def sweep_data(df, summary: dict, outdir: str = "OUTDIR") -> dict:
 def render_sweep(df, summary: dict, outdir: str = "OUTDIR") -> str:
     """The whole sweep page as a string."""
     data = sweep_data(df, summary, outdir)
-    blob = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     model = summary.get("model")
     title = html.escape(f"Sweep of {Path(model).name if model else 'a model'}")
     note = html.escape(f"{summary['designs']} designs ({summary['valid']} valid, "
                        f"{summary['invalid']} invalid) x {summary['samples']} samples, "
                        f"method {summary.get('method')}")
-    return _PAGE.format(title=title, note=note, css=_asset("report.css"),
-                        js=_script("sweep.js"), data=blob, version=html.escape(_version()))
+    return html_page(title=title, body=_BODY.format(title=title, note=note), data=data,
+                     script="sweep.js", css=_CSS)
 
 
-_PAGE = """<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<meta name="viewport" content="width=device-width, initial-scale=1">
-<meta name="generator" content="linkdyn {version}">
-<title>{title} — linkdyn</title>
-<style>
-{css}
-#scatter {{ max-width: 720px; }}
-#scatter circle.pt {{ fill: #1565c0; fill-opacity: 0.6; }}
-#scatter circle.pt.invalid {{ fill: #9e9e9e; fill-opacity: 0.5; }}
-#scatter circle.pt.front {{ fill: #c62828; fill-opacity: 1; }}
-#scatter circle.pt.hot {{ stroke: #000; stroke-width: 2; }}
-#scatter path.frontline {{ fill: none; stroke: #c62828; stroke-width: 1.5; }}
-</style>
-</head>
-<body>
-<header>
+_CSS = """
+#scatter { max-width: 720px; }
+#scatter circle.pt { fill: #1565c0; fill-opacity: 0.6; }
+#scatter circle.pt.invalid { fill: #9e9e9e; fill-opacity: 0.5; }
+#scatter circle.pt.front { fill: #c62828; fill-opacity: 1; }
+#scatter circle.pt.hot { stroke: #000; stroke-width: 2; }
+#scatter path.frontline { fill: none; stroke: #c62828; stroke-width: 1.5; }
+"""
+
+_BODY = """<header>
 <h1>{title}</h1>
 <p class="note">{note}. Parameters in the model file's units, metrics SI. Hover a point to read
 its design.</p>
@@ -128,11 +117,4 @@ its design.</p>
   <div class="scroll"><table id="best" class="grid"></table></div>
   <p class="note">Compare them curve by curve: <code id="cmpcmd"></code></p>
 </section>
-<footer class="note">linkdyn {version}</footer>
-<script id="linkdyn-data" type="application/json">{data}</script>
-<script>
-{js}
-</script>
-</body>
-</html>
 """
