@@ -35,29 +35,17 @@ import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
 from linkdyn.forward import _start, _System, partition, simulate  # noqa: E402
-from linkdyn.model import Body, Joint, Model  # noqa: E402
+from linkdyn.model import Model  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 TARGET_RHS = 50e-6   # s per right-hand side of Hoeken (issue 13)
 
 
 def chain(n: int, phi0: float = math.pi / 4) -> Model:
-    """n parallelogram windows: n + 1 unit bars pinned to the ground 1 m apart, tips joined by
-    n unit bars, cut at the B joints (as MuJoCo's tree is)."""
-    P = lambda *xy: np.array(xy, float)  # noqa: E731
-    bodies = [Body("ground", {f"G{k}": P(k, 0) for k in range(n + 1)})]
-    joints = []
-    for k in range(n + 1):
-        bodies.append(Body(f"V{k}", {"O": P(0, 0), "T": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
-        joints.append(Joint(f"G{k}", "revolute", "ground", f"G{k}", f"V{k}", "O"))
-    for k in range(1, n + 1):
-        bodies.append(Body(f"H{k}", {"A": P(0, 0), "B": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
-        joints.append(Joint(f"A{k}", "revolute", f"V{k - 1}", "T", f"H{k}", "A"))
-        joints.append(Joint(f"B{k}", "revolute", f"H{k}", "B", f"V{k}", "T"))
-    phi = {f"V{k}": phi0 for k in range(n + 1)} | {f"H{k}": 0.0 for k in range(1, n + 1)}
-    return Model(f"chain{n}", tuple(bodies), tuple(joints), gravity=P(0, -9.81),
-                 assembly_phi=phi, initial_q={"G0": phi0},
-                 cut=tuple(f"B{k}" for k in range(1, n + 1)))
+    """n parallelogram windows (tests/builders.py), cut at the B joints as MuJoCo's tree is."""
+    from builders import parallelogram_chain
+
+    return parallelogram_chain(n, phi0, cut=[f"B{k}" for k in range(1, n + 1)])
 
 
 def mujoco_run(model, ref, t, dt, free, motor=None):

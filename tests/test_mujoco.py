@@ -173,6 +173,26 @@ def mjcf(model):
     return ET.tostring(root, encoding="unicode"), tree
 
 
+def _load_forces(model, m, d, time):
+    """The model's force and torque loads at ``time`` as MuJoCo generalized forces (nv,), at
+    the state already in ``d`` (linkdyn's z moment is MuJoCo's -y torque)."""
+    q_loads = np.zeros(m.nv)
+    for ld in model.loads:
+        bid = m.body(ld.body).id
+        if ld.kind == "force":
+            f = np.asarray(ld.value(time), float)
+            point = d.site_xpos[m.site(f"{ld.body}.{ld.point}").id].copy()
+            mujoco.mj_applyFT(m, d, np.array([f[0], 0.0, f[1]]), np.zeros(3), point, bid,
+                              q_loads)
+        elif ld.kind == "torque":
+            tq = float(np.asarray(ld.value(time)))
+            mujoco.mj_applyFT(m, d, np.zeros(3), np.array([0.0, -tq, 0.0]),
+                              d.xipos[bid].copy(), bid, q_loads)
+        else:  # pragma: no cover - the cases here have no springs or dampers
+            raise NotImplementedError(ld.kind)
+    return q_loads
+
+
 def _relative(sol, child, parent, jt, what):
     """Hinge: phi/omega/alpha of the child minus the parent's; slide: linkdyn's q/qd/qdd."""
     if jt.kind == PRISMATIC:
@@ -236,20 +256,7 @@ def test_efforts_and_loop_forces_match_mujoco(case):
             np.testing.assert_allclose(J[3 * c:3 * c + 3], jac[0] - jac[1], atol=1e-14)
 
         # applied loads as generalized forces (linkdyn z moment -> MuJoCo -y torque)
-        q_loads = np.zeros(nv)
-        for ld in model.loads:
-            bid = m.body(ld.body).id
-            if ld.kind == "force":
-                f = np.asarray(ld.value(t[k]), float)
-                point = d.site_xpos[m.site(f"{ld.body}.{ld.point}").id].copy()
-                mujoco.mj_applyFT(m, d, np.array([f[0], 0.0, f[1]]), np.zeros(3), point, bid,
-                                  q_loads)
-            elif ld.kind == "torque":
-                tq = float(np.asarray(ld.value(t[k])))
-                mujoco.mj_applyFT(m, d, np.zeros(3), np.array([0.0, -tq, 0.0]),
-                                  d.xipos[bid].copy(), bid, q_loads)
-            else:  # pragma: no cover - the cases here have no springs or dampers
-                raise NotImplementedError(ld.kind)
+        q_loads = _load_forces(model, m, d, t[k])
 
         # S: the actuator's generalized force on the tree dof (+tau on the joint's second body)
         S = np.zeros((nv, len(drivers)))
@@ -344,20 +351,7 @@ def test_slot_joint_matches_mujoco(case):
         row = np.array([n[0], 0.0, n[1]]) @ (jac[0] - jac[1])
         # linkdyn's rates keep the pin in the slot
         assert abs(row @ d.qvel) <= 1e-12 * np.linalg.norm(row) * np.linalg.norm(d.qvel)
-        q_loads = np.zeros(nv)
-        for ld in model.loads:
-            bid = m.body(ld.body).id
-            if ld.kind == "force":
-                f = np.asarray(ld.value(t[k]), float)
-                point = d.site_xpos[m.site(f"{ld.body}.{ld.point}").id].copy()
-                mujoco.mj_applyFT(m, d, np.array([f[0], 0.0, f[1]]), np.zeros(3), point, bid,
-                                  q_loads)
-            elif ld.kind == "torque":
-                tq = float(np.asarray(ld.value(t[k])))
-                mujoco.mj_applyFT(m, d, np.zeros(3), np.array([0.0, -tq, 0.0]),
-                                  d.xipos[bid].copy(), bid, q_loads)
-            else:  # pragma: no cover - the cases here have no springs or dampers
-                raise NotImplementedError(ld.kind)
+        q_loads = _load_forces(model, m, d, t[k])
         S = np.zeros((nv, len(model.drivers)))
         for c_, drv in enumerate(model.drivers):
             jt = model.joint(drv.joint)

@@ -21,6 +21,8 @@ from linkdyn.errors import AssemblyError, ModelError
 from linkdyn.forward import simulate
 from linkdyn.model import Body, Joint, Load, Model
 
+from builders import parallelogram_chain
+
 G = 9.81
 
 
@@ -246,20 +248,9 @@ def test_round_trip_efforts_of_analyze_reproduce_the_motion():
 # ---------------------------------------------------------------------------- through singular positions
 
 def ladder(n, phi0=math.pi / 4):
-    """n parallelogram windows in a row: n + 1 unit bars pinned to the ground 1 m apart, their
-    tips joined by n unit bars; 1 kg uniform bars, gravity -y."""
-    bodies = [Body("ground", {f"G{k}": P(k, 0) for k in range(n + 1)})]
-    joints = []
-    for k in range(n + 1):
-        bodies.append(Body(f"V{k}", {"O": P(0, 0), "T": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
-        joints.append(Joint(f"G{k}", "revolute", "ground", f"G{k}", f"V{k}", "O"))
-    for k in range(1, n + 1):
-        bodies.append(Body(f"H{k}", {"A": P(0, 0), "B": P(1, 0)}, 1.0, P(0.5, 0), 1 / 12))
-        joints.append(Joint(f"A{k}", "revolute", f"V{k - 1}", "T", f"H{k}", "A"))
-        joints.append(Joint(f"B{k}", "revolute", f"H{k}", "B", f"V{k}", "T"))
-    phi = {f"V{k}": phi0 for k in range(n + 1)} | {f"H{k}": 0.0 for k in range(1, n + 1)}
-    return Model(f"ladder{n}", tuple(bodies), tuple(joints), gravity=P(0, -G),
-                 assembly_phi=phi, initial_q={"G0": phi0})
+    """n parallelogram windows in a row (:func:`builders.parallelogram_chain`), cut where the
+    topology chooses."""
+    return parallelogram_chain(n, phi0, name="ladder", g=G)
 
 
 def test_parallelogram_chain_falls_flat_and_through():
