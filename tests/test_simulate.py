@@ -219,6 +219,30 @@ def test_state_loads_and_joint_torques_in_analyze():
         linkdyn.model_from_dict(d)
 
 
+def test_joint_loads_are_per_design_in_a_batch():
+    """A batch of designs differing in their joint_torque formulas and their joint_force's
+    value and axis (the slider's, varied with the joint) equals each design solved alone."""
+    t = np.linspace(0.0, 0.2, 7)
+
+    def slider(value, axis, torque):
+        d = tomllib.loads(linkdyn.example_path("slider_crank").read_text())
+        d["joints"][3]["axis"] = axis
+        d["loads"] = [{"kind": "joint_force", "joint": "J4", "value": value},
+                      {"kind": "joint_torque", "joint": "J2", "value": torque}]
+        return linkdyn.model_from_dict(d)
+    models = [slider("-2000*q_J4", [1.0, 0.0], "0.1*qd_J2"),
+              slider("100 + 0.5*qd_J4", [1.0, 0.1], "-0.3"),
+              slider("30.0", [1.0, -0.2], "0.02*(q_J2 - 10)")]
+    batch = linkdyn.analyze(models, t)
+    for k, m in enumerate(models):
+        one, b = linkdyn.analyze(m, t), batch.design(k)
+        for x, y in ((b.effort("J1"), one.effort("J1")), (b.loads.power, one.loads.power),
+                     (b.reactions.force, one.reactions.force)):
+            assert np.allclose(x, y, rtol=0, atol=1e-12 * np.max(np.abs(y))), k
+    # the designs' joint loads differ: the batch did not give all of them design 0's
+    assert not np.allclose(batch.design(1).effort("J1"), batch.design(0).effort("J1"))
+
+
 def test_round_trip_efforts_of_analyze_reproduce_the_motion():
     """analyze's driver torque for a prescribed motion, applied as a joint_torque in simulate
     (no driver), reproduces that motion."""

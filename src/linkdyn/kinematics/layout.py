@@ -54,7 +54,8 @@ class LoadRow:
     damping: Any
     values: tuple
     joint: int = -1          # joint_torque / joint_force: the joint (model order), else -1
-    axis: Any = None         # joint_force: the joint's axis in its first body's frame
+    axis: Any = None         # joint_force: the joint's axis in its first body's frame, (2,)
+    #                          or (2, D, 1) with designs
 
 
 @dataclass(frozen=True)
@@ -109,7 +110,8 @@ class Layout:
                                angle=take(x.angle))
             if isinstance(x, LoadRow):
                 return replace(x, stiffness=take(x.stiffness), free_length=take(x.free_length),
-                               damping=take(x.damping), values=tuple(x.values[i] for i in idx))
+                               damping=take(x.damping), values=tuple(x.values[i] for i in idx),
+                               axis=None if x.axis is None else take(x.axis))
             return x
         if not self.designs:
             raise ValueError("take(idx) needs a layout of stacked designs")
@@ -132,7 +134,8 @@ class Layout:
         cuts = tuple(replace(c, pa=vec(c.pa), pb=vec(c.pb), axis=vec(c.axis), angle=num(c.angle))
                      for c in self.cuts)
         loads = tuple(replace(r, stiffness=num(r.stiffness), free_length=num(r.free_length),
-                              damping=num(r.damping), values=(r.values[k],)) for r in self.loads)
+                              damping=num(r.damping), values=(r.values[k],),
+                              axis=None if r.axis is None else vec(r.axis)) for r in self.loads)
         return replace(
             self, joint_point=tuple(map(vec, self.joint_point)), axis=tuple(map(vec, self.axis)),
             angle=tuple(map(num, self.angle)), origin=tuple(map(vec, self.origin)),
@@ -389,7 +392,10 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
     loads = tuple(replace(row, stiffness=num([l.loads[k].stiffness for l in layouts]),
                           free_length=num([l.loads[k].free_length for l in layouts]),
                           damping=num([l.loads[k].damping for l in layouts]),
-                          values=tuple(l.loads[k].values[0] for l in layouts))
+                          values=tuple(l.loads[k].values[0] for l in layouts),
+                          # a joint_force's axis (the joint's, which designs may vary)
+                          axis=None if row.axis is None else vec([l.loads[k].axis
+                                                                  for l in layouts]))
                   for k, row in enumerate(first.loads))
     return Layout(topo, first.kind, per_body("joint_point"), per_body("axis"),
                   per_body_num("angle"), per_body("origin"), points, per_body("com"),
