@@ -28,6 +28,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .steps import atan2, step
+
 
 def _empty(k: int, *parts) -> np.ndarray:
     """An output of k components over the broadcast shape of ``parts`` (written in place by the
@@ -35,20 +37,62 @@ def _empty(k: int, *parts) -> np.ndarray:
     return np.empty((k,) + np.broadcast_shapes(*(np.shape(x) for x in parts)))
 
 
-def perp(a: np.ndarray) -> np.ndarray:
-    """Rotate ``a`` (2, ...) by +90 degrees: ``z x a``."""
-    out = _empty(2, a[0])
-    np.negative(a[1], out=out[0, ...])
-    out[1] = a[0]
+def _stack(parts) -> np.ndarray:
+    """A component-first array (k, ...) from a step's tuple of components."""
+    out = _empty(len(parts), *parts)
+    for k, x in enumerate(parts):
+        out[k] = x
     return out
 
 
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+# --- steps on component tuples (linkdyn.steps): the algebra, written once for both backends ---
+
+@step
+def normal(a):
+    """``perp(a) = z x a = (-a_y, a_x)`` of a vector ``(x, y)``."""
+    return (-a[1], a[0])
+
+
+@step
+def turned(c, s, a):
+    """The vector ``a`` ``(x, y)`` turned by the angle of cosine ``c`` and sine ``s``:
+    ``R a``."""
+    return (c * a[0] - s * a[1], s * a[0] + c * a[1])
+
+
+@step
+def at(t, a):
+    """The twist ``t`` ``(w, vx, vy)`` of a body at a point O, taken at O + a: ``A(a) t``
+    (eq. 2; the velocity gains ``w perp(a)``)."""
+    return (t[0], t[1] - t[0] * a[1], t[0] * a[0] + t[2])
+
+
+@step
+def about(w, a):
+    """The wrench ``w`` ``(n, fx, fy)`` about a point P, taken about P - a: ``A(a)^T w`` (the
+    moment gains ``a x f``)."""
+    return ((a[0] * w[2] - a[1] * w[1]) + w[0], w[1], w[2])
+
+
+@step
+def wrapped(angle):
+    """``angle`` wrapped into (-pi, pi] (by its sine and cosine)."""
+    return atan2(np.sin(angle), np.cos(angle))
+
+
+def perp(a: np.ndarray) -> np.ndarray:
+    """Rotate ``a`` (2, ...) by +90 degrees: ``z x a``."""
+    return _stack(normal(a))
+
+
+@step
+def cross(a, b):
     """Scalar planar cross product ``a x b = a_x b_y - a_y b_x``; (2, ...), (2, ...) -> (...)."""
     return a[0] * b[1] - a[1] * b[0]
 
 
-def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+@step
+def dot(a, b):
     """Dot product over the leading component axis; (k, ...), (k, ...) -> (...)."""
     out = a[0] * b[0]
     for k in range(1, len(a)):
@@ -58,12 +102,7 @@ def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def rotate_cs(c: np.ndarray, s: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Rotate vectors ``a`` (2, ...) by angles given by their cosines and sines (...)."""
-    out = _empty(2, c, a[0])
-    np.multiply(c, a[0], out=out[0, ...])
-    out[0] -= s * a[1]
-    np.multiply(s, a[0], out=out[1, ...])
-    out[1] += c * a[1]
-    return out
+    return _stack(turned(c, s, a))
 
 
 def rotate(phi: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -81,13 +120,7 @@ def twist(w: np.ndarray, v: np.ndarray) -> np.ndarray:
 def shift_twist(t: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Twist ``t`` (3, ...) of a body at point O, expressed at point O + a: ``A(a) t``,
     with ``A(a) = [[1, 0], [perp(a), 1]]`` the planar twist-propagation matrix (eq. 2)."""
-    out = _empty(3, t[0], a[0])
-    out[0] = t[0]
-    np.multiply(t[0], a[1], out=out[1, ...])
-    np.subtract(t[1], out[1], out=out[1, ...])
-    np.multiply(t[0], a[0], out=out[2, ...])
-    out[2] += t[2]
-    return out
+    return _stack(at(t, a))
 
 
 def shift_wrench(w: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -95,12 +128,7 @@ def shift_wrench(w: np.ndarray, a: np.ndarray) -> np.ndarray:
 
     The moment gains ``a x f``; the transpose of :func:`shift_twist`, so power is invariant.
     """
-    out = _empty(3, w[0], a[0])
-    np.multiply(a[0], w[2], out=out[0, ...])
-    out[0] -= a[1] * w[1]
-    out[0] += w[0]
-    out[1:] = w[1:]
-    return out
+    return _stack(about(w, a))
 
 
 # --- the motion/force API (shared in shape with a spatial module) ------------------------------
@@ -196,7 +224,7 @@ def inverse(X: Transform) -> Transform:
 
 def wrap(angle: np.ndarray) -> np.ndarray:
     """Angle wrapped into (-pi, pi]."""
-    return np.arctan2(np.sin(angle), np.cos(angle))
+    return wrapped(angle)
 
 
 def last(x: np.ndarray, k: int = 1) -> np.ndarray:

@@ -15,18 +15,22 @@ variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
 :data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (40-45 s, then cached
 on disk beside the modules), which only a large batch repays.
 
-numba caches each kernel by its own file: after editing a helper in another file (this one),
-delete the caches (``find src -name '*.nb[ic]' -delete``).
+The equations themselves are the steps of :mod:`linkdyn.steps` (registered here with numba),
+which the numpy solvers call on whole arrays. numba caches each kernel on disk by its own file
+only; since the steps live in other files, the caches are dropped whenever any source file of
+the package changes (:func:`_drop_stale_caches`).
 """
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from dataclasses import dataclass
 
 import numpy as np
 
+from .. import steps
 
 try:  # optional: the numpy path is complete without it
     import numba
@@ -109,6 +113,46 @@ def screw_views(x, i, d, ks):
     """Entity i's twist or wrench of ``x`` (n, 3, D, T) over the samples ``ks`` of design d:
     its components [w, vx, vy] or [M, Fx, Fy] as 1-D views (see :func:`vector_views`)."""
     return x[i, 0, d, ks], x[i, 1, d, ks], x[i, 2, d, ks]
+
+
+@inline
+def choose(cond, a, b):
+    """:func:`linkdyn.steps.select` on scalars."""
+    return a if cond else b
+
+
+def _drop_stale_caches() -> None:
+    """Delete the kernels' on-disk caches when any source file of the package has changed
+    since they were written (numba checks only each kernel's own file, not the steps it
+    calls). The package's files' sizes and modification times are the stamp."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    files = sorted(os.path.join(d, f) for d, _, fs in os.walk(root) for f in fs
+                   if f.endswith(".py"))
+    stamp = hashlib.sha256("\n".join(
+        f"{os.path.relpath(f, root)} {os.stat(f).st_size} {os.stat(f).st_mtime_ns}"
+        for f in files).encode()).hexdigest()
+    path = os.path.join(root, "__pycache__", "numba-sources.stamp")
+    try:
+        with open(path) as fh:
+            if fh.read() == stamp:
+                return
+    except OSError:
+        pass
+    try:
+        for d, _, fs in os.walk(root):
+            for f in fs:
+                if f.endswith((".nbi", ".nbc")):
+                    os.remove(os.path.join(d, f))
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "w") as fh:
+            fh.write(stamp)
+    except OSError:   # a read-only installation: numba then caches elsewhere or not at all
+        pass
+
+
+if numba is not None:   # the steps compile into the kernels that call them
+    steps.register(choose, arctan2)
+    _drop_stale_caches()
 
 
 def unsupported(kinds) -> list[str]:

@@ -9,11 +9,35 @@ write a module defining a :class:`JointKind` subclass and its instance ``KIND``,
 from __future__ import annotations
 
 from . import prismatic, revolute, slot
+from ..steps import by_kind
 from .base import JointKind, line_motion
 
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
                                                        slot.KIND)}
+
+
+#: Each kind's integer code, as the numeric layout and the compiled kernels carry it (0: none).
+CODES: dict[str, int] = {name: k + 1 for k, name in enumerate(REGISTRY)}
+
+
+def _dispatch(method: str):
+    """The step ``f(code, *args)`` running ``method`` of the kind with that code (the kinds that
+    define it: a kind that is never a tree joint has no ``place``)."""
+    return by_kind([(CODES[name], getattr(kind, method)) for name, kind in REGISTRY.items()
+                    if getattr(kind, method) is not None])
+
+
+# the kinds' steps by code (linkdyn.steps), as the solvers of both backends call them
+place = _dispatch("place")
+motion = _dispatch("motion")
+plus_motion = _dispatch("plus_motion")
+plus_motion_rate = _dispatch("plus_motion_rate")
+residual = _dispatch("residual")
+selected = _dispatch("selected")
+selected_rate = _dispatch("selected_rate")
+wrench = _dispatch("wrench")
+coordinate = _dispatch("coordinate")
 
 
 class UnknownJointKind(ValueError):
@@ -34,4 +58,4 @@ def get(name: str) -> JointKind:
                                + ", ".join(REGISTRY)) from None
 
 
-__all__ = ["JointKind", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]
+__all__ = ["CODES", "JointKind", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]

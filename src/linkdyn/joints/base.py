@@ -32,7 +32,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..planar import dot, perp
+from ..planar import dot, normal
+from ..steps import step
 
 
 class JointKind:
@@ -83,7 +84,29 @@ class JointKind:
     def __repr__(self) -> str:
         return f"<joint kind {self.name!r}>"
 
-    # --- as a tree joint --------------------------------------------------------------------
+    # --- the kind's steps (linkdyn.steps: static, on component tuples, for both backends) ---
+    # A kind defines those that apply as static methods decorated with ``@step``; the solvers
+    # call them through the dispatchers of :mod:`linkdyn.joints` (by the kind's code), or
+    # through the array methods below. Vectors are ``(x, y)``, twists and wrenches 3-tuples;
+    # cut rows are padded to three (the first :attr:`rows` count).
+    #
+    #   place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint) -> phi, cos, sin, r, e
+    #       the child's pose from its parent's and q (tree joint); e: the global axis, or (0, 0)
+    #   motion(s, e) -> p                             p_i of eq. (3)
+    #   plus_motion(s, e, x, rate) -> x + p_i rate
+    #   plus_motion_rate(s, e, w_axis, x, rate) -> x + pd_i rate (w_axis: angular velocity
+    #       of the body carrying the axis)
+    #   residual(angle, phi_a, phi_b, e_a, r_pa, r_pb) -> rows   position closure (cut joint)
+    #   selected(e_a, x) -> S x                           x: relative twist of b to a at the cut
+    #   selected_rate(e_a, w_a, x) -> (dS/dt) x
+    #   wrench(e_a, lam) -> S^T lam                   on the second body, about the cut point
+    #   coordinate(e_a, a, b, d, dd, dd2) -> q, qd, qdd   a cut joint's coordinate, from the
+    #       bodies' (phi, w, al) and the second body's cut point relative to the first's
+    #       (d, d', d'')
+    place = motion = plus_motion = plus_motion_rate = None
+    residual = selected = selected_rate = wrench = coordinate = None
+
+    # --- array forms of the steps (component-first arrays), for the numpy solvers -----------
     def place_child(self, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
         """Pose of the child from its parent's pose and the joint coordinate.
 
@@ -110,51 +133,61 @@ class JointKind:
         e : ndarray (2, ...) or None
             Global unit axis, if the kind has one.
         """
-        raise NotImplementedError(f"a {self.name} joint cannot be a tree joint")
+        self._tree_only()
+        phi, c, sn, r, e = self.place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint)
+        return phi, c, sn, _stack(r), (_stack(e) if "axis" in self.keys else None)
 
     def motion_vector(self, s, e, ndim):
         """Joint-motion propagation vector ``p_i`` (3, ...) of eq. (3); a constant one is shaped
         ``(3, 1, ...)`` to broadcast over ``ndim`` batch axes. ``e``: global axis or None."""
-        raise NotImplementedError(f"a {self.name} joint cannot be a tree joint")
+        self._tree_only()
+        p = _stack(self.motion(s, (0.0, 0.0) if e is None else e))
+        return p.reshape((3,) + (1,) * ndim) if p.ndim == 1 else p
 
     def add_motion(self, s, e, x, rate):
         """``x += p_i rate`` in place for a twist or twist rate ``x`` (3, ...); returns ``x``."""
-        raise NotImplementedError(f"a {self.name} joint cannot be a tree joint")
+        self._tree_only()
+        x[...] = _stack(self.plus_motion(s, (0.0, 0.0) if e is None else e, x, rate))
+        return x
 
     def add_motion_rate(self, s, e, w_axis, x, rate):
         """``x += pd_i rate`` in place (``w_axis`` (...): angular velocity of the body carrying
         the axis); returns ``x``."""
-        raise NotImplementedError(f"a {self.name} joint cannot be a tree joint")
+        self._tree_only()
+        x[...] = _stack(self.plus_motion_rate(s, (0.0, 0.0) if e is None else e, w_axis, x,
+                                              rate))
+        return x
 
-    # --- as a cut joint ---------------------------------------------------------------------
     def cut_residual(self, angle, phi_a, phi_b, e_a, r_pa, r_pb):
         """Loop-closure residual (rows, ...) from the bodies' angles and the cut points
         ``r_pa``, ``r_pb`` (2, ...) (m, rad as :attr:`row_units`)."""
-        raise NotImplementedError
+        return _stack(self.residual(angle, phi_a, phi_b, e_a, r_pa, r_pb)[:self.rows], phi_a,
+                      phi_b, r_pa[0], r_pb[0])
 
     def cut_rows(self, e_a, x):
         """Cut-row selection ``S x`` (rows, ...) of a relative twist or twist rate ``x`` (3, ...)
         of the second body to the first at the cut point."""
-        raise NotImplementedError
+        return _stack(self.selected(e_a, x)[:self.rows], x[0])
 
     def cut_rows_rate(self, e_a, w_a, x):
-        """``(dS/dt) x`` (rows, ...) or a scalar 0, ``w_a`` (...) the first body's angular
-        velocity (the axis turns with it)."""
-        raise NotImplementedError
+        """``(dS/dt) x`` (rows, ...), ``w_a`` (...) the first body's angular velocity (the
+        axis turns with it)."""
+        return _stack(self.selected_rate(e_a, w_a, x)[:self.rows], w_a, x[0])
 
     def cut_wrench(self, e_a, lam):
         """Constraint wrench ``S^T lam`` (3, ...) on the second body about the cut point, from
         the multipliers ``lam`` (rows, ...)."""
-        raise NotImplementedError
+        lam = tuple(lam[k] for k in range(self.rows)) + (0.0,) * (3 - self.rows)
+        return _stack(self.wrench(e_a, lam), lam[0])
 
     def joint_motion(self, e_a, a, b, points):
         """Coordinate, rate and acceleration (each (...)) of a cut joint from its bodies' motion.
 
         ``a``, ``b``: ``(phi, w, al)`` of the first and second body; ``points()`` gives the
         second body's point relative to the first's, its rate and acceleration ``(d, d', d'')``,
-        each (2, ...) (called only by kinds that need it).
+        each (2, ...).
         """
-        raise NotImplementedError
+        return self.coordinate(e_a, a, b, *points())
 
     # --- explicit matrices, for the dense reference -----------------------------------------
     def selection(self, e_a) -> np.ndarray:
@@ -162,15 +195,30 @@ class JointKind:
         rows of the identity's columns."""
         return np.asarray(self.cut_rows(np.asarray(e_a, float), np.eye(3))).reshape(self.rows, 3)
 
+    def _tree_only(self):
+        if self.place is None:
+            raise NotImplementedError(f"a {self.name} joint cannot be a tree joint")
 
-def line_motion(e_a, w_a, al_a, points):
+
+def _stack(parts, *like) -> np.ndarray:
+    """A component-first array (k, ...) from a step's tuple of components, broadcast with the
+    arrays ``like`` too (a constant step result takes the batch shape of its inputs)."""
+    shape = np.broadcast_shapes(*(np.shape(x) for x in tuple(parts) + like))
+    out = np.empty((len(parts),) + shape)
+    for k, x in enumerate(parts):
+        out[k] = x
+    return out
+
+
+@step
+def line_motion(e_a, w_a, al_a, d, dd, dd2):
     """Coordinate, rate and acceleration of a point sliding on a line fixed in body a.
 
-    ``s = d . e`` with ``d`` the second body's point from the first's and ``e`` (2, ...) turning
-    at ``w_a``: ``s' = d' . e + d . e'``, ``s'' = d'' . e + 2 d' . e' + d . e''`` with
+    ``s = d . e`` with ``d`` the second body's point from the first's and ``e`` turning at
+    ``w_a``: ``s' = d' . e + d . e'``, ``s'' = d'' . e + 2 d' . e' + d . e''`` with
     ``e' = w_a perp(e)``, ``e'' = al_a perp(e) - w_a^2 e``.
     """
-    d, dd, ddd = points()
-    ed = w_a * perp(e_a)
-    edd = al_a * perp(e_a) - w_a ** 2 * e_a
-    return dot(d, e_a), dot(dd, e_a) + dot(d, ed), dot(ddd, e_a) + 2 * dot(dd, ed) + dot(d, edd)
+    n = normal(e_a)
+    ed = (w_a * n[0], w_a * n[1])
+    edd = (al_a * n[0] - w_a ** 2 * e_a[0], al_a * n[1] - w_a ** 2 * e_a[1])
+    return dot(d, e_a), dot(dd, e_a) + dot(d, ed), dot(dd2, e_a) + 2 * dot(dd, ed) + dot(d, edd)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..planar import dot, perp, rotate_cs, twist, wrap
+from ..planar import dot, normal, turned, wrapped
+from ..steps import step
 from .base import JointKind, line_motion
 
 
@@ -26,46 +27,64 @@ class Prismatic(JointKind):
     effort = "force"
     dyad = "P"
 
-    def place_child(self, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
+    @staticmethod
+    @step
+    def place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
         # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the joint's first body
         ca, sa = np.cos(s * angle), np.sin(s * angle)
-        e = rotate_cs(cos_p, sin_p, axis_p)
+        e = turned(cos_p, sin_p, axis_p)
         return (phi_p + s * angle, ca * cos_p - sa * sin_p, sa * cos_p + ca * sin_p,
-                r_joint + (s * q) * e, e)
+                (r_joint[0] + (s * q) * e[0], r_joint[1] + (s * q) * e[1]), e)
 
-    def motion_vector(self, s, e, ndim):
+    @staticmethod
+    @step
+    def motion(s, e):
         # p_i = [0, s e]
-        return twist(0.0, s * e)
+        return (0.0, s * e[0], s * e[1])
 
-    def add_motion(self, s, e, x, rate):
-        x[1:] += (s * rate) * e
-        return x
+    @staticmethod
+    @step
+    def plus_motion(s, e, x, rate):
+        return (x[0], x[1] + (s * rate) * e[0], x[2] + (s * rate) * e[1])
 
-    def add_motion_rate(self, s, e, w_axis, x, rate):
+    @staticmethod
+    @step
+    def plus_motion_rate(s, e, w_axis, x, rate):
         # pd_i = [0, s w perp(e)], w of the body carrying the axis
-        x[1:] += (s * rate * w_axis) * perp(e)
-        return x
+        f = s * rate * w_axis
+        return (x[0], x[1] - f * e[1], x[2] + f * e[0])
 
-    def cut_residual(self, angle, phi_a, phi_b, e_a, r_pa, r_pb):
+    @staticmethod
+    @step
+    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
         # [phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n],  n = perp(e)
-        return np.stack((wrap(phi_b - phi_a - angle), dot(r_pb - r_pa, perp(e_a))))
+        return (wrapped(phi_b - phi_a - angle),
+                dot((r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), normal(e_a)), 0.0)
 
-    def cut_rows(self, e_a, x):
+    @staticmethod
+    @step
+    def selected(e_a, x):
         # S = [[1, 0, 0], [0, n_x, n_y]]
-        return np.stack(np.broadcast_arrays(x[0], dot(x[1:], perp(e_a))))
+        return (x[0], dot((x[1], x[2]), normal(e_a)), 0.0)
 
-    def cut_rows_rate(self, e_a, w_a, x):
+    @staticmethod
+    @step
+    def selected_rate(e_a, w_a, x):
         # dS/dt x = [0, n_dot . x_v],  n_dot = -w_a e
-        ndot_x = -w_a * dot(x[1:], e_a)
-        return np.stack((np.zeros_like(ndot_x), ndot_x))
+        return (0.0, -w_a * dot((x[1], x[2]), e_a), 0.0)
 
-    def cut_wrench(self, e_a, lam):
+    @staticmethod
+    @step
+    def wrench(e_a, lam):
         # S^T lam = [lam_0, lam_1 n]
-        return twist(lam[0], lam[1] * perp(e_a))
+        n = normal(e_a)
+        return (lam[0], lam[1] * n[0], lam[1] * n[1])
 
-    def joint_motion(self, e_a, a, b, points):
+    @staticmethod
+    @step
+    def coordinate(e_a, a, b, d, dd, dd2):
         # q = d . e along the axis turning with the first body
-        return line_motion(e_a, a[1], a[2], points)
+        return line_motion(e_a, a[1], a[2], d, dd, dd2)
 
 
 KIND = Prismatic()

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..planar import twist
+from ..steps import step
 from .base import JointKind
 
 
@@ -24,38 +24,55 @@ class Revolute(JointKind):
     effort = "tau"
     dyad = "R"
 
-    def place_child(self, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
+    @staticmethod
+    @step
+    def place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
         # phi_i = phi_p + s q;  O_i coincides with the parent's joint point
         phi = phi_p + s * q
-        return phi, np.cos(phi), np.sin(phi), r_joint, None
+        return phi, np.cos(phi), np.sin(phi), (r_joint[0], r_joint[1]), (0.0, 0.0)
 
-    def motion_vector(self, s, e, ndim):
+    @staticmethod
+    @step
+    def motion(s, e):
         # p_i = [s, 0, 0], constant
-        return np.array([float(s), 0.0, 0.0]).reshape((3,) + (1,) * ndim)
+        return (s, 0.0, 0.0)
 
-    def add_motion(self, s, e, x, rate):
-        x[0] += s * rate
-        return x
+    @staticmethod
+    @step
+    def plus_motion(s, e, x, rate):
+        return (x[0] + s * rate, x[1], x[2])
 
-    def add_motion_rate(self, s, e, w_axis, x, rate):
-        return x  # p_i is constant
+    @staticmethod
+    @step
+    def plus_motion_rate(s, e, w_axis, x, rate):
+        return (x[0], x[1], x[2])  # p_i is constant
 
-    def cut_residual(self, angle, phi_a, phi_b, e_a, r_pa, r_pb):
+    @staticmethod
+    @step
+    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
         # the two pin points coincide: r_Pb - r_Pa = 0
-        return r_pb - r_pa
+        return (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1], 0.0)
 
-    def cut_rows(self, e_a, x):
+    @staticmethod
+    @step
+    def selected(e_a, x):
         # S = [[0, 1, 0], [0, 0, 1]]: the relative velocity at the pin
-        return x[1:]
+        return (x[1], x[2], 0.0)
 
-    def cut_rows_rate(self, e_a, w_a, x):
-        return 0.0
+    @staticmethod
+    @step
+    def selected_rate(e_a, w_a, x):
+        return (0.0, 0.0, 0.0)
 
-    def cut_wrench(self, e_a, lam):
+    @staticmethod
+    @step
+    def wrench(e_a, lam):
         # S^T lam = [0, lam_x, lam_y]: a force through the pin
-        return twist(0.0, lam)
+        return (0.0, lam[0], lam[1])
 
-    def joint_motion(self, e_a, a, b, points):
+    @staticmethod
+    @step
+    def coordinate(e_a, a, b, d, dd, dd2):
         # q = phi_b - phi_a and its rates
         return b[0] - a[0], b[1] - a[1], b[2] - a[2]
 

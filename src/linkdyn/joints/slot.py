@@ -11,7 +11,8 @@ force, and its reaction ``[Fx, Fy]`` (by A on B, through the pin) is normal to t
 
 from __future__ import annotations
 
-from ..planar import dot, perp, twist
+from ..planar import dot, normal
+from ..steps import step
 from .base import JointKind, line_motion
 
 
@@ -27,25 +28,36 @@ class Slot(JointKind):
     effort = None
     dyad = None
 
-    def cut_residual(self, angle, phi_a, phi_b, e_a, r_pa, r_pb):
+    @staticmethod
+    @step
+    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
         # the pin on the slot's line: (r_Pb - r_Pa) . n = 0,  n = perp(e)
-        return dot(r_pb - r_pa, perp(e_a))[None]
+        return (dot((r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), normal(e_a)), 0.0, 0.0)
 
-    def cut_rows(self, e_a, x):
+    @staticmethod
+    @step
+    def selected(e_a, x):
         # S = [[0, n_x, n_y]]: the pin's relative velocity normal to the slot
-        return dot(x[1:], perp(e_a))[None]
+        return (dot((x[1], x[2]), normal(e_a)), 0.0, 0.0)
 
-    def cut_rows_rate(self, e_a, w_a, x):
+    @staticmethod
+    @step
+    def selected_rate(e_a, w_a, x):
         # dS/dt x = n_dot . x_v,  n_dot = -w_a e (the slot turns with its body)
-        return (-w_a * dot(x[1:], e_a))[None]
+        return (-w_a * dot((x[1], x[2]), e_a), 0.0, 0.0)
 
-    def cut_wrench(self, e_a, lam):
+    @staticmethod
+    @step
+    def wrench(e_a, lam):
         # S^T lam = [0, lam n]: the normal force through the pin, no moment about it
-        return twist(0.0, lam[0] * perp(e_a))
+        n = normal(e_a)
+        return (0.0, lam[0] * n[0], lam[0] * n[1])
 
-    def joint_motion(self, e_a, a, b, points):
+    @staticmethod
+    @step
+    def coordinate(e_a, a, b, d, dd, dd2):
         # q = d . e, the pin's displacement along the slot turning with the first body
-        return line_motion(e_a, a[1], a[2], points)
+        return line_motion(e_a, a[1], a[2], d, dd, dd2)
 
 
 KIND = Slot()

@@ -1,0 +1,94 @@
+"""Per-sample steps: every equation of the method written once, for both backends.
+
+A *step* is a plain Python function over component tuples: a planar vector is ``(x, y)``, a
+twist ``(w, vx, vy)``, a wrench ``(n, fx, fy)``, and each component is either an array over
+samples and designs (numpy) or one float (inside a compiled sample loop). A step uses only
+arithmetic, comparisons, the functions ``np.sqrt``, ``np.cos``, ``np.sin``, ``np.abs``, other
+steps, and the two helpers below that differ by backend:
+
+- :func:`select` (``np.where`` on arrays, a conditional expression on scalars),
+- :func:`atan2` (``np.arctan2`` on arrays, straight-line code that vectorizes on scalars).
+
+It returns a tuple (or one component). Under numpy the solvers call a step once per body on
+whole arrays (the loops run over bodies, never over samples); the compiled backend registers
+every step with numba (:func:`register`, done by :mod:`linkdyn.compiled`) and its kernels call
+the same functions inside their sample loops, where numba compiles them for scalars and the
+compiler inlines them. No equation is restated for the other backend.
+
+A step that depends on a joint's kind is dispatched by :func:`by_kind`: the kind's own step is
+chosen by its integer code (:data:`linkdyn.joints.CODES`), by Python under numpy and by a
+branch the compiler hoists out of the sample loop under numba.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: every step, in definition order (registered with numba on first compiled use)
+STEPS: list = []
+
+
+def step(fn):
+    """Mark ``fn`` as a per-sample step (see the module docstring); returns ``fn`` itself."""
+    STEPS.append(fn)
+    return fn
+
+
+def select(cond, a, b):
+    """``a`` where ``cond`` holds, else ``b`` (``np.where``; a conditional on scalars)."""
+    return np.where(cond, a, b)
+
+
+def atan2(y, x):
+    """The angle of ``(x, y)``, rad in (-pi, pi] (``np.arctan2``; compiled: within 3 ulp)."""
+    return np.arctan2(y, x)
+
+
+def by_kind(steps: list):
+    """One step ``f(code, *args)`` that calls ``steps[k](*args)`` for the ``(code, step)``
+    pair whose code matches: a chain of comparisons, so that numba compiles every branch with
+    the same argument types (all branches must return the same kind of tuple)."""
+    (code, fn), rest = steps[0], steps[1:]
+    if not rest:
+        def call(kind, *args):
+            return fn(*args)
+    else:
+        other = by_kind(rest)
+
+        def call(kind, *args):
+            if kind == code:
+                return fn(*args)
+            return other(kind, *args)
+    call.__name__ = call.__qualname__ = f"by_kind_{fn.__name__}"
+    return step(call)
+
+
+_registered = False
+
+
+def register(scalar_select, scalar_atan2) -> None:
+    """Register every step with numba (compiled into its callers by the compiler), and the
+    scalar versions of :func:`select` and :func:`atan2`; idempotent. Called by
+    :mod:`linkdyn.compiled` when numba is installed."""
+    global _registered
+    if _registered:
+        return
+    from numba import types
+    from numba.extending import overload, register_jitable
+
+    for fn in STEPS:
+        register_jitable(inline="never")(fn)
+
+    @overload(select, inline="always")
+    def _select(cond, a, b):
+        if isinstance(cond, types.Array) or isinstance(a, types.Array):
+            return lambda cond, a, b: np.where(cond, a, b)
+        return lambda cond, a, b: scalar_select(cond, a, b)
+
+    @overload(atan2, inline="always")
+    def _atan2(y, x):
+        if isinstance(y, types.Array) or isinstance(x, types.Array):
+            return lambda y, x: np.arctan2(y, x)
+        return lambda y, x: scalar_atan2(y, x)
+
+    _registered = True
