@@ -90,8 +90,9 @@ class JointKind:
     # through the array methods below. Vectors are ``(x, y)``, twists and wrenches 3-tuples;
     # cut rows are padded to three (the first :attr:`rows` count).
     #
-    #   place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint) -> phi, cos, sin, r, e
-    #       the child's pose from its parent's and q (tree joint); e: the global axis, or (0, 0)
+    #   place(s, q, turn, angle, axis_p, phi_p, cos_p, sin_p, r_joint) -> phi, cos, sin, r, e
+    #       the child's pose from its parent's and q (tree joint); turn: (cos, sin) of s q for
+    #       an angular kind (else unused, (1, 0)); e: the global axis, or (0, 0)
     #   motion(s, e) -> p                             p_i of eq. (3)
     #   plus_motion(s, e, x, rate) -> x + p_i rate
     #   plus_motion_rate(s, e, w_axis, x, rate) -> x + pd_i rate (w_axis: angular velocity
@@ -134,7 +135,8 @@ class JointKind:
             Global unit axis, if the kind has one.
         """
         self._tree_only()
-        phi, c, sn, r, e = self.place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint)
+        turn = (np.cos(s * q), np.sin(s * q)) if self.angular else (1.0, 0.0)
+        phi, c, sn, r, e = self.place(s, q, turn, angle, axis_p, phi_p, cos_p, sin_p, r_joint)
         return phi, c, sn, _stack(r), (_stack(e) if "axis" in self.keys else None)
 
     def motion_vector(self, s, e, ndim):

@@ -29,7 +29,7 @@ class Prismatic(JointKind):
 
     @staticmethod
     @step
-    def place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
+    def place(s, q, turn, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
         # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the joint's first body
         ca, sa = np.cos(s * angle), np.sin(s * angle)
         e = turned(cos_p, sin_p, axis_p)

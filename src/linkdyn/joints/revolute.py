@@ -6,8 +6,7 @@ components of the relative velocity at the pin (2 rows, m); its reaction is a fo
 
 from __future__ import annotations
 
-import numpy as np
-
+from ..planar import turned
 from ..steps import step
 from .base import JointKind
 
@@ -26,10 +25,11 @@ class Revolute(JointKind):
 
     @staticmethod
     @step
-    def place(s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
-        # phi_i = phi_p + s q;  O_i coincides with the parent's joint point
-        phi = phi_p + s * q
-        return phi, np.cos(phi), np.sin(phi), (r_joint[0], r_joint[1]), (0.0, 0.0)
+    def place(s, q, turn, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
+        # phi_i = phi_p + s q, its cosine and sine by R(phi_p) turned by s q;  O_i coincides
+        # with the parent's joint point
+        c, sn = turned(cos_p, sin_p, turn)
+        return phi_p + s * q, c, sn, (r_joint[0], r_joint[1]), (0.0, 0.0)
 
     @staticmethod
     @step

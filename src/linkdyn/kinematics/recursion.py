@@ -9,6 +9,12 @@ Along the tree,
 At every cut joint the relative twist of its two bodies, taken at the cut point and reduced by
 the cut-row selection S, must vanish: ``J qd = 0``; its rate gives the closure bias. Arrays are
 component-first, one per body (see :mod:`linkdyn.planar`); the loops run over bodies.
+
+Each equation is one step (:mod:`linkdyn.steps`) on component tuples, per body or per cut:
+:func:`child_pose`, :func:`child_twist`, :func:`child_twist_rate`, :func:`cut_frame`,
+:func:`jacobian_column`, :func:`cut_bias`, :func:`cut_coordinate`, :func:`point_accel`. The
+functions below call them on whole arrays, one body or cut at a time; the compiled kernel
+(:mod:`.compiled`) calls the same steps on the scalars of each sample.
 """
 
 from __future__ import annotations
@@ -18,7 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import joints as jk
-from ..planar import perp, rotate_cs, shift_twist, solve_small, twist
+from ..planar import _stack, at, rotate_cs, solve_small, turned
+from ..steps import select, step
 from .layout import Cut, Layout
 
 
@@ -45,35 +52,202 @@ class Pose:
         return self.r[i] + self.rotate(i, local)
 
 
+# --- the steps: one body or cut, on component tuples (arrays or floats) ------------------------
+
+@step
+def relative(a, b):
+    """The vector ``b - a`` of two vectors ``(x, y)``."""
+    return (b[0] - a[0], b[1] - a[1])
+
+
+@step
+def child_pose(code, s, q, turn, angle, axis_p, joint_p, phi_p, c_p, s_p, r_p):
+    """Pose of body i from its parent's, through its tree joint of kind ``code``.
+
+    Parameters
+    ----------
+    code : int
+        The tree joint's kind (:data:`linkdyn.joints.CODES`).
+    s : float
+        +1 if body i is the joint's second body, -1 if its first.
+    q : float or ndarray (...)
+        Joint coordinate, rad or m.
+    turn : (c, s)
+        Cosine and sine of ``s q`` for an angular kind (unused by the others).
+    angle : float
+        Fixed angle of the joint's second body to its first, rad (prismatic).
+    axis_p, joint_p : (x, y)
+        The joint's axis and point in the parent's frame (the point relative to O_p), m.
+    phi_p, c_p, s_p : float or ndarray (...)
+        The parent's angle (rad), its cosine and sine.
+    r_p : (x, y)
+        The parent's reference point O_p, global, m.
+
+    Returns
+    -------
+    phi, c, s, r, e
+        Body i's angle, its cosine and sine, its reference point O_i (its joint point) and the
+        joint's global axis ((0, 0) for a kind without one).
+    """
+    # the joint point r_p + R_p j on the parent; the child placed from it by the joint's kind
+    j = turned(c_p, s_p, joint_p)
+    return jk.place(code, s, q, turn, angle, axis_p, phi_p, c_p, s_p,
+                    (r_p[0] + j[0], r_p[1] + j[1]))
+
+
+@step
+def child_twist(code, s, e, t_p, r_p, r_i, rate):
+    """Twist ``(w, vx, vy)`` of body i at O_i from its parent's twist ``t_p`` at O_p (eq. 2).
+
+    ``code``, ``s``: the tree joint's kind and sign (:func:`child_pose`); ``e`` its global axis;
+    ``r_p``, ``r_i`` the two reference points (m); ``rate`` the joint rate (rad/s or m/s).
+    """
+    # t_i = A(r_i - r_p) t_p + p_i rate
+    return jk.plus_motion(code, s, e, at(t_p, relative(r_p, r_i)), rate)
+
+
+@step
+def child_twist_rate(code, s, e, t_p, td_p, t_i, r_p, r_i, rate, accel):
+    """Twist rate ``(al, ax, ay)`` of body i at O_i (the derivative of :func:`child_twist`).
+
+    ``t_p``, ``td_p``: the parent's twist and twist rate at O_p; ``t_i`` body i's twist at O_i;
+    ``rate``, ``accel``: the joint's rate and acceleration; the rest as :func:`child_twist`.
+    """
+    # td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i, with pd_i
+    # turning at the angular velocity of the body carrying the axis (the joint's first body)
+    x = at(td_p, relative(r_p, r_i))
+    w = t_p[0]
+    x = (x[0], x[1] - w * (t_i[2] - t_p[2]), x[2] + w * (t_i[1] - t_p[1]))
+    x = jk.plus_motion(code, s, e, x, accel)
+    return jk.plus_motion_rate(code, s, e, select(s > 0, t_p[0], t_i[0]), x, rate)
+
+
+@step
+def cut_frame(c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis):
+    """A cut's points on its bodies a and b and its axis (fixed in a), global.
+
+    ``c_*``, ``s_*``, ``r_*``: the bodies' cosines, sines and reference points; ``pa``, ``pb``
+    the cut points relative to O_a, O_b and ``axis`` in a, in the bodies' frames (m).
+    Returns ``r_Pa``, ``r_Pb`` (m) and ``e_a``, each ``(x, y)``.
+    """
+    # r_Pa = r_a + R_a pa,  r_Pb = r_b + R_b pb,  e_a = R_a axis
+    ua, ub = turned(c_a, s_a, pa), turned(c_b, s_b, pb)
+    return ((r_a[0] + ua[0], r_a[1] + ua[1]), (r_b[0] + ub[0], r_b[1] + ub[1]),
+            turned(c_a, s_a, axis))
+
+
+@step
+def jacobian_column(cut, code, s, side, e, r_k, r_pb, e_a):
+    """Column k of a cut's loop-closure Jacobian: its rows (padded to 3) of tree joint k's rate.
+
+    ``cut``: the cut's kind; ``code``, ``s``, ``e``: tree joint k's kind, sign and global
+    axis; ``side``: +1 if joint k is on the path to the cut's second body, -1 to its first,
+    0 both or neither; ``r_k``: O_k; ``r_Pb``, ``e_a``: the cut's point and axis
+    (:func:`cut_frame`).
+    """
+    # side S_c A(r_Pb - r_k) p_k            (eqs. 20-24)
+    x = at(jk.motion(code, s, e), relative(r_k, r_pb))
+    return jk.selected(cut, e_a, (side * x[0], side * x[1], side * x[2]))
+
+
+@step
+def moving_point(t, td, r, r_pt, v_pt):
+    """Twist and twist rate of a body (``t``, ``td`` at O = ``r``) taken at a point ``r_pt``
+    moving with velocity ``v_pt`` (not a point of the body)."""
+    a = relative(r, r_pt)
+    # d/dt [w, v + w perp(a)] = [al, a_O + al perp(a) + w perp(v_pt - v_O)]
+    return at(t, a), (td[0], td[1] - td[0] * a[1] - t[0] * (v_pt[1] - t[2]),
+                      td[2] + td[0] * a[0] + t[0] * (v_pt[0] - t[1]))
+
+
+@step
+def cut_bias(cut, e_a, t_a, td_a, r_a, t_b, td_b, r_b, r_pb):
+    """Rate of a cut's rows ``d/dt (S x)`` (padded to 3), ``x`` the relative twist of its
+    second body b to its first a at the cut point P (which moves with b).
+
+    ``t_*``, ``td_*``, ``r_*``: the bodies' twists, twist rates and reference points; ``r_Pb``,
+    ``e_a`` from :func:`cut_frame`.
+    """
+    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x
+    v_pb = at(t_b, relative(r_b, r_pb))
+    tb, ab = moving_point(t_b, td_b, r_b, r_pb, (v_pb[1], v_pb[2]))
+    ta, aa = moving_point(t_a, td_a, r_a, r_pb, (v_pb[1], v_pb[2]))
+    x = jk.selected(cut, e_a, (ab[0] - aa[0], ab[1] - aa[1], ab[2] - aa[2]))
+    y = jk.selected_rate(cut, e_a, t_a[0], (tb[0] - ta[0], tb[1] - ta[1], tb[2] - ta[2]))
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
+
+
+@step
+def point_accel(t, td, a):
+    """Acceleration ``(x, y)`` of the body point at offset ``a`` from O, the body's twist and
+    twist rate ``t``, ``td`` taken at O."""
+    # a_O + al perp(a) - w^2 a
+    return (td[1] - td[0] * a[1] - t[0] ** 2 * a[0], td[2] + td[0] * a[0] - t[0] ** 2 * a[1])
+
+
+@step
+def cut_coordinate(cut, e_a, phi_a, t_a, td_a, r_a, phi_b, t_b, td_b, r_b, r_pa, r_pb):
+    """Coordinate, rate and acceleration of a cut joint (an output, not an unknown).
+
+    ``phi_*``, ``t_*``, ``td_*``, ``r_*``: the bodies' angles, twists, twist rates and
+    reference points; ``r_Pa``, ``r_Pb``, ``e_a`` from :func:`cut_frame`.
+    """
+    # the second body's cut point seen from the first's: d, d', d''; the kind's coordinate
+    oa, ob = relative(r_a, r_pa), relative(r_b, r_pb)
+    va, vb = at(t_a, oa), at(t_b, ob)
+    aa, ab = point_accel(t_a, td_a, oa), point_accel(t_b, td_b, ob)
+    return jk.coordinate(cut, e_a, (phi_a, t_a[0], td_a[0]), (phi_b, t_b[0], td_b[0]),
+                         relative(r_pa, r_pb), (vb[1] - va[1], vb[2] - va[2]),
+                         relative(aa, ab))
+
+
+# --- the recursions on arrays: a loop over bodies (or cuts), each step on whole arrays -------
+
+def _axis(e):
+    """A tree joint's global axis as the steps take it ((0, 0) for a kind without one)."""
+    return (0.0, 0.0) if e is None else e
+
+
 def forward_positions(lay: Layout, q: np.ndarray) -> Pose:
     """Poses of all bodies from the tree joint coordinates ``q`` (n, ...) (``q[0]`` unused)."""
     topo, shape = lay.topo, q.shape[1:]
     phi, c, s = [np.zeros(shape)], [np.ones(shape)], [np.zeros(shape)]
     r, e = [np.zeros((2,) + shape)], [None]
     for i in range(1, topo.n):
-        k = topo.parent[i]
-        # joint point on the parent, then the child placed by the joint kind
-        r_joint = r[k] + rotate_cs(c[k], s[k], lay.joint_point[i])
-        phi_i, c_i, s_i, r_i, e_i = jk.get(lay.kind[i]).place_child(
-            topo.sign[i], q[i], lay.angle[i], lay.axis[i], phi[k], c[k], s[k], r_joint)
-        phi.append(phi_i), c.append(c_i), s.append(s_i), r.append(r_i), e.append(e_i)
+        k, kind, sign = topo.parent[i], jk.get(lay.kind[i]), topo.sign[i]
+        turn = (np.cos(sign * q[i]), np.sin(sign * q[i])) if kind.angular else (1.0, 0.0)
+        phi_i, c_i, s_i, r_i, e_i = child_pose(jk.CODES[lay.kind[i]], sign, q[i], turn,
+                                               lay.angle[i], lay.axis[i], lay.joint_point[i],
+                                               phi[k], c[k], s[k], r[k])
+        phi.append(phi_i), c.append(c_i), s.append(s_i), r.append(_stack(r_i))
+        e.append(_stack(e_i) if "axis" in kind.keys else None)
     return Pose(phi, c, s, r, e)
 
 
 def _cut_frames(lay: Layout, pose: Pose, c: Cut):
     """Cut point positions on both bodies and the cut's axis, global, (2, ...) each."""
-    return pose.point(c.a, c.pa), pose.point(c.b, c.pb), pose.rotate(c.a, c.axis)
+    return tuple(_stack(x) for x in cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a],
+                                               pose.c[c.b], pose.s[c.b], pose.r[c.b],
+                                               c.pa, c.pb, c.axis))
+
+
+def _rows(parts, n: int, shape) -> np.ndarray:
+    """The first ``n`` of a step's padded cut rows, as an array (n, ...) of batch ``shape``."""
+    out = np.empty((n,) + shape)
+    for k in range(n):
+        out[k] = parts[k]
+    return out
 
 
 def closure_residual(lay: Layout, pose: Pose) -> np.ndarray:
     """Loop-closure residual of all cuts (n_rows, ...): m for positions, rad for angles; each
     cut contributes its kind's rows (``topo.rows``)."""
-    out = []
+    shape, out = pose.phi[0].shape, []
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        out.append(jk.get(c.kind).cut_residual(c.angle, pose.phi[c.a], pose.phi[c.b], e_a, r_pa,
-                                               r_pb))
-    return np.concatenate(out) if out else np.zeros((0,) + pose.phi[0].shape)
+        out.append(_rows(jk.residual(jk.CODES[c.kind], c.angle, pose.phi[c.a], pose.phi[c.b],
+                                     e_a, r_pa, r_pb), jk.get(c.kind).rows, shape))
+    return np.concatenate(out) if out else np.zeros((0,) + shape)
 
 
 def motion_vectors(lay: Layout, pose: Pose) -> list:
@@ -83,27 +257,21 @@ def motion_vectors(lay: Layout, pose: Pose) -> list:
                      for i in range(1, topo.n)]
 
 
-def closure_jacobian(lay: Layout, pose: Pose, p: list) -> np.ndarray:
-    """Loop-closure Jacobian ``J`` (n_rows, n - 1, ...): tree joint rates to the cut rows.
-
-    Column k of cut c is ``S_c A(r_Pb - r_k) p_k``, with sign +1 if joint k is on the path to
-    the cut's second body, -1 if on the path to its first, 0 if on both or neither (eqs. 20-24).
-    """
+def closure_jacobian(lay: Layout, pose: Pose, p: list | None = None) -> np.ndarray:
+    """Loop-closure Jacobian ``J`` (n_rows, n - 1, ...): tree joint rates to the cut rows
+    (:func:`jacobian_column`; ``p`` is not needed and kept for the callers' signature)."""
     topo, shape = lay.topo, pose.phi[0].shape
-    rows = []
-    for c in lay.cuts:
-        r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        kind = jk.get(c.kind)
+    J = np.zeros((topo.n_rows, topo.n - 1) + shape)
+    for ci, c in enumerate(lay.cuts):
+        _, r_pb, e_a = _cut_frames(lay, pose, c)
+        rows, n = topo.row_slice(ci), jk.get(c.kind).rows
         side = topo.ancestors[c.b].astype(int) - topo.ancestors[c.a].astype(int)
-        cols = []
         for k in range(1, topo.n):
-            if side[k] == 0:
-                cols.append(np.zeros((kind.rows,) + shape))
-                continue
-            x = side[k] * shift_twist(np.broadcast_to(p[k], (3,) + shape), r_pb - pose.r[k])
-            cols.append(kind.cut_rows(e_a, x))
-        rows.append(np.stack(cols, axis=1))
-    return np.concatenate(rows) if rows else np.zeros((0, topo.n - 1) + shape)
+            if side[k]:   # else the joint moves both bodies alike, or neither
+                J[rows, k - 1] = _rows(jacobian_column(
+                    jk.CODES[c.kind], jk.CODES[lay.kind[k]], topo.sign[k], side[k],
+                    _axis(pose.e[k]), pose.r[k], r_pb, e_a), n, shape)
+    return J
 
 
 def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
@@ -112,9 +280,8 @@ def forward_twists(lay: Layout, pose: Pose, p: list, qd: np.ndarray) -> list:
     tw = [np.zeros((3,) + qd.shape[1:])]
     for i in range(1, topo.n):
         k = topo.parent[i]
-        # t_i = A(r_i - r_p) t_p + p_i qd_i      (eq. 2)
-        tw.append(jk.get(lay.kind[i]).add_motion(topo.sign[i], pose.e[i],
-                                                 shift_twist(tw[k], pose.r[i] - pose.r[k]), qd[i]))
+        tw.append(_stack(child_twist(jk.CODES[lay.kind[i]], topo.sign[i], _axis(pose.e[i]),
+                                     tw[k], pose.r[k], pose.r[i], qd[i])))
     return tw
 
 
@@ -125,38 +292,22 @@ def forward_twist_rates(lay: Layout, pose: Pose, p: list, tw: list, qd: np.ndarr
     td = [np.zeros_like(tw[0])]
     for i in range(1, topo.n):
         k = topo.parent[i]
-        # td_i = A td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i
-        kind, sign, e = jk.get(lay.kind[i]), topo.sign[i], pose.e[i]
-        td_i = kind.add_motion(sign, e, shift_twist(td[k], pose.r[i] - pose.r[k]), qdd[i])
-        w_k = tw[k][0]
-        td_i[1] -= w_k * (tw[i][2] - tw[k][2])
-        td_i[2] += w_k * (tw[i][1] - tw[k][1])
-        kind.add_motion_rate(sign, e, tw[k if sign > 0 else i][0], td_i, qd[i])
-        td.append(td_i)
+        td.append(_stack(child_twist_rate(jk.CODES[lay.kind[i]], topo.sign[i], _axis(pose.e[i]),
+                                          tw[k], td[k], tw[i], pose.r[k], pose.r[i], qd[i],
+                                          qdd[i])))
     return td
-
-
-def _at_point(t_x, td_x, r_x, r_pt, v_pt):
-    """Twist and twist rate of body x taken at a point moving with velocity v_pt (2, ...)."""
-    a = r_pt - r_x
-    t_at = shift_twist(t_x, a)
-    # d/dt [w, v + w perp(a)] with the point moving at v_pt
-    acc = td_x[1:] + td_x[0] * perp(a) + t_x[0] * perp(v_pt - t_x[1:])
-    return t_at, twist(td_x[0], acc)
 
 
 def closure_bias(lay: Layout, pose: Pose, tw: list, td: list) -> np.ndarray:
     """Rate of the cut rows ``d/dt (S x)`` (n_rows, ...) for the given twist rates, ``x`` being
     the relative twist of the cut's second body to its first at the cut point."""
-    out = []
+    shape, out = tw[0].shape[1:], []
     for c in lay.cuts:
-        r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        v_pb = shift_twist(tw[c.b], r_pb - pose.r[c.b])[1:]
-        tb, ab = _at_point(tw[c.b], td[c.b], pose.r[c.b], r_pb, v_pb)
-        ta, aa = _at_point(tw[c.a], td[c.a], pose.r[c.a], r_pb, v_pb)
-        kind = jk.get(c.kind)
-        out.append(kind.cut_rows(e_a, ab - aa) + kind.cut_rows_rate(e_a, tw[c.a][0], tb - ta))
-    return np.concatenate(out) if out else np.zeros((0,) + tw[0].shape[1:])
+        _, r_pb, e_a = _cut_frames(lay, pose, c)
+        out.append(_rows(cut_bias(jk.CODES[c.kind], e_a, tw[c.a], td[c.a], pose.r[c.a],
+                                  tw[c.b], td[c.b], pose.r[c.b], r_pb),
+                         jk.get(c.kind).rows, shape))
+    return np.concatenate(out) if out else np.zeros((0,) + shape)
 
 
 def dependent_rates(lay: Layout, J: np.ndarray, q_rates_drv: np.ndarray):
@@ -168,5 +319,6 @@ def dependent_rates(lay: Layout, J: np.ndarray, q_rates_drv: np.ndarray):
 
 
 def point_acceleration(tw, twd, a):
-    """Acceleration (2, ...) of the body point at offset ``a`` from O: ``a_O + al perp(a) - w^2 a``."""
-    return twd[1:] + twd[0] * perp(a) - tw[0] ** 2 * a
+    """Acceleration (2, ...) of the body point at offset ``a`` (2, ...) from O
+    (:func:`point_accel`): ``a_O + al perp(a) - w^2 a``."""
+    return _stack(point_accel(tw, twd, a))

@@ -20,9 +20,9 @@ from . import compiled as kc
 from . import dyads
 from .layout import Layout, compile_designs, compile_layout
 from .positions import ACCEPT, _correct, _follow, assemble, newton
-from .recursion import (Pose, _cut_frames, closure_bias, closure_jacobian, dependent_rates,
-                        forward_positions, forward_twist_rates, forward_twists, motion_vectors,
-                        point_acceleration)
+from .recursion import (Pose, _cut_frames, closure_bias, closure_jacobian, cut_coordinate,
+                        dependent_rates, forward_positions, forward_twist_rates, forward_twists,
+                        motion_vectors, point_acceleration)
 
 
 @dataclass(frozen=True)
@@ -329,14 +329,8 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
     for c in lay.cuts:
         a, b = c.a, c.b
         r_pa, r_pb, e = _cut_frames(lay, pose, c)
-
-        def points(a=a, b=b, r_pa=r_pa, r_pb=r_pb):  # the cut points' relative motion
-            va = shift_twist(tw[a], r_pa - pose.r[a])[1:]
-            vb = shift_twist(tw[b], r_pb - pose.r[b])[1:]
-            aa = point_acceleration(tw[a], twd[a], r_pa - pose.r[a])
-            ab = point_acceleration(tw[b], twd[b], r_pb - pose.r[b])
-            return r_pb - r_pa, vb - va, ab - aa
-        motion = jk.get(c.kind).joint_motion(e, (pose.phi[a], tw[a][0], twd[a][0]),
-                                             (pose.phi[b], tw[b][0], twd[b][0]), points)
+        # the kind's coordinate from the bodies' motion (cut_coordinate)
+        motion = cut_coordinate(jk.CODES[c.kind], e, pose.phi[a], tw[a], twd[a], pose.r[a],
+                                pose.phi[b], tw[b], twd[b], pose.r[b], r_pa, r_pb)
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
     return tuple(cols)
