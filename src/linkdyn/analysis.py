@@ -496,6 +496,58 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
                             "speeds for extreme values")
 
 
+def _stages(model, t, backend: str, layout=None):
+    """The stages of an analysis composed: ``(kin, applied, dyn, react, valid)``, ``valid`` the
+    samples that close clear of a singular position. ``model``: a Model, or D Models (a batch;
+    with ``layout``, their stacked layout, and the models only give their ``[assembly]``
+    guesses and design 0's names)."""
+    designs = not isinstance(model, Model)
+    models = list(model) if designs else [model]
+    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
+    kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy")
+    # a batch: gravity, loads' values, springs and dampers from the layout, per design
+    applied = loads_mod.wrenches(None if designs else model, kin)
+    if fast:
+        dyn, react = compiled_dynamics.solve(kin, applied,
+                                             compiled.pack(kin.layout, len(models[0].joints)))
+    else:
+        dyn = denoc.solve(kin, applied)
+        react = reactions_mod.solve(models[0], kin, dyn)
+    valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
+    return kin, applied, dyn, react, valid
+
+
+def analyze_layout(models, layout, t, *, backend: str | None = None, designs=None) -> Solution:
+    """``analyze`` of a batch of designs given by their stacked layout (for instance built
+    from parameter arrays by :mod:`linkdyn.studies.vectorize`), without a Model per design.
+
+    Parameters
+    ----------
+    models : sequence of Model
+        D models whose ``[assembly]`` guesses the designs start from (they may all be one
+        model); ``models[0]`` names the columns.
+    layout : kinematics.Layout
+        The D designs' stacked layout (``layout.designs == D``).
+    t : array_like (T,)
+        Sample times, s.
+    designs : sequence of Model, optional
+        What ``Solution.designs`` holds (a sequence that builds design k's model when read);
+        default ``models``.
+
+    Returns
+    -------
+    Solution
+        As ``analyze(list_of_models, t, backend=backend)`` (designs that do not assemble or
+        pass a singular position flagged in ``valid``, never raised).
+    """
+    t = np.asarray(t, dtype=float)
+    name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
+    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout)
+    valid = _finite(models[0], kin, applied, dyn, react, valid, False)
+    return Solution(models[0], kin, applied, dyn, react, valid,
+                    designs if designs is not None else tuple(models))
+
+
 @quiet
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
@@ -539,19 +591,8 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     if not models:
         raise ModelError("no designs to solve", fix="Pass a model or a non-empty list of models")
     t = np.asarray(t, dtype=float)
-    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
-    kin = kinematics.solve(models if designs else model, t,
-                           backend="compiled" if fast else "numpy")
+    kin, applied, dyn, react, valid = _stages(models if designs else model, t, backend)
     model = models[0]
-    # a batch: gravity, loads' values, springs and dampers from the layout, per design
-    applied = loads_mod.wrenches(None if designs else model, kin)
-    if fast:
-        dyn, react = compiled_dynamics.solve(kin, applied,
-                                             compiled.pack(kin.layout, len(model.joints)))
-    else:
-        dyn = denoc.solve(kin, applied)
-        react = reactions_mod.solve(model, kin, dyn)
-    valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
         _check_drivers(model, float(kin.t[k]))  # a motion that overflows, not the loops

@@ -178,3 +178,20 @@ class Model:
     @property
     def moving_bodies(self) -> tuple[Body, ...]:
         return tuple(b for b in self.bodies if b.name != GROUND)
+
+
+def point_spread(points) -> np.ndarray | float:
+    """Characteristic size of a mechanism, m: the larger spread (max - min) of the x and the y
+    coordinates of all its named points, each in its own body's frame; 1 where there is one
+    point or no spread.
+
+    ``points`` (N, 2) for one design, or (N, 2, D) for D designs (then (D,) sizes). The
+    closure's tolerances and the continuation steps scale with it.
+    """
+    points = np.asarray(points, float)
+    if len(points) < 2:
+        return 1.0 if points.ndim < 3 else np.ones(points.shape[2:])
+    size = np.max(np.ptp(points, axis=0), axis=0)
+    size = np.where(size > 0, size, 1.0)
+    return float(size) if size.ndim == 0 else size
+

@@ -21,7 +21,7 @@ from pathlib import Path
 from ..errors import ModelError, quiet
 from ..model import Model
 from .drivers import MOTION_KEYS, _drivers
-from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _joints
+from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _check_links, _joints
 from .loads import LOAD_KEYS, _loads
 from .options import _analysis, _assembly, _initial, _topology
 from .files import MAX_FILE_BYTES, FileRefused, read_text
@@ -122,6 +122,7 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     _units(r, data.get("units", {}))
     bodies = _bodies(r, data.get("bodies"))
     joints = _joints(r, data.get("joints", []), bodies)
+    _check_links(r, bodies, joints)
     drivers = _drivers(r, data.get("drivers", []), joints)
     loads = _loads(r, data.get("loads", []), bodies, joints)
     phi, q = _assembly(r, data.get("assembly", {}), bodies, joints)

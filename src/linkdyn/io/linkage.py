@@ -9,8 +9,10 @@ from typing import Any
 import numpy as np
 
 from .. import joints as jk
-from ..model import GROUND, Body, Joint
+from ..model import GROUND, Body, Joint, point_spread
 from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
+
+SHORT_LINK = 1e-9  # a link shorter than this fraction of the mechanism's size has zero length
 
 BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about")
 JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
@@ -135,3 +137,46 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
             extra["angle"] = r.number(entry.get("angle", 0.0), f"{f}.angle", r.angle_name) * r.angle
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
     return joints
+
+
+def link_pairs(bodies, joints) -> list[tuple[str, str, str, str, str]]:
+    """The links of the mechanism: pairs of different named points of one body that two
+    revolute joints attach to, as ``(body, point, other point, joint, other joint)`` (the first
+    joint attaching at each point, in the joints' order). ``bodies`` and ``joints``: the
+    :class:`~linkdyn.model.Body` and :class:`~linkdyn.model.Joint` entries."""
+    at: dict[str, dict[str, str]] = {b.name: {} for b in bodies}
+    for j in joints:
+        if jk.get(j.kind).angular:
+            at[j.body_a].setdefault(j.point_a, j.name)
+            at[j.body_b].setdefault(j.point_b, j.name)
+    return [(b, p, q, pins[p], pins[q]) for b, pins in at.items()
+            for i, p in enumerate(pins) for q in list(pins)[i + 1:]]
+
+
+def short_links(pairs, points, size):
+    """Which of the links ``pairs`` (:func:`link_pairs`) have zero length: ``(pair, short)`` for
+    each, ``short`` True where its two points lie within ``SHORT_LINK`` times the mechanism's
+    ``size`` of each other. ``points``: ``(body, point) -> (2, ...)`` in the body's frame, m;
+    ``size``: float or array of the batch shape (one design, or D designs)."""
+    for pair in pairs:
+        body, p, q = pair[:3]
+        d = np.hypot(*(np.asarray(points[body, p]) - np.asarray(points[body, q])))
+        yield pair, ~(d > SHORT_LINK * np.asarray(size))
+
+
+def _check_links(r: _Reader, bodies: dict[str, Body], joints: dict[str, Joint]) -> None:
+    """No link of zero length: two revolute joints of one body at different points must not be
+    at the same place (the link between them could turn freely, or not at all)."""
+    points = {(b.name, p): x for b in bodies.values() for p, x in b.points.items()}
+    size = point_spread(list(points.values()))
+    for (body, p, q, jp, jq), short in short_links(link_pairs(bodies.values(), joints.values()),
+                                                   points, size):
+        if short:
+            xy = ", ".join(f"{c / r.length:g}" for c in points[body, q])
+            field = next(f"bodies.{body}.points.{x}" for x in (q, p))
+            r.fail(field, f"the link of body '{body}' between joints {jp} (point {p}) and {jq} "
+                          f"(point {q}) has zero length: {p} and {q} are both at [{xy}] "
+                          f"{r.length_name}",
+                   f"Move {q} away from {p}; a pin that two joints share is one point that both "
+                   "joints connect to")
+

@@ -10,7 +10,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import ModelError
-from ..model import Model
+from ..model import Model, point_spread
 from ..motion import ConstantSpeed
 from ..planar import rotate
 from ..topology import Topology, build
@@ -279,11 +279,10 @@ def compile_layout(model: Model, topo: Topology | None = None, *, plan: bool = T
     points = tuple({k: np.asarray(v, float) - origin[i] for k, v in b.points.items()}
                    for i, b in enumerate(bodies))
     com = tuple(np.asarray(b.com, float) - origin[i] for i, b in enumerate(bodies))
-    allpts = np.array([v for b in model.bodies for v in b.points.values()], float)
-    size = float(np.max(np.ptp(allpts, axis=0))) if len(allpts) > 1 else 1.0
+    size = point_spread([v for b in model.bodies for v in b.points.values()])
     lay = Layout(topo, tuple(kind), tuple(joint_point), tuple(axis), tuple(angle), tuple(origin),
                  points, com, tuple(float(b.mass) for b in bodies),
-                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size if size > 0 else 1.0,
+                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size,
                  gravity=np.asarray(model.gravity, float).reshape(2),
                  motions=tuple((d.motion,) for d in model.drivers),
                  loads=load_rows(model, topo))

@@ -100,7 +100,7 @@ def _show_progress(flag):
               help="Local worker processes.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask cluster (e.g. tcp://host:8786) instead of local processes.")
-@click.option("--chunk", type=int, help="Designs per chunk (default: 200 000 design-samples).")
+@click.option("--chunk", type=int, help="Designs per chunk (default: 2 000 000 design-samples).")
 @click.option("--resume", is_flag=True,
               help="Continue an interrupted sweep in OUTDIR: finished chunks are kept.")
 @click.option("--progress/--no-progress", default=None,

@@ -103,7 +103,8 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
     wanted : sequence of str, optional
         Metric names (default: all of :func:`names`).
     models : sequence of Model, optional
-        The D designs' models, when their drivers' speeds differ (``flywheel_inertia``).
+        Unused (each design's driver speed is read from the solution's layout); kept for
+        callers that pass it.
     path_point, path_range : optional
         For ``path_deviation`` (see :func:`path_spec`).
     fluctuation : float
@@ -165,9 +166,11 @@ def _flywheel(sol, models, fluctuation):
     m, t = sol.model, sol.t
     k = _flywheel_driver(m)
     power = driver_power(sol)[..., k]
+    # each design's own speed: from its layout's motions (one per design in a batch)
+    lay = sol.kin.layout
     speeds = np.broadcast_to(np.array(
-        [mm.drivers[k].motion.speed for mm in models] if models is not None
-        else m.drivers[k].motion.speed, float), power.shape[:-1])
+        [mo.speed for mo in lay.motions[k]] if lay.designs else m.drivers[k].motion.speed,
+        float), power.shape[:-1])
     out = np.full(power.shape[:-1], np.nan)
     # one cycle per distinct driver speed (all designs share it unless the speed is varied)
     for w in np.unique(speeds):

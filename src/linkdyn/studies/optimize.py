@@ -159,6 +159,7 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
                                             path_point=path_point)))
     task = Task(sp, np.asarray(t, float), names, backend, path_point,
                 None if path_range is None else tuple(path_range), fluctuation)
+    task = task.with_builder([a for a, _ in lohi], [b for _, b in lohi])
     obj = _Objective(task, minimize, cons)
     history: list[float] = []
 

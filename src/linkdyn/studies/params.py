@@ -260,7 +260,8 @@ def check_ranges(sp: Space, bounds) -> None:
     Raises
     ------
     ModelError
-        Naming the parameter, the bound and the loader's reason (field and fix).
+        Naming the parameter, the bound and the loader's reason (field and fix); or the
+        parameters whose ranges let a link's two joint points meet (a link of zero length).
     """
     base = np.array([p.base for p in sp.params])
     for k, (p, (lo, hi)) in enumerate(zip(sp.params, bounds)):
@@ -282,3 +283,44 @@ def check_ranges(sp: Space, bounds) -> None:
                                  field=e.field or p.path,
                                  fix=f"Narrow the range of {p.path}; {fix[0].lower()}{fix[1:]}"
                                  ) from None
+    _check_links(sp, np.array([b[0] for b in bounds], float),
+                 np.array([b[1] for b in bounds], float))
+
+
+def _check_links(sp: Space, lo: np.ndarray, hi: np.ndarray) -> None:
+    """No design of the box ``lo``..``hi`` has a link of zero length (:func:`linkdyn.io.linkage.
+    link_pairs`). A link's vector ``d(v) = d(b) + (v - b) A_d`` between its two points is affine
+    in the parameters (the study's map, :mod:`.vectorize`); its smallest length over the box is
+    a bounded linear least-squares problem."""
+    from scipy.optimize import lsq_linear
+
+    from ..io.linkage import SHORT_LINK, link_pairs
+    from .vectorize import derive
+
+    builder = derive(sp, lo, hi)
+    if not builder.vectorized:
+        return   # each design is then checked by the loader, and kept invalid with its reason
+    base = np.array([p.base for p in sp.params])
+    cols = {k[1:]: (a, b) for k, a, b in builder.keys if k[0] == "raw"}
+    size = builder.layout.size
+    for body, p, q, jp, jq in link_pairs(builder.base.bodies, builder.base.joints):
+        (a1, b1), (a2, b2) = cols[body, p], cols[body, q]
+        d0 = builder.z0[a1:b1] - builder.z0[a2:b2]                  # (2,)
+        Ad = builder.A[:, a1:b1] - builder.A[:, a2:b2]              # (P, 2)
+        moved = np.flatnonzero(np.any(Ad != 0, axis=1) & (hi > lo))
+        if not len(moved):
+            continue
+        # the smallest |d0 + Ad^T x| over x in [lo - b, hi - b] of the parameters that move it
+        res = lsq_linear(Ad[moved].T, -d0, bounds=(lo[moved] - base[moved],
+                                                    hi[moved] - base[moved]), method="bvls")
+        if np.hypot(*(d0 + Ad[moved].T @ res.x)) > SHORT_LINK * size:
+            continue
+        at = ", ".join(f"{sp.params[k].path} = {base[k] + x:.6g} {sp.params[k].unit}".rstrip()
+                       for k, x in zip(moved, res.x))
+        names = ", ".join(sp.params[k].path for k in moved)
+        raise ModelError(f"the range{'s' if len(moved) > 1 else ''} of {names} allow"
+                         f"{'' if len(moved) > 1 else 's'} a link of zero length: the link of "
+                         f"body '{body}' between joints {jp} (point {p}) and {jq} (point {q}) "
+                         f"vanishes at {at}", file=sp.source, field=names,
+                         fix=f"Narrow the range{'s' if len(moved) > 1 else ''} so that {p} and "
+                             f"{q} of {body} stay apart")

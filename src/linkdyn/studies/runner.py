@@ -18,20 +18,25 @@ import shutil
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..analysis import SINGULAR, analyze, failure
+from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
-from ..kinematics import driver_values
-from ..kinematics.positions import not_assembled
+from ..kinematics import ACCEPT, driver_values, newton
+# the assembly's starting guess, to sort designs by whether they close at once
+from ..kinematics.positions import _guess, not_assembled
 from . import metrics as metrics_mod
+from . import vectorize
 from .params import Space
 
 METHODS = ("grid", "random", "lhs", "sobol")
-CHUNK_SAMPLES = 200_000  # design-samples per chunk: ~100-200 MB of time histories at most
+CHUNK_SAMPLES = 2_000_000  # design-samples per chunk: the unit of work, of writing and resuming
+BATCH_SAMPLES = 250_000    # design-samples solved at once: ~200 MB of time histories at most
 
 
 def _pandas():
@@ -101,6 +106,27 @@ class Task:
     path_point: str | None = None
     path_range: tuple | None = None
     fluctuation: float = 0.02
+    builder: Any = None   # vectorize.Builder of the study (derived from the designs if None)
+
+    def with_builder(self, lo, hi) -> Task:
+        """This task with the builder of designs ranging over ``lo``..``hi`` (P,), file units."""
+        return replace(self, builder=vectorize.derive(self.space, lo, hi))
+
+
+class Designs(Sequence):
+    """The models of designs ``values`` (D, P) of a space, each built when read (the batch's
+    ``Solution.designs``: the solve itself needs no model per design)."""
+
+    def __init__(self, space: Space, values: np.ndarray):
+        self.space, self.values = space, values
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[i] for i in range(len(self))[k]]
+        return self.space.model(self.values[k])
 
 
 def _reason(err) -> str:
@@ -122,6 +148,78 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
         ``valid`` (D,) bool, ``reason`` (D,) object (str, '' when valid) and each metric (D,).
     """
     values = np.asarray(values, float).reshape(-1, len(task.space.params))
+    builder = task.builder
+    if builder is None:
+        builder = vectorize.derive(task.space, np.min(values, axis=0), np.max(values, axis=0))
+    if not builder.vectorized:
+        return _evaluate_models(task, values)
+    D = len(values)
+    Z = builder.numbers(values)
+    lay, guesses = builder.stacked(Z)
+    reason = np.full(D, "", dtype=object)
+    # the loader's checks, on the arrays; a design that may fail one is read by the loader
+    ok = np.ones(D, bool)
+    for k in np.flatnonzero(builder.suspect(values, Z, lay)):
+        try:
+            task.space.model(values[k])
+        except ModelError as e:
+            ok[k], reason[k] = False, _reason(e)
+    valid = np.zeros(D, bool)
+    out = {name: np.full(D, np.nan) for name in task.metrics}
+    for idx in _batches(builder, lay, guesses, np.flatnonzero(ok), len(task.t)):
+        sub = lay if len(idx) == D else lay.take(idx)
+        sol = analyze_layout(builder.guess_models({k: g[idx] for k, g in guesses.items()},
+                                                  len(idx)), sub, task.t, backend=task.backend,
+                             designs=Designs(task.space, values[idx]))
+        _fill(task, sol, idx, valid, reason, out)
+    return {"valid": valid, "reason": reason, **out}
+
+
+def _batches(builder, lay, guesses, idx, T: int) -> list[np.ndarray]:
+    """The designs ``idx`` of a chunk in batches solved at once, of at most ``BATCH_SAMPLES``
+    design-samples each (memory is bounded by a batch's time histories).
+
+    A design whose loops a plain Newton solve from its ``[assembly]`` guess does not close at
+    t = 0 goes to batches of its own: the assembly then tries many restarts, a cost per batch
+    that would otherwise fall on every batch holding one such design. Each design's result
+    does not depend on the batch it is solved in."""
+    if not len(idx):
+        return []
+    sub = lay if len(idx) == lay.designs else lay.take(idx)
+    models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
+    one = {id(m): _guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
+    q0 = np.stack([one[id(m)] for m in models], axis=-1)
+    q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0][..., 0]
+    with np.errstate(all="ignore"):
+        _, err = newton(sub, q0[..., None])
+    easy = err[:, 0] <= ACCEPT
+    size = max(1, BATCH_SAMPLES // max(T, 1))
+    return [part[k:k + size] for part in (idx[easy], idx[~easy])
+            for k in range(0, len(part), size)]
+
+
+def _fill(task: Task, sol, idx, valid, reason, out) -> None:
+    """Validity, reasons and metrics of the solved designs ``idx`` (``sol``'s designs)."""
+    good = np.all(sol.valid, axis=-1)
+    kin = sol.kin
+    for j in np.flatnonzero(~good):  # the message analyze would give this design alone
+        m = sol.designs[j]
+        if not np.isfinite(kin.residual[j, 0]) and not np.any(sol.valid[j]):
+            q0 = driver_values(m, np.zeros(1))[0][:, 0]
+            err: AssemblyError = not_assembled(m, kin.layout, q0, 0.0)
+        else:
+            i = int(np.argmin(sol.valid[j]))
+            err = failure(m, task.t[i], kin.residual[j, i])
+        reason[idx[j]] = _reason(err)
+    values_m = metrics_mod.evaluate(sol, task.metrics, path_point=task.path_point,
+                                    path_range=task.path_range, fluctuation=task.fluctuation)
+    valid[idx] = good
+    for name, v in values_m.items():
+        out[name][idx] = np.where(good, v, np.nan)
+
+
+def _evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
+    """:func:`evaluate` by the per-design path: a model per design, then their layouts."""
     D = len(values)
     models, errors = task.space.models(values)
     valid = np.zeros(D, bool)
@@ -129,26 +227,8 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
     out = {name: np.full(D, np.nan) for name in task.metrics}
     ok = [k for k in range(D) if models[k] is not None]
     if ok:
-        batch = [models[k] for k in ok]
-        sol = analyze(batch, task.t, backend=task.backend)
-        good = np.all(sol.valid, axis=-1)
-        kin = sol.kin
-        for j in np.flatnonzero(~good):  # the message analyze would give this design alone
-            m = batch[j]
-            if not np.isfinite(kin.residual[j, 0]) and not np.any(sol.valid[j]):
-                q0 = driver_values(m, np.zeros(1))[0][:, 0]
-                err: AssemblyError = not_assembled(m, kin.layout, q0, 0.0)
-            else:
-                i = int(np.argmin(sol.valid[j]))
-                err = failure(m, task.t[i], kin.residual[j, i])
-            reason[ok[j]] = _reason(err)
-        values_m = metrics_mod.evaluate(sol, task.metrics, models=batch,
-                                        path_point=task.path_point, path_range=task.path_range,
-                                        fluctuation=task.fluctuation)
-        idx = np.array(ok)
-        valid[idx] = good
-        for name, v in values_m.items():
-            out[name][idx] = np.where(good, v, np.nan)
+        sol = analyze([models[k] for k in ok], task.t, backend=task.backend)
+        _fill(task, sol, np.array(ok), valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
 
 
@@ -259,6 +339,8 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     pd = _pandas()
     values = np.asarray(values, float).reshape(-1, len(task.space.params))
     D, T = len(values), len(task.t)
+    if task.builder is None and D:   # the map from parameters to layouts, derived once
+        task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
     chunk = int(chunk or max(1, CHUNK_SAMPLES // max(T, 1)))
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}
