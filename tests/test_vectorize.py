@@ -36,6 +36,8 @@ def loaded_hoeken() -> dict:
          "point2": "P", "stiffness": 2.0, "free_length": 100.0},
         {"kind": "damper", "name": "c", "body": "ground", "point": "O1", "body2": "rocker",
          "point2": "O3", "damping": 0.01},
+        {"kind": "joint_torque", "name": "rub", "joint": "J3", "value": "-0.01*qd_J3"},
+        {"kind": "joint_torque", "name": "stop", "joint": "J2", "value": 0.2},
     ]
     return data
 
@@ -56,6 +58,7 @@ RANGES = {
     "loads.k.stiffness": (0.0, 5.0),
     "loads.k.free_length": (50.0, 150.0),
     "loads.c.damping": (0.0, 0.1),
+    "loads.stop.value": (-0.5, 0.5),
     "assembly.phi.coupler": (70.0, 85.0),
 }
 
@@ -71,7 +74,9 @@ def numbers(lay) -> dict:
         out.update({("cut", k, f): np.asarray(getattr(c, f)) for f in ("pa", "pb", "axis", "angle")})
     for k, r in enumerate(lay.loads):
         out.update({("load", k, f): getattr(r, f) for f in ("stiffness", "free_length", "damping")})
-        if r.kind in ("force", "torque"):
+        if r.axis is not None:
+            out[("load", k, "axis")] = r.axis
+        if r.kind != "spring" and r.kind != "damper" and not r.values[0].state_variables:
             out[("load value", k)] = lay.load_values(r, T)
     q, qd, qdd = lay.driver_values(T)
     out.update({"q driver": q, "qd driver": qd, "qdd driver": qdd})

@@ -77,6 +77,8 @@ def _entries(model: Model, lay: Layout) -> list[tuple[tuple, np.ndarray]]:
     for k, r in enumerate(lay.loads):
         out += [(("load", k, f), np.array([getattr(r, f)], float))
                 for f in ("stiffness", "free_length", "damping")]
+        if r.axis is not None:   # a joint_force's axis (its joint's)
+            out.append((("load", k, "axis"), np.asarray(r.axis, float)))
         idx = _load_constants(r)
         if idx:
             comps = r.values[0].components
@@ -110,8 +112,8 @@ def _frame(model: Model, lay: Layout) -> tuple:
         tuple((j.name, j.kind, j.body_a, j.point_a, j.body_b, j.point_b) for j in model.joints),
         tuple((d.joint, type(d.motion).__name__,
                None if type(d.motion) is ConstantSpeed else d.motion) for d in model.drivers),
-        tuple((r.kind, r.name, r.body, r.point, r.body2, r.point2, r.joint, value_shape(r.values[0]))
-              for r in lay.loads),
+        tuple((r.kind, r.name, r.body, r.point, r.body2, r.point2, r.joint, r.axis is None,
+               value_shape(r.values[0])) for r in lay.loads),
         tuple(model.assembly_phi), tuple(model.assembly_q),
         lay.topo.bodies, lay.topo.parent, lay.topo.tree_joint, lay.topo.sign, lay.topo.cut,
         lay.kind,
@@ -191,7 +193,8 @@ class Builder:
                     values = tuple(_with_constants(f, idx, row) for row in v.tolist())
             loads.append(replace(r, stiffness=num(("load", k, "stiffness")),
                                  free_length=num(("load", k, "free_length")),
-                                 damping=num(("load", k, "damping")), values=values))
+                                 damping=num(("load", k, "damping")), values=values,
+                                 axis=None if r.axis is None else vec(("load", k, "axis"))))
         motions = []
         for k, m in enumerate(lay.motions):
             same = (m[0],) * D
