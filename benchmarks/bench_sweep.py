@@ -5,11 +5,16 @@ coupler length (``bodies.coupler.points.O3[0]``, 90-140 mm) varied over Sobol de
 samples per design (one crank turn), metrics ``peak_tau_J1`` and ``path_deviation`` kept per
 design, the default backend choice (compiled with numba). Each run is a fresh process, so its
 peak memory (the largest resident set of the process or of any one of its worker processes) is
-that run's alone; with K workers the machine holds about K + 1 such processes. It
-prints design-samples per second on one worker and on every core, the peak memory at two numbers
-of designs (memory is bounded by the chunk, not by the number of designs), and the ratio to the
-hand-written compiled kernel of ``bench_ceiling.py`` (the full analysis of this one four-bar)
-measured in the same run, per core.
+that run's alone; with K workers the machine holds about K + 1 such processes.
+
+It prints design-samples per second of the sweep (each chunk's layout built at once from the
+parameter arrays, ``linkdyn.studies.vectorize``) on one worker and on every core, and, measured
+in the same run as baselines: the per-design path (a model read by the loader and a layout
+compiled per design, what sweeps did before the vectorized builder) on one worker, and the
+hand-written compiled kernel of ``bench_ceiling.py`` (the full analysis of this one four-bar,
+one core). Then where one worker's time goes per chunk (building the layouts, the loader's checks
+and batching, the solve, the metrics), and the peak memory at two numbers of designs (memory is
+bounded by the batch, not by the number of designs).
 
 Targets (issue 14): 1e6 designs x 360 samples in under 60 s on the 2-core machine, that is at
 least 3e6 design-samples/s per core; peak memory under 1 GB at any number of designs.
@@ -42,16 +47,25 @@ TARGET_PER_CORE = 3e6  # design-samples/s
 TARGET_MEMORY = 1 << 30  # bytes
 
 
-def child(designs: int, samples: int, workers: int) -> dict:
-    """One sweep in this process (and its workers): rate and peak memory."""
+def child(designs: int, samples: int, workers: int, per_design: int = 0) -> dict:
+    """One sweep in this process (and its workers): rate and peak memory. ``per_design``: by
+    the per-design path (a model and a layout per design) instead of the vectorized builder."""
+    from dataclasses import replace
+
+    from linkdyn.studies import Task, run, space
+    from linkdyn.studies.metrics import check_names
+
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     t = np.linspace(0.0, mech.drivers[0].period, samples)
     values = sample(list(BOX.values()), "sobol", designs, seed=0)
-    linkdyn.sweep(linkdyn.example_path("hoeken"), dict(zip(BOX, values[:4].T)), t,
-                  metrics=METRICS)  # imports and the compiled kernels' first load
+    sp = space(linkdyn.example_path("hoeken"), list(BOX))
+    task = Task(sp, t, tuple(check_names(sp.model(), METRICS))).with_builder(
+        *np.array(list(BOX.values())).T)
+    if per_design:
+        task = replace(task, builder=replace(task.builder, A=None, why="per-design baseline"))
+    run(task, values[:4])   # imports and the compiled kernels' first load
     t0 = time.perf_counter()
-    df = linkdyn.sweep(linkdyn.example_path("hoeken"), dict(zip(BOX, values.T)), t,
-                       metrics=METRICS, workers=workers)
+    df, _ = run(task, values, workers=workers)
     seconds = time.perf_counter() - t0
     rss = [resource.getrusage(w).ru_maxrss * 1024 for w in (resource.RUSAGE_SELF,
                                                              resource.RUSAGE_CHILDREN)]
@@ -60,9 +74,52 @@ def child(designs: int, samples: int, workers: int) -> dict:
             "peak_bytes": max(rss)}
 
 
-def in_fresh_process(designs: int, samples: int, workers: int) -> dict:
+def stages(designs: int, samples: int) -> dict:
+    """Seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
+    parameter arrays, the loader's checks on the arrays and the batching, the solve
+    (``analyze_layout``), the metrics and reasons."""
+    from linkdyn.studies import Task, space
+    from linkdyn.studies import runner
+    from linkdyn.studies.metrics import check_names
+
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, mech.drivers[0].period, samples)
+    values = sample(list(BOX.values()), "sobol", designs, seed=0)
+    sp = space(linkdyn.example_path("hoeken"), list(BOX))
+    task = Task(sp, t, tuple(check_names(sp.model(), METRICS))).with_builder(
+        *np.array(list(BOX.values())).T)
+    clock = {"solve": 0.0, "metrics": 0.0}
+
+    def timed(f, key):
+        def g(*a, **k):
+            t0 = time.perf_counter()
+            try:
+                return f(*a, **k)
+            finally:
+                clock[key] += time.perf_counter() - t0
+        return g
+    solve, fill = runner.analyze_layout, runner._fill
+    runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
+    try:
+        runner.evaluate(task, values[:8])
+        clock.update(solve=0.0, metrics=0.0)
+        t0 = time.perf_counter()
+        Z = task.builder.numbers(values)
+        task.builder.stacked(Z)
+        layouts = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        runner.evaluate(task, values)
+        total = time.perf_counter() - t0
+    finally:
+        runner.analyze_layout, runner._fill = solve, fill
+    return {"layouts": layouts, "solve": clock["solve"], "metrics": clock["metrics"],
+            "rest": total - clock["solve"] - clock["metrics"], "total": total}
+
+
+def in_fresh_process(designs: int, samples: int, workers: int, per_design: int = 0) -> dict:
     done = subprocess.run([sys.executable, __file__, "--child", str(designs), str(samples),
-                           str(workers)], capture_output=True, text=True, timeout=3600)
+                           str(workers), str(per_design)], capture_output=True, text=True,
+                          timeout=3600)
     if done.returncode:
         raise SystemExit(done.stderr[-2000:])
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -87,7 +144,7 @@ def main():
     ap.add_argument("--samples", type=int, default=360)
     ap.add_argument("--no-ceiling", action="store_true",
                     help="skip the hand-written kernel (its compile takes about a minute)")
-    ap.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--child", nargs=4, type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         print(json.dumps(child(*args.child)))
@@ -99,10 +156,18 @@ def main():
     one = in_fresh_process(D, T, 1)
     allc = in_fresh_process(D, T, cores) if cores > 1 else one
     small = in_fresh_process(max(D // 4, 1), T, 1)
+    base = in_fresh_process(max(D // 10, 1), T, 1, per_design=1)
     ceiling = None if args.no_ceiling else ceiling_rate(min(D * T, 4_000_000))
     for label, r in (("one worker", one), (f"{cores} workers", allc)):
         print(f"  {label:<11} {r['rate']:10.4g} design-samples/s  ({r['seconds']:.3g} s, "
               f"{r['valid']} valid, peak memory of a process {r['peak_bytes'] / 2**20:.0f} MB)")
+    print(f"  per-design path (a model and a layout per design; {base['designs']} designs, one "
+          f"worker, same run) {base['rate']:.4g} design-samples/s: the vectorized builder runs "
+          f"{one['rate'] / base['rate']:.3g}x faster on one worker")
+    print(f"  {cores} workers run {allc['rate'] / one['rate']:.3g}x one worker's rate")
+    st = stages(min(D, max(1, 2_000_000 // T)), T)
+    print(f"  one chunk of {min(D, max(1, 2_000_000 // T))} designs, one worker: "
+          + ", ".join(f"{k} {v:.3g} s" for k, v in st.items()))
     print(f"  peak memory at {small['designs']} designs {small['peak_bytes'] / 2**20:.0f} MB, "
           f"at {D} designs {one['peak_bytes'] / 2**20:.0f} MB (one worker): target < 1 GB "
           f"{'met' if max(one['peak_bytes'], allc['peak_bytes']) < TARGET_MEMORY else 'NOT met'}")
