@@ -9,9 +9,12 @@ twists (eq. 2), solves ``J_dep qdd_dep = -bias`` (eqs. 6-7) and propagates the t
 The samples are taken a block at a time (:data:`BLOCK`): every step walks the bodies (or cuts,
 or dyads) and, for each, the samples of the block. Each sample sees the operations of the
 one-sample recursion in the same order, while the independent samples keep the processor busy
-and every array is read and written in contiguous runs. The sample loops call nothing from the
-C library where they can help it (angles by :func:`~linkdyn.compiled.arctan2`, one loop per
-dyad shape), so the compiler turns them into vector instructions.
+and every array is read and written in contiguous runs. The equations are the steps of
+:mod:`.dyads` and :mod:`.recursion` (:mod:`linkdyn.steps`), called on one sample's scalars
+inside these loops; the kernel itself only moves data between the arrays and the steps. The
+sample loops call nothing from the C library where they can help it (angles by
+:func:`linkdyn.steps.atan2`, one loop per dyad shape), so the compiler turns them into vector
+instructions.
 
 All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
 ``[..., d, t]``. The topology comes as ``tree`` (n, 3) rows ``[parent, kind, sign]`` and
@@ -26,8 +29,11 @@ import math
 
 import numpy as np
 
-from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, SWING, Packed, arctan2, factor, inline,
-                        njit, screw_views, substitute, vector_views)
+from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, Packed, factor, inline, njit,
+                        screw_views, substitute, vector_views)
+from ..planar import turned
+from . import dyads as dy
+from .positions import nearest_node
 
 BLOCK = 1024         # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
@@ -38,42 +44,8 @@ CUT_A, CUT_B, CUT_KIND = range(3)   # cuts columns
 # --- scalar helpers, compiled into their callers -----------------------------------------------
 
 @inline
-def turn(ux, uy, vx, vy):
-    """The rotation carrying direction u onto v: angle, cosine, sine (dyads._turn)."""
-    x, y = ux * vx + uy * vy, ux * vy - uy * vx
-    norm = math.sqrt(x * x + y * y)
-    return arctan2(y, x), x / norm, y / norm
-
-
-@inline
-def circles(c1x, c1y, r1, c2x, c2y, r2, side):
-    """Intersection of circles (c1, r1), (c2, r2) on ``side`` of c1 -> c2 (dyads._circles)."""
-    dx, dy = c2x - c1x, c2y - c1y
-    d = math.sqrt(dx * dx + dy * dy)
-    ux, uy = dx / d, dy / d
-    a = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
-    h2 = r1 ** 2 - a ** 2
-    if h2 < 0 and h2 > -1e-12 * r1 ** 2:   # a toggle: the triangle is flat
-        h2 = 0.0
-    h = math.sqrt(h2) if h2 >= 0 else math.nan
-    return c1x + a * ux - side * h * uy, c1y + a * uy + side * h * ux
-
-
-@inline
-def on_line(cx, cy, r, px, py, ex, ey, side):
-    """Intersection of circle (c, r) with the line p + s e on ``side`` (dyads._on_line)."""
-    along = (cx - px) * ex + (cy - py) * ey
-    fx, fy = px + along * ex, py + along * ey
-    h2 = r ** 2 - ((cx - fx) ** 2 + (cy - fy) ** 2)
-    if h2 < 0 and h2 > -1e-12 * r ** 2:
-        h2 = 0.0
-    h = math.sqrt(h2) if h2 >= 0 else math.nan
-    return fx + side * h * ex, fy + side * h * ey
-
-
-@inline
 def nearest(nodes, tc):
-    """Index of the continuation node nearest to the time ``tc`` (solution.solve)."""
+    """Index of the continuation node nearest to the time ``tc`` (positions.nearest_node)."""
     lo, hi = 0, len(nodes)
     while lo < hi:   # searchsorted(nodes, tc, side="right")
         mid = (lo + hi) // 2
@@ -82,7 +54,7 @@ def nearest(nodes, tc):
         else:
             hi = mid
     j = min(max(lo - 1, 0), len(nodes) - 2)
-    return j if (tc - nodes[j]) / (nodes[j + 1] - nodes[j]) < 0.5 else j + 1
+    return nearest_node(j, nodes[j], nodes[j + 1], tc)
 
 
 # --- the steps of one block of samples -----------------------------------------------------------
@@ -133,8 +105,8 @@ def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
 
 @njit
 def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
-    """Turn body ``root`` and every body beyond it, sample k by ``rot[:, k]`` =
-    ``[angle, cos, sin, centre x, centre y]``."""
+    """Turn body ``root`` and every body beyond it, sample k by the turn ``rot[:, k]`` =
+    ``[angle, cos, sin, centre x, centre y]`` (dyads.turned_pose)."""
     ks = slice(k0, k0 + nb)
     for j in range(1, len(tree)):
         if not anc[j, root]:
@@ -142,15 +114,12 @@ def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
         prismatic = tree[j, KIND] == PRI
         phi_j, c_j, s_j, rx_j, ry_j, ex_j, ey_j = _pose(phi, c, s, r, e, j, d, ks)
         for k in range(nb):
-            ang, co, si, cx, cy = rot[0, k], rot[1, k], rot[2, k], rot[3, k], rot[4, k]
-            cj, sj = c_j[k], s_j[k]
-            dx, dy = rx_j[k] - cx, ry_j[k] - cy
-            phi_j[k] += ang
-            c_j[k], s_j[k] = co * cj - si * sj, si * cj + co * sj
-            rx_j[k], ry_j[k] = cx + co * dx - si * dy, cy + si * dx + co * dy
+            rot_k = (rot[0, k], rot[1, k], rot[2, k], rot[3, k], rot[4, k])
+            phi_k, c_k, s_k, r_k = dy.turned_pose(rot_k, phi_j[k], c_j[k], s_j[k],
+                                                  (rx_j[k], ry_j[k]))
+            phi_j[k], c_j[k], s_j[k], rx_j[k], ry_j[k] = phi_k, c_k, s_k, r_k[0], r_k[1]
             if prismatic:
-                ex, ey = ex_j[k], ey_j[k]
-                ex_j[k], ey_j[k] = co * ex - si * ey, si * ex + co * ey
+                ex_j[k], ey_j[k] = turned(rot_k[1], rot_k[2], (ex_j[k], ey_j[k]))
 
 
 @inline
@@ -161,126 +130,30 @@ def _body(c, s, r, i, d, ks):
 
 
 @inline
+def _at(body, k):
+    """Sample k of a body's views (:func:`_body`): its pose tuple (cos, sin, x, y)."""
+    return body[0][k], body[1][k], body[2][k], body[3][k]
+
+
+@inline
 def _point(body, k, px, py):
     """Body point (px, py) in global coordinates, sample k, from the body's views (_body)."""
-    c_i, s_i, rx_i, ry_i = body
-    return rx_i[k] + c_i[k] * px - s_i[k] * py, ry_i[k] + s_i[k] * px + c_i[k] * py
+    return dy.point(_at(body, k), (px, py))
 
 
 @inline
-def _turns(out, k, angle, co, si, cx, cy):
+def _turns(out, k, rot):
     """A turn of sample k into ``out`` (5, block): angle, cosine, sine, centre x, y."""
-    out[0, k], out[1, k], out[2, k], out[3, k], out[4, k] = angle, co, si, cx, cy
-
-
-# --- the dyads' turns over a block: a sample loop per shape (see linkdyn.compiled.arctan2) ------
-# Each takes the cut's bodies a, b (_body views) and points pa, pb in them, the unknown joints'
-# origins x1 = (x1x, x1y), x2 (views), the assembly mode ``side``, and writes the turns of the
-# upper and lower joints into ``up``, ``low`` (5, block).
-
-@inline
-def _split(A, B, pa, pb, x1x, x1y, x2x, x2y, side, nb, up, low):
-    """RRR split: the cut point m over the two unknown joints x1 and x2."""
-    for k in range(nb):
-        pax, pay = _point(A, k, pa[0], pa[1])
-        pbx, pby = _point(B, k, pb[0], pb[1])
-        mx, my = circles(x1x[k], x1y[k], math.sqrt((pax - x1x[k]) ** 2 + (pay - x1y[k]) ** 2),
-                         x2x[k], x2y[k], math.sqrt((pbx - x2x[k]) ** 2 + (pby - x2y[k]) ** 2),
-                         side)
-        ang1, c1, s1 = turn(pax - x1x[k], pay - x1y[k], mx - x1x[k], my - x1y[k])
-        ang2, c2, s2 = turn(pbx - x2x[k], pby - x2y[k], mx - x2x[k], my - x2y[k])
-        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
-        _turns(low, k, ang2, c2, s2, x2x[k], x2y[k])
-
-
-@inline
-def _chain(M, F, pm, pf, x1x, x1y, x2x, x2y, side, nb, up, low):
-    """RRR chain: the lower joint m over the upper joint x1 and the fixed cut point (on body
-    F at pf; the moving one on body M at pm); the lower turn, about m, is left to
-    :func:`_chain_lower` (it follows the upper turn)."""
-    for k in range(nb):
-        pmx, pmy = _point(M, k, pm[0], pm[1])
-        pfx, pfy = _point(F, k, pf[0], pf[1])
-        mx, my = circles(x1x[k], x1y[k], math.sqrt((x2x[k] - x1x[k]) ** 2 + (x2y[k] - x1y[k]) ** 2),
-                         pfx, pfy, math.sqrt((pmx - x2x[k]) ** 2 + (pmy - x2y[k]) ** 2), side)
-        ang1, c1, s1 = turn(x2x[k] - x1x[k], x2y[k] - x1y[k], mx - x1x[k], my - x1y[k])
-        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
-        low[3, k], low[4, k] = mx, my
-
-
-@inline
-def _chain_lower(M, F, pm, pf, nb, low):
-    """RRR chain, after the upper turn: the moving cut point onto the fixed one about m."""
-    for k in range(nb):
-        mx, my = low[3, k], low[4, k]
-        pmx, pmy = _point(M, k, pm[0], pm[1])
-        pfx, pfy = _point(F, k, pf[0], pf[1])
-        low[0, k], low[1, k], low[2, k] = turn(pmx - mx, pmy - my, pfx - mx, pfy - my)
-
-
-@inline
-def _slide(A, M, F, pm, pf, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low):
-    """RRP: the moving body M (the cut's body on the joints' side, b if ``on_b``) ends at a
-    known angle, so both joints together turn by a known total (cd, sd); the lower joint m
-    lies on the slide line (fixed in body a = A) shifted back by the turned offset to the cut
-    point."""
-    ca, sa, sgn = math.cos(angle), math.sin(angle), 1.0 if on_b else -1.0
-    for k in range(nb):
-        pmx, pmy = _point(M, k, pm[0], pm[1])
-        p0x, p0y = _point(F, k, pf[0], pf[1])
-        ct = F[0][k] * ca - sgn * F[1][k] * sa
-        st = F[1][k] * ca + sgn * F[0][k] * sa
-        cd = ct * M[0][k] + st * M[1][k]
-        sd = st * M[0][k] - ct * M[1][k]
-        # the slide axis e (turned with the moving body when that body carries it)
-        ex = A[0][k] * axis[0] - A[1][k] * axis[1]
-        ey = A[1][k] * axis[0] + A[0][k] * axis[1]
-        if not on_b:
-            ex, ey = cd * ex - sd * ey, sd * ex + cd * ey
-        # the lower joint on the slide line shifted back by the turned offset to the cut
-        dx, dy = pmx - x2x[k], pmy - x2y[k]
-        p0x, p0y = p0x - (cd * dx - sd * dy), p0y - (sd * dx + cd * dy)
-        mx, my = on_line(x1x[k], x1y[k], math.sqrt((x2x[k] - x1x[k]) ** 2
-                                                   + (x2y[k] - x1y[k]) ** 2),
-                         p0x, p0y, ex, ey, side)
-        ang1, c1, s1 = turn(x2x[k] - x1x[k], x2y[k] - x1y[k], mx - x1x[k], my - x1y[k])
-        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
-        # the lower joint supplies the rest of the known total turn
-        c2, s2 = cd * c1 + sd * s1, sd * c1 - cd * s1
-        _turns(low, k, arctan2(s2, c2), c2, s2, mx, my)
-
-
-@inline
-def _swing(A, B, pa, pb, axis, angle, x1x, x1y, x2x, x2y, side, nb, up, low):
-    """RPR: body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta."""
-    ca, sa = math.cos(angle), math.sin(angle)
-    for k in range(nb):
-        pax, pay = _point(A, k, pa[0], pa[1])
-        pbx, pby = _point(B, k, pb[0], pb[1])
-        c_a, s_a, c_b, s_b = A[0][k], A[1][k], B[0][k], B[1][k]
-        cr, sr = c_b * c_a + s_b * s_a, s_b * c_a - c_b * s_a
-        cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
-        nx, ny = -(s_a * axis[0] + c_a * axis[1]), c_a * axis[0] - s_a * axis[1]
-        dx, dy = x2x[k] - x1x[k], x2y[k] - x1y[k]
-        ox, oy = pbx - x2x[k], pby - x2y[k]
-        kk = ((pax - x1x[k] - (cd * ox - sd * oy)) * nx
-              + (pay - x1y[k] - (sd * ox + cd * oy)) * ny)
-        aa, bb = dx * nx + dy * ny, dx * -ny + dy * nx
-        ratio = kk / math.sqrt(aa * aa + bb * bb)
-        if abs(ratio) > 1 and abs(ratio) < 1 + 1e-12:
-            ratio = math.copysign(1.0, ratio)
-        theta = arctan2(bb, aa) + side * (math.acos(ratio) if abs(ratio) <= 1 else math.nan)
-        c1, s1 = math.cos(theta), math.sin(theta)
-        ang1 = arctan2(s1, c1)
-        _turns(up, k, ang1, c1, s1, x1x[k], x1y[k])
-        _turns(low, k, ang1 + arctan2(sd, cd), c1 * cd - s1 * sd, s1 * cd + c1 * sd, x2x[k],
-               x2y[k])
+    out[0, k], out[1, k], out[2, k], out[3, k] = rot[0], rot[1], rot[2], rot[3]
+    out[4, k] = rot[4]
 
 
 @njit
 def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low):
-    """Close every loop dyad by dyad, turning the subtrees beyond its two unknown joints
-    (dyads.solve); ``up``, ``low`` (5, block) scratch for the two turns."""
+    """Close every loop dyad by dyad (dyads.solve): each dyad's shape step (dyads.split,
+    chain, slide, swing) gives the two turns of the samples, one sample loop per shape;
+    then the subtrees beyond its two unknown joints turn. ``up``, ``low`` (5, block) scratch
+    for the two turns."""
     ks = slice(k0, k0 + nb)
     for m in range(dyads.shape[0]):
         shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
@@ -291,19 +164,34 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
         axis, angle = (cgeo[d, cut, 4], cgeo[d, cut, 5]), cgeo[d, cut, 6]
         # the cut's body on the side of both unknown joints (chain, slide), and the other
         M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
+        sgn = 1.0 if on_b else -1.0
         x1x, x1y = vector_views(r, ju, d, ks)   # the upper and lower unknown joints
         x2x, x2y = vector_views(r, jl, d, ks)
-        if shape == SLIDE:
-            _slide(A, M, F, pm, pf, axis, angle, on_b, x1x, x1y, x2x, x2y, side, nb, up, low)
-        elif shape == SWING:
-            _swing(A, B, pa, pb, axis, angle, x1x, x1y, x2x, x2y, side, nb, up, low)
-        elif shape == SPLIT:
-            _split(A, B, pa, pb, x1x, x1y, x2x, x2y, side, nb, up, low)
+        if shape == SPLIT:
+            for k in range(nb):
+                u, w = dy.split(_at(A, k), _at(B, k), pa, pb, (x1x[k], x1y[k]),
+                                (x2x[k], x2y[k]), side)
+                _turns(up, k, u)
+                _turns(low, k, w)
+        elif shape == CHAIN:
+            for k in range(nb):
+                u, w = dy.chain(_at(M, k), _at(F, k), pm, pf, (x1x[k], x1y[k]),
+                                (x2x[k], x2y[k]), side)
+                _turns(up, k, u)
+                _turns(low, k, w)
+        elif shape == SLIDE:
+            for k in range(nb):
+                u, w = dy.slide(_at(A, k), _at(M, k), _at(F, k), pm, pf, axis, angle, sgn,
+                                (x1x[k], x1y[k]), (x2x[k], x2y[k]), side)
+                _turns(up, k, u)
+                _turns(low, k, w)
         else:
-            _chain(M, F, pm, pf, x1x, x1y, x2x, x2y, side, nb, up, low)
+            for k in range(nb):
+                u, w = dy.swing(_at(A, k), _at(B, k), pa, pb, axis, angle, (x1x[k], x1y[k]),
+                                (x2x[k], x2y[k]), side)
+                _turns(up, k, u)
+                _turns(low, k, w)
         _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
-        if shape == CHAIN:
-            _chain_lower(M, F, pm, pf, nb, low)
         _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q_u, q_l = q[ju, d, ks], q[jl, d, ks]

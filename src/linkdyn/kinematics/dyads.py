@@ -1,21 +1,32 @@
-"""Closed-form position analysis of loops that are RRR dyads.
+"""Closed-form position analysis of loops that are dyads.
 
-A loop closed at a revolute cut joint whose only unknown joints are two revolute joints, once
-the loops solved before it are known, is an RRR dyad: a triangle with two known vertices and
-two known side lengths. Its third vertex is the intersection of two circles, on the side of the
-line through the known vertices where the current guess lies (the assembly branch). The two
-unknown joint angles then follow as the rotations that carry the guess onto the solution.
+A loop whose only unknown joints, once the loops solved before it are known, are two revolute
+joints, closed at a revolute or prismatic cut, is a dyad: a triangle with two known vertices
+and two known side lengths (RRR), or a circle and a line (RRP), or a line turning about a
+pivot (RPR). Its missing vertex lies on the side given by the assembly mode (+1/-1, the side
+of the line through the known vertices where the current guess has it); the two unknown joint
+angles then follow as the turns that carry the guess onto the solution.
 
-Two shapes occur along the spanning tree:
+Four shapes occur along the spanning tree:
 
-- *split*: one unknown joint on each side of the cut. Known vertices: the two joints; the
-  third vertex: the cut point.
-- *chain*: both unknown joints on the same side. Known vertices: the upper joint and the cut
-  point on the other side; the third vertex: the lower joint.
+- *split* (RRR): one unknown joint on each side of the cut. Known vertices: the two joints;
+  the third vertex: the cut point (:func:`circles`).
+- *chain* (RRR): both unknown joints on the same side. Known vertices: the upper joint and the
+  cut point on the other side; the third vertex: the lower joint (:func:`circles`).
+- *slide* (RRP): a slider cut with both unknown joints on one side; the lower joint lies where
+  a circle meets the slide line (:func:`on_line`).
+- *swing* (RPR): a slider cut between the two unknown joints' sides; the line body's turn
+  solves ``a cos + b sin = k``.
+
+Each shape is one step (:mod:`linkdyn.steps`): :func:`split`, :func:`chain`, :func:`slide`,
+:func:`swing` return the two turns (angle, cos, sin, centre) from the poses of the cut's
+bodies, and :func:`split_mode` ... :func:`swing_mode` the assembly mode of a pose. The numpy
+path (:func:`solve`, :func:`sides`) calls them once per dyad on whole arrays; the compiled
+kernel (:mod:`.compiled`) calls the same steps inside its sample loops.
 
 :func:`plan` orders the loops so each dyad only needs joints already solved; a mechanism that
-does not decompose this way (prismatic loops, Stephenson-type coupled loops) has no plan and
-uses Newton's method instead.
+does not decompose this way (prismatic joints inside the loop, Stephenson-type coupled loops)
+has no plan and uses Newton's method instead.
 """
 
 from __future__ import annotations
@@ -25,7 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import joints as jk
-from ..planar import cross, dot, perp, rotate_cs
+from ..planar import _stack, cross, dot, normal, turned
+from ..steps import atan2, select, step
 
 
 @dataclass(frozen=True)
@@ -79,124 +91,266 @@ def plan(lay) -> tuple[Dyad, ...] | None:
     return tuple(out)
 
 
-def _side(c1, c2, x):
-    """+1 where x lies left of the line c1 -> c2, -1 where right."""
-    return np.where(cross(c2 - c1, x - c1) >= 0, 1.0, -1.0)
+# --- the dyads' equations as steps (linkdyn.steps), for both backends ----------------------------
+# A body's pose is the tuple (cos, sin, x, y) of its angle and origin O; a point of it given in
+# its frame is p (x, y). A turn is (angle, cos, sin, centre x, centre y): the rotation of a
+# joint's subtree about the joint. ``side`` is an assembly mode, +1 or -1.
+
+@step
+def minus(a, b):
+    """``a - b`` of two vectors ``(x, y)``."""
+    return (a[0] - b[0], a[1] - b[1])
 
 
-def _circles(c1, r1, c2, r2, side):
-    """Intersection of circles (c1, r1) and (c2, r2) on the ``side`` (+1 left, -1 right) of the
-    line c1 -> c2; NaN where they do not meet. Points (2, ...), radii and side (...)."""
-    d_vec = c2 - c1
-    d = np.sqrt(dot(d_vec, d_vec))
-    ex = d_vec / d
-    a = (r1 ** 2 - r2 ** 2 + d ** 2) / (2 * d)
-    h2 = r1 ** 2 - a ** 2
-    # at a toggle the triangle is flat (h = 0): rounding must not turn it into "cannot close"
-    h2 = np.where((h2 < 0) & (h2 > -1e-12 * r1 ** 2), 0.0, h2)
-    with np.errstate(invalid="ignore"):
-        h = np.sqrt(np.where(h2 >= 0, h2, np.nan))
-    return c1 + a * ex + side * h * perp(ex)
+@step
+def point(body, p):
+    """Global position of the point ``p`` of ``body`` (cos, sin, x, y): ``O + R p``."""
+    g = turned(body[0], body[1], p)
+    return (body[2] + g[0], body[3] + g[1])
 
 
-def _turn(u, v):
-    """The rotation that carries direction u onto direction v: its angle in (-pi, pi], its
-    cosine and its sine, each (...)."""
+@step
+def length(a):
+    """``|a|`` of a vector ``(x, y)``."""
+    return np.sqrt(dot(a, a))
+
+
+@step
+def flat(h2, r2):
+    """``sqrt(h2)``, a squared height against a squared length ``r2``; NaN where ``h2 < 0``
+    (no solution), but 0 where ``h2`` lies within rounding below 0 (a toggle, where the
+    triangle is flat: rounding must not turn it into "cannot close")."""
+    h2 = select((h2 < 0) & (h2 > -1e-12 * r2), 0.0, h2)
+    return np.sqrt(select(h2 >= 0, h2, np.nan))
+
+
+@step
+def mode(cond):
+    """An assembly mode from a condition: +1 where it holds, else -1."""
+    return select(cond, 1.0, -1.0)
+
+
+@step
+def turn(u, v):
+    """The rotation that carries direction ``u`` onto direction ``v``: its angle in
+    (-pi, pi], its cosine and its sine (``u . v`` and ``u x v`` normalized)."""
     x, y = dot(u, v), cross(u, v)
     norm = np.sqrt(x * x + y * y)
-    return np.arctan2(y, x), x / norm, y / norm
+    return (atan2(y, x), x / norm, y / norm)
 
 
-def _rotate_subtree(lay, pose, root, centre, turn):
-    """Rotate body ``root`` and every body beyond it about ``centre`` (2, ...) in place."""
-    angle, c, s = turn
+@step
+def around(rot, centre):
+    """The turn ``rot`` (angle, cos, sin) about ``centre`` (x, y), as a turn 5-tuple."""
+    return (rot[0], rot[1], rot[2], centre[0], centre[1])
+
+
+@step
+def circles(c1, r1, c2, r2, side):
+    """Intersection of the circles (c1, r1) and (c2, r2) on the ``side`` (+1 left, -1 right)
+    of the line c1 -> c2; NaN where they do not meet.
+
+    With ``d = |c2 - c1|`` and ``e`` its direction, the point is
+    ``c1 + a e + side h perp(e)``, ``a = (r1^2 - r2^2 + d^2) / 2d``, ``h = sqrt(r1^2 - a^2)``.
+    """
+    d_vec = minus(c2, c1)
+    d = length(d_vec)
+    ex = (d_vec[0] / d, d_vec[1] / d)
+    a = (r1 * r1 - r2 * r2 + d * d) / (2 * d)
+    h = flat(r1 * r1 - a * a, r1 * r1)
+    n = normal(ex)
+    return (c1[0] + a * ex[0] + side * h * n[0], c1[1] + a * ex[1] + side * h * n[1])
+
+
+@step
+def on_line(c, r, p0, e, side):
+    """Intersection of the circle (c, r) with the line ``p0 + s e`` (``e`` unit) on the
+    ``side`` (+1: ahead along e of the foot of c, -1: behind); NaN where they do not meet.
+
+    The foot ``f = p0 + ((c - p0) . e) e``; the point ``f + side sqrt(r^2 - |c - f|^2) e``.
+    """
+    along = dot(minus(c, p0), e)
+    foot = (p0[0] + along * e[0], p0[1] + along * e[1])
+    h = flat(r * r - dot(minus(c, foot), minus(c, foot)), r * r)
+    return (foot[0] + side * h * e[0], foot[1] + side * h * e[1])
+
+
+@step
+def turned_pose(rot, phi, c, s, r):
+    """A body's pose (phi, cos, sin, origin ``r`` (x, y)) turned by the turn ``rot`` (angle,
+    cos, sin, centre x, y): ``phi + angle``, ``R c``, ``centre + R (r - centre)``."""
+    centre = (rot[3], rot[4])
+    g = turned(rot[1], rot[2], minus(r, centre))
+    return (phi + rot[0], rot[1] * c - rot[2] * s, rot[2] * c + rot[1] * s,
+            (centre[0] + g[0], centre[1] + g[1]))
+
+
+@step
+def split_mode(A, B, pa, pb, x1, x2):
+    """Assembly mode of an RRR split: the side of the line x1 -> x2 (the two unknown joints)
+    where the cut point (on body A at ``pa``) lies."""
+    return mode(cross(minus(x2, x1), minus(point(A, pa), x1)) >= 0)
+
+
+@step
+def split(A, B, pa, pb, x1, x2, side):
+    """RRR split: the cut point m is at the distances of the cut points of A and B from the
+    two unknown joints x1 (turning A's side) and x2 (B's): m = circles(x1, |p_a - x1|, x2,
+    |p_b - x2|). Returns the upper and lower turns, about x1 and x2, carrying p_a and p_b
+    onto m."""
+    u1, u2 = minus(point(A, pa), x1), minus(point(B, pb), x2)
+    m = circles(x1, length(u1), x2, length(u2), side)
+    return around(turn(u1, minus(m, x1)), x1), around(turn(u2, minus(m, x2)), x2)
+
+
+@step
+def chain_mode(M, F, pm, pf, x1, x2):
+    """Assembly mode of an RRR chain: the side of the line from the upper joint x1 to the
+    fixed cut point (body F at ``pf``) where the lower joint x2 lies."""
+    return mode(cross(minus(point(F, pf), x1), minus(x2, x1)) >= 0)
+
+
+@step
+def chain(M, F, pm, pf, x1, x2, side):
+    """RRR chain: both unknown joints x1 (upper) and x2 (lower) on the side of the moving
+    body M (cut point at ``pm``); the other, F, holds the fixed cut point (at ``pf``). The
+    lower joint goes to m = circles(x1, |x2 - x1|, p_f, |p_m - x2|): the upper turn (about x1)
+    carries x2 onto m, the lower turn (about m) then the moved cut point onto p_f."""
+    p_m, p_f = point(M, pm), point(F, pf)
+    m = circles(x1, length(minus(x2, x1)), p_f, length(minus(p_m, x2)), side)
+    up = turn(minus(x2, x1), minus(m, x1))
+    # the moving cut point after the upper turn: x1 + R_up (p_m - x1)
+    g = turned(up[1], up[2], minus(p_m, x1))
+    moved = (x1[0] + g[0], x1[1] + g[1])
+    return around(up, x1), around(turn(minus(moved, m), minus(p_f, m)), m)
+
+
+@step
+def slide_line(A, M, F, pm, pf, axis, angle, sgn, x2):
+    """Geometry of an RRP dyad: a slider cut (line fixed in body A = the cut's body a, along
+    ``axis``; fixed angle ``angle`` of b to a) with both unknown joints on the side of the
+    moving body M (b if ``sgn`` = +1, a if -1; F is the other).
+
+    M must end at the known angle ``phi_F + sgn angle``, so the subtree below the lower
+    joint x2 turns by a known total (cd, sd) (``phi_target - phi_M``); the lower joint then
+    lies on the slide line shifted back by the turned offset from x2 to M's cut point.
+    Returns the shifted line's point, its unit direction and (cd, sd).
+    """
+    ca, sa = np.cos(angle), np.sin(angle)
+    # target angle of the moving body phi_F + sgn angle, then its difference to phi_M
+    ct, st = F[0] * ca - sgn * F[1] * sa, F[1] * ca + sgn * F[0] * sa
+    cd, sd = ct * M[0] + st * M[1], st * M[0] - ct * M[1]
+    # the slide direction, turning with A when A is the moving body (sgn = -1)
+    e_a = turned(A[0], A[1], axis)
+    e_t = turned(cd, sd, e_a)
+    e = (select(sgn > 0, e_a[0], e_t[0]), select(sgn > 0, e_a[1], e_t[1]))
+    off = turned(cd, sd, minus(point(M, pm), x2))
+    return minus(point(F, pf), off), e, (cd, sd)
+
+
+@step
+def slide_mode(A, M, F, pm, pf, axis, angle, sgn, x1, x2):
+    """Assembly mode of an RRP dyad: the side of the foot of the upper joint x1 on the
+    shifted slide line, along it, where the lower joint x2 lies."""
+    p0, e, _ = slide_line(A, M, F, pm, pf, axis, angle, sgn, x2)
+    along = dot(minus(x1, p0), e)
+    return mode(dot(minus(x2, (p0[0] + along * e[0], p0[1] + along * e[1])), e) >= 0)
+
+
+@step
+def slide(A, M, F, pm, pf, axis, angle, sgn, x1, x2, side):
+    """RRP: the lower joint m is where the circle about the upper joint x1 through x2 meets
+    the shifted slide line (:func:`slide_line`); the upper turn (about x1) carries x2 onto
+    m, the lower turn (about m) supplies the rest of the known total turn."""
+    p0, e, total = slide_line(A, M, F, pm, pf, axis, angle, sgn, x2)
+    m = on_line(x1, length(minus(x2, x1)), p0, e, side)
+    up = turn(minus(x2, x1), minus(m, x1))
+    c2 = total[0] * up[1] + total[1] * up[2]
+    s2 = total[1] * up[1] - total[0] * up[2]
+    return around(up, x1), (atan2(s2, c2), c2, s2, m[0], m[1])
+
+
+@step
+def swing_terms(A, B, pa, pb, axis, angle, x1, x2):
+    """Geometry of an RPR dyad: a slider cut whose line body A turns about the unknown joint
+    x1 and whose slider body B about x2. B must turn by delta (cd, sd) more than A to keep
+    their angle; the slider point then stays on the line when
+    ``a cos(theta) + b sin(theta) = k`` for A's turn theta, with n the line's normal,
+    ``a = (x2 - x1) . n``, ``b = (x2 - x1) . perp(n)``,
+    ``k = (p_a - x1 - R_delta (p_b - x2)) . n``. Returns (a, b, k, cd, sd)."""
+    # delta = angle - (phi_b - phi_a), from the cosines and sines
+    cr, sr = B[0] * A[0] + B[1] * A[1], B[1] * A[0] - B[0] * A[1]
+    ca, sa = np.cos(angle), np.sin(angle)
+    cd, sd = ca * cr + sa * sr, sa * cr - ca * sr
+    n = normal(turned(A[0], A[1], axis))
+    d = minus(x2, x1)
+    k = dot(minus(minus(point(A, pa), x1), turned(cd, sd, minus(point(B, pb), x2))), n)
+    return (dot(d, n), dot(d, normal(n)), k, cd, sd)
+
+
+@step
+def swing_mode(A, B, pa, pb, axis, angle, x1, x2):
+    """Assembly mode of an RPR dyad: which root of ``a cos + b sin = k`` the pose sits on
+    (theta = 0)."""
+    return mode(swing_terms(A, B, pa, pb, axis, angle, x1, x2)[1] <= 0)
+
+
+@step
+def swing(A, B, pa, pb, axis, angle, x1, x2, side):
+    """RPR: A's side turns about x1 by ``theta = atan2(b, a) + side acos(k / |(a, b)|)``,
+    B's about x2 by theta + delta (:func:`swing_terms`)."""
+    a, b, k, cd, sd = swing_terms(A, B, pa, pb, axis, angle, x1, x2)
+    ratio = k / np.sqrt(a * a + b * b)
+    # within rounding beyond +-1 at a toggle: on it
+    ratio = select((np.abs(ratio) > 1) & (np.abs(ratio) < 1 + 1e-12),
+                   select(ratio > 0, 1.0, -1.0), ratio)
+    theta = atan2(b, a) + side * np.arccos(select(np.abs(ratio) <= 1, ratio, np.nan))
+    c1, s1 = np.cos(theta), np.sin(theta)
+    up = atan2(s1, c1)
+    return ((up, c1, s1, x1[0], x1[1]),
+            (up + atan2(sd, cd), c1 * cd - s1 * sd, s1 * cd + c1 * sd, x2[0], x2[1]))
+
+
+# --- the numpy path: each dyad's step on whole arrays -------------------------------------------
+
+def _body(pose, i):
+    """Body i's pose tuple (cos, sin, x, y) from a :class:`~.recursion.Pose`."""
+    return (pose.c[i], pose.s[i], pose.r[i][0], pose.r[i][1])
+
+
+def _args(lay, dy, pose):
+    """The arguments of dyad ``dy``'s shape step (and of its mode step, without ``side``)."""
+    c = lay.cuts[dy.cut]
+    A, B = _body(pose, c.a), _body(pose, c.b)
+    x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
+    if dy.shape in ("split", "swing"):
+        rest = (A, B, c.pa, c.pb) + ((c.axis, c.angle) if dy.shape == "swing" else ())
+        return rest + (x1, x2)
+    M, F, pm, pf = (B, A, c.pb, c.pa) if dy.side == "b" else (A, B, c.pa, c.pb)
+    if dy.shape == "chain":
+        return (M, F, pm, pf, x1, x2)
+    return (A, M, F, pm, pf, c.axis, c.angle, 1.0 if dy.side == "b" else -1.0, x1, x2)
+
+
+#: each shape's steps: (mode, turns)
+SHAPES = {"split": (split_mode, split), "chain": (chain_mode, chain),
+          "slide": (slide_mode, slide), "swing": (swing_mode, swing)}
+
+
+def _turn_subtree(lay, pose, root, rot):
+    """Turn body ``root`` and every body beyond it by ``rot`` (a turn 5-tuple), in place."""
     for j in range(1, lay.topo.n):
         if lay.topo.ancestors[j, root]:
-            pose.phi[j] = pose.phi[j] + angle
-            pose.c[j], pose.s[j] = c * pose.c[j] - s * pose.s[j], s * pose.c[j] + c * pose.s[j]
-            pose.r[j] = centre + rotate_cs(c, s, pose.r[j] - centre)
+            pose.phi[j], pose.c[j], pose.s[j], r = turned_pose(rot, pose.phi[j], pose.c[j],
+                                                               pose.s[j], pose.r[j])
+            pose.r[j] = _stack(r)
             if pose.e[j] is not None:
-                pose.e[j] = rotate_cs(c, s, pose.e[j])
-
-
-def _vertices(lay, dy, pose):
-    """Known vertices c1, c2, the apex guess and the moving points of one dyad."""
-    c = lay.cuts[dy.cut]
-    p_a, p_b = pose.point(c.a, c.pa), pose.point(c.b, c.pb)
-    x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
-    if dy.shape == "split":
-        return x1, x2, p_a, p_a, p_b   # apex: the cut point over the two joints
-    p_mov, p_fix = (p_a, p_b) if dy.side == "a" else (p_b, p_a)
-    return x1, p_fix, x2, p_mov, p_fix  # apex: the lower joint over the upper joint and cut
-
-
-def _slide(lay, dy, pose):
-    """Geometry of an RRP dyad (a slider cut with both unknown joints on one side ``dy.side``).
-
-    The body on the moving side that carries the cut point must end at a known angle (the
-    other body's plus the joint's ``angle``), so the whole subtree below the lower joint turns
-    by a known ``total`` turn; the lower joint then lies on the slide line shifted back by the
-    turned offset from it to the cut point. Returns ``x1``, ``x2`` (the joints), the shifted
-    line (point, unit direction) and ``total`` (angle, cosine, sine).
-    """
-    c = lay.cuts[dy.cut]
-    x1, x2 = pose.r[dy.upper], pose.r[dy.lower]
-    cos_a, sin_a = np.cos(c.angle), np.sin(c.angle)
-    if dy.side == "b":   # the slider body b moves; the line is fixed in body a
-        mov, fix, p_mov, sign = c.b, c.a, pose.point(c.b, c.pb), 1.0
-        p0, e = pose.point(c.a, c.pa), pose.rotate(c.a, c.axis)
-    else:                # body a, which carries the line, moves; the slider point is fixed
-        mov, fix, p_mov, sign = c.a, c.b, pose.point(c.a, c.pa), -1.0
-        p0, e = pose.point(c.b, c.pb), None
-    # target angle of the moving body: phi_fix +- angle, as a cosine and a sine
-    ct = pose.c[fix] * cos_a - sign * pose.s[fix] * sin_a
-    st = pose.s[fix] * cos_a + sign * pose.c[fix] * sin_a
-    cd, sd = ct * pose.c[mov] + st * pose.s[mov], st * pose.c[mov] - ct * pose.s[mov]
-    total = (np.arctan2(sd, cd), cd, sd)
-    if e is None:
-        e = rotate_cs(cd, sd, pose.rotate(c.a, c.axis))
-    return x1, x2, p0 - rotate_cs(cd, sd, p_mov - x2), e, total
-
-
-def _swing(lay, dy, pose):
-    """Geometry of an RPR dyad: a slider cut whose line body a turns about the unknown joint
-    ``x_a`` and whose slider body b about ``x_b``. Body b must turn by ``delta`` more than body a
-    (to keep their angle); then the slider point stays on the line when
-    ``A cos(theta) + B sin(theta) = k`` for body a's turn ``theta``. Returns
-    ``x_a, x_b, (A, B, k), delta (angle, cos, sin)``."""
-    c = lay.cuts[dy.cut]
-    x_a, x_b = pose.r[dy.upper], pose.r[dy.lower]
-    # delta = angle - (phi_b - phi_a), from the cosines and sines
-    cr = pose.c[c.b] * pose.c[c.a] + pose.s[c.b] * pose.s[c.a]
-    sr = pose.s[c.b] * pose.c[c.a] - pose.c[c.b] * pose.s[c.a]
-    cd, sd = np.cos(c.angle) * cr + np.sin(c.angle) * sr, np.sin(c.angle) * cr - np.cos(c.angle) * sr
-    n = perp(pose.rotate(c.a, c.axis))
-    d = x_b - x_a
-    k = dot(pose.point(c.a, c.pa) - x_a - rotate_cs(cd, sd, pose.point(c.b, c.pb) - x_b), n)
-    return x_a, x_b, (dot(d, n), dot(d, perp(n)), k), (np.arctan2(sd, cd), cd, sd)
-
-
-def _on_line(c, r, p0, e, side):
-    """Intersection of circle (c, r) with the line p0 + s e on the ``side`` (+1: ahead along e
-    of the foot of c, -1: behind); NaN where they do not meet."""
-    foot = p0 + dot(c - p0, e) * e
-    d = c - foot
-    h2 = r ** 2 - dot(d, d)
-    h2 = np.where((h2 < 0) & (h2 > -1e-12 * r ** 2), 0.0, h2)
-    with np.errstate(invalid="ignore"):
-        return foot + side * np.sqrt(np.where(h2 >= 0, h2, np.nan)) * e
+                pose.e[j] = _stack(turned(rot[1], rot[2], pose.e[j]))
 
 
 def _mode(lay, dy, pose):
     """Assembly mode of one dyad in ``pose``: +1 or -1, shape (...)."""
-    if dy.shape == "slide":
-        x1, x2, p0, e, _ = _slide(lay, dy, pose)
-        return np.where(dot(x2 - (p0 + dot(x1 - p0, e) * e), e) >= 0, 1.0, -1.0)
-    if dy.shape == "swing":  # which root of A cos + B sin = k the pose sits on (theta = 0)
-        _, _, (a, b, _), _ = _swing(lay, dy, pose)
-        return np.where(b <= 0, 1.0, -1.0)
-    c1, c2, apex, _, _ = _vertices(lay, dy, pose)
-    return _side(c1, c2, apex)
+    return SHAPES[dy.shape][0](*_args(lay, dy, pose))
 
 
 def sides(lay, dyads, q, forward) -> list:
@@ -222,56 +376,11 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
     pose = type(pose)(*(list(x) for x in (pose.phi, pose.c, pose.s, pose.r, pose.e)))
     for k, dy in enumerate(dyads):
         side = _mode(lay, dy, pose) if sides is None else sides[k]
-        if dy.shape == "slide":
-            # the lower joint m on the shifted slide line, at the link length from the upper
-            x1, x2, p0, e, total = _slide(lay, dy, pose)
-            m = _on_line(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p0, e, side)
-            up = _turn(x2 - x1, m - x1)
-            _rotate_subtree(lay, pose, dy.upper, x1, up)
-            # the lower joint supplies the rest of the known total turn
-            c2, s2 = total[1] * up[1] + total[2] * up[2], total[2] * up[1] - total[1] * up[2]
-            low = (np.arctan2(s2, c2), c2, s2)
-            _rotate_subtree(lay, pose, dy.lower, m, low)
-            q[dy.upper] += topo.sign[dy.upper] * up[0]
-            q[dy.lower] += topo.sign[dy.lower] * low[0]
-            continue
-        if dy.shape == "swing":
-            # body a turns by theta = psi + mode acos(k / |(A, B)|), body b by theta + delta
-            x_a, x_b, (a, b, k_), delta = _swing(lay, dy, pose)
-            norm = np.sqrt(a * a + b * b)
-            ratio = k_ / norm
-            ratio = np.where((np.abs(ratio) > 1) & (np.abs(ratio) < 1 + 1e-12), np.sign(ratio), ratio)
-            with np.errstate(invalid="ignore"):
-                theta = np.arctan2(b, a) + side * np.arccos(np.where(np.abs(ratio) <= 1, ratio, np.nan))
-            theta = np.arctan2(np.sin(theta), np.cos(theta))
-            up = (theta, np.cos(theta), np.sin(theta))
-            low = (theta + delta[0], up[1] * delta[1] - up[2] * delta[2],
-                   up[2] * delta[1] + up[1] * delta[2])
-            _rotate_subtree(lay, pose, dy.upper, x_a, up)
-            _rotate_subtree(lay, pose, dy.lower, x_b, low)
-            q[dy.upper] += topo.sign[dy.upper] * up[0]
-            q[dy.lower] += topo.sign[dy.lower] * low[0]
-            continue
-        x1, c2, apex, p_a_or_mov, p_b_or_fix = _vertices(lay, dy, pose)
-        if dy.shape == "split":
-            # the cut point m over the two unknown joints x1 and x2 = c2
-            p_up, p_low = p_a_or_mov, p_b_or_fix
-            m = _circles(x1, np.sqrt(dot(p_up - x1, p_up - x1)), c2,
-                         np.sqrt(dot(p_low - c2, p_low - c2)), side)
-            up, low = _turn(p_up - x1, m - x1), _turn(p_low - c2, m - c2)
-            _rotate_subtree(lay, pose, dy.upper, x1, up)
-            _rotate_subtree(lay, pose, dy.lower, c2, low)
-        else:
-            # the lower joint m over the upper joint x1 and the fixed cut point p_fix = c2
-            x2, p_mov, p_fix = apex, p_a_or_mov, p_b_or_fix
-            m = _circles(x1, np.sqrt(dot(x2 - x1, x2 - x1)), p_fix,
-                         np.sqrt(dot(p_mov - x2, p_mov - x2)), side)
-            up = _turn(x2 - x1, m - x1)
-            _rotate_subtree(lay, pose, dy.upper, x1, up)
-            p_mov = pose.point(*((lay.cuts[dy.cut].a, lay.cuts[dy.cut].pa) if dy.side == "a"
-                                 else (lay.cuts[dy.cut].b, lay.cuts[dy.cut].pb)))
-            low = _turn(p_mov - m, p_fix - m)
-            _rotate_subtree(lay, pose, dy.lower, m, low)
+        up, low = SHAPES[dy.shape][1](*_args(lay, dy, pose), side)
+        # the subtrees beyond the two joints turn rigidly: the upper's (holding the lower's
+        # in a chain or slide), then the lower's about its moved joint
+        _turn_subtree(lay, pose, dy.upper, up)
+        _turn_subtree(lay, pose, dy.lower, low)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q[dy.upper] += topo.sign[dy.upper] * up[0]
         q[dy.lower] += topo.sign[dy.lower] * low[0]

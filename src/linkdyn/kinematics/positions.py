@@ -14,6 +14,7 @@ from ..errors import AssemblyError
 from .. import joints as jk
 from ..model import Model
 from ..planar import solve_small, wrap
+from ..steps import select, step
 from . import dyads
 from .layout import Layout, motion_steps, motion_values
 from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
@@ -194,6 +195,19 @@ def driver_values(source, t: np.ndarray):
     if isinstance(source, Layout):
         return source.driver_values(t)
     return motion_values(tuple((d.motion,) for d in source.drivers), t)
+
+
+@step
+def node_fraction(t_j, t_next, tc):
+    """Where the time ``tc`` lies between the continuation nodes at ``t_j`` and ``t_next``:
+    ``u = (tc - t_j) / (t_next - t_j)`` (0 at node j, 1 at node j + 1)."""
+    return (tc - t_j) / (t_next - t_j)
+
+
+@step
+def nearest_node(j, t_j, t_next, tc):
+    """The node nearer to ``tc`` of the bracketing nodes j (at ``t_j``) and j + 1."""
+    return select(node_fraction(t_j, t_next, tc) < 0.5, j, j + 1)
 
 
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:

@@ -19,7 +19,7 @@ from ..planar import last, shift_twist, solve_small, stack_last
 from . import compiled as kc
 from . import dyads
 from .layout import Layout, compile_designs, compile_layout
-from .positions import ACCEPT, _correct, _follow, assemble, newton
+from .positions import ACCEPT, _correct, _follow, assemble, nearest_node, newton, node_fraction
 from .recursion import (Pose, _cut_frames, closure_bias, closure_jacobian, cut_coordinate,
                         dependent_rates, forward_positions, forward_twist_rates, forward_twists,
                         motion_vectors, point_acceleration)
@@ -212,14 +212,14 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
         if out is None:
             tc = np.clip(t, lo_c, hi_c)
             j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
-            u = (tc - nodes[j]) / (nodes[j + 1] - nodes[j])
+            u = node_fraction(nodes[j], nodes[j + 1], tc)
 
             def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
                 return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
             if lay.dyads is not None:
                 # closed form in the assembly modes: the guess only sets the winding of the
                 # angles, so the nearest node is enough
-                q = at(Q, np.where(u < 0.5, j, j + 1))
+                q = at(Q, nearest_node(j, nodes[j], nodes[j + 1], tc))
             else:
                 # cubic Hermite from the bracketing nodes for Newton's method
                 h = nodes[j + 1] - nodes[j]
