@@ -28,8 +28,16 @@ import numpy as np
 STEPS: list = []
 
 
-def step(fn):
-    """Mark ``fn`` as a per-sample step (see the module docstring); returns ``fn`` itself."""
+def step(fn=None, *, inline: bool = False):
+    """Mark ``fn`` as a per-sample step (see the module docstring); returns ``fn`` itself.
+
+    ``@step(inline=True)``: numba inlines the step into its callers before compiling them. For
+    a large step called once per sample (a whole dyad), which the compiler would otherwise
+    leave as a call, keeping the sample loop from being vectorized.
+    """
+    if fn is None:
+        return lambda f: step(f, inline=inline)
+    fn._step_inline = inline
     STEPS.append(fn)
     return fn
 
@@ -77,7 +85,7 @@ def register(scalar_select, scalar_atan2) -> None:
     from numba.extending import overload, register_jitable
 
     for fn in STEPS:
-        register_jitable(inline="never")(fn)
+        register_jitable(inline="always" if fn._step_inline else "never")(fn)
 
     @overload(select, inline="always")
     def _select(cond, a, b):

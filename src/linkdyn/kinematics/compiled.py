@@ -151,8 +151,9 @@ def _turns(out, k, rot):
 @njit
 def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low):
     """Close every loop dyad by dyad (dyads.solve): each dyad's shape step (dyads.split,
-    chain, slide, swing) gives the two turns of the samples, one sample loop per shape;
-    then the subtrees beyond its two unknown joints turn. ``up``, ``low`` (5, block) scratch
+    chain, slide, swing) gives the two turns of the samples, one sample loop per shape
+    (a chain's lower turn, dyads.chain_lower, once the upper turn has moved its body); the
+    subtrees beyond its two unknown joints turn. ``up``, ``low`` (5, block) scratch
     for the two turns."""
     ks = slice(k0, k0 + nb)
     for m in range(dyads.shape[0]):
@@ -173,12 +174,12 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
                                 (x2x[k], x2y[k]), side)
                 _turns(up, k, u)
                 _turns(low, k, w)
-        elif shape == CHAIN:
+        elif shape == CHAIN:   # the lower turn's centre, its turn after the upper turn
             for k in range(nb):
                 u, w = dy.chain(_at(M, k), _at(F, k), pm, pf, (x1x[k], x1y[k]),
                                 (x2x[k], x2y[k]), side)
                 _turns(up, k, u)
-                _turns(low, k, w)
+                low[3, k], low[4, k] = w
         elif shape == SLIDE:
             for k in range(nb):
                 u, w = dy.slide(_at(A, k), _at(M, k), _at(F, k), pm, pf, axis, angle, sgn,
@@ -192,6 +193,10 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
                 _turns(up, k, u)
                 _turns(low, k, w)
         _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
+        if shape == CHAIN:
+            for k in range(nb):
+                m_k = (low[3, k], low[4, k])
+                _turns(low, k, dy.chain_lower(_at(M, k), _at(F, k), pm, pf, m_k))
         _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q_u, q_l = q[ju, d, ks], q[jl, d, ks]

@@ -192,7 +192,7 @@ def split_mode(A, B, pa, pb, x1, x2):
     return mode(cross(minus(x2, x1), minus(point(A, pa), x1)) >= 0)
 
 
-@step
+@step(inline=True)
 def split(A, B, pa, pb, x1, x2, side):
     """RRR split: the cut point m is at the distances of the cut points of A and B from the
     two unknown joints x1 (turning A's side) and x2 (B's): m = circles(x1, |p_a - x1|, x2,
@@ -210,19 +210,24 @@ def chain_mode(M, F, pm, pf, x1, x2):
     return mode(cross(minus(point(F, pf), x1), minus(x2, x1)) >= 0)
 
 
-@step
+@step(inline=True)
 def chain(M, F, pm, pf, x1, x2, side):
     """RRR chain: both unknown joints x1 (upper) and x2 (lower) on the side of the moving
     body M (cut point at ``pm``); the other, F, holds the fixed cut point (at ``pf``). The
-    lower joint goes to m = circles(x1, |x2 - x1|, p_f, |p_m - x2|): the upper turn (about x1)
-    carries x2 onto m, the lower turn (about m) then the moved cut point onto p_f."""
+    lower joint goes to m = circles(x1, |x2 - x1|, p_f, |p_m - x2|): returns the upper turn,
+    about x1, carrying x2 onto m, and m, the centre of the lower turn (:func:`chain_lower`,
+    taken once the upper turn has moved M)."""
     p_m, p_f = point(M, pm), point(F, pf)
     m = circles(x1, length(minus(x2, x1)), p_f, length(minus(p_m, x2)), side)
-    up = turn(minus(x2, x1), minus(m, x1))
-    # the moving cut point after the upper turn: x1 + R_up (p_m - x1)
-    g = turned(up[1], up[2], minus(p_m, x1))
-    moved = (x1[0] + g[0], x1[1] + g[1])
-    return around(up, x1), around(turn(minus(moved, m), minus(p_f, m)), m)
+    return around(turn(minus(x2, x1), minus(m, x1)), x1), m
+
+
+@step
+def chain_lower(M, F, pm, pf, m):
+    """RRR chain, after the upper turn (:func:`chain`): the lower turn, about the lower joint
+    m, carrying the moving cut point (body M at ``pm``) onto the fixed one (body F at
+    ``pf``)."""
+    return around(turn(minus(point(M, pm), m), minus(point(F, pf), m)), m)
 
 
 @step
@@ -257,7 +262,7 @@ def slide_mode(A, M, F, pm, pf, axis, angle, sgn, x1, x2):
     return mode(dot(minus(x2, (p0[0] + along * e[0], p0[1] + along * e[1])), e) >= 0)
 
 
-@step
+@step(inline=True)
 def slide(A, M, F, pm, pf, axis, angle, sgn, x1, x2, side):
     """RRP: the lower joint m is where the circle about the upper joint x1 through x2 meets
     the shifted slide line (:func:`slide_line`); the upper turn (about x1) carries x2 onto
@@ -295,7 +300,7 @@ def swing_mode(A, B, pa, pb, axis, angle, x1, x2):
     return mode(swing_terms(A, B, pa, pb, axis, angle, x1, x2)[1] <= 0)
 
 
-@step
+@step(inline=True)
 def swing(A, B, pa, pb, axis, angle, x1, x2, side):
     """RPR: A's side turns about x1 by ``theta = atan2(b, a) + side acos(k / |(a, b)|)``,
     B's about x2 by theta + delta (:func:`swing_terms`)."""
@@ -380,8 +385,11 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
         # the subtrees beyond the two joints turn rigidly: the upper's (holding the lower's
         # in a chain or slide), then the lower's about its moved joint
         _turn_subtree(lay, pose, dy.upper, up)
+        if dy.shape == "chain":   # the lower turn follows from the moved cut point
+            low = chain_lower(*_args(lay, dy, pose)[:4], low)
         _turn_subtree(lay, pose, dy.lower, low)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q[dy.upper] += topo.sign[dy.upper] * up[0]
         q[dy.lower] += topo.sign[dy.lower] * low[0]
     return q, pose
+
