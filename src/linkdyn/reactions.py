@@ -18,11 +18,11 @@ from typing import Callable
 import numpy as np
 
 from . import joints as jk
-from .dynamics.denoc import DynamicSolution, composite
+from .dynamics.denoc import DynamicSolution, _array, _axis, composite
 from .kinematics import KinematicSolution
-from .kinematics.recursion import _cut_frames
 from .model import Model
-from .planar import first, shift_wrench, stack_last
+from .planar import about, first, stack_last, turned
+from .steps import step
 
 
 @dataclass(frozen=True)
@@ -65,16 +65,96 @@ class Reactions:
         return np.stack([w[0] for w in self.on_second], axis=-1)
 
 
+# --- the steps: each equation once, for both backends (linkdyn.steps) ------------------------
+
+@step
+def point(r, c, s, local):
+    """Global position ``r + R(phi) local`` of a point of a body (O at ``r``, angle of cosine
+    ``c`` and sine ``s``), m."""
+    a = turned(c, s, local)
+    return (r[0] + a[0], r[1] + a[1])
+
+
+@step
+def plus(x, y):
+    """``x + y`` of two wrenches ``(n, fx, fy)``."""
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
+
+
+@step
+def minus(x, y):
+    """``x - y`` of two wrenches ``(n, fx, fy)``."""
+    return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
+
+
+@step
+def cut_wrench(code, e_a, lam, r_pb, r_a, r_b):
+    """The constraint wrench of a cut joint of kind ``code`` on its two bodies.
+
+    Parameters
+    ----------
+    e_a : (x, y)
+        The joint's axis, fixed in its first body a, global components.
+    lam : (l0, l1, l2)
+        Its multipliers, padded with zeros to three.
+    r_pb, r_a, r_b : (x, y)
+        The cut point on the second body b, O_a and O_b, m.
+
+    Returns
+    -------
+    on_b : (n, fx, fy)
+        ``S^T lam``, by a on b about the cut point: the joint's reaction.
+    w_b, w_a : (n, fx, fy)
+        On b about O_b, ``A(r_Pb - r_b)^T S^T lam``, and its opposite on a about O_a.
+    """
+    # S^T lam acts at the cut point on the second body, its opposite on the first
+    on_b = jk.wrench(code, e_a, lam)
+    w_a = about(on_b, (r_pb[0] - r_a[0], r_pb[1] - r_a[1]))
+    return (on_b, about(on_b, (r_pb[0] - r_b[0], r_pb[1] - r_b[1])),
+            (-w_a[0], -w_a[1], -w_a[2]))
+
+
+@step
+def without_effort(code, s, e, w, tau):
+    """``w - tau p_i``: the wrench through tree joint i of kind ``code`` (sign ``s``, global axis
+    ``e``) less its driver's effort ``tau`` (N m or N), leaving the reaction."""
+    p = jk.motion(code, s, e)
+    return (w[0] - tau * p[0], w[1] - tau * p[1], w[2] - tau * p[2])
+
+
+@step
+def flipped(w, r_i, r_joint):
+    """``A(r_i - r_P)^T (-w)``: the opposite of a wrench ``w`` about O_i (on the child), about
+    the parent's joint point ``r_P`` (the reaction on the parent when it is the second body)."""
+    return about((-w[0], -w[1], -w[2]), (r_i[0] - r_joint[0], r_i[1] - r_joint[1]))
+
+
+# --- the numpy path: the steps on whole arrays, loops over cuts and bodies --------------------
+
+def _multipliers(lam: np.ndarray, rows: slice) -> tuple:
+    """A cut's multipliers (rows of ``lam`` (n_rows, ...)) padded with zeros to three."""
+    own = tuple(lam[rows])
+    return own + (0.0,) * (3 - len(own))
+
+
+def _cuts(kin: KinematicSolution, lam: np.ndarray):
+    """Per cut joint: the cut, its reaction ``S^T lam`` on b and its wrenches on b and a about
+    O_b and O_a, each (3, ...), by :func:`cut_wrench`."""
+    lay, pose = kin.layout, kin.pose
+    for k, c in enumerate(lay.cuts):
+        e_a = turned(pose.c[c.a], pose.s[c.a], c.axis)
+        r_pb = point(pose.r[c.b], pose.c[c.b], pose.s[c.b], c.pb)
+        on_b, w_b, w_a = cut_wrench(jk.CODES[c.kind], e_a, _multipliers(lam, lay.topo.row_slice(k)),
+                                    r_pb, pose.r[c.a], pose.r[c.b])
+        yield c, _array(on_b, r_pb[0]), _array(w_b, r_pb[0]), _array(w_a, r_pb[0])
+
+
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
     """Wrenches (3, T) of the cut-joint multipliers ``lam`` (n_rows, T) on every body about O_i."""
-    lay = kin.layout
-    w = [np.zeros((3,) + kin.shape) for _ in range(lay.topo.n)]
-    for k, c in enumerate(lay.cuts):
-        r_pa, r_pb, e_a = _cut_frames(lay, kin.pose, c)
-        # S^T lam acts at the cut point on the second body, its opposite on the first
-        on_b = jk.get(c.kind).cut_wrench(e_a, lam[lay.topo.row_slice(k)])
-        w[c.b] = w[c.b] + shift_wrench(on_b, r_pb - kin.pose.r[c.b])
-        w[c.a] = w[c.a] - shift_wrench(on_b, r_pb - kin.pose.r[c.a])
+    w = [np.zeros((3,) + kin.shape) for _ in range(kin.layout.topo.n)]
+    for c, _, w_b, w_a in _cuts(kin, lam):
+        w[c.b] = _array(plus(w[c.b], w_b))
+        w[c.a] = _array(plus(w[c.a], w_a))
     return w
 
 
@@ -83,14 +163,13 @@ def tree_wrenches(kin: KinematicSolution, dyn: DynamicSolution) -> list:
     joint, driver effort included."""
     w_cut = cut_wrenches(kin, first(dyn.lam))
     # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
-    return composite(kin, [ws - wc for ws, wc in zip(dyn.wstar, w_cut)])
+    return composite(kin, [_array(minus(ws, wc), wc[0]) for ws, wc in zip(dyn.wstar, w_cut)])
 
 
 def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactions:
     """Reactions at all joints from the dynamic solution."""
-    lay = kin.layout
+    lay, pose = kin.layout, kin.pose
     topo = lay.topo
-    lam = first(dyn.lam)
     R = tree_wrenches(kin, dyn)
     on_b = [None] * len(model.joints)
     driver_of = {i: k for k, i in enumerate(topo.driven)}
@@ -98,13 +177,14 @@ def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactio
         j, k = topo.tree_joint[i], topo.parent[i]
         on_child = R[i]
         if i in driver_of:  # remove the driver's effort tau p_i
-            on_child = on_child - dyn.tau[..., driver_of[i]] * kin.motion[i]
+            on_child = _array(without_effort(jk.CODES[lay.kind[i]], topo.sign[i],
+                                             _axis(pose.e[i]), on_child,
+                                             dyn.tau[..., driver_of[i]]))
         if topo.sign[i] > 0:  # the child is the second body: its wrench about O_i as is
             on_b[j] = on_child
         else:  # the child is the first body: the second (the parent) receives the opposite
-            r_pb = kin.pose.point(k, lay.joint_point[i])
-            on_b[j] = shift_wrench(-on_child, kin.pose.r[i] - r_pb)
-    for k, c in enumerate(lay.cuts):
-        _, _, e_a = _cut_frames(lay, kin.pose, c)
-        on_b[c.joint] = jk.get(c.kind).cut_wrench(e_a, lam[topo.row_slice(k)])
+            r_joint = point(pose.r[k], pose.c[k], pose.s[k], lay.joint_point[i])
+            on_b[j] = _array(flipped(on_child, pose.r[i], r_joint))
+    for c, on_cut, _, _ in _cuts(kin, first(dyn.lam)):
+        on_b[c.joint] = on_cut
     return Reactions(on_b, R)

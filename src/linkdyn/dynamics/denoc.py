@@ -25,7 +25,9 @@ import numpy as np
 
 from ..kinematics import KinematicSolution
 from ..loads import Loads
-from ..planar import cross, dot, last, perp, shift_wrench, solve_small, stack_last, twist
+from .. import joints as jk
+from ..planar import about, at, cross, dot, last, solve_small, stack_last, turned
+from ..steps import step
 
 
 @dataclass(frozen=True)
@@ -90,45 +92,110 @@ class DynamicSolution:
         return stack_last(self.wtilde)
 
 
-def newton_euler(kin: KinematicSolution, w_ext: list):
-    """Uncoupled Newton–Euler wrenches ``w_star_i`` (3, T) and the kinetic energy (T,).
+# --- the steps: each equation once, for both backends (linkdyn.steps) ------------------------
 
-    About O_i with ``d`` the vector from O_i to the mass centre (eq. 10, planar):
-    ``n = I_O al + m d x a_O``, ``f = m (a_O + al perp(d) - w^2 d)``.
+@step
+def newton_euler_wrench(mass, inertia, com, c, s, t, td, w_ext):
+    """Uncoupled Newton–Euler wrench ``w_star_i`` of one body about O_i, and its kinetic energy.
+
+    Parameters
+    ----------
+    mass, inertia : float or array
+        ``m`` (kg) and the moment of inertia about the mass centre ``I_C`` (kg m^2).
+    com : (x, y)
+        Mass centre from O_i in the body's frame, m.
+    c, s : float or array
+        Cosine and sine of the body's angle.
+    t, td : (w, vx, vy)
+        Twist and twist rate of the body at O_i (rad/s, m/s; rad/s^2, m/s^2).
+    w_ext : (n, fx, fy)
+        Applied wrench about O_i, N m / N.
+
+    Returns
+    -------
+    w_star : (n, fx, fy)
+        ``M_i td_i + W_i M_i E_i t_i - w_ext_i`` about O_i, N m / N.
+    ke : float or array
+        ``1/2 m |v_C|^2 + 1/2 I_C w^2``, J.
     """
-    lay = kin.layout
+    # d = R com;  n = I_O al + m d x a_O,  f = m (a_O + al perp(d) - w^2 d),  minus w_ext
+    d = turned(c, s, com)
+    w2 = t[0] * t[0]
+    i_o = inertia + mass * dot(d, d)
+    n = (i_o * td[0] + mass * cross(d, (td[1], td[2]))) - w_ext[0]
+    fx = mass * (td[1] - td[0] * d[1] - w2 * d[0]) - w_ext[1]
+    fy = mass * (td[2] + td[0] * d[0] - w2 * d[1]) - w_ext[2]
+    # kinetic energy with the mass centre's velocity v_C = v_O + w perp(d)
+    v_c = at(t, d)
+    return (n, fx, fy), 0.5 * mass * (v_c[1] * v_c[1] + v_c[2] * v_c[2]) + 0.5 * inertia * w2
+
+
+@step
+def plus_child(w_parent, w_child, r_child, r_parent):
+    """``w_p + A(r_i - r_p)^T w_i``: a child's wrench about O_i added to its parent's about O_p
+    (one term of the backward recursion of ``N_l^T``)."""
+    m = about(w_child, (r_child[0] - r_parent[0], r_child[1] - r_parent[1]))
+    return (w_parent[0] + m[0], w_parent[1] + m[1], w_parent[2] + m[2])
+
+
+@step
+def generalized_force(code, s, e, w_tilde):
+    """``Q_i = p_i . w_tilde_i``: the force the tree joint i of kind ``code`` (sign ``s``, global
+    axis ``e``) must carry, N m or N (``N_d^T``; every component multiplied, so a NaN spreads)."""
+    return dot(jk.motion(code, s, e), w_tilde)
+
+
+# --- the numpy path: the steps on whole arrays, a loop over bodies ----------------------------
+
+def _array(parts, *like) -> np.ndarray:
+    """A component-first array (k, ...) from a step's tuple, broadcast with the arrays ``like``
+    (a constant component takes the batch shape)."""
+    shape = np.broadcast_shapes(*(np.shape(x) for x in tuple(parts) + like))
+    out = np.empty((len(parts),) + shape)
+    for k, x in enumerate(parts):
+        out[k] = x
+    return out
+
+
+def _axis(e):
+    """A tree joint's global axis ``e`` (2, ...), or (0, 0) for a kind without one."""
+    return (0.0, 0.0) if e is None else e
+
+
+def newton_euler(kin: KinematicSolution, w_ext: list):
+    """Uncoupled Newton–Euler wrenches ``w_star_i`` (3, T) and the kinetic energy (T,), by
+    :func:`newton_euler_wrench` body by body."""
+    lay, pose = kin.layout, kin.pose
     w_star = [np.zeros((3,) + kin.shape)]   # the ground's (w_ext[0] may be a broadcast zero)
     ke = np.zeros(kin.shape)
     for i in range(1, lay.topo.n):
-        m = lay.mass[i]
-        d = kin.pose.rotate(i, lay.com[i])
-        (w, v), (al, a) = (kin.twists[i][0], kin.twists[i][1:]), (kin.rates[i][0], kin.rates[i][1:])
-        i_o = lay.inertia[i] + m * dot(d, d)
-        # M_i td_i + W_i M_i E_i t_i - w_ext_i
-        w_star.append(twist(i_o * al + m * cross(d, a), m * (a + al * perp(d) - w ** 2 * d))
-                      - w_ext[i])
-        # kinetic energy: 1/2 m |v_C|^2 + 1/2 I_C w^2
-        v_c = v + w * perp(d)
-        ke += 0.5 * m * dot(v_c, v_c) + 0.5 * lay.inertia[i] * w ** 2
+        w, ke_i = newton_euler_wrench(lay.mass[i], lay.inertia[i], lay.com[i], pose.c[i],
+                                      pose.s[i], kin.twists[i], kin.rates[i], w_ext[i])
+        w_star.append(_array(w, pose.c[i]))
+        ke = ke + ke_i
     return w_star, ke
 
 
 def composite(kin: KinematicSolution, w: list) -> list:
-    """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c``, (3, T) each."""
+    """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c``, (3, T) each, by
+    :func:`plus_child` from the leaves."""
     topo, r = kin.layout.topo, kin.pose.r
     out = list(w)
     for i in range(topo.n - 1, 0, -1):
         k = topo.parent[i]
-        out[k] = out[k] + shift_wrench(out[i], r[i] - r[k])
+        out[k] = _array(plus_child(out[k], out[i], r[i], r[k]), out[i][0])
     return out
 
 
 def reduce(kin: KinematicSolution, w_star: list) -> tuple[list, np.ndarray]:
     """``w_tilde`` (3, T) per body and the generalized forces ``Q`` (n, T) of ``w_star``."""
     # N_l^T w_star by the backward recursion, then N_d^T: Q_i = p_i . w_tilde_i
+    lay, pose = kin.layout, kin.pose
     w_tilde = composite(kin, w_star)
-    Q = np.stack([np.zeros(kin.shape)] + [dot(kin.motion[i], w_tilde[i])
-                                            for i in range(1, kin.layout.topo.n)])
+    Q = np.zeros((lay.topo.n,) + kin.shape)
+    for i in range(1, lay.topo.n):
+        Q[i] = generalized_force(jk.CODES[lay.kind[i]], lay.topo.sign[i], _axis(pose.e[i]),
+                                 w_tilde[i])
     return w_tilde, Q
 
 
