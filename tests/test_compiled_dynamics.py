@@ -3,17 +3,18 @@
 ``linkdyn.dynamics.compiled.solve`` must give what ``denoc.solve`` followed by
 ``reactions.solve`` give on the same kinematic solution: tau, lam, Q, w_star, w_tilde, kinetic
 energy, pivot, every joint's ``on_second`` wrench and every tree wrench ``R_i`` (the kernel
-keeping its internals), in the same shapes, to 1e-12 of each quantity's peak, NaN at the same samples. Covered: every bundled
-example, the dynamics tests' models (loads, gravity, springs, dampers, prismatic tree, cut and
-driven joints, joints declared child-first, two drivers, two loops), stacked designs, a design
-that cannot assemble, samples past a limit position, and a closure Jacobian made singular (and
-nearly singular on both sides of the pivot threshold) at chosen samples.
+keeping its internals), in the same shapes, to 1e-12 of each quantity's peak, NaN at the same
+samples. Covered: every bundled example, the dynamics tests' models (loads, gravity, springs,
+dampers, prismatic tree, cut and driven joints, joints declared child-first, two drivers, two
+loops, slot joints), a slot cut before a prismatic one (cuts of different row counts), random
+slotted levers, stacked designs equal to each design alone, a design that cannot assemble,
+samples past a limit position, and a closure Jacobian made singular (and nearly singular on both
+sides of the pivot threshold) at chosen samples.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import pickle
 import tomllib
 
@@ -23,19 +24,25 @@ import pytest
 import linkdyn
 from linkdyn import kinematics, loads as loads_mod, reactions
 from linkdyn.cli import example_names, example_text
-from linkdyn.compiled import CODES, pack
+from hypothesis import HealthCheck, given, settings
+
+from linkdyn.compiled import pack
 from linkdyn.dynamics import compiled, denoc
 from linkdyn.io import model_from_dict
+from linkdyn.model import Model
 
-from test_dynamics import MODELS, times
+from builders import body, rev
+from test_dynamics import MODELS, scotch_yoke, times
+from test_slot import _lever_models, slotted_levers
 
 RTOL = 1e-12
 
-# the examples and test models whose joint kinds the kernels have code for (a slot runs on
-# numpy: tests/test_slot.py)
-KERNEL_EXAMPLES = [n for n in example_names()
-                   if all(j.kind in CODES for j in linkdyn.load(linkdyn.example_path(n)).joints)]
-KERNEL_MODELS = [n for n, build in MODELS.items() if all(j.kind in CODES for j in build().joints)]
+# the examples and test models every compiled stage runs (tests/test_compiled.py; the compiled
+# kinematics has no code for the slot yet, the dynamics kernel runs every kind)
+KERNEL_EXAMPLES = [n for n in example_names() if not linkdyn.compiled.unsupported(
+    j.kind for j in linkdyn.load(linkdyn.example_path(n)).joints)]
+KERNEL_MODELS = [n for n, build in MODELS.items()
+                 if not linkdyn.compiled.unsupported(j.kind for j in build().joints)]
 
 
 def numpy_kinematics(model, t):
@@ -105,7 +112,7 @@ def slider_crank_design(scale):
 # ----------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", KERNEL_EXAMPLES)
+@pytest.mark.parametrize("name", example_names())
 def test_bundled_examples(name):
     model = linkdyn.load(linkdyn.example_path(name))
     kin = numpy_kinematics(model, times(model, 41))
@@ -114,11 +121,74 @@ def test_bundled_examples(name):
     check_all(ref, fast)
 
 
-@pytest.mark.parametrize("name", KERNEL_MODELS)
+@pytest.mark.parametrize("name", list(MODELS))
 def test_dynamics_test_models(name):
     model = MODELS[name]()
     kin = numpy_kinematics(model, times(model, 33))
     check_all(*both(model, kin))
+
+
+def yoke_and_rocker():
+    """The Scotch yoke with a second loop (a link and a rocker on the yoke), its slot declared
+    first: the slot's one row comes before the prismatic cut's two."""
+    base = scotch_yoke()
+    ground = body("ground", {"O": (0, 0), "G": (0, 0), "O6": (200, 200)})
+    bodies = (ground,) + tuple(b for b in base.bodies if b.name != "ground") + (
+        body("link", {"P": (0, 0), "Q": (150, 0)}, 0.3, (75, 0), 600.0),
+        body("rocker", {"O": (0, 0), "Q": (100, 0)}, 0.5, (50, 5), 400.0))
+    joints = (base.joints[2],) + base.joints[:2] + (
+        rev("J5", "yoke.P", "link.P"), rev("J6", "link.Q", "rocker.Q"),
+        rev("J7", "ground.O6", "rocker.O"))
+    return Model("yoke and rocker", bodies, joints, base.drivers, base.loads, base.gravity,
+                 assembly_phi={**base.assembly_phi, "link": 1.9, "rocker": -1.1},
+                 assembly_q=base.assembly_q)
+
+
+def test_cuts_of_different_row_counts():
+    """A slot (one row) cut before a prismatic joint (two rows): each cut reads its own
+    multipliers."""
+    model = yoke_and_rocker()
+    kin = numpy_kinematics(model, times(model, 21))
+    lay = kin.layout
+    assert [c.kind for c in lay.cuts] == ["slot", "prismatic"] and lay.topo.rows == (1, 2)
+    ref, fast = both(model, kin)
+    assert np.all(np.isfinite(ref[0].lam)) and np.min(np.max(np.abs(ref[0].lam), axis=0)) > 0
+    check_all(ref, fast)
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(slotted_levers())
+def test_random_slotted_levers(case):
+    """Random slotted levers (geometry, masses, loads, gravity; tests/test_slot.py) and their
+    massless-block equivalent (revolute and prismatic joints)."""
+    for model in _lever_models(case):
+        kin = numpy_kinematics(model, np.linspace(0.0, 1.0, 9))
+        check_all(*both(model, kin))
+
+
+def scaled(model, scale):
+    """``model`` with its masses and inertias scaled by ``scale``."""
+    bodies = tuple(dataclasses.replace(b, mass=b.mass * scale, inertia=b.inertia * scale)
+                   for b in model.bodies)
+    return dataclasses.replace(model, bodies=bodies)
+
+
+@pytest.mark.parametrize("build", [scotch_yoke, yoke_and_rocker])
+def test_a_batch_of_designs_equals_each_design_alone(build):
+    """Stacked designs (different masses) through the kernel at once give each design's own
+    kernel results (and numpy's)."""
+    designs = [scaled(build(), 1.0), scaled(build(), 1.6)]
+    t = times(designs[0], 17)
+    kin = numpy_kinematics(designs, t)
+    ref, fast = both(designs, kin)
+    check_all(ref, fast)
+    for k, model in enumerate(designs):
+        one = both(model, numpy_kinematics(model, t))[1]
+        for name in ("tau", "lam", "kinetic_energy", "pivot"):
+            same(getattr(fast[0], name)[k], getattr(one[0], name), name)
+        same(fast[1].force[k], one[1].force, "force")
+        same(fast[1].moment[k], one[1].moment, "moment")
+    assert np.max(np.abs(fast[0].tau[0] - fast[0].tau[1])) > 1e-3 * np.max(np.abs(fast[0].tau))
 
 
 def test_loads_are_in_the_comparison():
@@ -246,19 +316,6 @@ def test_any_sample_block_gives_the_same(monkeypatch, block):
     check_all(*both(designs, kin))
 
 
-def kernel_argument(monkeypatch, name="w_ext"):
-    """Record the argument ``name`` every call of the compiled kernel receives."""
-    seen, kernel = [], compiled._kernel
-
-    def spy(*args):
-        py_func = getattr(kernel, "py_func", kernel)   # the Python function numba compiled
-        seen.append(inspect.signature(py_func).bind(*args).arguments[name])
-        return kernel(*args)
-
-    monkeypatch.setattr(compiled, "_kernel", spy)
-    return seen
-
-
 def test_bodies_without_loads_get_a_broadcast_zero():
     """No per-sample memory for a body without loads, nor for the ground's share when nothing
     is anchored on it; every wrench keeps the shape (3, ...), and the numpy solver's ``w_star``
@@ -287,19 +344,19 @@ def constant_loads(applied, values):
 
 
 @pytest.mark.parametrize("designs", [1, 2])
-def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
-    """Wrenches constant in time (broadcast along the samples) reach the kernel as one sample,
-    ``w_ext`` (n, 3, D, 1), taken design by design; the results are numpy's and, to the bit,
-    those of the same wrenches given as full arrays, which reach it at every sample."""
-    seen = kernel_argument(monkeypatch)
-    monkeypatch.setattr(compiled, "BLOCK", 8)   # several blocks reuse the constant's scratch
+def test_constant_applied_wrenches_equal_the_same_at_every_sample(monkeypatch, designs):
+    """Wrenches constant in time (broadcast along the samples, per design when stacked) give
+    numpy's results, and the same bits as the same wrenches given as full arrays; with no
+    loads at all too."""
+    monkeypatch.setattr(compiled, "BLOCK", 8)   # several blocks
     models = [hoeken_design(38.1), hoeken_design(42.0)][:designs]
     kin = numpy_kinematics(models if designs > 1 else models[0], times(models[0], 21))
     D = designs
     applied = loads_mod.wrenches(models[0] if designs == 1 else None, kin)
     packed = pack(kin.layout, len(models[0].joints))
-    compiled.solve(kin, applied, packed)   # no loads at all
-    assert seen[-1].shape == (4, 3, D, 1) and not np.any(seen[-1])
+    dyn = denoc.solve(kin, applied)   # no loads at all
+    check_all((dyn, reactions.solve(models[0], kin, dyn)),
+              compiled.solve(kin, applied, packed, internals=True))
     # constant per body (the ground's zero), and per design when stacked: (3, D, 1) or (3, 1)
     scale = np.linspace(1.0, 1.3, D)[:, None]
     values = [np.zeros(3)] + [np.array([0.2 * i, -1.5 + i, 0.7]) for i in (1, 2, 3)]
@@ -308,62 +365,55 @@ def test_constant_applied_wrenches_are_passed_once(monkeypatch, designs):
     dyn = denoc.solve(kin, const)
     ref = (dyn, reactions.solve(models[0], kin, dyn))
     fast = compiled.solve(kin, const, packed, internals=True)
-    assert seen[-1].shape == (4, 3, D, 1)
     check_all(ref, fast)
-    # the same wrenches at every sample: the other path of the kernel, the same bits
+    assert np.max(np.abs(fast[0].tau - dyn.tau)) <= RTOL * np.max(np.abs(dyn.tau))
+    # the same wrenches at every sample: the same bits
     full = dataclasses.replace(const, wrenches=[np.array(w) for w in const.wrenches])
     again = compiled.solve(kin, full, packed, internals=True)
-    assert seen[-1].shape == (4, 3, D, 21)
     for name in ("tau", "lam", "Q", "w_star", "w_tilde"):
         assert np.array_equal(getattr(again[0], name), getattr(fast[0], name)), name
     assert np.array_equal(again[1].force, fast[1].force)
     assert np.array_equal(np.stack(again[1].tree), np.stack(fast[1].tree))
 
 
-def test_a_load_varying_in_time_without_gravity(monkeypatch):
-    """A torque varying in time on one body, none elsewhere and no gravity: the kernel reads
-    every sample of ``w_ext`` (the unloaded bodies' zeros included) and matches numpy."""
-    seen = kernel_argument(monkeypatch)
+def test_a_load_varying_in_time_without_gravity():
+    """A torque varying in time on one body, none elsewhere and no gravity: the kernel
+    matches numpy, and the torque changes the driver's."""
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     assert not np.any(model.gravity) and not model.loads
     torque = linkdyn.Load("torque", "rocker", value=lambda t: 0.3 * np.sin(5.0 * np.asarray(t)))
     model = dataclasses.replace(model, loads=(torque,))
     kin = numpy_kinematics(model, times(model, 31))
     ref, fast = both(model, kin)
-    assert seen[-1].shape == (4, 3, 1, 31)
     unloaded = both(dataclasses.replace(model, loads=()), kin)[1]
     assert np.max(np.abs(fast[0].tau - unloaded[0].tau)) > 1e-3 * np.max(np.abs(fast[0].tau))
     check_all(ref, fast)
 
 
-@pytest.mark.parametrize("name", ["hoeken", "stephenson", "inverted_slider_crank"])
+@pytest.mark.parametrize("name", ["hoeken", "stephenson", "inverted_slider_crank",
+                                  "scotch_yoke"])
 @pytest.mark.parametrize("block", [5, 1024])
 def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, block):
-    """By default the kernel keeps ``w_star``, ``w_tilde``, ``Q`` and ``R_i`` for one block
-    only: every other output is the same to the bit as with them kept, and the solutions
-    compute them with the numpy recursion when they are first read."""
+    """By default the solutions hold no per-sample ``w_star``, ``w_tilde``, ``Q``, ``R_i``:
+    every other output is the same to the bit as with them kept, and reading one gives the
+    kept ones, to the bit (the kernel runs again, keeping them)."""
     monkeypatch.setattr(compiled, "BLOCK", block)
     model = linkdyn.load(linkdyn.example_path(name))
     kin = numpy_kinematics(model, times(model, 41))
     applied = loads_mod.wrenches(model, kin)
     packed = pack(kin.layout, len(model.joints))
-    seen = kernel_argument(monkeypatch, "o_wstar")
     kept = compiled.solve(kin, applied, packed, internals=True)
     lean = compiled.solve(kin, applied, packed)
-    n = len(packed.parent)
-    assert [x.shape for x in seen] == [(n, 3, 1, 41), (n, 3, 1, min(block, 41))]
     for name_ in ("tau", "lam", "kinetic_energy", "pivot"):
         assert np.array_equal(getattr(lean[0], name_), getattr(kept[0], name_)), name_
     for j, (a, b) in enumerate(zip(lean[1].on_second, kept[1].on_second)):
         assert np.array_equal(a, b), f"on_second[{j}]"
     assert not callable(kept[0].internals) and callable(lean[0].internals)
-    # first read: the numpy recursion, equal to the kernel's kept internals
-    check_all(kept, lean)
-    dyn = denoc.solve(kin, applied)
     for name_ in ("w_star", "w_tilde", "Q"):
-        assert np.array_equal(getattr(lean[0], name_), getattr(dyn, name_)), name_
-    ref = reactions.solve(model, kin, dyn)
-    assert np.array_equal(np.stack(lean[1].tree), np.stack(ref.tree))
+        assert np.array_equal(getattr(lean[0], name_), getattr(kept[0], name_)), name_
+    assert np.array_equal(np.stack(lean[1].tree), np.stack(kept[1].tree))
+    dyn = denoc.solve(kin, applied)
+    check_all((dyn, reactions.solve(model, kin, dyn)), lean)
 
 
 def test_a_solution_without_kept_internals_pickles():

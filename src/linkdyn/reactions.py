@@ -18,8 +18,9 @@ from typing import Callable
 import numpy as np
 
 from . import joints as jk
-from .dynamics.denoc import DynamicSolution, _array, _axis, composite
+from .dynamics.denoc import DynamicSolution, _array, composite
 from .kinematics import KinematicSolution
+from .kinematics.recursion import _axis, cut_frame, relative
 from .model import Model
 from .planar import about, first, stack_last, turned
 from .steps import step
@@ -68,14 +69,6 @@ class Reactions:
 # --- the steps: each equation once, for both backends (linkdyn.steps) ------------------------
 
 @step
-def point(r, c, s, local):
-    """Global position ``r + R(phi) local`` of a point of a body (O at ``r``, angle of cosine
-    ``c`` and sine ``s``), m."""
-    a = turned(c, s, local)
-    return (r[0] + a[0], r[1] + a[1])
-
-
-@step
 def plus(x, y):
     """``x + y`` of two wrenches ``(n, fx, fy)``."""
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
@@ -109,9 +102,8 @@ def cut_wrench(code, e_a, lam, r_pb, r_a, r_b):
     """
     # S^T lam acts at the cut point on the second body, its opposite on the first
     on_b = jk.wrench(code, e_a, lam)
-    w_a = about(on_b, (r_pb[0] - r_a[0], r_pb[1] - r_a[1]))
-    return (on_b, about(on_b, (r_pb[0] - r_b[0], r_pb[1] - r_b[1])),
-            (-w_a[0], -w_a[1], -w_a[2]))
+    w_a = about(on_b, relative(r_a, r_pb))
+    return on_b, about(on_b, relative(r_b, r_pb)), (-w_a[0], -w_a[1], -w_a[2])
 
 
 @step
@@ -123,10 +115,13 @@ def without_effort(code, s, e, w, tau):
 
 
 @step
-def flipped(w, r_i, r_joint):
+def flipped(w, r_i, c_p, s_p, r_p, joint_p):
     """``A(r_i - r_P)^T (-w)``: the opposite of a wrench ``w`` about O_i (on the child), about
-    the parent's joint point ``r_P`` (the reaction on the parent when it is the second body)."""
-    return about((-w[0], -w[1], -w[2]), (r_i[0] - r_joint[0], r_i[1] - r_joint[1]))
+    the parent's joint point ``r_P = r_p + R_p joint_p`` (the reaction on the parent when it is
+    the joint's second body); ``c_p``, ``s_p``, ``r_p`` the parent's cosine, sine and O_p."""
+    j = turned(c_p, s_p, joint_p)
+    return about((-w[0], -w[1], -w[2]),
+                 relative((r_p[0] + j[0], r_p[1] + j[1]), r_i))
 
 
 # --- the numpy path: the steps on whole arrays, loops over cuts and bodies --------------------
@@ -142,10 +137,11 @@ def _cuts(kin: KinematicSolution, lam: np.ndarray):
     O_b and O_a, each (3, ...), by :func:`cut_wrench`."""
     lay, pose = kin.layout, kin.pose
     for k, c in enumerate(lay.cuts):
-        e_a = turned(pose.c[c.a], pose.s[c.a], c.axis)
-        r_pb = point(pose.r[c.b], pose.c[c.b], pose.s[c.b], c.pb)
-        on_b, w_b, w_a = cut_wrench(jk.CODES[c.kind], e_a, _multipliers(lam, lay.topo.row_slice(k)),
-                                    r_pb, pose.r[c.a], pose.r[c.b])
+        _, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
+                                 pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        on_b, w_b, w_a = cut_wrench(jk.CODES[c.kind], e_a,
+                                    _multipliers(lam, lay.topo.row_slice(k)), r_pb,
+                                    pose.r[c.a], pose.r[c.b])
         yield c, _array(on_b, r_pb[0]), _array(w_b, r_pb[0]), _array(w_a, r_pb[0])
 
 
@@ -183,8 +179,8 @@ def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactio
         if topo.sign[i] > 0:  # the child is the second body: its wrench about O_i as is
             on_b[j] = on_child
         else:  # the child is the first body: the second (the parent) receives the opposite
-            r_joint = point(pose.r[k], pose.c[k], pose.s[k], lay.joint_point[i])
-            on_b[j] = _array(flipped(on_child, pose.r[i], r_joint))
+            on_b[j] = _array(flipped(on_child, pose.r[i], pose.c[k], pose.s[k], pose.r[k],
+                                     lay.joint_point[i]))
     for c, on_cut, _, _ in _cuts(kin, first(dyn.lam)):
         on_b[c.joint] = on_cut
     return Reactions(on_b, R)

@@ -33,13 +33,24 @@ def step(fn=None, *, inline: bool = False):
 
     ``@step(inline=True)``: numba inlines the step into its callers before compiling them. For
     a large step called once per sample (a whole dyad), which the compiler would otherwise
-    leave as a call, keeping the sample loop from being vectorized.
+    leave as a call, keeping the sample loop from being vectorized. A step defined after
+    :func:`register` ran (its module imported later) is registered at once.
     """
     if fn is None:
         return lambda f: step(f, inline=inline)
     fn._step_inline = inline
     STEPS.append(fn)
+    if _registered:
+        _jitable(fn)
     return fn
+
+
+def _jitable(fn) -> None:
+    """Make the step ``fn`` callable from compiled code (compiled into its callers; inlined
+    first if it was declared ``inline``)."""
+    from numba.extending import register_jitable
+
+    register_jitable(inline="always" if fn._step_inline else "never")(fn)
 
 
 def select(cond, a, b):
@@ -82,10 +93,10 @@ def register(scalar_select, scalar_atan2) -> None:
     if _registered:
         return
     from numba import types
-    from numba.extending import overload, register_jitable
+    from numba.extending import overload
 
     for fn in STEPS:
-        register_jitable(inline="always" if fn._step_inline else "never")(fn)
+        _jitable(fn)
 
     @overload(select, inline="always")
     def _select(cond, a, b):

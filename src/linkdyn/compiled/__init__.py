@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import joints as jk
 from .. import steps
 
 try:  # optional: the numpy path is complete without it
@@ -250,10 +251,7 @@ def pack(lay, n_joints: int) -> Packed:
     """
     topo = lay.topo
     n = topo.n
-    missing = unsupported(list(lay.kind[1:]) + [c.kind for c in lay.cuts])
-    if missing:
-        raise ValueError(f"the compiled kernels do not support {', '.join(missing)} joints")
-    kind = np.array([GROUND] + [CODES[k] for k in lay.kind[1:]], np.int64)
+    kind = np.array([GROUND] + [jk.CODES[k] for k in lay.kind[1:]], np.int64)
     driver_of = np.full(n, -1, np.int64)
     driver_of[list(topo.driven)] = np.arange(len(topo.driven))
     ints = np.array(topo.ancestors, np.int64)
@@ -269,7 +267,7 @@ def pack(lay, n_joints: int) -> Packed:
         drv=np.array(topo.driven, np.int64), driver_of=driver_of,
         tree_joint=np.array(topo.tree_joint, np.int64), n_joints=n_joints,
         cut_a=np.array([c.a for c in cuts], np.int64), cut_b=np.array([c.b for c in cuts], np.int64),
-        cut_kind=np.array([CODES[c.kind] for c in cuts], np.int64),
+        cut_kind=np.array([jk.CODES[c.kind] for c in cuts], np.int64),
         cut_joint=np.array([c.joint for c in cuts], np.int64), side=side, dyads=dy,
         joint_point=joint_point, axis=_vectors(lay.axis), com=_vectors(lay.com),
         angle=_numbers(lay.angle, d), mass=_numbers(lay.mass, d),

@@ -1,36 +1,41 @@
 """Compiled DeNOC inverse dynamics and joint reactions: one pass over the samples.
 
-The same equations as :mod:`linkdyn.dynamics.denoc` and :mod:`linkdyn.reactions`, in the same
-order, fused by a numba kernel (:mod:`linkdyn.compiled`): for every sample the Newton–Euler
-wrenches ``w_star``, the backward recursion ``w_tilde``, the generalized forces ``Q``, the
-multipliers from ``J_dep^T lam = Q_dep`` by Gaussian elimination with partial pivoting (the
-pivot rule of :func:`linkdyn.planar.solve_small`), ``tau`` and the reactions at every joint.
+The steps of :mod:`linkdyn.dynamics.denoc` and :mod:`linkdyn.reactions` (Newton–Euler
+:func:`~linkdyn.dynamics.denoc.newton_euler_wrench`, the backward recursion
+:func:`~linkdyn.dynamics.denoc.plus_child`, ``Q_i`` by
+:func:`~linkdyn.dynamics.denoc.generalized_force`, then the reactions:
+:func:`~linkdyn.reactions.cut_wrench`, :func:`~linkdyn.reactions.without_effort`,
+:func:`~linkdyn.reactions.flipped`), called inside the sample loops of a numba kernel
+(:mod:`linkdyn.compiled`); this file holds only the data movement, the loops and the linear
+algebra of the multipliers (``J_dep^T lam = Q_dep`` by :func:`~linkdyn.compiled.eliminate`, the
+pivot rule of :func:`linkdyn.planar.solve_small`). Joint kinds enter by their codes
+(:data:`linkdyn.joints.CODES`) through the dispatching steps of :mod:`linkdyn.joints`.
 
-The kernel takes the samples a block at a time (:data:`BLOCK`): every step walks the bodies and,
-for each body, the samples of the block. A sample sees exactly the scalar operations of the
-one-sample recursion, but the independent samples keep the processor busy and every array is
-read and written in contiguous runs (one sample at a time through all bodies, the component-
-first arrays were ~2.5x slower). Each step takes a body's rows over the block as 1-D views
+The stages are those of the numpy path, in its order: the dynamics (``w_star``, ``w_tilde``,
+``Q``, ``lam``, ``tau``, the kinetic energy), then the reactions (the cut wrenches, ``R_i`` by
+the same backward recursion, every joint's reaction). The kernel fuses them per block of
+samples (:data:`BLOCK`): each stage walks the bodies and, for each body, the samples of the
+block, which are independent, so the loops vectorize and every array is read and written in
+contiguous runs. A stage takes a body's rows over the block as 1-D views
 (:func:`~linkdyn.compiled.vector_views`, :func:`~linkdyn.compiled.screw_views`) before its
-sample loop: numba then indexes them without the multi-dimensional address and wrap-around
-arithmetic of every access. The numpy solvers stay the reference; the tests hold the two to
-agree to rounding, NaN at the same samples.
+sample loop, gathers each sample's components into the steps' tuples and writes their tuples
+back. The tests hold the two backends to agree to rounding, NaN at the same samples.
 """
 
 from __future__ import annotations
 
-from functools import partial
+from functools import cached_property
 
 import numpy as np
 
-from .. import reactions
-from ..compiled import PRI, REV, Packed, eliminate, njit, screw_views, vector_views
+from ..compiled import Packed, eliminate, njit, screw_views, vector_views
+from ..joints import get as joint_kind
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
-from ..reactions import Reactions
-from . import denoc
-from .denoc import DynamicSolution
+from ..kinematics.recursion import cut_frame
+from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
+from .denoc import DynamicSolution, generalized_force, newton_euler_wrench, plus_child
 
 #: a relative pivot at or below this marks ``J_dep^T`` singular (as in ``solve_small``)
 SINGULAR_PIVOT = 1e-13
@@ -38,86 +43,70 @@ SINGULAR_PIVOT = 1e-13
 BLOCK = 1024
 
 
+# --- the dynamics stage -----------------------------------------------------------------------
+
 @njit
 def _composite(parent, r, d, k0, nb, di, ki, w):
-    """The backward recursion ``w_p += A(r_i - r_p)^T w_i``, leaves first, in place on the
-    wrenches ``w`` (n, 3, ., .) of a block (denoc.composite), taken at design ``di`` from
-    sample ``ki``: the moment gains ``a_x f_y - a_y f_x``."""
+    """The backward recursion :func:`~linkdyn.dynamics.denoc.plus_child` (``w_p += A(r_i -
+    r_p)^T w_i``), leaves first, in place on the wrenches ``w`` (n, 3, ., .) of a block, taken at
+    design ``di`` from sample ``ki`` (denoc.composite)."""
     ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in r and in w
     for i in range(len(parent) - 1, 0, -1):
         p = parent[i]
         r_i, r_p = vector_views(r, i, d, ks), vector_views(r, p, d, ks)
         w_i, w_p = screw_views(w, i, di, kw), screw_views(w, p, di, kw)
         for k in range(nb):
-            ax = r_i[0][k] - r_p[0][k]
-            ay = r_i[1][k] - r_p[1][k]
-            n0, f0, f1 = w_i[0][k], w_i[1][k], w_i[2][k]
-            w_p[0][k] = w_p[0][k] + ((ax * f1 - ay * f0) + n0)
-            w_p[1][k] = w_p[1][k] + f0
-            w_p[2][k] = w_p[2][k] + f1
+            w_p[0][k], w_p[1][k], w_p[2][k] = plus_child(
+                (w_p[0][k], w_p[1][k], w_p[2][k]), (w_i[0][k], w_i[1][k], w_i[2][k]),
+                (r_i[0][k], r_i[1][k]), (r_p[0][k], r_p[1][k]))
 
 
 @njit
 def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke,
                   o_wstar, o_wtilde, o_ke):
-    """Uncoupled Newton–Euler wrenches ``w_star`` of a block (denoc.newton_euler), copied into
-    ``w_tilde`` to start its recursion, and the kinetic energy. The ground's rows stay as
-    allocated (zero). ``w_const`` (n, 3, 1, block): ``w_ext`` repeated over a block when it is
-    constant in time (one sample, ``w_ext`` (n, 3, D, 1))."""
+    """:func:`~linkdyn.dynamics.denoc.newton_euler_wrench` of every body over a block into
+    ``w_star``, copied into ``w_tilde`` to start its recursion, and the kinetic energy summed
+    over the bodies. The ground's rows stay as allocated (zero). ``w_const`` (n, 3, 1, block):
+    ``w_ext`` repeated over a block when it is constant in time (one sample, ``w_ext``
+    (n, 3, D, 1))."""
     n = len(mass[dp])
     ks = slice(k0, k0 + nb)   # the block's samples
+    kw = slice(ki, ki + nb)   # the block's samples in the internals (see _kernel)
     ke[:nb] = 0.0
-    # Newton–Euler about O_i, d = R(phi) com:  n = I_O al + m d x a,
-    # f = m (a + al perp(d) - w^2 d), minus w_ext;  KE = 1/2 m |v + w perp(d)|^2 + 1/2 I w^2
     for i in range(1, n):
         mi, ii = mass[dp, i], inertia[dp, i]
-        cx, cy = com[dp, i, 0], com[dp, i, 1]
+        com_i = (com[dp, i, 0], com[dp, i, 1])
         c_i, s_i = c[i, d, ks], s[i, d, ks]
         tw_i, twd_i = screw_views(tw, i, d, ks), screw_views(twd, i, d, ks)
         if w_ext.shape[3] == 1:   # constant in time
             w_ext_i = screw_views(w_const, i, 0, slice(0, nb))
         else:
             w_ext_i = screw_views(w_ext, i, d, ks)
-        kw = slice(ki, ki + nb)   # the block's samples in the internals (see _kernel)
         wstar_i, wtilde_i = screw_views(o_wstar, i, di, kw), screw_views(o_wtilde, i, di, kw)
         for k in range(nb):
-            ci, si = c_i[k], s_i[k]
-            dx = ci * cx - si * cy
-            dy = si * cx + ci * cy
-            w, vx, vy = tw_i[0][k], tw_i[1][k], tw_i[2][k]
-            al, ax, ay = twd_i[0][k], twd_i[1][k], twd_i[2][k]
-            i_o = ii + mi * (dx * dx + dy * dy)
-            w2 = w * w
-            n0 = (i_o * al + mi * (dx * ay - dy * ax)) - w_ext_i[0][k]
-            f0 = mi * (ax + al * (-dy) - w2 * dx) - w_ext_i[1][k]
-            f1 = mi * (ay + al * dx - w2 * dy) - w_ext_i[2][k]
-            wstar_i[0][k], wstar_i[1][k], wstar_i[2][k] = n0, f0, f1
-            wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k] = n0, f0, f1
-            vcx = vx + w * (-dy)
-            vcy = vy + w * dx
-            ke[k] += 0.5 * mi * (vcx * vcx + vcy * vcy) + 0.5 * ii * w2
+            w, ke_k = newton_euler_wrench(
+                mi, ii, com_i, c_i[k], s_i[k], (tw_i[0][k], tw_i[1][k], tw_i[2][k]),
+                (twd_i[0][k], twd_i[1][k], twd_i[2][k]),
+                (w_ext_i[0][k], w_ext_i[1][k], w_ext_i[2][k]))
+            wstar_i[0][k], wstar_i[1][k], wstar_i[2][k] = w
+            wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k] = w
+            ke[k] += ke_k
     o_ke[d, ks] = ke[:nb]
 
 
 @njit
 def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q):
-    """``Q_i = p_i . w_tilde_i`` (denoc.solve) into ``o_Q`` (the ground's row stays as
-    allocated, zero). The zero entries of ``p_i`` are multiplied too, so a NaN spreads as in
-    numpy's dot product."""
+    """:func:`~linkdyn.dynamics.denoc.generalized_force` ``Q_i = p_i . w_tilde_i`` into ``o_Q``
+    (the ground's row stays as allocated, zero)."""
     ks = slice(k0, k0 + nb)   # the block's samples
-    # Q_i = p_i . w_tilde_i: revolute p = [s, 0, 0], prismatic p = [0, s e]
     for i in range(1, len(kind)):
-        si = sign[i]
+        code, si = kind[i], sign[i]
         wtilde_i = screw_views(o_wtilde, i, di, slice(ki, ki + nb))
         e_i = vector_views(e, i, d, ks)
         o_Q_i = o_Q[i, di, ki:ki + nb]
-        if kind[i] == REV:
-            for k in range(nb):
-                o_Q_i[k] = si * wtilde_i[0][k] + 0.0 * wtilde_i[1][k] + 0.0 * wtilde_i[2][k]
-        else:
-            for k in range(nb):
-                o_Q_i[k] = (0.0 * wtilde_i[0][k] + (si * e_i[0][k]) * wtilde_i[1][k]
-                            + (si * e_i[1][k]) * wtilde_i[2][k])
+        for k in range(nb):
+            o_Q_i[k] = generalized_force(code, si, (e_i[0][k], e_i[1][k]),
+                                         (wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k]))
 
 
 @njit
@@ -153,129 +142,95 @@ def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pi
             o_tau_j[k] = tau_j[k]
 
 
+# --- the reactions stage ----------------------------------------------------------------------
+
 @njit
-def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s, r,
-                  lam, wc, o_on):
-    """Cut-joint wrenches ``S^T lam`` on both bodies about their O (reactions.cut_wrenches) into
-    ``wc`` (n, 3, block), and the cut joints' reactions (a revolute cut's moment, zero, stays as
-    allocated)."""
-    n_cut = cut_a.shape[0]
+def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, cut_pb, cut_axis,
+                  d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
+    """:func:`~linkdyn.reactions.cut_wrench` of every cut joint over a block: ``S^T lam`` summed
+    on both bodies about their O into ``wc`` (n, 3, block), and the cut joints' reactions.
+    ``cut_row``, ``cut_rows`` (n_cut,): each cut's first row in ``lam`` and its number of rows;
+    ``zero`` (block,): zeros, the padding of a cut with fewer than three rows."""
     ks = slice(k0, k0 + nb)   # the block's samples
     wc[:, :, :nb] = 0.0
-    # cut wrenches S^T lam at the cut point: + on body b, - on body a, about O_b, O_a;
-    # revolute [0, lam], prismatic [lam_0, lam_1 perp(e_a)]
-    for cc in range(n_cut):
-        a, b, jc = cut_a[cc], cut_b[cc], cut_joint[cc]
-        px, py = cut_pb[dp, cc, 0], cut_pb[dp, cc, 1]
-        ux, uy = cut_axis[dp, cc, 0], cut_axis[dp, cc, 1]
-        prismatic = cut_kind[cc] == PRI
+    for cc in range(cut_a.shape[0]):
+        a, b, code, row, rows = cut_a[cc], cut_b[cc], cut_kind[cc], cut_row[cc], cut_rows[cc]
+        pa, pb = (cut_pa[dp, cc, 0], cut_pa[dp, cc, 1]), (cut_pb[dp, cc, 0], cut_pb[dp, cc, 1])
+        axis = (cut_axis[dp, cc, 0], cut_axis[dp, cc, 1])
         c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], vector_views(r, a, d, ks)
         c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], vector_views(r, b, d, ks)
         wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
         wc_b = wc[b, 0, :nb], wc[b, 1, :nb], wc[b, 2, :nb]
-        lam_c = lam[2 * cc, :nb], lam[2 * cc + 1, :nb]
-        on_c = screw_views(o_on, jc, d, ks)
+        # the cut's multipliers, padded with zeros to three
+        lam_c = (lam[row, :nb], lam[row + 1, :nb] if rows > 1 else zero[:nb],
+                 lam[row + 2, :nb] if rows > 2 else zero[:nb])
+        on_c = screw_views(o_on, cut_joint[cc], d, ks)
         for k in range(nb):
-            cb, sb = c_b[k], s_b[k]
-            rpx = r_b[0][k] + (cb * px - sb * py)
-            rpy = r_b[1][k] + (sb * px + cb * py)
-            l0, l1 = lam_c[0][k], lam_c[1][k]
-            if prismatic:
-                ca, sa = c_a[k], s_a[k]
-                ex = ca * ux - sa * uy
-                ey = sa * ux + ca * uy
-                o0, o1, o2 = l0, l1 * (-ey), l1 * ex
-                on_c[0][k] = o0
-            else:
-                o0, o1, o2 = 0.0, l0, l1
-            ax = rpx - r_b[0][k]
-            ay = rpy - r_b[1][k]
-            wc_b[0][k] = wc_b[0][k] + ((ax * o2 - ay * o1) + o0)
-            wc_b[1][k] = wc_b[1][k] + o1
-            wc_b[2][k] = wc_b[2][k] + o2
-            ax = rpx - r_a[0][k]
-            ay = rpy - r_a[1][k]
-            wc_a[0][k] = wc_a[0][k] - ((ax * o2 - ay * o1) + o0)
-            wc_a[1][k] = wc_a[1][k] - o1
-            wc_a[2][k] = wc_a[2][k] - o2
-            on_c[1][k], on_c[2][k] = o1, o2
+            x_a, x_b = (r_a[0][k], r_a[1][k]), (r_b[0][k], r_b[1][k])
+            _, r_pb, e_a = cut_frame(c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b, pa, pb, axis)
+            on, w_b, w_a = cut_wrench(code, e_a, (lam_c[0][k], lam_c[1][k], lam_c[2][k]), r_pb,
+                                      x_a, x_b)
+            wc_b[0][k], wc_b[1][k], wc_b[2][k] = plus((wc_b[0][k], wc_b[1][k], wc_b[2][k]), w_b)
+            wc_a[0][k], wc_a[1][k], wc_a[2][k] = plus((wc_a[0][k], wc_a[1][k], wc_a[2][k]), w_a)
+            on_c[0][k], on_c[1][k], on_c[2][k] = on
 
 
 @njit
 def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, di,
                     ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on):
-    """``R_i`` by the backward recursion of ``w_star - w_cut`` and the reaction of every tree
-    joint from it (reactions.solve). With the internals ``keep``, a joint whose reaction is
-    ``R_i`` itself (the child is its second body, not driven) is not written: :func:`solve`
-    gives it ``R_i``'s rows."""
+    """``R_i`` by the backward recursion of ``w_star - w_cut`` (reactions.tree_wrenches) and
+    the reaction of every tree joint from it (reactions.solve): the driver's effort removed by
+    :func:`~linkdyn.reactions.without_effort`, the opposite taken about the parent's joint point
+    by :func:`~linkdyn.reactions.flipped` where the parent is the second body. With the
+    internals ``keep``, a joint whose reaction is ``R_i`` itself (the child is its second body,
+    not driven) is not written: :func:`solve` gives it ``R_i``'s rows."""
     n = parent.shape[0]
     ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in the internals
-    # R_p += A(r_i - r_p)^T R_i, from R_i = w_star_i - w_cut_i; the ground's w_star_0 = 0
-    R_0, wc_0 = screw_views(o_tree, 0, di, kw), (wc[0, 0, :nb], wc[0, 1, :nb], wc[0, 2, :nb])
-    for k in range(nb):
-        R_0[0][k] = 0.0 - wc_0[0][k]
-        R_0[1][k] = 0.0 - wc_0[1][k]
-        R_0[2][k] = 0.0 - wc_0[2][k]
-    for i in range(1, n):
+    # R_i = w_star_i - w_cut_i (the ground's w_star_0 = 0), then R_p += A(r_i - r_p)^T R_i
+    for i in range(n):
         R_i, wstar_i = screw_views(o_tree, i, di, kw), screw_views(o_wstar, i, di, kw)
         wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
-            R_i[0][k] = wstar_i[0][k] - wc_i[0][k]
-            R_i[1][k] = wstar_i[1][k] - wc_i[1][k]
-            R_i[2][k] = wstar_i[2][k] - wc_i[2][k]
+            R_i[0][k], R_i[1][k], R_i[2][k] = minus((wstar_i[0][k], wstar_i[1][k], wstar_i[2][k]),
+                                                    (wc_i[0][k], wc_i[1][k], wc_i[2][k]))
     _composite(parent, r, d, k0, nb, di, ki, o_tree)
-    # tree joints: R_i - tau p_i on the child; sign > 0 as is, sign < 0 the opposite
-    # about the parent's joint point: A(r_i - r_Pb)^T (-w)
     for i in range(1, n):
-        si, dr, jt, p = sign[i], driver_of[i], tree_joint[i], parent[i]
+        si, dr, p = sign[i], driver_of[i], parent[i]
         if keep and si > 0 and dr < 0:   # R_i as is
             continue
-        revolute = kind[i] == REV
-        px, py = joint_point[dp, i, 0], joint_point[dp, i, 1]
-        R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, jt, d, ks)
+        code, jp = kind[i], (joint_point[dp, i, 0], joint_point[dp, i, 1])
+        R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, tree_joint[i], d, ks)
         e_i, r_i = vector_views(e, i, d, ks), vector_views(r, i, d, ks)
-        r_p = vector_views(r, p, d, ks)
-        c_p, s_p = c[p, d, ks], s[p, d, ks]
+        r_p, c_p, s_p = vector_views(r, p, d, ks), c[p, d, ks], s[p, d, ks]
+        tau_i = tau[max(dr, 0), :nb]
         for k in range(nb):
-            o0, o1, o2 = R_i[0][k], R_i[1][k], R_i[2][k]
-            if dr >= 0:   # body i's driver
-                tq = tau[dr, k]
-                if revolute:
-                    o0, o1, o2 = o0 - tq * si, o1 - tq * 0.0, o2 - tq * 0.0
-                else:
-                    o0 = o0 - tq * 0.0
-                    o1 = o1 - tq * (si * e_i[0][k])
-                    o2 = o2 - tq * (si * e_i[1][k])
-            if si > 0:
-                on_i[0][k], on_i[1][k], on_i[2][k] = o0, o1, o2
-            else:
-                cp, sp = c_p[k], s_p[k]
-                ax = r_i[0][k] - (r_p[0][k] + (cp * px - sp * py))
-                ay = r_i[1][k] - (r_p[1][k] + (sp * px + cp * py))
-                on_i[0][k] = (ax * (-o2) - ay * (-o1)) + (-o0)
-                on_i[1][k] = -o1
-                on_i[2][k] = -o2
+            o = (R_i[0][k], R_i[1][k], R_i[2][k])
+            if dr >= 0:   # body i's driver: R_i - tau p_i
+                o = without_effort(code, si, (e_i[0][k], e_i[1][k]), o, tau_i[k])
+            if si < 0:   # the parent is the joint's second body: the opposite, about its point
+                o = flipped(o, (r_i[0][k], r_i[1][k]), c_p[k], s_p[k], (r_p[0][k], r_p[1][k]),
+                            jp)
+            on_i[0][k], on_i[1][k], on_i[2][k] = o
 
 
 @njit
 def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, cut_kind,
-            cut_joint, joint_point, com, mass, inertia, cut_pb, cut_axis,
-            c, s, r, e, tw, twd, J, w_ext,
+            cut_joint, cut_row, cut_rows, joint_point, com, mass, inertia, cut_pa, cut_pb,
+            cut_axis, c, s, r, e, tw, twd, J, w_ext,
             o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, o_on, o_tree, block, keep):
     """Dynamics and reactions of every sample; arguments as in :func:`solve`, outputs written in
     place (component-first, batch ``(D, T)`` last) into zeroed arrays: the rows that are zero by
-    construction (the ground's ``w_star`` and ``Q``, a revolute cut's moment) are not written,
-    nor those of a joint whose reaction is ``R_i`` itself (:func:`_tree_reactions`).
+    construction (the ground's ``w_star`` and ``Q``) are not written, nor those of a joint whose
+    reaction is ``R_i`` itself (:func:`_tree_reactions`).
 
     The internals ``o_wstar``, ``o_wtilde``, ``o_Q``, ``o_tree`` are outputs like the others
     when ``keep``; else one block's scratch, (n, 3, 1, block) and (n, 1, block).
 
-    The samples are taken ``block`` at a time: each step below runs over the bodies, and for
-    each body over the samples of the block, which are independent (every sample sees exactly
-    the operations of the one-sample recursion, in the same order).
+    The samples are taken ``block`` at a time: each stage below runs over the bodies, and for
+    each body over the samples of the block, which are independent.
     """
     n = parent.shape[0]
-    m = dep.shape[0]           # = 2 n_cut rows of J_dep^T lam = Q_dep
+    m = dep.shape[0]           # = the cut rows: J_dep^T lam = Q_dep
     n_drv = drv.shape[0]
     D, T = c.shape[1], c.shape[2]
     n_designs = mass.shape[0]
@@ -287,6 +242,7 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
     A = np.zeros((m, m + 1, B))   # [J_dep^T | Q_dep]
     lam = np.zeros((max(m, 1), B))
     tau = np.zeros((max(n_drv, 1), B))
+    zero = np.zeros(B)
     ke = np.zeros(B)
     piv = np.zeros(B)
     for d in range(D):
@@ -301,15 +257,16 @@ def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, c
             di, ki = (d, k0) if keep else (0, 0)
             if not keep:   # the ground's w_tilde only accumulates
                 o_wtilde[0, :, 0, :nb] = 0.0
+            # the dynamics: w_star, w_tilde = N_l^T w_star, Q = N_d^T w_tilde, lam, tau
             _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const,
                           ke, o_wstar, o_wtilde, o_ke)
-            # w_tilde_p += A(r_i - r_p)^T w_tilde_i, leaves first
             _composite(parent, r, d, k0, nb, di, ki, o_wtilde)
             _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q)
             _multipliers(dep, drv, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A, lam, tau, piv, o_lam,
                          o_tau, o_pivot)
-            _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_pb, cut_axis, d, dp, k0, nb, c, s,
-                          r, lam, wc, o_on)
+            # the reactions: cut wrenches, R_i, every joint's reaction
+            _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, cut_pb,
+                          cut_axis, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on)
             _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
                             di, ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on)
 
@@ -375,8 +332,8 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
     internals : bool
         Keep the kernel's ``wstar``, ``wtilde``, ``Q`` and tree wrenches ``R_i`` per sample.
         By default the kernel holds them for one block only (Hoeken's dynamics then writes 16
-        numbers per sample instead of 46), and the solutions compute them with the numpy
-        recursion when they are first read.
+        numbers per sample instead of 46), and the solutions run the kernel again, keeping
+        them, when one of them is first read.
 
     Returns
     -------
@@ -390,8 +347,11 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
     shape = kin.shape
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
-    n, n_cut = len(packed.parent), len(packed.cut_a)
-    n_joints = packed.n_joints
+    topo = kin.layout.topo
+    n, n_rows = len(packed.parent), topo.n_rows
+    # each cut's first row in lam and its number of rows (its kind's)
+    cut_row = np.array([topo.row_slice(k).start for k in range(len(packed.cut_a))], np.int64)
+    cut_rows = np.array([joint_kind(c.kind).rows for c in kin.layout.cuts], np.int64)
     # w_ext (n, 3, D, Tw): one sample (Tw = 1) when no wrench varies in time (all broadcast
     # along t, stride 0, as a body without loads), else every sample (Tw = T)
     ws = [np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]
@@ -402,16 +362,16 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
     block = min(BLOCK, T)
     at = (D, T) if internals else (1, block)
     out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
-           "Q": np.zeros((n,) + at), "lam": np.zeros((2 * n_cut, D, T)),
+           "Q": np.zeros((n,) + at), "lam": np.zeros((n_rows, D, T)),
            "tau": np.zeros((len(packed.drv), D, T)), "ke": np.zeros((D, T)),
-           "pivot": np.zeros((D, T)), "on": np.zeros((n_joints, 3, D, T)),
+           "pivot": np.zeros((D, T)), "on": np.zeros((packed.n_joints, 3, D, T)),
            "tree": np.zeros((n, 3) + at)}
     P = packed
     _kernel(P.parent, P.kind, P.sign, P.dep, P.drv, P.driver_of, P.tree_joint, P.cut_a, P.cut_b,
-            P.cut_kind, P.cut_joint, P.joint_point, P.com, P.mass, P.inertia, P.cut_pb,
-            P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"], w_ext,
-            out["wstar"], out["wtilde"], out["Q"], out["lam"], out["tau"], out["ke"],
-            out["pivot"], out["on"], out["tree"], block, internals)
+            P.cut_kind, P.cut_joint, cut_row, cut_rows, P.joint_point, P.com, P.mass, P.inertia,
+            P.cut_pa, P.cut_pb, P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
+            x["J"], w_ext, out["wstar"], out["wtilde"], out["Q"], out["lam"], out["tau"],
+            out["ke"], out["pivot"], out["on"], out["tree"], block, internals)
 
     def per(a):  # per-entity views (3, ...) of a (k, 3, D, T) output
         return [w.reshape((3,) + shape) for w in a]
@@ -421,9 +381,10 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
 
     lam, tau = comps(out["lam"]), comps(out["tau"])
     ke, pivot = out["ke"].reshape(shape), out["pivot"].reshape(shape)
-    if not internals:   # (partial, not lambda: the solutions stay picklable)
-        dyn = DynamicSolution(lam, tau, ke, pivot, partial(denoc.internals, kin, loads))
-        return dyn, Reactions(per(out["on"]), partial(reactions.tree_wrenches, kin, dyn))
+    if not internals:   # the kernel again, keeping them, when first read
+        again = _Again(kin, loads, packed)
+        return (DynamicSolution(lam, tau, ke, pivot, again.dynamics),
+                Reactions(per(out["on"]), again.tree))
     dyn = DynamicSolution(lam, tau, ke, pivot,
                           (per(out["wstar"]), per(out["wtilde"]), comps(out["Q"])))
     # a tree joint whose child is its second body and is not driven reports R_i itself (the
@@ -433,3 +394,23 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
         if P.sign[i] > 0 and P.driver_of[i] < 0:
             on[P.tree_joint[i]] = tree[i]
     return dyn, Reactions(on, tree)
+
+
+class _Again:
+    """The kernel run again on the same input, keeping its internals, once, when the first of
+    them is read (a plain class, so that the solutions holding it stay picklable)."""
+
+    def __init__(self, kin: KinematicSolution, loads: Loads, packed: Packed):
+        self.kin, self.loads, self.packed = kin, loads, packed
+
+    @cached_property
+    def kept(self) -> tuple:
+        return solve(self.kin, self.loads, self.packed, internals=True)
+
+    def dynamics(self) -> tuple:
+        """``(wstar, wtilde, Q)``, as :attr:`DynamicSolution.internals`."""
+        return self.kept[0]._internals
+
+    def tree(self) -> list:
+        """``R_i`` per body, as :attr:`Reactions.internals`."""
+        return self.kept[1].tree

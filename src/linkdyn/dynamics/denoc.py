@@ -24,6 +24,7 @@ from typing import Callable
 import numpy as np
 
 from ..kinematics import KinematicSolution
+from ..kinematics.recursion import _axis
 from ..loads import Loads
 from .. import joints as jk
 from ..planar import about, at, cross, dot, last, solve_small, stack_last, turned
@@ -155,11 +156,6 @@ def _array(parts, *like) -> np.ndarray:
     for k, x in enumerate(parts):
         out[k] = x
     return out
-
-
-def _axis(e):
-    """A tree joint's global axis ``e`` (2, ...), or (0, 0) for a kind without one."""
-    return (0.0, 0.0) if e is None else e
 
 
 def newton_euler(kin: KinematicSolution, w_ext: list):
