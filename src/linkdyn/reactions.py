@@ -132,55 +132,66 @@ def _multipliers(lam: np.ndarray, rows: slice) -> tuple:
     return own + (0.0,) * (3 - len(own))
 
 
-def _cuts(kin: KinematicSolution, lam: np.ndarray):
+def _cuts(kin: KinematicSolution, lam: np.ndarray) -> list:
     """Per cut joint: the cut, its reaction ``S^T lam`` on b and its wrenches on b and a about
-    O_b and O_a, each (3, ...), by :func:`cut_wrench`."""
+    O_b and O_a, each a tuple of components, by :func:`cut_wrench`."""
     lay, pose = kin.layout, kin.pose
+    out = []
     for k, c in enumerate(lay.cuts):
         _, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
                                  pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
-        on_b, w_b, w_a = cut_wrench(jk.CODES[c.kind], e_a,
-                                    _multipliers(lam, lay.topo.row_slice(k)), r_pb,
-                                    pose.r[c.a], pose.r[c.b])
-        yield c, _array(on_b, r_pb[0]), _array(w_b, r_pb[0]), _array(w_a, r_pb[0])
+        out.append((c,) + cut_wrench(jk.CODES[c.kind], e_a,
+                                     _multipliers(lam, lay.topo.row_slice(k)), r_pb,
+                                     pose.r[c.a], pose.r[c.b]))
+    return out
+
+
+def _on_bodies(n: int, cuts: list) -> list:
+    """The cut wrenches of ``cuts`` (:func:`_cuts`) summed on each of the n bodies about its O:
+    a tuple of components, or None for a body no cut joint acts on."""
+    w = [None] * n
+    for c, _, w_b, w_a in cuts:
+        w[c.b] = w_b if w[c.b] is None else plus(w[c.b], w_b)
+        w[c.a] = w_a if w[c.a] is None else plus(w[c.a], w_a)
+    return w
 
 
 def cut_wrenches(kin: KinematicSolution, lam: np.ndarray) -> list:
     """Wrenches (3, T) of the cut-joint multipliers ``lam`` (n_rows, T) on every body about O_i."""
-    w = [np.zeros((3,) + kin.shape) for _ in range(kin.layout.topo.n)]
-    for c, _, w_b, w_a in _cuts(kin, lam):
-        w[c.b] = _array(plus(w[c.b], w_b))
-        w[c.a] = _array(plus(w[c.a], w_a))
-    return w
+    return [np.zeros((3,) + kin.shape) if w is None else _array(w, np.zeros(kin.shape))
+            for w in _on_bodies(kin.layout.topo.n, _cuts(kin, lam))]
 
 
-def tree_wrenches(kin: KinematicSolution, dyn: DynamicSolution) -> list:
+def tree_wrenches(kin: KinematicSolution, dyn: DynamicSolution, cuts: list | None = None
+                  ) -> list:
     """``R_i`` (3, T) per body: the wrench by the parent on body i about O_i through its tree
-    joint, driver effort included."""
-    w_cut = cut_wrenches(kin, first(dyn.lam))
+    joint, driver effort included (``cuts``: :func:`_cuts` of ``dyn.lam`` if known)."""
+    cuts = _cuts(kin, first(dyn.lam)) if cuts is None else cuts
+    w_cut = _on_bodies(kin.layout.topo.n, cuts)
     # R_i = w_star_i - w_cut_i + sum_c A^T R_c  (the composite of w_star - w_cut)
-    return composite(kin, [_array(minus(ws, wc), wc[0]) for ws, wc in zip(dyn.wstar, w_cut)])
+    return composite(kin, [ws if wc is None else minus(ws, wc)
+                           for ws, wc in zip(dyn.wstar, w_cut)])
 
 
 def solve(model: Model, kin: KinematicSolution, dyn: DynamicSolution) -> Reactions:
     """Reactions at all joints from the dynamic solution."""
     lay, pose = kin.layout, kin.pose
     topo = lay.topo
-    R = tree_wrenches(kin, dyn)
+    cuts = _cuts(kin, first(dyn.lam))
+    R = tree_wrenches(kin, dyn, cuts)
     on_b = [None] * len(model.joints)
     driver_of = {i: k for k, i in enumerate(topo.driven)}
     for i in range(1, topo.n):
         j, k = topo.tree_joint[i], topo.parent[i]
         on_child = R[i]
         if i in driver_of:  # remove the driver's effort tau p_i
-            on_child = _array(without_effort(jk.CODES[lay.kind[i]], topo.sign[i],
-                                             _axis(pose.e[i]), on_child,
-                                             dyn.tau[..., driver_of[i]]))
+            on_child = without_effort(jk.CODES[lay.kind[i]], topo.sign[i], _axis(pose.e[i]),
+                                      on_child, dyn.tau[..., driver_of[i]])
         if topo.sign[i] > 0:  # the child is the second body: its wrench about O_i as is
-            on_b[j] = on_child
+            on_b[j] = _array(on_child, R[i][0]) if isinstance(on_child, tuple) else on_child
         else:  # the child is the first body: the second (the parent) receives the opposite
             on_b[j] = _array(flipped(on_child, pose.r[i], pose.c[k], pose.s[k], pose.r[k],
-                                     lay.joint_point[i]))
-    for c, on_cut, _, _ in _cuts(kin, first(dyn.lam)):
-        on_b[c.joint] = on_cut
+                                     lay.joint_point[i]), R[i][0])
+    for c, on_cut, _, _ in cuts:
+        on_b[c.joint] = _array(on_cut, R[0][0])
     return Reactions(on_b, R)

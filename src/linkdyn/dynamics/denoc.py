@@ -174,13 +174,15 @@ def newton_euler(kin: KinematicSolution, w_ext: list):
 
 def composite(kin: KinematicSolution, w: list) -> list:
     """Backward recursion ``w_tilde_i = w_i + sum_c A(r_c - r_i)^T w_tilde_c``, (3, T) each, by
-    :func:`plus_child` from the leaves."""
+    :func:`plus_child` from the leaves; ``w``: per body a (3, T) array or a tuple of its
+    components."""
     topo, r = kin.layout.topo, kin.pose.r
     out = list(w)
     for i in range(topo.n - 1, 0, -1):
         k = topo.parent[i]
-        out[k] = _array(plus_child(out[k], out[i], r[i], r[k]), out[i][0])
-    return out
+        out[k] = plus_child(out[k], out[i], r[i], r[k])
+    like = np.zeros(kin.shape)
+    return [x if isinstance(x, np.ndarray) else _array(x, like) for x in out]
 
 
 def reduce(kin: KinematicSolution, w_star: list) -> tuple[list, np.ndarray]:
