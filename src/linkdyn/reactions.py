@@ -42,7 +42,7 @@ class Reactions:
         N m (zero to rounding for revolute joints, which cannot transmit one).
     internals : list or callable
         ``tree``, or a function returning it when first read (the compiled backend keeps no
-        per-sample copy of it unless asked: it is then computed by :func:`tree_wrenches`).
+        per-sample copy of it unless asked: its kernel then runs again, keeping it).
     tree : list of ndarray (3, T)
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).

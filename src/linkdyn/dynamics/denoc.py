@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from ..kinematics import KinematicSolution
-from ..kinematics.recursion import _axis
+from ..kinematics.recursion import _axis, relative
 from ..loads import Loads
 from .. import joints as jk
 from ..planar import about, at, cross, dot, last, solve_small, stack_last, turned
@@ -49,8 +49,8 @@ class DynamicSolution:
         Smallest relative pivot of ``J_dep^T`` (~0 at a singular position).
     internals : tuple or callable
         ``(wstar, wtilde, Q)``, or a function returning them when one is first read (the
-        compiled backend keeps no per-sample copy of them unless asked: they are then
-        computed by the numpy recursion of this module).
+        compiled backend keeps no per-sample copy of them unless asked: its kernel then runs
+        again, keeping them).
     wstar : list of ndarray (3, T)
         Uncoupled Newton–Euler wrench of each body about O_i minus applied loads, tree order.
     wtilde : list of ndarray (3, T)
@@ -135,7 +135,7 @@ def newton_euler_wrench(mass, inertia, com, c, s, t, td, w_ext):
 def plus_child(w_parent, w_child, r_child, r_parent):
     """``w_p + A(r_i - r_p)^T w_i``: a child's wrench about O_i added to its parent's about O_p
     (one term of the backward recursion of ``N_l^T``)."""
-    m = about(w_child, (r_child[0] - r_parent[0], r_child[1] - r_parent[1]))
+    m = about(w_child, relative(r_parent, r_child))
     return (w_parent[0] + m[0], w_parent[1] + m[1], w_parent[2] + m[2])
 
 
@@ -195,14 +195,6 @@ def reduce(kin: KinematicSolution, w_star: list) -> tuple[list, np.ndarray]:
         Q[i] = generalized_force(jk.CODES[lay.kind[i]], lay.topo.sign[i], _axis(pose.e[i]),
                                  w_tilde[i])
     return w_tilde, Q
-
-
-def internals(kin: KinematicSolution, loads: Loads) -> tuple:
-    """``(w_star, w_tilde, Q)`` of the motion ``kin`` under ``loads``, as
-    :attr:`DynamicSolution.internals`."""
-    w_star, _ = newton_euler(kin, loads.wrenches)
-    w_tilde, Q = reduce(kin, w_star)
-    return w_star, w_tilde, last(Q)
 
 
 def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
