@@ -98,13 +98,15 @@ def register(scalar_select, scalar_atan2) -> None:
     for fn in STEPS:
         _jitable(fn)
 
-    @overload(select, inline="always")
+    # select and atan2 are calls the compiler inlines (inlined by numba instead, inside a step
+    # inlined in turn, their variables trip numba's IR checks: NumbaIRAssumptionWarning)
+    @overload(select)
     def _select(cond, a, b):
         if isinstance(cond, types.Array) or isinstance(a, types.Array):
             return lambda cond, a, b: np.where(cond, a, b)
         return lambda cond, a, b: scalar_select(cond, a, b)
 
-    @overload(atan2, inline="always")
+    @overload(atan2)
     def _atan2(y, x):
         if isinstance(y, types.Array) or isinstance(x, types.Array):
             return lambda y, x: np.arctan2(y, x)
