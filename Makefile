@@ -25,8 +25,9 @@ demo: $(VENV)/.installed
 	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
 	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json, plots out/hoeken/plot_*.png and the report out/hoeken/report.html"
 
+# every core (pytest-xdist); the compiled-backend tests share one worker (tests/conftest.py)
 test: $(VENV)/.installed-test
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 bench: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/bench_hoeken.py

@@ -1,0 +1,46 @@
+"""Suite-wide set-up: how pytest-xdist spreads the tests.
+
+``make test`` runs the suite on every core (``pytest -n auto --dist loadgroup``). The tests that
+run the compiled (numba) backend all go to one worker, in collection order: on a fresh clone
+the first of them compiles the kernels once (40-45 s) and writes them to numba's on-disk cache,
+and the rest load them from there, while the other workers run the numpy, CLI and browser
+tests one test at a time as each worker frees up. Spread over several workers, each worker would
+compile the same kernels at the same time. The grouping is a scheduler of its own (xdist's
+``xdist_group`` mark sets ``item._nodeid``, which pytest 9.2 no longer reads). Without xdist
+(``pytest`` alone) none of this applies.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+NUMBA_GROUP = "numba"
+# files whose every test runs compiled code: the compiled backend or the benchmark scripts
+NUMBA_FILES = ("test_compiled", "test_benchmarks")
+# a parametrized test whose id has the "compiled" backend among its parameters
+COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
+
+
+def uses_numba(nodeid: str) -> bool:
+    """Whether the test ``nodeid`` compiles or runs numba kernels: a test of a file of compiled
+    tests, or one parametrized with the ``"compiled"`` backend."""
+    path, _, name = nodeid.partition("::")
+    return Path(path).stem.startswith(NUMBA_FILES) or bool(COMPILED_PARAM.search(name))
+
+
+@pytest.hookimpl(tryfirst=True, optionalhook=True)   # before xdist's own choice of scheduler
+def pytest_xdist_make_scheduler(config, log):
+    """Under ``--dist loadgroup``: the numba tests as one unit of work, every other test a unit
+    of its own (xdist hands out the largest unit first)."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class NumbaOnOneWorker(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return NUMBA_GROUP if uses_numba(nodeid) else nodeid
+
+    return NumbaOnOneWorker(config, log)
