@@ -1,4 +1,4 @@
-"""Suite-wide set-up: how pytest-xdist spreads the tests.
+"""Suite-wide set-up: how pytest-xdist spreads the tests, and fixtures several files read.
 
 ``make test`` runs the suite on every core (``pytest -n auto --dist loadgroup``). The tests that
 run the compiled (numba) backend all go to one worker, in collection order: on a fresh clone
@@ -16,6 +16,10 @@ import re
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
+
+import linkdyn
+from linkdyn.cli import main
 
 NUMBA_GROUP = "numba"
 # files whose every test runs compiled code: the compiled backend or the benchmark scripts
@@ -44,3 +48,16 @@ def pytest_xdist_make_scheduler(config, log):
             return NUMBA_GROUP if uses_numba(nodeid) else nodeid
 
     return NumbaOnOneWorker(config, log)
+
+
+@pytest.fixture(scope="session")
+def hoeken_report_run(tmp_path_factory) -> Path:
+    """The output folder of ``linkdyn analyze hoeken.toml -o out --report`` (in process), run
+    once per session for the files that read it: results.csv, summary.json, report.html and
+    the plots. Read it; a test that writes copies it first."""
+    folder = tmp_path_factory.mktemp("hoeken-report")
+    model = folder / "hoeken.toml"
+    model.write_text(linkdyn.example_path("hoeken").read_text("utf-8"), "utf-8")
+    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(folder / "out"), "--report"])
+    assert res.exit_code == 0, res.output
+    return folder / "out"

@@ -570,20 +570,12 @@ def snapshot(folder: Path) -> dict:
             else None for p in sorted(folder.rglob("*"))}
 
 
-@pytest.fixture(scope="module")
-def report_run(tmp_path_factory) -> Path:
-    """One successful run's outputs (csv, summary, report, plots), made once."""
-    out = tmp_path_factory.mktemp("report-run") / "out"
-    res = run("analyze", linkdyn.example_path("hoeken"), "-o", out, "--samples", 9, "--report")
-    assert res.exit_code == 0, res.output
-    return out
-
-
 @pytest.fixture
-def earlier_results(report_run, tmp_path) -> Path:
-    """A folder holding a successful run's outputs and an unrelated file of the user's."""
+def earlier_results(hoeken_report_run, tmp_path) -> Path:
+    """A folder holding a successful run's outputs (csv, summary, report, plots: the suite's one
+    ``analyze hoeken --report`` run, tests/conftest.py) and an unrelated file of the user's."""
     out = tmp_path / "runs" / "hoeken"
-    shutil.copytree(report_run, out)
+    shutil.copytree(hoeken_report_run, out)
     (out / "notes.txt").write_text("the user's own notes\n")
     assert {"results.csv", "summary.json", "report.html", "notes.txt"} <= {
         p.name for p in out.iterdir()}

@@ -51,8 +51,8 @@ def _analyze(tmp_path, example: str, *extra: str):
 
 
 @pytest.fixture(scope="module")
-def hoeken_report(tmp_path_factory):
-    return _analyze(tmp_path_factory.mktemp("hoeken"), "hoeken", "--report") / "report.html"
+def hoeken_report(hoeken_report_run):
+    return hoeken_report_run / "report.html"
 
 
 @pytest.fixture(scope="module")
@@ -100,15 +100,15 @@ def page(browser, hoeken_report):
 
 # ---------------------------------------------------------------------------- the file
 
-def test_report_is_one_self_contained_file(tmp_path):
+def test_report_is_one_self_contained_file(tmp_path, hoeken_report_run):
     base = set(os.listdir(_analyze(tmp_path / "a", "hoeken")))
-    with_report = set(os.listdir(_analyze(tmp_path / "b", "hoeken", "--report")))
+    with_report = set(os.listdir(hoeken_report_run))   # the same run with --report
     # SPEC: --report adds the plots and one self-contained report.html
     added = with_report - base
     assert "report.html" in added and not any(f.endswith(".html") for f in added - {"report.html"})
     assert {f for f in added if f.startswith("plot_")} == added - {"report.html"}
     assert {"plot_joints.png", "plot_joints.svg", "plot_efforts.png"} <= added
-    text = (tmp_path / "b" / "out" / "report.html").read_text("utf-8")
+    text = (hoeken_report_run / "report.html").read_text("utf-8")
     assert "http://" not in text and "https://" not in text
     assert not re.search(r"<script[^>]*\bsrc\s*=", text, re.I)
     assert not re.search(r"<link[^>]*\bhref\s*=", text, re.I)

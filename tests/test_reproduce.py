@@ -70,10 +70,8 @@ def test_plots_without_a_cut_joint_skip_the_multipliers():
         assert ax.get_ylabel() and ax.get_legend() is not None
 
 
-def test_report_flag_adds_the_plots_and_exactly_one_html_file(tmp_path):
-    out = tmp_path / "out"
-    res = _run("analyze", _hoeken_file(tmp_path), "-o", out, "--report")
-    assert res.exit_code == 0, res.output
+def test_report_flag_adds_the_plots_and_exactly_one_html_file(hoeken_report_run):
+    out = hoeken_report_run   # analyze hoeken.toml -o out --report (tests/conftest.py)
     files = set(os.listdir(out))
     assert {"results.csv", "summary.json", "report.html"} <= files
     assert [f for f in files if f.endswith(".html")] == ["report.html"]
