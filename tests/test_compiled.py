@@ -14,6 +14,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
 
 import linkdyn
 from linkdyn import compiled, kinematics
@@ -25,6 +26,7 @@ from linkdyn.kinematics import dyads, positions
 from test_compiled_dynamics import (KERNEL_EXAMPLES, KERNEL_MODELS, hoeken_design, same,
                                    slider_crank_design)
 from test_dynamics import MODELS, times
+from test_slot import _lever_models, slotted_levers
 
 
 def around(model, n=73):
@@ -123,6 +125,26 @@ def test_dynamics_test_models(name):
     """Sliders in the tree, at the cut and driven; two drivers; joints declared child-first."""
     model = MODELS[name]()
     check_kinematics(*solve_both(model, around(model, 41)))
+
+
+@pytest.mark.parametrize("name", ["scotch-yoke", "slotted-lever"])
+@pytest.mark.parametrize("block", [1024, 5])
+def test_slot_models(monkeypatch, name, block):
+    """The slot joint (one closure row, its slot fixed or turning) in the kinematics kernel."""
+    monkeypatch.setattr(kc, "BLOCK", block)
+    model = MODELS[name]()
+    fast, ref = solve_both(model, around(model, 41))
+    assert fast.J.shape[-2] == 1 and np.all(ref.valid)
+    check_kinematics(fast, ref)
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(slotted_levers())
+def test_random_slotted_levers(case):
+    """Random slotted levers (slot) and their equivalents with a massless block (revolute and
+    prismatic joints)."""
+    for model in _lever_models(case):
+        check_kinematics(*solve_both(model, np.linspace(-0.2, 1.1, 13)))
 
 
 @pytest.mark.parametrize("cut, shape", [("J2", "chain"), ("J3", "split"), ("J4", "chain")])

@@ -41,9 +41,11 @@ except ImportError:  # pragma: no cover - depends on the environment
 BACKENDS = ("auto", "numpy", "compiled")
 AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" compiles
 
-# joint kind codes inside the kernels, and the kinds (linkdyn.joints) they have code for
-GROUND, REV, PRI = 0, 1, 2
-CODES = {"revolute": REV, "prismatic": PRI}
+# joint kind codes inside the kernels: the registry's (linkdyn.joints.CODES; 0 the ground)
+GROUND, REV, PRI = 0, jk.CODES["revolute"], jk.CODES["prismatic"]
+# the kinds analyze runs compiled (both kernels run every kind; the slot is refused until it is
+# enabled end to end)
+CODES = {name: jk.CODES[name] for name in ("revolute", "prismatic")}
 # dyad shape codes (linkdyn.kinematics.dyads)
 SPLIT, CHAIN, SLIDE, SWING = 0, 1, 2, 3
 DYAD_SHAPES = {"split": SPLIT, "chain": CHAIN, "slide": SLIDE, "swing": SWING}
@@ -157,7 +159,8 @@ if numba is not None:   # the steps compile into the kernels that call them
 
 
 def unsupported(kinds) -> list[str]:
-    """The joint kinds among ``kinds`` that the kernels have no code for."""
+    """The joint kinds among ``kinds`` that ``analyze`` does not run compiled (not in
+    :data:`CODES`; ``kinematics.solve`` runs every registered kind compiled)."""
     return sorted({k for k in kinds if k not in CODES})
 
 
@@ -189,13 +192,17 @@ def use_compiled(backend: str | None = None, samples: int = 0, kinds=()) -> bool
 class Packed:
     """A :class:`~linkdyn.kinematics.Layout` as plain arrays for the kernels.
 
-    Topology (shared by all designs): ``parent``, ``kind`` (``GROUND``/``REV``/``PRI``),
-    ``sign`` (n,); ``ancestors`` (n, n) (1 where body k's tree joint is on the path to body
-    i); ``dep``, ``drv`` tree indices; ``driver_of`` (n,) driver number of a tree joint or -1;
-    ``tree_joint`` (n,) model joint of each tree joint; ``cut_a``, ``cut_b``, ``cut_kind``,
-    ``cut_joint`` (n_cut,); ``side`` (n_cut, n) the sign of tree joint k in cut c's closure
-    (+1 on the path to its second body, -1 to its first, 0 both or neither); ``dyads``
-    (n_dyads, 5) rows ``[shape, cut, upper, lower, side (0: a, 1: b)]``.
+    Topology (shared by all designs): ``parent``, ``kind`` (codes of
+    :data:`linkdyn.joints.CODES`, 0 for the ground), ``sign``, ``angular`` (n,) (whether the
+    tree joint's coordinate is an angle); ``ancestors`` (n, n) (1 where body k's tree joint is
+    on the path to body i); ``dep``, ``drv`` tree indices; ``driver_of`` (n,) driver number of
+    a tree joint or -1; ``tree_joint`` (n,) model joint of each tree joint; ``cut_a``,
+    ``cut_b``, ``cut_kind``, ``cut_joint`` (n_cut,); ``cut_row``, ``cut_rows`` (n_cut,) each
+    cut's first row in the stacked closure arrays and its number of rows (its kind's);
+    ``cut_metres`` (n_cut, 3) 1 for each of its rows (padded to 3) in m, else 0; ``side``
+    (n_cut, n) the sign of tree joint k in cut c's closure (+1 on the path to its second body,
+    -1 to its first, 0 both or neither); ``dyads`` (n_dyads, 5) rows
+    ``[shape, cut, upper, lower, side (0: a, 1: b)]``.
 
     Numbers, one row per design: ``joint_point``, ``axis``, ``com`` (D, n, 2), ``angle``,
     ``mass``, ``inertia`` (D, n); ``cut_pa``, ``cut_pb``, ``cut_axis`` (D, n_cut, 2),
@@ -215,6 +222,10 @@ class Packed:
     cut_b: np.ndarray
     cut_kind: np.ndarray
     cut_joint: np.ndarray
+    cut_row: np.ndarray
+    cut_rows: np.ndarray
+    cut_metres: np.ndarray
+    angular: np.ndarray
     side: np.ndarray
     dyads: np.ndarray
     joint_point: np.ndarray
@@ -245,13 +256,13 @@ def _numbers(xs, d: int) -> np.ndarray:
 
 
 def pack(lay, n_joints: int) -> Packed:
-    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs).
-
-    Raises ValueError for a joint kind the kernels have no code for (see :func:`use_compiled`).
-    """
+    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs)."""
     topo = lay.topo
     n = topo.n
     kind = np.array([GROUND] + [jk.CODES[k] for k in lay.kind[1:]], np.int64)
+    units = [jk.get(c.kind).row_units for c in lay.cuts]
+    metres = np.array([[int(k < len(u) and u[k] == "m") for k in range(3)] for u in units],
+                      np.int64).reshape(len(units), 3)
     driver_of = np.full(n, -1, np.int64)
     driver_of[list(topo.driven)] = np.arange(len(topo.driven))
     ints = np.array(topo.ancestors, np.int64)
@@ -268,7 +279,11 @@ def pack(lay, n_joints: int) -> Packed:
         tree_joint=np.array(topo.tree_joint, np.int64), n_joints=n_joints,
         cut_a=np.array([c.a for c in cuts], np.int64), cut_b=np.array([c.b for c in cuts], np.int64),
         cut_kind=np.array([jk.CODES[c.kind] for c in cuts], np.int64),
-        cut_joint=np.array([c.joint for c in cuts], np.int64), side=side, dyads=dy,
+        cut_joint=np.array([c.joint for c in cuts], np.int64),
+        cut_row=np.array([topo.row_slice(k).start for k in range(len(cuts))], np.int64),
+        cut_rows=np.array([len(u) for u in units], np.int64), cut_metres=metres,
+        angular=np.array([False] + [jk.get(k).angular for k in lay.kind[1:]], np.int64),
+        side=side, dyads=dy,
         joint_point=joint_point, axis=_vectors(lay.axis), com=_vectors(lay.com),
         angle=_numbers(lay.angle, d), mass=_numbers(lay.mass, d),
         inertia=_numbers(lay.inertia, d),

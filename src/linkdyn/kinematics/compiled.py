@@ -1,5 +1,8 @@
 """Compiled kinematics: the recursions of :mod:`.recursion` and the dyads of :mod:`.dyads`,
-fused by a numba kernel (see :mod:`linkdyn.compiled`).
+fused by a numba kernel (see :mod:`linkdyn.compiled`). The per-body and per-cut equations are the
+steps of :mod:`.recursion` (``child_pose``, ``cut_frame``, ``jacobian_column``, ``child_twist``,
+``child_twist_rate``, ``cut_bias``, ``cut_coordinate``) and the joint kinds' steps, called by
+their codes; the loops here only gather each sample's scalars, call them and write back.
 
 For every sample the kernel closes the loops (in closed form, dyad by dyad, from the nearest
 continuation node; or takes the coordinates Newton's method closed), places the bodies, forms
@@ -17,8 +20,10 @@ sample loops call nothing from the C library where they can help it (angles by
 instructions.
 
 All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
-``[..., d, t]``. The topology comes as ``tree`` (n, 3) rows ``[parent, kind, sign]`` and
-``cuts`` (n_cut, 3) rows ``[a, b, kind]``; the numbers of design d as ``geo[d]`` (n, 5) rows
+``[..., d, t]``. The topology comes as ``tree`` (n, 4) rows ``[parent, kind, sign, angular]``
+and ``cuts`` (n_cut, 8) rows ``[a, b, kind, first row, rows, metres (3)]`` (kinds by their
+codes, :data:`linkdyn.joints.CODES`; ``metres``: 1 for a cut row in m, which the residual
+scales by the size); the numbers of design d as ``geo[d]`` (n, 5) rows
 ``[joint point (2), axis (2), angle]`` and ``cgeo[d]`` (n_cut, 7) rows
 ``[pa (2), pb (2), axis (2), angle]``.
 """
@@ -29,16 +34,19 @@ import math
 
 import numpy as np
 
-from ..compiled import (CHAIN, PRI, REV, SLIDE, SPLIT, Packed, factor, inline, njit,
-                        screw_views, substitute, vector_views)
+from .. import joints as jk
+from ..compiled import (CHAIN, PRI, SLIDE, SPLIT, Packed, factor, inline, njit, screw_views,
+                        substitute, vector_views)
 from ..planar import turned
 from . import dyads as dy
 from .positions import nearest_node
+from .recursion import (child_pose, child_twist, child_twist_rate, cut_bias, cut_coordinate,
+                        cut_frame, jacobian_column)
 
 BLOCK = 1024         # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
-PARENT, KIND, SIGN = range(3)       # tree columns
-CUT_A, CUT_B, CUT_KIND = range(3)   # cuts columns
+PARENT, KIND, SIGN, ANGULAR = range(4)                      # tree columns
+CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, CUT_METRES = range(6)   # cuts columns
 
 
 # --- scalar helpers, compiled into their callers -----------------------------------------------
@@ -70,37 +78,22 @@ def _pose(phi, c, s, r, e, i, d, ks):
 
 @njit
 def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
-    """Poses of all bodies (recursion.forward_positions); ``cq``, ``sq`` (n, block): cosine
-    and sine of ``s q_i`` for the revolute joints."""
+    """Poses of all bodies (:func:`.recursion.child_pose`); ``cq``, ``sq`` (n, block): cosine
+    and sine of ``s q_i`` for the angular joints."""
     ks = slice(k0, k0 + nb)   # the block's samples
-    c[0, d, ks] = 1.0   # the ground's other rows, and a revolute joint's e, stay zero
+    c[0, d, ks] = 1.0   # the ground's other rows stay zero
     for i in range(1, len(tree)):
-        p, sign = tree[i, PARENT], tree[i, SIGN]
-        jx, jy = geo[d, i, 0], geo[d, i, 1]
+        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
+        joint, axis = (geo[d, i, 0], geo[d, i, 1]), (geo[d, i, 2], geo[d, i, 3])
+        angle = geo[d, i, 4]
         phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, d, ks)
         phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, d, ks)
-        q_i = q[i, d, ks]
-        if tree[i, KIND] == REV:
-            # phi_i = phi_p + s q;  O_i at the parent's joint point
-            cq_i, sq_i = cq[i], sq[i]
-            for k in range(nb):
-                cp, sp = c_p[k], s_p[k]
-                phi_i[k] = phi_p[k] + sign * q_i[k]
-                c_i[k], s_i[k] = cp * cq_i[k] - sp * sq_i[k], sp * cq_i[k] + cp * sq_i[k]
-                rx_i[k] = rx_p[k] + cp * jx - sp * jy
-                ry_i[k] = ry_p[k] + sp * jx + cp * jy
-        else:
-            # phi_i = phi_p + s angle;  O_i = joint point + s q e, e fixed in the parent
-            ax, ay, angle = geo[d, i, 2], geo[d, i, 3], sign * geo[d, i, 4]
-            ca, sa = math.cos(angle), math.sin(angle)
-            for k in range(nb):
-                cp, sp = c_p[k], s_p[k]
-                ex, ey = cp * ax - sp * ay, sp * ax + cp * ay
-                phi_i[k] = phi_p[k] + angle
-                c_i[k], s_i[k] = ca * cp - sa * sp, sa * cp + ca * sp
-                rx_i[k] = rx_p[k] + cp * jx - sp * jy + (sign * q_i[k]) * ex
-                ry_i[k] = ry_p[k] + sp * jx + cp * jy + (sign * q_i[k]) * ey
-                ex_i[k], ey_i[k] = ex, ey
+        q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
+        for k in range(nb):
+            ph, co, si, o, ax = child_pose(code, sign, q_i[k], (cq_i[k], sq_i[k]), angle, axis,
+                                           joint, phi_p[k], c_p[k], s_p[k], (rx_p[k], ry_p[k]))
+            phi_i[k], c_i[k], s_i[k] = ph, co, si
+            rx_i[k], ry_i[k], ex_i[k], ey_i[k] = o[0], o[1], ax[0], ax[1]
 
 
 @njit
@@ -208,84 +201,92 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
 @njit
 def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
     """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
-    loops are closed, for the steps that follow: ``P`` (n_cut, 6, block) rows
-    ``[pa (2), pb (2), e (2)]``."""
+    loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
+    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]``."""
     ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
-        A = _body(c, s, r, cuts[ci, CUT_A], d, ks)
-        B = _body(c, s, r, cuts[ci, CUT_B], d, ks)
-        pax_, pay_, pbx_, pby_ = cgeo[d, ci, 0], cgeo[d, ci, 1], cgeo[d, ci, 2], cgeo[d, ci, 3]
-        ux, uy = cgeo[d, ci, 4], cgeo[d, ci, 5]
+        c_a, s_a, rx_a, ry_a = _body(c, s, r, cuts[ci, CUT_A], d, ks)
+        c_b, s_b, rx_b, ry_b = _body(c, s, r, cuts[ci, CUT_B], d, ks)
+        pa, pb = (cgeo[d, ci, 0], cgeo[d, ci, 1]), (cgeo[d, ci, 2], cgeo[d, ci, 3])
+        axis = (cgeo[d, ci, 4], cgeo[d, ci, 5])
         P_c = P[ci]
         for k in range(nb):
-            P_c[0, k], P_c[1, k] = _point(A, k, pax_, pay_)
-            P_c[2, k], P_c[3, k] = _point(B, k, pbx_, pby_)
-            c_a, s_a = A[0][k], A[1][k]
-            P_c[4, k], P_c[5, k] = c_a * ux - s_a * uy, s_a * ux + c_a * uy
+            r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k], s_b[k],
+                                        (rx_b[k], ry_b[k]), pa, pb, axis)
+            P_c[0, k], P_c[1, k], P_c[2, k] = r_pa[0], r_pa[1], r_pb[0]
+            P_c[3, k], P_c[4, k], P_c[5, k] = r_pb[1], e_a[0], e_a[1]
 
 
 @inline
 def _frame(P_c, k):
     """A cut's points and axis, sample k of the block, from its rows ``P_c`` = ``P[ci]``
-    (:func:`_cut_frames`)."""
-    return P_c[0, k], P_c[1, k], P_c[2, k], P_c[3, k], P_c[4, k], P_c[5, k]
+    (:func:`_cut_frames`): ``r_Pa``, ``r_Pb``, ``e_a``, each ``(x, y)``."""
+    return (P_c[0, k], P_c[1, k]), (P_c[2, k], P_c[3, k]), (P_c[4, k], P_c[5, k])
 
 
 @njit
 def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
-    """Loop-closure residual relative to ``size``, max over the cut rows (positions._scaled)."""
+    """Loop-closure residual (the kinds' ``residual`` steps), its rows in metres relative to
+    ``size``, max over the cut rows (positions._scaled)."""
     ks = slice(k0, k0 + nb)
     err_d = err[d, ks]
     err_d[:] = 0.0
     for ci in range(len(cuts)):
         P_c = P[ci]
-        a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[d, ci, 6]
+        # the scale of each row (the padded rows are zero)
+        u0 = 1.0 / size[d] if cuts[ci, CUT_METRES] else 1.0
+        u1 = 1.0 / size[d] if cuts[ci, CUT_METRES + 1] else 1.0
+        u2 = 1.0 / size[d] if cuts[ci, CUT_METRES + 2] else 1.0
         phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
         for k in range(nb):
-            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
-            dx, dy = pbx - pax, pby - pay
-            if revolute:   # r_Pb - r_Pa
-                g0, g1 = dx / size[d], dy / size[d]
-            else:          # [phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n]
-                g = phi_b[k] - phi_a[k] - cgeo[d, ci, 6]
-                g0, g1 = math.atan2(math.sin(g), math.cos(g)), (-dx * eay + dy * eax) / size[d]
-            if g0 != g0 or g1 != g1 or err_d[k] != err_d[k]:
+            r_pa, r_pb, e_a = _frame(P_c, k)
+            g = jk.residual(code, angle, phi_a[k], phi_b[k], e_a, r_pa, r_pb)
+            g0, g1, g2 = abs(g[0] * u0), abs(g[1] * u1), abs(g[2] * u2)
+            if g0 != g0 or g1 != g1 or g2 != g2 or err_d[k] != err_d[k]:
                 err_d[k] = math.nan
             else:
-                err_d[k] = max(err_d[k], abs(g0), abs(g1))
+                err_d[k] = max(err_d[k], g0, g1, g2)
 
 
 @njit
 def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
-    """Loop-closure Jacobian J (2 n_cut, n - 1): column k of cut c is
-    ``side * S_c A(r_Pb - r_k) p_k`` (eqs. 20-24)."""
+    """Loop-closure Jacobian J (n_rows, n - 1): each cut's rows of each tree joint's rate
+    (:func:`.recursion.jacobian_column`, eqs. 20-24); the columns of joints that move both
+    bodies of a cut alike, or neither, stay zero."""
     ks = slice(k0, k0 + nb)
+    last = J.shape[0] - 1
     for ci in range(len(cuts)):
         P_c = P[ci]
-        revolute = cuts[ci, CUT_KIND] == REV
+        cut, row, rows = cuts[ci, CUT_KIND], cuts[ci, CUT_ROW], cuts[ci, CUT_ROWS]
         for j in range(1, len(tree)):
-            f = side[ci, j] * tree[j, SIGN]
+            f = side[ci, j]
+            if f == 0:
+                continue
+            code, sign = tree[j, KIND], float(tree[j, SIGN])
             rx_j, ry_j = vector_views(r, j, d, ks)
             ex_j, ey_j = vector_views(e, j, d, ks)
-            J0, J1 = J[2 * ci, j - 1, d, ks], J[2 * ci + 1, j - 1, d, ks]   # cut ci's rows
+            # cut ci's rows (a view of a row past the cut's is never written)
+            J0 = J[row, j - 1, d, ks]
+            J1 = J[min(row + 1, last), j - 1, d, ks]
+            J2 = J[min(row + 2, last), j - 1, d, ks]
             for k in range(nb):
-                _, _, pbx, pby, eax, eay = _frame(P_c, k)
-                if tree[j, KIND] == REV:   # A(a) [s, 0, 0]
-                    w, vx, vy = f, -f * (pby - ry_j[k]), f * (pbx - rx_j[k])
-                else:                      # A(a) [0, s e]
-                    w, vx, vy = 0.0, f * ex_j[k], f * ey_j[k]
-                if revolute:   # S x = [x_vx, x_vy]
-                    J0[k], J1[k] = vx, vy
-                else:          # S x = [x_w, n . x_v]
-                    J0[k], J1[k] = w, -vx * eay + vy * eax
+                _, r_pb, e_a = _frame(P_c, k)
+                x = jacobian_column(cut, code, sign, f, (ex_j[k], ey_j[k]), (rx_j[k], ry_j[k]),
+                                    r_pb, e_a)
+                J0[k] = x[0]
+                if rows > 1:
+                    J1[k] = x[1]
+                if rows > 2:
+                    J2[k] = x[2]
 
 
 @njit
 def _twists(tree, d, k0, nb, r, e, rate, tw):
-    """t_i = A(r_i - r_p) t_p + p_i rate_i for every body (eq. 2); ``rate`` (n, D, T)."""
+    """Twists of every body (:func:`.recursion.child_twist`, eq. 2); ``rate`` (n, D, T)."""
     ks = slice(k0, k0 + nb)
     for i in range(1, len(tree)):   # the ground's row stays zero
-        p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
         w_i, vx_i, vy_i = screw_views(tw, i, d, ks)
         w_p, vx_p, vy_p = screw_views(tw, p, d, ks)
         rx_i, ry_i = vector_views(r, i, d, ks)
@@ -293,15 +294,9 @@ def _twists(tree, d, k0, nb, r, e, rate, tw):
         ex_i, ey_i = vector_views(e, i, d, ks)
         rate_i = rate[i, d, ks]
         for k in range(nb):
-            w = w_p[k]
-            w_i[k] = w
-            vx_i[k] = vx_p[k] - w * (ry_i[k] - ry_p[k])
-            vy_i[k] = vy_p[k] + w * (rx_i[k] - rx_p[k])
-            if revolute:
-                w_i[k] += sign * rate_i[k]
-            else:
-                vx_i[k] += (sign * rate_i[k]) * ex_i[k]
-                vy_i[k] += (sign * rate_i[k]) * ey_i[k]
+            w_i[k], vx_i[k], vy_i[k] = child_twist(
+                code, sign, (ex_i[k], ey_i[k]), (w_p[k], vx_p[k], vy_p[k]), (rx_p[k], ry_p[k]),
+                (rx_i[k], ry_i[k]), rate_i[k])
 
 
 @inline
@@ -316,57 +311,44 @@ def _motion(tw, td, r, i, d, ks):
 
 @njit
 def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
-    """td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i."""
+    """Twist rates of every body (:func:`.recursion.child_twist_rate`)."""
     ks = slice(k0, k0 + nb)
     for i in range(1, len(tree)):   # the ground's row stays zero
-        p, sign, revolute = tree[i, PARENT], tree[i, SIGN], tree[i, KIND] == REV
+        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
         w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i = _motion(tw, td, r, i, d, ks)
         w_p, vx_p, vy_p, al_p, ax_p, ay_p, rx_p, ry_p = _motion(tw, td, r, p, d, ks)
         ex_i, ey_i = vector_views(e, i, d, ks)
         qd_i, qdd_i = qd[i, d, ks], qdd[i, d, ks]
         for k in range(nb):
-            al, w = al_p[k], w_p[k]
-            al_i[k] = al
-            ax_i[k] = ax_p[k] - al * (ry_i[k] - ry_p[k]) - w * (vy_i[k] - vy_p[k])
-            ay_i[k] = ay_p[k] + al * (rx_i[k] - rx_p[k]) + w * (vx_i[k] - vx_p[k])
-            if revolute:
-                al_i[k] += sign * qdd_i[k]
-            else:   # p_i qdd_i + s qd_i w_axis perp(e), e turning with the joint's first body
-                w_axis = w if sign > 0 else w_i[k]
-                f = sign * qd_i[k] * w_axis
-                ax_i[k] += (sign * qdd_i[k]) * ex_i[k] - f * ey_i[k]
-                ay_i[k] += (sign * qdd_i[k]) * ey_i[k] + f * ex_i[k]
+            al_i[k], ax_i[k], ay_i[k] = child_twist_rate(
+                code, sign, (ex_i[k], ey_i[k]), (w_p[k], vx_p[k], vy_p[k]),
+                (al_p[k], ax_p[k], ay_p[k]), (w_i[k], vx_i[k], vy_i[k]), (rx_p[k], ry_p[k]),
+                (rx_i[k], ry_i[k]), qd_i[k], qdd_i[k])
 
 
 @njit
 def _bias(cuts, d, k0, nb, r, tw, td, P, bias):
-    """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td`` (recursion.closure_bias);
-    ``bias`` (2 n_cut, block)."""
+    """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td``
+    (:func:`.recursion.cut_bias`); ``bias`` (n_rows, block)."""
     ks = slice(k0, k0 + nb)
+    last = bias.shape[0] - 1
     for ci in range(len(cuts)):
         P_c = P[ci]
-        a, b, revolute = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND] == REV
+        a, b, cut = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND]
+        row, rows = cuts[ci, CUT_ROW], cuts[ci, CUT_ROWS]
         w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
+        B0, B1, B2 = bias[row], bias[min(row + 1, last)], bias[min(row + 2, last)]
         for k in range(nb):
-            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
-            # both bodies' motion taken at the cut point, which moves with body b
-            wa, wb = w_a[k], w_b[k]
-            vbx = vx_b[k] - wb * (pby - ry_b[k])
-            vby = vy_b[k] + wb * (pbx - rx_b[k])
-            vax = vx_a[k] - wa * (pby - ry_a[k])
-            vay = vy_a[k] + wa * (pbx - rx_a[k])
-            abx = ax_b[k] - al_b[k] * (pby - ry_b[k]) - wb * (vby - vy_b[k])
-            aby = ay_b[k] + al_b[k] * (pbx - rx_b[k]) + wb * (vbx - vx_b[k])
-            aax = ax_a[k] - al_a[k] * (pby - ry_a[k]) - wa * (vby - vy_a[k])
-            aay = ay_a[k] + al_a[k] * (pbx - rx_a[k]) + wa * (vbx - vx_a[k])
-            dax, day = abx - aax, aby - aay
-            if revolute:
-                bias[2 * ci, k], bias[2 * ci + 1, k] = dax, day
-            else:   # [al_b - al_a, n . a_rel + n_dot . v_rel],  n_dot = -w_a e
-                bias[2 * ci, k] = al_b[k] - al_a[k]
-                bias[2 * ci + 1, k] = (-dax * eay + day * eax
-                                       - wa * ((vbx - vax) * eax + (vby - vay) * eay))
+            _, r_pb, e_a = _frame(P_c, k)
+            x = cut_bias(cut, e_a, (w_a[k], vx_a[k], vy_a[k]), (al_a[k], ax_a[k], ay_a[k]),
+                         (rx_a[k], ry_a[k]), (w_b[k], vx_b[k], vy_b[k]),
+                         (al_b[k], ax_b[k], ay_b[k]), (rx_b[k], ry_b[k]), r_pb)
+            B0[k] = x[0]
+            if rows > 1:
+                B1[k] = x[1]
+            if rows > 2:
+                B2[k] = x[2]
 
 
 @njit
@@ -395,41 +377,22 @@ def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
 
 @njit
 def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
-    """Coordinate, rate and acceleration of every cut joint (joints.joint_motion): revolute
-    ``phi_b - phi_a``; slider ``s = d . e`` and its rates. ``out`` (n_cut, 3, D, T)."""
+    """Coordinate, rate and acceleration of every cut joint (:func:`.recursion.cut_coordinate`);
+    ``out`` (n_cut, 3, D, T)."""
     ks = slice(k0, k0 + nb)
     for ci in range(len(cuts)):
         P_c = P[ci]
-        a, b = cuts[ci, CUT_A], cuts[ci, CUT_B]
+        a, b, cut = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND]
         w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
-        s_c, sd_c, sdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
-        if cuts[ci, CUT_KIND] == REV:
-            phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
-            for k in range(nb):
-                s_c[k] = phi_b[k] - phi_a[k]
-                sd_c[k] = w_b[k] - w_a[k]
-                sdd_c[k] = al_b[k] - al_a[k]
-            continue
+        phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
+        q_c, qd_c, qdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
         for k in range(nb):
-            pax, pay, pbx, pby, eax, eay = _frame(P_c, k)
-            # d, d', d'': the second body's cut point seen from the first's (body points)
-            wa, wb, ala, alb = w_a[k], w_b[k], al_a[k], al_b[k]
-            oax, oay, obx, oby = pax - rx_a[k], pay - ry_a[k], pbx - rx_b[k], pby - ry_b[k]
-            ddx = (vx_b[k] - wb * oby) - (vx_a[k] - wa * oay)
-            ddy = (vy_b[k] + wb * obx) - (vy_a[k] + wa * oax)
-            dddx = ((ax_b[k] - alb * oby - wb * wb * obx)
-                    - (ax_a[k] - ala * oay - wa * wa * oax))
-            dddy = ((ay_b[k] + alb * obx - wb * wb * oby)
-                    - (ay_a[k] + ala * oax - wa * wa * oay))
-            dx, dy = pbx - pax, pby - pay
-            # e' = w_a perp(e), e'' = al_a perp(e) - w_a^2 e
-            edx, edy = -wa * eay, wa * eax
-            eddx, eddy = -ala * eay - wa * wa * eax, ala * eax - wa * wa * eay
-            s_c[k] = dx * eax + dy * eay
-            sd_c[k] = ddx * eax + ddy * eay + (dx * edx + dy * edy)
-            sdd_c[k] = (dddx * eax + dddy * eay + 2 * (ddx * edx + ddy * edy)
-                        + (dx * eddx + dy * eddy))
+            r_pa, r_pb, e_a = _frame(P_c, k)
+            q_c[k], qd_c[k], qdd_c[k] = cut_coordinate(
+                cut, e_a, phi_a[k], (w_a[k], vx_a[k], vy_a[k]), (al_a[k], ax_a[k], ay_a[k]),
+                (rx_a[k], ry_a[k]), phi_b[k], (w_b[k], vx_b[k], vy_b[k]),
+                (al_b[k], ax_b[k], ay_b[k]), (rx_b[k], ry_b[k]), r_pa, r_pb)
 
 
 @njit
@@ -446,11 +409,12 @@ def _finite(d, k0, nb, qd, qdd, fin):
 @inline
 def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
     """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
-    ``s q_i`` for a revolute joint."""
+    ``s q_i`` for an angular joint (the ``turn`` of :func:`.recursion.child_pose`)."""
+    angular, sign = tree[i, ANGULAR], tree[i, SIGN]
     for k in range(nb):
         q_i[k] = q_from[k]
-        if tree[i, KIND] == REV:
-            x = tree[i, SIGN] * q_i[k]
+        if angular:
+            x = sign * q_i[k]
             cq_i[k], sq_i[k] = math.cos(x), math.sin(x)
 
 
@@ -474,7 +438,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
     D, T, from_nodes = size.shape[0], t_s.shape[0], nodes.shape[0] > 0
     B = block
     cq, sq = np.ones((n, B)), np.zeros((n, B))
-    up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((2 * nc, B))
+    up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((J.shape[0], B))
     P = np.zeros((nc, 6, B))
     A, sol, col = np.zeros((nd, nd, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
     perm, node = np.zeros((nd, B), np.int64), np.zeros(B, np.int64)
@@ -550,7 +514,7 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
 
     Returns the outputs, batch flattened to (D, T): ``q``, ``phi``, ``c``, ``s``, ``qd``,
     ``qdd`` (n, D, T); ``r``, ``e`` (n, 2, D, T; ``e`` is zero for revolute joints); ``tw``,
-    ``twd`` (n, 3, D, T); ``J`` (2 n_cut, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
+    ``twd`` (n, 3, D, T); ``J`` (n_rows, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
     joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T); ``finite`` (D, T)
     bool, whether every rate and acceleration of the sample is finite.
     """
@@ -571,15 +535,16 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
     out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
-           "J": (2 * nc, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3), "twd": (n, 3),
-           "cut": (nc, 3), "pivot": (), "err": ()}
+           "J": (int(P.cut_rows.sum()), n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
+           "twd": (n, 3), "cut": (nc, 3), "pivot": (), "err": ()}
     # zeroed (lazily, by the system) so the rows that stay zero are never written: the
     # ground's, and the slider axis e of a revolute joint
     out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
     out["finite"] = np.zeros((D, T), np.bool_)
     # the topology and the numbers in the kernel's few arrays
-    tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64)], axis=1)
-    cuts = np.stack([P.cut_a, P.cut_b, P.cut_kind], axis=1).reshape(nc, 3)
+    tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64), P.angular], axis=1)
+    cuts = np.concatenate([np.stack([P.cut_a, P.cut_b, P.cut_kind, P.cut_row, P.cut_rows],
+                                    axis=1).reshape(nc, 5), P.cut_metres], axis=1)
     geo = np.concatenate([P.joint_point, P.axis, P.angle[..., None]], axis=-1)
     cgeo = np.concatenate([P.cut_pa, P.cut_pb, P.cut_axis, P.cut_angle[..., None]], axis=-1)
     drivers = [np.ascontiguousarray(np.broadcast_to(

@@ -180,7 +180,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
     dep, drv = list(topo.dependent), list(topo.driven)
     # driver coordinates, rates, accelerations: (n_drivers, T), with designs (n_drivers, D, T)
     qdrv, qddrv, qdddrv = lay.driver_values(t)
-    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
+    fast = compiled.use_compiled(backend, t.size * len(models))   # the kernel runs every kind
     packed = compiled.pack(lay, len(models[0].joints)) if fast else None
     out = None  # the compiled kernel's arrays
     # the [assembly] guess describes the mechanism at t = 0: assemble there, then follow the
