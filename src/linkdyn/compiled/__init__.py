@@ -43,9 +43,8 @@ AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" 
 
 # joint kind codes inside the kernels: the registry's (linkdyn.joints.CODES; 0 the ground)
 GROUND, REV, PRI = 0, jk.CODES["revolute"], jk.CODES["prismatic"]
-# the kinds analyze runs compiled (both kernels run every kind; the slot is refused until it is
-# enabled end to end)
-CODES = {name: jk.CODES[name] for name in ("revolute", "prismatic")}
+# the kinds analyze runs compiled: every registered kind (both kernels call the kinds' steps)
+CODES = dict(jk.CODES)
 # dyad shape codes (linkdyn.kinematics.dyads)
 SPLIT, CHAIN, SLIDE, SWING = 0, 1, 2, 3
 DYAD_SHAPES = {"split": SPLIT, "chain": CHAIN, "slide": SLIDE, "swing": SWING}
@@ -159,8 +158,8 @@ if numba is not None:   # the steps compile into the kernels that call them
 
 
 def unsupported(kinds) -> list[str]:
-    """The joint kinds among ``kinds`` that ``analyze`` does not run compiled (not in
-    :data:`CODES`; ``kinematics.solve`` runs every registered kind compiled)."""
+    """The joint kinds among ``kinds`` that the kernels have no code for (not in :data:`CODES`:
+    none of the registered kinds)."""
     return sorted({k for k in kinds if k not in CODES})
 
 
