@@ -152,15 +152,58 @@ def test_initial_q_may_come_from_the_assembly():
     assert sol.free == ("J1",)
 
 
-def test_a_position_it_cannot_pass_exits_3_naming_the_time():
-    # the rocker as the free coordinate: pushed to its limit (crank and coupler in line) the
-    # crank would have to move at an unbounded rate, and the run stops there
-    d = fourbar_dict(q={"J4": -77.12})
+def pushed_rocker(**initial):
+    """Hoeken's four-bar without gravity, a constant torque on the rocker: from rest it turns
+    the crank ever faster while the rocker swings between its two limits."""
+    d = fourbar_dict(**initial)
     d["mechanism"]["gravity"] = [0.0, 0.0]
     d["loads"] = [{"kind": "torque", "body": "rocker", "value": 2.0}]
+    return linkdyn.model_from_dict(d)
+
+
+def test_a_dead_point_of_the_free_coordinate_is_passed_by_switching_coordinates():
+    """[initial] names the rocker, which cannot describe the motion at its limits (crank and
+    coupler in line: the crank's rate per unit rocker rate is unbounded). The simulation
+    switches to a better-conditioned coordinate there and goes on; it matches the same
+    mechanism integrated in the crank's angle throughout (another tree: J4 cut instead of J3),
+    keeps its energy balance and closes its loop at every sample."""
+    t = np.linspace(0.0, 0.5, 11)
+    ref = simulate(pushed_rocker(q={"J1": 0.0}), t, rtol=1e-9, atol=1e-11)
+    assert ref.stats["switches"] == []
+    start = float(np.degrees(ref.columns["q_J4"][0]))
+    sol = simulate(pushed_rocker(q={"J4": start}), t, rtol=1e-9, atol=1e-11)
+    assert sol.free == ("J4",) and len(sol.stats["switches"]) >= 1
+    assert sol.stats["switches"][0][1] != ["J4"]
+    # the rocker passes a limit (its rate changes sign) while the crank races on
+    qd4, qd1 = ref.columns["qd_J4"], ref.columns["qd_J1"]
+    assert np.any(np.diff(np.sign(qd4[1:])) != 0) and np.min(np.abs(qd1[1:])) > 1.0
+    for col in ("q_J1", "q_J4", "qd_J1", "qd_J4", "qdd_J3", "Fx_J2", "Fy_J4", "work",
+                "kinetic_energy"):
+        scale = np.max(np.abs(ref.columns[col]))
+        assert np.max(np.abs(sol.columns[col] - ref.columns[col])) < 1e-6 * scale, col
+    assert sol.energy_drift < 1e-7 and np.all(sol.valid)
+    gap = sol.point("rocker", "O4") - np.array([0.0895, 0.0])
+    assert np.max(np.abs(gap)) <= 1e-12 * 0.23
+    assert sol.stats["free_effort_residual"] < 1e-10
+
+
+def test_a_singular_position_of_the_mechanism_exits_3_naming_the_time_and_values():
+    """A driver turning the rocker past its limit: no choice of coordinates can follow (the
+    loop cannot close beyond it) and the run stops with the time and the coordinates there.
+    A pendulum on the ground is the free freedom."""
+    d = fourbar_dict(q={"J5": -90.0})
+    d["bodies"].append({"name": "bob", "points": {"O": [0.0, 0.0]}, "mass": 1.0,
+                        "com": [50.0, 0.0], "inertia": 1000.0})
+    d["joints"].append({"name": "J5", "type": "revolute", "connect": ["ground.O1", "bob.O"]})
+    d["drivers"] = [{"joint": "J4", "motion": {"kind": "constant_speed", "rpm": 30.0,
+                                               "start": -77.12}}]
+    d["assembly"]["phi"]["bob"] = -90.0
+    d.pop("topology")
     m = linkdyn.model_from_dict(d)
-    with pytest.raises(AssemblyError, match=r"at t = [0-9.e-]+ s.*cannot pass"):
-        simulate(m, np.linspace(0.0, 1.0, 3), rtol=1e-6, atol=1e-8)
+    with pytest.raises(AssemblyError, match=r"at t = 0\.1[0-9]+ s \(q_J4 = -0\.7[0-9]+, "
+                                            r"q_J5 = -1\.[0-9]+\).*cannot pass") as err:
+        simulate(m, np.linspace(0.0, 0.5, 3), rtol=1e-6, atol=1e-8)
+    assert err.value.exit_code == 3
 
 
 def test_cli_simulate_writes_results_and_summary(tmp_path):
@@ -176,6 +219,7 @@ def test_cli_simulate_writes_results_and_summary(tmp_path):
     assert (out / "report.html").stat().st_size > 1000
     summary = json.loads((out / "summary.json").read_text())
     assert summary["simulation"]["free_joints"] == ["J1"]
+    assert summary["simulation"]["coordinate_switches"] == []
     assert summary["simulation"]["energy_balance_drift_rel"] < 1e-6
 
 

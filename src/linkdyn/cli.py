@@ -660,6 +660,9 @@ def simulation_summary(sol, summ: dict) -> dict:
     s["simulation"] = {
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations")},
+        # where the free coordinates changed near a dead point of theirs (time s, joints)
+        "coordinate_switches": [{"t_s": ts, "free_joints": fr}
+                                for ts, fr in sol.stats.get("switches", [])],
         "energy_balance_drift_rel": sol.energy_drift,
         "closure_residual_max_rel": sol.stats["closure_residual"],
         "free_effort_residual_rel": sol.stats["free_effort_residual"],
@@ -719,7 +722,10 @@ def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report, 
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
         f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
         f"{sim['rhs_evaluations']} evaluations; energy balance drift "
-        f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)")
+        f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)"
+        + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "
+                  f"t = {sw['t_s']:.6g} s (a dead point of the previous ones)"
+                  for sw in sim["coordinate_switches"]))
     files = {
         "results.csv" if fmt == "csv" else "results.parquet":
             (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),

@@ -1,4 +1,4 @@
-"""``simulate(model, t)``: forward dynamics of the free degrees of freedom (docs/theory.md, F1-F9).
+"""``simulate(model, t)``: forward dynamics of the free degrees of freedom (docs/theory.md, F1-F10).
 
 A mechanism whose mobility exceeds its number of drivers has ``f`` free degrees of freedom. One
 joint coordinate per free freedom (``[initial]``) joins the drivers' as an *independent*
@@ -14,6 +14,10 @@ cut-joint constraints (coordinate partitioning, F1).
   generalized inertia ``H`` the change for a unit ``qdd_f[k]`` (F5), all 1 + f evaluations in
   one batch of the recursion. No actuator acts there (loads inside joints are applied loads),
   so ``qdd_f = -H^{-1} h`` (F6).
+- Dead points of the free coordinates (F10): at every accepted step the rates compatible with
+  the loops (the closure Jacobian's null space) say how well the free coordinates describe the
+  motion; where their growth passes ``SWITCH`` the integration restarts from the same state in
+  the best-conditioned tree coordinates (QR with column pivoting), on the same tree.
 - Integration: ``y = [q_f, qd_f, W]`` (W the work of drivers and non-conservative loads, F8)
   by a scipy ODE solver (explicit RK45/DOP853/RK23, implicit Radau/BDF, or LSODA) with the
   user's tolerances; outputs at the requested times from each step's dense output, then every
@@ -23,12 +27,12 @@ cut-joint constraints (coordinate partitioning, F1).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
 import numpy as np
 
-from . import kinematics, loads as loads_mod, reactions as reactions_mod
+from . import joints as jk, kinematics, loads as loads_mod, reactions as reactions_mod
 from .analysis import SINGULAR, Solution
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
@@ -42,6 +46,7 @@ from .topology import build
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
 MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
+SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
 
 
 class _Free:
@@ -161,6 +166,77 @@ def _partition(model: Model, free) -> Partition:
     return Partition(model, inner, compile_layout(inner, build(inner)), tuple(free))
 
 
+def _variant(part: Partition, free_bodies: tuple[int, ...]) -> Partition:
+    """``part`` with the tree coordinates of ``free_bodies`` (tree indices) as the free ones:
+    the same tree and cut joints (so every state keeps its tree coordinates), other
+    independent and dependent sets (F10)."""
+    topo, nd = part.layout.topo, part.n_drivers
+    driven = topo.driven[:nd] + tuple(free_bodies)
+    free = tuple(part.model.joints[topo.tree_joint[i]].name for i in free_bodies)
+    cut = tuple(part.model.joints[j].name for j in topo.cut)
+    inner = replace(part.model, cut=cut, drivers=part.model.drivers + tuple(
+        Driver(j, _Free(), "free (integrated)") for j in free))
+    tree = replace(topo, driven=driven,
+                   dependent=tuple(i for i in range(1, topo.n) if i not in driven))
+    # Newton's method closes the loops (the closed-form plan is the first partition's)
+    return Partition(part.model, inner, replace(part.layout, topo=tree, dyads=None), free)
+
+
+def conditioning(part: Partition, J: np.ndarray) -> tuple[float, tuple[int, ...], float]:
+    """How well the free coordinates of ``part`` describe the motion at one state (F10).
+
+    Parameters
+    ----------
+    part : Partition
+    J : ndarray (n_rows, n - 1)
+        Closure Jacobian at the state (columns: tree coordinates of bodies 1 .. n-1).
+
+    Returns
+    -------
+    growth : float
+        Largest rate of a non-driven tree coordinate per unit rate of the free ones,
+        ``max |V V_f^-1|`` (rad, or m per ``layout.size``): 1 at best, infinite at a dead point
+        of the free coordinates.
+    best : tuple of int
+        The tree bodies whose coordinates are the best-conditioned free ones (QR with column
+        pivoting of ``V^T``), ascending.
+    best_growth : float
+        ``growth`` of that choice.
+    """
+    import scipy.linalg as sl
+    lay, topo, nd = part.layout, part.layout.topo, part.n_drivers
+    nf = len(topo.driven) - nd
+    cand = np.array([i for i in range(1, topo.n) if i not in topo.driven[:nd]], int)
+    free = np.searchsorted(cand, topo.driven[nd:])
+    scale = np.array([1.0 if jk.get(lay.kind[i]).angular else 1.0 / float(lay.size)
+                      for i in cand])
+    A = J[:, cand - 1] / scale
+    if not np.all(np.isfinite(A)):
+        return np.inf, tuple(topo.driven[nd:]), np.inf
+    # V: the rates of the candidates (scaled) in the null space of the closure, J V = 0
+    _, sv, vt = np.linalg.svd(A)
+    V = vt[len(cand) - nf:].T                                       # (candidates, nf)
+    if nf == 0 or (len(sv) and sv[-1] <= 1e-9 * sv[0]):
+        # the closure itself loses rank (a singular position of the mechanism): every choice
+        # is as bad, the motion's velocity decides the branch; keep the current one
+        return 1.0, tuple(topo.driven[nd:]), 1.0
+
+    def growth(rows):
+        with np.errstate(all="ignore"):
+            G = np.linalg.solve(V[rows], V.T).T if nf else np.zeros((0, 0))
+        return float(np.max(np.abs(G))) if np.all(np.isfinite(G)) else np.inf
+    try:
+        current = growth(free)
+    except np.linalg.LinAlgError:
+        current = np.inf
+    piv = sl.qr(V.T, pivoting=True, mode="r")[1][:nf]
+    best = tuple(int(i) for i in np.sort(cand[piv]))
+    try:
+        return current, best, growth(np.sort(piv))
+    except np.linalg.LinAlgError:
+        return current, best, np.inf
+
+
 def _start(part: Partition) -> np.ndarray:
     """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
     ``[initial] q`` (else the ``[assembly]`` guess)."""
@@ -182,11 +258,13 @@ class Simulation(Solution):
         Work done since t = 0 by the drivers and the non-conservative loads (forces, torques,
         dampers, loads inside joints), J.
     free : tuple[str, ...]
-        The joints whose coordinates were integrated.
+        The joints whose coordinates were integrated first (``[initial]``'s).
     stats : dict
-        ``method``, ``rtol``, ``atol``, ``steps``, ``rhs_evaluations``, ``free_effort_residual``
-        (largest effort the free joints would need at the output states, relative to the
-        largest effort or load, ~0 when the accelerations solve F6).
+        ``method``, ``rtol``, ``atol``, ``steps``, ``rhs_evaluations``, ``switches`` (a list of
+        ``(t, [joints])``: where the integration went on in other free coordinates, F10),
+        ``free_effort_residual`` (largest effort the free joints would need at the output
+        states, relative to the largest effort or load, ~0 when the accelerations solve F6),
+        ``closure_residual``.
     """
 
     work: np.ndarray = field(default=None)
@@ -283,22 +361,21 @@ class _System:
         nf = self.nf
         self.nfev += 1
         tt = np.array([t])
-        qdd, _, power, qt, qdt = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
-                                               self.guess(tt))
-        self.last = (t, y.copy(), qt[:, 0], qdt[:, 0])
+        qdd, kin, power, qt, qdt = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
+                                                 self.guess(tt))
+        self.last = (t, y.copy(), qt[:, 0], qdt[:, 0], kin.jacobian[:, :, 0, 0])
         return np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
 
     def accept(self, t, y):
-        """Move the reference to an accepted step's end ``(t, y)``."""
-        if self.last is not None and self.last[0] == t and np.array_equal(self.last[1], y):
-            _, _, q, qd = self.last
-        else:
+        """Move the reference to an accepted step's end ``(t, y)``; the closure Jacobian there
+        (n_rows, n - 1), or None where the state does not close."""
+        if self.last is None or self.last[0] != t or not np.array_equal(self.last[1], y):
             self(t, y)
-            _, _, q, qd = self.last
+        _, _, q, qd, J = self.last
         if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
             self.ref = (t, q, qd)
-            return True
-        return False
+            return J
+        return None
 
 
 def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
@@ -348,47 +425,63 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             raise ModelError(f"{name} must be a positive number, got {tol}", field=f"--{name}",
                              fix=f"Give e.g. --{name} 1e-8")
     part = partition(model, free)
-    lay, topo = part.layout, part.layout.topo
+    topo = part.layout.topo
     nd, nf = part.n_drivers, len(part.free)
     q0 = _start(part)
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
     q_f0 = q0[list(topo.driven[nd:])]
     system = _System(part, q0, np.zeros(topo.n))
-    _, _, _, q_t, qd_t = system.evaluate(np.zeros(1), q_f0[:, None], qd_free0[:, None],
-                                         q0[:, None])
+    _, kin0, _, q_t, qd_t = system.evaluate(np.zeros(1), q_f0[:, None], qd_free0[:, None],
+                                            q0[:, None])
     if not np.all(np.isfinite(qd_t)):
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
+                            drivers=_values(part, q_t[:, 0]),
                             fix="Start the free joints ([initial] q) away from the toggle")
+    J = kin0.jacobian[:, :, 0, 0]
     system.ref = (0.0, q_t[:, 0], qd_t[:, 0])
-    y0 = np.concatenate((q_f0, qd_free0, [0.0]))
+    y = np.concatenate((q_f0, qd_free0, [0.0]))
 
     t_end = float(t[-1])
     Y = np.full((2 * nf + 1, len(t)), np.nan)
     guesses = np.full((topo.n, len(t)), np.nan)
+    segment = np.zeros(len(t), int)          # the partition each output sample was computed in
     at0 = t <= 0.0
-    Y[:, at0] = y0[:, None]
+    Y[:, at0] = y[:, None]
     guesses[:, at0] = q0[:, None]
-    steps = 0
-    if t_end > 0:
-        solver = getattr(si, method)(system, 0.0, y0, t_end, rtol=rtol, atol=atol)
+    parts, switches = [part], []
+    steps, nfev, t_now = 0, 0, 0.0
+    while t_now < t_end:
+        # the free coordinates describe the motion badly here (near a dead point of theirs):
+        # restart in the best-conditioned ones, from the same state          (F10)
+        best = _better(part, J)
+        if best is not None:
+            part = _variant(part, best)
+            _, q, qd = system.ref
+            nfev += system.nfev
+            system = _System(part, q, qd)
+            system.ref = (t_now, q, qd)
+            y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
+            parts.append(part)
+            switches.append((t_now, part.free))
+        solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
         while solver.status == "running":
             t_old, before = solver.t, system.ref
             message = solver.step()
             steps += 1
-            # a motion approaching a position it cannot pass (a dead point of the free
-            # coordinates) has accelerations growing without bound: its steps collapse
-            failed = (solver.status == "failed" or not np.all(np.isfinite(solver.y))
+            # a motion approaching a position it cannot pass (a singular position of the
+            # mechanism) has accelerations growing without bound: its steps collapse
+            J = None if solver.status == "failed" else system.accept(solver.t, solver.y)
+            failed = (J is None or not np.all(np.isfinite(solver.y))
                       or (solver.status == "running"
-                          and solver.step_size < MIN_STEP * max(t_end, 1.0))
-                      or not system.accept(solver.t, solver.y))
+                          and solver.step_size < MIN_STEP * max(t_end, 1.0)))
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
                     "the mechanism locks or reaches a position it cannot pass (a singular "
-                    "position, or loops that stop closing)" + (f"; the solver says: {message}"
-                                                               if message else ""),
-                    file=src, time=float(t_old),
+                    "position of the mechanism, or loops that stop closing)"
+                    + (f"; the solver says: {message}" if message else ""),
+                    file=src, time=float(t_old), drivers=_values(part, before[1]),
                     fix="Check the loads and [initial]; a stiff spring needs --method Radau "
                         "or BDF; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
@@ -396,9 +489,29 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 # outputs from the step's dense output; their guesses from the step's start
                 Y[:, inside] = solver.dense_output()(t[inside])
                 guesses[:, inside] = _hermite(before, system.ref, t[inside])
-    nfev = system.nfev
-    return _outputs(part, t, Y, guesses, dict(method=method, rtol=rtol, atol=atol, steps=steps,
-                                              rhs_evaluations=nfev))
+                segment[inside] = len(parts) - 1
+            y, t_now = solver.y, solver.t
+            if _better(part, J) is not None:
+                break
+    nfev += system.nfev
+    stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
+                 switches=[(float(ts), list(fr)) for ts, fr in switches])
+    return _outputs(parts, segment, t, Y, guesses, stats)
+
+
+def _better(part: Partition, J: np.ndarray) -> tuple[int, ...] | None:
+    """The tree bodies of better free coordinates where those of ``part`` describe the motion
+    badly at the state of closure Jacobian ``J`` (growth past ``SWITCH`` and twice the best's),
+    else None (F10)."""
+    growth, best, best_growth = conditioning(part, J)
+    return best if growth > SWITCH and best_growth < growth / 2 else None
+
+
+def _values(part: Partition, q: np.ndarray) -> dict[str, float]:
+    """The independent coordinates (drivers' and free ones) of tree coordinates ``q`` (n,),
+    by joint name, rad or m (for an error's message)."""
+    topo = part.layout.topo
+    return {part.inner.drivers[k].joint: float(q[i]) for k, i in enumerate(topo.driven)}
 
 
 def _hermite(a, b, t):
@@ -412,9 +525,29 @@ def _hermite(a, b, t):
             + v1[:, None] * (h * h11))
 
 
-def _outputs(part: Partition, t, Y, guesses, stats) -> Simulation:
-    """Every ``analyze`` quantity at the output states: the free accelerations (F6), then the
-    kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as ``analyze``."""
+def _outputs(parts: list[Partition], segment, t, Y, guesses, stats) -> Simulation:
+    """Every ``analyze`` quantity at the output states, each sample in the partition it was
+    integrated in (``parts[segment[k]]``, all on one tree): the free accelerations (F6), then
+    the kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as
+    ``analyze``; the segments' results joined along the samples."""
+    groups = [np.flatnonzero(segment == k) for k in range(len(parts))]
+    groups = [(parts[k], g) for k, g in enumerate(groups) if len(g)]
+    done = [_stages(p, t[g], Y[:, g], guesses[:, g]) for p, g in groups]
+    stats["free_effort_residual"] = max(d[-2] for d in done)
+    stats["closure_residual"] = max(d[-1] for d in done)
+    if len(done) == 1:
+        kin, applied, dyn, react, valid = done[0][:5]
+    else:
+        order = np.argsort(np.concatenate([g for _, g in groups]), kind="stable")
+        kin, applied, dyn, react, valid = _join([d[:5] for d in done], order)
+    return Simulation(parts[0].model, kin, applied, dyn, react, valid, work=Y[-1],
+                      free=parts[0].free, stats=stats)
+
+
+def _stages(part: Partition, t, Y, guesses):
+    """``(kin, loads, dyn, reactions, valid, free effort residual, closure residual)`` at the
+    output states ``Y`` (2 nf + 1, T) of one partition, ``guesses`` (n, T) their tree
+    coordinates."""
     model, lay = part.model, part.layout
     nd, nf = part.n_drivers, len(part.free)
     system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
@@ -431,9 +564,51 @@ def _outputs(part: Partition, t, Y, guesses, stats) -> Simulation:
     _, q_loads = denoc.reduce(kin, applied.wrenches)
     scale = max(float(np.nanmax(np.abs(q_loads), initial=0.0)),
                 float(np.nanmax(np.abs(dyn.Q.T + q_loads), initial=0.0)), 1e-300)
-    stats["free_effort_residual"] = float(np.nanmax(np.abs(dyn.tau[..., nd:])) / scale) if nf else 0.0
-    stats["closure_residual"] = float(np.nanmax(kin.residual)) if len(t) else 0.0
+    residual = float(np.nanmax(np.abs(dyn.tau[..., nd:])) / scale) if nf else 0.0
+    closure = float(np.nanmax(kin.residual)) if len(t) else 0.0
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     dyn = replace(dyn, tau=dyn.tau[..., :nd])
-    return Simulation(model, kin, applied, dyn, react, valid, work=Y[2 * nf],
-                      free=part.free, stats=stats)
+    return kin, applied, dyn, react, valid, residual, closure
+
+
+def _join(results: list[tuple], order: np.ndarray) -> tuple:
+    """The ``(kin, loads, dyn, reactions, valid)`` of the segments joined along the samples,
+    in time order (``order``). The layout is the first segment's: the segments share the tree,
+    the cut joints and every number; they differ only in which tree coordinates were
+    independent, which the joined results no longer depend on (the efforts kept are the
+    drivers')."""
+    kins, loads, dyns, reacts, valids = zip(*results)
+    sizes = [len(v) for v in valids]
+
+    def cat(parts: list, axis: int = -1):
+        # one field: arrays joined along the samples (``axis``, where each part has its own
+        # count, or 1 for a broadcast); lists, tuples and dataclasses entry by entry
+        x = parts[0]
+        if x is None:
+            return None
+        if isinstance(x, (list, tuple)):
+            return type(x)(cat([p[k] for p in parts], axis) for k in range(len(x)))
+        if hasattr(x, "__dataclass_fields__"):
+            return replace(x, **{f.name: cat([getattr(p, f.name) for p in parts], axis)
+                                 for f in fields(x)})
+        arrays = []
+        for p, n in zip(parts, sizes):
+            p = np.asarray(p)
+            shape = list(p.shape)
+            shape[axis] = n
+            arrays.append(np.broadcast_to(p, shape))
+        return np.take(np.concatenate(arrays, axis=axis), order, axis=axis)
+
+    def each(objs, skip=()):
+        return {f.name: cat([getattr(o, f.name) for o in objs]) for f in fields(objs[0])
+                if f.name not in skip}
+    kin = replace(kins[0], **each(kins, ("layout", "arrays")), arrays=None)
+    applied = replace(loads[0], **each(loads, ("has_potential",)))
+    # components-last arrays (T, ...): multipliers, efforts, generalized forces
+    internals = tuple(cat([d._internals[k] for d in dyns], 0 if k == 2 else -1) for k in range(3))
+    dyn = replace(dyns[0], lam=cat([d.lam for d in dyns], 0), tau=cat([d.tau for d in dyns], 0),
+                  kinetic_energy=cat([d.kinetic_energy for d in dyns]),
+                  pivot=cat([d.pivot for d in dyns]), internals=internals)
+    react = replace(reacts[0], on_second=cat([r.on_second for r in reacts]),
+                    internals=cat([r.tree for r in reacts]))
+    return kin, applied, dyn, react, cat(list(valids))
