@@ -38,7 +38,7 @@ from .dynamics import denoc
 from .errors import AssemblyError, ModelError
 from .kinematics.layout import Layout, compile_layout
 from .kinematics.positions import ACCEPT, _guess, assemble, driver_values
-from .kinematics.state import at_state, close
+from .kinematics.state import at_state
 from .model import REVOLUTE, Driver, Model
 from .planar import solve_small
 from .topology import build
@@ -306,64 +306,96 @@ class _System:
     def __init__(self, part: Partition, q0: np.ndarray, qd0: np.ndarray):
         self.part, self.lay = part, part.layout
         self.nd, self.nf = part.n_drivers, len(part.free)
-        self.free_rows = list(self.lay.topo.driven[self.nd:])
-        # the reference state (t, tree q, tree qd) the guesses are extrapolated from
-        self.ref = (0.0, q0, qd0)
+        topo = self.lay.topo
+        self.ind, self.dep = np.array(topo.driven, int), np.array(topo.dependent, int)
+        # each tree body's joint (model order): the tree coordinates out of the joints'
+        self.tree_joint = topo.tree_joint[1:]
+        # sample 0: qdd_f = 0; sample 1 + j: qdd_f = e_j (unit acceleration)          (F5)
+        self.unit = np.zeros((self.nf, 1 + self.nf, 1))
+        for j in range(self.nf):
+            self.unit[j, 1 + j] = 1.0
+        self.set_reference(0.0, q0, qd0)
         self.last = None
         self.nfev = 0
 
-    def guess(self, t) -> np.ndarray:
+    def set_reference(self, t0, q, qd, qdd=None, J=None):
+        """The state (time, tree q, qd, qdd (n,)) the guesses are extrapolated from, and the
+        closure Jacobian there (n_rows, n - 1) for the dependent coordinates' share of a change
+        of the independent ones."""
+        S = None
+        if J is not None and len(self.dep):
+            # dq_dep / dq_ind = -J_dep^-1 J_ind at the reference                    (F2)
+            with np.errstate(all="ignore"):
+                S = np.linalg.solve(J[:, self.dep - 1], -J[:, self.ind - 1])
+            S = S if np.all(np.isfinite(S)) else None
+        self.ref = (t0, q, qd, np.zeros_like(q) if qdd is None else qdd, S)
+
+    def guess(self, t, q_ind=None) -> np.ndarray:
         """Tree coordinates (n, T) near the solution at ``t`` (T,): the reference extrapolated
-        with its rates (so a motion passing a singular position keeps its direction)."""
-        t0, q, qd = self.ref
-        return q[:, None] + qd[:, None] * (np.asarray(t) - t0)
+        with its rates and accelerations (so a motion passing a singular position keeps its
+        direction), its dependent rows moved by their share of the independent coordinates'
+        (k, T) difference from the extrapolation."""
+        t0, q, qd, qdd, S = self.ref
+        dt = np.asarray(t) - t0
+        g = q[:, None] + qd[:, None] * dt + 0.5 * qdd[:, None] * dt**2
+        if S is not None and q_ind is not None:
+            g[self.dep] += S @ (q_ind - g[self.ind])
+        return g
 
     def evaluate(self, t, q_f, qd_f, guess):
         """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
 
-        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0),
-        the power of drivers and non-conservative loads (T,), and the closed tree coordinates
-        and rates (n, T).
+        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
+        and the power of drivers and non-conservative loads (T,).
         """
         nd, nf = self.nd, self.nf
         part, lay = self.part, self.lay
         q_d, qd_d, qdd_d = driver_values(part.model, t)
-        k = nd + nf
         q_ind = np.concatenate((q_d, q_f))[:, None]              # (k, 1, T)
         qd_ind = np.concatenate((qd_d, qd_f))[:, None]
-        # sample 0: qdd_f = 0; sample 1 + j: qdd_f = e_j (unit acceleration)          (F5)
-        qdd_ind = np.zeros((k, 1 + nf, len(t)))
-        qdd_ind[:nd] = qdd_d[:, None]
-        for j in range(nf):
-            qdd_ind[nd + j, 1 + j] = 1.0
+        qdd_ind = np.concatenate((np.broadcast_to(qdd_d[:, None], (nd, 1 + nf, len(t))),
+                                  np.broadcast_to(self.unit, (nf, 1 + nf, len(t)))))
         kin = at_state(part.inner, lay, t, q_ind, qd_ind, qdd_ind, guess[:, None])
-        applied = loads_mod.wrenches(part.model, kin)
+        # the layout holds the model's gravity and load rows (not rebuilt at every call)
+        applied = loads_mod.wrenches(None, kin)
         dyn = denoc.solve(kin, applied)
         tau = np.moveaxis(dyn.tau, -1, 0)                        # (k, 1 + nf, T)
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
         H = tau[nd:, 1:] - h[:, None]                            # (row, column, T)
         # no actuator in a free joint: H qdd_f = -h                             (F6)
-        qdd_f, _ = solve_small(H, -h) if nf else (np.zeros((0, len(t))), None)
+        if nf == 1:
+            qdd_f = -h / H[0]
+        else:
+            qdd_f = solve_small(H, -h)[0] if nf else np.zeros((0, len(t)))
         # drivers' efforts at the solution (affine in qdd_f) and the power balance   (F8)
         tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", tau[:nd, 1:] - tau[:nd, :1], qdd_f)
         power = applied.power[0] + np.sum(tau_d * qd_d, axis=0)
         ok = kin.valid[0] & (kin.pivot[0] > SINGULAR) & (dyn.pivot[0] > SINGULAR)
         qdd_f = np.where(ok, qdd_f, np.nan)
-        topo = lay.topo
-        qt = np.stack([np.zeros(len(t))] + [kin.joint_motion[0][topo.tree_joint[i]][0]
-                                             for i in range(1, topo.n)])
-        qdt = np.stack([np.zeros(len(t))] + [kin.joint_motion[1][topo.tree_joint[i]][0]
-                                              for i in range(1, topo.n)])
-        return qdd_f, kin, power, qt, qdt
+        return qdd_f, kin, power
+
+    def tree(self, kin, qdd_f) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tree coordinates, rates and accelerations (n, T) at the solution of an
+        :meth:`evaluate` (the accelerations affine in ``qdd_f``, F5)."""
+        q, qd, qdd = kin.joint_motion
+        tj = self.tree_joint
+        qt, qdt, qddt = (np.stack([np.zeros_like(x[tj[0]][0])] + [x[j][0] for j in tj])
+                         for x in (q, qd, qdd))
+        if len(qdd_f):
+            # column k of the unit responses: qdd(qdd_f = e_k) - qdd(0)
+            du = np.stack([np.zeros_like(qdd[tj[0]][1:])] + [qdd[j][1:] - qdd[j][:1] for j in tj])
+            qddt = qddt + np.einsum("kt,nkt->nt", qdd_f, du)
+        return qt, qdt, qddt
 
     def __call__(self, t, y):
         nf = self.nf
         self.nfev += 1
         tt = np.array([t])
-        qdd, kin, power, qt, qdt = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
-                                                 self.guess(tt))
-        self.last = (t, y.copy(), qt[:, 0], qdt[:, 0], kin.jacobian[:, :, 0, 0])
+        q_ind = np.concatenate((driver_values(self.part.model, tt)[0], y[:nf, None]))
+        qdd, kin, power = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
+                                        self.guess(tt, q_ind))
+        self.last = (t, y.copy(), kin, qdd)
         return np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
 
     def accept(self, t, y):
@@ -371,9 +403,11 @@ class _System:
         (n_rows, n - 1), or None where the state does not close."""
         if self.last is None or self.last[0] != t or not np.array_equal(self.last[1], y):
             self(t, y)
-        _, _, q, qd, J = self.last
-        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)):
-            self.ref = (t, q, qd)
+        _, _, kin, qdd_f = self.last
+        q, qd, qdd = (x[:, 0] for x in self.tree(kin, qdd_f))
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd)):
+            J = kin.jacobian[:, :, 0, 0]
+            self.set_reference(t, q, qd, qdd, J)
             return J
         return None
 
@@ -432,15 +466,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
     q_f0 = q0[list(topo.driven[nd:])]
     system = _System(part, q0, np.zeros(topo.n))
-    _, kin0, _, q_t, qd_t = system.evaluate(np.zeros(1), q_f0[:, None], qd_free0[:, None],
-                                            q0[:, None])
-    if not np.all(np.isfinite(qd_t)):
-        raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q_t[:, 0]),
-                            fix="Start the free joints ([initial] q) away from the toggle")
-    J = kin0.jacobian[:, :, 0, 0]
-    system.ref = (0.0, q_t[:, 0], qd_t[:, 0])
     y = np.concatenate((q_f0, qd_free0, [0.0]))
+    J = system.accept(0.0, y)
+    if J is None:
+        raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
+                            drivers=_values(part, q0),
+                            fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
     Y = np.full((2 * nf + 1, len(t)), np.nan)
@@ -457,10 +488,10 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         best = _better(part, J)
         if best is not None:
             part = _variant(part, best)
-            _, q, qd = system.ref
+            _, q, qd, qdd, _ = system.ref
             nfev += system.nfev
             system = _System(part, q, qd)
-            system.ref = (t_now, q, qd)
+            system.set_reference(t_now, q, qd, qdd, J)
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
             switches.append((t_now, part.free))
@@ -488,7 +519,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
                 Y[:, inside] = solver.dense_output()(t[inside])
-                guesses[:, inside] = _hermite(before, system.ref, t[inside])
+                guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
             y, t_now = solver.y, solver.t
             if _better(part, J) is not None:
@@ -552,7 +583,7 @@ def _stages(part: Partition, t, Y, guesses):
     nd, nf = part.n_drivers, len(part.free)
     system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
     q_f, qd_f = Y[:nf], Y[nf:2 * nf]
-    qdd_f, _, _, _, _ = system.evaluate(t, q_f, qd_f, guesses)
+    qdd_f, _, _ = system.evaluate(t, q_f, qd_f, guesses)
     q_d, qd_d, qdd_d = driver_values(model, t)
     kin = at_state(part.inner, lay, t, np.concatenate((q_d, q_f)), np.concatenate((qd_d, qd_f)),
                    np.concatenate((qdd_d, qdd_f)), guesses)

@@ -12,11 +12,33 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import joints as jk
 from .layout import Layout
 from ..planar import solve_small
 from .positions import ACCEPT, _scaled, newton
 from .recursion import closure_jacobian, closure_residual, forward_positions, motion_vectors
 from .solution import KinematicSolution, _rates_and_accelerations
+
+MAXITER = 20         # Newton steps before the damped restart
+
+
+STEP_TOL = 1e-8      # Newton's method stops after a step below this (scaled): the error left
+#                      is then of its square, rounding
+
+
+def _newton_step(J: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """``dx`` (m, ...) of ``J dx = -g`` (J (m, m, ...), g (m, ...)) by one batched LAPACK call
+    (a few microseconds, where :func:`~linkdyn.planar.solve_small`'s loops cost a millisecond
+    for one sample); non-finite where ``J`` is singular."""
+    m, shape = len(g), g.shape[1:]
+    A = np.moveaxis(J.reshape((m, m, -1)), -1, 0)
+    b = np.moveaxis(g.reshape((m, -1)), -1, 0)[..., None]
+    try:
+        with np.errstate(all="ignore"):
+            x = np.linalg.solve(A, -b)[..., 0]
+    except np.linalg.LinAlgError:   # an exactly singular sample: the slower per-sample rule
+        return solve_small(J, -g)[0]
+    return np.moveaxis(x, 0, -1).reshape((m,) + shape)
 
 
 def close(lay: Layout, q_ind: np.ndarray, guess: np.ndarray):
@@ -33,33 +55,49 @@ def close(lay: Layout, q_ind: np.ndarray, guess: np.ndarray):
     Returns
     -------
     q : ndarray (n, ...)
-        Tree coordinates with the loops closed (residual <= ``TOL`` relative to the size).
+        Tree coordinates with the loops closed (to rounding where Newton's method converges).
     err : ndarray (...)
         Scaled closure residual (above ``ACCEPT`` where the loops do not close).
+    pose : Pose
+        The bodies' poses at ``q``.
     """
-    drv = list(lay.topo.driven)
+    topo = lay.topo
+    drv, dep = list(topo.driven), np.array(topo.dependent, int)
     shape = np.broadcast_shapes(np.shape(q_ind)[1:], np.shape(guess)[1:])
-    q = np.array(np.broadcast_to(guess, (lay.topo.n,) + shape), dtype=float)
+    q = np.array(np.broadcast_to(guess, (topo.n,) + shape), dtype=float)
     q[drv] = q_ind
+    start = q.copy()
+    pose = forward_positions(lay, q)
+    if not len(dep):
+        return q, np.zeros(shape), pose
     # Newton's method g(q_dep) = 0 from the guess: it converges to the nearest root, the branch
-    # the motion is on; a damped restart for samples it leaves open
-    q_new, err = newton(lay, q, maxiter=20)
+    # the motion is on. It runs until a step is below STEP_TOL: quadratic convergence leaves
+    # rounding only, so the positions are a smooth function of the state (an integrator
+    # differentiates them)
+    unit = np.array([1.0 if jk.get(lay.kind[i]).angular else 1.0 / float(np.max(lay.size))
+                     for i in dep]).reshape((-1,) + (1,) * len(shape))
+    g = closure_residual(lay, pose)
+    for _ in range(MAXITER):
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))[:, dep - 1]
+        dx = _newton_step(J, g)
+        step = np.max(np.abs(dx) * unit, axis=0)
+        # a step of a radian or the mechanism's size is no correction of a nearby guess (a
+        # singular J_dep): not taken, the sample is left to the damped restart
+        dx = np.where(np.isfinite(dx) & (step < 1.0), dx, 0.0)
+        q[dep] += dx
+        pose = forward_positions(lay, q)
+        g = closure_residual(lay, pose)
+        if not np.any(step > STEP_TOL):        # NaN (singular) stops too
+            break
+    err = _scaled(lay, g)
     retry = ~(err <= ACCEPT)
     if np.any(retry):
-        q_damped, err_damped = newton(lay, q, maxiter=60, damped=True)
-        q_new = np.where(retry, q_damped, q_new)
+        # a damped restart from the guess for samples left open
+        q_damped, err_damped = newton(lay, start, maxiter=60, damped=True)
+        q = np.where(retry, q_damped, q)
         err = np.where(retry, err_damped, err)
-    # one more Newton step past the tolerance: quadratic convergence leaves rounding only, so
-    # the positions are a smooth function of the state (an integrator differentiates them)
-    dep = np.array(lay.topo.dependent, int)
-    if len(dep):
-        pose = forward_positions(lay, q_new)
-        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))[:, dep - 1]
-        dx, _ = solve_small(J, -closure_residual(lay, pose))
-        q_new[dep] += np.where(np.isfinite(dx), dx, 0.0)
-        err = np.where(err <= ACCEPT, _scaled(lay, closure_residual(lay, forward_positions(
-            lay, q_new))), err)
-    return q_new, err
+        pose = forward_positions(lay, q)
+    return q, err, pose
 
 
 def at_state(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, guess) -> KinematicSolution:
@@ -87,12 +125,12 @@ def at_state(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, guess) -> KinematicS
         singular are NaN with ``valid = False``.
     """
     q_ind, qd_ind, qdd_ind = (np.asarray(x, dtype=float) for x in (q_ind, qd_ind, qdd_ind))
-    q, err = close(lay, q_ind, guess)
-    # positions closed once; samples differing only in rates or accelerations share them
-    shape = np.broadcast_shapes(q.shape[1:], qd_ind.shape[1:], qdd_ind.shape[1:])
-    q = np.array(np.broadcast_to(q, (len(q),) + shape))
-    err = np.broadcast_to(err, shape)
-    pose = forward_positions(lay, q)
+    # the positions closed at the batch's whole shape (samples differing only in rates or
+    # accelerations cost no more: the arrays are small, the operations' overhead dominates)
+    shape = np.broadcast_shapes(q_ind.shape[1:], np.shape(guess)[1:], qd_ind.shape[1:],
+                                qdd_ind.shape[1:])
+    q, err, pose = close(lay, np.broadcast_to(q_ind, (len(q_ind),) + shape),
+                         np.broadcast_to(guess, (len(guess),) + shape))
     p = motion_vectors(lay, pose)
     J = closure_jacobian(lay, pose, p)
     # rates and accelerations: J_dep qd_dep = -J_ind qd_ind, J_dep qdd_dep = -bias   (eqs. 4-7)
