@@ -11,13 +11,14 @@ motor torque set every step) at several time steps, each with its wall time, ste
 side evaluations (linkdyn), energy drift (linkdyn's energy balance) and trajectory error: the
 largest deviation of the free joint's angle from the reference at the output samples, relative
 to its range. Then the energy drift of Hoeken's four-bar spinning freely (no drivers, no
-loads, no gravity: a conservative closed loop whose crank speed fluctuates) over ``--turns``
-crank turns at each tolerance (F9, sampled once per turn). Last, the time of one
+loads, no gravity: a conservative closed loop whose crank speed fluctuates; by default with the
+flywheel of ``hoeken_motor``) over ``--turns`` crank turns at each tolerance (F9, sampled once
+per turn). Last, the time of one
 right-hand-side evaluation of Hoeken.
 
 Usage: python benchmarks/bench_simulate.py [--duration T] [--windows N] [--chain-duration T]
        [--tols 1e-4,1e-6,1e-8] [--steps 1e-3,1e-4] [--samples S] [--turns N]
-       [--turn-tols 1e-6,1e-8]
+       [--turn-tols 1e-6,1e-8] [--turn-model hoeken|hoeken_motor]
 """
 
 from __future__ import annotations
@@ -113,12 +114,17 @@ def table(name, model, t, free, tols, steps, ref_tol, motor=None):
               f"{int(round(t[-1] / dt)):7d} {'':>7s} {'':>9s} {err:9.1e}")
 
 
-def energy_turns(turns: int, tols, method="DOP853"):
+def energy_turns(turns: int, tols, method="DOP853", example="hoeken"):
     """Energy drift (F9) of Hoeken's four-bar spinning freely for ``turns`` crank turns at each
-    relative tolerance of ``tols`` (absolute: 1e-2 of it); prints one row per tolerance."""
+    relative tolerance of ``tols`` (absolute: 1e-2 of it); prints one row per tolerance.
+    ``example``: ``hoeken`` (the bare four-bar, whose crank speed varies 2.5 to 1), or
+    ``hoeken_motor`` (with its flywheel, the motor removed: within 2 %)."""
     driven = linkdyn.load(linkdyn.example_path("hoeken"))
     w0 = 2 * math.pi * 45 / 60                       # 45 rpm at the start
-    model = replace(driven, drivers=(), gravity=np.zeros(2), initial_q={"J1": 0.0},
+    if example != "hoeken":
+        fly = linkdyn.load(linkdyn.example_path(example))
+        driven = replace(driven, bodies=fly.bodies)
+    model = replace(driven, drivers=(), loads=(), gravity=np.zeros(2), initial_q={"J1": 0.0},
                     initial_qd={"J1": w0})
     # the period: the crank's speed at angle th is w0 sqrt(I(0) / I(th)) (energy conserved),
     # I(th) from analyze's kinetic energy at the driver's constant speed
@@ -126,16 +132,22 @@ def energy_turns(turns: int, tols, method="DOP853"):
     ke = linkdyn.analyze(driven, th / w0).kinetic_energy
     period = float(np.trapezoid(np.sqrt(ke / ke[0]), th)) / w0
     t = np.linspace(0.0, turns * period, turns + 1)
-    print(f"\n{method}, Hoeken spinning freely, {turns} crank turns (sampled once per turn)")
+    which = "no flywheel" if example == "hoeken" else f"with the flywheel of {example}"
+    print(f"\n{method}, Hoeken spinning freely ({which}), {turns} crank turns "
+          "(sampled once per turn)")
+    marks = [n for n in (10, 100) if n < turns]
     print(f"  {'rtol':>8s} {'turns':>7s} {'wall s':>8s} {'steps':>7s} {'RHS':>8s} "
-          f"{'energy drift':>12s}")
+          + "".join(f"{f'drift {n}':>12s}" for n in marks) + f"{f'drift {turns}':>12s}")
     for tol in tols:
         start = time.perf_counter()
         s = simulate(model, t, rtol=tol, atol=tol * 1e-2, method=method, max_steps=10**7)
         wall = time.perf_counter() - start
         done = (s.columns["q_J1"][-1] - s.columns["q_J1"][0]) / (2 * math.pi)
+        # F9 over the first n turns (its scale, the largest kinetic energy, is the whole run's)
+        e = np.abs(s.energy - s.energy[0] - s.work) / np.max(s.kinetic_energy)
         print(f"  {tol:8.0e} {done:7.0f} {wall:8.1f} {s.stats['steps']:7d} "
-              f"{s.stats['rhs_evaluations']:8d} {s.energy_drift:12.1e}")
+              f"{s.stats['rhs_evaluations']:8d} "
+              + "".join(f"{np.max(e[:n + 1]):12.1e}" for n in marks) + f"{s.energy_drift:12.1e}")
 
 
 def rhs_time(model, repeat=200, h=2e-3):
@@ -169,6 +181,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=200)
     ap.add_argument("--turns", type=int, default=100, help="crank turns of the energy run")
     ap.add_argument("--turn-tols", default="1e-6,1e-8")
+    ap.add_argument("--turn-model", default="hoeken_motor", choices=("hoeken", "hoeken_motor"),
+                    help="the bare four-bar, or with hoeken_motor's flywheel (fewer steps a turn)")
     a = ap.parse_args()
     tols = [float(x) for x in a.tols.split(",")]
     steps = [float(x) for x in a.steps.split(",")]
@@ -181,7 +195,7 @@ def main():
           motor=lambda w: 3.2 * (1 - w / w0))
     table(f"{a.windows}-window parallelogram chain under gravity", chain(a.windows),
           np.linspace(0.0, a.chain_duration, a.samples), "G0", tols, steps, 1e-10)
-    energy_turns(a.turns, [float(x) for x in a.turn_tols.split(",")])
+    energy_turns(a.turns, [float(x) for x in a.turn_tols.split(",")], example=a.turn_model)
     rhs = rhs_time(hoeken, a.repeat)
     print(f"\none right-hand side of Hoeken (numpy, CPU time): {rhs * 1e6:.0f} us "
           f"(target {TARGET_RHS * 1e6:.0f} us: {'met' if rhs < TARGET_RHS else 'NOT met'})")

@@ -53,4 +53,4 @@ def test_bench_simulate():
               "--turns", "1", "--turn-tols", "1e-4")
     assert out.count("  linkdyn DOP853 rtol 0.0001") == 2 and out.count("MuJoCo RK4 dt") == 2
     assert "one right-hand side of Hoeken" in out
-    assert "Hoeken spinning freely, 1 crank turns" in out
+    assert "Hoeken spinning freely (with the flywheel of hoeken_motor), 1 crank turns" in out

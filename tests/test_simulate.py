@@ -174,6 +174,10 @@ def test_a_dead_point_of_the_free_coordinate_is_passed_by_switching_coordinates(
     sol = simulate(pushed_rocker(q={"J4": start}), t, rtol=1e-9, atol=1e-11)
     assert sol.free == ("J4",) and len(sol.stats["switches"]) >= 1
     assert sol.stats["switches"][0][1] != ["J4"]
+    # summary.json lists the switches
+    from linkdyn.cli import simulation_summary
+    listed = json.loads(json.dumps(simulation_summary(sol, {})))["simulation"]
+    assert listed["coordinate_switches"][0]["t_s"] == sol.stats["switches"][0][0]
     # the rocker passes a limit (its rate changes sign) while the crank races on
     qd4, qd1 = ref.columns["qd_J4"], ref.columns["qd_J1"]
     assert np.any(np.diff(np.sign(qd4[1:])) != 0) and np.min(np.abs(qd1[1:])) > 1.0

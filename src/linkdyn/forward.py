@@ -32,14 +32,14 @@ from functools import cached_property
 
 import numpy as np
 
-from . import joints as jk, kinematics, loads as loads_mod, reactions as reactions_mod
+from . import joints as jk, loads as loads_mod, reactions as reactions_mod
 from .analysis import SINGULAR, Solution
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
 from .kinematics.layout import Layout, compile_layout
-from .kinematics.positions import ACCEPT, _guess, assemble, driver_values
+from .kinematics.positions import _guess, assemble, driver_values
 from .kinematics.state import at_state
-from .model import REVOLUTE, Driver, Model
+from .model import Driver, Model
 from .planar import solve_small
 from .topology import build
 
