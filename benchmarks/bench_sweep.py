@@ -40,6 +40,7 @@ import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
 from linkdyn.studies import sample  # noqa: E402
+from linkdyn.studies.runner import CHUNK_SAMPLES  # noqa: E402
 
 BOX = {"bodies.ground.points.O4[0]": (60.0, 120.0), "bodies.coupler.points.O3[0]": (90.0, 140.0)}
 METRICS = ["peak_tau_J1", "path_deviation"]
@@ -63,7 +64,8 @@ def child(designs: int, samples: int, workers: int, per_design: int = 0) -> dict
         *np.array(list(BOX.values())).T)
     if per_design:
         task = replace(task, builder=replace(task.builder, A=None, why="per-design baseline"))
-    run(task, values[:4])   # imports and the compiled kernels' first load
+    # imports and the compiled kernels' first load (a batch large enough for them)
+    run(task, sample(list(BOX.values()), "sobol", min(designs, 250_000 // samples + 1), seed=1))
     t0 = time.perf_counter()
     df, _ = run(task, values, workers=workers)
     seconds = time.perf_counter() - t0
@@ -101,7 +103,7 @@ def stages(designs: int, samples: int) -> dict:
     solve, fill = runner.analyze_layout, runner._fill
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
     try:
-        runner.evaluate(task, values[:8])
+        runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
         clock.update(solve=0.0, metrics=0.0)
         t0 = time.perf_counter()
         Z = task.builder.numbers(values)
@@ -165,8 +167,10 @@ def main():
           f"worker, same run) {base['rate']:.4g} design-samples/s: the vectorized builder runs "
           f"{one['rate'] / base['rate']:.3g}x faster on one worker")
     print(f"  {cores} workers run {allc['rate'] / one['rate']:.3g}x one worker's rate")
-    st = stages(min(D, max(1, 2_000_000 // T)), T)
-    print(f"  one chunk of {min(D, max(1, 2_000_000 // T))} designs, one worker: "
+    lo, hi = CHUNK_SAMPLES
+    chunk = min(D, max(1, min(max(D * T // 4, lo), hi) // T))   # the sweep's default chunk
+    st = stages(chunk, T)
+    print(f"  one chunk of {chunk} designs, one worker: "
           + ", ".join(f"{k} {v:.3g} s" for k, v in st.items()))
     print(f"  peak memory at {small['designs']} designs {small['peak_bytes'] / 2**20:.0f} MB, "
           f"at {D} designs {one['peak_bytes'] / 2**20:.0f} MB (one worker): target < 1 GB "

@@ -963,5 +963,16 @@ def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browse
     assert pg.eval_on_selector_all("#best tbody tr", "es => es.map(e => +e.dataset.row)") == best
     assert "linkdyn compare --sweep" in pg.inner_text("#cmpcmd")
     assert "--by peak_tau_J1" in pg.inner_text("#cmpcmd")
+    # each best design's own report page, shown below the table with its animation drawn:
+    # the first at once, another on a click
+    assert pg.get_attribute("#preview", "src") == f"design-{df.design[best[0]]}.html"
+    assert pg.locator("#best tbody tr.shown").get_attribute("data-row") == str(best[0])
+    second = f"design-{df.design[best[1]]}.html"
+    with pg.expect_event("framenavigated", lambda f: f.url.endswith(second)) as nav:
+        pg.locator("#best tbody tr").nth(1).click(position={"x": 5, "y": 5})
+    assert pg.get_attribute("#preview", "src") == second
+    inner = nav.value
+    inner.wait_for_load_state()
+    inner.wait_for_function("document.querySelectorAll('#anim *').length > 10")
     assert errors == []
     pg.close()

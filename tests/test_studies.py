@@ -389,6 +389,19 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
     v = df.valid.to_numpy()
     assert data["fronts"]["peak_tau_J1|path_deviation"] == pareto_front(
         np.where(v, df.peak_tau_J1, np.nan), np.where(v, df.path_deviation, np.nan)).tolist()
+    # the best designs of each metric have their own report page (with its animation), which
+    # the sweep page shows: each analyzed alone gives the sweep's batch metric
+    from linkdyn.studies.runner import best_designs
+    rows = best_designs(df, ["peak_tau_J1", "path_deviation"])
+    assert 3 <= len(rows) <= 6
+    assert sorted(data["previews"]) == sorted(str(df.design[k]) for k in rows)
+    for k in rows:
+        page_text = (tmp_path / "s" / data["previews"][str(df.design[k])]).read_text("utf-8")
+        assert 'id="anim"' in page_text
+        own = json.loads(re.search(r'<script id="linkdyn-data" type="application/json">(.*?)'
+                                   r'</script>', page_text, re.S).group(1))
+        tau = np.array([v for v in own["series"]["tau:J1"] if v is not None])
+        assert np.max(np.abs(tau)) == pytest.approx(df.peak_tau_J1[k], rel=1e-4)
     # a page that cannot be written leaves no file at all
     import linkdyn.report.sweep as page
 

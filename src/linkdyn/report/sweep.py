@@ -52,9 +52,10 @@ def _col(values) -> list:
     return [float(v) if v is not None and math.isfinite(v) else None for v in values]
 
 
-def sweep_data(df, summary: dict, outdir: str = "OUTDIR") -> dict:
-    """The page's data: every design row, the column roles and the Pareto front of every pair of
-    metrics (indices into the rows, valid designs only)."""
+def sweep_data(df, summary: dict, outdir: str = "OUTDIR", previews=None) -> dict:
+    """The page's data: every design row, the column roles, the Pareto front of every pair of
+    metrics (indices into the rows, valid designs only) and ``previews``: design number ->
+    the file of its own report page (beside the sweep page)."""
     params = [p["path"] for p in summary["parameters"]]
     metrics = [m for m in summary["metrics"]]
     valid = df["valid"].to_numpy(bool)
@@ -68,12 +69,14 @@ def sweep_data(df, summary: dict, outdir: str = "OUTDIR") -> dict:
     return {"design": [int(d) for d in df["design"]], "valid": valid.tolist(),
             "reason": [str(r) if isinstance(r, str) else "" for r in df["reason"]],
             "params": params, "units": {p["path"]: p.get("unit") or "" for p in summary["parameters"]},
-            "metrics": metrics, "cols": cols, "fronts": fronts, "outdir": outdir}
+            "metrics": metrics, "cols": cols, "fronts": fronts, "outdir": outdir,
+            "previews": {str(k): v for k, v in (previews or {}).items()}}
 
 
-def render_sweep(df, summary: dict, outdir: str = "OUTDIR") -> str:
-    """The whole sweep page as a string."""
-    data = sweep_data(df, summary, outdir)
+def render_sweep(df, summary: dict, outdir: str = "OUTDIR", previews=None) -> str:
+    """The whole sweep page as a string; ``previews``: design number -> its report page's file,
+    shown in the page (the best designs' animations)."""
+    data = sweep_data(df, summary, outdir, previews)
     model = summary.get("model")
     title = html.escape(f"Sweep of {Path(model).name if model else 'a model'}")
     note = html.escape(f"{summary['designs']} designs ({summary['valid']} valid, "
@@ -90,6 +93,9 @@ _CSS = """
 #scatter circle.pt.front { fill: #c62828; fill-opacity: 1; }
 #scatter circle.pt.hot { stroke: #000; stroke-width: 2; }
 #scatter path.frontline { fill: none; stroke: #c62828; stroke-width: 1.5; }
+#best tr[data-preview] { cursor: pointer; }
+#best tr.shown td { background: #fff3e0; }
+#preview { width: 100%; height: 760px; border: 1px solid #ccc; display: none; }
 """
 
 _BODY = """<header>
@@ -116,5 +122,7 @@ its design.</p>
   <label>how many <select id="bn"><option>3</option><option>5</option><option>10</option></select></label></div>
   <div class="scroll"><table id="best" class="grid"></table></div>
   <p class="note">Compare them curve by curve: <code id="cmpcmd"></code></p>
+  <p class="note" id="previewnote"></p>
+  <iframe id="preview" title="the design's own report"></iframe>
 </section>
 """

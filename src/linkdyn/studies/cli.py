@@ -100,7 +100,9 @@ def _show_progress(flag):
               help="Local worker processes.")
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask cluster (e.g. tcp://host:8786) instead of local processes.")
-@click.option("--chunk", type=int, help="Designs per chunk (default: 2 000 000 design-samples).")
+@click.option("--chunk", type=int,
+              help="Designs per chunk (default: a quarter of the designs, within 1e6 to 1e7 "
+                   "design-samples).")
 @click.option("--resume", is_flag=True,
               help="Continue an interrupted sweep in OUTDIR: finished chunks are kept.")
 @click.option("--progress/--no-progress", default=None,
@@ -152,7 +154,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                               workers=workers, scheduler=scheduler,
                               progress=_show_progress(progress))
     summ = sweep_mod.summary(task, df, stats, bounds=bounds, method=method, seed=seed)
-    sweep_mod.write_results(out, df, _json_safe(summ), report=report)
+    sweep_mod.write_results(out, df, _json_safe(summ), report=report, task=task)
     rate = stats["design_samples_per_s"]
     click.echo(f"{summ['designs']} designs x {len(t)} samples: {summ['valid']} valid, "
                f"{summ['invalid']} invalid; {stats['chunks_computed']} chunks computed"

@@ -35,7 +35,10 @@ from . import vectorize
 from .params import Space
 
 METHODS = ("grid", "random", "lhs", "sobol")
-CHUNK_SAMPLES = 2_000_000  # design-samples per chunk: the unit of work, of writing and resuming
+# design-samples per chunk (the unit of work, of writing and of resuming): a quarter of the
+# sweep, within these bounds. Large chunks spread the fixed costs of a chunk (the assembly's
+# restarts for its designs that cannot be assembled); four or more let workers share a sweep.
+CHUNK_SAMPLES = (1_000_000, 10_000_000)
 BATCH_SAMPLES = 250_000    # design-samples solved at once: ~200 MB of time histories at most
 
 
@@ -324,7 +327,8 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
         Keep the finished chunks of an interrupted sweep of the same study in ``outdir`` and
         compute only the others (a different study there is an error).
     chunk : int, optional
-        Designs per chunk (default: ``CHUNK_SAMPLES`` design-samples).
+        Designs per chunk (default: a quarter of the designs, within ``CHUNK_SAMPLES``
+        design-samples; memory is bounded by the batch, ``BATCH_SAMPLES``, not the chunk).
     workers : int
         Local worker processes (1: this process).
     scheduler : str or distributed.Client, optional
@@ -341,7 +345,8 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     D, T = len(values), len(task.t)
     if task.builder is None and D:   # the map from parameters to layouts, derived once
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
-    chunk = int(chunk or max(1, CHUNK_SAMPLES // max(T, 1)))
+    lo, hi = CHUNK_SAMPLES
+    chunk = int(chunk or max(1, min(max(D * T // 4, lo), hi) // max(T, 1)))
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}
     out = Path(outdir) if outdir is not None else None
@@ -462,9 +467,53 @@ def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None)
     return out
 
 
-def write_results(outdir, df, summary_data: dict, *, report: bool = False) -> None:
-    """Write ``designs.parquet`` and ``summary.json`` (and ``sweep.html`` with ``report``; all
-    or none, by :func:`linkdyn.outputs.write_outputs`), then drop the chunks."""
+PREVIEWS = 3   # best designs of each metric whose own report the sweep page shows
+
+
+def best_designs(df, metrics, n: int = PREVIEWS) -> list[int]:
+    """Rows of the ``n`` valid designs with the lowest value of each metric (lowest first,
+    ties by design number), each row once, in the order met."""
+    valid = df["valid"].to_numpy(bool)
+    rows: list[int] = []
+    for name in metrics:
+        col = df[name].to_numpy(float)
+        ok = np.flatnonzero(valid & np.isfinite(col))
+        for k in ok[np.lexsort((ok, col[ok]))][:n]:
+            if int(k) not in rows:
+                rows.append(int(k))
+    return rows
+
+
+def preview_outputs(task: Task, df, rows) -> dict:
+    """``design-<number>.html`` for the designs ``rows`` of the table: each design rebuilt from
+    the model file and its parameter values, analyzed alone and shown by its own report page
+    (:func:`linkdyn.report.render`, with the mechanism's animation), as ``linkdyn analyze
+    --report`` would write it. ``{file name: writer}`` for :func:`linkdyn.outputs.write_outputs`.
+    """
+    from .. import design
+    from ..report import render
+
+    params = [p.path for p in task.space.params]
+    files = {}
+    for k in rows:
+        model = task.space.model(df[params].iloc[k].to_numpy(float))
+        sol = analyze(model, task.t, allow_singular=True, backend=task.backend)
+        summ = design.summary(sol, fluctuation=task.fluctuation,
+                              path_point=task.path_point or model.path_point,
+                              path_range=task.path_range, default_range=model.path_range)
+
+        def write(path, sol=sol, summ=summ):
+            path.write_text(render(sol, summ), encoding="utf-8")
+        files[f"design-{int(df['design'].iloc[k])}.html"] = write
+    return files
+
+
+def write_results(outdir, df, summary_data: dict, *, report: bool = False,
+                  task: Task | None = None) -> None:
+    """Write ``designs.parquet`` and ``summary.json`` (and with ``report``, ``sweep.html`` and,
+    given the ``task``, the report page ``design-<number>.html`` of the best designs of each
+    metric, which the sweep page shows; all or none, by :func:`linkdyn.outputs.write_outputs`),
+    then drop the chunks."""
     from ..outputs import write_outputs
 
     text = json.dumps(summary_data, indent=2, default=_json_default) + "\n"
@@ -472,9 +521,15 @@ def write_results(outdir, df, summary_data: dict, *, report: bool = False) -> No
              "summary.json": lambda p: p.write_text(text)}
     if report:
         from ..report.sweep import render_sweep
-        page = render_sweep(df, json.loads(text), os.fspath(outdir))
+        previews = {}
+        if task is not None:
+            previews = preview_outputs(task, df, best_designs(df, task.metrics))
+        page = render_sweep(df, json.loads(text), os.fspath(outdir),
+                            previews={int(n[len("design-"):-len(".html")]): n for n in previews})
         files["sweep.html"] = lambda p: p.write_text(page, encoding="utf-8")
-    write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json", "sweep.html"))
+        files.update(previews)
+    write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json", "sweep.html",
+                                              "design-*.html"))
     shutil.rmtree(Path(outdir) / "chunks", ignore_errors=True)
 
 

@@ -112,8 +112,32 @@
       h("td", "num", tr, String(D.design[i]));
       columns.forEach(function (c) { var td = h("td", "num", tr, fmt(D.cols[c][i])); if (c === m) td.style.fontWeight = "bold"; });
     });
+    // each best design with its own report page beside this one: click its row to animate it
+    var shown = null;
+    if (rows.some(function (i) { return D.previews[String(D.design[i])]; })) h("th", "", hr, "report");
+    rows.forEach(function (i) {
+      var file = D.previews[String(D.design[i])], tr = tb.querySelector("tr[data-row='" + i + "']");
+      if (!file) return;
+      tr.setAttribute("data-preview", file);
+      var a = h("a", "", h("td", "", tr), "open");
+      a.href = file; a.target = "_blank";
+      tr.addEventListener("click", function (e) { if (e.target.tagName !== "A") preview(tr); });
+      if (!shown) shown = tr;
+    });
+    if (shown) preview(shown);
+    document.getElementById("previewnote").textContent = shown ? "Below: the highlighted " +
+      "design's own report (as linkdyn analyze --report writes it, with its animation); click " +
+      "a row to show another." : "";
     document.getElementById("cmpcmd").textContent =
       "linkdyn compare --sweep " + D.outdir + " --by " + m + " --best " + n + " -o " + D.outdir + "/compare";
+  }
+
+  function preview(tr) {
+    var f = document.getElementById("preview");
+    Array.prototype.forEach.call(document.querySelectorAll("#best tr.shown"), function (r) { r.classList.remove("shown"); });
+    tr.classList.add("shown");
+    if (f.getAttribute("src") !== tr.getAttribute("data-preview")) f.setAttribute("src", tr.getAttribute("data-preview"));
+    f.style.display = "block";
   }
 
   // default axes: the first two metrics (the front's), else the first parameter and the metric
