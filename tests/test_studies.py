@@ -260,6 +260,9 @@ def test_sweep_command_writes_the_table_and_summary(tmp_path):
     (["--vary", "bodies.crank.mass=-1:2"], ["must be positive"]),
     (["--vary", "bodies.crank.mass=1:1.8", "--metric", "peak_tau"], ["no metric 'peak_tau'"]),
     ([], ["nothing to vary"]),
+    # the crank pin may reach the crank's pivot: a link of zero length
+    (["--vary", "bodies.crank.points.O2[0]=-10:10"],
+     ["bodies.crank.points.O2[0]", "zero length", "Narrow the range"]),
 ])
 def test_sweep_command_bad_input_exits_2_with_one_message(tmp_path, args, words):
     r = _cli("sweep", HOEKEN, *args, "--samples", 11, "-o", tmp_path / "o")
