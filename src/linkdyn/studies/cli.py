@@ -154,7 +154,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                               workers=workers, scheduler=scheduler,
                               progress=_show_progress(progress))
     summ = sweep_mod.summary(task, df, stats, bounds=bounds, method=method, seed=seed)
-    sweep_mod.write_results(out, df, _json_safe(summ), report=report, task=task)
+    written = sweep_mod.write_results(out, df, _json_safe(summ), report=report, task=task)
     rate = stats["design_samples_per_s"]
     click.echo(f"{summ['designs']} designs x {len(t)} samples: {summ['valid']} valid, "
                f"{summ['invalid']} invalid; {stats['chunks_computed']} chunks computed"
@@ -164,8 +164,10 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
         if m is not None:
             click.echo(f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g}  (lowest: design "
                        f"{m['min_design']})")
-    click.echo(f"wrote {out / 'designs.parquet'}, {out / 'summary.json'}"
-               + (f", {out / 'sweep.html'}" if report else ""))
+    pages = [p for p in written if p.name.startswith("design-")]
+    click.echo(f"wrote {', '.join(str(p) for p in written if p not in pages)}"
+               + (f" and the reports of {len(pages)} best designs "
+                  f"({', '.join(p.name for p in pages)})" if pages else ""))
 
 
 def _read_designs(path):

@@ -509,11 +509,11 @@ def preview_outputs(task: Task, df, rows) -> dict:
 
 
 def write_results(outdir, df, summary_data: dict, *, report: bool = False,
-                  task: Task | None = None) -> None:
+                  task: Task | None = None) -> list[Path]:
     """Write ``designs.parquet`` and ``summary.json`` (and with ``report``, ``sweep.html`` and,
     given the ``task``, the report page ``design-<number>.html`` of the best designs of each
     metric, which the sweep page shows; all or none, by :func:`linkdyn.outputs.write_outputs`),
-    then drop the chunks."""
+    then drop the chunks. Returns the files written."""
     from ..outputs import write_outputs
 
     text = json.dumps(summary_data, indent=2, default=_json_default) + "\n"
@@ -528,9 +528,10 @@ def write_results(outdir, df, summary_data: dict, *, report: bool = False,
                             previews={int(n[len("design-"):-len(".html")]): n for n in previews})
         files["sweep.html"] = lambda p: p.write_text(page, encoding="utf-8")
         files.update(previews)
-    write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json", "sweep.html",
-                                              "design-*.html"))
+    written = write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json",
+                                                        "sweep.html", "design-*.html"))
     shutil.rmtree(Path(outdir) / "chunks", ignore_errors=True)
+    return written
 
 
 def _json_default(x):
