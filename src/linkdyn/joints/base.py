@@ -6,21 +6,15 @@ A joint joins body ``a`` (first, ``connect[0]``) and body ``b`` (second, ``conne
 :attr:`JointKind.rows` loop-closure rows. A kind that cannot be a tree joint (``tree = False``,
 e.g. a pin in a slot, which leaves two relative freedoms) is always cut.
 
-For a tree joint (eqs. 1-3 of the seed paper, planar)
-
-- :meth:`JointKind.place_child`: the child's pose from the parent's and ``q``;
-- :meth:`JointKind.motion_vector`: the joint-motion propagation vector ``p_i`` (3, ...), and
-  :meth:`JointKind.add_motion`, :meth:`JointKind.add_motion_rate`: ``x += p_i rate`` and
-  ``x += pd_i rate`` in place, as the twist recursions use them.
-
-For a cut joint at the second body's point P, with ``x`` the relative twist of b to a at P
-
-- :meth:`JointKind.cut_residual`: the position closure residual (rows, ...);
-- :meth:`JointKind.cut_rows`: the cut-row selection ``S x`` (rows, ...) and
-  :meth:`JointKind.cut_rows_rate`: ``(dS/dt) x``;
-- :meth:`JointKind.cut_wrench`: the constraint wrench ``S^T lam`` on b at P;
-- :meth:`JointKind.joint_motion`: the joint's coordinate, rate and acceleration from its
-  bodies' motion (a cut joint's ``q`` is an output, not an unknown).
+Each kind writes its equations once, as static steps (:mod:`linkdyn.steps`) that both backends
+call. For a tree joint (eqs. 1-3 of the seed paper, planar): ``place`` (the child's pose from
+the parent's and ``q``), ``motion`` (the propagation vector ``p_i``), ``plus_motion`` and
+``plus_motion_rate`` (``x + p_i rate``, ``x + pd_i rate``). For a cut joint at the second body's
+point P, with ``x`` the relative twist of b to a at P: ``residual`` (the position closure rows),
+``selected`` (``S x``), ``selected_rate`` (``(dS/dt) x``), ``wrench`` (``S^T lam`` on b at P)
+and ``coordinate`` (the joint's coordinate, rate and acceleration from its bodies' motion: a cut
+joint's ``q`` is an output, not an unknown). :meth:`JointKind.motion_vector`,
+:meth:`JointKind.cut_rows` and :meth:`JointKind.selection` give them as arrays.
 
 Arrays are component-first (see :mod:`linkdyn.planar`): a planar vector is ``(2, ...)``, a
 twist ``[w, vx, vy]`` or wrench ``[n, fx, fy]`` is ``(3, ...)``; ``e_a`` is the joint's axis,
@@ -107,38 +101,7 @@ class JointKind:
     place = motion = plus_motion = plus_motion_rate = None
     residual = selected = selected_rate = wrench = coordinate = None
 
-    # --- array forms of the steps (component-first arrays), for the numpy solvers -----------
-    def place_child(self, s, q, angle, axis_p, phi_p, cos_p, sin_p, r_joint):
-        """Pose of the child from its parent's pose and the joint coordinate.
-
-        Parameters
-        ----------
-        s : {+1, -1}
-        q : ndarray (...)
-            Joint coordinate, rad or m.
-        angle : float
-            Fixed angle of the joint's second body relative to its first, rad (if the kind has one).
-        axis_p : ndarray (2,)
-            Unit axis expressed in the parent's frame (if the kind has one).
-        phi_p, cos_p, sin_p : ndarray (...)
-            Parent's absolute angle, its cosine and sine.
-        r_joint : ndarray (2, ...)
-            Global position of the parent's joint point, m.
-
-        Returns
-        -------
-        phi, cos, sin : ndarray (...)
-            Child's absolute angle, its cosine and sine.
-        r : ndarray (2, ...)
-            Child's reference point O_i (its own joint point), m.
-        e : ndarray (2, ...) or None
-            Global unit axis, if the kind has one.
-        """
-        self._tree_only()
-        turn = (np.cos(s * q), np.sin(s * q)) if self.angular else (1.0, 0.0)
-        phi, c, sn, r, e = self.place(s, q, turn, angle, axis_p, phi_p, cos_p, sin_p, r_joint)
-        return phi, c, sn, _stack(r), (_stack(e) if "axis" in self.keys else None)
-
+    # --- array forms (component-first arrays), for the design metrics and the dense reference
     def motion_vector(self, s, e, ndim):
         """Joint-motion propagation vector ``p_i`` (3, ...) of eq. (3); a constant one is shaped
         ``(3, 1, ...)`` to broadcast over ``ndim`` batch axes. ``e``: global axis or None."""
@@ -146,50 +109,10 @@ class JointKind:
         p = _stack(self.motion(s, (0.0, 0.0) if e is None else e))
         return p.reshape((3,) + (1,) * ndim) if p.ndim == 1 else p
 
-    def add_motion(self, s, e, x, rate):
-        """``x += p_i rate`` in place for a twist or twist rate ``x`` (3, ...); returns ``x``."""
-        self._tree_only()
-        x[...] = _stack(self.plus_motion(s, (0.0, 0.0) if e is None else e, x, rate))
-        return x
-
-    def add_motion_rate(self, s, e, w_axis, x, rate):
-        """``x += pd_i rate`` in place (``w_axis`` (...): angular velocity of the body carrying
-        the axis); returns ``x``."""
-        self._tree_only()
-        x[...] = _stack(self.plus_motion_rate(s, (0.0, 0.0) if e is None else e, w_axis, x,
-                                              rate))
-        return x
-
-    def cut_residual(self, angle, phi_a, phi_b, e_a, r_pa, r_pb):
-        """Loop-closure residual (rows, ...) from the bodies' angles and the cut points
-        ``r_pa``, ``r_pb`` (2, ...) (m, rad as :attr:`row_units`)."""
-        return _stack(self.residual(angle, phi_a, phi_b, e_a, r_pa, r_pb)[:self.rows], phi_a,
-                      phi_b, r_pa[0], r_pb[0])
-
     def cut_rows(self, e_a, x):
         """Cut-row selection ``S x`` (rows, ...) of a relative twist or twist rate ``x`` (3, ...)
         of the second body to the first at the cut point."""
         return _stack(self.selected(e_a, x)[:self.rows], x[0])
-
-    def cut_rows_rate(self, e_a, w_a, x):
-        """``(dS/dt) x`` (rows, ...), ``w_a`` (...) the first body's angular velocity (the
-        axis turns with it)."""
-        return _stack(self.selected_rate(e_a, w_a, x)[:self.rows], w_a, x[0])
-
-    def cut_wrench(self, e_a, lam):
-        """Constraint wrench ``S^T lam`` (3, ...) on the second body about the cut point, from
-        the multipliers ``lam`` (rows, ...)."""
-        lam = tuple(lam[k] for k in range(self.rows)) + (0.0,) * (3 - self.rows)
-        return _stack(self.wrench(e_a, lam), lam[0])
-
-    def joint_motion(self, e_a, a, b, points):
-        """Coordinate, rate and acceleration (each (...)) of a cut joint from its bodies' motion.
-
-        ``a``, ``b``: ``(phi, w, al)`` of the first and second body; ``points()`` gives the
-        second body's point relative to the first's, its rate and acceleration ``(d, d', d'')``,
-        each (2, ...).
-        """
-        return self.coordinate(e_a, a, b, *points())
 
     # --- explicit matrices, for the dense reference -----------------------------------------
     def selection(self, e_a) -> np.ndarray:
