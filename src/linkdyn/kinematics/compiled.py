@@ -39,7 +39,7 @@ from ..compiled import (CHAIN, PRI, SLIDE, SPLIT, Packed, factor, inline, njit, 
                         substitute, vector_views)
 from ..planar import turned
 from . import dyads as dy
-from .positions import nearest_node
+from .positions import nearest_node, scaled_error
 from .recursion import (child_pose, child_twist, child_twist_rate, cut_bias, cut_coordinate,
                         cut_frame, jacobian_column)
 
@@ -227,26 +227,21 @@ def _frame(P_c, k):
 @njit
 def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
     """Loop-closure residual (the kinds' ``residual`` steps), its rows in metres relative to
-    ``size``, max over the cut rows (positions._scaled)."""
+    ``size``, max over the cut rows (:func:`.positions.scaled_error`)."""
     ks = slice(k0, k0 + nb)
     err_d = err[d, ks]
     err_d[:] = 0.0
     for ci in range(len(cuts)):
         P_c = P[ci]
         a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[d, ci, 6]
-        # the scale of each row (the padded rows are zero)
-        u0 = 1.0 / size[d] if cuts[ci, CUT_METRES] else 1.0
-        u1 = 1.0 / size[d] if cuts[ci, CUT_METRES + 1] else 1.0
-        u2 = 1.0 / size[d] if cuts[ci, CUT_METRES + 2] else 1.0
+        m0, m1, m2 = cuts[ci, CUT_METRES], cuts[ci, CUT_METRES + 1], cuts[ci, CUT_METRES + 2]
         phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
-        for k in range(nb):
+        for k in range(nb):   # the padded rows are zero
             r_pa, r_pb, e_a = _frame(P_c, k)
             g = jk.residual(code, angle, phi_a[k], phi_b[k], e_a, r_pa, r_pb)
-            g0, g1, g2 = abs(g[0] * u0), abs(g[1] * u1), abs(g[2] * u2)
-            if g0 != g0 or g1 != g1 or g2 != g2 or err_d[k] != err_d[k]:
-                err_d[k] = math.nan
-            else:
-                err_d[k] = max(err_d[k], g0, g1, g2)
+            e = scaled_error(err_d[k], g[0], m0, size[d])
+            e = scaled_error(e, g[1], m1, size[d])
+            err_d[k] = scaled_error(e, g[2], m2, size[d])
 
 
 @njit

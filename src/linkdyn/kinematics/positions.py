@@ -26,16 +26,25 @@ STEP_ANGLE = 0.1     # rad of driver travel between continuation nodes
 STEP_LENGTH = 0.02   # fraction of the mechanism's size between continuation nodes
 
 
+@step
+def scaled_error(err, g, metres, size):
+    """The scaled closure error ``err`` with one more residual row ``g`` (m if ``metres``, else
+    rad): ``max(err, |g| / size)`` for a row in metres, ``max(err, |g|)`` otherwise; NaN if
+    either is NaN (a row that cannot be evaluated leaves the sample open)."""
+    # e = max(err, |g| / size  or  |g|)
+    x = select(metres, np.abs(g) / size, np.abs(g))
+    return select((x > err) | (x != x), x, err)
+
+
 def _scaled(lay: Layout, g: np.ndarray) -> np.ndarray:
-    """Closure residual (n_rows, ...) made dimensionless (lengths / size), max over rows."""
-    rows, k = [], 0
+    """Closure residual (n_rows, ...) made dimensionless (lengths / size), max over rows
+    (:func:`scaled_error` row by row)."""
+    err, k = np.zeros(g.shape[1:]), 0
     for c in lay.cuts:
         for unit in jk.get(c.kind).row_units:
-            rows.append(g[k] / lay.size if unit == "m" else g[k])
+            err = scaled_error(err, g[k], unit == "m", lay.size)
             k += 1
-    if not rows:
-        return np.zeros(g.shape[1:])
-    return np.max(np.abs(np.stack(rows)), axis=0)
+    return err
 
 
 def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
