@@ -414,3 +414,33 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
     r = _cli(*args, "-o", tmp_path / "f")
     assert r.exit_code != 0
     assert not any((tmp_path / "f").glob("*.html")) and not any((tmp_path / "f").glob("*.parquet"))
+
+
+@pytest.mark.parametrize("example, path, lo, hi", [
+    ("hoeken", "bodies.ground.points.O4[0]", 0.0, 400.0),        # RRR chain
+    ("slider_crank", "bodies.ground.points.G[1]", -300.0, 300.0),  # RRP: the slide line's offset
+    ("inverted_slider_crank", "bodies.ground.points.O4[1]", -400.0, 400.0),  # RPR: always
+    ("watt2", "bodies.ground.points.O6[0]", 0.0, 600.0),           # two RRR dyads
+])
+def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(example, path, lo, hi):
+    from linkdyn.kinematics import dyads, newton
+    from linkdyn.kinematics.layout import compile_designs
+    from linkdyn.kinematics.positions import _guess
+    from linkdyn.kinematics.recursion import forward_positions
+
+    models, _ = space(linkdyn.example_path(example), [path]).models(
+        np.random.default_rng(1).uniform(lo, hi, (24, 1)))
+    lay = compile_designs(models)
+    q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]   # (n, D, 1)
+    q0[list(lay.topo.driven)] = lay.driver_values(np.zeros(1))[0]
+    can = dyads.closable(lay, lay.dyads, q0, forward_positions)[:, 0]
+    # the independent answer: damped Newton from 128 random starts per design
+    starts = np.repeat(q0, 128, axis=-1)
+    starts[list(lay.topo.dependent)] = np.random.default_rng(2).uniform(-np.pi, np.pi, 128)
+    with np.errstate(all="ignore"):
+        _, err = newton(lay, starts, maxiter=60, damped=True)
+    assert np.array_equal(can, np.any(err <= 1e-10, axis=-1))
+    assert 0 < can.sum() < len(can) or example == "inverted_slider_crank"
+    if example == "hoeken":   # circles: |r1 - r2| <= d <= r1 + r2, crank pin at (38.1, 0)
+        d = np.abs([m.body("ground").points["O4"][0] - 0.0381 for m in models])
+        assert np.array_equal(can, (abs(0.1152 - 0.1152) <= d) & (d <= 0.2304))

@@ -393,3 +393,30 @@ def solve(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward, sides=None):
         q[dy.lower] += topo.sign[dy.lower] * low[0]
     return q, pose
 
+
+
+MAX_MODES = 256   # mode combinations tried by :func:`closable` (2 ** number of dyads)
+
+
+def closable(lay, dyads: tuple[Dyad, ...], q: np.ndarray, forward) -> np.ndarray:
+    """Whether the loops can close at the driver values of ``q`` (n, ...), shape (...).
+
+    A dyad's two side lengths are fixed by its bodies, so whether it closes depends only on
+    its known vertices (two circles meet when ``|r1 - r2| <= d <= r1 + r2``, a line meets a
+    circle when its distance from the centre is at most the radius, ``a cos + b sin = k`` has
+    a root when ``|k| <= |(a, b)|``), which the dyads solved before it place according to
+    their assembly modes. :func:`solve` in every combination of modes: False where none closes
+    every dyad (NaN), so that no starting guess of Newton's method can assemble the loops
+    there (with the same rounding allowance at a toggle as :func:`solve`, which closes the
+    branch followed from the assembly). With more than ``log2(MAX_MODES)`` dyads: True.
+    """
+    ok = np.zeros(q.shape[1:], bool)
+    if 2 ** len(dyads) > MAX_MODES:
+        return ~ok
+    dep = list(lay.topo.dependent)
+    for k in range(2 ** len(dyads)):
+        modes = [1.0 if k >> j & 1 else -1.0 for j in range(len(dyads))]
+        with np.errstate(all="ignore"):
+            closed, _ = solve(lay, dyads, q, forward, sides=modes)
+        ok |= np.all(np.isfinite(closed[dep]), axis=0)
+    return ok

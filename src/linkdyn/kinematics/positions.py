@@ -139,13 +139,17 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
     q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]
     q_drv0 = np.reshape(q_drv0, (len(topo.driven), -1))   # (n_drivers, 1 or D)
     q0[list(topo.driven)] = q_drv0[..., None]
-    q, err = newton(lay, q0, maxiter=60, damped=True)
+    # dyads that close in no assembly mode (circles apart, a line missing its circle) cannot be
+    # assembled from any guess: no Newton solve and no restarts for them (NaN stays inactive)
+    hopeless = (np.zeros(q0.shape[1:-1], bool) if lay.dyads is None else
+                ~dyads.closable(lay, lay.dyads, q0, forward_positions)[..., 0])
+    q, err = newton(lay, np.where(hopeless[..., None], np.nan, q0), maxiter=60, damped=True)
     q0, q, err = q0[..., 0], q[..., 0], err[..., 0]
     failed = ~(err <= ACCEPT)
-    if np.any(failed):
+    if np.any(failed & ~hopeless):
         rng = np.random.default_rng(0)
         # restart the failed designs only: their layout, batch (F, 64)
-        idx = np.flatnonzero(failed)
+        idx = np.flatnonzero(failed & ~hopeless)
         lay_f = lay.take(idx) if lay.designs else lay
         starts = np.repeat(q0[:, idx, None], 64, axis=-1)
         for i in dep:
@@ -162,12 +166,12 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
         rescued = np.any(ok, axis=-1)
         q[:, idx[rescued]] = pick[:, rescued]
         failed[idx[rescued]] = False
-        if np.any(failed):
-            if raise_error:
-                d = int(np.argmax(failed))
-                raise not_assembled(models[d], lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)], t0,
-                                    d if len(models) > 1 else None)
-            q[:, failed] = np.nan
+    if np.any(failed):
+        if raise_error:
+            d = int(np.argmax(failed))
+            raise not_assembled(models[d], lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)], t0,
+                                d if len(models) > 1 else None)
+        q[:, failed] = np.nan
     return _nearest_turn(lay, q, q0)
 
 
