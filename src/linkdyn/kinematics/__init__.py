@@ -17,10 +17,11 @@ from .positions import ACCEPT, STEP_ANGLE, STEP_LENGTH, TOL, assemble, driver_va
 from .recursion import (Pose, closure_bias, closure_jacobian, closure_residual,
                         dependent_rates, forward_positions, forward_twist_rates, forward_twists,
                         motion_vectors, point_acceleration)
-from .solution import KinematicSolution, joint_values, solve
+from .solution import solve
+from .state import KinematicSolution, at_state, close, joint_values
 
 __all__ = ["Cut", "Layout", "compile_layout", "stack_layouts", "Pose", "KinematicSolution",
-           "solve", "assemble", "newton", "driver_values", "forward_positions",
+           "solve", "at_state", "close", "assemble", "newton", "driver_values", "forward_positions",
            "closure_residual", "closure_jacobian", "closure_bias", "forward_twists",
            "forward_twist_rates", "motion_vectors", "dependent_rates", "point_acceleration",
            "joint_values", "last", "TOL", "ACCEPT", "STEP_ANGLE", "STEP_LENGTH"]

@@ -8,6 +8,8 @@ predictor and a Newton corrector per node (a loop over driver steps, never over 
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..errors import AssemblyError
@@ -223,6 +225,103 @@ def nearest_node(j, t_j, t_next, tc):
     return select(node_fraction(t_j, t_next, tc) < 0.5, j, j + 1)
 
 
+@dataclass(frozen=True)
+class Branch:
+    """The branch of the assembly a run follows: the positions it gives every sample time.
+
+    Attributes
+    ----------
+    start : ndarray (n,) or (n, D)
+        Tree coordinates assembled at t = 0, rad or m (NaN for a design that did not assemble).
+    modes : list of ndarray (..., 1), or None
+        The dyads' assembly modes at the start (None unless every loop is a dyad).
+    nodes : ndarray (K,) or None
+        Continuation node times, s, ascending (None: not followed, as without dependent
+        joints or with every sample at t = 0).
+    Q, QD : ndarray (n, ..., K)
+        Tree coordinates and rates at the nodes (NaN beyond a design's reach).
+    reach : ndarray (..., 2)
+        The time interval over which each design's branch was followed (empty if it was not).
+    """
+
+    start: np.ndarray
+    modes: list | None
+    nodes: np.ndarray | None = None
+    Q: np.ndarray | None = None
+    QD: np.ndarray | None = None
+    reach: np.ndarray | None = None
+
+    @property
+    def followed(self) -> np.ndarray:
+        """(..., 1) bool: the branch was followed (False for a design that did not assemble)."""
+        return self.reach[..., :1] <= self.reach[..., 1:]
+
+    @property
+    def span(self):
+        """``lo``, ``hi`` (..., 1): the reach, (0, 0) for a design not followed, s."""
+        ok = self.followed
+        return np.where(ok, self.reach[..., :1], 0.0), np.where(ok, self.reach[..., 1:], 0.0)
+
+    def guess(self, lay: Layout, t: np.ndarray) -> np.ndarray:
+        """Tree coordinates (n, ..., T) near the branch at the times ``t``, from the nodes: the
+        nearest node where every loop is a dyad (closed form: the guess only sets the winding
+        of the angles), else cubic Hermite from the bracketing nodes (for Newton's method).
+        Samples outside the reach start from its end; a design not followed from zeros."""
+        if self.nodes is None:
+            return self.start[..., None]
+        nodes, (lo, hi) = self.nodes, self.span
+        tc = np.clip(t, lo, hi)
+        j = np.clip(np.searchsorted(nodes, tc, side="right") - 1, 0, len(nodes) - 2)
+
+        def at(X, k):  # nodes not followed are zero: their weight is zero on the clamped span
+            return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
+        if lay.dyads is not None:
+            q = at(self.Q, nearest_node(j, nodes[j], nodes[j + 1], tc))
+        else:
+            # q(u) = h00 Q_j + h10 QD_j + h01 Q_j+1 + h11 QD_j+1, u the fraction of the span
+            u, h = node_fraction(nodes[j], nodes[j + 1], tc), nodes[j + 1] - nodes[j]
+            h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
+            h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
+            q = (h00 * at(self.Q, j) + h10 * at(self.QD, j) + h01 * at(self.Q, j + 1)
+                 + h11 * at(self.QD, j + 1))
+        return np.where(np.isfinite(q), q, 0.0)
+
+    def ended(self, t: np.ndarray, err: np.ndarray):
+        """Samples (..., T) past the branch's end, or None: the branch ends at the first
+        sample beyond the reach whose loops do not close (``err`` above ``ACCEPT``); every
+        sample of a design not followed."""
+        if self.nodes is None:
+            return None
+        fails, followed = ~(err <= ACCEPT), self.followed
+        if not np.any(fails) and np.all(followed):
+            return None
+        lo_ok, hi_ok = self.reach[..., :1], self.reach[..., 1:]
+        hi_end = np.min(np.where(fails & (t > hi_ok), t, np.inf), axis=-1, keepdims=True)
+        lo_end = np.max(np.where(fails & (t < lo_ok), t, -np.inf), axis=-1, keepdims=True)
+        return (t >= hi_end) | (t <= lo_end) | ~followed
+
+
+def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True) -> Branch:
+    """Assemble at t = 0 on the branch of the ``[assembly]`` guess and follow it through
+    continuation nodes over the times ``t`` (driver travel at most ``STEP_ANGLE`` rad or
+    ``STEP_LENGTH`` of the size between nodes: a loop over driver steps, not samples).
+
+    ``single``: one model, whose coordinates have no design axis and whose assembly failure
+    raises :class:`AssemblyError`; else a design that cannot be assembled is NaN.
+    """
+    q_start = assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0,
+                       raise_error=single)
+    if single:
+        q_start = q_start[:, 0]
+    # the dyads' assembly modes, (..., 1) each: the branch along the nodes and the samples
+    modes = (None if lay.dyads is None else
+             dyads.sides(lay, lay.dyads, q_start[..., None], forward_positions))
+    lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
+    if not lay.topo.dependent or not hi > lo:
+        return Branch(q_start, modes)
+    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes))
+
+
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
     """Continuation times from ``start`` to ``end`` (either order): the drivers of every design
     move at most one step between consecutive nodes."""
@@ -346,29 +445,3 @@ def _continuation(lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
         last_ok = np.where(alive, nodes[k], last_ok)
         q = np.where(alive, q, np.nan)
     return Q, QD, last_ok
-
-
-def _correct(lay: Layout, q: np.ndarray, modes=None):
-    """Close the loops of a close guess for all samples at once: in closed form when every loop
-    is an RRR dyad, else by one Newton step; then Newton steps for samples whose residual is
-    still above ``ACCEPT``. ``modes``: the dyads' assembly modes (default: the guess's).
-    Returns q, pose, p, J, err."""
-    dep = np.array(lay.topo.dependent)
-    guess = q
-    if lay.dyads is not None:
-        # every loop is an RRR dyad: close it exactly on the guess's branch
-        q, pose = dyads.solve(lay, lay.dyads, q, forward_positions, sides=modes)
-    else:
-        pose = forward_positions(lay, q)
-        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
-        dx, _ = solve_small(J[:, dep - 1], -closure_residual(lay, pose))
-        q = q.copy()
-        q[dep] += np.where(np.isfinite(dx), dx, 0.0)
-        pose = forward_positions(lay, q)
-    err = _scaled(lay, closure_residual(lay, pose))
-    retry = ~(err <= ACCEPT) & np.all(np.isfinite(q), axis=0)
-    if np.any(retry):  # damped Newton from the guess; only samples above TOL move
-        q, err = newton(lay, np.where(retry, guess, q), maxiter=30, damped=True)
-        pose = forward_positions(lay, q)
-    p = motion_vectors(lay, pose)
-    return q, pose, p, closure_jacobian(lay, pose, p), err
