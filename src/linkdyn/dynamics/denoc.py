@@ -12,7 +12,7 @@ gives ``N_l^T w_star`` body by body, and ``N_d^T`` picks ``Q_i = p_i . w_tilde_i
 generalized force needed at tree joint i. With the cut-joint multipliers ``lam`` (eqs. 16-24)
 and the driver efforts ``tau`` (eqs. 25-26), eq. (27) reads ``Q = J^T lam + D tau``; its rows
 at the dependent joints give ``J_dep^T lam = Q_dep`` and the driven rows then give
-``tau = Q_drv - J_drv^T lam``.
+``tau = Q_drv - J_drv^T lam`` (:func:`less_cut`, cut by cut).
 """
 
 from __future__ import annotations
@@ -146,6 +146,21 @@ def generalized_force(code, s, e, w_tilde):
     return dot(jk.motion(code, s, e), w_tilde)
 
 
+@step
+def less_cut(tau, j, lam):
+    """``tau - j . lam``: one cut joint's share taken off a driver's effort, the cut's rows of
+    ``tau = Q_drv - J_drv^T lam`` (eq. 27); ``j`` the driven joint's Jacobian entries in the
+    cut's rows and ``lam`` its multipliers, each padded with zeros to three."""
+    return tau - (j[0] * lam[0] + j[1] * lam[1] + j[2] * lam[2])
+
+
+def padded(x, rows: slice) -> tuple:
+    """The rows ``rows`` of ``x`` (n_rows, ...) padded with zeros to three: one cut joint's
+    entries as the steps take them."""
+    own = tuple(x[rows])
+    return own + (0.0,) * (3 - len(own))
+
+
 # --- the numpy path: the steps on whole arrays, a loop over bodies ----------------------------
 
 def _array(parts, *like) -> np.ndarray:
@@ -209,5 +224,12 @@ def solve(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
         lam, pivot = solve_small(np.swapaxes(J[:, dep - 1], 0, 1), Q[dep])
     else:
         lam, pivot = np.zeros((0,) + kin.shape), np.ones(kin.shape)
-    tau = Q[drv] - np.einsum("ij...,i...->j...", J[:, drv - 1], lam)
+    # tau_j = Q_j less each cut's share J_cj^T lam_c
+    tau = np.zeros((len(drv),) + kin.shape)
+    for k, i in enumerate(drv):
+        tau_k = Q[i]
+        for c in range(topo.n_loops):
+            rows = topo.row_slice(c)
+            tau_k = less_cut(tau_k, padded(J[:, i - 1], rows), padded(lam, rows))
+        tau[k] = tau_k
     return DynamicSolution(last(lam), last(tau), ke, pivot, (w_star, w_tilde, last(Q)))
