@@ -1,7 +1,7 @@
 """Where the compiled backend's time goes, on the bundled Hoeken four-bar, one core.
 
 Prints, in ns per sample:
-  1. the kinematics kernel and the dynamics kernel alone, writing into outputs already touched
+  1. the kinematics, dynamics and reactions kernels alone, writing into outputs already touched
      (each kernel re-run on the arguments of a real ``linkdyn.analyze`` call);
   2. the kinematics kernel with blocks of 512, 1024 and 2048 samples (linkdyn uses
      ``linkdyn.kinematics.compiled.BLOCK``);
@@ -37,21 +37,26 @@ from bench_hoeken import best_time, one_core  # noqa: E402
 
 
 def kernel_arguments(mech, t):
-    """The arguments ``linkdyn.analyze`` passes to the two kernels (outputs included)."""
+    """The kernels ``linkdyn.analyze`` calls and their arguments (outputs included):
+    ``{name: (kernel, args)}`` for the kinematics, dynamics and reactions."""
     seen = {}
-    kin_kernel, dyn_kernel = kc.kernel, dc._kernel
+    kernels = {"kinematics": (kc, "kernel"), "dynamics": (dc, "_dynamics"),
+               "reactions": (dc, "_reactions")}
+    real = {name: getattr(mod, attr) for name, (mod, attr) in kernels.items()}
 
     def spy(name, fn):
         def call(*args):
             seen[name] = args
             return fn(*args)
         return call
-    kc.kernel, dc._kernel = spy("kin", kin_kernel), spy("dyn", dyn_kernel)
+    for name, (mod, attr) in kernels.items():
+        setattr(mod, attr, spy(name, real[name]))
     try:
         linkdyn.analyze(mech, t, backend="compiled")
     finally:
-        kc.kernel, dc._kernel = kin_kernel, dyn_kernel
-    return kin_kernel, seen["kin"], dyn_kernel, seen["dyn"]
+        for name, (mod, attr) in kernels.items():
+            setattr(mod, attr, real[name])
+    return {name: (real[name], seen[name]) for name in kernels}
 
 
 def steps(args):
@@ -108,10 +113,10 @@ def main():
     T = args.samples
     t = np.linspace(0.0, mech.drivers[0].period, T)
     linkdyn.analyze(mech, t[:1000], backend="compiled")   # compile once
-    kin_kernel, kin_args, dyn_kernel, dyn_args = kernel_arguments(mech, t)
+    kernels = kernel_arguments(mech, t)
+    kin_kernel, kin_args = kernels["kinematics"]
     print(f"Hoeken four-bar, {T} samples, one core, best of 5, outputs already touched")
-    for name, kernel, args in (("kinematics", kin_kernel, kin_args),
-                               ("dynamics", dyn_kernel, dyn_args)):
+    for name, (kernel, args) in kernels.items():
         per = best_time(lambda: kernel(*args), 5)
         print(f"{name + ' kernel':18s} {per / T * 1e9:7.1f} ns/sample")
     for block in (512, 1024, 2048):

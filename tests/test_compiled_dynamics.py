@@ -1,7 +1,7 @@
-"""The compiled dynamics + reactions kernel against the numpy reference.
+"""The compiled dynamics and reactions kernels against the numpy reference.
 
-``linkdyn.dynamics.compiled.solve`` must give what ``denoc.solve`` followed by
-``reactions.solve`` give on the same kinematic solution: tau, lam, Q, w_star, w_tilde, kinetic
+``linkdyn.dynamics.compiled.solve`` followed by ``compiled.reactions`` must give what
+``denoc.solve`` followed by ``reactions.solve`` give on the same kinematic solution: tau, lam, Q, w_star, w_tilde, kinetic
 energy, pivot, every joint's ``on_second`` wrench and every tree wrench ``R_i`` (the kernel
 keeping its internals), in the same shapes, to 1e-12 of each quantity's peak, NaN at the same
 samples. Covered: every bundled example, the dynamics tests' models (loads, gravity, springs,
@@ -26,9 +26,9 @@ from linkdyn import kinematics, loads as loads_mod, reactions
 from linkdyn.cli import example_names, example_text
 from hypothesis import HealthCheck, given, settings
 
-from linkdyn.compiled import pack
 from linkdyn.dynamics import compiled, denoc
 from linkdyn.io import model_from_dict
+from linkdyn.kinematics.layout import compile_designs
 from linkdyn.model import Model
 
 from builders import body, rev
@@ -57,7 +57,13 @@ def both(model, kin):
     applied = loads_mod.wrenches(model if isinstance(model, linkdyn.Model) else None, kin)
     dyn = denoc.solve(kin, applied)
     ref = (dyn, reactions.solve(first, kin, dyn))
-    return ref, compiled.solve(kin, applied, pack(kin.layout, len(first.joints)), internals=True)
+    return ref, compiled_stages(kin, applied, internals=True)
+
+
+def compiled_stages(kin, applied, internals=False):
+    """(compiled dyn, compiled reactions) on ``kin`` under ``applied``: the two stages."""
+    dyn = compiled.solve(kin, applied, internals=internals)
+    return dyn, compiled.reactions(kin, applied, dyn, internals=internals)
 
 
 def same(actual, expected, what, rtol=RTOL):
@@ -198,20 +204,19 @@ def test_loads_are_in_the_comparison():
     applied = loads_mod.wrenches(model, kin)
     assert any(np.max(np.abs(w)) > 0 for w in applied.wrenches)
     free = dataclasses.replace(applied, wrenches=[np.zeros_like(w) for w in applied.wrenches])
-    packed = pack(kin.layout, len(model.joints))
-    loaded, _ = compiled.solve(kin, applied, packed)
-    unloaded, _ = compiled.solve(kin, free, packed)
+    loaded, _ = compiled_stages(kin, applied)
+    unloaded, _ = compiled_stages(kin, free)
     assert np.max(np.abs(loaded.tau - unloaded.tau)) > 1e-3 * np.max(np.abs(loaded.tau))
 
 
 def test_comparison_detects_a_wrong_kernel_input():
-    """A 0.1 % heavier coupler in the packed layout is caught by :func:`check_all`."""
+    """A 0.1 % heavier coupler in the layout the kernels read is caught by :func:`check_all`."""
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     kin = numpy_kinematics(model, times(model, 9))
     ref, _ = both(model, kin)
-    packed = pack(kin.layout, len(model.joints))
-    heavy = dataclasses.replace(packed, mass=packed.mass * np.array([1.0, 1.0, 1.001, 1.0]))
-    wrong = compiled.solve(kin, loads_mod.wrenches(model, kin), heavy, internals=True)
+    mass = tuple(np.multiply(kin.layout.mass, [1.0, 1.0, 1.001, 1.0]))
+    heavy = dataclasses.replace(kin, layout=dataclasses.replace(kin.layout, mass=mass))
+    wrong = compiled_stages(heavy, loads_mod.wrenches(model, kin), internals=True)
     with pytest.raises(AssertionError):
         check_all(ref, wrong)
 
@@ -299,10 +304,9 @@ def test_kinematic_arrays_are_used_when_set():
     ref, _ = both(model, kin)
     with_arrays = dataclasses.replace(kin, arrays=arrays)
     applied = loads_mod.wrenches(model, kin)
-    packed = pack(kin.layout, len(model.joints))
-    check_all(ref, compiled.solve(with_arrays, applied, packed, internals=True))
+    check_all(ref, compiled_stages(with_arrays, applied, internals=True))
     arrays["twd"] = arrays["twd"] * 1.01
-    changed, _ = compiled.solve(with_arrays, applied, packed)
+    changed, _ = compiled_stages(with_arrays, applied)
     assert np.max(np.abs(changed.tau - ref[0].tau)) > 1e-4 * np.max(np.abs(ref[0].tau))
 
 
@@ -353,10 +357,9 @@ def test_constant_applied_wrenches_equal_the_same_at_every_sample(monkeypatch, d
     kin = numpy_kinematics(models if designs > 1 else models[0], times(models[0], 21))
     D = designs
     applied = loads_mod.wrenches(models[0] if designs == 1 else None, kin)
-    packed = pack(kin.layout, len(models[0].joints))
     dyn = denoc.solve(kin, applied)   # no loads at all
     check_all((dyn, reactions.solve(models[0], kin, dyn)),
-              compiled.solve(kin, applied, packed, internals=True))
+              compiled_stages(kin, applied, internals=True))
     # constant per body (the ground's zero), and per design when stacked: (3, D, 1) or (3, 1)
     scale = np.linspace(1.0, 1.3, D)[:, None]
     values = [np.zeros(3)] + [np.array([0.2 * i, -1.5 + i, 0.7]) for i in (1, 2, 3)]
@@ -364,12 +367,12 @@ def test_constant_applied_wrenches_equal_the_same_at_every_sample(monkeypatch, d
     const = constant_loads(applied, values)
     dyn = denoc.solve(kin, const)
     ref = (dyn, reactions.solve(models[0], kin, dyn))
-    fast = compiled.solve(kin, const, packed, internals=True)
+    fast = compiled_stages(kin, const, internals=True)
     check_all(ref, fast)
     assert np.max(np.abs(fast[0].tau - dyn.tau)) <= RTOL * np.max(np.abs(dyn.tau))
     # the same wrenches at every sample: the same bits
     full = dataclasses.replace(const, wrenches=[np.array(w) for w in const.wrenches])
-    again = compiled.solve(kin, full, packed, internals=True)
+    again = compiled_stages(kin, full, internals=True)
     for name in ("tau", "lam", "Q", "w_star", "w_tilde"):
         assert np.array_equal(getattr(again[0], name), getattr(fast[0], name)), name
     assert np.array_equal(again[1].force, fast[1].force)
@@ -401,9 +404,8 @@ def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, bloc
     model = linkdyn.load(linkdyn.example_path(name))
     kin = numpy_kinematics(model, times(model, 41))
     applied = loads_mod.wrenches(model, kin)
-    packed = pack(kin.layout, len(model.joints))
-    kept = compiled.solve(kin, applied, packed, internals=True)
-    lean = compiled.solve(kin, applied, packed)
+    kept = compiled_stages(kin, applied, internals=True)
+    lean = compiled_stages(kin, applied)
     for name_ in ("tau", "lam", "kinetic_energy", "pivot"):
         assert np.array_equal(getattr(lean[0], name_), getattr(kept[0], name_)), name_
     for j, (a, b) in enumerate(zip(lean[1].on_second, kept[1].on_second)):
@@ -422,7 +424,32 @@ def test_a_solution_without_kept_internals_pickles():
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     kin = numpy_kinematics(model, times(model, 9))
     applied = loads_mod.wrenches(model, kin)
-    dyn, react = compiled.solve(kin, applied, pack(kin.layout, len(model.joints)))
+    dyn, react = compiled_stages(kin, applied)
     dyn2, react2 = pickle.loads(pickle.dumps((dyn, react)))
     assert np.array_equal(dyn2.w_star, dyn.w_star) and np.array_equal(dyn2.tau, dyn.tau)
     assert np.array_equal(np.stack(react2.tree), np.stack(react.tree))
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_the_reactions_stage_runs_only_when_read(monkeypatch, backend):
+    """``analyze_layout(..., reactions=False)`` leaves the reactions stage to run when
+    ``Solution.reactions`` is first read: nothing else differs, the reactions then equal the
+    eager ones to the bit (per design too), and no reactions stage runs if they are not read."""
+    from linkdyn import analysis
+
+    designs = [hoeken_design(38.1), hoeken_design(42.0)]
+    t = times(designs[0], 19)
+    lay = compile_designs(designs)
+    eager = analysis.analyze_layout(designs, lay, t, backend=backend)
+    calls = []
+    for name in ("_numpy_reactions", "_compiled_reactions"):
+        stage = getattr(analysis, name)
+        monkeypatch.setattr(analysis, name,
+                            lambda *a, _stage=stage: calls.append(1) or _stage(*a))
+    lazy = analysis.analyze_layout(designs, lay, t, backend=backend, reactions=False)
+    assert np.array_equal(lazy.dyn.tau, eager.dyn.tau) and np.array_equal(lazy.valid, eager.valid)
+    assert callable(lazy.react) and not calls
+    one = lazy.design(1)
+    assert not calls
+    assert np.array_equal(one.reactions.force, eager.design(1).reactions.force)
+    assert np.array_equal(lazy.reactions.force, eager.reactions.force) and len(calls) == 1

@@ -6,9 +6,9 @@ This module is the one obvious entry point; each stage it calls can be used alon
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -36,7 +36,11 @@ class Solution:
     kin : kinematics.KinematicSolution
     loads : loads.Loads
     dyn : dynamics.DynamicSolution
+    react : reactions.Reactions or callable
+        The reactions, or the reactions stage still to run (a function of no argument), run
+        when ``reactions`` is first read (``analyze_layout(..., reactions=False)``).
     reactions : reactions.Reactions
+        Every joint's reaction.
     valid : ndarray (T,) or (D, T) bool
         Samples where the loops close and the position is not singular.
     designs : tuple of Model
@@ -47,9 +51,13 @@ class Solution:
     kin: kinematics.KinematicSolution
     loads: loads_mod.Loads
     dyn: denoc.DynamicSolution
-    reactions: reactions_mod.Reactions
+    react: reactions_mod.Reactions | Callable
     valid: np.ndarray
     designs: tuple = ()
+
+    @cached_property
+    def reactions(self) -> reactions_mod.Reactions:
+        return self.react() if callable(self.react) else self.react
 
     # --- designs ----------------------------------------------------------------------------
     @property
@@ -73,7 +81,9 @@ class Solution:
             return self
         kin = batch.kinematics(self.kin, k)
         return Solution(self.designs[k], kin, batch.loads(self.loads, k, kin.layout),
-                        batch.dynamics(self.dyn, k), batch.reactions(self.reactions, k),
+                        batch.dynamics(self.dyn, k),
+                        partial(_design_reactions, self, k) if callable(self.react)
+                        else batch.reactions(self.react, k),
                         self.valid[k])
 
     @property
@@ -444,11 +454,12 @@ def _check_drivers(model, time: float) -> None:
 def _finite(model, kin, applied, dyn, react, valid, stop: bool):
     """``valid`` and every output of the sample finite. With ``stop``, the first valid sample
     with a non-finite output raises an AssemblyError naming its time and its cause: a driver's
-    motion, a load (by its field), gravity, or the output that overflows."""
+    motion, a load (by its field), gravity, or the output that overflows. Reactions not yet
+    solved (``react`` still a function) are not looked at."""
     # the outputs as stored (no stacked copies): (array, axis holding other than samples)
     outputs = {"joint motion": [(x, None) for part in kin.joint_motion for x in part],
                "driver effort": [(dyn.tau, -1)],
-               "reaction": [(w, 0) for w in react.on_second],
+               "reaction": [(w, 0) for w in ([] if callable(react) else react.on_second)],
                "kinetic energy": [(dyn.kinetic_energy, None)]}
 
     def finite(a, axis):  # (*valid.shape) bool: the sample's numbers of ``a`` are finite
@@ -496,28 +507,49 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
                             "speeds for extreme values")
 
 
-def _stages(model, t, backend: str, layout=None):
+def _design_reactions(sol: Solution, k: int):
+    """Design k's reactions out of the batch ``sol``'s (run when first read)."""
+    return batch.reactions(sol.reactions, k)
+
+
+def _backend(fast: bool) -> tuple:
+    """The dynamics and reactions stages of one backend, ``dynamics(kin, loads)`` and
+    ``reactions(model, kin, loads, dyn)``: the compiled kernels or the numpy solvers."""
+    if fast:
+        return compiled_dynamics.solve, _compiled_reactions
+    return denoc.solve, _numpy_reactions
+
+
+def _compiled_reactions(model, kin, applied, dyn):
+    return compiled_dynamics.reactions(kin, applied, dyn)
+
+
+def _numpy_reactions(model, kin, applied, dyn):
+    return reactions_mod.solve(model, kin, dyn)
+
+
+def _stages(model, t, backend: str, layout=None, reactions: bool = True):
     """The stages of an analysis composed: ``(kin, applied, dyn, react, valid)``, ``valid`` the
     samples that close clear of a singular position. ``model``: a Model, or D Models (a batch;
     with ``layout``, their stacked layout, and the models only give their ``[assembly]``
-    guesses and design 0's names)."""
+    guesses and design 0's names). Without ``reactions``, ``react`` is the reactions stage
+    still to run (a function of no argument), for :class:`Solution` to run when they are
+    first read."""
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy")
     # a batch: gravity, loads' values, springs and dampers from the layout, per design
     applied = loads_mod.wrenches(None if designs else model, kin)
-    if fast:
-        dyn, react = compiled_dynamics.solve(kin, applied,
-                                             compiled.pack(kin.layout, len(models[0].joints)))
-    else:
-        dyn = denoc.solve(kin, applied)
-        react = reactions_mod.solve(models[0], kin, dyn)
+    dynamics, reactions_stage = _backend(fast)
+    dyn = dynamics(kin, applied)
+    react = partial(reactions_stage, models[0], kin, applied, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
-    return kin, applied, dyn, react, valid
+    return kin, applied, dyn, react() if reactions else react, valid
 
 
-def analyze_layout(models, layout, t, *, backend: str | None = None, designs=None) -> Solution:
+def analyze_layout(models, layout, t, *, backend: str | None = None, designs=None,
+                   reactions: bool = True) -> Solution:
     """``analyze`` of a batch of designs given by their stacked layout (for instance built
     from parameter arrays by :mod:`linkdyn.studies.vectorize`), without a Model per design.
 
@@ -533,6 +565,10 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
     designs : sequence of Model, optional
         What ``Solution.designs`` holds (a sequence that builds design k's model when read);
         default ``models``.
+    reactions : bool
+        Solve the joint reactions now (and count a sample whose reactions are not finite as
+        not valid). With False the reactions stage runs only if ``Solution.reactions`` is read
+        (a sweep whose metrics need no reaction skips it), and ``valid`` does not look at them.
 
     Returns
     -------
@@ -542,7 +578,7 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
     """
     t = np.asarray(t, dtype=float)
     name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
-    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout)
+    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout, reactions)
     valid = _finite(models[0], kin, applied, dyn, react, valid, False)
     return Solution(models[0], kin, applied, dyn, react, valid,
                     designs if designs is not None else tuple(models))

@@ -1,41 +1,44 @@
-"""Compiled DeNOC inverse dynamics and joint reactions: one pass over the samples.
+"""Compiled DeNOC inverse dynamics and joint reactions: two kernels, two stages.
 
 The steps of :mod:`linkdyn.dynamics.denoc` and :mod:`linkdyn.reactions` (Newton–Euler
 :func:`~linkdyn.dynamics.denoc.newton_euler_wrench`, the backward recursion
 :func:`~linkdyn.dynamics.denoc.plus_child`, ``Q_i`` by
-:func:`~linkdyn.dynamics.denoc.generalized_force`, then the reactions:
+:func:`~linkdyn.dynamics.denoc.generalized_force`, the efforts by
+:func:`~linkdyn.dynamics.denoc.less_cut`; then the reactions:
 :func:`~linkdyn.reactions.cut_wrench`, :func:`~linkdyn.reactions.without_effort`,
-:func:`~linkdyn.reactions.flipped`), called inside the sample loops of a numba kernel
+:func:`~linkdyn.reactions.flipped`), called inside the sample loops of numba kernels
 (:mod:`linkdyn.compiled`); this file holds only the data movement, the loops and the linear
 algebra of the multipliers (``J_dep^T lam = Q_dep`` by :func:`~linkdyn.compiled.eliminate`, the
 pivot rule of :func:`linkdyn.planar.solve_small`). Joint kinds enter by their codes
 (:data:`linkdyn.joints.CODES`) through the dispatching steps of :mod:`linkdyn.joints`.
 
-The stages are those of the numpy path, in its order: the dynamics (``w_star``, ``w_tilde``,
-``Q``, ``lam``, ``tau``, the kinetic energy), then the reactions (the cut wrenches, ``R_i`` by
-the same backward recursion, every joint's reaction). The kernel fuses them per block of
-samples (:data:`BLOCK`): each stage walks the bodies and, for each body, the samples of the
-block, which are independent, so the loops vectorize and every array is read and written in
+The stages are those of the numpy path: :func:`solve`, the dynamics (``w_star``, ``w_tilde``,
+``Q``, ``lam``, ``tau``, the kinetic energy), as ``denoc.solve``; then :func:`reactions` (the
+cut wrenches, ``R_i`` by the same backward recursion, every joint's reaction), as
+``reactions.solve``, run only when the reactions are wanted. Each kernel takes the samples a
+block at a time (:data:`BLOCK`): each stage walks the bodies and, for each body, the samples of
+the block, which are independent, so the loops vectorize and every array is read and written in
 contiguous runs. A stage takes a body's rows over the block as 1-D views
 (:func:`~linkdyn.compiled.vector_views`, :func:`~linkdyn.compiled.screw_views`) before its
 sample loop, gathers each sample's components into the steps' tuples and writes their tuples
-back. The tests hold the two backends to agree to rounding, NaN at the same samples.
+back. The reactions kernel forms each block's ``w_star`` again by the same step (cheaper than
+writing and reading it per sample). The tests hold the two backends to agree to rounding, NaN
+at the same samples.
 """
-
 from __future__ import annotations
 
 from functools import cached_property
 
 import numpy as np
 
-from ..compiled import Packed, eliminate, njit, screw_views, vector_views
-from ..joints import get as joint_kind
+from ..compiled import eliminate, inline, njit, pack, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
-from .denoc import DynamicSolution, generalized_force, newton_euler_wrench, plus_child
+from .denoc import (DynamicSolution, generalized_force, less_cut, newton_euler_wrench,
+                    plus_child)
 
 #: a relative pivot at or below this marks ``J_dep^T`` singular (as in ``solve_small``)
 SINGULAR_PIVOT = 1e-13
@@ -63,15 +66,15 @@ def _composite(parent, r, d, k0, nb, di, ki, w):
 
 @njit
 def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke,
-                  o_wstar, o_wtilde, o_ke):
+                  o_wstar, o_wtilde):
     """:func:`~linkdyn.dynamics.denoc.newton_euler_wrench` of every body over a block into
     ``w_star``, copied into ``w_tilde`` to start its recursion, and the kinetic energy summed
-    over the bodies. The ground's rows stay as allocated (zero). ``w_const`` (n, 3, 1, block):
+    over the bodies into ``ke`` (block,). The ground's rows stay as allocated (zero). ``w_const`` (n, 3, 1, block):
     ``w_ext`` repeated over a block when it is constant in time (one sample, ``w_ext``
     (n, 3, D, 1))."""
     n = len(mass[dp])
     ks = slice(k0, k0 + nb)   # the block's samples
-    kw = slice(ki, ki + nb)   # the block's samples in the internals (see _kernel)
+    kw = slice(ki, ki + nb)   # the block's samples in the internals (see _dynamics)
     ke[:nb] = 0.0
     for i in range(1, n):
         mi, ii = mass[dp, i], inertia[dp, i]
@@ -91,7 +94,6 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ex
             wstar_i[0][k], wstar_i[1][k], wstar_i[2][k] = w
             wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k] = w
             ke[k] += ke_k
-    o_ke[d, ks] = ke[:nb]
 
 
 @njit
@@ -110,10 +112,13 @@ def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q):
 
 
 @njit
-def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pivot):
-    """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27), a block at a time;
-    ``Q`` (n, block) the block's generalized forces (a view of ``o_Q``)."""
+def _multipliers(dep, drv, cut_row, cut_rows, d, k0, nb, J, Q, A, lam, piv, o_lam, o_tau,
+                 o_pivot):
+    """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27) cut by cut
+    (:func:`~linkdyn.dynamics.denoc.less_cut`), a block at a time; ``Q`` (n, block) the block's
+    generalized forces (a view of ``o_Q``)."""
     m, n_rows, n_drv = dep.shape[0], J.shape[0], drv.shape[0]
+    last = max(n_rows - 1, 0)
     ks = slice(k0, k0 + nb)   # the block's samples
     # J_dep^T lam = Q_dep by Gaussian elimination with partial pivoting; NaN where the
     # smallest pivot / largest |entry| (a NaN entry: NaN) is not above SINGULAR_PIVOT
@@ -129,17 +134,22 @@ def _multipliers(dep, drv, d, k0, nb, J, Q, A, lam, tau, piv, o_lam, o_tau, o_pi
             o_lam[a, d, ks] = lam[a, :nb]
     else:
         o_pivot[d, ks] = 1.0
-    # tau = Q_drv - J_drv^T lam
+    # tau_j = Q_j less each cut's share (its rows of J_drv^T lam, padded to three)
     for jd in range(n_drv):
         i = drv[jd]
-        J_i, Q_i = J[:, i - 1, d, ks], Q[i, :nb]
-        tau_j, o_tau_j = tau[jd, :nb], o_tau[jd, d, ks]
-        for k in range(nb):
-            acc = 0.0
-            for a in range(n_rows):
-                acc += J_i[a, k] * lam[a, k]
-            tau_j[k] = Q_i[k] - acc
-            o_tau_j[k] = tau_j[k]
+        o_tau_j = o_tau[jd, d, ks]
+        o_tau_j[:] = Q[i, :nb]
+        for cc in range(cut_row.shape[0]):
+            row, rows = cut_row[cc], cut_rows[cc]
+            r1, r2 = min(row + 1, last), min(row + 2, last)
+            J0, J1, J2 = J[row, i - 1, d, ks], J[r1, i - 1, d, ks], J[r2, i - 1, d, ks]
+            l0, l1, l2 = lam[row], lam[r1], lam[r2]
+            for k in range(nb):
+                o_tau_j[k] = less_cut(o_tau_j[k],
+                                      (J0[k], J1[k] if rows > 1 else 0.0,
+                                       J2[k] if rows > 2 else 0.0),
+                                      (l0[k], l1[k] if rows > 1 else 0.0,
+                                       l2[k] if rows > 2 else 0.0))
 
 
 # --- the reactions stage ----------------------------------------------------------------------
@@ -177,18 +187,19 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, 
 
 @njit
 def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, di,
-                    ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on):
+                    ki, keep, c, s, r, e, tau, wc, ws, o_tree, o_on):
     """``R_i`` by the backward recursion of ``w_star - w_cut`` (reactions.tree_wrenches) and
     the reaction of every tree joint from it (reactions.solve): the driver's effort removed by
     :func:`~linkdyn.reactions.without_effort`, the opposite taken about the parent's joint point
-    by :func:`~linkdyn.reactions.flipped` where the parent is the second body. With the
-    internals ``keep``, a joint whose reaction is ``R_i`` itself (the child is its second body,
-    not driven) is not written: :func:`solve` gives it ``R_i``'s rows."""
+    by :func:`~linkdyn.reactions.flipped` where the parent is the second body. ``ws``
+    (n, 3, 1, block): the block's ``w_star``. With the internals ``keep``, a joint whose
+    reaction is ``R_i`` itself (the child is its second body, not driven) is not written:
+    :func:`reactions` gives it ``R_i``'s rows."""
     n = parent.shape[0]
     ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in the internals
     # R_i = w_star_i - w_cut_i (the ground's w_star_0 = 0), then R_p += A(r_i - r_p)^T R_i
     for i in range(n):
-        R_i, wstar_i = screw_views(o_tree, i, di, kw), screw_views(o_wstar, i, di, kw)
+        R_i, wstar_i = screw_views(o_tree, i, di, kw), screw_views(ws, i, 0, slice(0, nb))
         wc_i = wc[i, 0, :nb], wc[i, 1, :nb], wc[i, 2, :nb]
         for k in range(nb):
             R_i[0][k], R_i[1][k], R_i[2][k] = minus((wstar_i[0][k], wstar_i[1][k], wstar_i[2][k]),
@@ -213,62 +224,95 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
             on_i[0][k], on_i[1][k], on_i[2][k] = o
 
 
+@inline
+def _constant(w_ext, d, w_const):
+    """Design d's applied wrenches repeated over a block into ``w_const`` (n, 3, 1, block) when
+    they are constant in time (``w_ext`` (n, 3, D, 1))."""
+    if w_ext.shape[3] == 1:
+        for i in range(w_ext.shape[0]):
+            for j in range(3):
+                w_const[i, j, 0, :] = w_ext[i, j, d, 0]
+
+
+# --- the kernels ------------------------------------------------------------------------------
+
 @njit
-def _kernel(parent, kind, sign, dep, drv, driver_of, tree_joint, cut_a, cut_b, cut_kind,
-            cut_joint, cut_row, cut_rows, joint_point, com, mass, inertia, cut_pa, cut_pb,
-            cut_axis, c, s, r, e, tw, twd, J, w_ext,
-            o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, o_on, o_tree, block, keep):
-    """Dynamics and reactions of every sample; arguments as in :func:`solve`, outputs written in
-    place (component-first, batch ``(D, T)`` last) into zeroed arrays: the rows that are zero by
-    construction (the ground's ``w_star`` and ``Q``) are not written, nor those of a joint whose
-    reaction is ``R_i`` itself (:func:`_tree_reactions`).
+def _dynamics(parent, kind, sign, dep, drv, cut_row, cut_rows, com, mass, inertia, c, s, r, e,
+              tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, block,
+              keep):
+    """The dynamics of every sample: ``w_star``, ``w_tilde = N_l^T w_star``, ``Q = N_d^T
+    w_tilde``, ``lam``, ``tau`` and the kinetic energy; arguments as in :func:`solve`, outputs
+    written in place (component-first, batch ``(D, T)`` last) into zeroed arrays (the ground's
+    ``w_star`` and ``Q`` rows, zero by construction, are not written).
 
-    The internals ``o_wstar``, ``o_wtilde``, ``o_Q``, ``o_tree`` are outputs like the others
-    when ``keep``; else one block's scratch, (n, 3, 1, block) and (n, 1, block).
-
-    The samples are taken ``block`` at a time: each stage below runs over the bodies, and for
-    each body over the samples of the block, which are independent.
+    The internals ``o_wstar``, ``o_wtilde``, ``o_Q`` are outputs like the others when ``keep``;
+    else one block's scratch, (n, 3, 1, block) and (n, 1, block). The samples are taken
+    ``block`` at a time: each stage runs over the bodies, and for each body over the samples
+    of the block, which are independent.
     """
-    n = parent.shape[0]
-    m = dep.shape[0]           # = the cut rows: J_dep^T lam = Q_dep
-    n_drv = drv.shape[0]
+    n, m = parent.shape[0], dep.shape[0]   # m = the cut rows: J_dep^T lam = Q_dep
     D, T = c.shape[1], c.shape[2]
     n_designs = mass.shape[0]
     B = block
     # scratch for one block of samples, allocated once per call
-    # (w_star, w_tilde and R are built in place in their outputs)
     w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
-    wc = np.zeros((n, 3, B))      # cut-joint wrenches on the bodies
-    A = np.zeros((m, m + 1, B))   # [J_dep^T | Q_dep]
+    A = np.zeros((m, m + 1, B))        # [J_dep^T | Q_dep]
     lam = np.zeros((max(m, 1), B))
-    tau = np.zeros((max(n_drv, 1), B))
-    zero = np.zeros(B)
     ke = np.zeros(B)
     piv = np.zeros(B)
     for d in range(D):
         dp = d if n_designs > 1 else 0
-        if w_ext.shape[3] == 1:   # w_ext constant in time: design d's, repeated over a block
-            for i in range(n):
-                for j in range(3):
-                    w_const[i, j, 0, :] = w_ext[i, j, d, 0]
+        _constant(w_ext, d, w_const)
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
             # the internals' design and first sample: the block's, or the scratch's
             di, ki = (d, k0) if keep else (0, 0)
             if not keep:   # the ground's w_tilde only accumulates
                 o_wtilde[0, :, 0, :nb] = 0.0
-            # the dynamics: w_star, w_tilde = N_l^T w_star, Q = N_d^T w_tilde, lam, tau
             _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const,
-                          ke, o_wstar, o_wtilde, o_ke)
+                          ke, o_wstar, o_wtilde)
+            o_ke[d, k0:k0 + nb] = ke[:nb]
             _composite(parent, r, d, k0, nb, di, ki, o_wtilde)
             _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q)
-            _multipliers(dep, drv, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A, lam, tau, piv, o_lam,
-                         o_tau, o_pivot)
-            # the reactions: cut wrenches, R_i, every joint's reaction
+            _multipliers(dep, drv, cut_row, cut_rows, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A,
+                         lam, piv, o_lam, o_tau, o_pivot)
+
+
+@njit
+def _reactions(parent, kind, sign, driver_of, tree_joint, cut_a, cut_b, cut_kind, cut_joint,
+               cut_row, cut_rows, joint_point, com, mass, inertia, cut_pa, cut_pb, cut_axis, c, s,
+               r, e, tw, twd, w_ext, lam, tau, o_on, o_tree, block, keep):
+    """Every joint's reaction at every sample from the multipliers ``lam`` (n_rows, D, T) and
+    the efforts ``tau`` (n_drivers, D, T): the cut wrenches, ``R_i`` by the backward recursion
+    of ``w_star - w_cut`` (``w_star`` of the block by the same step as the dynamics), then
+    every tree joint's reaction; arguments as in :func:`reactions`, outputs written in place
+    into zeroed arrays. ``o_tree`` per sample when ``keep``, else one block's scratch
+    (n, 3, 1, block)."""
+    n, n_rows, n_drv = parent.shape[0], lam.shape[0], tau.shape[0]
+    D, T = c.shape[1], c.shape[2]
+    n_designs = mass.shape[0]
+    B = block
+    w_const = np.zeros((n, 3, 1, B))
+    ws, ws2 = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B))   # w_star of the block
+    wc = np.zeros((n, 3, B))      # cut-joint wrenches on the bodies
+    lam_b, tau_b = np.zeros((max(n_rows, 1), B)), np.zeros((max(n_drv, 1), B))
+    zero, ke = np.zeros(B), np.zeros(B)
+    for d in range(D):
+        dp = d if n_designs > 1 else 0
+        _constant(w_ext, d, w_const)
+        for k0 in range(0, T, B):
+            nb = min(B, T - k0)
+            di, ki = (d, k0) if keep else (0, 0)
+            for a in range(n_rows):
+                lam_b[a, :nb] = lam[a, d, k0:k0 + nb]
+            for a in range(n_drv):
+                tau_b[a, :nb] = tau[a, d, k0:k0 + nb]
+            _newton_euler(com, mass, inertia, d, dp, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const,
+                          ke, ws, ws2)
             _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, cut_pb,
-                          cut_axis, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on)
+                          cut_axis, d, dp, k0, nb, c, s, r, lam_b, zero, wc, o_on)
             _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
-                            di, ki, keep, c, s, r, e, tau, wc, o_wstar, o_tree, o_on)
+                            di, ki, keep, c, s, r, e, tau_b, wc, ws, o_tree, o_on)
 
 
 def _plain(x) -> np.ndarray:
@@ -311,12 +355,33 @@ def _inputs(kin: KinematicSolution) -> dict:
     }
 
 
-def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool = False
-          ) -> tuple[DynamicSolution, Reactions]:
-    """Driver efforts, cut-joint multipliers and joint reactions by the compiled kernel.
+def _arrays(lay):
+    """The kernels' topology and numbers of the layout ``lay``."""
+    return pack(lay, lay.topo.n - 1 + lay.topo.n_loops)
 
-    The same results as ``denoc.solve(kin, loads)`` followed by
-    ``reactions.solve(model, kin, dyn)``, in the same shapes.
+
+def _applied(loads: Loads, shape) -> np.ndarray:
+    """``w_ext`` (n, 3, D, Tw) of ``loads``: one sample (Tw = 1) when no wrench varies in time
+    (all broadcast along t, stride 0, as a body without loads), else every sample (Tw = T)."""
+    D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
+    ws = [np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]
+    Tw = 1 if all(w.strides[-1] == 0 for w in ws) else T
+    return _plain(np.stack([w[..., :Tw].reshape(3, D, Tw) for w in ws]))
+
+
+def _per(a, shape) -> list:
+    """Per-entity views (3, ...) of a (k, 3, D, T) output."""
+    return [w.reshape((3,) + shape) for w in a]
+
+
+def _comps(a, shape) -> np.ndarray:
+    """(k, D, T) -> components last (..., k), like the numpy path's ``last(...)``."""
+    return last(a.reshape((len(a),) + shape))
+
+
+def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> DynamicSolution:
+    """Driver efforts and cut-joint multipliers by the compiled kernel: the same results as
+    ``denoc.solve(kin, loads)``, in the same shapes.
 
     Parameters
     ----------
@@ -327,90 +392,106 @@ def solve(kin: KinematicSolution, loads: Loads, packed: Packed, internals: bool 
         Applied wrenches ``loads.wrenches``, (3, ...) per body about O_i, N m / N. When none
         varies in time (each broadcast along the samples, as for a body without loads), the
         kernel reads one sample of them.
-    packed : Packed
-        ``linkdyn.compiled.pack(kin.layout, len(model.joints))``.
     internals : bool
-        Keep the kernel's ``wstar``, ``wtilde``, ``Q`` and tree wrenches ``R_i`` per sample.
-        By default the kernel holds them for one block only (Hoeken's dynamics then writes 16
-        numbers per sample instead of 46), and the solutions run the kernel again, keeping
-        them, when one of them is first read.
+        Keep the kernel's ``wstar``, ``wtilde`` and ``Q`` per sample. By default the kernel
+        holds them for one block only (Hoeken's dynamics then writes 4 numbers per sample
+        instead of 31), and the solution runs the kernel again, keeping them, when one of them
+        is first read.
 
     Returns
     -------
-    dyn : DynamicSolution
-        ``wstar``, ``wtilde`` (3, ...) per body; ``Q`` (..., n), ``lam`` (..., 2 n_cut),
+    DynamicSolution
+        ``wstar``, ``wtilde`` (3, ...) per body; ``Q`` (..., n), ``lam`` (..., n_rows),
         ``tau`` (..., n_drivers) components last; ``kinetic_energy`` (...) J; ``pivot`` (...).
-    reactions : Reactions
-        ``on_second`` (3, ...) per model joint ``[M, Fx, Fy]`` by the first body on the second
-        about the second's joint point, N m / N; ``tree`` (3, ...) per body, ``R_i`` about O_i.
     """
     shape = kin.shape
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
-    topo = kin.layout.topo
-    n, n_rows = len(packed.parent), topo.n_rows
-    # each cut's first row in lam and its number of rows (its kind's)
-    cut_row = np.array([topo.row_slice(k).start for k in range(len(packed.cut_a))], np.int64)
-    cut_rows = np.array([joint_kind(c.kind).rows for c in kin.layout.cuts], np.int64)
-    # w_ext (n, 3, D, Tw): one sample (Tw = 1) when no wrench varies in time (all broadcast
-    # along t, stride 0, as a body without loads), else every sample (Tw = T)
-    ws = [np.broadcast_to(w, (3,) + shape) for w in loads.wrenches]
-    Tw = 1 if all(w.strides[-1] == 0 for w in ws) else T
-    w_ext = _plain(np.stack([w[..., :Tw].reshape(3, D, Tw) for w in ws]))
+    P = _arrays(kin.layout)
+    n, n_rows = len(P.parent), kin.layout.topo.n_rows
     # zeroed outputs: the pages of the rows the kernel leaves zero are never touched; the
     # internals per sample, or for one block
     block = min(BLOCK, T)
     at = (D, T) if internals else (1, block)
     out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
            "Q": np.zeros((n,) + at), "lam": np.zeros((n_rows, D, T)),
-           "tau": np.zeros((len(packed.drv), D, T)), "ke": np.zeros((D, T)),
-           "pivot": np.zeros((D, T)), "on": np.zeros((packed.n_joints, 3, D, T)),
-           "tree": np.zeros((n, 3) + at)}
-    P = packed
-    _kernel(P.parent, P.kind, P.sign, P.dep, P.drv, P.driver_of, P.tree_joint, P.cut_a, P.cut_b,
-            P.cut_kind, P.cut_joint, cut_row, cut_rows, P.joint_point, P.com, P.mass, P.inertia,
-            P.cut_pa, P.cut_pb, P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
-            x["J"], w_ext, out["wstar"], out["wtilde"], out["Q"], out["lam"], out["tau"],
-            out["ke"], out["pivot"], out["on"], out["tree"], block, internals)
-
-    def per(a):  # per-entity views (3, ...) of a (k, 3, D, T) output
-        return [w.reshape((3,) + shape) for w in a]
-
-    def comps(a):  # (k, D, T) -> components last (..., k), like the numpy path's last(...)
-        return last(a.reshape((len(a),) + shape))
-
-    lam, tau = comps(out["lam"]), comps(out["tau"])
+           "tau": np.zeros((len(P.drv), D, T)), "ke": np.zeros((D, T)),
+           "pivot": np.zeros((D, T))}
+    _dynamics(P.parent, P.kind, P.sign, P.dep, P.drv, P.cut_row, P.cut_rows, P.com, P.mass,
+              P.inertia, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
+              _applied(loads, shape), out["wstar"], out["wtilde"], out["Q"], out["lam"],
+              out["tau"], out["ke"], out["pivot"], block, internals)
+    lam, tau = _comps(out["lam"], shape), _comps(out["tau"], shape)
     ke, pivot = out["ke"].reshape(shape), out["pivot"].reshape(shape)
     if not internals:   # the kernel again, keeping them, when first read
-        again = _Again(kin, loads, packed)
-        return (DynamicSolution(lam, tau, ke, pivot, again.dynamics),
-                Reactions(per(out["on"]), again.tree))
-    dyn = DynamicSolution(lam, tau, ke, pivot,
-                          (per(out["wstar"]), per(out["wtilde"]), comps(out["Q"])))
+        return DynamicSolution(lam, tau, ke, pivot, _Again(solve, kin, loads).dynamics)
+    return DynamicSolution(lam, tau, ke, pivot, (_per(out["wstar"], shape),
+                                                 _per(out["wtilde"], shape),
+                                                 _comps(out["Q"], shape)))
+
+
+def reactions(kin: KinematicSolution, loads: Loads, dyn: DynamicSolution,
+              internals: bool = False) -> Reactions:
+    """Every joint's reaction by the compiled kernel: the same results as
+    ``reactions.solve(model, kin, dyn)``, in the same shapes.
+
+    Parameters
+    ----------
+    kin, loads
+        As for :func:`solve` (the kernel forms each block's ``w_star`` again from them, by the
+        same step, rather than reading a per-sample copy).
+    dyn : DynamicSolution
+        Its multipliers ``lam`` and efforts ``tau``.
+    internals : bool
+        Keep the tree wrenches ``R_i`` per sample; by default they are computed again, kept,
+        when first read.
+
+    Returns
+    -------
+    Reactions
+        ``on_second`` (3, ...) per model joint ``[M, Fx, Fy]`` by the first body on the second
+        about the second's joint point, N m / N; ``tree`` (3, ...) per body, ``R_i`` about O_i.
+    """
+    shape = kin.shape
+    D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
+    x = _inputs(kin)
+    P = _arrays(kin.layout)
+    n = len(P.parent)
+    block = min(BLOCK, T)
+    on = np.zeros((P.n_joints, 3, D, T))
+    tree = np.zeros((n, 3) + ((D, T) if internals else (1, block)))
+    lam, tau = (_plain(np.moveaxis(a, -1, 0).reshape(a.shape[-1], D, T))
+                for a in (dyn.lam, dyn.tau))
+    _reactions(P.parent, P.kind, P.sign, P.driver_of, P.tree_joint, P.cut_a, P.cut_b, P.cut_kind,
+               P.cut_joint, P.cut_row, P.cut_rows, P.joint_point, P.com, P.mass, P.inertia,
+               P.cut_pa, P.cut_pb, P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
+               _applied(loads, shape), lam, tau, on, tree, block, internals)
+    if not internals:   # the kernel again, keeping them, when first read
+        return Reactions(_per(on, shape), _Again(reactions, kin, loads, dyn).tree)
     # a tree joint whose child is its second body and is not driven reports R_i itself (the
     # same array, as in reactions.solve): the kernel left its rows of ``on`` unwritten
-    on, tree = per(out["on"]), per(out["tree"])
+    on_second, tree = _per(on, shape), _per(tree, shape)
     for i in range(1, n):
         if P.sign[i] > 0 and P.driver_of[i] < 0:
-            on[P.tree_joint[i]] = tree[i]
-    return dyn, Reactions(on, tree)
+            on_second[P.tree_joint[i]] = tree[i]
+    return Reactions(on_second, tree)
 
 
 class _Again:
-    """The kernel run again on the same input, keeping its internals, once, when the first of
+    """A stage run again on the same input, keeping its internals, once, when the first of
     them is read (a plain class, so that the solutions holding it stay picklable)."""
 
-    def __init__(self, kin: KinematicSolution, loads: Loads, packed: Packed):
-        self.kin, self.loads, self.packed = kin, loads, packed
+    def __init__(self, stage, *args):
+        self.stage, self.args = stage, args
 
     @cached_property
-    def kept(self) -> tuple:
-        return solve(self.kin, self.loads, self.packed, internals=True)
+    def kept(self):
+        return self.stage(*self.args, internals=True)
 
     def dynamics(self) -> tuple:
         """``(wstar, wtilde, Q)``, as :attr:`DynamicSolution.internals`."""
-        return self.kept[0]._internals
+        return self.kept._internals
 
     def tree(self) -> list:
         """``R_i`` per body, as :attr:`Reactions.internals`."""
-        return self.kept[1].tree
+        return self.kept.tree
