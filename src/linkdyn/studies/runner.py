@@ -25,11 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from .. import compiled
 from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
-from ..kinematics import ACCEPT, driver_values, newton
+from ..kinematics import ACCEPT, driver_values, dyads, newton
 # the assembly's starting guess, to sort designs by whether they close at once
 from ..kinematics.positions import _guess, not_assembled
+from ..kinematics.recursion import forward_positions
 from . import metrics as metrics_mod
 from . import vectorize
 from .params import Space
@@ -39,7 +41,11 @@ METHODS = ("grid", "random", "lhs", "sobol")
 # sweep, within these bounds. Large chunks spread the fixed costs of a chunk (the assembly's
 # restarts for its designs that cannot be assembled); four or more let workers share a sweep.
 CHUNK_SAMPLES = (1_000_000, 10_000_000)
-BATCH_SAMPLES = 250_000    # design-samples solved at once: ~200 MB of time histories at most
+# design-samples solved at once: ~80 MB of time histories at most. Smaller batches run faster
+# per sample (their arrays are reused from the heap and stay nearer the caches; measured on
+# Hoeken: 1e5 about 1.3x faster than 2.5e5, 1e6 four times slower) until each batch's fixed
+# Python costs (assembly, continuation nodes, metrics) take over, below about 5e4
+BATCH_SAMPLES = 100_000
 
 
 def _pandas():
@@ -169,36 +175,59 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
             ok[k], reason[k] = False, _reason(e)
     valid = np.zeros(D, bool)
     out = {name: np.full(D, np.nan) for name in task.metrics}
-    for idx in _batches(builder, lay, guesses, np.flatnonzero(ok), len(task.t)):
+    batches, apart = _batches(builder, lay, guesses, np.flatnonzero(ok), len(task.t))
+    for k in apart:   # no assembly mode closes its dyads: analyze's error, nothing solved
+        reason[k] = _reason(_not_assembled(task.space.model(values[k]), builder.layout))
+    # the backend chosen once for the chunk, so that a small last batch runs it too
+    backend = _backend(task, D * len(task.t))
+    for idx in batches:
         sub = lay if len(idx) == D else lay.take(idx)
         sol = analyze_layout(builder.guess_models({k: g[idx] for k, g in guesses.items()},
-                                                  len(idx)), sub, task.t, backend=task.backend,
+                                                  len(idx)), sub, task.t, backend=backend,
                              designs=Designs(task.space, values[idx]))
         _fill(task, sol, idx, valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
 
 
-def _batches(builder, lay, guesses, idx, T: int) -> list[np.ndarray]:
-    """The designs ``idx`` of a chunk in batches solved at once, of at most ``BATCH_SAMPLES``
-    design-samples each (memory is bounded by a batch's time histories).
+def _backend(task: Task, samples: int) -> str:
+    """The backend of ``task`` resolved for ``samples`` design-samples ('auto': compiled from
+    :data:`linkdyn.compiled.AUTO_MIN_SAMPLES`), so that every batch of a sweep runs it."""
+    kinds = [j.kind for j in task.space.model().joints]
+    return "compiled" if compiled.use_compiled(task.backend, samples, kinds) else "numpy"
 
-    A design whose loops a plain Newton solve from its ``[assembly]`` guess does not close at
-    t = 0 goes to batches of its own: the assembly then tries many restarts, a cost per batch
-    that would otherwise fall on every batch holding one such design. Each design's result
-    does not depend on the batch it is solved in."""
+
+def _batches(builder, lay, guesses, idx, T: int) -> tuple[list[np.ndarray], np.ndarray]:
+    """The designs ``idx`` of a chunk in batches solved at once, of at most ``BATCH_SAMPLES``
+    design-samples each, as equal as may be (memory is bounded by a batch's time histories),
+    and the designs that cannot be assembled whatever the start.
+
+    For a mechanism of dyads, a design whose dyads close in no assembly mode at t = 0
+    (:func:`linkdyn.kinematics.dyads.closable`) is left out of the batches: the assembly would
+    fail it at once. A design whose loops a plain Newton solve from its ``[assembly]`` guess
+    does not close at t = 0 goes to batches of its own: the assembly then tries many restarts,
+    a cost per batch that would otherwise fall on every batch holding one such design. Each
+    design's result does not depend on the batch it is solved in."""
     if not len(idx):
-        return []
+        return [], idx
     sub = lay if len(idx) == lay.designs else lay.take(idx)
     models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
     one = {id(m): _guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
-    q0 = np.stack([one[id(m)] for m in models], axis=-1)
-    q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0][..., 0]
+    q0 = np.stack([one[id(m)] for m in models], axis=-1)[..., None]
+    q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0]
+    can = (np.ones(len(idx), bool) if sub.dyads is None else
+           dyads.closable(sub, sub.dyads, q0, forward_positions)[:, 0])
     with np.errstate(all="ignore"):
-        _, err = newton(sub, q0[..., None])
+        _, err = newton(sub, np.where(can[:, None], q0, np.nan))
     easy = err[:, 0] <= ACCEPT
     size = max(1, BATCH_SAMPLES // max(T, 1))
-    return [part[k:k + size] for part in (idx[easy], idx[~easy])
-            for k in range(0, len(part), size)]
+    return [b for part in (idx[easy], idx[can & ~easy]) if len(part)
+            for b in np.array_split(part, -(-len(part) // size))], idx[~can]
+
+
+def _not_assembled(model, lay) -> AssemblyError:
+    """The error of a design that cannot be assembled at t = 0, as ``analyze`` raises it
+    (``lay``: a layout of its topology)."""
+    return not_assembled(model, lay, driver_values(model, np.zeros(1))[0][:, 0], 0.0)
 
 
 def _fill(task: Task, sol, idx, valid, reason, out) -> None:
@@ -208,8 +237,7 @@ def _fill(task: Task, sol, idx, valid, reason, out) -> None:
     for j in np.flatnonzero(~good):  # the message analyze would give this design alone
         m = sol.designs[j]
         if not np.isfinite(kin.residual[j, 0]) and not np.any(sol.valid[j]):
-            q0 = driver_values(m, np.zeros(1))[0][:, 0]
-            err: AssemblyError = not_assembled(m, kin.layout, q0, 0.0)
+            err: AssemblyError = _not_assembled(m, kin.layout)
         else:
             i = int(np.argmin(sol.valid[j]))
             err = failure(m, task.t[i], kin.residual[j, i])
@@ -345,6 +373,8 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     D, T = len(values), len(task.t)
     if task.builder is None and D:   # the map from parameters to layouts, derived once
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
+    if D:   # one backend for every chunk and batch, by the size of the whole sweep
+        task = replace(task, backend=_backend(task, D * T))
     lo, hi = CHUNK_SAMPLES
     chunk = int(chunk or max(1, min(max(D * T // 4, lo), hi) // max(T, 1)))
     starts = list(range(0, D, chunk))
