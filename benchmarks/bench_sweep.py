@@ -40,7 +40,7 @@ import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
 from linkdyn.studies import sample  # noqa: E402
-from linkdyn.studies.runner import CHUNK_SAMPLES  # noqa: E402
+from linkdyn.studies.runner import default_chunk  # noqa: E402
 
 BOX = {"bodies.ground.points.O4[0]": (60.0, 120.0), "bodies.coupler.points.O3[0]": (90.0, 140.0)}
 METRICS = ["peak_tau_J1", "path_deviation"]
@@ -167,8 +167,7 @@ def main():
           f"worker, same run) {base['rate']:.4g} design-samples/s: the vectorized builder runs "
           f"{one['rate'] / base['rate']:.3g}x faster on one worker")
     print(f"  {cores} workers run {allc['rate'] / one['rate']:.3g}x one worker's rate")
-    lo, hi = CHUNK_SAMPLES
-    chunk = min(D, max(1, min(max(D * T // 4, lo), hi) // T))   # the sweep's default chunk
+    chunk = min(D, default_chunk(D, T))   # the sweep's default chunk on one worker
     st = stages(chunk, T)
     print(f"  one chunk of {chunk} designs, one worker: "
           + ", ".join(f"{k} {v:.3g} s" for k, v in st.items()))

@@ -138,7 +138,8 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
     topo = lay.topo
     dep = list(topo.dependent)
     # batch shape (D, 1): the trailing axis stands for time, so design arrays broadcast
-    q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]
+    guess = {id(m): _guess(m, lay) for m in {id(m): m for m in models}.values()}  # once each
+    q0 = np.stack([guess[id(m)] for m in models], axis=-1)[..., None]
     q_drv0 = np.reshape(q_drv0, (len(topo.driven), -1))   # (n_drivers, 1 or D)
     q0[list(topo.driven)] = q_drv0[..., None]
     # dyads that close in no assembly mode (circles apart, a line missing its circle) cannot be

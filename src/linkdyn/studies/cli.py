@@ -101,8 +101,8 @@ def _show_progress(flag):
 @click.option("--scheduler", metavar="ADDRESS",
               help="Run on this Dask cluster (e.g. tcp://host:8786) instead of local processes.")
 @click.option("--chunk", type=int,
-              help="Designs per chunk (default: a quarter of the designs, within 1e6 to 1e7 "
-                   "design-samples).")
+              help="Designs per chunk (default: a quarter of each worker's share, within 1e6 "
+                   "to 1e7 design-samples).")
 @click.option("--resume", is_flag=True,
               help="Continue an interrupted sweep in OUTDIR: finished chunks are kept.")
 @click.option("--progress/--no-progress", default=None,

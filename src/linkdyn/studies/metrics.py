@@ -38,7 +38,7 @@ from .. import joints as jk
 from ..model import Model
 from ..motion import ConstantSpeed
 
-__all__ = ["names", "evaluate", "path_spec"]
+__all__ = ["names", "evaluate", "path_spec", "reads_reactions"]
 
 
 def _effort(model: Model, joint: str) -> str:
@@ -90,6 +90,13 @@ def check_names(model: Model, wanted, *, path_point=None) -> list[str]:
             raise ModelError(f"no metric '{w}' for this model", field="--metric",
                              fix=_did_you_mean(w, have, "metrics"))
     return list(wanted)
+
+
+def reads_reactions(wanted) -> bool:
+    """Whether any of the metrics ``wanted`` reads the joint reactions (``peak_F_<joint>``, and
+    ``peak_shaking_force``, the ground joints' reactions summed): a sweep solves them only then.
+    """
+    return any(w.startswith("peak_F_") or w == "peak_shaking_force" for w in wanted)
 
 
 def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,

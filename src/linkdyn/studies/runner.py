@@ -37,9 +37,8 @@ from . import vectorize
 from .params import Space
 
 METHODS = ("grid", "random", "lhs", "sobol")
-# design-samples per chunk (the unit of work, of writing and of resuming): a quarter of the
-# sweep, within these bounds. Large chunks spread the fixed costs of a chunk (the assembly's
-# restarts for its designs that cannot be assembled); four or more let workers share a sweep.
+# design-samples per chunk (the unit of work, of writing and of resuming): four chunks per
+# worker, within these bounds (see :func:`default_chunk`)
 CHUNK_SAMPLES = (1_000_000, 10_000_000)
 # design-samples solved at once: ~80 MB of time histories at most. Smaller batches run faster
 # per sample (their arrays are reused from the heap and stay nearer the caches; measured on
@@ -184,7 +183,8 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
         sub = lay if len(idx) == D else lay.take(idx)
         sol = analyze_layout(builder.guess_models({k: g[idx] for k, g in guesses.items()},
                                                   len(idx)), sub, task.t, backend=backend,
-                             designs=Designs(task.space, values[idx]))
+                             designs=Designs(task.space, values[idx]),
+                             reactions=metrics_mod.reads_reactions(task.metrics))
         _fill(task, sol, idx, valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
 
@@ -342,6 +342,17 @@ def _fingerprint(task: Task, values: np.ndarray, chunk: int) -> str:
     return h.hexdigest()
 
 
+def default_chunk(D: int, T: int, workers: int = 1) -> int:
+    """Designs per chunk of a sweep of D designs x T samples: a quarter of each worker's share
+    of the sweep (so that K workers finish together within about a chunk), within
+    ``CHUNK_SAMPLES`` design-samples. Memory does not depend on it (it is bounded by the batch,
+    ``BATCH_SAMPLES``); a chunk's fixed costs (sorting its designs into batches, the first load
+    of the compiled kernels in a fresh worker) are spread over at least 1e6 design-samples; and
+    the backend is the sweep's, so a small chunk does not fall back to numpy."""
+    lo, hi = CHUNK_SAMPLES
+    return max(1, min(max(D * T // (4 * max(workers, 1)), lo), hi) // max(T, 1))
+
+
 def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | None = None,
         workers: int = 1, scheduler=None, progress: bool = False, _stop_after: int | None = None):
     """Evaluate designs ``values`` (D, P) in chunks; the table of designs (pandas DataFrame).
@@ -355,8 +366,9 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
         Keep the finished chunks of an interrupted sweep of the same study in ``outdir`` and
         compute only the others (a different study there is an error).
     chunk : int, optional
-        Designs per chunk (default: a quarter of the designs, within ``CHUNK_SAMPLES``
-        design-samples; memory is bounded by the batch, ``BATCH_SAMPLES``, not the chunk).
+        Designs per chunk (default :func:`default_chunk`: a quarter of each worker's share,
+        within ``CHUNK_SAMPLES`` design-samples; memory is bounded by the batch,
+        ``BATCH_SAMPLES``, not the chunk).
     workers : int
         Local worker processes (1: this process).
     scheduler : str or distributed.Client, optional
@@ -375,8 +387,7 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
     if D:   # one backend for every chunk and batch, by the size of the whole sweep
         task = replace(task, backend=_backend(task, D * T))
-    lo, hi = CHUNK_SAMPLES
-    chunk = int(chunk or max(1, min(max(D * T // 4, lo), hi) // max(T, 1)))
+    chunk = int(chunk or default_chunk(D, T, workers))
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}
     out = Path(outdir) if outdir is not None else None
