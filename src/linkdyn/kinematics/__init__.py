@@ -2,10 +2,13 @@
 
 The loops are cut at the topology's cut joints, leaving a tree. Twists propagate along it
 (:mod:`.recursion`); at every cut the relative twist of its two bodies must vanish, ``J qd = 0``,
-which gives the dependent joint rates and, differentiated, their accelerations
-(:mod:`.solution`). Positions are solved at t = 0 from the ``[assembly]`` guess and followed along
-the branch to every sample (:mod:`.positions`), in closed form where the loops are RRR dyads
-(:mod:`.dyads`). The geometry the recursions use is compiled once per model (:mod:`.layout`).
+which gives the dependent joint rates and, differentiated, their accelerations. The stage takes
+a state: :func:`at_state` (:mod:`.state`) closes the loops at given independent coordinates and
+solves the rates and accelerations. :func:`solve` (:mod:`.solution`) drives it by time: the
+drivers' motions give the state, and the branch assembled at t = 0 from the ``[assembly]`` guess
+and followed to every sample (:mod:`.positions`) gives the positions' guess, closed in closed
+form where the loops are RRR dyads (:mod:`.dyads`). The geometry the recursions use is compiled
+once per model (:mod:`.layout`).
 
 Every function works on arrays with leading batch axes (samples, designs); the loops run over
 bodies, never over samples.
