@@ -37,8 +37,8 @@ import numpy as np
 
 from .errors import InvalidValue
 
-__all__ = ["Expr", "ExpressionError", "parse", "CONSTANTS", "FUNCTIONS", "MAX_LENGTH",
-           "MAX_DEPTH", "MAX_NODES"]
+__all__ = ["Expr", "ExpressionError", "parse", "flatten", "CONSTANTS", "FUNCTIONS", "OPCODES",
+           "MAX_LENGTH", "MAX_DEPTH", "MAX_NODES"]
 
 MAX_LENGTH = 10_000     # characters of a formula
 MAX_DEPTH = 100         # nesting levels: parentheses, call arguments, unary signs, powers
@@ -270,6 +270,59 @@ def _program(root: Expr):
         frees[k].append(i)
     object.__setattr__(root, "_program", (nodes, children, frees))
     return root._program
+
+
+# ------------------------------------------------------------------------------ op codes
+
+#: the op code of each node kind in a flattened program (:func:`flatten`): ``num`` a constant,
+#: ``var`` a variable's slot, the operators, :data:`FUNCTIONS` and :data:`COMPARISONS`
+OPCODES = {op: k for k, op in enumerate(
+    ("num", "var", "+", "-", "*", "/", "**", "neg", *FUNCTIONS, *COMPARISONS))}
+
+
+def flatten(formulas, slots: dict[str, tuple[int, float]]):
+    """Formulas as one flat program of op codes, for an evaluator that runs without Python (the
+    compiled right-hand side of :mod:`linkdyn.forward`): the distinct nodes of all formulas,
+    children first (:func:`_program`), each a row ``[op, child 1, child 2, child 3]``.
+
+    Parameters
+    ----------
+    formulas : sequence of Expr or float
+        A float is a constant (one ``num`` node).
+    slots : dict
+        Each variable's ``(slot, scale)``: a ``var`` node reads ``x[slot] / scale`` of the
+        evaluator's variables ``x``.
+
+    Returns
+    -------
+    code : ndarray (N, 4) int64
+        ``[OPCODES[op], children...]`` (unused children -1; a ``var``'s first is its slot).
+    value : ndarray (N,)
+        A ``num``'s constant, a ``var``'s scale, else 0.
+    roots : ndarray (len(formulas),) int64
+        The row of each formula's value.
+    """
+    code, value, roots, seen = [], [], [], {}
+    alive = [f if isinstance(f, Expr) else Expr("num", (float(f),)) for f in formulas]
+    for f in alive:     # (all alive while ``seen`` holds their nodes' ids)
+        nodes, children, _ = _program(f)
+        for node, kids in zip(nodes, children):
+            if id(node) in seen:
+                continue
+            seen[id(node)] = len(code)
+            row = [OPCODES[node.op], -1, -1, -1]
+            if node.op == "num":
+                value.append(float(node.args[0]))
+            elif node.op == "var":
+                row[1], scale = slots[node.args[0]]
+                value.append(float(scale))
+            else:
+                row[1:1 + len(kids)] = [seen[id(nodes[i])] for i in kids]
+                value.append(0.0)
+            code.append(row)
+        roots.append(seen[id(nodes[-1])])
+    return (np.array(code, np.int64).reshape(-1, 4), np.array(value, float),
+            np.array(roots, np.int64))
 
 
 # ------------------------------------------------------------------------------ parsing

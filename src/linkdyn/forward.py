@@ -32,7 +32,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import joints as jk, loads as loads_mod, reactions as reactions_mod
+from . import compiled, joints as jk, loads as loads_mod, reactions as reactions_mod
 from .analysis import SINGULAR, Solution
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
@@ -47,6 +47,8 @@ METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
 MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
+AUTO_RHS = 20_000    # backend "auto": right-hand sides after which the compiled one is used
+#                      (compiling costs ~30 s once, about as much as 20,000 numpy evaluations)
 
 
 class _Free:
@@ -303,8 +305,12 @@ class Simulation(Solution):
 class _System:
     """The ODE ``y' = F(t, y)`` of F7 with ``y = [q_f, qd_f, W]`` and the branch it follows."""
 
-    def __init__(self, part: Partition, q0: np.ndarray, qd0: np.ndarray):
+    def __init__(self, part: Partition, q0: np.ndarray, qd0: np.ndarray, fast: bool = False):
         self.part, self.lay = part, part.layout
+        # the compiled right-hand side (linkdyn.forward_compiled), else numpy's stages
+        self.kernel = None
+        if fast:
+            self.use_compiled()
         self.nd, self.nf = part.n_drivers, len(part.free)
         topo = self.lay.topo
         self.ind, self.dep = np.array(topo.driven, int), np.array(topo.dependent, int)
@@ -317,6 +323,12 @@ class _System:
         self.set_reference(0.0, q0, qd0)
         self.last = None
         self.nfev = 0
+
+    def use_compiled(self):
+        """Evaluate the right-hand side by the compiled kernel from now on (the numpy path stays
+        for states whose loops Newton's method from the guess does not close)."""
+        from .forward_compiled import Kernel
+        self.kernel = Kernel(self.part)
 
     def set_reference(self, t0, q, qd, qdd=None, J=None):
         """The state (time, tree q, qd, qdd (n,)) the guesses are extrapolated from, and the
@@ -391,6 +403,11 @@ class _System:
     def __call__(self, t, y):
         nf = self.nf
         self.nfev += 1
+        if self.kernel is not None:
+            out = self.kernel(t, y, self.ref)
+            if out is not None:
+                self.last = (t, y.copy(), None, None)
+                return out
         tt = np.array([t])
         q_ind = np.concatenate((driver_values(self.part.model, tt)[0], y[:nf, None]))
         qdd, kin, power = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
@@ -404,9 +421,13 @@ class _System:
         if self.last is None or self.last[0] != t or not np.array_equal(self.last[1], y):
             self(t, y)
         _, _, kin, qdd_f = self.last
-        q, qd, qdd = (x[:, 0] for x in self.tree(kin, qdd_f))
-        if np.all(np.isfinite(q)) and np.all(np.isfinite(qd)) and np.all(np.isfinite(qdd)):
+        if kin is None:   # the compiled kernel's last evaluation
+            q, qd, qdd = (x.copy() for x in self.kernel.state)
+            J = self.kernel.J.copy()
+        else:
+            q, qd, qdd = (x[:, 0] for x in self.tree(kin, qdd_f))
             J = kin.jacobian[:, :, 0, 0]
+        if J is not None and all(np.all(np.isfinite(x)) for x in (q, qd, qdd)):
             self.set_reference(t, q, qd, qdd, J)
             return J
         return None
@@ -414,7 +435,7 @@ class _System:
 
 def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
              method: str = "DOP853", free: tuple[str, ...] | None = None,
-             max_steps: int = MAX_STEPS) -> Simulation:
+             max_steps: int = MAX_STEPS, backend: str | None = None) -> Simulation:
     """Integrate the free degrees of freedom of ``model`` from ``[initial]`` and return every
     ``analyze`` quantity at the times ``t``.
 
@@ -430,6 +451,11 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         scipy ODE solver: explicit Runge-Kutta, or implicit (Radau, BDF) for stiff springs.
     free : tuple of str, optional
         The free joints (default: those of ``[initial]``, else chosen automatically).
+    backend : {'auto', 'numpy', 'compiled'}, optional
+        The right-hand side's evaluation (default ``LINKDYN_BACKEND`` or ``'auto'``): numpy's
+        array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
+        with numba installed); ``'auto'`` compiles once a run has made :data:`AUTO_RHS`
+        evaluations. The outputs are computed by numpy's stages either way.
 
     Returns
     -------
@@ -458,6 +484,13 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         if not (np.isfinite(tol) and tol > 0):
             raise ModelError(f"{name} must be a positive number, got {tol}", field=f"--{name}",
                              fix=f"Give e.g. --{name} 1e-8")
+    kinds = [j.kind for j in model.joints]
+    try:
+        fast = compiled.use_compiled(backend, 0, kinds)                  # asked for
+        may = compiled.use_compiled(backend, compiled.AUTO_MIN_SAMPLES, kinds)   # once it pays
+    except (ValueError, ImportError) as err:
+        raise ModelError(str(err), field="backend",
+                         fix=f"Use one of {', '.join(compiled.BACKENDS)}") from None
     part = partition(model, free)
     topo = part.layout.topo
     nd, nf = part.n_drivers, len(part.free)
@@ -465,7 +498,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
     q_f0 = q0[list(topo.driven[nd:])]
-    system = _System(part, q0, np.zeros(topo.n))
+    system = _System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
     J = system.accept(0.0, y)
     if J is None:
@@ -490,7 +523,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             part = _variant(part, best)
             _, q, qd, qdd, _ = system.ref
             nfev += system.nfev
-            system = _System(part, q, qd)
+            system = _System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
@@ -522,6 +555,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
             y, t_now = solver.y, solver.t
+            if may and not fast and nfev + system.nfev >= AUTO_RHS:
+                fast = True          # "auto": the compiled right-hand side pays from here on
+                system.use_compiled()
             if _better(part, J) is not None:
                 break
     nfev += system.nfev

@@ -14,8 +14,10 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
+from .kinematics.recursion import relative
 from .model import Model
-from .planar import cross, dot, shift_twist, stack_last, twist
+from .planar import _stack, about, at, dot, stack_last, turned, twist
+from .steps import select, step
 
 
 @dataclass(frozen=True)
@@ -57,15 +59,71 @@ def has_potential(lay) -> bool:
     return bool(np.any(lay.gravity != 0)) or any(r.kind == "spring" for r in lay.loads)
 
 
+# --- the steps: one load, on component tuples (arrays, or floats in a compiled kernel) -------
+
+@step
+def body_point(c, s, r, t, p):
+    """Global position and velocity ``(x, y)`` of the point ``p`` of a body (its frame, from O),
+    the body's cosine ``c``, sine ``s``, reference point ``r`` and twist ``t`` at O."""
+    # r + R p, and the velocity of A(R p) t
+    a = turned(c, s, p)
+    v = at(t, a)
+    return (r[0] + a[0], r[1] + a[1]), (v[1], v[2])
+
+
+@step
+def force_at(f, r_o, r):
+    """The wrench ``(n, fx, fy)`` about ``r_o`` of the force ``f`` applied at ``r``:
+    ``[(r - r_o) x f, f]``."""
+    return about((0.0, f[0], f[1]), relative(r_o, r))
+
+
+@step
+def weight(mass, g, r_c):
+    """A body's weight ``m g`` (at its mass centre ``r_c``) and its potential ``-m g . r_c``."""
+    return (mass * g[0], mass * g[1]), -mass * (g[0] * r_c[0] + g[1] * r_c[1])
+
+
+@step
+def spring_force(stiffness, free_length, r1, r2):
+    """Force ``(x, y)`` of a spring on its first point ``r1`` (minus it on ``r2``) and its
+    potential energy, J."""
+    # tension k (l - l0) pulls the two points together; zero free length: the force k d,
+    # defined also where the two points meet
+    d = relative(r1, r2)
+    length = np.sqrt(dot(d, d))
+    tension = stiffness * (length - free_length)
+    zero = free_length == 0
+    f = (select(zero, stiffness * d[0], tension * (d[0] / length)),
+         select(zero, stiffness * d[1], tension * (d[1] / length)))
+    return f, 0.5 * stiffness * (length - free_length) ** 2
+
+
+@step
+def damper_force(damping, r1, v1, r2, v2):
+    """Force ``(x, y)`` of a damper on its first point (minus it on the second) and its power
+    (negative), W."""
+    # tension c dl/dt along the line of the two points
+    d = relative(r1, r2)
+    length = np.sqrt(dot(d, d))
+    u = (d[0] / length, d[1] / length)
+    rate = dot(u, relative(v1, v2))
+    tension = damping * rate
+    return (tension * u[0], tension * u[1]), -damping * rate ** 2
+
+
+# --- the numpy path: the steps on whole arrays, a loop over the loads -------------------------
+
 def _point(kin: KinematicSolution, i: int, name: str):
     """Global position and velocity (2, T) of body i's named point."""
-    a = kin.pose.rotate(i, kin.layout.points[i][name])
-    return kin.pose.r[i] + a, shift_twist(kin.twists[i], a)[1:]
+    pose = kin.pose
+    r, v = body_point(pose.c[i], pose.s[i], pose.r[i], kin.twists[i], kin.layout.points[i][name])
+    return _stack(r), _stack(v)
 
 
 def _add_force(w, kin, i, r, f):
     """Accumulate force ``f`` (2, T) applied at ``r`` on body i: ``[(r - r_i) x f, f]``."""
-    w[i] = w[i] + twist(cross(r - kin.pose.r[i], f), f)
+    w[i] = w[i] + _stack(force_at(f, kin.pose.r[i], r))
 
 
 def values(lay, load, kin: KinematicSolution) -> np.ndarray:
@@ -114,9 +172,9 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
     if np.any(g != 0):
         for i in range(1, topo.n):
             r_c = kin.pose.point(i, lay.com[i])
-            f = np.stack([np.broadcast_to(lay.mass[i] * g[k], r_c.shape[1:]) for k in range(2)])
-            _add_force(w, kin, i, r_c, f)
-            pe -= lay.mass[i] * (g[0] * r_c[0] + g[1] * r_c[1])
+            f, pe_i = weight(lay.mass[i], g, r_c)
+            _add_force(w, kin, i, r_c, np.stack([np.broadcast_to(x, r_c.shape[1:]) for x in f]))
+            pe += pe_i
     for load in lay.loads:
         i = load.body
         if load.kind == "force":
@@ -148,21 +206,13 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
             j = load.body2
             r1, v1 = _point(kin, i, load.point)
             r2, v2 = _point(kin, j, load.point2)
-            d = r2 - r1
-            length = np.sqrt(dot(d, d))
-            u = d / length
             if load.kind == "spring":
-                # tension k (l - l0) pulls the two points together
-                tension = load.stiffness * (length - load.free_length)
-                pe += 0.5 * load.stiffness * (length - load.free_length) ** 2
-                # zero free length: the force k d, defined also where the two points meet
-                f = np.where(np.asarray(load.free_length) == 0, load.stiffness * d, tension * u)
+                f, pe_k = spring_force(load.stiffness, load.free_length, r1, r2)
+                pe += pe_k
             else:
-                # damper: tension c dl/dt
-                rate = dot(u, v2 - v1)
-                tension = load.damping * rate
-                power -= load.damping * rate ** 2
-                f = tension * u
+                f, power_k = damper_force(load.damping, r1, v1, r2, v2)
+                power += power_k
+            f = _stack(f)
             _add_force(w, kin, i, r1, f)
             _add_force(w, kin, j, r2, -f)
     # the ground's O_0 is the global origin: w[0] is the load on the ground about it, which does
