@@ -28,7 +28,7 @@ from . import compiled, expr
 from . import joints as jk
 from .compiled import factor, njit, substitute
 from .dynamics.denoc import generalized_force, newton_euler_wrench, plus_child
-from .kinematics.positions import ACCEPT
+from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
                                    cut_coordinate, cut_frame, jacobian_column)
 from .kinematics.state import MAXITER, STEP_TOL
@@ -155,7 +155,7 @@ def _frames(cuts, cgeo, c, s, r, P):
 @njit
 def _residual(cuts, cgeo, size, phi, P, g):
     """The closure residual ``g`` (n_rows,) (the kinds' ``residual``); returns it scaled, the
-    largest row with the metres over ``size`` (positions._scaled)."""
+    largest row with the metres over ``size`` (:func:`~linkdyn.kinematics.positions.scaled_error`)."""
     err = 0.0
     for k in range(cuts.shape[0]):
         a, b, row, rows = cuts[k, CUT_A], cuts[k, CUT_B], cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
@@ -163,8 +163,7 @@ def _residual(cuts, cgeo, size, phi, P, g):
                         (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
         for j in range(rows):
             g[row + j] = x[j]
-            m = abs(x[j] / size if cuts[k, CUT_METRES + j] else x[j])
-            err = math.nan if m != m or err != err else max(err, m)
+            err = scaled_error(err, x[j], cuts[k, CUT_METRES + j] != 0, size)
     return err
 
 
