@@ -11,8 +11,8 @@ equation is a step (:mod:`linkdyn.steps`) that the numpy path runs on arrays:
 ``child_twist``, ``child_twist_rate``, ``cut_bias``, ``cut_coordinate``, the joint kinds'
 ``residual``; :mod:`linkdyn.loads`' ``body_point``, ``force_at``, ``weight``, ``spring_force``,
 ``damper_force``; :mod:`linkdyn.dynamics.denoc`'s ``newton_euler_wrench``, ``plus_child``,
-``generalized_force``; the linear systems by the LU primitives of :mod:`linkdyn.compiled`. This
-file holds the loops and the data movement.
+``generalized_force``, ``less_cut``; the linear systems by the LU primitives of
+:mod:`linkdyn.compiled`. This file holds the loops and the data movement.
 
 Where Newton's method from the guess does not close the loops, the kernel says so and the
 caller evaluates that state by the numpy path (whose damped restart takes over).
@@ -27,7 +27,7 @@ import numpy as np
 from . import compiled, expr
 from . import joints as jk
 from .compiled import factor, njit, substitute
-from .dynamics.denoc import generalized_force, newton_euler_wrench, plus_child
+from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
 from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
                                    cut_coordinate, cut_frame, jacobian_column)
@@ -495,10 +495,14 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
                 b[a, 0] = Q[dep[a]]
             substitute(At, perm_t, rel_t, m, 1, b, lam, PIVOT_TOL)
         for j in range(k_ind):
-            acc = 0.0
-            for a in range(m):
-                acc += J[a, ind[j] - 1] * lam[a, 0]
-            tau[j, cs] = Q[ind[j]] - acc
+            col, tau_j = ind[j] - 1, Q[ind[j]]
+            for k in range(nc):   # one cut's share at a time: tau = Q_ind - J_ind^T lam
+                row, rows = cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
+                tau_j = less_cut(tau_j, (J[row, col], J[row + 1, col] if rows > 1 else 0.0,
+                                         J[row + 2, col] if rows > 2 else 0.0),
+                                 (lam[row, 0], lam[row + 1, 0] if rows > 1 else 0.0,
+                                  lam[row + 2, 0] if rows > 2 else 0.0))
+            tau[j, cs] = tau_j
     # tau_f = H qdd_f + h; no actuator in a free joint: H qdd_f = -h              (F4-F6)
     qdd_f = np.zeros(nf)
     if nf == 1:
