@@ -66,18 +66,24 @@ def child(designs: int, samples: int, workers: int, per_design: int = 0) -> dict
         task = replace(task, builder=replace(task.builder, A=None, why="per-design baseline"))
     # imports and the compiled kernels' first load (a batch large enough for them)
     run(task, sample(list(BOX.values()), "sobol", min(designs, 250_000 // samples + 1), seed=1))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu()
     df, _ = run(task, values, workers=workers)
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, _cpu() - c0
     rss = [resource.getrusage(w).ru_maxrss * 1024 for w in (resource.RUSAGE_SELF,
                                                              resource.RUSAGE_CHILDREN)]
     return {"designs": designs, "samples": samples, "workers": workers, "seconds": seconds,
-            "rate": designs * samples / seconds, "valid": int(df.valid.sum()),
-            "peak_bytes": max(rss)}
+            "rate": designs * samples / seconds, "cpu": cpu, "cpu_rate": designs * samples / cpu,
+            "valid": int(df.valid.sum()), "peak_bytes": max(rss)}
+
+
+def _cpu() -> float:
+    """CPU seconds (user + system) of this process and of its finished worker processes."""
+    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
+                                                resource.getrusage(resource.RUSAGE_CHILDREN)))
 
 
 def stages(designs: int, samples: int) -> dict:
-    """Seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
+    """CPU seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
     parameter arrays, the loader's checks on the arrays and the batching, the solve
     (``analyze_layout``), the metrics and reasons."""
     from linkdyn.studies import Task, space
@@ -94,24 +100,24 @@ def stages(designs: int, samples: int) -> dict:
 
     def timed(f, key):
         def g(*a, **k):
-            t0 = time.perf_counter()
+            t0 = time.process_time()
             try:
                 return f(*a, **k)
             finally:
-                clock[key] += time.perf_counter() - t0
+                clock[key] += time.process_time() - t0
         return g
     solve, fill = runner.analyze_layout, runner._fill
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
     try:
         runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
         clock.update(solve=0.0, metrics=0.0)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         Z = task.builder.numbers(values)
         task.builder.stacked(Z)
-        layouts = time.perf_counter() - t0
-        t0 = time.perf_counter()
+        layouts = time.process_time() - t0
+        t0 = time.process_time()
         runner.evaluate(task, values)
-        total = time.perf_counter() - t0
+        total = time.process_time() - t0
     finally:
         runner.analyze_layout, runner._fill = solve, fill
     return {"layouts": layouts, "solve": clock["solve"], "metrics": clock["metrics"],
@@ -160,9 +166,12 @@ def main():
     small = in_fresh_process(max(D // 4, 1), T, 1)
     base = in_fresh_process(max(D // 10, 1), T, 1, per_design=1)
     ceiling = None if args.no_ceiling else ceiling_rate(min(D * T, 4_000_000))
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"  load average (1 min) at the end of the runs: {load:.2f} on {os.cpu_count()} cores")
     for label, r in (("one worker", one), (f"{cores} workers", allc)):
         print(f"  {label:<11} {r['rate']:10.4g} design-samples/s  ({r['seconds']:.3g} s, "
-              f"{r['valid']} valid, peak memory of a process {r['peak_bytes'] / 2**20:.0f} MB)")
+              f"{r['valid']} valid, peak memory of a process {r['peak_bytes'] / 2**20:.0f} MB); "
+              f"per CPU second {r['cpu_rate']:.4g} ({r['cpu']:.3g} s of CPU)")
     print(f"  per-design path (a model and a layout per design; {base['designs']} designs, one "
           f"worker, same run) {base['rate']:.4g} design-samples/s: the vectorized builder runs "
           f"{one['rate'] / base['rate']:.3g}x faster on one worker")
@@ -175,6 +184,8 @@ def main():
           f"at {D} designs {one['peak_bytes'] / 2**20:.0f} MB (one worker): target < 1 GB "
           f"{'met' if max(one['peak_bytes'], allc['peak_bytes']) < TARGET_MEMORY else 'NOT met'}")
     per_core = allc["rate"] / cores
+    print(f"  per CPU second on {cores} workers {allc['cpu_rate']:.4g} design-samples/s (the "
+          f"rate per core of an otherwise idle machine, processes' start-up included)")
     if ceiling:
         print(f"  hand-written compiled kernel (bench_ceiling, full analysis, one core) "
               f"{ceiling:.4g} samples/s: the sweep on one worker runs at "

@@ -40,11 +40,12 @@ METHODS = ("grid", "random", "lhs", "sobol")
 # design-samples per chunk (the unit of work, of writing and of resuming): four chunks per
 # worker, within these bounds (see :func:`default_chunk`)
 CHUNK_SAMPLES = (1_000_000, 10_000_000)
-# design-samples solved at once: ~80 MB of time histories at most. Smaller batches run faster
-# per sample (their arrays are reused from the heap and stay nearer the caches; measured on
-# Hoeken: 1e5 about 1.3x faster than 2.5e5, 1e6 four times slower) until each batch's fixed
-# Python costs (assembly, continuation nodes, metrics) take over, below about 5e4
-BATCH_SAMPLES = 100_000
+# design-samples solved at once: ~120 MB of time histories at most. Batches of 1e5 to 2e5 run
+# fastest per sample (their arrays are reused from the heap and stay nearer the caches;
+# measured on Hoeken, CPU time of a 5,000-design chunk: 0.66-0.80 s at 1.5e5, 1.0-1.05 s at
+# 5e4 where each batch's fixed Python costs (assembly, continuation nodes, metrics) take over,
+# 1.1-1.6 s at 2.5e5 and 4-6.5 s at 1e6)
+BATCH_SAMPLES = 150_000
 
 
 def _pandas():
