@@ -13,7 +13,7 @@ largest deviation of the free joint's angle from the reference at the output sam
 to its range. Then the energy drift of Hoeken's four-bar spinning freely (no drivers, no
 loads, no gravity: a conservative closed loop whose crank speed fluctuates; by default with the
 flywheel of ``hoeken_motor``) over ``--turns`` crank turns at each tolerance (F9, sampled once
-per turn). Last, the time of one
+per turn), without and with the energy projection (F11). Last, the time of one
 right-hand-side evaluation of Hoeken.
 
 Usage: python benchmarks/bench_simulate.py [--duration T] [--windows N] [--chain-duration T]
@@ -87,21 +87,30 @@ def table(name, model, t, free, tols, steps, ref_tol, motor=None):
     print(f"\n{name}: {t[-1]:g} s, {len(t)} output samples; reference linkdyn DOP853 rtol "
           f"{ref_tol:g}")
     start = time.perf_counter()
-    ref = simulate(model, t, rtol=ref_tol, atol=ref_tol * 1e-2)
+    ref = simulate(model, t, rtol=ref_tol, atol=ref_tol * 1e-2, backend="numpy")
     print(f"  reference: {time.perf_counter() - start:.2f} s, {ref.stats['steps']} steps, "
           f"energy drift {ref.energy_drift:.1e}")
     q_ref = ref.columns[f"q_{free}"]
     scale = float(np.ptp(q_ref)) or 1.0
-    print(f"  {'solver':30s} {'wall s':>8s} {'steps':>7s} {'RHS':>7s} {'energy':>9s} "
+    print(f"  {'solver':34s} {'wall s':>8s} {'steps':>7s} {'RHS':>7s} {'energy':>9s} "
           f"{'error':>9s}")
-    for tol in tols:
-        start = time.perf_counter()
-        s = simulate(model, t, rtol=tol, atol=tol * 1e-2)
-        wall = time.perf_counter() - start
-        err = float(np.max(np.abs(s.columns[f"q_{free}"] - q_ref))) / scale
-        print(f"  {'linkdyn DOP853 rtol ' + format(tol, 'g'):30s} {wall:8.2f} "
-              f"{s.stats['steps']:7d} {s.stats['rhs_evaluations']:7d} "
-              f"{s.energy_drift:9.1e} {err:9.1e}")
+    try:
+        import numba  # noqa: F401
+        backends = ("numpy", "compiled")
+    except ImportError:
+        backends = ("numpy",)
+    for backend in backends:   # the right-hand side by numpy's stages, then compiled
+        if backend == "compiled":   # compiled before the timing
+            simulate(model, t[:2], rtol=1e-4, atol=1e-6, backend=backend)
+        for tol in tols:
+            start = time.perf_counter()
+            s = simulate(model, t, rtol=tol, atol=tol * 1e-2, backend=backend)
+            wall = time.perf_counter() - start
+            err = float(np.max(np.abs(s.columns[f"q_{free}"] - q_ref))) / scale
+            name = "linkdyn DOP853" if backend == "numpy" else "linkdyn compiled DOP853"
+            print(f"  {name + ' rtol ' + format(tol, 'g'):34s} {wall:8.2f} "
+                  f"{s.stats['steps']:7d} {s.stats['rhs_evaluations']:7d} "
+                  f"{s.energy_drift:9.1e} {err:9.1e}")
     try:
         import mujoco  # noqa: F401
     except ImportError:
@@ -110,7 +119,7 @@ def table(name, model, t, free, tols, steps, ref_tol, motor=None):
     for dt in steps:
         q, wall = mujoco_run(model, ref, t, dt, free, motor)
         err = float(np.max(np.abs(q - q_ref))) / scale
-        print(f"  {'MuJoCo RK4 dt ' + format(dt, 'g'):30s} {wall:8.2f} "
+        print(f"  {'MuJoCo RK4 dt ' + format(dt, 'g'):34s} {wall:8.2f} "
               f"{int(round(t[-1] / dt)):7d} {'':>7s} {'':>9s} {err:9.1e}")
 
 
@@ -136,18 +145,23 @@ def energy_turns(turns: int, tols, method="DOP853", example="hoeken"):
     print(f"\n{method}, Hoeken spinning freely ({which}), {turns} crank turns "
           "(sampled once per turn)")
     marks = [n for n in (10, 100) if n < turns]
-    print(f"  {'rtol':>8s} {'turns':>7s} {'wall s':>8s} {'steps':>7s} {'RHS':>8s} "
-          + "".join(f"{f'drift {n}':>12s}" for n in marks) + f"{f'drift {turns}':>12s}")
+    print(f"  {'rtol':>8s} {'projected':>9s} {'turns':>7s} {'wall s':>8s} {'steps':>7s} "
+          f"{'RHS':>8s} " + "".join(f"{f'drift {n}':>12s}" for n in marks)
+          + f"{f'drift {turns}':>12s}")
     for tol in tols:
-        start = time.perf_counter()
-        s = simulate(model, t, rtol=tol, atol=tol * 1e-2, method=method, max_steps=10**7)
-        wall = time.perf_counter() - start
-        done = (s.columns["q_J1"][-1] - s.columns["q_J1"][0]) / (2 * math.pi)
-        # F9 over the first n turns (its scale, the largest kinetic energy, is the whole run's)
-        e = np.abs(s.energy - s.energy[0] - s.work) / np.max(s.kinetic_energy)
-        print(f"  {tol:8.0e} {done:7.0f} {wall:8.1f} {s.stats['steps']:7d} "
-              f"{s.stats['rhs_evaluations']:8d} "
-              + "".join(f"{np.max(e[:n + 1]):12.1e}" for n in marks) + f"{s.energy_drift:12.1e}")
+        for project in (False, True):   # the integrator alone, then with F11's projection
+            start = time.perf_counter()
+            s = simulate(model, t, rtol=tol, atol=tol * 1e-2, method=method, max_steps=10**7,
+                         project=project)
+            wall = time.perf_counter() - start
+            done = (s.columns["q_J1"][-1] - s.columns["q_J1"][0]) / (2 * math.pi)
+            # F9 over the first n turns (its scale, the largest kinetic energy, is the whole
+            # run's)
+            e = np.abs(s.energy - s.energy[0] - s.work) / np.max(s.kinetic_energy)
+            print(f"  {tol:8.0e} {'yes' if project else 'no':>9s} {done:7.0f} {wall:8.1f} "
+                  f"{s.stats['steps']:7d} {s.stats['rhs_evaluations']:8d} "
+                  + "".join(f"{np.max(e[:n + 1]):12.1e}" for n in marks)
+                  + f"{s.energy_drift:12.1e}")
 
 
 def rhs_time(model, repeat=200, h=2e-3, fast=False):

@@ -52,5 +52,6 @@ def test_bench_simulate():
               "0.05", "--tols", "1e-4", "--steps", "1e-3", "--samples", "3", "--repeat", "2",
               "--turns", "1", "--turn-tols", "1e-4")
     assert out.count("  linkdyn DOP853 rtol 0.0001") == 2 and out.count("MuJoCo RK4 dt") == 2
+    assert out.count("  linkdyn compiled DOP853 rtol 0.0001") == 2
     assert "one right-hand side of Hoeken" in out and "  compiled: " in out
     assert "Hoeken spinning freely (with the flywheel of hoeken_motor), 1 crank turns" in out

@@ -21,7 +21,11 @@ cut-joint constraints (coordinate partitioning, F1).
 - Integration: ``y = [q_f, qd_f, W]`` (W the work of drivers and non-conservative loads, F8)
   by a scipy ODE solver (explicit RK45/DOP853/RK23, implicit Radau/BDF, or LSODA) with the
   user's tolerances; outputs at the requested times from each step's dense output, then every
-  ``analyze`` quantity recomputed at those states by the same stages as ``analyze``.
+  ``analyze`` quantity recomputed at those states by the same stages as ``analyze``. With an
+  explicit method each accepted step's end is put back on the energy balance by scaling the
+  free rates (F11).
+- The right-hand side runs numpy's stages, or one compiled function per evaluation
+  (:mod:`linkdyn.forward_compiled`, ``backend=``).
 """
 
 from __future__ import annotations
@@ -47,6 +51,8 @@ METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
 MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
+EXPLICIT = ("RK45", "DOP853", "RK23")   # the methods whose steps the energy projection joins
+PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
 AUTO_RHS = 20_000    # backend "auto": right-hand sides after which the compiled one is used
 #                      (compiling costs ~30 s once, about as much as 20,000 numpy evaluations)
 
@@ -371,6 +377,9 @@ class _System:
         # the layout holds the model's gravity and load rows (not rebuilt at every call)
         applied = loads_mod.wrenches(None, kin)
         dyn = denoc.solve(kin, applied)
+        # the energies of the first state (the accelerations do not enter them)
+        self.energy = (float(dyn.kinetic_energy[0, 0]),
+                       float(np.broadcast_to(applied.potential_energy, kin.shape)[0, 0]))
         tau = np.moveaxis(dyn.tau, -1, 0)                        # (k, 1 + nf, T)
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
@@ -415,6 +424,48 @@ class _System:
         self.last = (t, y.copy(), kin, qdd)
         return np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
 
+    def shift(self, rows, by) -> None:
+        """Move the reference's tree coordinates ``rows`` by ``by``: whole turns of free angles,
+        which leave every pose as it is."""
+        t0, q, qd, qdd, S = self.ref
+        q = q.copy()
+        q[rows] += by
+        self.ref = (t0, q, qd, qdd, S)
+
+    def energies(self, t, y) -> tuple[float, float]:
+        """Kinetic and potential energy (J) at the state ``(t, y)``."""
+        if self.last is None or self.last[0] != t or not np.array_equal(self.last[1], y):
+            self(t, y)
+        if self.last[2] is None:   # the compiled kernel's last evaluation
+            return float(self.kernel.energy[0]), float(self.kernel.energy[1])
+        return self.energy
+
+    def project(self, t, y, e0) -> np.ndarray | None:
+        """``y`` with the free rates scaled by the factor that puts it on the energy balance
+        ``T + V - W = E0`` (F11), else None (no such factor within ``PROJECT_MAX`` of 1).
+
+        ``T`` is quadratic in the factor ``a`` (the drivers' rates fixed): ``T(a) = T_2 a^2 +
+        T_1 a + T_0``, from ``T`` at ``a = 1`` (and, with drivers, at 0 and -1)."""
+        nf = self.nf
+        if not nf:
+            return None
+        ke1, pe = self.energies(t, y)
+        target = e0 + y[-1] - pe
+        if self.nd:
+            ke0 = self.energies(t, np.concatenate((y[:nf], 0.0 * y[nf:2 * nf], y[-1:])))[0]
+            kem = self.energies(t, np.concatenate((y[:nf], -y[nf:2 * nf], y[-1:])))[0]
+            t2, t1, t0 = 0.5 * (ke1 + kem) - ke0, 0.5 * (ke1 - kem), ke0
+        else:
+            t2, t1, t0 = ke1, 0.0, 0.0
+        disc = t1 * t1 - 4.0 * t2 * (t0 - target)
+        if not (t2 > 0 and disc >= 0):
+            return None
+        roots = ((-t1 + np.sqrt(disc)) / (2 * t2), (-t1 - np.sqrt(disc)) / (2 * t2))
+        a = min(roots, key=lambda x: abs(x - 1.0))
+        if not abs(a - 1.0) <= PROJECT_MAX:
+            return None
+        return np.concatenate((y[:nf], a * y[nf:2 * nf], y[-1:]))
+
     def accept(self, t, y):
         """Move the reference to an accepted step's end ``(t, y)``; the closure Jacobian there
         (n_rows, n - 1), or None where the state does not close."""
@@ -435,7 +486,8 @@ class _System:
 
 def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
              method: str = "DOP853", free: tuple[str, ...] | None = None,
-             max_steps: int = MAX_STEPS, backend: str | None = None) -> Simulation:
+             max_steps: int = MAX_STEPS, backend: str | None = None,
+             project: bool = True) -> Simulation:
     """Integrate the free degrees of freedom of ``model`` from ``[initial]`` and return every
     ``analyze`` quantity at the times ``t``.
 
@@ -456,6 +508,10 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
         with numba installed); ``'auto'`` compiles once a run has made :data:`AUTO_RHS`
         evaluations. The outputs are computed by numpy's stages either way.
+    project : bool
+        With an explicit method (RK45, DOP853, RK23): after every accepted step, scale the free
+        rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the energy of a
+        conservative mechanism to the tolerance over any number of steps.
 
     Returns
     -------
@@ -501,6 +557,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     system = _System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
     J = system.accept(0.0, y)
+    e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
                             drivers=_values(part, q0),
@@ -514,7 +571,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     Y[:, at0] = y[:, None]
     guesses[:, at0] = q0[:, None]
     parts, switches = [part], []
-    steps, nfev, t_now = 0, 0, 0.0
+    steps, nfev, t_now, projections = 0, 0, 0.0, 0
+    # with an explicit method a free angle is integrated less its whole turns (``turns``, rad):
+    # the relative tolerance on it would otherwise loosen as a crank turns on (rtol |q_f|
+    # grows with the turns, and with it the error of every step)
+    turns = np.zeros(nf)
+    angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -522,6 +584,10 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         if best is not None:
             part = _variant(part, best)
             _, q, qd, qdd, _ = system.ref
+            q = q.copy()
+            q[list(parts[-1].layout.topo.driven[nd:])] += turns     # the whole turns back
+            turns = np.zeros(nf)
+            angular = np.array([jk.get(part.layout.kind[i]).angular for i in best], bool)
             nfev += system.nfev
             system = _System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
@@ -552,8 +618,34 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
                 Y[:, inside] = solver.dense_output()(t[inside])
+                Y[:nf, inside] += turns[:, None]
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
+            if project and method in EXPLICIT and solver.status != "failed":
+                # back onto the energy balance: the next step starts there         (F11)
+                y_p = system.project(solver.t, solver.y, e0)
+                if y_p is not None:
+                    f_p = system(solver.t, y_p)
+                    J_p = system.accept(solver.t, y_p)
+                    if J_p is not None and np.all(np.isfinite(f_p)):
+                        solver.y, solver.f, J = y_p, f_p, J_p
+                        projections += 1
+                    else:
+                        system.accept(solver.t, solver.y)
+            whole = np.where(angular, 2 * np.pi * np.round(solver.y[:nf] / (2 * np.pi)), 0.0)
+            if np.any(whole != 0) and solver.status == "running" and method in EXPLICIT:
+                # whole turns of the free angles moved out of the integrated state
+                y_w = solver.y.copy()
+                y_w[:nf] -= whole
+                system.shift(list(topo_free(part)), -whole)
+                f_w = system(solver.t, y_w)
+                J_w = system.accept(solver.t, y_w)
+                if J_w is not None and np.all(np.isfinite(f_w)):
+                    solver.y, solver.f, J = y_w, f_w, J_w
+                    turns += whole
+                else:   # (not expected: the same poses) keep the state as it was
+                    system.shift(list(topo_free(part)), whole)
+                    system.accept(solver.t, solver.y)
             y, t_now = solver.y, solver.t
             if may and not fast and nfev + system.nfev >= AUTO_RHS:
                 fast = True          # "auto": the compiled right-hand side pays from here on
@@ -562,8 +654,14 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 break
     nfev += system.nfev
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
-                 switches=[(float(ts), list(fr)) for ts, fr in switches])
+                 switches=[(float(ts), list(fr)) for ts, fr in switches],
+                 energy_projections=projections)
     return _outputs(parts, segment, t, Y, guesses, stats)
+
+
+def topo_free(part: Partition) -> tuple[int, ...]:
+    """The tree bodies of the free coordinates of ``part``."""
+    return part.layout.topo.driven[part.n_drivers:]
 
 
 def _better(part: Partition, J: np.ndarray) -> tuple[int, ...] | None:

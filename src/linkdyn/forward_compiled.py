@@ -318,7 +318,7 @@ def _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q):
 
 @njit
 def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, code, value,
-               t, y, drv, ext, ref, S, o_y, o_state, o_J):
+               t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
     """``y' = F(t, y)`` (F7) at one state, ``y = [q_f, qd_f, W]``.
 
     Parameters
@@ -349,7 +349,7 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         (m, k) the dependent coordinates' share of the independent ones there (0 x 0: none).
     o_y : float (2 nf + 1,)
         ``y'``; ``o_state`` (3, n) the tree coordinates, rates and accelerations; ``o_J``
-        (n_rows, n - 1) the closure Jacobian.
+        (n_rows, n - 1) the closure Jacobian; ``o_e`` (2,) the kinetic and potential energy.
 
     Returns
     -------
@@ -489,7 +489,9 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         for i in range(n):
             ok = ok and math.isfinite(qd[i]) and math.isfinite(qdd_c[i])
         # the DeNOC inverse dynamics: Q, then J_dep^T lam = Q_dep, tau = Q_ind - J_ind^T lam
-        _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q)
+        ke = _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q)
+        if cs == 0:
+            o_e[0], o_e[1] = ke, pe
         if m > 0:
             for a in range(m):
                 b[a, 0] = Q[dep[a]]
@@ -625,12 +627,13 @@ class Kernel:
         self.ext_none = np.zeros(0)
         self.state = np.zeros((3, n))
         self.J = np.zeros((rows, n - 1))
+        self.energy = np.zeros(2)
 
     def __call__(self, t: float, y: np.ndarray, ref) -> np.ndarray | None:
         """``y'`` (2 nf + 1,) at ``(t, y)`` from the reference ``ref`` = ``(t0, q, qd, qdd,
         S)`` (``_System.ref``), else None where Newton's method from the guess does not close
         the loops; :attr:`state` (3, n) and :attr:`J` hold the tree state and the closure
-        Jacobian of the last call."""
+        Jacobian of the last call, :attr:`energy` its kinetic and potential energy."""
         from .kinematics.positions import driver_values
         t0, q, qd, qdd, S = ref
         self.misc[3] = t0
@@ -646,5 +649,5 @@ class Kernel:
         out = np.empty(len(y))
         status = rhs_kernel(*self.args, float(t), np.ascontiguousarray(y, dtype=float), drv, ext, np.stack((q, qd, qdd)),
                             self.noS if S is None else np.ascontiguousarray(S), out,
-                            self.state, self.J)
+                            self.state, self.J, self.energy)
         return out if status == 0 else None
