@@ -440,3 +440,13 @@ def test_simulation_models_round_trip_through_save(tmp_path):
             if x.value is not None:
                 assert [str(c) for c in x.value.components] == \
                     [str(c) for c in y.value.components]
+
+
+def test_unknown_backend_names_the_field(monkeypatch):
+    m = pendulum(initial_q={"J1": 0.3})
+    with pytest.raises(ModelError, match="backend"):
+        simulate(m, np.linspace(0.0, 0.1, 3), backend="fortran")
+    monkeypatch.setenv("LINKDYN_BACKEND", "gpu")
+    with pytest.raises(ModelError) as err:
+        simulate(m, np.linspace(0.0, 0.1, 3))
+    assert err.value.field == "LINKDYN_BACKEND"

@@ -545,8 +545,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         fast = compiled.use_compiled(backend, 0, kinds)                  # asked for
         may = compiled.use_compiled(backend, compiled.AUTO_MIN_SAMPLES, kinds)   # once it pays
     except (ValueError, ImportError) as err:
-        raise ModelError(str(err), field="backend",
-                         fix=f"Use one of {', '.join(compiled.BACKENDS)}") from None
+        raise ModelError(str(err), field="backend" if backend else "LINKDYN_BACKEND",
+                         fix=f"Use one of {', '.join(compiled.BACKENDS)}"
+                             + ("" if backend else ", or unset LINKDYN_BACKEND")) from None
     part = partition(model, free)
     topo = part.layout.topo
     nd, nf = part.n_drivers, len(part.free)
