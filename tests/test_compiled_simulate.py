@@ -179,3 +179,22 @@ def test_energy_projection_with_a_driver_keeps_the_integrated_balance():
     for key in ("q_J1", "q_J3", "qd_J5", "work"):
         x = ref.columns[key]
         assert np.max(np.abs(s.columns[key] - x)) <= 1e-5 * np.max(np.abs(x)), key
+
+
+def test_auto_backend_compiles_once_a_run_has_made_auto_rhs_evaluations(monkeypatch):
+    """``backend="auto"``: numpy's right-hand side first, the compiled one from the first
+    accepted step after ``AUTO_RHS`` evaluations; the same motion as numpy throughout."""
+    from linkdyn import forward, forward_compiled
+
+    calls = []
+    original = forward_compiled.Kernel.__call__
+    monkeypatch.setattr(forward_compiled.Kernel, "__call__",
+                        lambda self, *args: calls.append(1) or original(self, *args))
+    monkeypatch.setattr(forward, "AUTO_RHS", 100)
+    monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
+    t = np.linspace(0.0, 1.0, 5)
+    auto = simulate(hoeken_motor(), t, rtol=1e-9, atol=1e-11, backend="auto")
+    assert calls and auto.stats["rhs_evaluations"] - len(calls) >= 100
+    ref = simulate(hoeken_motor(), t, rtol=1e-9, atol=1e-11, backend="numpy")
+    x = ref.columns["q_J1"]
+    assert np.max(np.abs(auto.columns["q_J1"] - x)) <= 1e-7 * np.ptp(x)
