@@ -105,7 +105,7 @@ def test_compiled_rhs_equals_numpy_at_random_states(name):
         a, b = slow(t + h, z), fast(t + h, z)
         assert fast.kernel is not None and fast.last[2] is None   # the kernel ran
         scale = np.abs(a) + np.max(np.abs(a))
-        assert np.all(np.abs(b - a) <= 1e-9 * scale), (a, b)
+        assert np.all(np.abs(b - a) <= 1e-11 * scale), (a, b)   # measured: 4e-14 at most
         # the tree state and the Jacobian kept for the reference agree too
         Ja, Jb = slow.accept(t + h, z), fast.accept(t + h, z)
         assert np.allclose(Jb, Ja, rtol=1e-10, atol=1e-10 * np.max(np.abs(Ja)))
