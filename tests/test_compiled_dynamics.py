@@ -214,7 +214,7 @@ def test_comparison_detects_a_wrong_kernel_input():
     model = linkdyn.load(linkdyn.example_path("hoeken"))
     kin = numpy_kinematics(model, times(model, 9))
     ref, _ = both(model, kin)
-    mass = tuple(np.multiply(kin.layout.mass, [1.0, 1.0, 1.001, 1.0]))
+    mass = np.multiply(kin.layout.mass, [1.0, 1.0, 1.001, 1.0])
     heavy = dataclasses.replace(kin, layout=dataclasses.replace(kin.layout, mass=mass))
     wrong = compiled_stages(heavy, loads_mod.wrenches(model, kin), internals=True)
     with pytest.raises(AssertionError):

@@ -24,10 +24,11 @@ import math
 
 import numpy as np
 
-from . import compiled, expr
+from . import expr
 from . import joints as jk
 from .compiled import factor, njit, substitute
 from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
+from .kinematics import layout as lt
 from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
                                    cut_coordinate, cut_frame, jacobian_column)
@@ -546,23 +547,25 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
 
 def tables(part) -> dict:
     """The kernel's arrays of a simulation's partition (:class:`linkdyn.forward.Partition`),
-    read from the packed layout (:func:`linkdyn.compiled.pack`): the one place that knows the
-    layout's arrays."""
+    read from the numeric layout (its integer tables and, design 0's, numbers): the one place
+    that knows the layout's arrays."""
     lay, topo, model = part.layout, part.layout.topo, part.inner
-    P = compiled.pack(lay, len(model.joints))
-    n, nc = len(P.parent), len(P.cut_a)
-    size = float(P.size[0])
-    scale = np.where(P.angular, 1.0, 1.0 / size)   # Newton's step in rad, or m per size
-    tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64), P.angular, P.tree_joint], axis=1)
+    idx, nc = lay.indices, topo.n_loops
+
+    def num(name):   # design 0's number, entity first
+        return lay.per_design(name)[..., 0]
+    size = float(num("size"))
+    scale = np.where(lay.tree[:, lt.ANGULAR], 1.0, 1.0 / size)   # Newton's step in rad, or m/size
+    tree = np.concatenate([lay.tree, idx["tree_joint"][:, None]], axis=1)
     tree[0, JOINT] = 0
-    cuts = np.concatenate([np.stack([P.cut_a, P.cut_b, P.cut_kind, P.cut_row, P.cut_rows,
-                                     P.cut_joint], axis=1).reshape(nc, 6), P.cut_metres], axis=1)
-    geo = np.concatenate([P.joint_point[0], P.axis[0], P.angle[0][:, None], P.com[0],
-                          P.mass[0][:, None], P.inertia[0][:, None], scale[:, None]], axis=1)
-    cgeo = np.concatenate([P.cut_pa[0], P.cut_pb[0], P.cut_axis[0], P.cut_angle[0][:, None]],
-                          axis=1).reshape(nc, 7)
-    out = dict(tree=tree, geo=geo, cuts=cuts, cgeo=cgeo, side=np.ascontiguousarray(P.side),
-               ind=P.drv, dep=P.dep,
+    cuts = np.concatenate([lay.cut_table[:, :lt.CUT_METRES], idx["cut_joint"][:, None],
+                           lay.cut_table[:, lt.CUT_METRES:]], axis=1).reshape(nc, 9)
+    geo = np.concatenate([num("joint_point"), num("axis"), num("angle")[:, None], num("com"),
+                          num("mass")[:, None], num("inertia")[:, None], scale[:, None]], axis=1)
+    cgeo = np.concatenate([num("cut_pa"), num("cut_pb"), num("cut_axis"),
+                           num("cut_angle")[:, None]], axis=1).reshape(nc, 7)
+    out = dict(tree=tree, geo=geo, cuts=cuts, cgeo=cgeo, side=np.ascontiguousarray(lay.side),
+               ind=idx["driven"], dep=idx["dependent"],
                misc=np.array([lay.gravity[0], lay.gravity[1], size, 0.0]))
     out.update(_load_tables(lay, len(model.joints)))
     return {k: np.ascontiguousarray(v) if isinstance(v, np.ndarray) else v

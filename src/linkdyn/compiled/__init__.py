@@ -7,8 +7,9 @@ run these kernels instead: one compiled loop over the samples that walks the bod
 sample, with the same equations in the same order, writing the same component-first arrays.
 The tests hold the two paths to agree to rounding.
 
-The kernels take the layout packed into plain arrays (:func:`pack`), every number with a design
-axis ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T)``.
+The kernels read the numeric layout (:class:`linkdyn.kinematics.Layout`) itself: its
+topology's integer arrays (computed once per layout) and views of its numbers with the design
+axis last, ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T)``.
 
 Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
 variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
@@ -26,7 +27,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -45,9 +45,6 @@ AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" 
 GROUND, REV, PRI = 0, jk.CODES["revolute"], jk.CODES["prismatic"]
 # the kinds analyze runs compiled: every registered kind (both kernels call the kinds' steps)
 CODES = dict(jk.CODES)
-# dyad shape codes (linkdyn.kinematics.dyads)
-SPLIT, CHAIN, SLIDE, SWING = 0, 1, 2, 3
-DYAD_SHAPES = {"split": SPLIT, "chain": CHAIN, "slide": SLIDE, "swing": SWING}
 
 
 def njit(fn):
@@ -185,112 +182,6 @@ def use_compiled(backend: str | None = None, samples: int = 0, kinds=()) -> bool
         raise ImportError("the compiled backend needs numba: pip install 'linkdyn[fast]'")
     return backend == "compiled" or (backend == "auto" and numba is not None and not missing
                                       and samples >= AUTO_MIN_SAMPLES)
-
-
-@dataclass(frozen=True)
-class Packed:
-    """A :class:`~linkdyn.kinematics.Layout` as plain arrays for the kernels.
-
-    Topology (shared by all designs): ``parent``, ``kind`` (codes of
-    :data:`linkdyn.joints.CODES`, 0 for the ground), ``sign``, ``angular`` (n,) (whether the
-    tree joint's coordinate is an angle); ``ancestors`` (n, n) (1 where body k's tree joint is
-    on the path to body i); ``dep``, ``drv`` tree indices; ``driver_of`` (n,) driver number of
-    a tree joint or -1; ``tree_joint`` (n,) model joint of each tree joint; ``cut_a``,
-    ``cut_b``, ``cut_kind``, ``cut_joint`` (n_cut,); ``cut_row``, ``cut_rows`` (n_cut,) each
-    cut's first row in the stacked closure arrays and its number of rows (its kind's);
-    ``cut_metres`` (n_cut, 3) 1 for each of its rows (padded to 3) in m, else 0; ``side``
-    (n_cut, n) the sign of tree joint k in cut c's closure (+1 on the path to its second body,
-    -1 to its first, 0 both or neither); ``dyads`` (n_dyads, 5) rows
-    ``[shape, cut, upper, lower, side (0: a, 1: b)]``.
-
-    Numbers, one row per design: ``joint_point``, ``axis``, ``com`` (D, n, 2), ``angle``,
-    ``mass``, ``inertia`` (D, n); ``cut_pa``, ``cut_pb``, ``cut_axis`` (D, n_cut, 2),
-    ``cut_angle`` (D, n_cut); ``size`` (D,).
-    """
-
-    parent: np.ndarray
-    kind: np.ndarray
-    sign: np.ndarray
-    ancestors: np.ndarray
-    dep: np.ndarray
-    drv: np.ndarray
-    driver_of: np.ndarray
-    tree_joint: np.ndarray
-    n_joints: int
-    cut_a: np.ndarray
-    cut_b: np.ndarray
-    cut_kind: np.ndarray
-    cut_joint: np.ndarray
-    cut_row: np.ndarray
-    cut_rows: np.ndarray
-    cut_metres: np.ndarray
-    angular: np.ndarray
-    side: np.ndarray
-    dyads: np.ndarray
-    joint_point: np.ndarray
-    axis: np.ndarray
-    com: np.ndarray
-    angle: np.ndarray
-    mass: np.ndarray
-    inertia: np.ndarray
-    cut_pa: np.ndarray
-    cut_pb: np.ndarray
-    cut_axis: np.ndarray
-    cut_angle: np.ndarray
-    size: np.ndarray
-
-
-def _vectors(xs) -> np.ndarray:
-    """Per-entity vectors ((2,) or (2, D, 1) each) as (D, n, 2)."""
-    rows = [np.asarray(x, float).reshape(2, -1).T for x in xs]
-    d = max([len(r) for r in rows], default=1)
-    return np.ascontiguousarray(np.stack([np.broadcast_to(r, (d, 2)) for r in rows], axis=1)
-                                if rows else np.zeros((d, 0, 2)))
-
-
-def _numbers(xs, d: int) -> np.ndarray:
-    """Per-entity numbers (float or (D, 1)) as (D, n)."""
-    cols = [np.broadcast_to(np.asarray(x, float).reshape(-1), (d,)) for x in xs]
-    return np.ascontiguousarray(np.stack(cols, axis=1) if cols else np.zeros((d, 0)))
-
-
-def pack(lay, n_joints: int) -> Packed:
-    """The arrays of :class:`Packed` for the layout ``lay`` (one design or stacked designs)."""
-    topo = lay.topo
-    n = topo.n
-    kind = np.array([GROUND] + [jk.CODES[k] for k in lay.kind[1:]], np.int64)
-    units = [jk.get(c.kind).row_units for c in lay.cuts]
-    metres = np.array([[int(k < len(u) and u[k] == "m") for k in range(3)] for u in units],
-                      np.int64).reshape(len(units), 3)
-    driver_of = np.full(n, -1, np.int64)
-    driver_of[list(topo.driven)] = np.arange(len(topo.driven))
-    ints = np.array(topo.ancestors, np.int64)
-    side = np.array([ints[c.b] - ints[c.a] for c in lay.cuts], float).reshape(len(lay.cuts), n)
-    dy = np.array([[DYAD_SHAPES[x.shape], x.cut, x.upper, x.lower, int(x.side == "b")]
-                   for x in (lay.dyads or ())], np.int64).reshape(-1, 5)
-    joint_point = _vectors(lay.joint_point)
-    d = joint_point.shape[0]
-    cuts = lay.cuts
-    return Packed(
-        parent=np.array(topo.parent, np.int64), kind=kind, sign=np.array(topo.sign, float),
-        ancestors=ints, dep=np.array(topo.dependent, np.int64),
-        drv=np.array(topo.driven, np.int64), driver_of=driver_of,
-        tree_joint=np.array(topo.tree_joint, np.int64), n_joints=n_joints,
-        cut_a=np.array([c.a for c in cuts], np.int64), cut_b=np.array([c.b for c in cuts], np.int64),
-        cut_kind=np.array([jk.CODES[c.kind] for c in cuts], np.int64),
-        cut_joint=np.array([c.joint for c in cuts], np.int64),
-        cut_row=np.array([topo.row_slice(k).start for k in range(len(cuts))], np.int64),
-        cut_rows=np.array([len(u) for u in units], np.int64), cut_metres=metres,
-        angular=np.array([False] + [jk.get(k).angular for k in lay.kind[1:]], np.int64),
-        side=side, dyads=dy,
-        joint_point=joint_point, axis=_vectors(lay.axis), com=_vectors(lay.com),
-        angle=_numbers(lay.angle, d), mass=_numbers(lay.mass, d),
-        inertia=_numbers(lay.inertia, d),
-        cut_pa=_vectors([c.pa for c in cuts]) if cuts else np.zeros((d, 0, 2)),
-        cut_pb=_vectors([c.pb for c in cuts]) if cuts else np.zeros((d, 0, 2)),
-        cut_axis=_vectors([c.axis for c in cuts]) if cuts else np.zeros((d, 0, 2)),
-        cut_angle=_numbers([c.angle for c in cuts], d),
-        size=np.broadcast_to(np.asarray(lay.size, float).reshape(-1), (d,)).copy())
 
 
 @inline

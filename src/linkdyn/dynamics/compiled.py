@@ -31,10 +31,12 @@ from functools import cached_property
 
 import numpy as np
 
-from ..compiled import eliminate, inline, njit, pack, screw_views, vector_views
+from ..compiled import eliminate, inline, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..loads import Loads
 from ..planar import last
+from ..kinematics.layout import (CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
+                                 SIGN)
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
 from .denoc import (DynamicSolution, generalized_force, less_cut, newton_euler_wrench,
@@ -72,13 +74,13 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ex
     over the bodies into ``ke`` (block,). The ground's rows stay as allocated (zero). ``w_const`` (n, 3, 1, block):
     ``w_ext`` repeated over a block when it is constant in time (one sample, ``w_ext``
     (n, 3, D, 1))."""
-    n = len(mass[dp])
+    n = mass.shape[0]
     ks = slice(k0, k0 + nb)   # the block's samples
     kw = slice(ki, ki + nb)   # the block's samples in the internals (see _dynamics)
     ke[:nb] = 0.0
     for i in range(1, n):
-        mi, ii = mass[dp, i], inertia[dp, i]
-        com_i = (com[dp, i, 0], com[dp, i, 1])
+        mi, ii = mass[i, dp], inertia[i, dp]
+        com_i = (com[i, 0, dp], com[i, 1, dp])
         c_i, s_i = c[i, d, ks], s[i, d, ks]
         tw_i, twd_i = screw_views(tw, i, d, ks), screw_views(twd, i, d, ks)
         if w_ext.shape[3] == 1:   # constant in time
@@ -165,8 +167,8 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, 
     wc[:, :, :nb] = 0.0
     for cc in range(cut_a.shape[0]):
         a, b, code, row, rows = cut_a[cc], cut_b[cc], cut_kind[cc], cut_row[cc], cut_rows[cc]
-        pa, pb = (cut_pa[dp, cc, 0], cut_pa[dp, cc, 1]), (cut_pb[dp, cc, 0], cut_pb[dp, cc, 1])
-        axis = (cut_axis[dp, cc, 0], cut_axis[dp, cc, 1])
+        pa, pb = (cut_pa[cc, 0, dp], cut_pa[cc, 1, dp]), (cut_pb[cc, 0, dp], cut_pb[cc, 1, dp])
+        axis = (cut_axis[cc, 0, dp], cut_axis[cc, 1, dp])
         c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], vector_views(r, a, d, ks)
         c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], vector_views(r, b, d, ks)
         wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
@@ -209,7 +211,7 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
         si, dr, p = sign[i], driver_of[i], parent[i]
         if keep and si > 0 and dr < 0:   # R_i as is
             continue
-        code, jp = kind[i], (joint_point[dp, i, 0], joint_point[dp, i, 1])
+        code, jp = kind[i], (joint_point[i, 0, dp], joint_point[i, 1, dp])
         R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, tree_joint[i], d, ks)
         e_i, r_i = vector_views(e, i, d, ks), vector_views(r, i, d, ks)
         r_p, c_p, s_p = vector_views(r, p, d, ks), c[p, d, ks], s[p, d, ks]
@@ -252,7 +254,7 @@ def _dynamics(parent, kind, sign, dep, drv, cut_row, cut_rows, com, mass, inerti
     """
     n, m = parent.shape[0], dep.shape[0]   # m = the cut rows: J_dep^T lam = Q_dep
     D, T = c.shape[1], c.shape[2]
-    n_designs = mass.shape[0]
+    n_designs = mass.shape[1]
     B = block
     # scratch for one block of samples, allocated once per call
     w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
@@ -290,7 +292,7 @@ def _reactions(parent, kind, sign, driver_of, tree_joint, cut_a, cut_b, cut_kind
     (n, 3, 1, block)."""
     n, n_rows, n_drv = parent.shape[0], lam.shape[0], tau.shape[0]
     D, T = c.shape[1], c.shape[2]
-    n_designs = mass.shape[0]
+    n_designs = mass.shape[1]
     B = block
     w_const = np.zeros((n, 3, 1, B))
     ws, ws2 = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B))   # w_star of the block
@@ -355,9 +357,18 @@ def _inputs(kin: KinematicSolution) -> dict:
     }
 
 
-def _arrays(lay):
-    """The kernels' topology and numbers of the layout ``lay``."""
-    return pack(lay, lay.topo.n - 1 + lay.topo.n_loops)
+def _arrays(lay) -> dict:
+    """What the kernels read of the layout ``lay``: the topology's integer arrays (columns of
+    its tables, views) and its numbers with the design axis last (views)."""
+    tree, cuts, idx = lay.tree, lay.cut_table, lay.indices
+    out = {"parent": tree[:, PARENT], "kind": tree[:, KIND], "sign": tree[:, SIGN],
+           "cut_a": cuts[:, CUT_A], "cut_b": cuts[:, CUT_B], "cut_kind": cuts[:, CUT_KIND],
+           "cut_row": cuts[:, CUT_ROW], "cut_rows": cuts[:, CUT_ROWS]}
+    out.update({k: idx[k] for k in ("dependent", "driven", "driver_of", "tree_joint",
+                                     "cut_joint")})
+    out.update({k: lay.per_design(k) for k in ("joint_point", "com", "mass", "inertia", "cut_pa",
+                                                "cut_pb", "cut_axis")})
+    return out
 
 
 def _applied(loads: Loads, shape) -> np.ndarray:
@@ -408,17 +419,17 @@ def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> Dyna
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
     P = _arrays(kin.layout)
-    n, n_rows = len(P.parent), kin.layout.topo.n_rows
+    n, n_rows = kin.layout.topo.n, kin.layout.topo.n_rows
     # zeroed outputs: the pages of the rows the kernel leaves zero are never touched; the
     # internals per sample, or for one block
     block = min(BLOCK, T)
     at = (D, T) if internals else (1, block)
     out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
            "Q": np.zeros((n,) + at), "lam": np.zeros((n_rows, D, T)),
-           "tau": np.zeros((len(P.drv), D, T)), "ke": np.zeros((D, T)),
+           "tau": np.zeros((len(P["driven"]), D, T)), "ke": np.zeros((D, T)),
            "pivot": np.zeros((D, T))}
-    _dynamics(P.parent, P.kind, P.sign, P.dep, P.drv, P.cut_row, P.cut_rows, P.com, P.mass,
-              P.inertia, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
+    _dynamics(*(P[k] for k in ("parent", "kind", "sign", "dependent", "driven", "cut_row",
+                               "cut_rows", "com", "mass", "inertia")), x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
               _applied(loads, shape), out["wstar"], out["wtilde"], out["Q"], out["lam"],
               out["tau"], out["ke"], out["pivot"], block, internals)
     lam, tau = _comps(out["lam"], shape), _comps(out["tau"], shape)
@@ -456,15 +467,16 @@ def reactions(kin: KinematicSolution, loads: Loads, dyn: DynamicSolution,
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
     P = _arrays(kin.layout)
-    n = len(P.parent)
+    n = kin.layout.topo.n
     block = min(BLOCK, T)
-    on = np.zeros((P.n_joints, 3, D, T))
+    on = np.zeros((kin.layout.n_joints, 3, D, T))
     tree = np.zeros((n, 3) + ((D, T) if internals else (1, block)))
     lam, tau = (_plain(np.moveaxis(a, -1, 0).reshape(a.shape[-1], D, T))
                 for a in (dyn.lam, dyn.tau))
-    _reactions(P.parent, P.kind, P.sign, P.driver_of, P.tree_joint, P.cut_a, P.cut_b, P.cut_kind,
-               P.cut_joint, P.cut_row, P.cut_rows, P.joint_point, P.com, P.mass, P.inertia,
-               P.cut_pa, P.cut_pb, P.cut_axis, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
+    _reactions(*(P[k] for k in ("parent", "kind", "sign", "driver_of", "tree_joint", "cut_a",
+                                "cut_b", "cut_kind", "cut_joint", "cut_row", "cut_rows",
+                                "joint_point", "com", "mass", "inertia", "cut_pa", "cut_pb",
+                                "cut_axis")), x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
                _applied(loads, shape), lam, tau, on, tree, block, internals)
     if not internals:   # the kernel again, keeping them, when first read
         return Reactions(_per(on, shape), _Again(reactions, kin, loads, dyn).tree)
@@ -472,8 +484,8 @@ def reactions(kin: KinematicSolution, loads: Loads, dyn: DynamicSolution,
     # same array, as in reactions.solve): the kernel left its rows of ``on`` unwritten
     on_second, tree = _per(on, shape), _per(tree, shape)
     for i in range(1, n):
-        if P.sign[i] > 0 and P.driver_of[i] < 0:
-            on_second[P.tree_joint[i]] = tree[i]
+        if P["sign"][i] > 0 and P["driver_of"][i] < 0:
+            on_second[P["tree_joint"][i]] = tree[i]
     return Reactions(on_second, tree)
 
 

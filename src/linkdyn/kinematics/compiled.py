@@ -20,12 +20,14 @@ sample loops call nothing from the C library where they can help it (angles by
 instructions.
 
 All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
-``[..., d, t]``. The topology comes as ``tree`` (n, 4) rows ``[parent, kind, sign, angular]``
-and ``cuts`` (n_cut, 8) rows ``[a, b, kind, first row, rows, metres (3)]`` (kinds by their
-codes, :data:`linkdyn.joints.CODES`; ``metres``: 1 for a cut row in m, which the residual
-scales by the size); the numbers of design d as ``geo[d]`` (n, 5) rows
-``[joint point (2), axis (2), angle]`` and ``cgeo[d]`` (n_cut, 7) rows
-``[pa (2), pb (2), axis (2), angle]``.
+``[..., d, t]``. The kernel reads the numeric layout (:class:`.layout.Layout`) itself: the
+topology as its integer arrays ``tree`` (n, 4) rows ``[parent, kind, sign, angular]`` and
+``cuts`` (n_cut, 8) rows ``[a, b, kind, first row, rows, metres (3)]`` (:attr:`.Layout.tree`,
+:attr:`.Layout.cut_table`: kinds by their codes, :data:`linkdyn.joints.CODES`; ``metres``: 1
+for a cut row in m, which the residual scales by the size), and the numbers as views of the
+layout's arrays with the design axis last (:meth:`.Layout.per_design`): ``geo`` = (joint
+point (n, 2, D), axis (n, 2, D), angle (n, D)) and ``cgeo`` = (pa, pb, axis (n_cut, 2, D),
+angle (n_cut, D)).
 """
 
 from __future__ import annotations
@@ -35,18 +37,18 @@ import math
 import numpy as np
 
 from .. import joints as jk
-from ..compiled import (CHAIN, PRI, SLIDE, SPLIT, Packed, factor, inline, njit, screw_views,
-                        substitute, vector_views)
+from ..compiled import PRI, factor, inline, njit, screw_views, substitute, vector_views
 from ..planar import turned
 from . import dyads as dy
+from .layout import (ANGULAR, CUT_A, CUT_B, CUT_KIND, CUT_METRES, CUT_ROW, CUT_ROWS,
+                     DYAD_SHAPES, KIND, PARENT, SIGN, Layout)
 from .positions import nearest_node, scaled_error
 from .recursion import (child_pose, child_twist, child_twist_rate, cut_bias, cut_coordinate,
                         cut_frame, jacobian_column)
 
+SPLIT, CHAIN, SLIDE = (DYAD_SHAPES[k] for k in ("split", "chain", "slide"))
 BLOCK = 1024         # samples per block of the kernel
 PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singular (solve_small)
-PARENT, KIND, SIGN, ANGULAR = range(4)                      # tree columns
-CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, CUT_METRES = range(6)   # cuts columns
 
 
 # --- scalar helpers, compiled into their callers -----------------------------------------------
@@ -81,11 +83,12 @@ def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
     """Poses of all bodies (:func:`.recursion.child_pose`); ``cq``, ``sq`` (n, block): cosine
     and sine of ``s q_i`` for the angular joints."""
     ks = slice(k0, k0 + nb)   # the block's samples
+    jp, slide, ang = geo   # joint points, slider axes, angles
     c[0, d, ks] = 1.0   # the ground's other rows stay zero
     for i in range(1, len(tree)):
         p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
-        joint, axis = (geo[d, i, 0], geo[d, i, 1]), (geo[d, i, 2], geo[d, i, 3])
-        angle = geo[d, i, 4]
+        joint, axis = (jp[i, 0, d], jp[i, 1, d]), (slide[i, 0, d], slide[i, 1, d])
+        angle = ang[i, d]
         phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, d, ks)
         phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, d, ks)
         q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
@@ -149,13 +152,14 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
     subtrees beyond its two unknown joints turn. ``up``, ``low`` (5, block) scratch
     for the two turns."""
     ks = slice(k0, k0 + nb)
+    cpa, cpb, cax, cang = cgeo
     for m in range(dyads.shape[0]):
         shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
         side = modes[m, d]
         A = _body(c, s, r, cuts[cut, CUT_A], d, ks)
         B = _body(c, s, r, cuts[cut, CUT_B], d, ks)
-        pa, pb = (cgeo[d, cut, 0], cgeo[d, cut, 1]), (cgeo[d, cut, 2], cgeo[d, cut, 3])
-        axis, angle = (cgeo[d, cut, 4], cgeo[d, cut, 5]), cgeo[d, cut, 6]
+        pa, pb = (cpa[cut, 0, d], cpa[cut, 1, d]), (cpb[cut, 0, d], cpb[cut, 1, d])
+        axis, angle = (cax[cut, 0, d], cax[cut, 1, d]), cang[cut, d]
         # the cut's body on the side of both unknown joints (chain, slide), and the other
         M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
         sgn = 1.0 if on_b else -1.0
@@ -204,11 +208,12 @@ def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
     loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
     (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]``."""
     ks = slice(k0, k0 + nb)
+    cpa, cpb, cax, _ = cgeo
     for ci in range(len(cuts)):
         c_a, s_a, rx_a, ry_a = _body(c, s, r, cuts[ci, CUT_A], d, ks)
         c_b, s_b, rx_b, ry_b = _body(c, s, r, cuts[ci, CUT_B], d, ks)
-        pa, pb = (cgeo[d, ci, 0], cgeo[d, ci, 1]), (cgeo[d, ci, 2], cgeo[d, ci, 3])
-        axis = (cgeo[d, ci, 4], cgeo[d, ci, 5])
+        pa, pb = (cpa[ci, 0, d], cpa[ci, 1, d]), (cpb[ci, 0, d], cpb[ci, 1, d])
+        axis = (cax[ci, 0, d], cax[ci, 1, d])
         P_c = P[ci]
         for k in range(nb):
             r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k], s_b[k],
@@ -233,7 +238,7 @@ def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
     err_d[:] = 0.0
     for ci in range(len(cuts)):
         P_c = P[ci]
-        a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[d, ci, 6]
+        a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[3][ci, d]
         m0, m1, m2 = cuts[ci, CUT_METRES], cuts[ci, CUT_METRES + 1], cuts[ci, CUT_METRES + 2]
         phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
         for k in range(nb):   # the padded rows are zero
@@ -497,10 +502,10 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _finite(d, k0, nb, qd, qdd, fin)
 
 
-def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
+def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
         lo=None, hi=None, modes=()) -> dict:
-    """Run :func:`kernel` at the times ``t`` (T,) with the driver values (n_drivers, T), or
-    (n_drivers, D, T) per design.
+    """Run :func:`kernel` on the layout ``lay`` at the times ``t`` (T,) with the driver values
+    (n_drivers, T), or (n_drivers, D, T) per design.
 
     Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
     the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
@@ -513,8 +518,9 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
     joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T); ``finite`` (D, T)
     bool, whether every rate and acceleration of the sample is finite.
     """
-    n, nc = len(P.parent), len(P.cut_a)
-    D, T = P.size.shape[0], len(t)
+    topo, idx = lay.topo, lay.indices
+    n, nc = topo.n, topo.n_loops
+    D, T = max(lay.designs, 1), len(t)
     t = np.ascontiguousarray(t, dtype=float)
     if nodes is None:
         nodes, Qn, lo, hi = np.zeros(0), np.zeros((n, D, 0)), np.zeros(D), np.zeros(D)
@@ -525,27 +531,26 @@ def run(P: Packed, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None,
         q_in = np.zeros((n, D, 0))
         lo, hi = (np.ascontiguousarray(np.broadcast_to(np.reshape(x, -1), (D,)), dtype=float)
                   for x in (lo, hi))
-    sQ, cQ = np.sin(P.sign[:, None, None] * Qn), np.cos(P.sign[:, None, None] * Qn)
+    sign = np.asarray(topo.sign, float)[:, None, None]
+    sQ, cQ = np.sin(sign * Qn), np.cos(sign * Qn)
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
     out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
-           "J": (int(P.cut_rows.sum()), n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
+           "J": (topo.n_rows, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
            "twd": (n, 3), "cut": (nc, 3), "pivot": (), "err": ()}
     # zeroed (lazily, by the system) so the rows that stay zero are never written: the
     # ground's, and the slider axis e of a revolute joint
     out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
     out["finite"] = np.zeros((D, T), np.bool_)
-    # the topology and the numbers in the kernel's few arrays
-    tree = np.stack([P.parent, P.kind, P.sign.astype(np.int64), P.angular], axis=1)
-    cuts = np.concatenate([np.stack([P.cut_a, P.cut_b, P.cut_kind, P.cut_row, P.cut_rows],
-                                    axis=1).reshape(nc, 5), P.cut_metres], axis=1)
-    geo = np.concatenate([P.joint_point, P.axis, P.angle[..., None]], axis=-1)
-    cgeo = np.concatenate([P.cut_pa, P.cut_pb, P.cut_axis, P.cut_angle[..., None]], axis=-1)
+    # the layout's numbers as views, design axis last
+    geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
+    cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
+    drv = idx["driven"]
     drivers = [np.ascontiguousarray(np.broadcast_to(
-        np.reshape(x, (len(P.drv), -1, T)), (len(P.drv), D, T)), dtype=float)
+        np.reshape(x, (len(drv), -1, T)), (len(drv), D, T)), dtype=float)
         for x in (q_drv, qd_drv, qdd_drv)]
-    kernel(tree, P.ancestors, P.dep, P.drv, cuts, P.side, P.dyads, geo, cgeo, P.size,
-           t, np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in, *drivers, *out.values(),
-           min(BLOCK, T))
+    kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
+           lay.dyad_table, geo, cgeo, lay.per_design("size"), t, np.asarray(nodes, float), lo,
+           hi, Qn, cQ, sQ, md, q_in, *drivers, *out.values(), min(BLOCK, T))
     return out

@@ -1,14 +1,18 @@
 """The numeric layout: a model's numbers arranged along its spanning tree, for one design or a
-batch of designs sharing one topology (a design axis on every number that may differ)."""
+batch of designs sharing one topology (a design axis on every number that may differ), read by
+both backends: the numpy solvers index an entity's row, the compiled kernels take the arrays
+themselves (views with the design axis last) and the topology's integer arrays, computed once
+per layout."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
-from functools import partial
+from dataclasses import dataclass, field, replace
+from functools import cached_property, partial
 from typing import Any, Callable
 
 import numpy as np
 
+from .. import joints as jk
 from ..errors import ModelError
 from ..model import Model, point_spread
 from ..motion import ConstantSpeed
@@ -19,8 +23,9 @@ from . import dyads
 
 @dataclass(frozen=True)
 class Cut:
-    """Geometry of one cut joint: bodies ``a``, ``b`` (tree indices), points relative to O_a, O_b
-    in the bodies' frames."""
+    """One cut joint as the numpy solvers read it (a view of :class:`Layout`'s cut arrays):
+    bodies ``a``, ``b`` (tree indices), points relative to O_a, O_b in the bodies' frames,
+    the axis fixed in a, the joint's angle."""
 
     joint: int
     kind: str
@@ -58,66 +63,160 @@ class LoadRow:
     #                          or (2, D, 1) with designs
 
 
+# dyad shape codes of Layout.dyad_table (linkdyn.kinematics.dyads)
+DYAD_SHAPES = {"split": 0, "chain": 1, "slide": 2, "swing": 3}
+# columns of Layout.tree and Layout.cut_table
+PARENT, KIND, SIGN, ANGULAR = range(4)
+CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, CUT_METRES = range(6)
+
+
 @dataclass(frozen=True)
 class Layout:
-    """The numbers of a model for its topology, SI, in tree order (index 0 = ground).
+    """The numeric layout: a model's numbers for its topology, SI, in tree order (index 0 =
+    ground), read by both backends (the numpy solvers index an entity's row, the compiled
+    kernels the whole arrays, :meth:`per_design`).
 
-    ``joint_point[i]``: body i's parent's joint point relative to O_parent, parent frame, (2,).
-    ``points[i]``: dict of body i's named points relative to O_i, body frame.
-    ``axis[i]``: slider axis of body i's tree joint in the parent's frame.
-    ``origin[i]``: O_i in body i's own frame. ``size``: characteristic length, m.
-    ``gravity``: (2,) m/s^2, global frame. ``motions[k]``: the motions of driver k
-    (``model.drivers[k]``, moving tree joint ``topo.driven[k]``), one per design.
-    ``loads``: one :class:`LoadRow` per ``model.loads`` entry.
+    Per body, one array each (entity first): ``joint_point`` (n, 2): body i's parent's joint
+    point relative to O_parent, parent frame; ``axis`` (n, 2): slider axis of body i's tree
+    joint in the parent's frame; ``angle`` (n,): its joint's angle; ``origin`` (n, 2): O_i in
+    body i's own frame; ``com`` (n, 2), ``mass``, ``inertia`` (n,). ``points[i]``: dict of
+    body i's named points relative to O_i, body frame. Per cut joint (``topo.cut``):
+    ``cut_kind``, ``cut_a``, ``cut_b`` (kinds and tree indices of its bodies), ``cut_pa``,
+    ``cut_pb`` (n_cut, 2) its points relative to O_a, O_b, ``cut_axis`` (n_cut, 2) its axis
+    in a's frame, ``cut_angle`` (n_cut,); :attr:`cuts` views them as :class:`Cut` objects.
+    ``size``: characteristic length, m. ``gravity``: (2,) m/s^2, global frame.
+    ``motions[k]``: the motions of driver k (``model.drivers[k]``, moving tree joint
+    ``topo.driven[k]``), one per design. ``loads``: one :class:`LoadRow` per ``model.loads``
+    entry.
 
     ``designs``: 0 for one mechanism; D for D stacked designs (:func:`stack_layouts`), where
-    every number gains a design axis shaped to broadcast against ``(D, T)`` batches: vectors
-    ``(2, D, 1)``, scalars ``(D, 1)``.
+    every number gains a design axis shaped to broadcast against ``(D, T)`` batches: ``(n, 2,
+    D, 1)`` for vectors, ``(n, D, 1)`` for numbers (so ``joint_point[i]`` is ``(2, D, 1)``),
+    ``size`` (D, 1), ``gravity`` (2, D, 1).
+
+    The topology's integer arrays the kernels index (:attr:`tree`, :attr:`cut_table`,
+    :attr:`side`, :attr:`dyad_table`, ...) are computed once per layout, on first read.
     """
 
     topo: Topology
     kind: tuple[str, ...]
-    joint_point: tuple[np.ndarray, ...]
-    axis: tuple[np.ndarray, ...]
-    angle: tuple[float, ...]
-    origin: tuple[np.ndarray, ...]
+    joint_point: np.ndarray
+    axis: np.ndarray
+    angle: np.ndarray
+    origin: np.ndarray
     points: tuple[dict, ...]
-    com: tuple[np.ndarray, ...]
-    mass: tuple[float, ...]
-    inertia: tuple[float, ...]
-    cuts: tuple[Cut, ...]
-    size: float
+    com: np.ndarray
+    mass: np.ndarray
+    inertia: np.ndarray
+    cut_kind: tuple[str, ...]
+    cut_a: tuple[int, ...]
+    cut_b: tuple[int, ...]
+    cut_pa: np.ndarray
+    cut_pb: np.ndarray
+    cut_axis: np.ndarray
+    cut_angle: np.ndarray
+    size: Any
     dyads: tuple | None = None  # closed-form plan (linkdyn.dyads), None: Newton's method
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(2))
     motions: tuple = ()
     loads: tuple = ()
     designs: int = 0
 
+    # the numbers every design has its own of (the design axis -2 with designs)
+    NUMBERS = ("joint_point", "axis", "angle", "origin", "com", "mass", "inertia", "cut_pa",
+               "cut_pb", "cut_axis", "cut_angle", "size", "gravity")
+
+    @cached_property
+    def cuts(self) -> tuple[Cut, ...]:
+        """Each cut joint's numbers as a :class:`Cut` (views of the cut arrays)."""
+        return tuple(Cut(j, self.cut_kind[k], self.cut_a[k], self.cut_b[k], self.cut_pa[k],
+                         self.cut_pb[k], self.cut_axis[k], self.cut_angle[k])
+                     for k, j in enumerate(self.topo.cut))
+
+    @property
+    def n_joints(self) -> int:
+        """Joints of the model: a tree joint per moving body and the cut joints."""
+        return self.topo.n - 1 + self.topo.n_loops
+
+    # --- the kernels' view of the layout ------------------------------------------------------
+    def per_design(self, name: str) -> np.ndarray:
+        """The number ``name`` (one of :attr:`NUMBERS`) with the design axis last: ``(n, 2,
+        D)``, ``(n, D)``, ``(D,)``; D = 1 for one mechanism. A view (no copy) of the stored,
+        C-contiguous array."""
+        x = np.asarray(getattr(self, name), float)
+        return x.reshape(x.shape[:-2] + (self.designs,)) if self.designs else x[..., None]
+
+    @cached_property
+    def tree(self) -> np.ndarray:
+        """(n, 4) int64 rows ``[parent, kind, sign, angular]`` of the tree joints: the kind by
+        its code (:data:`linkdyn.joints.CODES`, 0 the ground), angular 1 where the joint's
+        coordinate is an angle."""
+        topo = self.topo
+        return _frozen(np.array([[topo.parent[i], jk.CODES[k] if i else 0, topo.sign[i],
+                                  int(bool(i) and jk.get(k).angular)]
+                                 for i, k in enumerate(self.kind)], np.int64).reshape(-1, 4))
+
+    @cached_property
+    def cut_table(self) -> np.ndarray:
+        """(n_cut, 8) int64 rows ``[a, b, kind, first row, rows, metres (3)]``: each cut's
+        bodies, kind code, first row in the stacked closure arrays and number of rows (its
+        kind's), and 1 for each of its rows (padded to three) in m, else 0."""
+        rows = []
+        for k in range(self.topo.n_loops):
+            units = jk.get(self.cut_kind[k]).row_units
+            rows.append([self.cut_a[k], self.cut_b[k], jk.CODES[self.cut_kind[k]],
+                         self.topo.row_slice(k).start, len(units)]
+                        + [int(j < len(units) and units[j] == "m") for j in range(3)])
+        return _frozen(np.array(rows, np.int64).reshape(-1, 8))
+
+    @cached_property
+    def side(self) -> np.ndarray:
+        """(n_cut, n): the sign of tree joint k in cut c's closure (+1 on the path to its
+        second body, -1 to its first, 0 both or neither)."""
+        anc = np.asarray(self.topo.ancestors, np.int64)
+        return _frozen(np.array([anc[b] - anc[a] for a, b in zip(self.cut_a, self.cut_b)],
+                                float).reshape(-1, self.topo.n))
+
+    @cached_property
+    def dyad_table(self) -> np.ndarray:
+        """(n_dyads, 5) int64 rows ``[shape, cut, upper, lower, side (0: a, 1: b)]`` of the
+        closed-form plan (empty without one)."""
+        return _frozen(np.array([[DYAD_SHAPES[x.shape], x.cut, x.upper, x.lower,
+                                  int(x.side == "b")] for x in (self.dyads or ())],
+                                np.int64).reshape(-1, 5))
+
+    @cached_property
+    def indices(self) -> dict:
+        """The topology's other integer arrays, int64: ``ancestors`` (n, n), ``dependent``,
+        ``driven`` (tree indices), ``driver_of`` (n,) (driver number of a tree joint, else
+        -1), ``tree_joint`` (n,) (its model joint), ``cut_joint`` (n_cut,)."""
+        topo = self.topo
+        driver_of = np.full(topo.n, -1, np.int64)
+        driver_of[list(topo.driven)] = np.arange(len(topo.driven))
+        out = {"ancestors": np.array(topo.ancestors, np.int64),
+               "dependent": np.array(topo.dependent, np.int64),
+               "driven": np.array(topo.driven, np.int64), "driver_of": driver_of,
+               "tree_joint": np.array(topo.tree_joint, np.int64),
+               "cut_joint": np.array(topo.cut, np.int64)}
+        return {k: _frozen(v) for k, v in out.items()}
+
+    # --- designs ---------------------------------------------------------------------------
     def take(self, idx) -> Layout:
         """The designs ``idx`` (integer array) of stacked designs, stacked (every number's
         design axis is its axis -2; motions and load values keep those designs' functions)."""
         idx = np.asarray(idx, int)
-
-        def take(x):
-            if isinstance(x, np.ndarray):
-                return x[..., idx, :] if x.ndim >= 2 else x
-            if isinstance(x, tuple):
-                return tuple(take(v) for v in x)
-            if isinstance(x, dict):
-                return {k: take(v) for k, v in x.items()}
-            if isinstance(x, Cut):
-                return replace(x, pa=take(x.pa), pb=take(x.pb), axis=take(x.axis),
-                               angle=take(x.angle))
-            if isinstance(x, LoadRow):
-                return replace(x, stiffness=take(x.stiffness), free_length=take(x.free_length),
-                               damping=take(x.damping), values=tuple(x.values[i] for i in idx),
-                               axis=None if x.axis is None else take(x.axis))
-            return x
         if not self.designs:
             raise ValueError("take(idx) needs a layout of stacked designs")
-        return replace(self, **{f.name: take(getattr(self, f.name)) for f in fields(self)
-                                if f.name not in ("topo", "kind", "dyads", "motions", "designs")},
-                       motions=tuple(tuple(m[i] for i in idx) for m in self.motions),
+
+        def take(x):
+            return x[..., idx, :]
+        loads = tuple(replace(x, stiffness=take(x.stiffness), free_length=take(x.free_length),
+                              damping=take(x.damping), values=tuple(x.values[i] for i in idx),
+                              axis=None if x.axis is None else take(x.axis))
+                      for x in self.loads)
+        return replace(self, **{f: take(getattr(self, f)) for f in self.NUMBERS},
+                       points=tuple({k: take(v) for k, v in pts.items()} for pts in self.points),
+                       loads=loads, motions=tuple(tuple(m[i] for i in idx) for m in self.motions),
                        designs=len(idx))
 
     def design(self, k: int) -> Layout:
@@ -126,24 +225,19 @@ class Layout:
             raise ValueError("design(k) needs a layout of stacked designs")
         k = range(self.designs)[k]   # an IndexError out of range; negative k counts back
 
-        def vec(x):   # (2, D, 1) -> (2,)
-            return np.asarray(x, float)[:, k, 0].copy()
+        def one(x):   # (..., D, 1) -> (...), a contiguous copy
+            return np.ascontiguousarray(np.asarray(x, float)[..., k, 0])
 
         def num(x):   # (D, 1) -> float
             return float(np.asarray(x, float)[k, 0])
-        cuts = tuple(replace(c, pa=vec(c.pa), pb=vec(c.pb), axis=vec(c.axis), angle=num(c.angle))
-                     for c in self.cuts)
         loads = tuple(replace(r, stiffness=num(r.stiffness), free_length=num(r.free_length),
                               damping=num(r.damping), values=(r.values[k],),
-                              axis=None if r.axis is None else vec(r.axis)) for r in self.loads)
+                              axis=None if r.axis is None else one(r.axis)) for r in self.loads)
         return replace(
-            self, joint_point=tuple(map(vec, self.joint_point)), axis=tuple(map(vec, self.axis)),
-            angle=tuple(map(num, self.angle)), origin=tuple(map(vec, self.origin)),
-            points=tuple({name: vec(x) for name, x in pts.items()} for pts in self.points),
-            com=tuple(map(vec, self.com)), mass=tuple(map(num, self.mass)),
-            inertia=tuple(map(num, self.inertia)), cuts=cuts, size=num(self.size),
-            gravity=vec(self.gravity), motions=tuple((m[k],) for m in self.motions),
-            loads=loads, designs=0)
+            self, **{f: one(getattr(self, f)) for f in self.NUMBERS if f != "size"},
+            size=num(self.size),
+            points=tuple({name: one(x) for name, x in pts.items()} for pts in self.points),
+            motions=tuple((m[k],) for m in self.motions), loads=loads, designs=0)
 
     def driver_values(self, t: np.ndarray):
         """Driver coordinates, rates and accelerations at the times ``t`` (T,): each
@@ -269,24 +363,38 @@ def compile_layout(model: Model, topo: Topology | None = None, *, plan: bool = T
             ax = rotate(np.asarray(-jt.angle), ax)
         axis.append(ax)
         angle.append(float(jt.angle))
-    cuts = []
-    for j in topo.cut:
-        jt = model.joints[j]
-        a, b = pos[jt.body_a], pos[jt.body_b]
-        cuts.append(Cut(j, jt.kind, a, b, np.asarray(bodies[a].points[jt.point_a], float) - origin[a],
-                        np.asarray(bodies[b].points[jt.point_b], float) - origin[b],
-                        np.asarray(jt.axis, float), float(jt.angle)))
-    points = tuple({k: np.asarray(v, float) - origin[i] for k, v in b.points.items()}
-                   for i, b in enumerate(bodies))
-    com = tuple(np.asarray(b.com, float) - origin[i] for i, b in enumerate(bodies))
-    size = point_spread([v for b in model.bodies for v in b.points.values()])
-    lay = Layout(topo, tuple(kind), tuple(joint_point), tuple(axis), tuple(angle), tuple(origin),
-                 points, com, tuple(float(b.mass) for b in bodies),
-                 tuple(float(b.inertia) for b in bodies), tuple(cuts), size,
-                 gravity=np.asarray(model.gravity, float).reshape(2),
-                 motions=tuple((d.motion,) for d in model.drivers),
-                 loads=load_rows(model, topo))
+    cuts = [model.joints[j] for j in topo.cut]
+    a = [pos[jt.body_a] for jt in cuts]
+    b = [pos[jt.body_b] for jt in cuts]
+    points = tuple({k: np.asarray(v, float) - origin[i] for k, v in b_.points.items()}
+                   for i, b_ in enumerate(bodies))
+    size = point_spread([v for b_ in model.bodies for v in b_.points.values()])
+    lay = Layout(
+        topo, tuple(kind), _rows(joint_point, (2,)), _rows(axis, (2,)), _rows(angle, ()),
+        _rows(origin, (2,)), points,
+        _rows([np.asarray(b_.com, float) - origin[i] for i, b_ in enumerate(bodies)], (2,)),
+        _rows([float(b_.mass) for b_ in bodies], ()),
+        _rows([float(b_.inertia) for b_ in bodies], ()),
+        tuple(jt.kind for jt in cuts), tuple(a), tuple(b),
+        _rows([np.asarray(bodies[a_].points[jt.point_a], float) - origin[a_]
+               for jt, a_ in zip(cuts, a)], (2,)),
+        _rows([np.asarray(bodies[b_].points[jt.point_b], float) - origin[b_]
+               for jt, b_ in zip(cuts, b)], (2,)),
+        _rows([np.asarray(jt.axis, float) for jt in cuts], (2,)),
+        _rows([float(jt.angle) for jt in cuts], ()), size,
+        gravity=np.asarray(model.gravity, float).reshape(2),
+        motions=tuple((d.motion,) for d in model.drivers), loads=load_rows(model, topo))
     return replace(lay, dyads=dyads.plan(lay)) if plan else lay
+
+
+def _rows(xs, shape: tuple) -> np.ndarray:
+    """Per-entity numbers of one design as one array, entity first: ``(n,) + shape``."""
+    return np.array(xs, float).reshape((len(xs),) + shape)
+
+
+def _frozen(x: np.ndarray) -> np.ndarray:
+    x.flags.writeable = False
+    return x
 
 
 def load_rows(model: Model, topo: Topology) -> tuple[LoadRow, ...]:
@@ -353,8 +461,8 @@ def _differ(value, ref) -> str:
 
 def stack_layouts(layouts: list[Layout]) -> Layout:
     """One layout for several designs of the same topology: every number gains a design axis,
-    shaped to broadcast against ``(D, T)`` batches (vectors ``(2, D, 1)``, scalars ``(D, 1)``);
-    the motions and load values keep one function per design.
+    shaped to broadcast against ``(D, T)`` batches (per-entity vectors ``(n, 2, D, 1)``, numbers
+    ``(n, D, 1)``, ``size`` (D, 1)); the motions and load values keep one function per design.
     """
     first = layouts[0]
     topo = first.topo
@@ -370,37 +478,22 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
             raise ModelError(f"design {k} has other drivers or loads than design 0",
                              field="designs", fix="Vary the loads' and drivers' numbers only")
 
-    def vec(xs):
-        return np.stack([np.asarray(x, float) for x in xs], axis=-1)[..., None]
+    def stacked(xs):   # (...) per design -> (..., D, 1)
+        return np.ascontiguousarray(np.stack([np.asarray(x, float) for x in xs], axis=-1)[..., None])
 
-    def num(xs):
-        return np.asarray(xs, float)[:, None]
-
-    def per_body(name):
-        return tuple(vec([getattr(l, name)[i] for l in layouts]) for i in range(topo.n))
-
-    def per_body_num(name):
-        return tuple(num([getattr(l, name)[i] for l in layouts]) for i in range(topo.n))
-
-    cuts = tuple(Cut(c.joint, c.kind, c.a, c.b, vec([l.cuts[k].pa for l in layouts]),
-                     vec([l.cuts[k].pb for l in layouts]), vec([l.cuts[k].axis for l in layouts]),
-                     num([l.cuts[k].angle for l in layouts]))
-                 for k, c in enumerate(first.cuts))
-    points = tuple({name: vec([l.points[i][name] for l in layouts]) for name in first.points[i]}
+    points = tuple({name: stacked([l.points[i][name] for l in layouts]) for name in first.points[i]}
                    for i in range(topo.n))
-    loads = tuple(replace(row, stiffness=num([l.loads[k].stiffness for l in layouts]),
-                          free_length=num([l.loads[k].free_length for l in layouts]),
-                          damping=num([l.loads[k].damping for l in layouts]),
+    loads = tuple(replace(row, stiffness=stacked([l.loads[k].stiffness for l in layouts]),
+                          free_length=stacked([l.loads[k].free_length for l in layouts]),
+                          damping=stacked([l.loads[k].damping for l in layouts]),
                           values=tuple(l.loads[k].values[0] for l in layouts),
                           # a joint_force's axis (the joint's, which designs may vary)
-                          axis=None if row.axis is None else vec([l.loads[k].axis
-                                                                  for l in layouts]))
+                          axis=None if row.axis is None else stacked([l.loads[k].axis
+                                                                      for l in layouts]))
                   for k, row in enumerate(first.loads))
-    return Layout(topo, first.kind, per_body("joint_point"), per_body("axis"),
-                  per_body_num("angle"), per_body("origin"), points, per_body("com"),
-                  per_body_num("mass"), per_body_num("inertia"), cuts,
-                  num([l.size for l in layouts]), first.dyads,
-                  gravity=vec([l.gravity for l in layouts]),
-                  motions=tuple(tuple(l.motions[k][0] for l in layouts)
-                                for k in range(len(first.motions))),
-                  loads=loads, designs=len(layouts))
+    return replace(first, **{f: stacked([getattr(l, f) for l in layouts])
+                             for f in Layout.NUMBERS},
+                   points=points, loads=loads,
+                   motions=tuple(tuple(l.motions[k][0] for l in layouts)
+                                 for k in range(len(first.motions))),
+                   designs=len(layouts))

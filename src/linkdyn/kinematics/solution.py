@@ -61,19 +61,18 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
     # (n_drivers, D, T)
     q_ind, qd_ind, qdd_ind = lay.driver_values(t)
     fast = compiled.use_compiled(backend, t.size * len(models))   # the kernel runs every kind
-    packed = compiled.pack(lay, len(models[0].joints)) if fast else None
     # the branch: the [assembly] guess describes the mechanism at t = 0; assembled there and
     # followed to the samples
     branch = follow(models, lay, t, single)
-    if packed is not None:
-        return _compiled(models[0], lay, packed, t, q_ind, qd_ind, qdd_ind, branch)
+    if fast:
+        return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch)
     kin = at_state(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch.guess(lay, t), branch.modes)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, kin.residual)
     return kin if ended is None else blanked(kin, ended, np.where(ended, np.inf, kin.residual))
 
 
-def _compiled(model, lay: Layout, packed, t, q_ind, qd_ind, qdd_ind, branch: Branch
+def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch
               ) -> KinematicSolution:
     """:func:`solve`'s state stage by the compiled kernel for the whole batch: it closes every
     sample in closed form from its nearest node (every loop a dyad), or takes the coordinates
@@ -81,7 +80,7 @@ def _compiled(model, lay: Layout, packed, t, q_ind, qd_ind, qdd_ind, branch: Bra
     out = None  # the compiled kernel's arrays
     if branch.nodes is not None and lay.dyads is not None:
         lo, hi = branch.span
-        out = kc.run(packed, t, q_ind, qd_ind, qdd_ind, nodes=branch.nodes, Q=branch.Q,
+        out = kc.run(lay, t, q_ind, qd_ind, qdd_ind, nodes=branch.nodes, Q=branch.Q,
                      modes=branch.modes, lo=lo, hi=hi)
         err = out["err"].reshape(lo.shape[:-1] + t.shape)
         unclosed = ~(err <= ACCEPT)
@@ -90,7 +89,7 @@ def _compiled(model, lay: Layout, packed, t, q_ind, qd_ind, qdd_ind, branch: Bra
             out = None   # some sample needs the damped Newton retry of the numpy path
     if out is None:   # the loops closed by numpy: the kernel does the rest
         q, err, _ = close(lay, q_ind, branch.guess(lay, t), branch.modes)
-        out = kc.run(packed, t, q_ind, qd_ind, qdd_ind, q=q)
+        out = kc.run(lay, t, q_ind, qd_ind, qdd_ind, q=q)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, err)
     if ended is not None:

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..io.reader import MAX_MAGNITUDE, MIN_MAGNITUDE
-from ..kinematics.layout import Cut, Layout, compile_layout
+from ..kinematics.layout import Layout, compile_layout
 from ..model import Model, point_spread
 from ..motion import ConstantSpeed
 from ..topology import build
@@ -179,10 +179,11 @@ class Builder:
         def num(key):     # (D, 1) -> (D, 1)
             return np.ascontiguousarray(col[key])
 
-        n = lay.topo.n
-        cuts = tuple(Cut(c.joint, c.kind, c.a, c.b, vec(("cut", k, "pa")), vec(("cut", k, "pb")),
-                         vec(("cut", k, "axis")), num(("cut", k, "angle")))
-                     for k, c in enumerate(lay.cuts))
+        n, nc = lay.topo.n, lay.topo.n_loops
+
+        def rows(key, count, shape):   # one number per entity -> (count,) + shape + (D, 1)
+            return np.stack([vec(key(i)) if shape else num(key(i)) for i in range(count)]) \
+                if count else np.zeros((0,) + shape + (D, 1))
         loads = []
         for k, r in enumerate(lay.loads):
             values = (r.values[0],) * D
@@ -205,14 +206,14 @@ class Builder:
             motions.append(same)
         raw = np.stack([col[k].T for k, *_ in self.keys if k[0] == "raw"])  # (points, 2, D)
         guesses = {k: col[k][:, 0] for k, *_ in self.keys if k[0] in ("assembly_phi", "assembly_q")}
-        out = Layout(
-            lay.topo, lay.kind,
-            tuple(vec(("joint_point", i)) for i in range(n)), tuple(vec(("axis", i)) for i in range(n)),
-            tuple(num(("angle", i)) for i in range(n)), tuple(vec(("origin", i)) for i in range(n)),
-            tuple({p: vec(("points", i, p)) for p in lay.points[i]} for i in range(n)),
-            tuple(vec(("com", i)) for i in range(n)), tuple(num(("mass", i)) for i in range(n)),
-            tuple(num(("inertia", i)) for i in range(n)), cuts,
-            point_spread(raw)[:, None], lay.dyads, gravity=vec(("gravity",)),
+        out = replace(
+            lay, **{f: rows(lambda i, f=f: (f, i), n, (2,) if f in ("joint_point", "axis",
+                                                                     "origin", "com") else ())
+                    for f in ("joint_point", "axis", "angle", "origin", "com", "mass", "inertia")},
+            **{f"cut_{f}": rows(lambda k, f=f: ("cut", k, f), nc, () if f == "angle" else (2,))
+               for f in ("pa", "pb", "axis", "angle")},
+            points=tuple({p: vec(("points", i, p)) for p in lay.points[i]} for i in range(n)),
+            size=point_spread(raw)[:, None], gravity=vec(("gravity",)),
             motions=tuple(motions), loads=tuple(loads), designs=D)
         return out, guesses
 
