@@ -262,3 +262,28 @@ def test_bundled_examples_batch_equals_one_by_one(name, backend):
         assert np.array_equal(sol.valid[k], alone.valid) and alone.valid.any()
         assert_same(sol.design(k).columns, alone.columns, 1e-12, f"{name} design {k}")
     assert np.max(np.abs(sol.dyn.tau[1] - sol.dyn.tau[0])) > 1e-3 * np.max(np.abs(sol.dyn.tau[0]))
+
+
+def test_the_stacked_layout_holds_each_design_and_the_kernels_read_it_in_place():
+    """One numeric layout for both backends: each per-entity number is one array with the
+    design axis (``(n, 2, D, 1)``, ``(n, D, 1)``); design k of the stack is design k's own layout,
+    number for number, and so are the designs a ``take`` keeps; the kernels' view of a number
+    shares the layout's memory (no copy per call)."""
+    designs = random_designs(3)
+    stacked = compile_designs(designs)
+    n, D = stacked.topo.n, len(designs)
+    assert stacked.joint_point.shape == (n, 2, D, 1) and stacked.mass.shape == (n, D, 1)
+    assert stacked.cut_pa.shape == (1, 2, D, 1) and stacked.joint_point[2].shape == (2, D, 1)
+    kept = stacked.take([3, 1])
+    for lay, k in [(stacked.design(j), j) for j in range(D)] + [(kept.design(0), 3),
+                                                                (kept.design(1), 1)]:
+        alone = compile_layout(designs[k], stacked.topo)
+        for name in stacked.NUMBERS:
+            assert np.array_equal(getattr(lay, name), getattr(alone, name)), (k, name)
+        assert [c.pa.tolist() for c in lay.cuts] == [c.pa.tolist() for c in alone.cuts]
+    for name in stacked.NUMBERS:
+        view = stacked.per_design(name)
+        assert view.shape[-1] == D and np.shares_memory(view, getattr(stacked, name)), name
+    one = compile_layout(designs[0])
+    assert one.per_design("joint_point").shape == (n, 2, 1)
+    assert np.shares_memory(one.per_design("joint_point"), one.joint_point)
