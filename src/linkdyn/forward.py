@@ -507,7 +507,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         The right-hand side's evaluation (default ``LINKDYN_BACKEND`` or ``'auto'``): numpy's
         array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
         with numba installed); ``'auto'`` compiles once a run has made :data:`AUTO_RHS`
-        evaluations. The outputs are computed by numpy's stages either way.
+        evaluations. The outputs are computed by numpy's stages either way (once the compiled
+        right-hand side runs, it gives their free accelerations and closed positions).
     project : bool
         With an explicit method (RK45, DOP853, RK23): after every accepted step, scale the free
         rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the energy of a
@@ -657,7 +658,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections)
-    return _outputs(parts, segment, t, Y, guesses, stats)
+    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel)
 
 
 def topo_free(part: Partition) -> tuple[int, ...]:
@@ -691,14 +692,16 @@ def _hermite(a, b, t):
             + v1[:, None] * (h * h11))
 
 
-def _outputs(parts: list[Partition], segment, t, Y, guesses, stats) -> Simulation:
+def _outputs(parts: list[Partition], segment, t, Y, guesses, stats,
+             kernel=None) -> Simulation:
     """Every ``analyze`` quantity at the output states, each sample in the partition it was
     integrated in (``parts[segment[k]]``, all on one tree): the free accelerations (F6), then
     the kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as
-    ``analyze``; the segments' results joined along the samples."""
+    ``analyze``; the segments' results joined along the samples. With ``kernel`` (the run's
+    compiled right-hand side) the free accelerations and closed positions come from it."""
     groups = [np.flatnonzero(segment == k) for k in range(len(parts))]
     groups = [(parts[k], g) for k, g in enumerate(groups) if len(g)]
-    done = [_stages(p, t[g], Y[:, g], guesses[:, g]) for p, g in groups]
+    done = [_stages(p, t[g], Y[:, g], guesses[:, g], kernel) for p, g in groups]
     stats["free_effort_residual"] = max(d[-2] for d in done)
     stats["closure_residual"] = max(d[-1] for d in done)
     if len(done) == 1:
@@ -710,15 +713,32 @@ def _outputs(parts: list[Partition], segment, t, Y, guesses, stats) -> Simulatio
                       free=parts[0].free, stats=stats)
 
 
-def _stages(part: Partition, t, Y, guesses):
+def _stages(part: Partition, t, Y, guesses, kernel=None):
     """``(kin, loads, dyn, reactions, valid, free effort residual, closure residual)`` at the
     output states ``Y`` (2 nf + 1, T) of one partition, ``guesses`` (n, T) their tree
-    coordinates."""
+    coordinates; ``kernel``: the run's compiled right-hand side (:class:`.forward_compiled.Kernel`,
+    of any partition), which then gives the free accelerations (numpy's stages where its
+    Newton's method does not close the loops)."""
     model, lay = part.model, part.layout
     nd, nf = part.n_drivers, len(part.free)
-    system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
     q_f, qd_f = Y[:nf], Y[nf:2 * nf]
-    qdd_f, _, _ = system.evaluate(t, q_f, qd_f, guesses)
+    qdd_f, open_ = np.empty((nf, len(t))), np.ones(len(t), bool)
+    if kernel is not None:
+        # the free accelerations (F6) and closed positions by the compiled right-hand side,
+        # sample by sample from its guess; its closed positions are the guesses below
+        if kernel.part is not part:
+            kernel = type(kernel)(part)
+        zero = np.zeros(lay.topo.n)
+        guesses = guesses.copy()
+        for k in range(len(t)):
+            out = kernel(t[k], Y[:, k], (t[k], guesses[:, k], zero, zero, None))
+            if out is not None:
+                qdd_f[:, k], guesses[:, k], open_[k] = out[nf:2 * nf], kernel.state[0], False
+    if np.any(open_):
+        # numpy's stages (and their damped restart) where the compiled Newton did not close
+        system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
+        qdd_f[:, open_] = system.evaluate(t[open_], q_f[:, open_], qd_f[:, open_],
+                                          guesses[:, open_])[0]
     q_d, qd_d, qdd_d = driver_values(model, t)
     kin = at_state(part.inner, lay, t, np.concatenate((q_d, q_f)), np.concatenate((qd_d, qd_f)),
                    np.concatenate((qdd_d, qdd_f)), guesses)
