@@ -20,6 +20,9 @@ Targets (issue 14): 1e6 designs x 360 samples in under 60 s on the 2-core machin
 least 3e6 design-samples/s per core; peak memory under 1 GB at any number of designs.
 
 Usage: python benchmarks/bench_sweep.py [--designs N] [--samples T] [--no-ceiling]
+       python benchmarks/bench_sweep.py --chunk-only [--designs N]   (one chunk's stages in CPU
+       time, the minimum of three runs in one process: to compare two versions of the code in one
+       window, run it alternately with each version's ``src`` on PYTHONPATH)
 """
 
 from __future__ import annotations
@@ -84,8 +87,9 @@ def _cpu() -> float:
 
 def stages(designs: int, samples: int) -> dict:
     """CPU seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
-    parameter arrays, the loader's checks on the arrays and the batching, the solve
-    (``analyze_layout``), the metrics and reasons."""
+    parameter arrays, the batching and the chunk's assembly at t = 0 (``runner._batches``), the
+    solve (``analyze_layout``), the metrics and reasons, the rest (the loader's checks on the
+    arrays)."""
     from linkdyn.studies import Task, space
     from linkdyn.studies import runner
     from linkdyn.studies.metrics import check_names
@@ -96,7 +100,7 @@ def stages(designs: int, samples: int) -> dict:
     sp = space(linkdyn.example_path("hoeken"), list(BOX))
     task = Task(sp, t, tuple(check_names(sp.model(), METRICS))).with_builder(
         *np.array(list(BOX.values())).T)
-    clock = {"solve": 0.0, "metrics": 0.0}
+    clock = {"batches": 0.0, "solve": 0.0, "metrics": 0.0}
 
     def timed(f, key):
         def g(*a, **k):
@@ -106,11 +110,12 @@ def stages(designs: int, samples: int) -> dict:
             finally:
                 clock[key] += time.process_time() - t0
         return g
-    solve, fill = runner.analyze_layout, runner._fill
+    solve, fill, batches = runner.analyze_layout, runner._fill, runner._batches
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
+    runner._batches = timed(batches, "batches")
     try:
         runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
-        clock.update(solve=0.0, metrics=0.0)
+        clock.update(batches=0.0, solve=0.0, metrics=0.0)
         t0 = time.process_time()
         Z = task.builder.numbers(values)
         task.builder.stacked(Z)
@@ -119,9 +124,9 @@ def stages(designs: int, samples: int) -> dict:
         runner.evaluate(task, values)
         total = time.process_time() - t0
     finally:
-        runner.analyze_layout, runner._fill = solve, fill
-    return {"layouts": layouts, "solve": clock["solve"], "metrics": clock["metrics"],
-            "rest": total - clock["solve"] - clock["metrics"], "total": total}
+        runner.analyze_layout, runner._fill, runner._batches = solve, fill, batches
+    return {"layouts": layouts, "batches": clock["batches"], "solve": clock["solve"],
+            "metrics": clock["metrics"], "rest": total - sum(clock.values()), "total": total}
 
 
 def in_fresh_process(designs: int, samples: int, workers: int, per_design: int = 0) -> dict:
@@ -152,10 +157,19 @@ def main():
     ap.add_argument("--samples", type=int, default=360)
     ap.add_argument("--no-ceiling", action="store_true",
                     help="skip the hand-written kernel (its compile takes about a minute)")
+    ap.add_argument("--chunk-only", action="store_true",
+                    help="only one chunk's stages, CPU time, minimum of three runs")
     ap.add_argument("--child", nargs=4, type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         print(json.dumps(child(*args.child)))
+        return
+    if args.chunk_only:
+        chunk = min(args.designs, default_chunk(args.designs, args.samples))
+        runs = [stages(chunk, args.samples) for _ in range(3)]
+        print(f"one chunk of {chunk} designs x {args.samples} samples, one worker, CPU s "
+              f"(minimum of 3; load average {os.getloadavg()[0]:.2f}): "
+              + ", ".join(f"{k} {min(r[k] for r in runs):.3g}" for k in runs[0]))
         return
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     D, T = args.designs, args.samples

@@ -528,7 +528,7 @@ def _numpy_reactions(model, kin, applied, dyn):
     return reactions_mod.solve(model, kin, dyn)
 
 
-def _stages(model, t, backend: str, layout=None, reactions: bool = True):
+def _stages(model, t, backend: str, layout=None, reactions: bool = True, start=None):
     """The stages of an analysis composed: ``(kin, applied, dyn, react, valid)``, ``valid`` the
     samples that close clear of a singular position. ``model``: a Model, or D Models (a batch;
     with ``layout``, their stacked layout, and the models only give their ``[assembly]``
@@ -538,7 +538,8 @@ def _stages(model, t, backend: str, layout=None, reactions: bool = True):
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
-    kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy")
+    kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy",
+                           start=start)
     # a batch: gravity, loads' values, springs and dampers from the layout, per design
     applied = loads_mod.wrenches(None if designs else model, kin)
     dynamics, reactions_stage = _backend(fast)
@@ -549,7 +550,7 @@ def _stages(model, t, backend: str, layout=None, reactions: bool = True):
 
 
 def analyze_layout(models, layout, t, *, backend: str | None = None, designs=None,
-                   reactions: bool = True) -> Solution:
+                   reactions: bool = True, start=None) -> Solution:
     """``analyze`` of a batch of designs given by their stacked layout (for instance built
     from parameter arrays by :mod:`linkdyn.studies.vectorize`), without a Model per design.
 
@@ -569,6 +570,9 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
         Solve the joint reactions now (and count a sample whose reactions are not finite as
         not valid). With False the reactions stage runs only if ``Solution.reactions`` is read
         (a sweep whose metrics need no reaction skips it), and ``valid`` does not look at them.
+    start : ndarray (n, D), optional
+        The designs' assembly at t = 0 if already solved
+        (:func:`linkdyn.kinematics.positions.assemble` with ``raise_error=False``).
 
     Returns
     -------
@@ -578,7 +582,7 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
     """
     t = np.asarray(t, dtype=float)
     name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
-    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout, reactions)
+    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout, reactions, start)
     valid = _finite(models[0], kin, applied, dyn, react, valid, False)
     return Solution(models[0], kin, applied, dyn, react, valid,
                     designs if designs is not None else tuple(models))

@@ -302,16 +302,20 @@ class Branch:
         return (t >= hi_end) | (t <= lo_end) | ~followed
 
 
-def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True) -> Branch:
+def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
+           start: np.ndarray | None = None) -> Branch:
     """Assemble at t = 0 on the branch of the ``[assembly]`` guess and follow it through
     continuation nodes over the times ``t`` (driver travel at most ``STEP_ANGLE`` rad or
     ``STEP_LENGTH`` of the size between nodes: a loop over driver steps, not samples).
 
     ``single``: one model, whose coordinates have no design axis and whose assembly failure
-    raises :class:`AssemblyError`; else a design that cannot be assembled is NaN.
+    raises :class:`AssemblyError`; else a design that cannot be assembled is NaN. ``start``
+    (n, D): the designs' assembly, already solved by :func:`assemble` (a sweep assembles a
+    chunk's designs at once, then solves them in batches; each design's assembly does not
+    depend on the designs solved with it).
     """
-    q_start = assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0,
-                       raise_error=single)
+    q_start = start if start is not None else assemble(
+        models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0, raise_error=single)
     if single:
         q_start = q_start[:, 0]
     # the dyads' assembly modes, (..., 1) each: the branch along the nodes and the samples

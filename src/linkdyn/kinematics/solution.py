@@ -23,7 +23,8 @@ from .recursion import Pose, motion_vectors
 from .state import KinematicSolution, at_state, blanked, close
 
 
-def solve(model, t, layout: Layout | None = None, backend: str | None = None) -> KinematicSolution:
+def solve(model, t, layout: Layout | None = None, backend: str | None = None,
+          start: np.ndarray | None = None) -> KinematicSolution:
     """Positions, velocities and accelerations at the times ``t`` (T,) s.
 
     The drivers' motions give the state at ``t``; the mechanism is assembled at t = 0 on the
@@ -47,6 +48,9 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
         Run the per-sample work in numpy array passes or in the compiled kernels of
         :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
         numba is installed and the batch is large).
+    start : ndarray (n, D), optional
+        The designs' tree coordinates assembled at t = 0 (:func:`.positions.assemble`, NaN
+        for a design that does not assemble), if already solved.
     """
     single = isinstance(model, Model)
     models = [model] if single else list(model)
@@ -63,7 +67,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None) ->
     fast = compiled.use_compiled(backend, t.size * len(models))   # the kernel runs every kind
     # the branch: the [assembly] guess describes the mechanism at t = 0; assembled there and
     # followed to the samples
-    branch = follow(models, lay, t, single)
+    branch = follow(models, lay, t, single, start)
     if fast:
         return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch)
     kin = at_state(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch.guess(lay, t), branch.modes)

@@ -28,9 +28,9 @@ import numpy as np
 from .. import compiled
 from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
-from ..kinematics import ACCEPT, driver_values, dyads, newton
+from ..kinematics import driver_values, dyads
 # the assembly's starting guess, to sort designs by whether they close at once
-from ..kinematics.positions import _guess, not_assembled
+from ..kinematics.positions import _guess, assemble, not_assembled
 from ..kinematics.recursion import forward_positions
 from . import metrics as metrics_mod
 from . import vectorize
@@ -175,17 +175,20 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
             ok[k], reason[k] = False, _reason(e)
     valid = np.zeros(D, bool)
     out = {name: np.full(D, np.nan) for name in task.metrics}
-    batches, apart = _batches(builder, lay, guesses, np.flatnonzero(ok), len(task.t))
+    batches, start, apart = _batches(builder, lay, guesses, np.flatnonzero(ok), len(task.t))
     for k in apart:   # no assembly mode closes its dyads: analyze's error, nothing solved
         reason[k] = _reason(_not_assembled(task.space.model(values[k]), builder.layout))
     # the backend chosen once for the chunk, so that a small last batch runs it too
     backend = _backend(task, D * len(task.t))
+    at = 0   # the batch's columns of ``start``, the chunk's assembly
     for idx in batches:
         sub = lay if len(idx) == D else lay.take(idx)
         sol = analyze_layout(builder.guess_models({k: g[idx] for k, g in guesses.items()},
                                                   len(idx)), sub, task.t, backend=backend,
                              designs=Designs(task.space, values[idx]),
-                             reactions=metrics_mod.reads_reactions(task.metrics))
+                             reactions=metrics_mod.reads_reactions(task.metrics),
+                             start=start[:, at:at + len(idx)])
+        at += len(idx)
         _fill(task, sol, idx, valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
 
@@ -197,32 +200,54 @@ def _backend(task: Task, samples: int) -> str:
     return "compiled" if compiled.use_compiled(task.backend, samples, kinds) else "numpy"
 
 
-def _batches(builder, lay, guesses, idx, T: int) -> tuple[list[np.ndarray], np.ndarray]:
+def _batches(builder, lay, guesses, idx, T: int):
     """The designs ``idx`` of a chunk in batches solved at once, of at most ``BATCH_SAMPLES``
     design-samples each, as equal as may be (memory is bounded by a batch's time histories),
-    and the designs that cannot be assembled whatever the start.
+    their assembly at t = 0, and the designs that cannot be assembled whatever the start.
 
     For a mechanism of dyads, a design whose dyads close in no assembly mode at t = 0
     (:func:`linkdyn.kinematics.dyads.closable`) is left out of the batches: the assembly would
-    fail it at once. A design whose loops a plain Newton solve from its ``[assembly]`` guess
-    does not close at t = 0 goes to batches of its own: the assembly then tries many restarts,
-    a cost per batch that would otherwise fall on every batch holding one such design. Each
-    design's result does not depend on the batch it is solved in."""
+    fail it at once. The others are assembled at once for the whole chunk
+    (:func:`linkdyn.kinematics.positions.assemble`: a damped Newton solve from the
+    ``[assembly]`` guesses, restarts for the designs it does not close), so that its Python
+    costs, and the restarts, are paid once per chunk and not once per batch. A design's
+    assembly, like the rest of its solution, does not depend on the designs solved with it.
+
+    Returns
+    -------
+    batches : list of ndarray
+        The batches' design indices.
+    start : ndarray (n, B) or None
+        The batched designs' tree coordinates at t = 0, batch after batch (NaN for a design
+        that does not assemble).
+    apart : ndarray
+        The designs left out.
+    """
     if not len(idx):
-        return [], idx
+        return [], None, idx
+    sub = lay if len(idx) == lay.designs else lay.take(idx)
+    can = np.ones(len(idx), bool)
+    if sub.dyads is not None:
+        models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
+        one = {id(m): _guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
+        q0 = np.stack([one[id(m)] for m in models], axis=-1)[..., None]
+        q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0]
+        can = dyads.closable(sub, sub.dyads, q0, forward_positions)[:, 0]
+    if not np.any(can):
+        return [], None, idx
+    size = max(1, BATCH_SAMPLES // max(T, 1))
+    batches = np.array_split(idx[can], -(-int(np.sum(can)) // size))
+    return batches, _assemble(builder, lay, guesses, idx[can]), idx[~can]
+
+
+def _assemble(builder, lay, guesses, idx) -> np.ndarray:
+    """Tree coordinates (n, len(idx)) of the designs ``idx`` assembled at t = 0 on the branch
+    of their ``[assembly]`` guesses (:func:`linkdyn.kinematics.positions.assemble`; NaN for a
+    design that does not assemble)."""
     sub = lay if len(idx) == lay.designs else lay.take(idx)
     models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
-    one = {id(m): _guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
-    q0 = np.stack([one[id(m)] for m in models], axis=-1)[..., None]
-    q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0]
-    can = (np.ones(len(idx), bool) if sub.dyads is None else
-           dyads.closable(sub, sub.dyads, q0, forward_positions)[:, 0])
-    with np.errstate(all="ignore"):
-        _, err = newton(sub, np.where(can[:, None], q0, np.nan))
-    easy = err[:, 0] <= ACCEPT
-    size = max(1, BATCH_SAMPLES // max(T, 1))
-    return [b for part in (idx[easy], idx[can & ~easy]) if len(part)
-            for b in np.array_split(part, -(-len(part) // size))], idx[~can]
+    return assemble(models, sub, sub.driver_values(np.zeros(1))[0][..., 0], 0.0,
+                    raise_error=False)
 
 
 def _not_assembled(model, lay) -> AssemblyError:
