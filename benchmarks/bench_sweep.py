@@ -21,7 +21,7 @@ least 3e6 design-samples/s per core; peak memory under 1 GB at any number of des
 
 Usage: python benchmarks/bench_sweep.py [--designs N] [--samples T] [--no-ceiling]
        python benchmarks/bench_sweep.py --chunk-only [--designs N]   (one chunk's stages in CPU
-       time, the minimum of three runs in one process: to compare two versions of the code in one
+       time, the minimum of five runs in one process: to compare two versions of the code in one
        window, run it alternately with each version's ``src`` on PYTHONPATH)
 """
 
@@ -85,11 +85,11 @@ def _cpu() -> float:
                                                 resource.getrusage(resource.RUSAGE_CHILDREN)))
 
 
-def stages(designs: int, samples: int) -> dict:
+def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     """CPU seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
     parameter arrays, the batching and the chunk's assembly at t = 0 (``runner._batches``), the
     solve (``analyze_layout``), the metrics and reasons, the rest (the loader's checks on the
-    arrays)."""
+    arrays); with ``repeat``, each the minimum of that many runs of the chunk."""
     from linkdyn.studies import Task, space
     from linkdyn.studies import runner
     from linkdyn.studies.metrics import check_names
@@ -115,18 +115,21 @@ def stages(designs: int, samples: int) -> dict:
     runner._batches = timed(batches, "batches")
     try:
         runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
-        clock.update(batches=0.0, solve=0.0, metrics=0.0)
-        t0 = time.process_time()
-        Z = task.builder.numbers(values)
-        task.builder.stacked(Z)
-        layouts = time.process_time() - t0
-        t0 = time.process_time()
-        runner.evaluate(task, values)
-        total = time.process_time() - t0
+        runs = []
+        for _ in range(repeat):
+            clock.update(batches=0.0, solve=0.0, metrics=0.0)
+            t0 = time.process_time()
+            Z = task.builder.numbers(values)
+            task.builder.stacked(Z)
+            layouts = time.process_time() - t0
+            t0 = time.process_time()
+            runner.evaluate(task, values)
+            total = time.process_time() - t0
+            runs.append({"layouts": layouts, **clock, "rest": total - sum(clock.values()),
+                         "total": total})
     finally:
         runner.analyze_layout, runner._fill, runner._batches = solve, fill, batches
-    return {"layouts": layouts, "batches": clock["batches"], "solve": clock["solve"],
-            "metrics": clock["metrics"], "rest": total - sum(clock.values()), "total": total}
+    return {k: min(r[k] for r in runs) for k in runs[0]}
 
 
 def in_fresh_process(designs: int, samples: int, workers: int, per_design: int = 0) -> dict:
@@ -158,7 +161,7 @@ def main():
     ap.add_argument("--no-ceiling", action="store_true",
                     help="skip the hand-written kernel (its compile takes about a minute)")
     ap.add_argument("--chunk-only", action="store_true",
-                    help="only one chunk's stages, CPU time, minimum of three runs")
+                    help="only one chunk's stages, CPU time, minimum of five runs")
     ap.add_argument("--child", nargs=4, type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -166,10 +169,10 @@ def main():
         return
     if args.chunk_only:
         chunk = min(args.designs, default_chunk(args.designs, args.samples))
-        runs = [stages(chunk, args.samples) for _ in range(3)]
+        st = stages(chunk, args.samples, repeat=5)
         print(f"one chunk of {chunk} designs x {args.samples} samples, one worker, CPU s "
-              f"(minimum of 3; load average {os.getloadavg()[0]:.2f}): "
-              + ", ".join(f"{k} {min(r[k] for r in runs):.3g}" for k in runs[0]))
+              f"(each the minimum of 5 runs in one process; load average "
+              f"{os.getloadavg()[0]:.2f}): " + ", ".join(f"{k} {v:.3g}" for k, v in st.items()))
         return
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     D, T = args.designs, args.samples
