@@ -429,13 +429,13 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
 def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(example, path, lo, hi):
     from linkdyn.kinematics import dyads, newton
     from linkdyn.kinematics.layout import compile_designs
-    from linkdyn.kinematics.positions import _guess
+    from linkdyn.kinematics.positions import assembly_guess
     from linkdyn.kinematics.recursion import forward_positions
 
     models, _ = space(linkdyn.example_path(example), [path]).models(
         np.random.default_rng(1).uniform(lo, hi, (24, 1)))
     lay = compile_designs(models)
-    q0 = np.stack([_guess(m, lay) for m in models], axis=-1)[..., None]   # (n, D, 1)
+    q0 = np.stack([assembly_guess(m, lay) for m in models], axis=-1)[..., None]   # (n, D, 1)
     q0[list(lay.topo.driven)] = lay.driver_values(np.zeros(1))[0]
     can = dyads.closable(lay, lay.dyads, q0, forward_positions)[:, 0]
     # the independent answer: damped Newton from 128 random starts per design

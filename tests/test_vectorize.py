@@ -14,7 +14,7 @@ import linkdyn
 from linkdyn.errors import ModelError
 from linkdyn.io import read_model_data
 from linkdyn.kinematics.layout import compile_designs
-from linkdyn.kinematics.positions import _guess
+from linkdyn.kinematics.positions import assembly_guess
 from linkdyn.studies import Task, sample, space
 from linkdyn.studies.params import check_ranges
 from linkdyn.studies.runner import _evaluate_models, evaluate
@@ -104,8 +104,8 @@ def test_the_stacked_layout_of_random_designs_is_the_per_design_one():
     for key in want:
         assert close(got[key], want[key]), key
     # the assembly starts from each design's own guess
-    mine = np.stack([_guess(m, lay) for m in builder.guess_models(guesses, len(values))], -1)
-    assert close(mine, np.stack([_guess(m, ref) for m in models], -1))
+    mine = np.stack([assembly_guess(m, lay) for m in builder.guess_models(guesses, len(values))], -1)
+    assert close(mine, np.stack([assembly_guess(m, ref) for m in models], -1))
     # taking designs out of it keeps them
     idx = np.array([4, 0, 17])
     sub = numbers(lay.take(idx))

@@ -41,7 +41,7 @@ from .analysis import SINGULAR, Solution
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
 from .kinematics.layout import Layout, compile_layout
-from .kinematics.positions import _guess, assemble, driver_values
+from .kinematics.positions import assembly_guess, assemble, driver_values
 from .kinematics.state import at_state
 from .model import Driver, Model
 from .planar import solve_small
@@ -249,7 +249,7 @@ def _start(part: Partition) -> np.ndarray:
     """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
     ``[initial] q`` (else the ``[assembly]`` guess)."""
     lay, topo = part.layout, part.layout.topo
-    guess = _guess(part.inner, lay)
+    guess = assembly_guess(part.inner, lay)
     q_drv = driver_values(part.model, np.zeros(1))[0][:, 0]
     q_free = [part.model.initial_q.get(j, guess[topo.driven[part.n_drivers + k]])
               for k, j in enumerate(part.free)]

@@ -96,7 +96,7 @@ def newton(lay: Layout, q: np.ndarray, maxiter: int = 12, damped: bool = False):
     return q, err
 
 
-def _guess(model: Model, lay: Layout) -> np.ndarray:
+def assembly_guess(model: Model, lay: Layout) -> np.ndarray:
     """Tree coordinates (n,) near the ``[assembly]`` guess (absolute angles, joint values)."""
     topo = lay.topo
     phi = {"ground": 0.0, **model.assembly_phi}
@@ -138,7 +138,7 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
     topo = lay.topo
     dep = list(topo.dependent)
     # batch shape (D, 1): the trailing axis stands for time, so design arrays broadcast
-    guess = {id(m): _guess(m, lay) for m in {id(m): m for m in models}.values()}  # once each
+    guess = {id(m): assembly_guess(m, lay) for m in {id(m): m for m in models}.values()}  # once each
     q0 = np.stack([guess[id(m)] for m in models], axis=-1)[..., None]
     q_drv0 = np.reshape(q_drv0, (len(topo.driven), -1))   # (n_drivers, 1 or D)
     q0[list(topo.driven)] = q_drv0[..., None]
@@ -160,10 +160,10 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
                          else rng.uniform(-2, 2, 64) * lay_f.size)
         qs, errs = newton(lay_f, starts, maxiter=60, damped=True)
         ok = errs <= ACCEPT
-        # distance to the guess: angles modulo 2 pi, slider travel relative to the size
+        # distance to the guess: angles modulo 2 pi, slider travel relative to the design's size
         gap = qs[dep] - q0[dep][:, idx, None]
         rev = np.array([jk.get(lay.kind[i]).angular for i in dep]).reshape((-1,) + (1,) * (gap.ndim - 1))
-        dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / np.min(lay.size))), axis=0)
+        dist = np.sum(np.abs(np.where(rev, wrap(gap), gap / lay_f.size)), axis=0)
         best = np.argmin(np.where(ok, dist, np.inf), axis=-1)
         pick = np.take_along_axis(qs, best[None, :, None], axis=-1)[..., 0]
         rescued = np.any(ok, axis=-1)

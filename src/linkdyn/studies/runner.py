@@ -30,7 +30,7 @@ from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
 from ..kinematics import driver_values, dyads
 # the assembly's starting guess, to sort designs by whether they close at once
-from ..kinematics.positions import _guess, assemble, not_assembled
+from ..kinematics.positions import assembly_guess, assemble, not_assembled
 from ..kinematics.recursion import forward_positions
 from . import metrics as metrics_mod
 from . import vectorize
@@ -229,7 +229,7 @@ def _batches(builder, lay, guesses, idx, T: int):
     can = np.ones(len(idx), bool)
     if sub.dyads is not None:
         models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
-        one = {id(m): _guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
+        one = {id(m): assembly_guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
         q0 = np.stack([one[id(m)] for m in models], axis=-1)[..., None]
         q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0]
         can = dyads.closable(sub, sub.dyads, q0, forward_positions)[:, 0]
