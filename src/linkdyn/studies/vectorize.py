@@ -162,11 +162,6 @@ class Builder:
         b = np.array([p.base for p in self.space.params])
         return self.z0 + (v - b) @ self.A
 
-    def layout_of(self, values) -> Layout:
-        """The stacked layout of designs ``values`` (D, P), as
-        :func:`~linkdyn.kinematics.layout.compile_designs` would give for their models."""
-        return self.stacked(self.numbers(values))[0]
-
     def stacked(self, Z: np.ndarray) -> tuple[Layout, dict]:
         """The stacked layout of numbers ``Z`` (D, N), and the assembly guesses (key -> (D,))."""
         D = len(Z)
