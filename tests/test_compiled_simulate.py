@@ -17,7 +17,7 @@ import linkdyn
 from linkdyn import expr
 from linkdyn.forward import _start, _System, partition, simulate
 
-pytest.importorskip("numba")
+pytest.importorskip("numba", reason="the compiled right-hand side needs numba (the fast extra)")
 
 
 def _dict(name):

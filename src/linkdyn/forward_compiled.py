@@ -26,9 +26,13 @@ import numpy as np
 
 from . import expr
 from . import joints as jk
+from .analysis import SINGULAR
 from .compiled import factor, njit, substitute
 from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
 from .kinematics import layout as lt
+from .kinematics.layout import (ANGULAR, CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
+                                SIGN)
+from .kinematics.compiled import PIVOT_TOL
 from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
                                    cut_coordinate, cut_frame, jacobian_column)
@@ -36,12 +40,12 @@ from .kinematics.state import MAXITER, STEP_TOL
 from .loads import body_point, damper_force, force_at, spring_force, weight
 from .planar import turned
 
-PIVOT_TOL = 1e-13     # relative pivot below which a small system is singular (solve_small's)
-SINGULAR = 1e-10      # analysis.SINGULAR: a position with a smaller pivot is singular
 
-# columns of the integer tables
-PARENT, KIND, SIGN, ANGULAR, JOINT = range(5)                        # tree (n, 5)
-CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, CUT_JOINT, CUT_METRES = range(7)   # cuts (nc, 10)
+# columns of the integer tables: the layout's, each tree row with its model joint appended
+# (n, 5), each cut row with its model joint before its metres (nc, 9)
+JOINT = ANGULAR + 1
+CUT_JOINT = lt.CUT_METRES
+CUT_METRES = CUT_JOINT + 1
 # load kinds (loads (L, 6): [kind, body, body2, joint, value row 1, value row 2])
 LOAD_KINDS = {"force": 0, "torque": 1, "joint_torque": 2, "joint_force": 3, "spring": 4,
               "damper": 5}
@@ -105,7 +109,7 @@ def run_program(code, value, x, reg):
         elif op == 21:                           # sign: NaN stays NaN
             reg[k] = 1.0 if u > 0 else (-1.0 if u < 0 else (0.0 if u == 0 else u))
         elif op == 22:                           # min, max, clip: NaN propagates (np.minimum)
-            reg[k] = u if u != u or u <= v else (v if v == v else v)
+            reg[k] = u if u != u or u <= v else v
             reg[k] = math.nan if v != v else reg[k]
         elif op == 23:
             reg[k] = u if u != u or u >= v else v
@@ -328,7 +332,7 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         ``[parent, kind code, sign, angular, model joint]`` per tree body.
     geo : float (n, 10)
         ``[joint point (2), axis (2), angle, com (2), mass, inertia, Newton step scale]``.
-    cuts : int (nc, 10)
+    cuts : int (nc, 9)
         ``[a, b, kind code, first row, rows, model joint, metres (3)]``; ``cgeo`` (nc, 7)
         ``[pa (2), pb (2), axis (2), angle]``; ``side`` (nc, n).
     ind, dep : int
@@ -555,7 +559,7 @@ def tables(part) -> dict:
     def num(name):   # design 0's number, entity first
         return lay.per_design(name)[..., 0]
     size = float(num("size"))
-    scale = np.where(lay.tree[:, lt.ANGULAR], 1.0, 1.0 / size)   # Newton's step in rad, or m/size
+    scale = np.where(lay.tree[:, ANGULAR], 1.0, 1.0 / size)   # Newton's step in rad, or m/size
     tree = np.concatenate([lay.tree, idx["tree_joint"][:, None]], axis=1)
     tree[0, JOINT] = 0
     cuts = np.concatenate([lay.cut_table[:, :lt.CUT_METRES], idx["cut_joint"][:, None],
@@ -650,7 +654,8 @@ class Kernel:
             ext = np.array([np.reshape(lay.load_values(lay.loads[m], tt), -1)[k]
                             for m, k in self.external])
         out = np.empty(len(y))
-        status = rhs_kernel(*self.args, float(t), np.ascontiguousarray(y, dtype=float), drv, ext, np.stack((q, qd, qdd)),
+        status = rhs_kernel(*self.args, float(t), np.ascontiguousarray(y, dtype=float), drv, ext,
+                            np.stack((q, qd, qdd)),
                             self.noS if S is None else np.ascontiguousarray(S), out,
                             self.state, self.J, self.energy)
         return out if status == 0 else None
