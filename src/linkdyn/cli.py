@@ -101,6 +101,19 @@ def example(name, list_):
     click.echo(example_text(name), nl=False)
 
 
+_BACKEND = click.option(
+    "--backend", type=click.Choice(["auto", "numpy", "compiled"]), default="auto",
+    show_default=True,
+    help="Per-sample kernels (default: LINKDYN_BACKEND if set, else auto).")
+
+
+def _backend(ctx: click.Context, value: str) -> str | None:
+    """The backend to pass on: the option's value when given on the command line, else None
+    (``LINKDYN_BACKEND`` if set, else ``auto``; the library checks the variable's value)."""
+    given = ctx.get_parameter_source("backend") is not click.core.ParameterSource.DEFAULT
+    return value if given else None
+
+
 # ---------------------------------------------------------------------------- check
 
 _ALLOW_OUTSIDE = click.option(
@@ -485,9 +498,11 @@ def _check_path_range(sol, text: str, given, si) -> None:
 @click.option("--path-range", metavar="A:B",
               help="Range of the first driver's coordinate for --path-point, in the model "
                    "file's angle unit (length unit for a slider); default: the whole run.")
+@_BACKEND
 @_ALLOW_OUTSIDE
-def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singular, fluctuation,
-            path_point, path_range, plots_, allow_outside):
+@click.pass_context
+def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_singular,
+            fluctuation, path_point, path_range, plots_, backend, allow_outside):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -508,7 +523,8 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
         # everything is computed (solution, summary, its text) before any file is written
         progress.step(f"solving {len(t)} samples")
         try:
-            sol = run(mech, t, allow_singular=allow_singular)
+            sol = run(mech, t, allow_singular=allow_singular,
+                      backend=_backend(ctx, backend))
         except MemoryError:  # below the estimate of _times, yet more than is free now
             raise ModelError(f"not enough free memory for {len(t)} samples", field="--samples",
                              fix="Give fewer samples, or split the run into parts with "
@@ -558,9 +574,11 @@ def analyze(model, outdir, samples, duration, cycles, fmt, report, allow_singula
 @click.option("--cycles", type=float, help="Duration in driver revolutions of every design.")
 @click.option("--fluctuation", type=float, default=0.02, show_default=True,
               help="Coefficient of speed fluctuation C_s for the flywheel size.")
+@_BACKEND
 @_ALLOW_OUTSIDE
-def compare(models, outdir, samples, duration, cycles, fluctuation, sweep_dir, by_metric, n_best,
-            allow_outside):
+@click.pass_context
+def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_dir, by_metric,
+            n_best, backend, allow_outside):
     """Compare designs MODELS... on one page: curves overlaid, key results side by side.
 
     Each design is solved and summarized as `linkdyn analyze` does with the same options, so
@@ -588,7 +606,7 @@ def compare(models, outdir, samples, duration, cycles, fluctuation, sweep_dir, b
     check_outdir(outdir)
     runs, names = [], []
     for path, stem, mech, _ in designs:
-        sol = run(mech, _times(mech, samples, duration, cycles))
+        sol = run(mech, _times(mech, samples, duration, cycles), backend=_backend(ctx, backend))
         summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
                               default_range=mech.path_range)
         name = stem if stem not in names else f"{stem} ({len(names) + 1})"
@@ -659,7 +677,8 @@ def simulation_summary(sol, summ: dict) -> dict:
     s = dict(summ)
     s["simulation"] = {
         "free_joints": list(sol.free),
-        **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations")},
+        **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
+                                     "energy_projections")},
         # where the free coordinates changed near a dead point of theirs (time s, joints)
         "coordinate_switches": [{"t_s": ts, "free_joints": fr}
                                 for ts, fr in sol.stats.get("switches", [])],
@@ -692,8 +711,14 @@ def simulation_summary(sol, summ: dict) -> dict:
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
 @click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
+@click.option("--no-project", "no_project", is_flag=True,
+              help="Do not put each step's end back on the energy balance (F11); the "
+                   "integrator's own steps only.")
+@_BACKEND
 @_ALLOW_OUTSIDE
-def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report, allow_outside):
+@click.pass_context
+def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, report, no_project,
+             backend, allow_outside):
     """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
@@ -715,7 +740,8 @@ def simulate(model, outdir, duration, samples, rtol, atol, method, fmt, report, 
                          fix="Give --samples 2 or more")
     t = np.linspace(0.0, float(duration), int(samples))
     # everything is computed (solution, summary, its text) before any file is written
-    sol = run(mech, t, rtol=rtol, atol=atol, method=method)
+    sol = run(mech, t, rtol=rtol, atol=atol, method=method, backend=_backend(ctx, backend),
+              project=not no_project)
     summ = simulation_summary(sol, design.summary(sol))
     sim = summ["simulation"]
     text = summary_text(summ) + "\n" + (
