@@ -25,7 +25,8 @@ cut-joint constraints (coordinate partitioning, F1).
   explicit method each accepted step's end is put back on the energy balance by scaling the
   free rates (F11).
 - The right-hand side runs numpy's stages, or one compiled function per evaluation
-  (:mod:`linkdyn.forward_compiled`, ``backend=``).
+  (:mod:`linkdyn.forward_compiled`, ``backend=``); the outputs of a compiled run are computed
+  by the compiled kernels of ``analyze``'s stages.
 """
 
 from __future__ import annotations
@@ -36,13 +37,14 @@ from functools import cached_property
 
 import numpy as np
 
-from . import compiled, joints as jk, loads as loads_mod, reactions as reactions_mod
-from .analysis import SINGULAR, Solution
+from . import compiled, joints as jk, loads as loads_mod
+from .analysis import SINGULAR, Solution, _backend
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
 from .kinematics.layout import Layout, compile_layout
 from .kinematics.positions import assembly_guess, assemble, driver_values
-from .kinematics.state import at_state
+from .kinematics.solution import at_closed
+from .kinematics.state import at_state, close
 from .model import Driver, Model
 from .planar import solve_small
 from .topology import build
@@ -507,8 +509,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         The right-hand side's evaluation (default ``LINKDYN_BACKEND`` or ``'auto'``): numpy's
         array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
         with numba installed); ``'auto'`` compiles once a run has made :data:`AUTO_RHS`
-        evaluations. The outputs are computed by numpy's stages either way (once the compiled
-        right-hand side runs, it gives their free accelerations and closed positions).
+        evaluations. The outputs are computed by the same backend's stages: once the compiled
+        right-hand side runs, it gives their free accelerations and closed positions, and the
+        compiled kinematics, dynamics and reactions kernels the rest.
     project : bool
         With an explicit method (RK45, DOP853, RK23): after every accepted step, scale the free
         rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the energy of a
@@ -717,8 +720,10 @@ def _stages(part: Partition, t, Y, guesses, kernel=None):
     """``(kin, loads, dyn, reactions, valid, free effort residual, closure residual)`` at the
     output states ``Y`` (2 nf + 1, T) of one partition, ``guesses`` (n, T) their tree
     coordinates; ``kernel``: the run's compiled right-hand side (:class:`.forward_compiled.Kernel`,
-    of any partition), which then gives the free accelerations (numpy's stages where its
-    Newton's method does not close the loops)."""
+    of any partition), which then gives the free accelerations and the closed positions
+    (numpy's stages where its Newton's method does not close the loops), and the stages after
+    it are the compiled kernels (the kinematics kernel at the closed positions, the dynamics
+    and reactions kernels), as ``analyze`` chooses them (:func:`.analysis._backend`)."""
     model, lay = part.model, part.layout
     nd, nf = part.n_drivers, len(part.free)
     q_f, qd_f = Y[:nf], Y[nf:2 * nf]
@@ -740,11 +745,20 @@ def _stages(part: Partition, t, Y, guesses, kernel=None):
         qdd_f[:, open_] = system.evaluate(t[open_], q_f[:, open_], qd_f[:, open_],
                                           guesses[:, open_])[0]
     q_d, qd_d, qdd_d = driver_values(model, t)
-    kin = at_state(part.inner, lay, t, np.concatenate((q_d, q_f)), np.concatenate((qd_d, qd_f)),
-                   np.concatenate((qdd_d, qdd_f)), guesses)
+    q_ind, qd_ind, qdd_ind = (np.concatenate(x) for x in ((q_d, q_f), (qd_d, qd_f),
+                                                           (qdd_d, qdd_f)))
+    if kernel is None:
+        kin = at_state(part.inner, lay, t, q_ind, qd_ind, qdd_ind, guesses)
+    else:
+        # the loops closed (by the right-hand side, else as at_state closes them), the rest of
+        # the kinematics by the compiled kernel
+        if np.any(open_):
+            guesses[:, open_] = close(lay, q_ind[:, open_], guesses[:, open_])[0]
+        kin = at_closed(part.inner, lay, t, guesses, qd_ind, qdd_ind)
     applied = loads_mod.wrenches(model, kin)
-    dyn = denoc.solve(kin, applied)
-    react = reactions_mod.solve(part.inner, kin, dyn)
+    dynamics, reactions_stage = _backend(kernel is not None)
+    dyn = dynamics(kin, applied)
+    react = reactions_stage(part.inner, kin, applied, dyn)
     # the free joints' efforts vanish at the solution of F6: what is left is rounding
     # scale: the generalized forces of the loads alone and of the inertia alone (Q + loads')
     _, q_loads = denoc.reduce(kin, applied.wrenches)

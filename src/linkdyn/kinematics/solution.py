@@ -132,3 +132,32 @@ def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
     return KinematicSolution(lay, t, tuple(cols), pose, p,
                              each("tw", (n, 3)), each("twd", (n, 3)), J,
                              out["pivot"].reshape(shape), err, valid, arrays=out)
+
+
+def at_closed(model, lay: Layout, t, q, qd_ind, qdd_ind) -> KinematicSolution:
+    """The kinematics stage by the compiled kernel at positions that already close the loops
+    (as :func:`.state.at_state` after :func:`.state.close`): the rates ``J_dep qd_dep = -J_drv
+    qd_drv`` (eqs. 4-5), accelerations ``J_dep qdd_dep = -b`` (eqs. 6-7), twists, their rates
+    and every joint's motion.
+
+    Parameters
+    ----------
+    model : Model
+        The model whose drivers are the independent coordinates (``lay``'s model).
+    lay : Layout
+    t : ndarray (T,)
+        s.
+    q : ndarray (n, T)
+        Tree coordinates closing the loops, rad or m.
+    qd_ind, qdd_ind : ndarray (k, T)
+        The independent coordinates' rates and accelerations, ``lay.topo.driven`` order.
+
+    Returns
+    -------
+    KinematicSolution
+        Samples whose closure residual (of ``q``, scaled) is above ``ACCEPT``, or whose rates or
+        accelerations are not finite (``J_dep`` singular), NaN with ``valid = False``.
+    """
+    t = np.asarray(t, dtype=float)
+    out = kc.run(lay, t, q[list(lay.topo.driven)], qd_ind, qdd_ind, q=q)
+    return _from_kernel(model, lay, t, out, out["err"].reshape(t.shape))
