@@ -79,19 +79,20 @@ def _pose(phi, c, s, r, e, i, d, ks):
 
 
 @njit
-def _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e):
-    """Poses of all bodies (:func:`.recursion.child_pose`); ``cq``, ``sq`` (n, block): cosine
-    and sine of ``s q_i`` for the angular joints."""
-    ks = slice(k0, k0 + nb)   # the block's samples
+def _place(tree, geo, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
+    """Poses of all bodies (:func:`.recursion.child_pose`) of design d (``geo``) into the work
+    arrays at ``w``, ``kw``; ``cq``, ``sq`` (n, block): cosine and sine of ``s q_i`` for the
+    angular joints."""
+    ks = slice(kw, kw + nb)   # the block's samples in the work arrays
     jp, slide, ang = geo   # joint points, slider axes, angles
-    c[0, d, ks] = 1.0   # the ground's other rows stay zero
+    c[0, w, ks] = 1.0   # the ground's other rows stay zero
     for i in range(1, len(tree)):
         p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
         joint, axis = (jp[i, 0, d], jp[i, 1, d]), (slide[i, 0, d], slide[i, 1, d])
         angle = ang[i, d]
-        phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, d, ks)
-        phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, d, ks)
-        q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
+        phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, w, ks)
+        phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, w, ks)
+        q_i, cq_i, sq_i = q[i, w, ks], cq[i], sq[i]
         for k in range(nb):
             ph, co, si, o, ax = child_pose(code, sign, q_i[k], (cq_i[k], sq_i[k]), angle, axis,
                                            joint, phi_p[k], c_p[k], s_p[k], (rx_p[k], ry_p[k]))
@@ -145,26 +146,26 @@ def _turns(out, k, rot):
 
 
 @njit
-def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low):
+def _close(dyads, anc, tree, cuts, cgeo, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
     """Close every loop dyad by dyad (dyads.solve): each dyad's shape step (dyads.split,
     chain, slide, swing) gives the two turns of the samples, one sample loop per shape
     (a chain's lower turn, dyads.chain_lower, once the upper turn has moved its body); the
-    subtrees beyond its two unknown joints turn. ``up``, ``low`` (5, block) scratch
-    for the two turns."""
-    ks = slice(k0, k0 + nb)
+    subtrees beyond its two unknown joints turn. Design d's numbers (``cgeo``, ``modes``),
+    the work arrays at ``wd``, ``kw``; ``up``, ``low`` (5, block) scratch for the two turns."""
+    ks = slice(kw, kw + nb)
     cpa, cpb, cax, cang = cgeo
     for m in range(dyads.shape[0]):
         shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
         side = modes[m, d]
-        A = _body(c, s, r, cuts[cut, CUT_A], d, ks)
-        B = _body(c, s, r, cuts[cut, CUT_B], d, ks)
+        A = _body(c, s, r, cuts[cut, CUT_A], wd, ks)
+        B = _body(c, s, r, cuts[cut, CUT_B], wd, ks)
         pa, pb = (cpa[cut, 0, d], cpa[cut, 1, d]), (cpb[cut, 0, d], cpb[cut, 1, d])
         axis, angle = (cax[cut, 0, d], cax[cut, 1, d]), cang[cut, d]
         # the cut's body on the side of both unknown joints (chain, slide), and the other
         M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
         sgn = 1.0 if on_b else -1.0
-        x1x, x1y = vector_views(r, ju, d, ks)   # the upper and lower unknown joints
-        x2x, x2y = vector_views(r, jl, d, ks)
+        x1x, x1y = vector_views(r, ju, wd, ks)   # the upper and lower unknown joints
+        x2x, x2y = vector_views(r, jl, wd, ks)
         if shape == SPLIT:
             for k in range(nb):
                 u, w = dy.split(_at(A, k), _at(B, k), pa, pb, (x1x[k], x1y[k]),
@@ -189,29 +190,30 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, u
                                 (x2x[k], x2y[k]), side)
                 _turns(up, k, u)
                 _turns(low, k, w)
-        _rotate(anc, tree, ju, up, d, k0, nb, phi, c, s, r, e)
+        _rotate(anc, tree, ju, up, wd, kw, nb, phi, c, s, r, e)
         if shape == CHAIN:
             for k in range(nb):
                 m_k = (low[3, k], low[4, k])
                 _turns(low, k, dy.chain_lower(_at(M, k), _at(F, k), pm, pf, m_k))
-        _rotate(anc, tree, jl, low, d, k0, nb, phi, c, s, r, e)
+        _rotate(anc, tree, jl, low, wd, kw, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
-        q_u, q_l = q[ju, d, ks], q[jl, d, ks]
+        q_u, q_l = q[ju, wd, ks], q[jl, wd, ks]
         for k in range(nb):
             q_u[k] += tree[ju, SIGN] * up[0, k]
             q_l[k] += tree[jl, SIGN] * low[0, k]
 
 
 @njit
-def _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P):
+def _cut_frames(cuts, cgeo, d, w, kw, nb, c, s, r, P):
     """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
     loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
-    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]``."""
-    ks = slice(k0, k0 + nb)
+    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]`` (design d's ``cgeo``, the poses
+    at ``w``, ``kw``)."""
+    ks = slice(kw, kw + nb)
     cpa, cpb, cax, _ = cgeo
     for ci in range(len(cuts)):
-        c_a, s_a, rx_a, ry_a = _body(c, s, r, cuts[ci, CUT_A], d, ks)
-        c_b, s_b, rx_b, ry_b = _body(c, s, r, cuts[ci, CUT_B], d, ks)
+        c_a, s_a, rx_a, ry_a = _body(c, s, r, cuts[ci, CUT_A], w, ks)
+        c_b, s_b, rx_b, ry_b = _body(c, s, r, cuts[ci, CUT_B], w, ks)
         pa, pb = (cpa[ci, 0, d], cpa[ci, 1, d]), (cpb[ci, 0, d], cpb[ci, 1, d])
         axis = (cax[ci, 0, d], cax[ci, 1, d])
         P_c = P[ci]
@@ -230,17 +232,17 @@ def _frame(P_c, k):
 
 
 @njit
-def _residual(cuts, cgeo, size, d, k0, nb, phi, P, err):
+def _residual(cuts, cgeo, size, d, k0, w, kw, nb, phi, P, err):
     """Loop-closure residual (the kinds' ``residual`` steps), its rows in metres relative to
-    ``size``, max over the cut rows (:func:`.positions.scaled_error`)."""
-    ks = slice(k0, k0 + nb)
-    err_d = err[d, ks]
+    ``size``, max over the cut rows (:func:`.positions.scaled_error`), into ``err`` (D, T) at
+    design d, samples from ``k0``; the angles ``phi`` at ``w``, ``kw``."""
+    err_d = err[d, k0:k0 + nb]
     err_d[:] = 0.0
     for ci in range(len(cuts)):
         P_c = P[ci]
         a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[3][ci, d]
         m0, m1, m2 = cuts[ci, CUT_METRES], cuts[ci, CUT_METRES + 1], cuts[ci, CUT_METRES + 2]
-        phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
+        phi_a, phi_b = phi[a, w, kw:kw + nb], phi[b, w, kw:kw + nb]
         for k in range(nb):   # the padded rows are zero
             r_pa, r_pb, e_a = _frame(P_c, k)
             g = jk.residual(code, angle, phi_a[k], phi_b[k], e_a, r_pa, r_pb)
@@ -396,12 +398,13 @@ def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
 
 
 @njit
-def _finite(d, k0, nb, qd, qdd, fin):
-    """``fin`` (D, T): whether every rate and acceleration of the sample is finite."""
+def _finite(d, k0, w, kw, nb, qd, qdd, fin):
+    """``fin`` (D, T) at design d, samples from ``k0``: whether every rate and acceleration
+    of the sample (``qd``, ``qdd`` at ``w``, ``kw``) is finite."""
     fin_d = fin[d, k0:k0 + nb]
     fin_d[:] = True
     for i in range(len(qd)):
-        qd_i, qdd_i = qd[i, d, k0:k0 + nb], qdd[i, d, k0:k0 + nb]
+        qd_i, qdd_i = qd[i, w, kw:kw + nb], qdd[i, w, kw:kw + nb]
         for k in range(nb):
             fin_d[k] = fin_d[k] & math.isfinite(qd_i[k]) & math.isfinite(qdd_i[k])
 
@@ -421,9 +424,88 @@ def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
 # --- the kernel ----------------------------------------------------------------------------------
 
 @njit
+def scratch(n, nc, nd, n_rows, block):
+    """The kernel's scratch for one block of samples: the cosines and sines of the angular
+    joints' coordinates, the two turns of a dyad, the right-hand sides, the cut frames, the LU
+    factors of ``J_dep``, the solution, the pivots and the nearest nodes (:func:`block`)."""
+    B = block
+    return (np.ones((n, B)), np.zeros((n, B)), np.zeros((5, B)), np.zeros((5, B)),
+            np.zeros((n_rows, B)), np.zeros((nc, 6, B)), np.zeros((nd, nd, B)),
+            np.zeros((max(nd, 1), B)), np.zeros(B), np.zeros((nd, B), np.int64),
+            np.zeros(B, np.int64))
+
+
+@njit
+def block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ,
+          sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
+    """Positions, rates and accelerations of the samples ``k0`` .. ``k0 + nb`` of design d
+    (arguments as in :func:`kernel`): the per-sample arrays ``work`` = ``(q, phi, c, s, r, e,
+    J, qd, qdd, tw, td)`` written at design ``w``, samples from ``kw`` (the outputs
+    themselves, ``w, kw = d, k0``, or one block's scratch, ``0, 0``); ``err``, ``pivot``,
+    ``fin`` (D, T) at d, ``k0``; ``tmp`` the block's scratch (:func:`scratch`)."""
+    q, phi, c, s, r, e, J, qd, qdd, tw, td = work
+    cq, sq, up, low, rhs, P, A, sol, col, perm, node = tmp
+    n, nd, nv = len(tree), len(dep), len(drv)
+    ks, kws = slice(k0, k0 + nb), slice(kw, kw + nb)   # the samples, in the work arrays
+    # coordinates: the nearest node's (or the closed ones) and the drivers'
+    if nodes.shape[0] > 0:
+        for k in range(nb):
+            node[k] = nearest(nodes, min(max(t_s[k0 + k], lo[d]), hi[d]))
+        for i in range(1, n):
+            q_i, cq_i, sq_i = q[i, w, kws], cq[i], sq[i]
+            Qn_i, cQ_i, sQ_i = Qn[i, d], cQ[i, d], sQ[i, d]
+            for k in range(nb):
+                jn = node[k]
+                q_i[k], cq_i[k], sq_i[k] = Qn_i[jn], cQ_i[jn], sQ_i[jn]
+    else:
+        for i in range(1, n):
+            _coordinates(tree, i, q_in[i, d, ks], q[i, w, kws], cq[i], sq[i], nb)
+    for j in range(nv):
+        i = drv[j]
+        _coordinates(tree, i, q_drv[j, d, ks], q[i, w, kws], cq[i], sq[i], nb)
+    # positions, the loops closed in closed form from the nodes
+    _place(tree, geo, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
+    if nodes.shape[0] > 0:
+        _close(dyads, anc, tree, cuts, cgeo, modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
+    _cut_frames(cuts, cgeo, d, w, kw, nb, c, s, r, P)
+    _residual(cuts, cgeo, size, d, k0, w, kw, nb, phi, P, err)
+    _jacobian(tree, side, cuts, w, kw, nb, r, e, P, J)
+    # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
+    for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
+        qdd[dep[m], w, kws] = 0.0
+    for j in range(nv):
+        qd[drv[j], w, kws], qdd[drv[j], w, kws] = qd_drv[j, d, ks], qdd_drv[j, d, ks]
+    for row in range(nd):
+        acc = rhs[row]   # the sum over the drivers, negated once summed
+        acc[:nb] = 0.0
+        for j in range(nv):
+            J_rj, qd_j = J[row, drv[j] - 1, w, kws], qd_drv[j, d, ks]
+            for k in range(nb):
+                acc[k] += J_rj[k] * qd_j[k]
+        for k in range(nb):
+            acc[k] = -acc[k]
+    if nd:   # J_dep, factored once for the rates and the accelerations
+        _factor_dep(dep, J, w, kw, nb, A, perm, col)
+        _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qd, sol)
+    for k in range(nb):
+        pivot[d, k0 + k] = col[k] if nd else 1.0
+    _twists(tree, w, kw, nb, r, e, qd, tw)
+    # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
+    _twist_rates(tree, w, kw, nb, r, e, tw, qd, qdd, td)
+    if nd:
+        _bias(cuts, w, kw, nb, r, tw, td, P, rhs)
+        for row in range(nd):
+            for k in range(nb):
+                rhs[row, k] = -rhs[row, k]
+        _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qdd, sol)
+        _twist_rates(tree, w, kw, nb, r, e, tw, qd, qdd, td)
+    _finite(d, k0, w, kw, nb, qd, qdd, fin)
+
+
+@njit
 def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
            t_s, nodes, lo, hi, Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv,
-           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block):
+           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block_size):
     """Positions, rates and accelerations at the times ``t_s`` (T,), written into the outputs
     ``q`` ... ``err`` (see :func:`run`), which come zeroed: the rows that stay zero (the
     ground's, a revolute joint's slider axis) are never written.
@@ -432,74 +514,19 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
     cosines and sines ``cQ``, ``sQ`` of ``s Qn``), the loops are closed dyad by dyad from the
     node nearest to each time clamped to ``[lo, hi]`` (D,), in the assembly ``modes``
     (n_dyads, D); without (K = 0), ``q_in`` (n, D, T) already closes them. Driver coordinates,
-    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T).
+    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T). Each block of
+    samples is :func:`block`, written in place, then the cut joints' motion.
     """
-    n, nc, nd, nv = len(tree), len(cuts), len(dep), len(drv)
-    D, T, from_nodes = size.shape[0], t_s.shape[0], nodes.shape[0] > 0
-    B = block
-    cq, sq = np.ones((n, B)), np.zeros((n, B))
-    up, low, rhs = np.zeros((5, B)), np.zeros((5, B)), np.zeros((J.shape[0], B))
-    P = np.zeros((nc, 6, B))
-    A, sol, col = np.zeros((nd, nd, B)), np.zeros((max(nd, 1), B)), np.zeros(B)
-    perm, node = np.zeros((nd, B), np.int64), np.zeros(B, np.int64)
+    D, T = size.shape[0], t_s.shape[0]
+    tmp = scratch(len(tree), len(cuts), len(dep), J.shape[0], block_size)
+    work = (q, phi, c, s, r, e, J, qd, qdd, tw, td)
     for d in range(D):
-        for k0 in range(0, T, B):
-            nb = min(B, T - k0)
-            ks = slice(k0, k0 + nb)
-            # coordinates: the nearest node's (or the closed ones) and the drivers'
-            if from_nodes:
-                for k in range(nb):
-                    node[k] = nearest(nodes, min(max(t_s[k0 + k], lo[d]), hi[d]))
-                for i in range(1, n):
-                    q_i, cq_i, sq_i = q[i, d, ks], cq[i], sq[i]
-                    Qn_i, cQ_i, sQ_i = Qn[i, d], cQ[i, d], sQ[i, d]
-                    for k in range(nb):
-                        jn = node[k]
-                        q_i[k], cq_i[k], sq_i[k] = Qn_i[jn], cQ_i[jn], sQ_i[jn]
-            else:
-                for i in range(1, n):
-                    _coordinates(tree, i, q_in[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
-            for j in range(nv):
-                i = drv[j]
-                _coordinates(tree, i, q_drv[j, d, ks], q[i, d, ks], cq[i], sq[i], nb)
-            # positions, the loops closed in closed form from the nodes
-            _place(tree, geo, d, k0, nb, q, cq, sq, phi, c, s, r, e)
-            if from_nodes:
-                _close(dyads, anc, tree, cuts, cgeo, modes, d, k0, nb, q, phi, c, s, r, e, up, low)
-            _cut_frames(cuts, cgeo, d, k0, nb, c, s, r, P)
-            _residual(cuts, cgeo, size, d, k0, nb, phi, P, err)
-            _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
-            # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
-            for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
-                qdd[dep[m], d, ks] = 0.0
-            for j in range(nv):
-                qd[drv[j], d, ks], qdd[drv[j], d, ks] = qd_drv[j, d, ks], qdd_drv[j, d, ks]
-            for row in range(nd):
-                acc = rhs[row]   # the sum over the drivers, negated once summed
-                acc[:nb] = 0.0
-                for j in range(nv):
-                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, d, ks]
-                    for k in range(nb):
-                        acc[k] += J_rj[k] * qd_j[k]
-                for k in range(nb):
-                    acc[k] = -acc[k]
-            if nd:   # J_dep, factored once for the rates and the accelerations
-                _factor_dep(dep, J, d, k0, nb, A, perm, col)
-                _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qd, sol)
-            for k in range(nb):
-                pivot[d, k0 + k] = col[k] if nd else 1.0
-            _twists(tree, d, k0, nb, r, e, qd, tw)
-            # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
-            _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
-            if nd:
-                _bias(cuts, d, k0, nb, r, tw, td, P, rhs)
-                for row in range(nd):
-                    for k in range(nb):
-                        rhs[row, k] = -rhs[row, k]
-                _solve_dep(dep, A, perm, col, d, k0, nb, rhs, qdd, sol)
-                _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td)
-            _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, cut)
-            _finite(d, k0, nb, qd, qdd, fin)
+        for k0 in range(0, T, block_size):
+            nb = min(block_size, T - k0)
+            block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
+                  Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, d, k0, err,
+                  pivot, fin, tmp)
+            _cut_motion(cuts, d, k0, nb, phi, r, tw, td, tmp[5], cut)
 
 
 def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
