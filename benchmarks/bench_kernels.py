@@ -68,17 +68,18 @@ def steps(args):
     cq, sq = np.ones((n, block)), np.zeros((n, block))   # cos, sin of s q: any angle will do
     up, low, rhs = np.zeros((5, block)), np.zeros((5, block)), np.zeros((2 * nc, block))
     P = np.zeros((nc, 6, block))
-    kc._cut_frames(cuts, cgeo, 0, 0, block, c, s, r, P)   # the first block's, for every block
+    kc._cut_frames(cuts, cgeo, 0, 0, 0, block, c, s, r, P)   # the first block's, for every block
     A, sol, col = np.zeros((nd, nd, block)), np.zeros((max(nd, 1), block)), np.zeros(block)
     perm = np.zeros((nd, block), np.int64)
     closed = [x.copy() for x in (q, phi, c, s, r, e)]   # the close step turns a copy
     return {
-        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, k0, nb, q, cq, sq, phi, c, s, r,
-                                                     e),
-        "close the dyads": lambda k0, nb: kc._close(dyads, anc, tree, cuts, cgeo, modes, 0, k0, nb,
+        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, 0, k0, nb, q, cq, sq, phi, c, s,
+                                                     r, e),
+        "close the dyads": lambda k0, nb: kc._close(dyads, anc, tree, cuts, cgeo, modes, 0, 0, k0, nb,
                                                     *closed, up, low),
-        "cut frames": lambda k0, nb: kc._cut_frames(cuts, cgeo, 0, k0, nb, c, s, r, P),
-        "closure residual": lambda k0, nb: kc._residual(cuts, cgeo, size, 0, k0, nb, phi, P, err),
+        "cut frames": lambda k0, nb: kc._cut_frames(cuts, cgeo, 0, 0, k0, nb, c, s, r, P),
+        "closure residual": lambda k0, nb: kc._residual(cuts, cgeo, size, 0, k0, 0, k0, nb, phi, P,
+                                                              err),
         "closure Jacobian": lambda k0, nb: kc._jacobian(tree, side, cuts, 0, k0, nb, r, e, P, J),
         "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(dep, J, 0, k0, nb, A, perm,
                                                                         col),
