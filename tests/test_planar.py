@@ -138,3 +138,22 @@ def test_parts_and_sizes():
     assert t.shape == (pl.SIZE, 4) and pl.linear(t).shape == (pl.LINEAR_SIZE, 4)
     np.testing.assert_array_equal(pl.angular(t), np.arange(4.0))
     np.testing.assert_array_equal(pl.force(2.0, np.array([3.0, 4.0])), [2.0, 3.0, 4.0])
+
+
+def test_solve_small_by_lapack_solves_and_flags_singular_samples():
+    """``solve_small`` of 9 and 41 unknowns (LAPACK), one array or nested lists alike: the
+    solution of ``K x = b`` where regular, NaN and a relative pivot ~0 at a singular sample
+    (rank one short, and a zero matrix)."""
+    rng = np.random.default_rng(2)
+    for n in (9, 41):
+        K, b = rng.normal(size=(n, n, 4)), rng.normal(size=(n, 4))
+        K[:, 3, 1] = K[:, 2, 1]              # two equal columns
+        K[..., 2] = 0.0
+        x, rel = pl.solve_small(K, b)
+        lists = pl.solve_small([[K[i, j] for j in range(n)] for i in range(n)], list(b))
+        np.testing.assert_array_equal(x, lists[0])
+        np.testing.assert_array_equal(rel, lists[1])
+        for k in (0, 3):
+            np.testing.assert_allclose(K[..., k] @ x[:, k], b[:, k], atol=1e-9)
+            assert rel[k] > 1e-6
+        assert np.all(np.isnan(x[:, 1:3])) and np.all(rel[1:3] < 1e-13)

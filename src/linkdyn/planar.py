@@ -251,12 +251,17 @@ def _solve_lapack(K, b, n, shape):
     results and the same relative pivot (of an LU factorization with partial pivoting)."""
     from scipy.linalg import lu
 
-    A = np.empty(shape + (n, n))
-    B = np.empty(shape + (n,))
-    for i in range(n):
-        B[..., i] = b[i]
-        for j in range(n):
-            A[..., i, j] = K[i][j]
+    if isinstance(K, np.ndarray) and isinstance(b, np.ndarray):
+        # one array each (the Jacobians' slices): the samples first, by moving axes
+        A = np.moveaxis(np.broadcast_to(K, (n, n) + shape), (0, 1), (-2, -1))
+        B = np.moveaxis(np.broadcast_to(b, (n,) + shape), 0, -1)
+    else:
+        A = np.empty(shape + (n, n))
+        B = np.empty(shape + (n,))
+        for i in range(n):
+            B[..., i] = b[i]
+            for j in range(n):
+                A[..., i, j] = K[i][j]
     scale = np.max(np.abs(A), axis=(-2, -1))
     finite = np.all(np.isfinite(A), axis=(-2, -1)) & np.all(np.isfinite(B), axis=-1)
     A = np.where(finite[..., None, None], A, np.eye(n))
@@ -290,8 +295,11 @@ def solve_small(K, b):
         Smallest pivot magnitude relative to the largest entry of ``K``: ~0 means singular.
     """
     n = len(b)
-    shape = np.broadcast_shapes(*(np.shape(K[i][j]) for i in range(n) for j in range(n)),
-                                *(np.shape(b[i]) for i in range(n)))
+    if isinstance(K, np.ndarray) and isinstance(b, np.ndarray):
+        shape = np.broadcast_shapes(K.shape[2:], b.shape[1:])
+    else:
+        shape = np.broadcast_shapes(*(np.shape(K[i][j]) for i in range(n) for j in range(n)),
+                                    *(np.shape(b[i]) for i in range(n)))
     if n >= LAPACK_FROM:
         return _solve_lapack(K, b, n, shape)
     A = [[np.broadcast_to(K[i][j], shape) for j in range(n)] + [np.broadcast_to(b[i], shape)]
