@@ -41,7 +41,7 @@ from . import compiled, joints as jk, loads as loads_mod
 from .analysis import SINGULAR, Solution, _backend
 from .dynamics import denoc
 from .errors import AssemblyError, ModelError
-from .kinematics.layout import Layout, compile_layout
+from .kinematics.layout import ANGULAR, Layout, compile_layout
 from .kinematics.positions import assembly_guess, assemble, driver_values
 from .kinematics.solution import at_closed
 from .kinematics.state import at_state, close
@@ -233,7 +233,7 @@ def conditioning(part: Partition, J: np.ndarray) -> tuple[float, tuple[int, ...]
 
     def growth(rows):
         with np.errstate(all="ignore"):
-            G = np.linalg.solve(V[rows], V.T).T if nf else np.zeros((0, 0))
+            G = np.linalg.solve(V[rows].T, V.T).T if nf else np.zeros((0, 0))   # V V_f^-1
         return float(np.max(np.abs(G))) if np.all(np.isfinite(G)) else np.inf
     try:
         current = growth(free)
@@ -673,8 +673,30 @@ def _better(part: Partition, J: np.ndarray) -> tuple[int, ...] | None:
     """The tree bodies of better free coordinates where those of ``part`` describe the motion
     badly at the state of closure Jacobian ``J`` (growth past ``SWITCH`` and twice the best's),
     else None (F10)."""
+    if _growth(part, J) <= SWITCH:   # the usual case, without conditioning's SVD
+        return None
     growth, best, best_growth = conditioning(part, J)
     return best if growth > SWITCH and best_growth < growth / 2 else None
+
+
+def _growth(part: Partition, J: np.ndarray) -> float:
+    """``growth`` of :func:`conditioning` for the free coordinates of ``part`` alone, from the
+    null space written in them: the dependent rates per unit free rate ``S = -J_dep^-1 J_f``
+    (scaled as there), ``max(1, max |S|)``; infinite where ``J_dep`` is not square and
+    regular."""
+    topo, lay = part.layout.topo, part.layout
+    dep, free = np.array(topo.dependent, int), np.array(topo_free(part), int)
+    if len(dep) != J.shape[0]:
+        return np.inf
+    if not len(dep):
+        return 1.0
+    unit = np.where(lay.tree[:, ANGULAR], 1.0, float(lay.size))   # rad, or m per size
+    with np.errstate(all="ignore"):
+        try:
+            S = np.linalg.solve(J[:, dep - 1] * unit[dep], -J[:, free - 1] * unit[free])
+        except np.linalg.LinAlgError:
+            return np.inf
+    return max(1.0, float(np.max(np.abs(S)))) if np.all(np.isfinite(S)) else np.inf
 
 
 def _values(part: Partition, q: np.ndarray) -> dict[str, float]:
