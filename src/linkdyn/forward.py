@@ -21,9 +21,11 @@ cut-joint constraints (coordinate partitioning, F1).
 - Integration: ``y = [q_f, qd_f, W]`` (W the work of drivers and non-conservative loads, F8)
   by a scipy ODE solver (explicit RK45/DOP853/RK23, implicit Radau/BDF, or LSODA) with the
   user's tolerances; outputs at the requested times from each step's dense output, then every
-  ``analyze`` quantity recomputed at those states by the same stages as ``analyze``. With an
-  explicit method each accepted step's end is put back on the energy balance by scaling the
-  free rates (F11).
+  ``analyze`` quantity recomputed at those states by the same stages as ``analyze``. With a
+  one-step method (RK45, DOP853, RK23, Radau) each accepted step's end is put back on the
+  energy balance by scaling the free rates (F11); with those and BDF free angles are
+  integrated less their whole turns (F12); the solver's history moves with its state
+  (:func:`restate`).
 - The right-hand side runs numpy's stages, or one compiled function per evaluation
   (:mod:`linkdyn.forward_compiled`, ``backend=``); the outputs of a compiled run are computed
   by the compiled kernels of ``analyze``'s stages.
@@ -53,7 +55,12 @@ METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
 MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
-EXPLICIT = ("RK45", "DOP853", "RK23")   # the methods whose steps the energy projection joins
+# the methods whose steps the energy projection joins (F11): the one-step methods, whose next
+# step is a function of the state alone (not BDF's history, nor LSODA's)
+PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
+# the methods whose free angles are integrated less their whole turns (F12): those whose history
+# moves with a constant shift of the state (:func:`restate`; not LSODA, ODEPACK's)
+UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
 AUTO_RHS = 20_000    # backend "auto": right-hand sides after which the compiled one is used
 #                      (compiling costs ~30 s once, about as much as 20,000 numpy evaluations)
@@ -513,9 +520,10 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         right-hand side runs, it gives their free accelerations and closed positions, and the
         compiled kinematics, dynamics and reactions kernels the rest.
     project : bool
-        With an explicit method (RK45, DOP853, RK23): after every accepted step, scale the free
-        rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the energy of a
-        conservative mechanism to the tolerance over any number of steps.
+        With a one-step method (RK45, DOP853, RK23, Radau): after every accepted step, scale
+        the free rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the
+        energy of a conservative mechanism to the tolerance over any number of steps. (BDF and
+        LSODA are not projected.)
 
     Returns
     -------
@@ -577,11 +585,13 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     guesses[:, at0] = q0[:, None]
     parts, switches = [part], []
     steps, nfev, t_now, projections = 0, 0, 0.0, 0
-    # with an explicit method a free angle is integrated less its whole turns (``turns``, rad):
-    # the relative tolerance on it would otherwise loosen as a crank turns on (rtol |q_f|
-    # grows with the turns, and with it the error of every step)
+    # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
+    # tolerance on it would otherwise loosen as a crank turns on (rtol |q_f| grows with the
+    # turns, and with it the error of every step). Not when a load formula reads a joint
+    # coordinate: a whole turn less would change that load
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
+    unwound = method in UNWOUND and not reads_coordinates(model)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -626,27 +636,29 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 Y[:nf, inside] += turns[:, None]
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
-            if project and method in EXPLICIT and solver.status != "failed":
+            if project and method in PROJECTED and solver.status != "failed":
                 # back onto the energy balance: the next step starts there         (F11)
                 y_p = system.project(solver.t, solver.y, e0)
                 if y_p is not None:
                     f_p = system(solver.t, y_p)
                     J_p = system.accept(solver.t, y_p)
                     if J_p is not None and np.all(np.isfinite(f_p)):
-                        solver.y, solver.f, J = y_p, f_p, J_p
+                        restate(solver, y_p, f_p)
+                        J = J_p
                         projections += 1
                     else:
                         system.accept(solver.t, solver.y)
             whole = np.where(angular, 2 * np.pi * np.round(solver.y[:nf] / (2 * np.pi)), 0.0)
-            if np.any(whole != 0) and solver.status == "running" and method in EXPLICIT:
-                # whole turns of the free angles moved out of the integrated state
+            if np.any(whole != 0) and solver.status == "running" and unwound:
+                # whole turns of the free angles moved out of the integrated state   (F12)
                 y_w = solver.y.copy()
                 y_w[:nf] -= whole
                 system.shift(list(topo_free(part)), -whole)
                 f_w = system(solver.t, y_w)
                 J_w = system.accept(solver.t, y_w)
                 if J_w is not None and np.all(np.isfinite(f_w)):
-                    solver.y, solver.f, J = y_w, f_w, J_w
+                    restate(solver, y_w, f_w)
+                    J = J_w
                     turns += whole
                 else:   # (not expected: the same poses) keep the state as it was
                     system.shift(list(topo_free(part)), whole)
@@ -662,6 +674,47 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections)
     return _outputs(parts, segment, t, Y, guesses, stats, system.kernel)
+
+
+def restate(solver, y: np.ndarray, f: np.ndarray) -> None:
+    """Move a scipy ``solver`` between two steps, at its current time, to the state ``y``
+    (right-hand side ``f``): its next step starts there (F11, F12).
+
+    An explicit Runge-Kutta method keeps only ``y`` and ``f``. Radau also keeps its last step's
+    collocation polynomial, from which it predicts the next step's stages (Newton's start);
+    BDF keeps its history as backward differences ``D[i] = nabla^i y_n``, from which it
+    predicts and corrects. Their history moves with the state by the same constant
+    ``y - solver.y`` (``D[0]`` only, the differences unchanged): for Radau's prediction a
+    better start, for BDF exact only when every past state may move with it, as under whole
+    turns of a free angle (the right-hand side periodic in it), so BDF is not projected (F11).
+    Not for LSODA: ODEPACK keeps its history in its own work arrays, to be changed only by a
+    restart.
+    """
+    import copy
+
+    import scipy.integrate as si
+
+    delta = y - solver.y
+    if isinstance(solver, si.BDF):
+        solver.D[0] += delta
+    elif isinstance(solver, si.Radau):
+        if solver.sol is not None:
+            sol = copy.copy(solver.sol)       # the dense output already read stays as it was
+            sol.y_old = sol.y_old + delta
+            solver.sol = sol
+        solver.f = f
+    elif isinstance(solver, (si.RK45, si.DOP853, si.RK23)):
+        solver.f = f
+    else:
+        raise TypeError(f"the state of {type(solver).__name__} cannot be changed between steps")
+    solver.y = y
+
+
+def reads_coordinates(model: Model) -> bool:
+    """Whether a load formula of ``model`` reads a joint coordinate ``q_<joint>``: the right-
+    hand side then changes with a whole turn of a free angle, which is then not removed (F12)."""
+    return any(name.startswith("q_") for load in model.loads
+               for name in getattr(load.value, "state_variables", ()))
 
 
 def topo_free(part: Partition) -> tuple[int, ...]:
