@@ -538,12 +538,17 @@ def _stages(model, t, backend: str, layout=None, reactions: bool = True, start=N
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
+    # without reactions and applied loads, the compiled dynamics runs in the kinematics'
+    # blocks (dynamics.compiled.sweep), and the kinematics keep less per sample
+    fused = (fast and not reactions and layout is not None
+             and compiled_dynamics.fusable(layout))
     kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy",
-                           start=start)
+                           start=start, run=compiled_dynamics.sweep if fused else None)
     # a batch: gravity, loads' values, springs and dampers from the layout, per design
     applied = loads_mod.wrenches(None if designs else model, kin)
     dynamics, reactions_stage = _backend(fast)
-    dyn = dynamics(kin, applied)
+    swept = getattr(kin, "swept", None) is not None   # the dynamics already solved
+    dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)
     react = partial(reactions_stage, models[0], kin, applied, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     return kin, applied, dyn, react() if reactions else react, valid

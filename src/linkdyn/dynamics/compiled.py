@@ -31,8 +31,10 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import joints as jk
 from ..compiled import eliminate, inline, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
+from ..kinematics import compiled as kc
 from ..loads import Loads
 from ..planar import last
 from ..kinematics.layout import (CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
@@ -315,6 +317,132 @@ def _reactions(parent, kind, sign, driver_of, tree_joint, cut_a, cut_b, cut_kind
                           cut_axis, d, dp, k0, nb, c, s, r, lam_b, zero, wc, o_on)
             _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
                             di, ki, keep, c, s, r, e, tau_b, wc, ws, o_tree, o_on)
+
+
+# --- the sweep: the kinematics kernel's blocks and the dynamics, fused -------------------------
+
+#: what the fused kernel keeps per sample of the kinematics (:func:`sweep`)
+KEPT = ("q", "phi", "c", "s", "r", "e", "qd", "qdd", "cut")
+
+
+@inline
+def _keep(x, out, d, k0, nb):
+    """Rows ``x`` (k, 1, block) of one block's scratch into ``out`` (k, D, T) at design d,
+    samples ``k0`` .. ``k0 + nb``."""
+    for i in range(x.shape[0]):
+        o_i, x_i = out[i, d, k0:k0 + nb], x[i, 0]
+        for k in range(nb):
+            o_i[k] = x_i[k]
+
+
+@njit
+def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia, w_ext, q, phi, c,
+           s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke, o_pivot, block):
+    """The kinematics of every sample (:func:`linkdyn.kinematics.compiled.block` on one
+    block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block):
+    only ``KEPT`` of the kinematics (``e``: the rows ``axes``) and the dynamics' ``lam``,
+    ``tau``, kinetic energy and pivot reach the outputs (component-first, batch ``(D, T)``
+    last; written in place). ``kin``: the kinematics kernel's inputs
+    (:func:`linkdyn.kinematics.compiled.inputs`); ``w_ext`` (n, 3, D or 1, 1) constant in time.
+    """
+    (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
+     modes, q_in, q_drv, qd_drv, qdd_drv) = kin
+    n, nc, m, nv, n_rows = len(tree), len(cuts), len(dep), len(drv), o_lam.shape[0]
+    D, T = size.shape[0], t_s.shape[0]
+    B = block
+    # the kinematics of one block: its work arrays and scratch
+    tmp = kc.scratch(n, nc, m, n_rows, B)
+    work = (np.zeros((n, 1, B)), np.zeros((n, 1, B)), np.zeros((n, 1, B)), np.zeros((n, 1, B)),
+            np.zeros((n, 2, 1, B)), np.zeros((n, 2, 1, B)), np.zeros((n_rows, n - 1, 1, B)),
+            np.zeros((n, 1, B)), np.zeros((n, 1, B)), np.zeros((n, 3, 1, B)),
+            np.zeros((n, 3, 1, B)))
+    q_w, phi_w, c_w, s_w, r_w, e_w, J_w, qd_w, qdd_w, tw_w, td_w = work
+    cut_w = np.zeros((nc, 3, 1, B))
+    # the dynamics of one block (as _dynamics without its internals)
+    w_const = np.zeros((n, 3, 1, B))
+    A = np.zeros((m, m + 1, B))
+    lam, ke, piv = np.zeros((max(m, 1), B)), np.zeros(B), np.zeros(B)
+    wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
+    lam_b, tau_b, pivot_b = np.zeros((n_rows, 1, B)), np.zeros((nv, 1, B)), np.zeros((1, B))
+    for d in range(D):
+        dp = d if mass.shape[1] > 1 else 0
+        _constant(w_ext, d if w_ext.shape[2] > 1 else 0, w_const)
+        for k0 in range(0, T, B):
+            nb = min(B, T - k0)
+            kc.block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
+                     Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, 0, 0, err,
+                     pivot, fin, tmp)
+            kc._cut_motion(cuts, 0, 0, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
+            for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
+                           (qdd_w, qdd)):
+                _keep(x, out, d, k0, nb)
+            for i in range(n):
+                _keep(r_w[i], r[i], d, k0, nb)
+            for i in axes:
+                _keep(e_w[i], e[i], d, k0, nb)
+            for ci in range(nc):
+                _keep(cut_w[ci], cut[ci], d, k0, nb)
+            # the dynamics of the block (the ground's w_tilde only accumulates)
+            wtilde[0, :, 0, :nb] = 0.0
+            _newton_euler(com, mass, inertia, 0, dp, 0, nb, 0, 0, c_w, s_w, tw_w, td_w, w_const,
+                          w_const, ke, wstar, wtilde)
+            o_ke[d, k0:k0 + nb] = ke[:nb]
+            _composite(parent, r_w, 0, 0, nb, 0, 0, wtilde)
+            _generalized(kind, sign, 0, 0, nb, 0, 0, e_w, wtilde, Q)
+            _multipliers(dep, drv, cut_row, cut_rows, 0, 0, nb, J_w, Q[:, 0, 0:nb], A, lam, piv,
+                         lam_b, tau_b, pivot_b)
+            _keep(lam_b, o_lam, d, k0, nb)
+            _keep(tau_b, o_tau, d, k0, nb)
+            o_pivot[d, k0:k0 + nb] = pivot_b[0, :nb]
+
+
+def fusable(lay) -> bool:
+    """Whether :func:`sweep` can run the layout ``lay``'s dynamics in the kinematics' blocks:
+    no applied load (neither gravity nor a load; those read the kinematics first)."""
+    return not np.any(np.asarray(lay.gravity) != 0) and not lay.loads
+
+
+def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
+    """The kinematics of :func:`linkdyn.kinematics.compiled.run` (same arguments) fused with
+    the dynamics of :func:`solve` in one kernel (:func:`_sweep`), for a layout without
+    applied loads (:func:`fusable`): the loops are closed, the rates and accelerations solved
+    and the dynamics done a block of samples at a time, and only ``KEPT`` of the kinematics
+    (no twists, twist rates or Jacobian) is written per sample.
+
+    Returns
+    -------
+    dict
+        ``run``'s outputs named in ``KEPT`` (``e``: the rows of the joints with a slider axis,
+        the others zero), ``pivot``, ``err``, ``finite``, and the dynamics' ``lam``
+        (n_rows, D, T), ``tau`` (n_drivers, D, T), ``ke`` and ``dyn_pivot`` (D, T).
+    """
+    args = kc.inputs(lay, t, q_drv, qd_drv, qdd_drv, **closing)
+    topo, P = lay.topo, _arrays(lay)
+    n, nc, D, T = topo.n, topo.n_loops, max(lay.designs, 1), len(t)
+    shapes = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
+              "qd": (n,), "qdd": (n,), "cut": (nc, 3), "pivot": (), "err": ()}
+    out = {k: np.zeros(shape + (D, T)) for k, shape in shapes.items()}
+    out["finite"] = np.zeros((D, T), np.bool_)
+    dyn = {"lam": np.zeros((topo.n_rows, D, T)), "tau": np.zeros((len(P["driven"]), D, T)),
+           "ke": np.zeros((D, T)), "dyn_pivot": np.zeros((D, T))}
+    axes = np.array([i for i in range(1, n) if "axis" in jk.get(lay.kind[i]).keys], np.int64)
+    w_ext = np.zeros((n, 3, 1, 1))   # no applied load (fusable)
+    _sweep(args, axes, *(P[k] for k in ("parent", "kind", "sign", "cut_row", "cut_rows", "com",
+                                       "mass", "inertia")), w_ext, *out.values(),
+           *dyn.values(), min(BLOCK, T))
+    out.update(dyn)
+    return out
+
+
+def swept(kin: KinematicSolution, loads: Loads) -> DynamicSolution:
+    """The dynamics :func:`sweep` solved with the kinematics ``kin`` (its ``swept`` outputs),
+    as :func:`solve` would give them; the internals by :func:`solve` when first read."""
+    out, shape = kin.swept, kin.shape
+    lam, tau = _comps(out["lam"], shape), _comps(out["tau"], shape)
+    ke, pivot = out["ke"].reshape(shape), out["dyn_pivot"].reshape(shape)
+    if not kin.layout.topo.n_rows:   # no multiplier: the pivot is one (blanked with the rest)
+        pivot = np.ones(shape)
+    return DynamicSolution(lam, tau, ke, pivot, _Again(solve, kin, loads).dynamics)
 
 
 def _plain(x) -> np.ndarray:

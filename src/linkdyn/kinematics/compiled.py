@@ -529,24 +529,12 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _cut_motion(cuts, d, k0, nb, phi, r, tw, td, tmp[5], cut)
 
 
-def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
-        lo=None, hi=None, modes=()) -> dict:
-    """Run :func:`kernel` on the layout ``lay`` at the times ``t`` (T,) with the driver values
-    (n_drivers, T), or (n_drivers, D, T) per design.
-
-    Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
-    the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
-    (n, ..., K), each design's times clamped to ``[lo, hi]`` (D,), in the dyads' assembly
-    ``modes`` (each (1,) or (D, 1)).
-
-    Returns the outputs, batch flattened to (D, T): ``q``, ``phi``, ``c``, ``s``, ``qd``,
-    ``qdd`` (n, D, T); ``r``, ``e`` (n, 2, D, T; ``e`` is zero for revolute joints); ``tw``,
-    ``twd`` (n, 3, D, T); ``J`` (n_rows, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
-    joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T); ``finite`` (D, T)
-    bool, whether every rate and acceleration of the sample is finite.
-    """
+def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
+           lo=None, hi=None, modes=()) -> tuple:
+    """The inputs of :func:`kernel` (and of :func:`block`), from ``tree`` to ``qdd_drv``, for
+    the arguments of :func:`run`."""
     topo, idx = lay.topo, lay.indices
-    n, nc = topo.n, topo.n_loops
+    n = topo.n
     D, T = max(lay.designs, 1), len(t)
     t = np.ascontiguousarray(t, dtype=float)
     if nodes is None:
@@ -563,13 +551,6 @@ def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=Non
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
-    out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
-           "J": (topo.n_rows, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
-           "twd": (n, 3), "cut": (nc, 3), "pivot": (), "err": ()}
-    # zeroed (lazily, by the system) so the rows that stay zero are never written: the
-    # ground's, and the slider axis e of a revolute joint
-    out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
-    out["finite"] = np.zeros((D, T), np.bool_)
     # the layout's numbers as views, design axis last
     geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
     cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
@@ -577,7 +558,38 @@ def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=Non
     drivers = [np.ascontiguousarray(np.broadcast_to(
         np.reshape(x, (len(drv), -1, T)), (len(drv), D, T)), dtype=float)
         for x in (q_drv, qd_drv, qdd_drv)]
-    kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
-           lay.dyad_table, geo, cgeo, lay.per_design("size"), t, np.asarray(nodes, float), lo,
-           hi, Qn, cQ, sQ, md, q_in, *drivers, *out.values(), min(BLOCK, T))
+    return (lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
+            lay.dyad_table, geo, cgeo, lay.per_design("size"), t, np.asarray(nodes, float), lo,
+            hi, Qn, cQ, sQ, md, q_in, *drivers)
+
+
+def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
+        lo=None, hi=None, modes=()) -> dict:
+    """Run :func:`kernel` on the layout ``lay`` at the times ``t`` (T,) with the driver values
+    (n_drivers, T), or (n_drivers, D, T) per design.
+
+    Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
+    the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
+    (n, ..., K), each design's times clamped to ``[lo, hi]`` (D,), in the dyads' assembly
+    ``modes`` (each (1,) or (D, 1)).
+
+    Returns the outputs, batch flattened to (D, T): ``q``, ``phi``, ``c``, ``s``, ``qd``,
+    ``qdd`` (n, D, T); ``r``, ``e`` (n, 2, D, T; ``e`` is zero for revolute joints); ``tw``,
+    ``twd`` (n, 3, D, T); ``J`` (n_rows, n - 1, D, T); ``cut`` (n_cut, 3, D, T) the cut
+    joints' coordinate, rate and acceleration; ``pivot``, ``err`` (D, T); ``finite`` (D, T)
+    bool, whether every rate and acceleration of the sample is finite.
+    """
+    topo = lay.topo
+    n, nc = topo.n, topo.n_loops
+    D, T = max(lay.designs, 1), len(t)
+    args = inputs(lay, t, q_drv, qd_drv, qdd_drv, q=q, nodes=nodes, Q=Q, lo=lo, hi=hi,
+                  modes=modes)
+    out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
+           "J": (topo.n_rows, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
+           "twd": (n, 3), "cut": (nc, 3), "pivot": (), "err": ()}
+    # zeroed (lazily, by the system) so the rows that stay zero are never written: the
+    # ground's, and the slider axis e of a revolute joint
+    out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
+    out["finite"] = np.zeros((D, T), np.bool_)
+    kernel(*args, *out.values(), min(BLOCK, T))
     return out

@@ -10,6 +10,8 @@ kernel (:mod:`.compiled`) is the state stage for the whole batch.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from .. import joints as jk
@@ -24,7 +26,7 @@ from .state import KinematicSolution, at_state, blanked, close
 
 
 def solve(model, t, layout: Layout | None = None, backend: str | None = None,
-          start: np.ndarray | None = None) -> KinematicSolution:
+          start: np.ndarray | None = None, run=None) -> KinematicSolution:
     """Positions, velocities and accelerations at the times ``t`` (T,) s.
 
     The drivers' motions give the state at ``t``; the mechanism is assembled at t = 0 on the
@@ -51,6 +53,10 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     start : ndarray (n, D), optional
         The designs' tree coordinates assembled at t = 0 (:func:`.positions.assemble`, NaN
         for a design that does not assemble), if already solved.
+    run : callable, optional
+        The compiled backend's kernel entry, :func:`.compiled.run` by default; a sweep passes
+        :func:`linkdyn.dynamics.compiled.sweep`, which solves the dynamics in the same blocks
+        and keeps less of the kinematics (a :class:`Swept` solution).
     """
     single = isinstance(model, Model)
     models = [model] if single else list(model)
@@ -69,23 +75,23 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     # followed to the samples
     branch = follow(models, lay, t, single, start)
     if fast:
-        return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch)
+        return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch, run or kc.run)
     kin = at_state(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch.guess(lay, t), branch.modes)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, kin.residual)
     return kin if ended is None else blanked(kin, ended, np.where(ended, np.inf, kin.residual))
 
 
-def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch
+def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run=kc.run
               ) -> KinematicSolution:
-    """:func:`solve`'s state stage by the compiled kernel for the whole batch: it closes every
-    sample in closed form from its nearest node (every loop a dyad), or takes the coordinates
-    :func:`.state.close` closed, then the rates and accelerations."""
+    """:func:`solve`'s state stage by the compiled kernel ``run`` for the whole batch: it
+    closes every sample in closed form from its nearest node (every loop a dyad), or takes the
+    coordinates :func:`.state.close` closed, then the rates and accelerations."""
     out = None  # the compiled kernel's arrays
     if branch.nodes is not None and lay.dyads is not None:
         lo, hi = branch.span
-        out = kc.run(lay, t, q_ind, qd_ind, qdd_ind, nodes=branch.nodes, Q=branch.Q,
-                     modes=branch.modes, lo=lo, hi=hi)
+        how = {"nodes": branch.nodes, "Q": branch.Q, "modes": branch.modes, "lo": lo, "hi": hi}
+        out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
         err = out["err"].reshape(lo.shape[:-1] + t.shape)
         unclosed = ~(err <= ACCEPT)
         if np.any(unclosed) and np.any(
@@ -93,17 +99,31 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch
             out = None   # some sample needs the damped Newton retry of the numpy path
     if out is None:   # the loops closed by numpy: the kernel does the rest
         q, err, _ = close(lay, q_ind, branch.guess(lay, t), branch.modes)
-        out = kc.run(lay, t, q_ind, qd_ind, qdd_ind, q=q)
+        how = {"q": q}
+        out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, err)
     if ended is not None:
         err = np.where(ended, np.inf, err)
-    return _from_kernel(model, lay, t, out, err)
+    if run is kc.run:
+        return _from_kernel(model, lay, t, out, err)
+    # the full kernel on the same state, if what the sweep kernel left out is read
+    full = partial(_full, model, lay, t, (q_ind, qd_ind, qdd_ind), how, err)
+    return _from_kernel(model, lay, t, out, err, full)
 
 
-def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
+def _full(model, lay, t, state, how, err) -> KinematicSolution:
+    """The solution of :func:`.compiled.run` at the ``state`` (the drivers' coordinates, rates
+    and accelerations) closed as ``how`` says, its samples ``err`` set to NaN as
+    :func:`_compiled` does."""
+    return _from_kernel(model, lay, t, kc.run(lay, t, *state, **how), err)
+
+
+def _from_kernel(model, lay, t, out, err, full=None) -> KinematicSolution:
     """The solution from the compiled kernel's arrays (:func:`.compiled.run`), whose samples
-    that do not close (``err``) or are singular are set to NaN in place."""
+    that do not close (``err``) or are singular are set to NaN in place. With ``full``, the
+    arrays of :func:`linkdyn.dynamics.compiled.sweep` (no twists, twist rates or Jacobian):
+    a :class:`Swept` solution that calls ``full`` (no argument) for those when first read."""
     topo, shape = lay.topo, err.shape
     n, nc = topo.n, len(lay.cuts)
     valid = (err <= ACCEPT) & out["finite"].reshape(shape)
@@ -125,10 +145,13 @@ def _from_kernel(model, lay, t, out, err) -> KinematicSolution:
         cols[0][j], cols[1][j], cols[2][j] = q[i], qd[i], qdd[i]
     for c, motion in zip(lay.cuts, each("cut", (nc, 3))):
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
-    J = out["J"].reshape((topo.n_rows, n - 1) + shape)
     p = motion_vectors(lay, pose)
     if not np.all(valid):  # the constant p_i of revolute joints too, as the numpy path does
         p = [None] + [np.where(valid, x, np.nan) for x in p[1:]]
+    if full is not None:
+        return Swept.of(full, out, layout=lay, t=t, joint_motion=tuple(cols), pose=pose,
+                        motion=p, pivot=out["pivot"].reshape(shape), residual=err, valid=valid)
+    J = out["J"].reshape((topo.n_rows, n - 1) + shape)
     return KinematicSolution(lay, t, tuple(cols), pose, p,
                              each("tw", (n, 3)), each("twd", (n, 3)), J,
                              out["pivot"].reshape(shape), err, valid, arrays=out)
@@ -161,3 +184,31 @@ def at_closed(model, lay: Layout, t, q, qd_ind, qdd_ind) -> KinematicSolution:
     t = np.asarray(t, dtype=float)
     out = kc.run(lay, t, q[list(lay.topo.driven)], qd_ind, qdd_ind, q=q)
     return _from_kernel(model, lay, t, out, out["err"].reshape(t.shape))
+
+
+class Swept(KinematicSolution):
+    """A :class:`~.state.KinematicSolution` of the sweep kernel
+    (:func:`linkdyn.dynamics.compiled.sweep`): the joints' motion, the poses, ``p_i``, the
+    pivots, the residual and ``valid`` as the kernel wrote them; the twists, their rates, the
+    Jacobian and ``arrays`` computed by the full kernel on the same state when one of them is
+    first read (then all four are kept). ``swept``: the sweep kernel's arrays, its dynamics
+    among them (:func:`linkdyn.dynamics.compiled.swept`)."""
+
+    LATER = ("twists", "rates", "jacobian", "arrays")
+
+    @classmethod
+    def of(cls, full, swept: dict, **fields) -> Swept:
+        """The solution with ``fields`` (all of the dataclass's but ``LATER``), ``full()``
+        giving the full solution."""
+        self = object.__new__(cls)
+        for k, v in dict(fields, _full=full, swept=swept).items():
+            object.__setattr__(self, k, v)
+        return self
+
+    def __getattr__(self, name):   # only for an attribute not yet set
+        if name not in Swept.LATER or "_full" not in self.__dict__:
+            raise AttributeError(name)
+        kin = self._full()
+        for k in Swept.LATER:
+            object.__setattr__(self, k, getattr(kin, k))
+        return getattr(kin, name)

@@ -1,0 +1,132 @@
+"""The sweep kernel (kinematics and dynamics fused, ``linkdyn.dynamics.compiled.sweep``) against
+the full kinematics kernel followed by the compiled dynamics stage.
+
+A sweep whose metrics read no reaction runs the dynamics inside the kinematics kernel's blocks
+and keeps only part of the kinematics per sample (the joints' motion, the poses). What it keeps
+must equal the full kernel's, and its dynamics (lam, tau, kinetic energy, pivot) the dynamics
+stage's on the full kinematics, to 1e-12 of each quantity's peak with NaN at the same samples;
+what it leaves out (twists, their rates, the Jacobian) comes from the full kernel when read.
+Covered: every bundled example and the dynamics tests' models, loads removed (the sweep kernel
+runs layouts without applied loads): one and two loops, prismatic tree and cut joints, slot
+joints, two drivers; two designs stacked; several blocks of samples with a partial last one; a
+design that cannot assemble and one driven past a limit position.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+
+import numpy as np
+import pytest
+
+import linkdyn
+from linkdyn import analysis, kinematics, loads as loads_mod
+from linkdyn.cli import example_names, example_text
+from linkdyn.dynamics import compiled
+from linkdyn.io import model_from_dict
+from linkdyn.kinematics import compiled as kc
+from linkdyn.kinematics.layout import compile_designs
+from linkdyn.kinematics.solution import Swept
+
+from test_compiled_dynamics import hoeken_design, same
+from test_dynamics import MODELS, times
+
+pytest.importorskip("numba", reason="the sweep kernel is compiled by numba")
+
+
+def unloaded(model, scale=1.0):
+    """``model`` without gravity or loads, its masses and inertias scaled by ``scale``."""
+    bodies = tuple(dataclasses.replace(b, mass=b.mass * scale, inertia=b.inertia * scale)
+                   for b in model.bodies)
+    return dataclasses.replace(model, bodies=bodies, gravity=(0.0, 0.0), loads=())
+
+
+def _limit_design():
+    """A non-Grashof Hoeken driven past the angle where its loop stops closing."""
+    text = example_text("hoeken").replace("O2 = [38.1, 0.0]", "O2 = [60.0, 0.0]")
+    return model_from_dict(tomllib.loads(text.replace("O4 = [89.5, 0.0] }", "O4 = [180.0, 0.0] }")))
+
+
+CASES = {f"example-{n}": (lambda n=n: [unloaded(linkdyn.load(linkdyn.example_path(n)), s)
+                                       for s in (1.0, 1.6)]) for n in example_names()}
+CASES.update({f"model-{n}": (lambda n=n: [unloaded(MODELS[n](), s) for s in (1.0, 1.6)])
+              for n in ("slider-crank-cut-J3", "inverted-slider-crank-cut-prismatic",
+                        "boom-offset", "five-bar", "slotted-lever")})
+# two designs that close, one that cannot assemble, one past a limit position
+CASES["hoeken-invalid"] = lambda: [hoeken_design(38.1), hoeken_design(42.0),
+                                   hoeken_design(400.0), _limit_design()]
+
+
+def _pair(designs, t, monkeypatch):
+    """The full kernel's kinematics and the sweep kernel's, several blocks of 7 samples."""
+    monkeypatch.setattr(kc, "BLOCK", 7)
+    monkeypatch.setattr(compiled, "BLOCK", 7)
+    lay = compile_designs(designs)
+    assert compiled.fusable(lay)
+    full = kinematics.solve(designs, t, layout=lay, backend="compiled")
+    lean = kinematics.solve(designs, t, layout=lay, backend="compiled", run=compiled.sweep)
+    return full, lean
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_the_sweep_kernel_equals_the_kinematics_and_dynamics_stages(case, monkeypatch):
+    designs = CASES[case]()
+    t = times(designs[0], 23)
+    full, lean = _pair(designs, t, monkeypatch)
+    assert isinstance(lean, Swept) and "twists" not in vars(lean)   # not computed yet
+    # what it keeps: the joints' motion, the poses, p_i, pivots, residuals, validity
+    assert np.array_equal(lean.valid, full.valid) and np.array_equal(lean.pivot, full.pivot,
+                                                                     equal_nan=True)
+    assert np.array_equal(lean.residual, full.residual, equal_nan=True)
+    for part, name in zip(range(3), ("q", "qd", "qdd")):
+        for j, (a, b) in enumerate(zip(lean.joint_motion[part], full.joint_motion[part])):
+            same(a, b, f"{name} of joint {j}")
+    for key in ("phi", "c", "s", "r", "e"):
+        for i, (a, b) in enumerate(zip(getattr(lean.pose, key), getattr(full.pose, key))):
+            assert (a is None) == (b is None), f"pose {key} of body {i}"
+            if a is not None:
+                same(a, b, f"pose {key} of body {i}")
+    for i, (a, b) in enumerate(zip(lean.motion[1:], full.motion[1:])):
+        same(np.broadcast_to(a, np.shape(b)), b, f"p of body {i + 1}")
+    # its dynamics: the dynamics stage's on the full kinematics
+    applied = loads_mod.wrenches(None, full)
+    ref, dyn = compiled.solve(full, applied), compiled.swept(lean, applied)
+    for key in ("lam", "tau", "kinetic_energy", "pivot"):
+        same(getattr(dyn, key), getattr(ref, key), key)
+    assert np.any(np.abs(dyn.tau) > 0)
+    # what it leaves out, from the full kernel when first read
+    same(np.stack(lean.twists), np.stack(full.twists), "twists")
+    same(np.stack(lean.rates), np.stack(full.rates), "twist rates")
+    same(lean.jacobian, full.jacobian, "Jacobian")
+    same(dyn.w_star, ref.w_star, "w_star (the internals, solved again)")
+
+
+def test_invalid_designs_are_nan_alike(monkeypatch):
+    """The designs that do not assemble or stop closing are NaN in the sweep kernel's outputs
+    at the samples the full path has NaN (the comparison above would pass on all-finite)."""
+    designs = CASES["hoeken-invalid"]()
+    full, lean = _pair(designs, np.linspace(0.0, 4 / 3, 41), monkeypatch)
+    assert np.all(~lean.valid[2]) and 0 < np.sum(~lean.valid[3]) < 41
+    dyn = compiled.swept(lean, loads_mod.wrenches(None, full))
+    assert np.array_equal(np.isnan(dyn.tau[..., 0]), ~full.valid)
+    assert np.array_equal(np.isnan(lean.joint_motion[0][2]), ~full.valid)
+
+
+def test_a_sweep_without_reactions_runs_the_sweep_kernel():
+    """``analyze_layout(..., reactions=False)`` of designs without applied loads on the
+    compiled backend is the sweep kernel's (its kinematics a :class:`Swept`), and gives the
+    solution of the two stages; with a load it is not."""
+    designs = [hoeken_design(38.1), hoeken_design(42.0)]
+    t = times(designs[0], 19)
+    lay = compile_designs(designs)
+    eager = analysis.analyze_layout(designs, lay, t, backend="compiled")
+    lazy = analysis.analyze_layout(designs, lay, t, backend="compiled", reactions=False)
+    assert isinstance(lazy.kin, Swept) and not isinstance(eager.kin, Swept)
+    same(lazy.dyn.tau, eager.dyn.tau, "tau")
+    assert np.array_equal(lazy.valid, eager.valid)
+    same(lazy.reactions.force, eager.reactions.force, "reactions")
+    loaded = [MODELS["hoeken-loaded"]()] * 2
+    sol = analysis.analyze_layout(loaded, compile_designs(loaded), t, backend="compiled",
+                                  reactions=False)
+    assert not isinstance(sol.kin, Swept)
