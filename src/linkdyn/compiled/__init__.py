@@ -257,9 +257,8 @@ def factor(A, m, nb, perm, rel):
             for k in range(nb):
                 f = A[i, p, k] * (1.0 / A[p, p, k])
                 A[i, p, k] = f
-                if f != 0.0:   # a zero multiplier leaves the row (J_dep of a long chain is sparse)
-                    for j in range(p + 1, m):
-                        A[i, j, k] -= f * A[p, j, k]
+                for j in range(p + 1, m):
+                    A[i, j, k] -= f * A[p, j, k]
     for k in range(nb):
         rel[k] /= scale[k]
 
