@@ -6,10 +6,11 @@ and keeps only part of the kinematics per sample (the joints' motion, the poses)
 must equal the full kernel's, and its dynamics (lam, tau, kinetic energy, pivot) the dynamics
 stage's on the full kinematics, to 1e-12 of each quantity's peak with NaN at the same samples;
 what it leaves out (twists, their rates, the Jacobian) comes from the full kernel when read.
-Covered: every bundled example and the dynamics tests' models, loads removed (the sweep kernel
-runs layouts without applied loads): one and two loops, prismatic tree and cut joints, slot
-joints, two drivers; two designs stacked; several blocks of samples with a partial last one; a
-design that cannot assemble and one driven past a limit position.
+Covered: every bundled example and the dynamics tests' models, their loads removed (the sweep
+kernel runs layouts whose only applied load is gravity), with gravity and without: one and two
+loops, prismatic tree and cut joints, slot joints, two drivers; two designs stacked; several
+blocks of samples with a partial last one; a design that cannot assemble and one driven past a
+limit position.
 """
 
 from __future__ import annotations
@@ -36,10 +37,11 @@ pytest.importorskip("numba", reason="the sweep kernel is compiled by numba")
 
 
 def unloaded(model, scale=1.0):
-    """``model`` without gravity or loads, its masses and inertias scaled by ``scale``."""
+    """``model`` without its loads (gravity kept), its masses and inertias scaled by
+    ``scale``."""
     bodies = tuple(dataclasses.replace(b, mass=b.mass * scale, inertia=b.inertia * scale)
                    for b in model.bodies)
-    return dataclasses.replace(model, bodies=bodies, gravity=(0.0, 0.0), loads=())
+    return dataclasses.replace(model, bodies=bodies, loads=())
 
 
 def _limit_design():
@@ -95,6 +97,10 @@ def test_the_sweep_kernel_equals_the_kinematics_and_dynamics_stages(case, monkey
     for key in ("lam", "tau", "kinetic_energy", "pivot"):
         same(getattr(dyn, key), getattr(ref, key), key)
     assert np.any(np.abs(dyn.tau) > 0)
+    if np.any(full.layout.gravity != 0):   # the weights are in the comparison
+        weightless = compiled.solve(full, loads_mod.wrenches(None, dataclasses.replace(
+            full, layout=dataclasses.replace(full.layout, gravity=0.0 * full.layout.gravity))))
+        assert not np.allclose(weightless.tau, ref.tau, equal_nan=True)
     # what it leaves out, from the full kernel when first read
     same(np.stack(lean.twists), np.stack(full.twists), "twists")
     same(np.stack(lean.rates), np.stack(full.rates), "twist rates")

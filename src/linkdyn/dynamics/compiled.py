@@ -35,8 +35,8 @@ from .. import joints as jk
 from ..compiled import eliminate, inline, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
-from ..loads import Loads
-from ..planar import last
+from ..loads import Loads, force_at, weight
+from ..planar import last, turned
 from ..kinematics.layout import (CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
                                  SIGN)
 from ..kinematics.recursion import cut_frame
@@ -336,14 +336,33 @@ def _keep(x, out, d, k0, nb):
 
 
 @njit
-def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia, w_ext, q, phi, c,
-           s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke, o_pivot, block):
+def _weights(com, mass, g, dp, nb, c, s, r, w):
+    """Every body's weight ``m_i g`` at its mass centre as a wrench about O_i
+    (:func:`~linkdyn.loads.weight`, :func:`~linkdyn.loads.force_at`, as
+    :func:`linkdyn.loads.wrenches` applies gravity) over one block, from the block's poses
+    ``c``, ``s`` (n, 1, block), ``r`` (n, 2, 1, block) into ``w`` (n, 3, 1, block); design
+    ``dp`` of ``com``, ``mass`` and of the gravity ``g`` (2,)."""
+    ks = slice(0, nb)
+    for i in range(1, mass.shape[0]):
+        mi, com_i = mass[i, dp], (com[i, 0, dp], com[i, 1, dp])
+        c_i, s_i, (rx_i, ry_i) = c[i, 0, ks], s[i, 0, ks], vector_views(r, i, 0, ks)
+        w_i = screw_views(w, i, 0, ks)
+        for k in range(nb):
+            a = turned(c_i[k], s_i[k], com_i)   # r_C = r_i + R com_i
+            r_c = (rx_i[k] + a[0], ry_i[k] + a[1])
+            f, _ = weight(mi, g, r_c)
+            w_i[0][k], w_i[1][k], w_i[2][k] = force_at(f, (rx_i[k], ry_i[k]), r_c)
+
+
+@njit
+def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia, gravity, q, phi,
+           c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke, o_pivot, block):
     """The kinematics of every sample (:func:`linkdyn.kinematics.compiled.block` on one
-    block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block):
-    only ``KEPT`` of the kinematics (``e``: the rows ``axes``) and the dynamics' ``lam``,
-    ``tau``, kinetic energy and pivot reach the outputs (component-first, batch ``(D, T)``
-    last; written in place). ``kin``: the kinematics kernel's inputs
-    (:func:`linkdyn.kinematics.compiled.inputs`); ``w_ext`` (n, 3, D or 1, 1) constant in time.
+    block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block,
+    under the weights of :func:`_weights`): only ``KEPT`` of the kinematics (``e``: the rows
+    ``axes``) and the dynamics' ``lam``, ``tau``, kinetic energy and pivot reach the outputs
+    (component-first, batch ``(D, T)`` last; written in place). ``kin``: the kinematics
+    kernel's inputs (:func:`linkdyn.kinematics.compiled.inputs`); ``gravity`` (2, D or 1).
     """
     (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
      modes, q_in, q_drv, qd_drv, qdd_drv) = kin
@@ -358,15 +377,16 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
             np.zeros((n, 3, 1, B)))
     q_w, phi_w, c_w, s_w, r_w, e_w, J_w, qd_w, qdd_w, tw_w, td_w = work
     cut_w = np.zeros((nc, 3, 1, B))
-    # the dynamics of one block (as _dynamics without its internals)
-    w_const = np.zeros((n, 3, 1, B))
+    # the dynamics of one block (as _dynamics without its internals), its applied wrenches
+    w_b = np.zeros((n, 3, 1, B))
     A = np.zeros((m, m + 1, B))
     lam, ke, piv = np.zeros((max(m, 1), B)), np.zeros(B), np.zeros(B)
     wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
     lam_b, tau_b, pivot_b = np.zeros((n_rows, 1, B)), np.zeros((nv, 1, B)), np.zeros((1, B))
     for d in range(D):
         dp = d if mass.shape[1] > 1 else 0
-        _constant(w_ext, d if w_ext.shape[2] > 1 else 0, w_const)
+        dg = d if gravity.shape[1] > 1 else 0
+        g = (gravity[0, dg], gravity[1, dg])
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
             kc.block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
@@ -383,9 +403,11 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
             for ci in range(nc):
                 _keep(cut_w[ci], cut[ci], d, k0, nb)
             # the dynamics of the block (the ground's w_tilde only accumulates)
+            if g[0] != 0.0 or g[1] != 0.0:   # else no applied wrench: w_b stays zero
+                _weights(com, mass, g, dp, nb, c_w, s_w, r_w, w_b)
             wtilde[0, :, 0, :nb] = 0.0
-            _newton_euler(com, mass, inertia, 0, dp, 0, nb, 0, 0, c_w, s_w, tw_w, td_w, w_const,
-                          w_const, ke, wstar, wtilde)
+            _newton_euler(com, mass, inertia, 0, dp, 0, nb, 0, 0, c_w, s_w, tw_w, td_w, w_b, w_b,
+                          ke, wstar, wtilde)
             o_ke[d, k0:k0 + nb] = ke[:nb]
             _composite(parent, r_w, 0, 0, nb, 0, 0, wtilde)
             _generalized(kind, sign, 0, 0, nb, 0, 0, e_w, wtilde, Q)
@@ -398,16 +420,18 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
 
 def fusable(lay) -> bool:
     """Whether :func:`sweep` can run the layout ``lay``'s dynamics in the kinematics' blocks:
-    no applied load (neither gravity nor a load; those read the kinematics first)."""
-    return not np.any(np.asarray(lay.gravity) != 0) and not lay.loads
+    no applied load but gravity (the kernel applies the weights; the other loads, their
+    formulas among them, are applied by :func:`linkdyn.loads.wrenches` once the kinematics
+    are solved)."""
+    return not lay.loads
 
 
 def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
     """The kinematics of :func:`linkdyn.kinematics.compiled.run` (same arguments) fused with
     the dynamics of :func:`solve` in one kernel (:func:`_sweep`), for a layout without
-    applied loads (:func:`fusable`): the loops are closed, the rates and accelerations solved
-    and the dynamics done a block of samples at a time, and only ``KEPT`` of the kinematics
-    (no twists, twist rates or Jacobian) is written per sample.
+    applied loads but gravity (:func:`fusable`): the loops are closed, the rates and
+    accelerations solved and the dynamics done a block of samples at a time, and only ``KEPT``
+    of the kinematics (no twists, twist rates or Jacobian) is written per sample.
 
     Returns
     -------
@@ -421,14 +445,15 @@ def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
     n, nc, D, T = topo.n, topo.n_loops, max(lay.designs, 1), len(t)
     shapes = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
               "qd": (n,), "qdd": (n,), "cut": (nc, 3), "pivot": (), "err": ()}
-    out = {k: np.zeros(shape + (D, T)) for k, shape in shapes.items()}
-    out["finite"] = np.zeros((D, T), np.bool_)
-    dyn = {"lam": np.zeros((topo.n_rows, D, T)), "tau": np.zeros((len(P["driven"]), D, T)),
-           "ke": np.zeros((D, T)), "dyn_pivot": np.zeros((D, T))}
+    # every number of these is written (the ground's rows too), but e's rows without an axis
+    out = {k: (np.zeros if k == "e" else np.empty)(shape + (D, T)) for k, shape in shapes.items()}
+    out["finite"] = np.empty((D, T), np.bool_)
+    dyn = {"lam": np.empty((topo.n_rows, D, T)), "tau": np.empty((len(P["driven"]), D, T)),
+           "ke": np.empty((D, T)), "dyn_pivot": np.empty((D, T))}
     axes = np.array([i for i in range(1, n) if "axis" in jk.get(lay.kind[i]).keys], np.int64)
-    w_ext = np.zeros((n, 3, 1, 1))   # no applied load (fusable)
     _sweep(args, axes, *(P[k] for k in ("parent", "kind", "sign", "cut_row", "cut_rows", "com",
-                                       "mass", "inertia")), w_ext, *out.values(),
+                                       "mass", "inertia")), lay.per_design("gravity"),
+           *out.values(),
            *dyn.values(), min(BLOCK, T))
     out.update(dyn)
     return out
