@@ -23,6 +23,9 @@ Usage: python benchmarks/bench_sweep.py [--designs N] [--samples T] [--no-ceilin
        python benchmarks/bench_sweep.py --chunk-only [--designs N]   (one chunk's stages in CPU
        time, the minimum of five runs in one process: to compare two versions of the code in one
        window, run it alternately with each version's ``src`` on PYTHONPATH)
+       python benchmarks/bench_sweep.py --kernels   (one batch's compiled stages, CPU time: the
+       kinematics kernel then the dynamics stage, as ``analyze`` runs them, against the sweep
+       kernel that fuses them, ``linkdyn.dynamics.compiled.sweep``)
 """
 
 from __future__ import annotations
@@ -132,6 +135,58 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     return {k: min(r[k] for r in runs) for k in runs[0]}
 
 
+def kernels(samples: int, repeat: int = 5) -> dict:
+    """CPU seconds per design-sample of one batch of a sweep's chunk (the runner's batch size,
+    ``runner.BATCH_SAMPLES`` design-samples), its branch already followed: the kinematics kernel
+    (``kinematics.compiled.run``) then the dynamics stage (``dynamics.compiled.solve``), against
+    the sweep kernel (``dynamics.compiled.sweep``, both fused, writing only the joints' motion and
+    the poses of the kinematics), each with the solution built from its arrays; the minimum of
+    ``repeat`` alternating runs."""
+    from linkdyn import loads as loads_mod
+    from linkdyn.dynamics import compiled as dc
+    from linkdyn.kinematics import compiled as kc
+    from linkdyn.kinematics.solution import _from_kernel
+    from linkdyn.studies import Task, runner, space
+    from linkdyn.studies.metrics import check_names
+
+    mech = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, mech.drivers[0].period, samples)
+    sp = space(linkdyn.example_path("hoeken"), list(BOX))
+    task = Task(sp, t, tuple(check_names(sp.model(), METRICS)), backend="compiled").with_builder(
+        *np.array(list(BOX.values())).T)
+    seen = []
+    sweep = dc.sweep
+
+    def spy(*a, **k):
+        seen.append((a, k))
+        return sweep(*a, **k)
+    dc.sweep = spy
+    try:   # one batch's arguments of the sweep kernel (and every kernel compiled)
+        runner.evaluate(task, sample(list(BOX.values()), "sobol",
+                                     runner.BATCH_SAMPLES // samples, seed=0))
+    finally:
+        dc.sweep = sweep
+    (lay, tt, *state), how = seen[0]
+    model, D = sp.model(), lay.designs
+
+    def stages():
+        out = kc.run(lay, tt, *state, **how)
+        kin = _from_kernel(model, lay, tt, out, out["err"].reshape(D, samples))
+        dc.solve(kin, loads_mod.wrenches(None, kin))
+
+    def fused():
+        out = sweep(lay, tt, *state, **how)
+        kin = _from_kernel(model, lay, tt, out, out["err"].reshape(D, samples), lambda: None)
+        dc.swept(kin, loads_mod.wrenches(None, kin))
+    best = {"stages": np.inf, "fused": np.inf}
+    for _ in range(repeat):
+        for name, f in (("stages", stages), ("fused", fused)):
+            t0 = time.process_time()
+            f()
+            best[name] = min(best[name], (time.process_time() - t0) / (D * samples))
+    return {"designs": D, **best}
+
+
 def in_fresh_process(designs: int, samples: int, workers: int, per_design: int = 0) -> dict:
     done = subprocess.run([sys.executable, __file__, "--child", str(designs), str(samples),
                            str(workers), str(per_design)], capture_output=True, text=True,
@@ -162,10 +217,19 @@ def main():
                     help="skip the hand-written kernel (its compile takes about a minute)")
     ap.add_argument("--chunk-only", action="store_true",
                     help="only one chunk's stages, CPU time, minimum of five runs")
+    ap.add_argument("--kernels", action="store_true",
+                    help="only one batch's compiled stages against the sweep kernel, CPU time")
     ap.add_argument("--child", nargs=4, type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         print(json.dumps(child(*args.child)))
+        return
+    if args.kernels:
+        k = kernels(args.samples)
+        print(f"one batch of {k['designs']} designs x {args.samples} samples, CPU ns per "
+              f"design-sample (each the minimum of 5 alternating runs; load average "
+              f"{os.getloadavg()[0]:.2f}): kinematics kernel then dynamics stage "
+              f"{k['stages'] * 1e9:.0f}, sweep kernel (fused) {k['fused'] * 1e9:.0f}")
         return
     if args.chunk_only:
         chunk = min(args.designs, default_chunk(args.designs, args.samples))
