@@ -512,7 +512,8 @@ def _inputs(kin: KinematicSolution) -> dict:
 
 def _arrays(lay) -> dict:
     """What the kernels read of the layout ``lay``: the topology's integer arrays (columns of
-    its tables, views) and its numbers with the design axis last (views)."""
+    its tables) and its numbers with the design axis last, C-contiguous and read-only
+    (:func:`linkdyn.kinematics.compiled.fixed`)."""
     tree, cuts, idx = lay.tree, lay.cut_table, lay.indices
     out = {"parent": tree[:, PARENT], "kind": tree[:, KIND], "sign": tree[:, SIGN],
            "cut_a": cuts[:, CUT_A], "cut_b": cuts[:, CUT_B], "cut_kind": cuts[:, CUT_KIND],
@@ -521,7 +522,7 @@ def _arrays(lay) -> dict:
                                      "cut_joint")})
     out.update({k: lay.per_design(k) for k in ("joint_point", "com", "mass", "inertia", "cut_pa",
                                                 "cut_pb", "cut_axis")})
-    return out
+    return {k: kc.fixed(v) for k, v in out.items()}   # one array type each: compiled once
 
 
 def _applied(loads: Loads, shape) -> np.ndarray:

@@ -529,10 +529,24 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
             _cut_motion(cuts, d, k0, nb, phi, r, tw, td, tmp[5], cut)
 
 
+def fixed(x) -> np.ndarray | tuple:
+    """``x`` (an array, or a tuple of them) as C-contiguous, read-only arrays of their dtype:
+    views, copied only where not C-contiguous. numba compiles a kernel once per combination of
+    its arguments' layouts ('C', 'A', 'F') and read-only flags; every array input of the
+    kernels goes through this, so each compiles once whatever the caller passed (a broadcast
+    view, a column of a table, an unpickled layout, a sweep's design-last views)."""
+    if isinstance(x, tuple):
+        return tuple(fixed(a) for a in x)
+    x = np.asarray(x)
+    v = np.ascontiguousarray(x, dtype=x.dtype).view()
+    v.flags.writeable = False
+    return v
+
+
 def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
            lo=None, hi=None, modes=()) -> tuple:
     """The inputs of :func:`kernel` (and of :func:`block`), from ``tree`` to ``qdd_drv``, for
-    the arguments of :func:`run`."""
+    the arguments of :func:`run`: each array C-contiguous and read-only (:func:`fixed`)."""
     topo, idx = lay.topo, lay.indices
     n = topo.n
     D, T = max(lay.designs, 1), len(t)
@@ -558,9 +572,9 @@ def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=
     drivers = [np.ascontiguousarray(np.broadcast_to(
         np.reshape(x, (len(drv), -1, T)), (len(drv), D, T)), dtype=float)
         for x in (q_drv, qd_drv, qdd_drv)]
-    return (lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
-            lay.dyad_table, geo, cgeo, lay.per_design("size"), t, np.asarray(nodes, float), lo,
-            hi, Qn, cQ, sQ, md, q_in, *drivers)
+    return fixed((lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
+                  lay.dyad_table, geo, cgeo, lay.per_design("size"), t,
+                  np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in, *drivers))
 
 
 def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
