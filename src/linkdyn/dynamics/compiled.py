@@ -369,6 +369,9 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
     n, nc, m, nv, n_rows = len(tree), len(cuts), len(dep), len(drv), o_lam.shape[0]
     D, T = size.shape[0], t_s.shape[0]
     B = block
+    # the work arrays' place as an int64, not a literal 0: the callees then reuse the
+    # compilation of the other kernels' calls instead of one of their own
+    z = np.int64(0)
     # the kinematics of one block: its work arrays and scratch
     tmp = kc.scratch(n, nc, m, n_rows, B)
     work = (np.zeros((n, 1, B)), np.zeros((n, 1, B)), np.zeros((n, 1, B)), np.zeros((n, 1, B)),
@@ -390,9 +393,9 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
             kc.block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
-                     Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, 0, 0, err,
+                     Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, z, z, err,
                      pivot, fin, tmp)
-            kc._cut_motion(cuts, 0, 0, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
+            kc._cut_motion(cuts, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
             for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
                            (qdd_w, qdd)):
                 _keep(x, out, d, k0, nb)
@@ -406,12 +409,12 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
             if g[0] != 0.0 or g[1] != 0.0:   # else no applied wrench: w_b stays zero
                 _weights(com, mass, g, dp, nb, c_w, s_w, r_w, w_b)
             wtilde[0, :, 0, :nb] = 0.0
-            _newton_euler(com, mass, inertia, 0, dp, 0, nb, 0, 0, c_w, s_w, tw_w, td_w, w_b, w_b,
+            _newton_euler(com, mass, inertia, z, dp, z, nb, z, z, c_w, s_w, tw_w, td_w, w_b, w_b,
                           ke, wstar, wtilde)
             o_ke[d, k0:k0 + nb] = ke[:nb]
-            _composite(parent, r_w, 0, 0, nb, 0, 0, wtilde)
-            _generalized(kind, sign, 0, 0, nb, 0, 0, e_w, wtilde, Q)
-            _multipliers(dep, drv, cut_row, cut_rows, 0, 0, nb, J_w, Q[:, 0, 0:nb], A, lam, piv,
+            _composite(parent, r_w, z, z, nb, z, z, wtilde)
+            _generalized(kind, sign, z, z, nb, z, z, e_w, wtilde, Q)
+            _multipliers(dep, drv, cut_row, cut_rows, z, z, nb, J_w, Q[:, 0, 0:nb], A, lam, piv,
                          lam_b, tau_b, pivot_b)
             _keep(lam_b, o_lam, d, k0, nb)
             _keep(tau_b, o_tau, d, k0, nb)
@@ -452,7 +455,7 @@ def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
            "ke": np.empty((D, T)), "dyn_pivot": np.empty((D, T))}
     axes = np.array([i for i in range(1, n) if "axis" in jk.get(lay.kind[i]).keys], np.int64)
     _sweep(args, axes, *(P[k] for k in ("parent", "kind", "sign", "cut_row", "cut_rows", "com",
-                                       "mass", "inertia")), lay.per_design("gravity"),
+                                       "mass", "inertia")), kc.fixed(lay.per_design("gravity")),
            *out.values(),
            *dyn.values(), min(BLOCK, T))
     out.update(dyn)
