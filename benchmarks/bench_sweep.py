@@ -209,6 +209,17 @@ def ceiling_rate(samples: int) -> float:
     return samples / best_time(lambda: run(t, np.empty((ROWS_ALL, samples))), 3)
 
 
+def projection(cpu_rate: float, cores: int | None = None) -> str:
+    """The projected time of the issue's target sweep (1e6 designs x 360 samples) on this
+    machine's ``cores`` with every core at ``cpu_rate`` design-samples per CPU second (an
+    otherwise idle machine, workers' start-up left out), against the 60 s target."""
+    cores = cores or (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
+                      else os.cpu_count())
+    s = 1e6 * 360 / (cpu_rate * cores)
+    return (f"1e6 designs x 360 samples on {cores} cores at this rate: {s:.0f} s "
+            f"(target 60 s: {'met' if s < 60 else 'NOT met'})")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--designs", type=int, default=10_000)
@@ -237,6 +248,8 @@ def main():
         print(f"one chunk of {chunk} designs x {args.samples} samples, one worker, CPU s "
               f"(each the minimum of 5 runs in one process; load average "
               f"{os.getloadavg()[0]:.2f}): " + ", ".join(f"{k} {v:.3g}" for k, v in st.items()))
+        rate = chunk * args.samples / st["total"]
+        print(f"  {rate:.4g} design-samples per CPU second; " + projection(rate))
         return
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     D, T = args.designs, args.samples
@@ -266,7 +279,8 @@ def main():
           f"{'met' if max(one['peak_bytes'], allc['peak_bytes']) < TARGET_MEMORY else 'NOT met'}")
     per_core = allc["rate"] / cores
     print(f"  per CPU second on {cores} workers {allc['cpu_rate']:.4g} design-samples/s (the "
-          f"rate per core of an otherwise idle machine, processes' start-up included)")
+          f"rate per core of an otherwise idle machine, processes' start-up included): "
+          + projection(allc["cpu_rate"], cores))
     if ceiling:
         print(f"  hand-written compiled kernel (bench_ceiling, full analysis, one core) "
               f"{ceiling:.4g} samples/s: the sweep on one worker runs at "

@@ -429,7 +429,7 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
 def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(example, path, lo, hi):
     from linkdyn.kinematics import dyads, newton
     from linkdyn.kinematics.layout import compile_designs
-    from linkdyn.kinematics.positions import assembly_guess
+    from linkdyn.kinematics.positions import assemble, assembly_guess
     from linkdyn.kinematics.recursion import forward_positions
 
     models, _ = space(linkdyn.example_path(example), [path]).models(
@@ -445,6 +445,14 @@ def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(examp
         _, err = newton(lay, starts, maxiter=60, damped=True)
     assert np.array_equal(can, np.any(err <= 1e-10, axis=-1))
     assert 0 < can.sum() < len(can) or example == "inverted_slider_crank"
+    # the assembly reports the same designs (the sweep sorts them out by it) and solves the
+    # others as it does alone: NaN exactly where no mode closes or no start converges
+    q, closes = assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0],
+                         raise_error=False, closable=True)
+    assert np.array_equal(closes, can) and np.all(np.isnan(q[:, ~can]))
+    assert np.array_equal(q, assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0],
+                                      raise_error=False), equal_nan=True)
+    assert np.array_equal(np.all(np.isfinite(q), axis=0), np.any(err <= 1e-10, axis=-1))
     if example == "hoeken":   # circles: |r1 - r2| <= d <= r1 + r2, crank pin at (38.1, 0)
         d = np.abs([m.body("ground").points["O4"][0] - 0.0381 for m in models])
         assert np.array_equal(can, (abs(0.1152 - 0.1152) <= d) & (d <= 0.2304))

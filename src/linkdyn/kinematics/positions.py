@@ -127,13 +127,18 @@ def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0
 
 
 def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
-             raise_error: bool = True) -> np.ndarray:
+             raise_error: bool = True, closable: bool = False):
     """Assembled tree coordinates (n, D) of D designs at the first sample, on the branch of
     each design's ``[assembly]`` guess.
 
     A damped Newton solve from the guesses; designs where it fails get 64 deterministic
     restarts, solved at once, and the converged one nearest the guess is kept. A design that
-    still does not close is NaN, or raises :class:`AssemblyError` if ``raise_error``.
+    still does not close is NaN, or raises :class:`AssemblyError` if ``raise_error``. Designs
+    whose dyads close in no assembly mode (:func:`.dyads.closable`) are not solved at all.
+
+    With ``closable``, returns ``(q, can)``: ``can`` (D,) bool is False for the designs that
+    no assembly mode closes (always True without a closed-form plan), so that a caller sorts
+    them out without a second pass.
     """
     topo = lay.topo
     dep = list(topo.dependent)
@@ -175,7 +180,8 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
             raise not_assembled(models[d], lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)], t0,
                                 d if len(models) > 1 else None)
         q[:, failed] = np.nan
-    return _nearest_turn(lay, q, q0)
+    q = _nearest_turn(lay, q, q0)
+    return (q, ~hopeless) if closable else q
 
 
 def _nearest_turn(lay: Layout, q: np.ndarray, q0: np.ndarray) -> np.ndarray:

@@ -28,10 +28,8 @@ import numpy as np
 from .. import compiled
 from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
-from ..kinematics import driver_values, dyads
-# the assembly's starting guess, to sort designs by whether they close at once
-from ..kinematics.positions import assembly_guess, assemble, not_assembled
-from ..kinematics.recursion import forward_positions
+from ..kinematics import driver_values
+from ..kinematics.positions import assemble, not_assembled
 from . import metrics as metrics_mod
 from . import vectorize
 from .params import Space
@@ -205,13 +203,14 @@ def _batches(builder, lay, guesses, idx, T: int):
     design-samples each, as equal as may be (memory is bounded by a batch's time histories),
     their assembly at t = 0, and the designs that cannot be assembled whatever the start.
 
-    For a mechanism of dyads, a design whose dyads close in no assembly mode at t = 0
-    (:func:`linkdyn.kinematics.dyads.closable`) is left out of the batches: the assembly would
-    fail it at once. The others are assembled at once for the whole chunk
+    The designs are assembled at once for the whole chunk
     (:func:`linkdyn.kinematics.positions.assemble`: a damped Newton solve from the
     ``[assembly]`` guesses, restarts for the designs it does not close), so that its Python
     costs, and the restarts, are paid once per chunk and not once per batch. A design's
     assembly, like the rest of its solution, does not depend on the designs solved with it.
+    For a mechanism of dyads, a design whose dyads close in no assembly mode at t = 0
+    (:func:`linkdyn.kinematics.dyads.closable`, which the assembly checks first and reports)
+    is left out of the batches: nothing of it is solved.
 
     Returns
     -------
@@ -226,28 +225,14 @@ def _batches(builder, lay, guesses, idx, T: int):
     if not len(idx):
         return [], None, idx
     sub = lay if len(idx) == lay.designs else lay.take(idx)
-    can = np.ones(len(idx), bool)
-    if sub.dyads is not None:
-        models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
-        one = {id(m): assembly_guess(m, sub) for m in {id(m): m for m in models}.values()}  # once each
-        q0 = np.stack([one[id(m)] for m in models], axis=-1)[..., None]
-        q0[list(sub.topo.driven)] = sub.driver_values(np.zeros(1))[0]
-        can = dyads.closable(sub, sub.dyads, q0, forward_positions)[:, 0]
+    models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
+    q, can = assemble(models, sub, sub.driver_values(np.zeros(1))[0][..., 0], 0.0,
+                      raise_error=False, closable=True)
     if not np.any(can):
         return [], None, idx
     size = max(1, BATCH_SAMPLES // max(T, 1))
     batches = np.array_split(idx[can], -(-int(np.sum(can)) // size))
-    return batches, _assemble(builder, lay, guesses, idx[can]), idx[~can]
-
-
-def _assemble(builder, lay, guesses, idx) -> np.ndarray:
-    """Tree coordinates (n, len(idx)) of the designs ``idx`` assembled at t = 0 on the branch
-    of their ``[assembly]`` guesses (:func:`linkdyn.kinematics.positions.assemble`; NaN for a
-    design that does not assemble)."""
-    sub = lay if len(idx) == lay.designs else lay.take(idx)
-    models = builder.guess_models({k: g[idx] for k, g in guesses.items()}, len(idx))
-    return assemble(models, sub, sub.driver_values(np.zeros(1))[0][..., 0], 0.0,
-                    raise_error=False)
+    return batches, q[:, can], idx[~can]
 
 
 def _not_assembled(model, lay) -> AssemblyError:
