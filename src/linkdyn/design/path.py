@@ -23,7 +23,7 @@ from ..errors import ModelError
 from .. import joints as jk
 from ..model import GROUND, Model
 from .fourbar import _other
-from ..planar import cross, first
+from ..planar import cross
 
 TWO_PI = 2.0 * np.pi
 
@@ -147,21 +147,23 @@ def line_fit(xy, sel):
     dev : ndarray (..., T)
         Signed perpendicular distance of each sample from the line, m (NaN where not selected).
     """
-    sel = np.broadcast_to(sel, xy.shape[:-1]) & np.all(np.isfinite(xy), axis=-1)
+    # on the two components, each (..., T) (a batch's contiguous arrays, not strided by 2)
+    x, y = xy[..., 0], xy[..., 1]
+    sel = np.broadcast_to(sel, x.shape) & np.isfinite(x) & np.isfinite(y)
     n = np.sum(sel, axis=-1)
-    p = np.where(sel[..., None], xy, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
-        c = np.sum(p, axis=-2) / n[..., None]
-    d = np.where(sel[..., None], xy - c[..., None, :], 0.0)
+        c = (np.sum(np.where(sel, x, 0.0), axis=-1) / n, np.sum(np.where(sel, y, 0.0), axis=-1) / n)
+    d = (np.where(sel, x - c[0][..., None], 0.0), np.where(sel, y - c[1][..., None], 0.0))
     # principal axis of the scatter S = sum d d^T: angle theta with tan 2 theta = 2 Sxy / (Sxx - Syy)
-    sxx, syy = np.sum(d[..., 0] ** 2, -1), np.sum(d[..., 1] ** 2, -1)
-    sxy = np.sum(d[..., 0] * d[..., 1], -1)
+    sxx, syy = np.sum(d[0] * d[0], -1), np.sum(d[1] * d[1], -1)
+    sxy = np.sum(d[0] * d[1], -1)
     theta = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
-    u = np.stack([np.cos(theta), np.sin(theta)], axis=-1)
-    big = np.take_along_axis(u, np.argmax(np.abs(u), axis=-1)[..., None], axis=-1)
-    u = np.where(big < 0, -u, u)
-    dev = np.where(sel, cross(first(u[..., None, :]), first(d)), np.nan)
-    return c, u, dev
+    u = (np.cos(theta), np.sin(theta))
+    # the direction's largest component positive
+    flip = np.where(np.abs(u[1]) > np.abs(u[0]), u[1], u[0]) < 0
+    u = (np.where(flip, -u[0], u[0]), np.where(flip, -u[1], u[1]))
+    dev = np.where(sel, cross((u[0][..., None], u[1][..., None]), d), np.nan)
+    return np.stack(c, axis=-1), np.stack(u, axis=-1), dev
 
 
 def max_deviation(dev):
