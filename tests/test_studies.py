@@ -3,6 +3,7 @@ and give the same table in this process, in worker processes and on a Dask clust
 
 from __future__ import annotations
 
+import importlib.util
 import re
 
 import numpy as np
@@ -429,7 +430,7 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
 def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(example, path, lo, hi):
     from linkdyn.kinematics import dyads, newton
     from linkdyn.kinematics.layout import compile_designs
-    from linkdyn.kinematics.positions import assemble, assembly_guess
+    from linkdyn.kinematics.positions import assemble, assembly_guess, follow
     from linkdyn.kinematics.recursion import forward_positions
 
     models, _ = space(linkdyn.example_path(example), [path]).models(
@@ -453,6 +454,17 @@ def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(examp
     assert np.array_equal(q, assemble(models, lay, lay.driver_values(np.zeros(1))[0][..., 0],
                                       raise_error=False), equal_nan=True)
     assert np.array_equal(np.all(np.isfinite(q), axis=0), np.any(err <= 1e-10, axis=-1))
+    # the branch followed with its nodes closed by the compiled kernel (the compiled backend's
+    # path): numpy's nodes, reach and rates to rounding, the same nodes that do not close
+    if importlib.util.find_spec("numba"):
+        t = np.linspace(-0.4, 2.5, 40)
+        with np.errstate(all="ignore"):
+            ref = follow(models, lay, t, single=False)
+            got = follow(models, lay, t, single=False, compiled=True)
+        assert np.array_equal(got.nodes, ref.nodes) and np.array_equal(got.reach, ref.reach)
+        for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
+            assert np.array_equal(np.isnan(a), np.isnan(b)) and np.isfinite(b).any()
+            assert np.allclose(a, b, rtol=0, atol=1e-12 * np.nanmax(np.abs(b)), equal_nan=True)
     if example == "hoeken":   # circles: |r1 - r2| <= d <= r1 + r2, crank pin at (38.1, 0)
         d = np.abs([m.body("ground").points["O4"][0] - 0.0381 for m in models])
         assert np.array_equal(can, (abs(0.1152 - 0.1152) <= d) & (d <= 0.2304))

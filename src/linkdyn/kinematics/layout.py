@@ -283,12 +283,16 @@ def _groups(functions) -> dict:
     """The designs sharing each function (equal objects; an unhashable one by identity):
     key -> list of design indices, in order of first use."""
     groups: dict = {}
+    seen: dict = {}   # id -> key: the designs of a sweep share one object, hashed once
     for d, f in enumerate(functions):
-        try:
-            key = (0, f, type(f))
-            hash(key)
-        except TypeError:
-            key = (1, id(f))
+        key = seen.get(id(f))
+        if key is None:
+            try:
+                key = (0, f, type(f))
+                hash(key)
+            except TypeError:
+                key = (1, id(f))
+            seen[id(f)] = key
         groups.setdefault(key, []).append(d)
     return groups
 

@@ -309,7 +309,7 @@ class Branch:
 
 
 def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
-           start: np.ndarray | None = None) -> Branch:
+           start: np.ndarray | None = None, compiled: bool = False) -> Branch:
     """Assemble at t = 0 on the branch of the ``[assembly]`` guess and follow it through
     continuation nodes over the times ``t`` (driver travel at most ``STEP_ANGLE`` rad or
     ``STEP_LENGTH`` of the size between nodes: a loop over driver steps, not samples).
@@ -318,7 +318,8 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     raises :class:`AssemblyError`; else a design that cannot be assembled is NaN. ``start``
     (n, D): the designs' assembly, already solved by :func:`assemble` (a sweep assembles a
     chunk's designs at once, then solves them in batches; each design's assembly does not
-    depend on the designs solved with it).
+    depend on the designs solved with it). ``compiled``: close the nodes of a mechanism of
+    dyads by the compiled kernel (:mod:`.compiled_nodes`; the same steps, to rounding).
     """
     q_start = start if start is not None else assemble(
         models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0, raise_error=single)
@@ -330,7 +331,7 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
     if not lay.topo.dependent or not hi > lo:
         return Branch(q_start, modes)
-    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes))
+    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes, compiled))
 
 
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
@@ -356,14 +357,15 @@ def _at_node(x: np.ndarray, k: int, ndim: int) -> np.ndarray:
     return x.reshape(x.shape + (1,) * (ndim - x.ndim))
 
 
-def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None):
+def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None,
+            compiled: bool = False):
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
     Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
     interval ``reach`` (..., 2) over which each branch was followed."""
     if lay.dyads is not None:
-        return _follow_dyads(lay, q0, lo, hi, modes)
+        return _follow_dyads(lay, q0, lo, hi, modes, compiled)
     if q0.ndim == 1:
         return _follow_newton(lay, q0, lo, hi)
     # designs: Newton's batch is (D, 1), the trailing axis standing for time
@@ -393,10 +395,12 @@ def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float):
             np.stack([reach[1], reach[0]], axis=-1))
 
 
-def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes):
+def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes,
+                  compiled: bool = False):
     """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
-    in closed form in the assembly ``modes``, and the dependent angles are unwrapped along the
-    nodes (which the driver crosses in steps of at most ``STEP_ANGLE``)."""
+    in closed form in the assembly ``modes`` (``compiled``: by the compiled kernel of
+    :mod:`.compiled_nodes`), and the dependent angles are unwrapped along the nodes (which
+    the driver crosses in steps of at most ``STEP_ANGLE``)."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
     nodes = np.unique(np.concatenate((_travel_nodes(lay, 0.0, lo),
@@ -406,9 +410,13 @@ def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes):
     shape = (len(drv),) + q0.shape[1:] + (len(nodes),)
     Q = np.repeat(q0[..., None], len(nodes), axis=-1)
     Q[drv] = nq.reshape(shape)
-    Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
-    J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
-    x, _ = dependent_rates(lay, J, nqd.reshape(shape))
+    if compiled:
+        from . import compiled_nodes
+        Q, x = compiled_nodes.close(lay, Q, nqd.reshape(shape), modes)
+    else:
+        Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
+        J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
+        x, _ = dependent_rates(lay, J, nqd.reshape(shape))
     ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
     for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
         if jk.get(lay.kind[i]).angular:

@@ -73,7 +73,7 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     fast = compiled.use_compiled(backend, t.size * len(models))   # the kernel runs every kind
     # the branch: the [assembly] guess describes the mechanism at t = 0; assembled there and
     # followed to the samples
-    branch = follow(models, lay, t, single, start)
+    branch = follow(models, lay, t, single, start, compiled=fast)
     if fast:
         return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch, run or kc.run)
     kin = at_state(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch.guess(lay, t), branch.modes)

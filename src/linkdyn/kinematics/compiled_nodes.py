@@ -1,0 +1,86 @@
+"""Compiled continuation nodes of a mechanism of dyads: each node's loops closed in closed form
+and its dependent rates, for :func:`.positions.follow` on the compiled backend.
+
+The numpy path (:func:`.positions._follow_dyads`) closes every node at once with
+:func:`.dyads.solve` and solves ``J_dep qd_dep = -J_drv qd_drv`` (eqs. 4-5) by
+:func:`.recursion.dependent_rates`: a few hundred array passes over (designs x nodes). This
+kernel does the same per node, with the block helpers of the kinematics kernel
+(:mod:`.compiled`: ``_place``, ``_close``, ``_cut_frames``, ``_jacobian``, the LU of
+``J_dep``), which call the same steps (:func:`.recursion.child_pose`, the dyads' shape steps,
+:func:`.recursion.jacobian_column`). It writes only what the branch keeps: the closed
+coordinates and the dependent rates; the poses and the Jacobian are scratch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..compiled import njit
+from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _factor_dep, _jacobian,
+                       _place, _solve_dep, scratch)
+from .layout import Layout
+
+
+@njit
+def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, x,
+           phi, c, s, r, e, J, block):
+    """Close the loops of the coordinates ``q`` (n, D, K) in place, dyad by dyad in the
+    assembly ``modes`` (n_dyads, D) (the dependent coordinates of ``q`` are the guess that
+    sets their winding, the driven ones the drivers' values), and write the dependent rates
+    for the driver rates ``qd_drv`` (n_drivers, D, K) into ``x[dep]`` (n, D, K; NaN where
+    ``J_dep`` is singular). ``phi`` ... ``J``: zeroed scratch shaped as the kinematics
+    kernel's outputs (:func:`.compiled.run`)."""
+    n, nd, nv = len(tree), len(dep), len(drv)
+    D, K = q.shape[1], q.shape[2]
+    cq, sq, up, low, rhs, P, A, sol, col, perm, _ = scratch(n, len(cuts), nd, J.shape[0], block)
+    for d in range(D):
+        for k0 in range(0, K, block):
+            nb = min(block, K - k0)
+            ks = slice(k0, k0 + nb)
+            for i in range(1, n):   # cosines and sines of the guess's joint angles
+                _coordinates(tree, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
+            # design d's numbers, and its nodes in the arrays at d, k0
+            _place(tree, geo, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
+            _close(dyads, anc, tree, cuts, cgeo, modes, d, d, k0, nb, q, phi, c, s, r, e, up,
+                   low)
+            _cut_frames(cuts, cgeo, d, d, k0, nb, c, s, r, P)
+            _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
+            # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
+            for row in range(nd):
+                acc = rhs[row]
+                acc[:nb] = 0.0
+                for j in range(nv):
+                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, d, ks]
+                    for k in range(nb):
+                        acc[k] += J_rj[k] * qd_j[k]
+                for k in range(nb):
+                    acc[k] = -acc[k]
+            if nd:
+                _factor_dep(dep, J, d, k0, nb, A, perm, col)
+                _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol)
+
+
+def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes' coordinates ``Q`` (n, ..., K) closed in the dyads' assembly ``modes`` (each
+    (..., 1)), and the dependent rates (n_dep, ..., K) for the driver rates ``qd_drv``
+    (n_drivers, ..., K): what :func:`.dyads.solve` and :func:`.recursion.dependent_rates`
+    give, by :func:`kernel`."""
+    topo, idx = lay.topo, lay.indices
+    n, K = topo.n, Q.shape[-1]
+    D = max(lay.designs, 1)
+    batch = Q.shape[1:]
+    q = np.array(np.broadcast_to(Q.reshape(n, -1, K), (n, D, K)), dtype=float)   # a copy
+    drv = idx["driven"]
+    qd = np.ascontiguousarray(np.broadcast_to(qd_drv.reshape(len(drv), -1, K),
+                                              (len(drv), D, K)), dtype=float)
+    md = np.zeros((len(modes), D))
+    for k, m in enumerate(modes):
+        md[k] = np.reshape(m, -1)
+    x = np.zeros((n, D, K))
+    scratch = [np.zeros(shape + (D, K)) for shape in ((n,), (n,), (n,), (n, 2), (n, 2),
+                                                       (topo.n_rows, n - 1))]
+    geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
+    cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
+    kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
+           lay.dyad_table, geo, cgeo, md, q, qd, x, *scratch, min(BLOCK, K))
+    return q.reshape((n,) + batch), x[idx["dependent"]].reshape((-1,) + batch)
