@@ -7,32 +7,41 @@ The numpy path (:func:`.positions._follow_dyads`) closes every node at once with
 kernel does the same per node, with the block helpers of the kinematics kernel
 (:mod:`.compiled`: ``_place``, ``_close``, ``_cut_frames``, ``_jacobian``, the LU of
 ``J_dep``), which call the same steps (:func:`.recursion.child_pose`, the dyads' shape steps,
-:func:`.recursion.jacobian_column`). It writes only what the branch keeps: the closed
-coordinates and the dependent rates; the poses and the Jacobian are scratch.
+:func:`.recursion.jacobian_column`), then unwinds the dependent angles along the nodes by the
+same step as the numpy path (:func:`.positions.unwrap_step`). It writes only what the branch
+keeps: the coordinates, the dependent rates and which nodes close; the poses and the Jacobian
+are scratch.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from ..compiled import njit
 from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _factor_dep, _jacobian,
                        _place, _solve_dep, scratch)
-from .layout import Layout
+from .layout import ANGULAR, Layout
+from .positions import unwrap_step
 
 
 @njit
-def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, x,
-           phi, c, s, r, e, J, block):
+def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, q0, k_zero,
+           x, ok, phi, c, s, r, e, J, block):
     """Close the loops of the coordinates ``q`` (n, D, K) in place, dyad by dyad in the
     assembly ``modes`` (n_dyads, D) (the dependent coordinates of ``q`` are the guess that
     sets their winding, the driven ones the drivers' values), and write the dependent rates
     for the driver rates ``qd_drv`` (n_drivers, D, K) into ``x[dep]`` (n, D, K; NaN where
-    ``J_dep`` is singular). ``phi`` ... ``J``: zeroed scratch shaped as the kinematics
-    kernel's outputs (:func:`.compiled.run`)."""
+    ``J_dep`` is singular). ``ok`` (D, K): the node closes and its rates are finite. Then the
+    dependent angles are unwound along the nodes from the assembly ``q0`` (n, D) at node
+    ``k_zero`` (t = 0; :func:`.positions.unwrap_step`), NaN where a node is not ``ok``.
+    ``phi`` ... ``J``: zeroed scratch shaped as the kinematics kernel's outputs
+    (:func:`.compiled.run`)."""
     n, nd, nv = len(tree), len(dep), len(drv)
     D, K = q.shape[1], q.shape[2]
     cq, sq, up, low, rhs, P, A, sol, col, perm, _ = scratch(n, len(cuts), nd, J.shape[0], block)
+    path = np.zeros(K)
     for d in range(D):
         for k0 in range(0, K, block):
             nb = min(block, K - k0)
@@ -58,13 +67,31 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, 
             if nd:
                 _factor_dep(dep, J, d, k0, nb, A, perm, col)
                 _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol)
+        ok_d = ok[d]   # the node closes and its rates are finite
+        for k in range(K):
+            ok_d[k] = True
+            for m in range(nd):
+                i = dep[m]
+                ok_d[k] = ok_d[k] & math.isfinite(q[i, d, k]) & math.isfinite(x[i, d, k])
+        for m in range(nd):   # unwind along the nodes, anchored at the assembly (t = 0)
+            i = dep[m]
+            if not tree[i, ANGULAR]:
+                continue
+            q_i = q[i, d]
+            path[0] = 0.0
+            for k in range(1, K):
+                path[k] = path[k - 1] + unwrap_step(ok_d[k - 1], ok_d[k], q_i[k - 1], q_i[k])
+            for k in range(K):
+                q_i[k] = q0[i, d] + path[k] - path[k_zero] if ok_d[k] else math.nan
 
 
-def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes) -> tuple[np.ndarray, np.ndarray]:
+def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes, q0: np.ndarray, k0: int):
     """The nodes' coordinates ``Q`` (n, ..., K) closed in the dyads' assembly ``modes`` (each
-    (..., 1)), and the dependent rates (n_dep, ..., K) for the driver rates ``qd_drv``
-    (n_drivers, ..., K): what :func:`.dyads.solve` and :func:`.recursion.dependent_rates`
-    give, by :func:`kernel`."""
+    (..., 1)) with their dependent angles unwound from the assembly ``q0`` (n, ...) at node
+    ``k0``, the dependent rates (n_dep, ..., K) for the driver rates ``qd_drv``
+    (n_drivers, ..., K), and whether each node closes with finite rates (..., K): what
+    :func:`.positions._follow_dyads` gives by :func:`.dyads.solve`,
+    :func:`.recursion.dependent_rates` and :func:`.positions.unwrap_step`, by :func:`kernel`."""
     topo, idx = lay.topo, lay.indices
     n, K = topo.n, Q.shape[-1]
     D = max(lay.designs, 1)
@@ -73,14 +100,17 @@ def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes) -> tuple[np.nda
     drv = idx["driven"]
     qd = np.ascontiguousarray(np.broadcast_to(qd_drv.reshape(len(drv), -1, K),
                                               (len(drv), D, K)), dtype=float)
+    start = np.ascontiguousarray(np.broadcast_to(q0.reshape(n, -1), (n, D)), dtype=float)
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
-    x = np.zeros((n, D, K))
+    x, ok = np.zeros((n, D, K)), np.zeros((D, K), np.bool_)
     scratch = [np.zeros(shape + (D, K)) for shape in ((n,), (n,), (n,), (n, 2), (n, 2),
                                                        (topo.n_rows, n - 1))]
     geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
     cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
     kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
-           lay.dyad_table, geo, cgeo, md, q, qd, x, *scratch, min(BLOCK, K))
-    return q.reshape((n,) + batch), x[idx["dependent"]].reshape((-1,) + batch)
+           lay.dyad_table, geo, cgeo, md, q, qd, start, int(k0), x, ok, *scratch,
+           min(BLOCK, K))
+    return (q.reshape((n,) + batch), x[idx["dependent"]].reshape((-1,) + batch),
+            ok.reshape(batch))

@@ -282,18 +282,25 @@ def _load_value(value, t, comps=()):
 def _groups(functions) -> dict:
     """The designs sharing each function (equal objects; an unhashable one by identity):
     key -> list of design indices, in order of first use."""
-    groups: dict = {}
-    seen: dict = {}   # id -> key: the designs of a sweep share one object, hashed once
+    by_id: dict = {}   # the designs of a sweep share one object: grouped by identity first
     for d, f in enumerate(functions):
-        key = seen.get(id(f))
-        if key is None:
-            try:
-                key = (0, f, type(f))
-                hash(key)
-            except TypeError:
-                key = (1, id(f))
-            seen[id(f)] = key
-        groups.setdefault(key, []).append(d)
+        by_id.setdefault(id(f), []).append(d)
+    groups: dict = {}
+    merged = set()
+    for idx in by_id.values():   # then equal objects merged, each hashed once
+        f = functions[idx[0]]
+        try:
+            key = (0, f, type(f))
+            hash(key)
+        except TypeError:
+            key = (1, id(f))
+        if key in groups:
+            groups[key].extend(idx)
+            merged.add(key)
+        else:
+            groups[key] = idx
+    for key in merged:
+        groups[key].sort()
     return groups
 
 

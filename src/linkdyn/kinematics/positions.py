@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import AssemblyError
 from .. import joints as jk
 from ..model import Model
-from ..planar import solve_small, wrap
+from ..planar import solve_small, wrap, wrapped
 from ..steps import select, step
 from . import dyads
 from .layout import Layout, motion_steps, motion_values
@@ -395,6 +395,15 @@ def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float):
             np.stack([reach[1], reach[0]], axis=-1))
 
 
+@step
+def unwrap_step(ok_a, ok_b, q_a, q_b):
+    """The change of a dependent angle from a node (``q_a``) to the next (``q_b``), wrapped
+    into (-pi, pi] (between nodes the driver moves at most ``STEP_ANGLE``, the angle less than
+    half a turn); 0 unless both nodes close (``ok_a``, ``ok_b``). Their sum along the nodes
+    unwinds the angle."""
+    return select(ok_a & ok_b, wrapped(q_b - q_a), 0.0)
+
+
 def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes,
                   compiled: bool = False):
     """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
@@ -410,19 +419,20 @@ def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes,
     shape = (len(drv),) + q0.shape[1:] + (len(nodes),)
     Q = np.repeat(q0[..., None], len(nodes), axis=-1)
     Q[drv] = nq.reshape(shape)
-    if compiled:
+    if compiled:   # closed, the rates solved and the angles unwrapped by the kernel
         from . import compiled_nodes
-        Q, x = compiled_nodes.close(lay, Q, nqd.reshape(shape), modes)
+        Q, x, ok = compiled_nodes.close(lay, Q, nqd.reshape(shape), modes, q0, k0)
     else:
         Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))
         x, _ = dependent_rates(lay, J, nqd.reshape(shape))
-    ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
-    for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
-        if jk.get(lay.kind[i]).angular:
-            step = np.where(ok[..., 1:] & ok[..., :-1], wrap(np.diff(Q[i], axis=-1)), 0.0)
-            path = np.concatenate((np.zeros(step.shape[:-1] + (1,)), np.cumsum(step, -1)), -1)
-            Q[i] = np.where(ok, q0[i][..., None] + path - path[..., k0:k0 + 1], np.nan)
+        ok = np.all(np.isfinite(Q[dep]), axis=0) & np.all(np.isfinite(x), axis=0)
+        for i in dep:  # unwrap along the nodes, anchored at the assembly (t = 0)
+            if jk.get(lay.kind[i]).angular:
+                step = unwrap_step(ok[..., :-1], ok[..., 1:], Q[i][..., :-1], Q[i][..., 1:])
+                path = np.concatenate((np.zeros(step.shape[:-1] + (1,)), np.cumsum(step, -1)),
+                                      -1)
+                Q[i] = np.where(ok, q0[i][..., None] + path - path[..., k0:k0 + 1], np.nan)
     QD = np.zeros(Q.shape)
     QD[drv], QD[dep] = nqd.reshape(shape), x
     # the branch is followed over the nodes that close, contiguous around t = 0
