@@ -560,8 +560,13 @@ def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=
         q_in = np.zeros((n, D, 0))
         lo, hi = (np.ascontiguousarray(np.broadcast_to(np.reshape(x, -1), (D,)), dtype=float)
                   for x in (lo, hi))
-    sign = np.asarray(topo.sign, float)[:, None, None]
-    sQ, cQ = np.sin(sign * Qn), np.cos(sign * Qn)
+    # cos and sin of s q at the nodes, for the angular joints the nodes give (the kernel takes
+    # the drivers' per sample; ``turn`` is unused for the other kinds)
+    cQ, sQ = np.ones_like(Qn), np.zeros_like(Qn)
+    rows = [i for i in range(1, n) if lay.tree[i, ANGULAR] and i not in topo.driven]
+    if Qn.shape[-1] and rows:
+        x = np.asarray(topo.sign, float)[rows, None, None] * Qn[rows]
+        cQ[rows], sQ[rows] = np.cos(x), np.sin(x)
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
