@@ -280,6 +280,33 @@ def test_backend_choice(monkeypatch):
     assert linkdyn.analyze(model, np.linspace(0, 1, 5)).kin.arrays is not None
 
 
+def test_factor_of_a_sparse_system():
+    """Twelve unknowns, sparse as a long chain's J_dep (where a zero multiplier leaves its row
+    as it is): factor and substitute solve every finite sample as LAPACK does, with the
+    relative pivot of an LU factorization with partial pivoting; a sample with an infinite
+    entry comes out NaN (every row then updated, as in solve_small)."""
+    import scipy.linalg as sl
+
+    rng = np.random.default_rng(12)
+    m, nb = 12, 30
+    K = rng.normal(size=(m, m, nb)) * (rng.random(size=(m, m, nb)) < 0.2)
+    K += np.eye(m)[:, :, None] * (0.5 + rng.random(nb))
+    K[-1, 0, 3] = np.inf
+    b = rng.normal(size=(m, nb))
+    A, perm, rel, x = K.copy(), np.zeros((m, nb), np.int64), np.zeros(nb), np.zeros((m, nb))
+    compiled.factor(A, m, nb, perm, rel)
+    compiled.substitute(A, perm, rel, m, nb, b, x, kc.PIVOT_TOL)
+    for k in range(nb):
+        if k == 3:
+            assert np.all(np.isnan(x[:, k]))
+            continue
+        np.testing.assert_allclose(x[:, k], np.linalg.solve(K[..., k], b[:, k]), rtol=1e-10,
+                                   atol=1e-12)
+        U = sl.lu(K[..., k])[2]
+        assert np.isclose(rel[k], np.min(np.abs(np.diag(U))) / np.max(np.abs(K[..., k])),
+                          rtol=1e-12)
+
+
 @pytest.mark.parametrize("m", [1, 2, 3, 4, 6])
 def test_factor_once_solve_twice_matches_solve_small(m):
     """The kinematics kernel factors J_dep once and solves for the rates and then the

@@ -226,12 +226,15 @@ def factor(A, m, nb, perm, rel):
     U on and above the diagonal and the multipliers of L below it. Partial pivoting under the
     rules of :func:`linkdyn.planar.solve_small`: a row swaps up where its entry is strictly
     larger; ``perm`` (m, block) records the row order. ``rel`` (block,): the smallest pivot
-    over the largest ``|K_ij|`` (NaN if ``K`` holds a NaN).
+    over the largest ``|K_ij|`` (NaN if ``K`` holds a NaN). A row whose multiplier is zero is
+    left as it is when ``K`` is finite (the long chains' sparse ``J_dep``); with an infinite or
+    NaN entry every row is updated, so that they spread as in ``solve_small``.
     """
     if m == 2:   # one loop, the same operations per sample (a single loop's J_dep)
         _factor2(A, nb, perm, rel)
         return
     scale = np.empty(nb)
+    finite_k = np.empty(nb, np.bool_)
     for k in range(nb):
         top, finite = 0.0, True
         for i in range(m):
@@ -241,6 +244,7 @@ def factor(A, m, nb, perm, rel):
                 finite = finite and A[i, j, k] == A[i, j, k]
         scale[k] = top if top > 0 else 1.0
         rel[k] = math.inf if finite else math.nan
+        finite_k[k] = finite and top < math.inf
     for p in range(m):
         # partial pivoting: rows swap whole, with the multipliers already stored in them
         for i in range(p + 1, m):
@@ -257,8 +261,9 @@ def factor(A, m, nb, perm, rel):
             for k in range(nb):
                 f = A[i, p, k] * (1.0 / A[p, p, k])
                 A[i, p, k] = f
-                for j in range(p + 1, m):
-                    A[i, j, k] -= f * A[p, j, k]
+                if f != 0.0 or not finite_k[k]:
+                    for j in range(p + 1, m):
+                        A[i, j, k] -= f * A[p, j, k]
     for k in range(nb):
         rel[k] /= scale[k]
 
