@@ -1,0 +1,47 @@
+"""Each compiled kernel compiles once: numba compiles a kernel again for every other
+combination of its arguments' layouts ('C', 'A', 'F'), read-only flags and literal integers,
+40 s and more each on a fresh machine. The entry points hand every kernel one array type
+(``kinematics.compiled.fixed``) whatever their callers pass: one mechanism, a batch of designs,
+a layout that went through pickle (as to a sweep's worker process), a sweep's fused kernel.
+(Run on the compiled worker.)"""
+
+from __future__ import annotations
+
+import pickle
+import tomllib
+
+import numpy as np
+import pytest
+
+import linkdyn
+from linkdyn import analysis
+from linkdyn.cli import example_text
+from linkdyn.io import model_from_dict
+from linkdyn.kinematics.layout import compile_designs
+
+pytest.importorskip("numba", reason="the compiled kernels need numba (the fast extra)")
+
+
+def hoeken(crank_mm: float):
+    text = example_text("hoeken")
+    assert "O2 = [38.1, 0.0]" in text
+    return model_from_dict(tomllib.loads(text.replace("O2 = [38.1, 0.0]",
+                                                      f"O2 = [{crank_mm!r}, 0.0]")))
+
+
+def test_each_kernel_compiles_once_whatever_its_callers_pass():
+    from linkdyn.dynamics import compiled as dc
+    from linkdyn.kinematics import compiled as kc
+
+    one = hoeken(38.1)
+    designs = [one, hoeken(42.0)]
+    t = np.linspace(0.0, 4.0 / 3.0, 7)
+    lay = compile_designs(designs)
+    linkdyn.analyze(one, t, backend="compiled")
+    linkdyn.analyze(designs, t, backend="compiled")
+    analysis.analyze_layout(designs, pickle.loads(pickle.dumps(lay)), t, backend="compiled")
+    # the sweep's fused kernel (reactions left to be read)
+    lazy = analysis.analyze_layout(designs, lay, t, backend="compiled", reactions=False)
+    assert np.all(np.isfinite(lazy.design(1).reactions.force))
+    for kernel in (kc.kernel, kc.block, dc._dynamics, dc._reactions, dc._sweep):
+        assert len(kernel.signatures) == 1, (kernel.__name__, kernel.signatures)
