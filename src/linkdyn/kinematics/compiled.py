@@ -436,6 +436,22 @@ def scratch(n, nc, nd, n_rows, block):
 
 
 @njit
+def _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs):
+    """The right-hand side of the dependent rates, ``rhs[:nd, :nb] = -J_drv qd_drv`` (eqs. 4-5):
+    ``J`` (n_rows, n - 1, ., .) at design ``w``, samples ``kws`` (a slice), the drivers' rates
+    ``qd_drv`` (n_drivers, D, T) at design ``d``, samples ``ks`` (a slice of the same length)."""
+    for row in range(nd):
+        acc = rhs[row]   # the sum over the drivers, negated once summed
+        acc[:nb] = 0.0
+        for j in range(len(drv)):
+            J_rj, qd_j = J[row, drv[j] - 1, w, kws], qd_drv[j, d, ks]
+            for k in range(nb):
+                acc[k] += J_rj[k] * qd_j[k]
+        for k in range(nb):
+            acc[k] = -acc[k]
+
+
+@njit
 def block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ,
           sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     """Positions, rates and accelerations of the samples ``k0`` .. ``k0 + nb`` of design d
@@ -475,15 +491,7 @@ def block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, l
         qdd[dep[m], w, kws] = 0.0
     for j in range(nv):
         qd[drv[j], w, kws], qdd[drv[j], w, kws] = qd_drv[j, d, ks], qdd_drv[j, d, ks]
-    for row in range(nd):
-        acc = rhs[row]   # the sum over the drivers, negated once summed
-        acc[:nb] = 0.0
-        for j in range(nv):
-            J_rj, qd_j = J[row, drv[j] - 1, w, kws], qd_drv[j, d, ks]
-            for k in range(nb):
-                acc[k] += J_rj[k] * qd_j[k]
-        for k in range(nb):
-            acc[k] = -acc[k]
+    _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs)
     if nd:   # J_dep, factored once for the rates and the accelerations
         _factor_dep(dep, J, w, kw, nb, A, perm, col)
         _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qd, sol)

@@ -20,8 +20,8 @@ import math
 import numpy as np
 
 from ..compiled import njit
-from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _factor_dep, _jacobian,
-                       _place, _solve_dep, scratch)
+from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _driven_rhs, _factor_dep,
+                       _jacobian, _place, _solve_dep, scratch)
 from .layout import ANGULAR, Layout
 from .positions import unwrap_step
 
@@ -38,7 +38,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, 
     ``k_zero`` (t = 0; :func:`.positions.unwrap_step`), NaN where a node is not ``ok``.
     ``phi`` ... ``J``: zeroed scratch shaped as the kinematics kernel's outputs
     (:func:`.compiled.run`)."""
-    n, nd, nv = len(tree), len(dep), len(drv)
+    n, nd = len(tree), len(dep)
     D, K = q.shape[1], q.shape[2]
     cq, sq, up, low, rhs, P, A, sol, col, perm, _ = scratch(n, len(cuts), nd, J.shape[0], block)
     path = np.zeros(K)
@@ -55,15 +55,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, 
             _cut_frames(cuts, cgeo, d, d, k0, nb, c, s, r, P)
             _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
-            for row in range(nd):
-                acc = rhs[row]
-                acc[:nb] = 0.0
-                for j in range(nv):
-                    J_rj, qd_j = J[row, drv[j] - 1, d, ks], qd_drv[j, d, ks]
-                    for k in range(nb):
-                        acc[k] += J_rj[k] * qd_j[k]
-                for k in range(nb):
-                    acc[k] = -acc[k]
+            _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, nb, rhs)
             if nd:
                 _factor_dep(dep, J, d, k0, nb, A, perm, col)
                 _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol)
