@@ -32,6 +32,7 @@ def hoeken(crank_mm: float):
 def test_each_kernel_compiles_once_whatever_its_callers_pass():
     from linkdyn.dynamics import compiled as dc
     from linkdyn.kinematics import compiled as kc
+    from linkdyn.kinematics import compiled_nodes as kn
 
     one = hoeken(38.1)
     designs = [one, hoeken(42.0)]
@@ -43,5 +44,5 @@ def test_each_kernel_compiles_once_whatever_its_callers_pass():
     # the sweep's fused kernel (reactions left to be read)
     lazy = analysis.analyze_layout(designs, lay, t, backend="compiled", reactions=False)
     assert np.all(np.isfinite(lazy.design(1).reactions.force))
-    for kernel in (kc.kernel, kc.block, dc._dynamics, dc._reactions, dc._sweep):
+    for kernel in (kc.kernel, kc.block, kn.kernel, dc._dynamics, dc._reactions, dc._sweep):
         assert len(kernel.signatures) == 1, (kernel.__name__, kernel.signatures)

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..compiled import njit
 from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _driven_rhs, _factor_dep,
-                       _jacobian, _place, _solve_dep, scratch)
+                       _jacobian, _place, _solve_dep, fixed, scratch)
 from .layout import ANGULAR, Layout
 from .positions import unwrap_step
 
@@ -90,17 +90,17 @@ def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes, q0: np.ndarray,
     batch = Q.shape[1:]
     q = np.array(np.broadcast_to(Q.reshape(n, -1, K), (n, D, K)), dtype=float)   # a copy
     drv = idx["driven"]
-    qd = np.ascontiguousarray(np.broadcast_to(qd_drv.reshape(len(drv), -1, K),
-                                              (len(drv), D, K)), dtype=float)
-    start = np.ascontiguousarray(np.broadcast_to(q0.reshape(n, -1), (n, D)), dtype=float)
+    # the inputs as one array type, so that the kernel compiles once (compiled.fixed)
+    qd = fixed(np.broadcast_to(qd_drv.reshape(len(drv), -1, K), (len(drv), D, K)).astype(float))
+    start = fixed(np.broadcast_to(q0.reshape(n, -1), (n, D)).astype(float))
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
     x, ok = np.zeros((n, D, K)), np.zeros((D, K), np.bool_)
     scratch = [np.zeros(shape + (D, K)) for shape in ((n,), (n,), (n,), (n, 2), (n, 2),
                                                        (topo.n_rows, n - 1))]
-    geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
-    cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
+    geo = fixed(tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle")))
+    cgeo = fixed(tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle")))
     kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
            lay.dyad_table, geo, cgeo, md, q, qd, start, int(k0), x, ok, *scratch,
            min(BLOCK, K))
