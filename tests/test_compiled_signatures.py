@@ -8,25 +8,17 @@ a layout that went through pickle (as to a sweep's worker process), a sweep's fu
 from __future__ import annotations
 
 import pickle
-import tomllib
 
 import numpy as np
 import pytest
 
 import linkdyn
 from linkdyn import analysis
-from linkdyn.cli import example_text
-from linkdyn.io import model_from_dict
 from linkdyn.kinematics.layout import compile_designs
 
 pytest.importorskip("numba", reason="the compiled kernels need numba (the fast extra)")
 
-
-def hoeken(crank_mm: float):
-    text = example_text("hoeken")
-    assert "O2 = [38.1, 0.0]" in text
-    return model_from_dict(tomllib.loads(text.replace("O2 = [38.1, 0.0]",
-                                                      f"O2 = [{crank_mm!r}, 0.0]")))
+from test_compiled_dynamics import hoeken_design  # noqa: E402
 
 
 def test_each_kernel_compiles_once_whatever_its_callers_pass():
@@ -34,8 +26,8 @@ def test_each_kernel_compiles_once_whatever_its_callers_pass():
     from linkdyn.kinematics import compiled as kc
     from linkdyn.kinematics import compiled_nodes as kn
 
-    one = hoeken(38.1)
-    designs = [one, hoeken(42.0)]
+    one = hoeken_design(38.1)
+    designs = [one, hoeken_design(42.0)]
     t = np.linspace(0.0, 4.0 / 3.0, 7)
     lay = compile_designs(designs)
     linkdyn.analyze(one, t, backend="compiled")
