@@ -49,7 +49,7 @@ from .kinematics.solution import at_closed
 from .kinematics.state import at_state, close
 from .model import Driver, Model
 from .planar import solve_small
-from .topology import build
+from .topology import build, mobility
 
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
@@ -102,11 +102,6 @@ class Partition:
         return len(self.model.drivers)
 
 
-def mobility(model: Model) -> int:
-    """Grübler–Kutzbach mobility ``3 (n - 1) - 2 j``."""
-    return 3 * (len(model.bodies) - 1) - 2 * len(model.joints)
-
-
 def partition(model: Model, free: tuple[str, ...] | None = None) -> Partition:
     """Choose the free coordinates: ``free``, else those named in ``[initial]``, else the first
     joints (file order) that leave the dependent coordinates solvable at the assembly.
@@ -117,10 +112,11 @@ def partition(model: Model, free: tuple[str, ...] | None = None) -> Partition:
         No free freedom, or ``[initial]`` naming an unknown or driven joint or the wrong count.
     """
     src = model.source
-    nf = mobility(model) - len(model.drivers)
+    mob = mobility(model)                  # Grübler–Kutzbach, each joint kind's rows
+    nf = mob - len(model.drivers)
     if nf <= 0:
         raise ModelError(
-            f"the mechanism has no free degree of freedom (mobility {mobility(model)}, "
+            f"the mechanism has no free degree of freedom (mobility {mob}, "
             f"{len(model.drivers)} driver(s)): its motion is prescribed", file=src,
             field="drivers" if nf == 0 else "joints",
             fix="Use `linkdyn analyze` for a fully driven mechanism, or remove a driver to let "
@@ -149,7 +145,7 @@ def partition(model: Model, free: tuple[str, ...] | None = None) -> Partition:
         if len(given) != nf:
             raise ModelError(
                 f"[initial] names {len(given)} joint(s) but the mechanism has {nf} free degree(s)"
-                f" of freedom (mobility {mobility(model)} minus {len(model.drivers)} driver(s))",
+                f" of freedom (mobility {mob} minus {len(model.drivers)} driver(s))",
                 file=src, field=section,
                 fix=f"Give exactly {nf} joint coordinate(s), one per free degree of freedom")
         return _partition(model, given)

@@ -179,7 +179,11 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
         i = load.body
         if load.kind == "force":
             r, v = _point(kin, i, load.point)
-            f = np.broadcast_to(values(lay, load, kin), (2,) + shape)
+            # components first, then the samples' axes: a value of the times alone (2, T)
+            # gains the batch axes between (simulate's 1 + nf acceleration cases)
+            f = values(lay, load, kin)
+            f = f.reshape(f.shape[:1] + (1,) * (len(shape) + 1 - f.ndim) + f.shape[1:])
+            f = np.broadcast_to(f, (2,) + shape)
             _add_force(w, kin, i, r, f)
             power += dot(f, v)
         elif load.kind == "torque":

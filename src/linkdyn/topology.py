@@ -93,6 +93,32 @@ class Topology:
         return out
 
 
+def _kinds(model: Model) -> list[jk.JointKind]:
+    """The kind of each joint of ``model``, in file order; an unknown kind is a model error."""
+    kinds = []
+    for jt in model.joints:
+        try:
+            kinds.append(jk.get(jt.kind))
+        except jk.UnknownJointKind as exc:
+            raise ModelError(str(exc), file=model.source, field=f"joints.{jt.name}.type",
+                             fix="Set type to one of " + ", ".join(jk.names())) from None
+    return kinds
+
+
+def mobility(model: Model) -> int:
+    """Grübler–Kutzbach mobility of ``model``: ``3 (n - 1)`` minus the rows every joint's kind
+    removes of the three planar freedoms (``JointKind.rows``: a revolute or prismatic joint 2,
+    a pin in a slot 1), n the bodies including the ground. The one count of the degrees of
+    freedom that :func:`build`, ``check``, the summary and ``simulate`` report.
+
+    Raises
+    ------
+    ModelError
+        An unknown joint kind.
+    """
+    return 3 * (len(model.bodies) - 1) - sum(k.rows for k in _kinds(model))
+
+
 def build(model: Model) -> Topology:
     """Choose the spanning tree and cut joints of ``model`` and check its mobility.
 
@@ -113,13 +139,7 @@ def build(model: Model) -> Topology:
     driven_names = [d.joint for d in model.drivers]
     driven_set = set(driven_names)
     user_cut = set(model.cut or ())
-    kinds = []
-    for k, jt in enumerate(joints):
-        try:
-            kinds.append(jk.get(jt.kind))
-        except jk.UnknownJointKind as exc:
-            raise ModelError(str(exc), file=src, field=f"joints.{jt.name}.type",
-                             fix="Set type to one of " + ", ".join(jk.names())) from None
+    kinds = _kinds(model)
 
     # union-find over bodies
     root = list(range(len(names)))
@@ -201,22 +221,20 @@ def build(model: Model) -> Topology:
             queue.append(child)
     n = len(bodies)
 
-    # Grübler–Kutzbach: each joint removes its kind's rows of the three planar freedoms
-    removed = sum(k.rows for k in kinds)
-    mobility = 3 * (n - 1) - removed
-    if mobility != len(model.drivers):
+    mob = mobility(model)
+    if mob != len(model.drivers):
         count = Counter(k.name for k in kinds)                  # kinds in order of first use
         terms = " - ".join(f"{k.rows}*{count[k.name]}" for k in {k.name: k for k in kinds}.values())
-        need = "add" if mobility > len(model.drivers) else "remove"
+        need = "add" if mob > len(model.drivers) else "remove"
         raise ModelError(
-            f"the mechanism has mobility {mobility} (Grübler–Kutzbach: 3*({n}-1)"
+            f"the mechanism has mobility {mob} (Grübler–Kutzbach: 3*({n}-1)"
             + (f" - {terms}" if terms else "") + f" with {n} bodies including the ground and "
             + ", ".join(f"{c} {name}" for name, c in count.items()) + " joints) but "
             f"{len(model.drivers)} driver(s)",
             file=src, field="drivers",
-            fix=(f"{need.capitalize()} {abs(mobility - len(model.drivers))} driver(s), "
+            fix=(f"{need.capitalize()} {abs(mob - len(model.drivers))} driver(s), "
                  "or check the joints: a mechanism needs one driver per degree of freedom"
-                 if mobility >= 0 else
+                 if mob >= 0 else
                  "The joints over-constrain the bodies; remove joints or add bodies"))
 
     tree_of_joint = {tree_joint[i]: i for i in range(1, n)}
@@ -226,4 +244,4 @@ def build(model: Model) -> Topology:
     dependent = tuple(i for i in range(1, n) if i not in driven_bodies)
     cut = tuple(sorted(cut))
     return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign), cut,
-                    tuple(kinds[j].rows for j in cut), driven, dependent, mobility)
+                    tuple(kinds[j].rows for j in cut), driven, dependent, mob)
