@@ -29,7 +29,9 @@ demo: $(VENV)/.installed
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
-bench: $(VENV)/.installed-fast
+# the scripts' own reference checks (pytest -m bench, tests/test_benchmarks.py), then the timings
+bench: $(VENV)/.installed-fast $(VENV)/.installed-test
+	$(BIN)/python -m pytest -q -m bench tests/test_benchmarks.py
 	$(BIN)/python benchmarks/bench_hoeken.py
 	$(BIN)/python benchmarks/bench_kernels.py
 	$(BIN)/python benchmarks/bench_ceiling.py

@@ -4,8 +4,11 @@ Each script checks its references before it times anything: ``bench_hoeken.py`` 
 per-sample baselines and the hand-written numpy four-bar agree with linkdyn, ``bench_ceiling.py``
 that every row of its hand-written compiled kernels (kinematics; torque, pin forces, kinetic
 energy) agrees with linkdyn's numpy path. A wrong reference would make a wrong comparison, so
-those checks run here, in the suite; the timings they print mean nothing at this size. They
-time the compiled backend too: the test extras install numba.
+those checks run here; the timings they print mean nothing at this size. They time the
+compiled backend too: the test extras install numba.
+
+Marked ``bench``: ``make test`` (pytest's default ``-m "not bench"``, pyproject.toml) leaves
+them out; ``make bench`` runs them first, ``pytest -m bench`` alone.
 """
 
 from __future__ import annotations
@@ -14,6 +17,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.bench
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
