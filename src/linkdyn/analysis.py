@@ -15,7 +15,8 @@ import numpy as np
 from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
-from .errors import AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics  # noqa: F401
+from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics,  # noqa: F401
+                     wrong_type)
 from . import joints as jk
 from .model import Model
 
@@ -375,6 +376,17 @@ def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
              "Limit the driver's range (duration) or change the link lengths"))
 
 
+def times_argument(func: str, t) -> np.ndarray:
+    """The times argument ``t`` of ``func`` as a float array; an :class:`ArgumentError` naming
+    ``t`` for what is not an array of numbers (a str, None, a dict)."""
+    if isinstance(t, (str, bytes, dict)) or t is None:
+        raise wrong_type(func, "t", t, "an array of times (s)")
+    try:
+        return np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise wrong_type(func, "t", t, "an array of times (s)") from None
+
+
 def _arguments(model, t, allow_singular, backend):
     """``analyze``'s arguments checked and normalized: ``(model, t, backend)``.
 
@@ -386,22 +398,16 @@ def _arguments(model, t, allow_singular, backend):
         model = load_model(model)
     elif not isinstance(model, Model):
         if isinstance(model, (bytes, dict)) or not isinstance(model, Iterable):
-            raise TypeError("analyze: model must be a Model, a path to a model file or a "
-                            f"sequence of Models, not {type(model).__name__}")
+            raise wrong_type("analyze", "model", model,
+                             "a Model, a path to a model file or a sequence of Models")
         model = list(model)
         if not model:
             raise ModelError("no designs: model is an empty sequence", field="model",
                              fix="Pass a Model, a model file's path, or a non-empty list of Models")
         for k, m in enumerate(model):
             if not isinstance(m, Model):
-                raise TypeError(f"analyze: model[{k}] must be a Model, not {type(m).__name__}")
-    if isinstance(t, (str, bytes)):
-        raise TypeError(f"analyze: t must be an array of times (s), not {type(t).__name__}")
-    try:
-        t = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise TypeError(f"analyze: t must be an array of times (s), not {type(t).__name__}") \
-            from None
+                raise wrong_type("analyze", f"model[{k}]", m, "a Model")
+    t = times_argument("analyze", t)
     if t.ndim != 1 or t.size < 1:
         raise ModelError(f"the times must be a 1-D array of at least one time, got shape "
                          f"{t.shape}", field="t",
@@ -411,10 +417,9 @@ def _arguments(model, t, allow_singular, backend):
         raise ModelError(f"t[{k}] = {t[k]} is not a finite time", field="t",
                          fix="Pass finite times, e.g. numpy.linspace(0, duration, samples)")
     if not isinstance(allow_singular, (bool, np.bool_)):
-        raise TypeError(f"analyze: allow_singular must be True or False, not "
-                        f"{type(allow_singular).__name__}")
+        raise wrong_type("analyze", "allow_singular", allow_singular, "True or False")
     if backend is not None and not isinstance(backend, str):
-        raise TypeError(f"analyze: backend must be a str, not {type(backend).__name__}")
+        raise wrong_type("analyze", "backend", backend, "a str")
     field = "backend" if backend else "LINKDYN_BACKEND"
     name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
     if name not in compiled.BACKENDS:
@@ -478,6 +483,19 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
     where = _at(model, float(tk[0]))
     _check_drivers(model, float(tk[0]))
     one = kinematics.solve(model, tk, backend="numpy") if kin.t.size > 1 else kin
+    blame_loads(model, one, where)
+    bad = next(name for name, arrays in outputs.items() for a, axis in arrays
+               if not finite(a, axis)[k])
+    raise AssemblyError(f"the {bad} is not finite at this time: a number of the model is too "
+                        "large (or too small) to compute with", **where,
+                        fix="Check the model's masses, inertias, lengths, loads and driver "
+                            "speeds for extreme values")
+
+
+def blame_loads(model, one, where: dict) -> None:
+    """Raise an AssemblyError naming the first load of ``model`` (by its field), or gravity,
+    whose wrench is not finite at the one state of the kinematics ``one``; ``where``: the
+    error's file, time and drivers. Nothing when every load is finite there."""
     for i, load in enumerate(model.loads):
         w = loads_mod.wrenches(replace(model, loads=(load,), gravity=(0.0, 0.0)), one)
         if all(np.all(np.isfinite(x)) for x in w.wrenches + [w.on_ground]):
@@ -499,12 +517,6 @@ def _finite(model, kin, applied, dyn, react, valid, stop: bool):
     if not all(np.all(np.isfinite(x)) for x in w.wrenches):
         raise AssemblyError("gravity times a body's mass is not finite", **where,
                             fix="Check mechanism.gravity and the bodies' masses")
-    bad = next(name for name, arrays in outputs.items() for a, axis in arrays
-               if not finite(a, axis)[k])
-    raise AssemblyError(f"the {bad} is not finite at this time: a number of the model is too "
-                        "large (or too small) to compute with", **where,
-                        fix="Check the model's masses, inertias, lengths, loads and driver "
-                            "speeds for extreme values")
 
 
 def _design_reactions(sol: Solution, k: int):

@@ -193,6 +193,18 @@ def _memory() -> float:
         return float("inf")
 
 
+def _check_memory(mech, samples: int, field: str) -> None:
+    """Raise, naming ``field`` and the limit, when ``samples`` samples of ``mech``'s results
+    would not fit in this machine's memory."""
+    columns = (2 + 5 * len(mech.joints) + 3 * len(mech.moving_bodies) + len(mech.drivers)
+               + 2 * sum(len(b.points) for b in mech.moving_bodies))
+    need = float(samples) * columns * BYTES_PER_VALUE
+    if need > _memory():
+        raise ModelError(f"{samples} samples would need about {need / 1e9:.3g} GB of memory, more "
+                         f"than this machine has ({_memory() / 1e9:.3g} GB)", field=field,
+                         fix="Give fewer samples, or split the run into parts with --duration")
+
+
 def _times(mech, samples, duration, cycles) -> np.ndarray:
     """Sample times: the options, else the model's [analysis], else 361 samples of one cycle.
 
@@ -206,13 +218,7 @@ def _times(mech, samples, duration, cycles) -> np.ndarray:
     if samples < 2:
         raise ModelError(f"{n_field} must be at least 2, got {samples}", field=n_field,
                          fix="Give --samples 2 or more")
-    columns = (2 + 5 * len(mech.joints) + 3 * len(mech.moving_bodies) + len(mech.drivers)
-               + 2 * sum(len(b.points) for b in mech.moving_bodies))
-    need = float(samples) * columns * BYTES_PER_VALUE
-    if need > _memory():
-        raise ModelError(f"{samples} samples would need about {need / 1e9:.3g} GB of memory, more "
-                         f"than this machine has ({_memory() / 1e9:.3g} GB)", field=n_field,
-                         fix="Give fewer samples, or split the run into parts with --duration")
+    _check_memory(mech, samples, n_field)
     if duration is None and cycles is None:
         duration, cycles = mech.duration, mech.cycles
         d_field, c_field = "analysis.duration", "analysis.cycles"
@@ -516,6 +522,9 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
     if given is not None and not mech.drivers:
         raise ModelError("--path-range is a range of the first driver, and the model has "
                          "none", field="--path-range", fix="Drop --path-range")
+    if path_point is not None:
+        from .design.path import _parse_point
+        _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
     q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
     t = _times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
@@ -723,21 +732,25 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
     from . import design, io
-    from .forward import simulate as run
+    from .forward import simulate as run, tolerances
 
     check_outdir(outdir)
+    rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
+    d_field = "--duration" if duration is not None else "analysis.duration"
     duration = mech.duration if duration is None else duration
     if duration is None:
         raise ModelError("no duration to simulate", field="--duration",
                          fix="Give --duration T (s) or [analysis] duration")
-    if not duration > 0:
-        raise ModelError(f"duration must be positive, got {duration}", field="--duration",
-                         fix="Give a positive duration in s")
+    if not (0 < duration < np.inf):
+        raise ModelError(f"{d_field} must be positive and finite, got {duration}", field=d_field,
+                         fix="Give a positive, finite duration in s")
+    n_field = "--samples" if samples is not None else "analysis.samples"
     samples = samples if samples is not None else (mech.samples or 501)
     if samples < 2:
-        raise ModelError(f"--samples must be at least 2, got {samples}", field="--samples",
+        raise ModelError(f"{n_field} must be at least 2, got {samples}", field=n_field,
                          fix="Give --samples 2 or more")
+    _check_memory(mech, samples, n_field)
     t = np.linspace(0.0, float(duration), int(samples))
     # everything is computed (solution, summary, its text) before any file is written
     sol = run(mech, t, rtol=rtol, atol=atol, method=method, backend=_backend(ctx, backend),

@@ -77,6 +77,19 @@ class InvalidValue(ModelError, ValueError):
     """
 
 
+class ArgumentError(ModelError, TypeError):
+    """An argument of the wrong type given to the Python API (``analyze``, ``simulate``,
+    ``save``, ``load``): a :class:`ModelError` (exit status 2) whose field is the argument's name,
+    and a ``TypeError``, so code that catches ``TypeError`` keeps working."""
+
+
+def wrong_type(func: str, name: str, value, expected: str) -> ArgumentError:
+    """The :class:`ArgumentError` of ``func``'s argument ``name`` holding ``value`` where
+    ``expected`` (in words) is wanted."""
+    return ArgumentError(f"{func}: {name} must be {expected}, not {type(value).__name__}",
+                         field=name, fix=f"Pass {name} as {expected}")
+
+
 @contextlib.contextmanager
 def quiet_numerics():
     """Run numpy without printing floating-point ``RuntimeWarning``s: a number that is not

@@ -34,15 +34,17 @@ cut-joint constraints (coordinate partitioning, F1).
 from __future__ import annotations
 
 import itertools
+import numbers
+import os
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
 import numpy as np
 
 from . import compiled, joints as jk, loads as loads_mod
-from .analysis import SINGULAR, Solution, _backend
+from .analysis import SINGULAR, Solution, _backend, blame_loads, times_argument
 from .dynamics import denoc
-from .errors import AssemblyError, ModelError
+from .errors import ArgumentError, AssemblyError, ModelError, quiet, wrong_type
 from .kinematics.layout import ANGULAR, Layout, compile_layout
 from .kinematics.positions import assembly_guess, assemble, driver_values
 from .kinematics.solution import at_closed
@@ -53,7 +55,13 @@ from .topology import build, mobility
 
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
-MIN_STEP = 1e-10     # smallest step, relative to the duration, before a run counts as stuck
+MIN_STEP = 1e-10     # least advance of STUCK steps, relative to the time reached (1 s at least)
+STUCK = 50           # steps that together advance less than MIN_STEP: a stuck run
+RTOL_MIN = 100 * np.finfo(float).eps   # scipy's floor of rtol (it raises a smaller one to this)
+RTOL_MAX = 0.01      # largest rtol (a relative error of 1 %; at 10 % the energy is lost)
+ATOL_MIN = 1e-18     # smallest atol: rad, m, J well below the rounding of the state's numbers
+PACE = 100           # steps between the checks that the run can end within max_steps
+HOPELESS = 1000      # ... it cannot when, at a steady step size, it needs this many times more
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
 # the methods whose steps the energy projection joins (F11): the one-step methods, whose next
 # step is a function of the state alone (not BDF's history, nor LSODA's)
@@ -332,7 +340,7 @@ class _System:
         for j in range(self.nf):
             self.unit[j, 1 + j] = 1.0
         self.set_reference(0.0, q0, qd0)
-        self.last = None
+        self.last = self.bad = None
         self.nfev = 0
 
     def use_compiled(self):
@@ -427,7 +435,10 @@ class _System:
         qdd, kin, power = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
                                         self.guess(tt, q_ind))
         self.last = (t, y.copy(), kin, qdd)
-        return np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
+        out = np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
+        if not np.all(np.isfinite(out)):
+            self.bad = (t, y.copy())   # the last state the step was refused at: for messages
+        return out
 
     def shift(self, rows, by) -> None:
         """Move the reference's tree coordinates ``rows`` by ``by``: whole turns of free angles,
@@ -489,6 +500,63 @@ class _System:
         return None
 
 
+def tolerances(rtol, atol, names=("rtol", "atol")) -> tuple[float, float]:
+    """The tolerances an integration uses for the ``rtol`` and ``atol`` asked for: ``rtol``
+    raised to :data:`RTOL_MIN` (scipy's own floor, which it applies with a warning), both
+    checked. ``names``: how the messages name them (``--rtol``, ``--atol`` on the command line).
+
+    Raises
+    ------
+    ModelError
+        ``rtol`` not in (0, :data:`RTOL_MAX`] or ``atol`` not in [:data:`ATOL_MIN`, inf), naming
+        it (an :class:`~linkdyn.errors.ArgumentError` for what is not a number).
+    """
+    for name, tol in zip(names, (rtol, atol)):
+        if isinstance(tol, bool) or not isinstance(tol, numbers.Real):
+            raise wrong_type("simulate", name, tol, "a positive number")
+    rtol, atol = float(rtol), float(atol)
+    if not (0 < rtol <= RTOL_MAX):
+        raise ModelError(f"{names[0]} must be a positive number up to {RTOL_MAX:g} (a relative "
+                         f"error of {RTOL_MAX:.0%}), got {rtol:g}", field=names[0],
+                         fix=f"Give e.g. {names[0]} 1e-8")
+    if not (ATOL_MIN <= atol < np.inf):
+        raise ModelError(f"{names[1]} must be a finite number of at least {ATOL_MIN:g} (rad, m, "
+                         f"per s, J; below it the tolerance asks for less than the rounding of the "
+                         f"state's numbers), got {atol:g}", field=names[1],
+                         fix=f"Give e.g. {names[1]} 1e-10")
+    return max(rtol, RTOL_MIN), atol
+
+
+def _arguments(model, t, rtol, atol, method, max_steps, backend, project):
+    """``simulate``'s arguments checked: ``(model, t, rtol, atol)``, the model read when given
+    as a path, the tolerances those used (:func:`tolerances`). Raises a ModelError naming the
+    argument (an :class:`~linkdyn.errors.ArgumentError` for a wrong type)."""
+    if isinstance(model, (str, os.PathLike)):
+        from .io import load_model
+        model = load_model(model)
+    elif not isinstance(model, Model):
+        raise wrong_type("simulate", "model", model, "a Model or the path of a model file")
+    t = times_argument("simulate", t)
+    if t.ndim != 1 or len(t) < 1 or not np.all(np.isfinite(t)) or t[0] < 0 or np.any(np.diff(t) < 0):
+        raise ModelError("output times must be a 1-D ascending array of finite times starting at "
+                         "t >= 0", file=model.source, field="t",
+                         fix="Pass t = numpy.linspace(0, duration, samples)")
+    if not isinstance(method, str):
+        raise wrong_type("simulate", "method", method, "a str")
+    if method not in METHODS:
+        raise ModelError(f"unknown integration method '{method}'", field="method",
+                         fix=f"Use one of {', '.join(METHODS)}")
+    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
+        raise ArgumentError(f"simulate: max_steps must be a positive int, got {max_steps!r}",
+                            field="max_steps", fix="Pass e.g. max_steps=50000")
+    if backend is not None and not isinstance(backend, str):
+        raise wrong_type("simulate", "backend", backend, "a str")
+    if not isinstance(project, (bool, np.bool_)):
+        raise wrong_type("simulate", "project", project, "True or False")
+    return (model, t, *tolerances(rtol, atol))
+
+
+@quiet
 def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
              method: str = "DOP853", free: tuple[str, ...] | None = None,
              max_steps: int = MAX_STEPS, backend: str | None = None,
@@ -536,18 +604,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     """
     import scipy.integrate as si
 
+    model, t, rtol, atol = _arguments(model, t, rtol, atol, method, max_steps, backend,
+                                      project)
     src = model.source
-    t = np.asarray(t, dtype=float)
-    if t.ndim != 1 or len(t) < 1 or not np.all(np.isfinite(t)) or t[0] < 0 or np.any(np.diff(t) < 0):
-        raise ModelError("output times must be a 1-D ascending array starting at t >= 0",
-                         file=src, field="t", fix="Pass t = numpy.linspace(0, duration, samples)")
-    if method not in METHODS:
-        raise ModelError(f"unknown integration method '{method}'", field="--method",
-                         fix=f"Use one of {', '.join(METHODS)}")
-    for name, tol in (("rtol", rtol), ("atol", atol)):
-        if not (np.isfinite(tol) and tol > 0):
-            raise ModelError(f"{name} must be a positive number, got {tol}", field=f"--{name}",
-                             fix=f"Give e.g. --{name} 1e-8")
     kinds = [j.kind for j in model.joints]
     try:
         fast = compiled.use_compiled(backend, 0, kinds)                  # asked for
@@ -568,6 +627,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
+        _blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
                             drivers=_values(part, q0),
                             fix="Start the free joints ([initial] q) away from the toggle")
@@ -588,6 +648,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
     unwound = method in UNWOUND and not reads_coordinates(model)
+    pace = np.inf      # the step size at the last check of the pace
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -606,6 +667,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             parts.append(part)
             switches.append((t_now, part.free))
         solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
+        recent = [solver.t]      # the times of the last steps
         while solver.status == "running":
             t_old, before = solver.t, system.ref
             message = solver.step()
@@ -613,9 +675,18 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             # a motion approaching a position it cannot pass (a singular position of the
             # mechanism) has accelerations growing without bound: its steps collapse
             J = None if solver.status == "failed" else system.accept(solver.t, solver.y)
-            failed = (J is None or not np.all(np.isfinite(solver.y))
-                      or (solver.status == "running"
-                          and solver.step_size < MIN_STEP * max(t_end, 1.0)))
+            # stuck: the last STUCK steps together advance less than MIN_STEP of the time
+            # reached (not of the duration: a long run is not a stuck one; and a few short
+            # steps are not either, as an implicit method's first ones on a stiff spring)
+            recent = (recent + [solver.t])[-STUCK - 1:]
+            stuck = (solver.status == "running" and len(recent) > STUCK
+                     and recent[-1] - recent[0] < MIN_STEP * max(abs(solver.t), 1.0))
+            failed = J is None or not np.all(np.isfinite(solver.y)) or stuck
+            if failed:
+                _blame_loads(system, system.bad)     # a load that is not finite, by its field
+                _blame_loads(system, system.last)
+            if steps % PACE == 0 and solver.status == "running":
+                pace = _pace(pace, solver, t_end, max_steps, src, part, system.ref[1])
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
@@ -670,6 +741,45 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections)
     return _outputs(parts, segment, t, Y, guesses, stats, system.kernel)
+
+
+def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
+          q: np.ndarray) -> float:
+    """The step size now; raise an AssemblyError naming the time when, at a step size that
+    did not grow tenfold since the last check (``last``), the run would need more than
+    ``HOPELESS * max_steps`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there,
+    for the message (a duration far beyond the motion's
+    time scale, which would otherwise run for hours before stopping at ``max_steps``)."""
+    h = float(solver.step_size)
+    need = (t_end - solver.t) / h if h > 0 else np.inf
+    if np.isfinite(last) and h < 10 * last and need > HOPELESS * max_steps:
+        raise AssemblyError(
+            f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
+            f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
+            time=float(solver.t), drivers=_values(part, q),
+            fix="Give a --duration within reach of the motion's time scale, e.g. "
+                f"{max_steps * h:.3g} s or less")
+    return h
+
+
+def _blame_loads(system: _System, last) -> None:
+    """Raise an AssemblyError naming the load (by its field) that is not finite at the state
+    of the right-hand side's last evaluation ``last = (t, y, ...)``, where the integration
+    stopped: the cause is then that load, not the mechanism. Nothing if every load is finite
+    there, or the state does not close."""
+    if last is None:
+        return
+    part, nf = system.part, system.nf
+    t, y = np.array([last[0]]), last[1]
+    q_d, qd_d, qdd_d = driver_values(part.model, t)
+    q_ind = np.concatenate((q_d, y[:nf, None]))
+    qd_ind = np.concatenate((qd_d, y[nf:2 * nf, None]))
+    qdd_ind = np.concatenate((qdd_d, np.zeros((nf, 1))))
+    kin = at_state(part.inner, part.layout, t, q_ind, qd_ind, qdd_ind, system.guess(t, q_ind))
+    if kin.valid[0]:
+        blame_loads(part.model, kin, dict(file=part.model.source, time=float(t[0]),
+                                          drivers=dict(zip((d.joint for d in part.inner.drivers),
+                                                           q_ind[:, 0].tolist()))))
 
 
 def restate(solver, y: np.ndarray, f: np.ndarray) -> None:

@@ -34,7 +34,9 @@ def rms(x):
 
 
 def _peak(t, x):
-    """Largest |x| (over the finite samples) and its time."""
+    """Largest |x| (over the finite samples) and its time; NaN where none is finite."""
+    if not np.any(np.isfinite(x)):
+        return np.nan, np.nan
     k = int(np.nanargmax(np.abs(x)))
     return float(peak(x)), float(t[k])
 
@@ -44,6 +46,11 @@ def _rms(x):
 
 
 def _extremes(t, x) -> dict:
+    """Smallest and largest x and their times; NaN (not defined: "n/a" in the text, null in
+    summary.json) where no sample is finite, as a mechanical advantage 0/0 of a mechanism at
+    rest."""
+    if not np.any(np.isfinite(x)):
+        return {"min": np.nan, "min_time_s": np.nan, "max": np.nan, "max_time_s": np.nan}
     kmin, kmax = int(np.nanargmin(x)), int(np.nanargmax(x))
     return {"min": float(x[kmin]), "min_time_s": float(t[kmin]),
             "max": float(x[kmax]), "max_time_s": float(t[kmax])}

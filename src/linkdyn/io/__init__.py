@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..errors import ModelError, quiet
+from ..errors import ModelError, quiet, wrong_type
 from ..model import Model
 from .drivers import MOTION_KEYS, _drivers
 from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _check_links, _joints
@@ -59,7 +59,7 @@ def load_model(path: str | os.PathLike, *, allow_outside: bool = False) -> Model
         For any invalid content, naming the file, the field and the fix.
     """
     if not isinstance(path, (str, os.PathLike)):
-        raise TypeError(f"load_model: path must be a str or os.PathLike, got {type(path).__name__}")
+        raise wrong_type("load", "path", path, "a str or os.PathLike")
     file = os.fspath(path)
     data = read_model_data(file)
     return model_from_dict(data, source=file, base_dir=Path(file).parent,
@@ -70,8 +70,7 @@ def read_model_data(path: str | os.PathLike) -> dict:
     """The parsed structure of a model file (``.toml`` or ``.json``), not yet validated: what
     :func:`model_from_dict` takes. The same checks of the file as :func:`load_model`."""
     if not isinstance(path, (str, os.PathLike)):
-        raise TypeError("read_model_data: path must be a str or os.PathLike, got "
-                        f"{type(path).__name__}")
+        raise wrong_type("read_model_data", "path", path, "a str or os.PathLike")
     file = os.fspath(path)
     suffix = Path(file).suffix.lower()
     if suffix not in (".toml", ".json"):

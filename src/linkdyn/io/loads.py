@@ -105,6 +105,12 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             # an effort inside a joint: on its second body, minus that on the first
             joint = r.choice(entry["joint"], f"{f}.joint", joints or {}, "joint")
             jt = joints[joint]
+            if jk.get(jt.kind).freedoms != 1:
+                r.fail(f"{f}.joint", f"joint '{joint}' is a {jt.kind} joint with "
+                       f"{jk.get(jt.kind).freedoms} freedoms: a {kind} acts along the one "
+                       "freedom of a revolute (joint_torque) or prismatic (joint_force) joint",
+                       "Name a revolute or prismatic joint, or apply a force or torque to the "
+                       "bodies (kind = \"force\" or \"torque\")")
             want = "joint_torque" if jk.get(jt.kind).angular else "joint_force"
             if kind != want:
                 r.fail(f"{f}.kind", f"joint '{joint}' is {jt.kind}: its load is a {want}",

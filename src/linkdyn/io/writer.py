@@ -21,6 +21,7 @@ import numpy as np
 from .. import expr as _expr
 from .. import joints as jk
 from .. import motion as _motion
+from ..errors import ModelError, wrong_type
 from ..model import GROUND, Model
 from .loads import _TimeFunction
 from .units import ANGLE_UNITS, LENGTH_UNITS
@@ -206,13 +207,15 @@ def dumps_toml(data: dict) -> str:
 
 
 def save(model: Model, path: str | os.PathLike) -> Path:
-    """Write ``model`` as a TOML model file that :func:`linkdyn.load` reads back to it.
+    """Write ``model`` as a model file that :func:`linkdyn.load` reads back to it: TOML for
+    ``*.toml``, JSON (the same structure) for ``*.json``.
 
     Parameters
     ----------
     model : Model
     path : str or os.PathLike
-        The ``.toml`` file to write. A driver's motion table goes beside it as
+        The ``.toml`` or ``.json`` file to write (another suffix raises a ModelError naming
+        ``path``). A driver's motion table goes beside it as
         ``<stem>.<joint>.csv`` (t in s, q in the file's angle or length unit).
 
     Returns
@@ -220,11 +223,23 @@ def save(model: Model, path: str | os.PathLike) -> Path:
     Path
         The file written.
     """
+    if not isinstance(model, Model):
+        raise wrong_type("save", "model", model, "a Model")
+    if not isinstance(path, (str, os.PathLike)):
+        raise wrong_type("save", "path", path, "a str or os.PathLike")
     path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".toml", ".json"):
+        raise ModelError(f"cannot write a model file named *{path.suffix or '(no suffix)'}: "
+                         "linkdyn.load reads *.toml and *.json only", file=str(path),
+                         field="path", fix="Name the file *.toml (TOML) or *.json (JSON)")
     L, A = LENGTH_UNITS[model.length_unit], ANGLE_UNITS[model.angle_unit]
     tables = {d.joint: d.motion for d in model.drivers if isinstance(d.motion, _motion.TableMotion)}
     names = {j: f"{path.stem}.{j}.csv" for j in tables}
-    text = dumps_toml(model_to_dict(model, table_files=names))
+    data = model_to_dict(model, table_files=names)
+    # JSON with the same structure for *.json, as load reads it
+    text = (json.dumps(data, indent=2, allow_nan=False) + "\n" if suffix == ".json"
+            else dumps_toml(data))
     for j, motion in tables.items():
         unit = A if jk.get(model.joint(j).kind).angular else L
         q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
