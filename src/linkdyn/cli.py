@@ -596,7 +596,9 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     from . import design, io
     from .analysis import analyze as run
     from .report import compare as compare_mod
+    from .studies.checks import fluctuation as check_fluctuation
 
+    fluctuation = check_fluctuation(fluctuation)
     if duration is not None and cycles is not None:
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
@@ -604,7 +606,7 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
     if sweep_dir is not None:
-        designs += _sweep_best(sweep_dir, by_metric, n_best)
+        designs += compare_mod.sweep_best(sweep_dir, by_metric, n_best)
     elif by_metric is not None:
         raise ModelError("--by ranks a sweep's designs, and no --sweep is given", field="--by",
                          fix="Give --sweep OUTDIR of the sweep, or drop --by")
@@ -633,50 +635,6 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
                           for j, d in summ["drivers"].items())
         click.echo(f"{name}: {summ['model']}, {summ['samples']} samples; {peaks}")
     click.echo(f"wrote {', '.join(map(str, written))}")
-
-
-def _sweep_best(sweep_dir, metric, n_best) -> list:
-    """The ``n_best`` valid designs of a sweep with the lowest ``metric``: ``(file, name, model,
-    row)`` each, the model rebuilt from the sweep's base file and the design's parameter values
-    (``row``: the design number, its parameters in the file's units and its metric, SI)."""
-    from .studies import params as params_mod
-    from .studies.runner import _pandas
-
-    folder = Path(sweep_dir)
-    spec, table = folder / "summary.json", folder / "designs.parquet"
-    if not spec.is_file() or not table.is_file():
-        raise ModelError(f"{folder} holds no finished sweep (summary.json and designs.parquet)",
-                         field="--sweep", fix="Give the -o folder of a finished linkdyn sweep")
-    info = json.loads(spec.read_text("utf-8"))
-    df = _pandas().read_parquet(table)
-    metrics = [m for m in info.get("metrics", {})]
-    if metric is None or metric not in metrics:
-        what = "--sweep needs --by METRIC" if metric is None else f"no metric '{metric}' in {spec}"
-        raise ModelError(what, field="--by",
-                         fix="Rank by one of the sweep's metrics: " + ", ".join(metrics))
-    if n_best < 1:
-        raise ModelError(f"--best must be at least 1, not {n_best}", field="--best",
-                         fix="Give --best 1 or more")
-    base = Path(info["model"])
-    if not base.is_file() and (folder / base.name).is_file():
-        base = folder / base.name
-    if not base.is_file():
-        raise ModelError(f"the sweep's model file {info['model']} is not found", field="--sweep",
-                         fix="Run compare from the folder the sweep ran in (its summary.json "
-                             "names the model file relative to it)")
-    paths = [p["path"] for p in info["parameters"]]
-    sp = params_mod.space(str(base), paths)
-    ok = df[df["valid"] & df[metric].notna()].sort_values([metric, "design"], kind="stable")
-    if ok.empty:
-        raise ModelError(f"no valid design in {table} has a {metric}", field="--sweep",
-                         fix="Rank by another metric, or sweep other ranges")
-    out = []
-    for _, r in ok.head(n_best).iterrows():
-        values = [float(r[p]) for p in paths]
-        row = {"design": int(r["design"]), "parameters": dict(zip(paths, values)),
-               metric: float(r[metric])}
-        out.append((str(base), f"{base.stem} #{row['design']}", sp.model(values), row))
-    return out
 
 
 # ---------------------------------------------------------------------------- simulate

@@ -10,7 +10,11 @@ and its curves are the series of its own :func:`.data.page_data`, drawn together
 from __future__ import annotations
 
 import html
+from pathlib import Path
 
+import numpy as np
+
+from ..errors import ModelError
 from .data import MAX_FRAMES, PALETTE, page_data
 from .page import html_page
 from .tables import fmt, key_value, key_where
@@ -44,6 +48,51 @@ def compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
         out["series"] = {k: v for k, v in d["series"].items()
                          if k in keys or k in {a["key"] for a in xaxes}}
     return {"designs": designs, "panels": panels, "xaxes": xaxes}
+
+
+def sweep_best(sweep_dir, metric, n_best) -> list:
+    """The ``n_best`` valid designs of a sweep with the lowest ``metric``: ``(file, name, model,
+    row)`` each, the model rebuilt from the sweep's base file and the design's parameter values
+    (``row``: the design number, its parameters in the file's units and its metric, SI).
+
+    A damaged or foreign sweep folder, an unknown metric or a parameter value the model file
+    does not accept is a ModelError naming ``--sweep``, ``--by`` or the field.
+    """
+    from ..studies import params as params_mod
+    from ..studies.files import read_sweep
+
+    info, df = read_sweep(sweep_dir)
+    folder = Path(sweep_dir)
+    metrics = [m for m in info["metrics"] if m in df.columns]
+    if metric is None or metric not in metrics:
+        what = ("--sweep needs --by METRIC" if metric is None else
+                f"no metric '{metric}' in {folder / 'summary.json'}")
+        raise ModelError(what, field="--by",
+                         fix="Rank by one of the sweep's metrics: " + ", ".join(metrics))
+    if n_best < 1:
+        raise ModelError(f"--best must be at least 1, not {n_best}", field="--best",
+                         fix="Give --best 1 or more")
+    base = Path(info["model"])
+    if not base.is_file() and (folder / base.name).is_file():
+        base = folder / base.name
+    if not base.is_file():
+        raise ModelError(f"the sweep's model file {info['model']} is not found", field="--sweep",
+                         fix="Run compare from the folder the sweep ran in (its summary.json "
+                             "names the model file relative to it)")
+    paths = [p["path"] for p in info["parameters"]]
+    sp = params_mod.space(str(base), paths)
+    good = df["valid"].to_numpy() & np.isfinite(df[metric].to_numpy(float))
+    ok = df[good].sort_values([metric, "design"], kind="stable")
+    if ok.empty:
+        raise ModelError(f"no valid design in {folder / 'designs.parquet'} has a {metric}",
+                         field="--sweep", fix="Rank by another metric, or sweep other ranges")
+    out = []
+    for _, r in ok.head(n_best).iterrows():
+        values = [float(r[p]) for p in paths]
+        row = {"design": int(r["design"]), "parameters": dict(zip(paths, values)),
+               metric: float(r[metric])}
+        out.append((str(base), f"{base.stem} #{row['design']}", sp.model(values), row))
+    return out
 
 
 def key_table_html(designs: list) -> str:

@@ -5,7 +5,10 @@
 - :mod:`.metrics`: the per-design metrics (peak and RMS efforts, joint forces, transmission
   angle, path deviation, shaking force, flywheel), from the functions the summary uses;
 - :mod:`.runner`: designs in chunks, locally, in worker processes or on a Dask cluster, resumable;
-- :mod:`.optimize`: differential evolution over the same space, one generation per batch.
+- :mod:`.optimize`: differential evolution over the same space, one generation per batch;
+- :mod:`.checks`: the studies' inputs (seeds, counts, sizes, times, ranges) checked before any
+  work; :mod:`.files`: the chunks folder, earlier outputs, a designs CSV and a sweep's folder,
+  read and removed so that nothing a study did not write is touched.
 """
 
 from __future__ import annotations
@@ -66,22 +69,12 @@ def sweep(model, params, t, metrics=None, *, outdir=None, resume=False, workers:
         Columns ``design``, one per parameter path, ``valid``, ``reason`` and the metrics (SI);
         ``df.attrs['stats']``: chunks computed and reused, seconds, design-samples per second.
     """
-    if hasattr(params, "columns"):  # a DataFrame of designs
-        params = {c: params[c].to_numpy(float) for c in params.columns}
-    paths = list(params)
-    arrays = [np.asarray(params[p], float).ravel() for p in paths]
-    if len({len(a) for a in arrays}) > 1:
-        from ..errors import ModelError
-        raise ModelError("the parameters have different numbers of values",
-                         field=", ".join(paths),
-                         fix="Give one value per design for each parameter, or use "
-                             "linkdyn.studies.grid({...}) for every combination")
+    from .checks import designs_table
+
+    paths, values = designs_table(params)
     sp = space(model, paths)
-    t = np.asarray(t, float)
     names = tuple(check_names(sp.model(), metrics, path_point=path_point))
-    task = Task(sp, t, names, backend, path_point,
-                None if path_range is None else tuple(path_range), fluctuation)
-    values = np.stack(arrays, axis=-1) if arrays else np.zeros((1, 0))
+    task = Task(sp, t, names, backend, path_point, path_range, fluctuation)
     df, stats = run(task, values, outdir=outdir, resume=resume, chunk=chunk, workers=workers,
                     scheduler=scheduler, progress=progress)
     if outdir is not None:

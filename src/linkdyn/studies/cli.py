@@ -119,22 +119,23 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     and OUTDIR/summary.json. Finished chunks go to OUTDIR/chunks/ as they finish, so --resume
     after an interruption computes only what is missing.
     """
+    from . import checks, files
     from . import runner as sweep_mod
     from .metrics import check_names
 
-    if workers < 1:
-        raise ModelError(f"--workers must be at least 1, got {workers}", field="--workers",
-                         fix="Give --workers 1 or more")
+    workers, chunk = checks.workers(workers), checks.count(chunk, "--chunk", "designs per chunk")
+    designs, seed = checks.count(designs, "--designs", "designs"), checks.seed(seed)
     check_outdir(outdir)
+    files.read_state(Path(outdir))   # a chunks folder that is not a sweep's: refused at once
     if designs_csv:
         if vary:
             raise ModelError("give --vary or --designs-csv, not both", field="--designs-csv",
                              fix="Drop one of them")
-        values, paths = _read_designs(designs_csv)
+        values, paths = files.read_designs(designs_csv)
         from .params import space
         sp = space(model, paths)
         t = _times(sp.model(), samples, duration, cycles)
-        bounds = None
+        bounds, counts = None, None
         method = "csv"
     else:
         if not vary:
@@ -143,12 +144,18 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                                  "--designs-csv FILE")
         sp, t, bounds, counts = _setup(model, vary, samples, duration, cycles)
         method = method or ("grid" if all(counts) else "sobol")
-        values = sweep_mod.sample(bounds, method, designs or (None if method == "grid" else 1024),
-                                  seed, counts)
+        designs = designs if designs is not None or method == "grid" else 1024
     q_range = _path_range(path_range)
     names = tuple(check_names(sp.model(), list(metrics) or None, path_point=path_point))
     task = sweep_mod.Task(sp, t, names, None if backend == "auto" else backend, path_point,
                           q_range, fluctuation)
+    # the number of designs bounded before they are made
+    n = len(values) if method == "csv" else sweep_mod.design_count(method, designs, counts,
+                                                                   len(bounds))
+    sweep_mod.check_size(task, n, workers=workers, scheduler=scheduler, option={
+        "csv": "--designs-csv", "grid": "--vary"}.get(method, "--designs"))
+    if method != "csv":
+        values = sweep_mod.sample(bounds, method, designs, seed, counts)
     out = Path(outdir)
     df, stats = sweep_mod.run(task, values, outdir=out, resume=resume, chunk=chunk,
                               workers=workers, scheduler=scheduler,
@@ -168,32 +175,6 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     click.echo(f"wrote {', '.join(str(p) for p in written if p not in pages)}"
                + (f" and the reports of {len(pages)} best designs "
                   f"({', '.join(p.name for p in pages)})" if pages else ""))
-
-
-def _read_designs(path):
-    """Designs of a CSV file: (values (D, P), paths)."""
-    try:
-        import pandas as pd
-        df = pd.read_csv(path)
-    except FileNotFoundError:
-        raise ModelError("file not found", file=path, fix="Check the path") from None
-    except Exception as e:  # pandas' parser errors
-        raise ModelError(f"cannot read the designs ({e})", file=path,
-                         fix="Give a CSV file: a header of field paths, one row per design") \
-            from None
-    if df.empty or not len(df.columns):
-        raise ModelError("no designs in the file", file=path,
-                         fix="Give a header of field paths and one row per design")
-    try:
-        values = df.to_numpy(float)
-    except ValueError:
-        raise ModelError("every value must be a number", file=path,
-                         fix="Give numbers in the file's units") from None
-    if not np.all(np.isfinite(values)):
-        r = int(np.argmax(~np.all(np.isfinite(values), axis=1)))
-        raise ModelError(f"row {r + 1} has a missing or non-finite value", file=path,
-                         fix="Give a number in every column of every row")
-    return values, [str(c).strip() for c in df.columns]
 
 
 @click.command()
@@ -220,6 +201,7 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     from .. import design
     from ..analysis import analyze
     from ..io.writer import dumps_toml
+    from .files import owned_before
     from .optimize import optimize as run
 
     if not vary:
@@ -253,8 +235,10 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
         files.update(report_mod.outputs(sol, summ))
         files.update(plots_mod.outputs(sol))
     out = Path(outdir)
-    write_outputs(out, files, owned=("best.toml", "optimize.json", "summary.json", "report.html",
-                                     "plot_*.png", "plot_*.svg"))
+    # the files written, listed in optimize.json: a later run removes those it does not write
+    info["files"] = list(files)
+    write_outputs(out, files, owned=owned_before(out, "optimize.json", (
+        "best.toml", "summary.json", "report.html", "plot_*.png", "plot_*.svg")))
     state = "feasible" if res.feasible else "NOT feasible (no design met every constraint)"
     click.echo(f"best design ({state}) after {res.evaluations} designs in {res.seconds:.3g} s:")
     for p, v in res.values.items():

@@ -18,13 +18,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ModelError
+from . import checks
 from .metrics import check_names
 from .params import Space, check_ranges, space, with_values
-from .runner import Task, evaluate
+from .runner import Task, check_size, evaluate
 
-_CONSTRAINT = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(<=|>=|<|>)\s*([-+0-9.eE]+)\s*([A-Za-z ]*)\s*\Z")
-_UNITS = {"": 1.0, "m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254, "rad": 1.0,
-          "deg": np.pi / 180, "N": 1.0, "Nm": 1.0, "N m": 1.0, "kg m^2": 1.0, "kgm2": 1.0}
+_CONSTRAINT = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(<=|>=|<|>)\s*([-+0-9.eE]+)\s*"
+                         r"([A-Za-z][A-Za-z ^0-9]*)?\s*\Z")
+# units a constraint's value may be given in, by the quantity of its metric (SI without one)
+_UNITS = {"length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254},
+          "angle": {"rad": 1.0, "deg": np.pi / 180},
+          "force": {"N": 1.0},
+          "torque": {"N m": 1.0, "Nm": 1.0},
+          "inertia": {"kg m^2": 1.0, "kgm2": 1.0}}
+_SI = {"length": "m", "angle": "rad", "force": "N", "torque": "N m", "inertia": "kg m^2"}
 BIG = 1e30  # score of an infeasible design, plus its violation
 
 
@@ -44,19 +51,55 @@ class Constraint:
         return f"{self.metric} {'<=' if self.upper else '>='} {self.value:g}"
 
 
+def quantity(metric: str) -> str | None:
+    """What a metric measures (a key of the constraint units), None for an unknown name."""
+    if metric.startswith(("peak_tau_", "rms_tau_")):
+        return "torque"
+    if metric.startswith(("peak_force_", "rms_force_", "peak_F_")) or metric == "peak_shaking_force":
+        return "force"
+    return {"min_transmission_angle": "angle", "path_deviation": "length",
+            "flywheel_inertia": "inertia"}.get(metric)
+
+
 def parse_constraint(text: str) -> Constraint:
-    """``'path_deviation<=0.1mm'`` -> Constraint (units m, mm, cm, in, rad, deg, N, N m)."""
+    """``'path_deviation<=0.1mm'`` -> Constraint: ``<=`` or ``>=``, a finite value in SI or in a
+    unit of the metric's quantity (m, mm, cm, in; rad, deg; N; N m; kg m^2)."""
     m = _CONSTRAINT.match(text) if isinstance(text, str) else None
-    if m is None or m.group(4).strip() not in _UNITS:
-        raise ModelError(f"cannot read the constraint {text!r}", field="--constraint",
-                         fix='Write METRIC<=VALUE or METRIC>=VALUE with an optional unit, e.g. '
-                             '"path_deviation<=0.1mm" (SI when no unit is given)')
+
+    def fail(message, fix):
+        return ModelError(message, field="--constraint", fix=fix)
+
+    if m is None:
+        raise fail(f"cannot read the constraint {text!r}",
+                   'Write METRIC<=VALUE or METRIC>=VALUE with an optional unit, e.g. '
+                   '"path_deviation<=0.1mm" (SI when no unit is given)')
+    metric, op, unit = m.group(1), m.group(2), " ".join((m.group(4) or "").split())
+    if op in ("<", ">"):
+        raise fail(f"{text!r} is a strict bound ({op})", f"Write {op}= (a bound the best "
+                   "design may reach, as a continuous metric's optimum does)")
+    kind = quantity(metric)
+    units = _UNITS.get(kind, {}) if kind else {u: f for t in _UNITS.values() for u, f in t.items()}
+    if unit and unit not in units:
+        what = f"{metric} is in {_SI[kind]}" if kind else "the unit is not known"
+        raise fail(f"{text!r}: {what}, so '{unit}' does not fit it",
+                   f"Give the value in {' or '.join(units)}, or without a unit (SI)" if kind
+                   else "Use m, mm, cm, in, rad, deg, N, N m or kg m^2")
     try:
-        value = float(m.group(3)) * _UNITS[m.group(4).strip()]
+        value = float(m.group(3)) * units.get(unit, 1.0)
     except ValueError:
-        raise ModelError(f"cannot read the number in {text!r}", field="--constraint",
-                         fix="Write a plain number, e.g. 1e-4") from None
-    return Constraint(m.group(1), m.group(2).startswith("<"), value)
+        raise fail(f"cannot read the number in {text!r}", "Write a plain number, e.g. 1e-4") \
+            from None
+    if not np.isfinite(value):
+        raise fail(f"the bound of {text!r} is not finite", "Write a finite number")
+    return Constraint(metric, op == "<=", value)
+
+
+def _names(model, wanted, option: str, path_point) -> list[str]:
+    """:func:`.metrics.check_names`, naming ``option`` for an unknown metric."""
+    try:
+        return check_names(model, wanted, path_point=path_point)
+    except ModelError as e:
+        raise ModelError(e.message, field=option, fix=e.fix) from None
 
 
 @dataclass
@@ -151,14 +194,19 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
 
     start = time.perf_counter()
     cons = [c if isinstance(c, Constraint) else parse_constraint(c) for c in constraints]
+    lohi = _bounds(bounds)
+    seed = checks.seed(seed)
+    popsize = checks.count(popsize, "--popsize", "population per parameter")
+    maxiter = checks.count(maxiter, "--maxiter", "generations")
     sp: Space = space(model, list(bounds))
-    lohi = [tuple(float(v) for v in bounds[p]) for p in bounds]
     check_ranges(sp, lohi)
     base = sp.model()
-    names = tuple(dict.fromkeys(check_names(base, [minimize] + [c.metric for c in cons],
-                                            path_point=path_point)))
-    task = Task(sp, np.asarray(t, float), names, backend, path_point,
-                None if path_range is None else tuple(path_range), fluctuation)
+    names = tuple(dict.fromkeys(_names(base, [minimize], "--minimize", path_point)
+                                + _names(base, [c.metric for c in cons], "--constraint",
+                                         path_point)))
+    task = Task(sp, t, names, backend, path_point, path_range, fluctuation)
+    # the designs of every generation and of the polish, bounded as a sweep's
+    check_size(task, popsize * len(lohi) * (maxiter + 1) + 80 * len(lohi), option="--popsize")
     task = task.with_builder([a for a, _ in lohi], [b for _, b in lohi])
     obj = _Objective(task, minimize, cons)
     history: list[float] = []
@@ -181,6 +229,17 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
                   feasible=bool(score < BIG), data=data, model=sp.model(x),
                   evaluations=obj.evaluations, generations=int(res.nit),
                   seconds=time.perf_counter() - start, history=history)
+
+
+def _bounds(bounds) -> list[tuple[float, float]]:
+    """``{path: (lo, hi)}`` -> the (lo, hi) pairs: at least one parameter, two finite numbers
+    each."""
+    if not isinstance(bounds, dict) or not bounds:
+        raise ModelError(f"bounds must name at least one parameter, got {bounds!r:.80}",
+                         field="bounds", fix="Pass {path: (lo, hi)}, e.g. "
+                                             "{'bodies.ground.points.O4[0]': (85, 95)}")
+    return [checks.pair(v, f"bounds[{p!r}]", "its range LO, HI in the file's units")
+            for p, v in bounds.items()]
 
 
 def _compass(obj: _Objective, lohi: np.ndarray, history: list, steps: int = 40) -> None:

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
-import shutil
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -30,6 +30,7 @@ from ..analysis import SINGULAR, analyze, analyze_layout, failure
 from ..errors import AssemblyError, ModelError
 from ..kinematics import driver_values
 from ..kinematics.positions import assemble, not_assembled
+from . import checks, files
 from . import metrics as metrics_mod
 from . import vectorize
 from .params import Space
@@ -74,18 +75,12 @@ def sample(bounds, method: str = "sobol", n: int | None = None, seed: int | None
     lo = np.array([b[0] for b in bounds], float)
     hi = np.array([b[1] for b in bounds], float)
     P = len(lo)
-    if method not in METHODS:
-        raise ModelError(f"unknown method '{method}'", field="--method",
-                         fix="Use one of " + ", ".join(METHODS))
+    seed = checks.seed(seed)
     if method == "grid":
-        counts = list(counts or [None] * P)
-        default = max(2, int(round((n or 2 ** P) ** (1.0 / P))))
-        axes = [np.linspace(a, b, c or default) if (c or default) > 1 else np.array([a])
-                for a, b, c in zip(lo, hi, counts)]
+        axes = [np.linspace(a, b, c) if c > 1 else np.array([a])
+                for a, b, c in zip(lo, hi, grid_counts(n, counts, P))]
         return np.stack([g.ravel() for g in np.meshgrid(*axes, indexing="ij")], axis=-1)
-    if not n or n < 1:
-        raise ModelError("the number of designs must be at least 1", field="--designs",
-                         fix="Give --designs N")
+    n = design_count(method, n, counts, P)
     if method == "random":
         u = np.random.default_rng(seed).random((n, P))
     else:
@@ -98,6 +93,36 @@ def sample(bounds, method: str = "sobol", n: int | None = None, seed: int | None
             warnings.simplefilter("ignore")  # Sobol balance wants a power of 2; any n is fine
             u = gen.random(n)
     return lo + u * (hi - lo)
+
+
+def grid_counts(n: int | None, counts, P: int) -> list[int]:
+    """Values per parameter of a grid: ``counts[k]``, or where missing ``round(n ** (1 / P))``
+    (at least 2; ``n`` default ``2 ** P``)."""
+    n = checks.count(n, "--designs", "designs")
+    default = max(2, int(round((n or 2 ** P) ** (1.0 / P))))
+    return [c or default for c in list(counts or [None] * P)]
+
+
+def design_count(method: str, n: int | None, counts, P: int) -> int:
+    """The number of designs :func:`sample` makes, found without making them."""
+    if method not in METHODS:
+        raise ModelError(f"unknown method '{method}'", field="--method",
+                         fix="Use one of " + ", ".join(METHODS))
+    if method == "grid":
+        return math.prod(grid_counts(n, counts, P))
+    if n is None:
+        raise ModelError("the number of designs must be given", field="--designs",
+                         fix="Give --designs N")
+    return checks.count(n, "--designs", "designs")
+
+
+def check_size(task: Task, designs: int, *, workers: int = 1, scheduler=None,
+               option: str = "--designs") -> None:
+    """Refuse a study of ``designs`` designs of ``task`` that cannot fit in memory or finish
+    (:func:`.checks.sweep_size`, at the backend it would run)."""
+    checks.sweep_size(designs, len(task.space.params), len(task.metrics), len(task.t),
+                      workers=workers, backend=_backend(task, designs * len(task.t)),
+                      local=scheduler is None, option=option)
 
 
 # --- one chunk --------------------------------------------------------------------------------
@@ -114,6 +139,11 @@ class Task:
     path_range: tuple | None = None
     fluctuation: float = 0.02
     builder: Any = None   # vectorize.Builder of the study (derived from the designs if None)
+
+    def __post_init__(self):   # the study's numbers checked once, whoever builds the task
+        object.__setattr__(self, "t", checks.times(self.t))
+        object.__setattr__(self, "fluctuation", checks.fluctuation(self.fluctuation))
+        object.__setattr__(self, "path_range", checks.path_range(self.path_range))
 
     def with_builder(self, lo, hi) -> Task:
         """This task with the builder of designs ranging over ``lo``..``hi`` (P,), file units."""
@@ -282,21 +312,12 @@ def _run_chunk(task: Task, k: int, values, outdir: str | None):
     return k, cols
 
 
-def _chunk_path(outdir: Path, k: int) -> Path:
-    return outdir / "chunks" / f"chunk-{k:06d}.parquet"
-
-
 def _write_chunk(outdir: Path, k: int, cols) -> None:
     pd = _pandas()
-    path = _chunk_path(outdir, k)
+    path = files.chunk_path(outdir, k)
     tmp = path.with_name(path.name + f".tmp{os.getpid()}")
     pd.DataFrame(cols).to_parquet(tmp, index=False)
     os.replace(tmp, path)  # a chunk file exists only when complete
-
-
-def _read_chunk(outdir: Path, k: int) -> dict:
-    df = _pandas().read_parquet(_chunk_path(outdir, k))
-    return {c: df[c].to_numpy() for c in df.columns}
 
 
 # --- the sweep --------------------------------------------------------------------------------
@@ -391,9 +412,11 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
         The table (one row per design: ``design``, the parameters, ``valid``, ``reason``, the
         metrics) and run statistics (chunks computed and reused, seconds, rate).
     """
-    pd = _pandas()
     values = np.asarray(values, float).reshape(-1, len(task.space.params))
     D, T = len(values), len(task.t)
+    chunk = checks.count(chunk, "--chunk", "designs per chunk")
+    workers = checks.workers(workers)
+    check_size(task, D, workers=workers, scheduler=scheduler)
     if task.builder is None and D:   # the map from parameters to layouts, derived once
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
     if D:   # one backend for every chunk and batch, by the size of the whole sweep
@@ -402,22 +425,34 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}
     out = Path(outdir) if outdir is not None else None
-    if out is not None:
-        fp = _fingerprint(task, values, chunk)
-        state = out / "chunks" / "study.json"
-        if state.is_file() and resume:
-            old = json.loads(state.read_text()).get("fingerprint")
-            if old != fp:
-                raise ModelError("the directory holds chunks of a different study",
-                                 field=str(out), fix="Give the same model, --vary ranges, "
-                                 "method, designs and samples to resume, or another -o directory")
-            for k in range(len(starts)):
-                if _chunk_path(out, k).is_file():
-                    results[k] = _read_chunk(out, k)
-        elif (out / "chunks").exists() and not resume:
-            shutil.rmtree(out / "chunks")
-        (out / "chunks").mkdir(parents=True, exist_ok=True)
-        state.write_text(json.dumps({"fingerprint": fp, "designs": D, "chunk": chunk}))
+    client = _connect(scheduler) if scheduler is not None else None   # before any file
+    prepared = False
+    try:
+        if out is not None:
+            names = ("valid", "reason", *task.metrics)
+            found = files.prepare_chunks(out, _fingerprint(task, values, chunk), D, chunk,
+                                         resume)
+            prepared = True
+            for k in (k for k in found if k < len(starts)):   # a damaged one is redone
+                cols = files.read_chunk(out, k, names, len(values[starts[k]:][:chunk]))
+                if cols is not None:
+                    results[k] = cols
+        return _compute(task, values, starts, chunk, results, out, workers, client, progress,
+                        _stop_after)
+    except BaseException:
+        if prepared and not results:   # nothing finished: no chunks folder left behind
+            files.remove_chunks(out)
+        raise
+    finally:
+        if client is not None and client is not scheduler:
+            client.close()
+
+
+def _compute(task, values, starts, chunk, results, out, workers, client, progress,
+             _stop_after):
+    """The chunks of :func:`run` not in ``results``, then the table and the statistics."""
+    pd = _pandas()
+    D, T = len(values), len(task.t)
     reused = len(results)
     bar = Progress(D, T) if progress else None
     if bar:
@@ -435,10 +470,10 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
             raise KeyboardInterrupt(f"stopped after {_stop_after} chunks (test hook)")
 
     part = {k: values[starts[k]:starts[k] + chunk] for k in todo}
-    if scheduler is not None:
-        _run_dask(scheduler, task, part, outs, done)
+    if client is not None:
+        _run_dask(client, task, part, outs, done)
     elif workers > 1 and len(todo) > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with ProcessPoolExecutor(max_workers=min(workers, len(todo))) as pool:
             pending = {pool.submit(_run_chunk, task, k, part[k], outs) for k in todo}
             try:
                 while pending:
@@ -471,26 +506,80 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     return df, stats
 
 
-def _run_dask(scheduler, task, part, outs, done) -> None:
+def _run_dask(client, task, part, outs, done) -> None:
+    from distributed import as_completed
+
+    task_f = client.scatter(task, broadcast=True)
+    futures = [client.submit(_run_chunk, task_f, k, v, outs, pure=False)
+               for k, v in part.items()]
     try:
-        from distributed import Client, as_completed
+        for f in as_completed(futures):
+            done(*f.result())
+    except BaseException:
+        client.cancel(futures)
+        raise
+
+
+#: Seconds to wait for a Dask scheduler to answer.
+CONNECT_TIMEOUT = 1.5
+
+
+def _connect(scheduler):
+    """A ``distributed.Client`` of ``scheduler`` (a client, returned as it is, or an address),
+    or a ModelError naming ``--scheduler`` at once for an address that is not one or where
+    nothing answers within :data:`CONNECT_TIMEOUT` s."""
+    if not isinstance(scheduler, str):
+        from distributed import Client
+        if isinstance(scheduler, Client):
+            return scheduler
+        raise ModelError(f"the scheduler must be an address or a distributed.Client, not "
+                         f"{type(scheduler).__name__}", field="--scheduler",
+                         fix="Give an address such as tcp://host:8786")
+    host, port = _address(scheduler)
+    if host is not None:   # nothing listening: said at once, not after distributed's 30 s
+        import socket
+        try:
+            socket.create_connection((host, port), timeout=CONNECT_TIMEOUT).close()
+        except OSError as e:
+            raise ModelError(f"no Dask scheduler answers at {scheduler} "
+                             f"({e.strerror or e or 'timed out'})", field="--scheduler",
+                             fix="Start the scheduler (dask scheduler) and its workers, check "
+                                 "the address, or drop --scheduler to run locally") from None
+    try:
+        from distributed import Client
     except ImportError as exc:
         raise ModelError("--scheduler needs Dask", field="--scheduler",
                          fix="pip install 'linkdyn[dask]'") from exc
-    client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
     try:
-        task_f = client.scatter(task, broadcast=True)
-        futures = [client.submit(_run_chunk, task_f, k, v, outs, pure=False)
-                   for k, v in part.items()]
-        try:
-            for f in as_completed(futures):
-                done(*f.result())
-        except BaseException:
-            client.cancel(futures)
-            raise
-    finally:
-        if client is not scheduler:
-            client.close()
+        return Client(scheduler, timeout=max(CONNECT_TIMEOUT, 10.0))
+    except (OSError, ValueError, TypeError) as e:
+        raise ModelError(f"cannot connect to the Dask scheduler at {scheduler} ({e})",
+                         field="--scheduler", fix="Check the address (e.g. tcp://host:8786)"
+                         ) from None
+
+
+_SCHEMES = ("tcp", "tls", "inproc", "ucx", "ws", "wss")
+
+
+def _address(text: str) -> tuple[str | None, int | None]:
+    """(host, port) of a TCP-based scheduler address (``tcp://``, ``tls://``, ``ws(s)://`` or
+    none), (None, None) for another scheme; a ModelError for what is not an address."""
+    scheme, sep, rest = text.strip().partition("://")
+    if not sep:
+        scheme, rest = "tcp", text.strip()
+    if scheme not in _SCHEMES:
+        raise ModelError(f"unknown scheduler address scheme '{scheme}' in {text!r}",
+                         field="--scheduler",
+                         fix="Give an address such as tcp://host:8786 (schemes: "
+                             + ", ".join(_SCHEMES) + ")")
+    if scheme in ("inproc", "ucx"):
+        return None, None
+    host, colon, port = rest.rstrip("/").rpartition(":")
+    host = host.strip("[]")
+    if not colon or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise ModelError(f"cannot read the scheduler address {text!r}", field="--scheduler",
+                         fix="Give HOST:PORT, e.g. tcp://127.0.0.1:8786")
+    return host, int(port)
 
 
 def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None) -> dict:
@@ -568,21 +657,23 @@ def write_results(outdir, df, summary_data: dict, *, report: bool = False,
     then drop the chunks. Returns the files written."""
     from ..outputs import write_outputs
 
-    text = json.dumps(summary_data, indent=2, default=_json_default) + "\n"
-    files = {"designs.parquet": lambda p: df.to_parquet(p, index=False),
-             "summary.json": lambda p: p.write_text(text)}
+    previews = {}
+    if report and task is not None:
+        previews = preview_outputs(task, df, best_designs(df, task.metrics))
+    names = ["designs.parquet", "summary.json", *(["sweep.html", *previews] if report else [])]
+    # the files written, listed in summary.json: a later run removes those it does not write
+    text = json.dumps({**summary_data, "files": names}, indent=2, default=_json_default) + "\n"
+    out = {"designs.parquet": lambda p: df.to_parquet(p, index=False),
+           "summary.json": lambda p: p.write_text(text)}
     if report:
         from ..report.sweep import render_sweep
-        previews = {}
-        if task is not None:
-            previews = preview_outputs(task, df, best_designs(df, task.metrics))
         page = render_sweep(df, json.loads(text), os.fspath(outdir),
                             previews={int(n[len("design-"):-len(".html")]): n for n in previews})
-        files["sweep.html"] = lambda p: p.write_text(page, encoding="utf-8")
-        files.update(previews)
-    written = write_outputs(Path(outdir), files, owned=("designs.parquet", "summary.json",
-                                                        "sweep.html", "design-*.html"))
-    shutil.rmtree(Path(outdir) / "chunks", ignore_errors=True)
+        out["sweep.html"] = lambda p: p.write_text(page, encoding="utf-8")
+        out.update(previews)
+    written = write_outputs(Path(outdir), out, owned=files.owned_before(
+        outdir, "summary.json", ("designs.parquet", "sweep.html", "design-*.html")))
+    files.remove_chunks(Path(outdir))
     return written
 
 
