@@ -565,7 +565,8 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
               help="Also compare a sweep's best designs: the folder of its designs.parquet "
                    "and summary.json.")
 @click.option("--by", "by_metric", metavar="METRIC",
-              help="The sweep metric that ranks its designs (lowest first); needed with --sweep.")
+              help="The sweep metric that ranks its designs (best first: the lowest, or the "
+                   "largest for min_transmission_angle and stroke_*); needed with --sweep.")
 @click.option("--best", "n_best", type=int, default=3, show_default=True,
               help="How many of the sweep's best valid designs to compare.")
 @click.option("--samples", type=int, help="Number of samples of each design (both ends "
@@ -627,10 +628,12 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
 
 
 def _sweep_best(sweep_dir, metric, n_best) -> list:
-    """The ``n_best`` valid designs of a sweep with the lowest ``metric``: ``(file, name, model,
+    """The ``n_best`` valid designs of a sweep best by ``metric`` (in its sense: the largest
+    ``min_transmission_angle``, the lowest peak torque): ``(file, name, model,
     row)`` each, the model rebuilt from the sweep's base file and the design's parameter values
     (``row``: the design number, its parameters in the file's units and its metric, SI)."""
     from .studies import params as params_mod
+    from .studies.metrics import ranked
     from .studies.runner import _pandas
 
     folder = Path(sweep_dir)
@@ -657,7 +660,7 @@ def _sweep_best(sweep_dir, metric, n_best) -> list:
                              "names the model file relative to it)")
     paths = [p["path"] for p in info["parameters"]]
     sp = params_mod.space(str(base), paths)
-    ok = df[df["valid"] & df[metric].notna()].sort_values([metric, "design"], kind="stable")
+    ok = df.iloc[ranked(df, metric)]   # best first, in the metric's sense
     if ok.empty:
         raise ModelError(f"no valid design in {table} has a {metric}", field="--sweep",
                          fix="Rank by another metric, or sweep other ranges")
