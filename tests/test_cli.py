@@ -194,8 +194,8 @@ def test_check_hoeken_lengths_and_roles():
 def test_check_flags_a_non_grashof_linkage(tmp_path):
     path = write(tmp_path, non_grashof_hoeken())
     res = run("check", path)
-    assert res.exit_code == 0      # check does not solve
-    assert "non-Grashof" in res.stdout
+    assert res.exit_code == 3      # driven through a full turn, it locks (tests/test_check.py)
+    assert "non-Grashof" in res.stdout and "model OK" not in res.stdout
 
 
 # ------------------------------------------------------------------------------- analyze

@@ -125,11 +125,15 @@ _ALLOW_OUTSIDE = click.option(
 @click.argument("model", type=click.Path(dir_okay=False))
 @_ALLOW_OUTSIDE
 def check(model, allow_outside):
-    """Validate MODEL and describe it without solving."""
-    from . import design, io, topology
+    """Validate MODEL, assemble it at t = 0 and over its run, and describe it.
+
+    Exit 3 where it cannot be assembled or locks (naming the loop and the driver values); a
+    model with free coordinates (for simulate) is assembled at t = 0 with its [initial] values.
+    """
+    from . import design, io
 
     mech = io.load_model(model, allow_outside=allow_outside)
-    topo = topology.build(mech)
+    topo, free = _check_topology(mech)
     click.echo(f"{mech.name}  ({model})")
     if mech.description:
         click.echo(f"  {mech.description}")
@@ -142,6 +146,8 @@ def check(model, allow_outside):
         role = "cut" if k in topo.cut else "tree"
         if j.name in [d.joint for d in mech.drivers]:
             role += ", driven"
+        if free and j.name in free[0].free:
+            role += ", free"
         click.echo(f"  {j.name:8s} {j.kind:9s} {j.body_a}.{j.point_a} -> {j.body_b}.{j.point_b}"
                    f"  [{role}]")
     click.echo("spanning tree (parent <- body via joint):")
@@ -153,13 +159,95 @@ def check(model, allow_outside):
     click.echo(f"mobility (Grübler–Kutzbach): {topo.mobility}; drivers: {len(mech.drivers)}")
     for d in mech.drivers:
         click.echo(f"  {d.joint}: {d.description}")
-    if topo.n_loops and not (mech.assembly_phi or mech.assembly_q):
+    if topo.n_loops and not (mech.assembly_phi or mech.assembly_q) and not free:
         click.echo("assembly: " + _assembly_at_zero(mech, topo))
     for fb in design.four_bars(mech):
         L = ", ".join(f"{k} {v * 1e3:.6g} mm" for k, v in
                       zip(("ground", "input", "coupler", "output"), fb.lengths))
         click.echo(f"four-bar {fb.input}/{fb.coupler}/{fb.output}: {fb.grashof} ({L})")
+    for sc in design.checks.slider_cranks(mech):
+        lg = lambda v: design.checks.length(mech, v)  # noqa: E731
+        click.echo(f"slider-crank {sc.crank}/{sc.rod}/{sc.slider} (guide {sc.guide}): crank "
+                   f"{lg(sc.r)}, rod {lg(sc.l)}, offset {lg(sc.e)}: the crank "
+                   + ("can turn fully (crank + offset < rod)" if sc.turns else
+                      "cannot turn fully (crank + offset >= rod)"))
+    if free:
+        _check_free(mech, *free)
+    else:
+        _check_run(mech, topo)
     click.echo("model OK")
+
+
+def _check_topology(mech):
+    """``check``'s topology: the model's own when fully driven; for a model meant for
+    ``simulate`` (fewer drivers than its mobility, and an ``[initial]`` section or no driver at
+    all) the one ``simulate`` builds, with ``(partition, q0)``
+    (:func:`linkdyn.design.checks.free_coordinates`). Any other mismatch is refused as
+    ``analyze`` refuses it."""
+    from . import topology
+    from .design.checks import free_coordinates
+
+    try:
+        return topology.build(mech), None
+    except ModelError as err:
+        for_simulate = mech.initial_q or mech.initial_qd or not mech.drivers
+        if err.field != "drivers" or "Add" not in err.fix or not for_simulate:
+            raise
+    part, q0 = free_coordinates(mech)
+    return part.layout.topo, (part, q0)
+
+
+def _check_free(mech, part, q0) -> None:
+    """``check`` of a model for ``simulate``: its free coordinates and their start."""
+    from .design.checks import shown
+
+    topo = part.layout.topo
+    at = {mech.joints[topo.tree_joint[i]].name: q0[i] for i in range(1, topo.n)}
+    given = "[initial] q" if mech.initial_q else "the [assembly] guess"
+    click.echo(f"free coordinates (integrated by linkdyn simulate): {', '.join(part.free)}, "
+               f"from {given}: " + ", ".join(f"q_{j} = {shown(mech, j, at[j])}"
+                                            for j in part.free))
+    rates = ", ".join(f"qd_{j} = {shown(mech, j, mech.initial_qd.get(j, 0.0))}/s"
+                      for j in part.free)
+    click.echo(f"assembles at t = 0 ({rates}); analyze needs "
+               f"{topo.mobility - len(mech.drivers)} more driver(s), simulate none")
+
+
+def _check_run(mech, topo) -> None:
+    """``check`` of a driven model over its run: it assembles and does not lock (exit 3
+    naming the loop and the driver values otherwise), with the dyads' motion over it."""
+    from . import design
+    from .design.checks import length, over_run, span
+    from .report.keys import guide_transmission_angle, slider_rods
+
+    try:
+        t = _times(mech, None, None, None)
+    except ModelError as err:   # no run defined: the start only
+        over_run(mech, np.zeros(1), topo)
+        click.echo(f"assembles at t = 0 (no run to check over: {err.message})")
+        return
+    sol = over_run(mech, t, topo)
+    names = [j.name for j in mech.joints]
+    ranges = ", ".join(
+        f"q_{d.joint} = {span(mech, d.joint, float(np.min(q)), float(np.max(q)))}"
+        for d in mech.drivers for q in [sol.kin.q[:, names.index(d.joint)]])
+    click.echo(f"assembles at t = 0 and over the run ({len(t)} samples, t = 0 .. "
+               f"{t[-1]:.4g} s{', ' + ranges if ranges else ''}), clear of singular positions")
+    for fb in design.four_bars(mech):
+        mu = np.degrees(design.transmission_angle(sol, fb))
+        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb))
+        click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
+                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg")
+    guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
+    for g, rod, pin, other in slider_rods(mech):
+        if g.name not in guides:
+            continue
+        lo, hi = design.path.joint_travel(sol, g.name)
+        mu = guide_transmission_angle(sol, g, rod, pin, other)
+        click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
+                   f"{span(mech, g.name, lo, hi)}); transmission "
+                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg (rod against the guide's "
+                   "normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -574,7 +662,8 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
               help="Also compare a sweep's best designs: the folder of its designs.parquet "
                    "and summary.json.")
 @click.option("--by", "by_metric", metavar="METRIC",
-              help="The sweep metric that ranks its designs (lowest first); needed with --sweep.")
+              help="The sweep metric that ranks its designs (best first: the lowest, or the "
+                   "largest for min_transmission_angle and stroke_*); needed with --sweep.")
 @click.option("--best", "n_best", type=int, default=3, show_default=True,
               help="How many of the sweep's best valid designs to compare.")
 @click.option("--samples", type=int, help="Number of samples of each design (both ends "

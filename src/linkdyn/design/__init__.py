@@ -11,6 +11,7 @@ arrays of the :class:`~linkdyn.Solution`; all values are SI (m, rad, s, N, N m, 
 - :mod:`.overview`: the run's summary (``summary.json``) and its numerical health.
 """
 
+from . import checks
 from .energy import driver_energy, driver_power, energy_fluctuation, flywheel_inertia
 from .fourbar import FourBar, four_bars, mechanical_advantage, transmission_angle, velocity_ratio
 from .overview import health, summary

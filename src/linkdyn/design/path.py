@@ -28,23 +28,49 @@ from ..planar import cross
 TWO_PI = 2.0 * np.pi
 
 
-def _extreme(t, q, qd, qdd, k, sign) -> float:
-    """q[k] refined by one Newton step on qd = 0 when the extreme lies between samples."""
-    if 0 < k < len(q) - 1 and np.isfinite(qdd[k]) and sign * qdd[k] < 0:
-        dt = abs(qd[k] / qdd[k])
-        if dt <= max(t[k + 1] - t[k], t[k] - t[k - 1]):
-            return float(q[k] - 0.5 * qd[k] ** 2 / qdd[k])
-    return float(q[k])
+def _extreme(t, q, qd, qdd, k, sign):
+    """q at sample ``k`` (one per leading index: ``k`` (...,) for q (..., T)) refined by one
+    Newton step on qd = 0 when the extreme lies between samples:
+    ``q_k - qd_k^2 / (2 qdd_k)``, where qdd has the extreme's sign and ``|qd_k / qdd_k|`` is
+    within a sample step."""
+    take = lambda x: np.take_along_axis(x, k[..., None], axis=-1)[..., 0]   # noqa: E731
+    qk, qdk, qddk = take(q), take(qd), take(qdd)
+    inner = (k > 0) & (k < q.shape[-1] - 1)
+    h = np.maximum(t[np.minimum(k + 1, len(t) - 1)] - t[k], t[k] - t[np.maximum(k - 1, 0)])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ok = inner & np.isfinite(qddk) & (sign * qddk < 0) & (np.abs(qdk / qddk) <= h)
+        return np.where(ok, qk - 0.5 * qdk ** 2 / qddk, qk)
+
+
+def travel(t, q, qd, qdd):
+    """Smallest and largest value of a coordinate over the last (time) axis, each refined
+    between samples (:func:`_extreme`); finite samples only, NaN where none is.
+
+    Parameters
+    ----------
+    t : ndarray (T,)
+        Sample times, s.
+    q, qd, qdd : ndarray (..., T)
+        The coordinate and its rates (rad or m, per s, per s^2).
+
+    Returns
+    -------
+    lo, hi : ndarray (...,)
+    """
+    q, qd, qdd = (np.asarray(x, float) for x in (q, qd, qdd))
+    ok = np.isfinite(q)
+    kmin = np.argmin(np.where(ok, q, np.inf), axis=-1)
+    kmax = np.argmax(np.where(ok, q, -np.inf), axis=-1)
+    some = np.any(ok, axis=-1)
+    return (np.where(some, _extreme(t, q, qd, qdd, kmin, -1), np.nan),
+            np.where(some, _extreme(t, q, qd, qdd, kmax, +1), np.nan))
 
 
 def joint_travel(sol, joint: str) -> tuple[float, float]:
     """Smallest and largest value of a joint coordinate over the run (rad or m)."""
     k = [j.name for j in sol.model.joints].index(joint)
-    t = sol.t
-    q, qd, qdd = sol.kin.q[..., k], sol.kin.qd[..., k], sol.kin.qdd[..., k]
-    lo = _extreme(t, q, qd, qdd, int(np.nanargmin(q)), -1)
-    hi = _extreme(t, q, qd, qdd, int(np.nanargmax(q)), +1)
-    return lo, hi
+    lo, hi = travel(sol.t, sol.kin.q[..., k], sol.kin.qd[..., k], sol.kin.qdd[..., k])
+    return float(lo), float(hi)
 
 
 def _parse_point(model: Model, point: str) -> tuple[str, str]:

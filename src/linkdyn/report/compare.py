@@ -81,8 +81,8 @@ def sweep_best(sweep_dir, metric, n_best) -> list:
                              "names the model file relative to it)")
     paths = [p["path"] for p in info["parameters"]]
     sp = params_mod.space(str(base), paths)
-    good = df["valid"].to_numpy() & np.isfinite(df[metric].to_numpy(float))
-    ok = df[good].sort_values([metric, "design"], kind="stable")
+    from ..studies.metrics import ranked
+    ok = df.iloc[ranked(df, metric)]   # best first, in the metric's sense
     if ok.empty:
         raise ModelError(f"no valid design in {folder / 'designs.parquet'} has a {metric}",
                          field="--sweep", fix="Rank by another metric, or sweep other ranges")

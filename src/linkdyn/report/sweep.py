@@ -2,7 +2,9 @@
 the Pareto front of two metrics and the best designs of a metric.
 
 The front is computed here, by :func:`pareto_front`, for every pair of metrics over the valid
-designs; the page only highlights it.
+designs, each metric taken in its sense (larger is better for ``min_transmission_angle``:
+:func:`linkdyn.studies.metrics.cost`); the page only highlights it, and ranks the best designs
+by the senses it is given.
 """
 
 from __future__ import annotations
@@ -53,23 +55,27 @@ def _col(values) -> list:
 
 
 def sweep_data(df, summary: dict, outdir: str = "OUTDIR", previews=None) -> dict:
-    """The page's data: every design row, the column roles, the Pareto front of every pair of
-    metrics (indices into the rows, valid designs only) and ``previews``: design number ->
+    """The page's data: every design row, the column roles, each metric's sense (``'min'`` or
+    ``'max'``), the Pareto front of every pair of metrics in their senses (indices into the
+    rows, valid designs only) and ``previews``: design number ->
     the file of its own report page (beside the sweep page)."""
     params = [p["path"] for p in summary["parameters"]]
+    from ..studies.metrics import cost, sense, unit
+
     metrics = [m for m in summary["metrics"]]
     valid = df["valid"].to_numpy(bool)
     cols = {c: _col(df[c].to_numpy(float)) for c in params + metrics}
     fronts = {}
     for i, m1 in enumerate(metrics):
         for m2 in metrics[i + 1:]:
-            a = np.where(valid, df[m1].to_numpy(float), np.nan)
-            b = np.where(valid, df[m2].to_numpy(float), np.nan)
+            a = np.where(valid, cost(m1, df[m1].to_numpy(float)), np.nan)
+            b = np.where(valid, cost(m2, df[m2].to_numpy(float)), np.nan)
             fronts[f"{m1}|{m2}"] = pareto_front(a, b).tolist()
     return {"design": [int(d) for d in df["design"]], "valid": valid.tolist(),
             "reason": [str(r) if isinstance(r, str) else "" for r in df["reason"]],
-            "params": params, "units": {p["path"]: p.get("unit") or "" for p in summary["parameters"]},
-            "metrics": metrics, "cols": cols, "fronts": fronts, "outdir": outdir,
+            "params": params, "units": {**{p["path"]: p.get("unit") or "" for p in summary["parameters"]},
+                                    **{m: unit(m) for m in metrics}},
+            "metrics": metrics, "senses": {m: sense(m) for m in metrics}, "cols": cols, "fronts": fronts, "outdir": outdir,
             "previews": {str(k): v for k, v in (previews or {}).items()}}
 
 
@@ -111,14 +117,14 @@ its design.</p>
   <label><input type="checkbox" id="logx"> log x</label>
   <label><input type="checkbox" id="logy"> log y</label></div>
   <div class="plotbar"><h2>Pareto front</h2>
-  <label>minimize <select id="pa"></select></label>
+  <label>best <select id="pa"></select></label>
   <label>and <select id="pb"></select></label>
   <span id="frontnote" class="note"></span></div>
   <div id="scatter" class="panel"></div>
 </section>
 <section class="tables">
   <div class="plotbar"><h2>Best designs</h2>
-  <label>lowest <select id="bm"></select></label>
+  <label>best by <select id="bm"></select></label>
   <label>how many <select id="bn"><option>3</option><option>5</option><option>10</option></select></label></div>
   <div class="scroll"><table id="best" class="grid"></table></div>
   <p class="note">Compare them curve by curve: <code id="cmpcmd"></code></p>

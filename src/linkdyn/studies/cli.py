@@ -169,18 +169,27 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                + (f" in {stats['seconds']:.3g} s ({rate:.3g} design-samples/s)" if rate else ""))
     for name, m in summ["metrics"].items():
         if m is not None:
-            click.echo(f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g}  (lowest: design "
-                       f"{m['min_design']})")
+            click.echo(_metric_line(name, m))
     pages = [p for p in written if p.name.startswith("design-")]
     click.echo(f"wrote {', '.join(str(p) for p in written if p not in pages)}"
                + (f" and the reports of {len(pages)} best designs "
                   f"({', '.join(p.name for p in pages)})" if pages else ""))
 
 
+def _metric_line(name: str, m: dict) -> str:
+    """A metric of the sweep's summary in one line: its range, unit and best design (by its
+    sense: the largest where larger is better)."""
+    word = "largest" if m["sense"] == "max" else "smallest"
+    return (f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g} {m['unit']}".rstrip()
+            + f"  (best: design {m['best_design']}, the {word})")
+
+
 @click.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @_common
-@click.option("--minimize", required=True, metavar="METRIC", help="The metric to minimize.")
+@click.option("--minimize", metavar="METRIC", help="The metric to minimize.")
+@click.option("--maximize", metavar="METRIC",
+              help="The metric to maximize instead (e.g. min_transmission_angle).")
 @click.option("--constraint", "constraints", multiple=True, metavar='"METRIC<=VALUE"',
               help="A constraint on a metric (<= or >=; SI, or a unit such as mm, deg). Repeat.")
 @click.option("--popsize", type=int, default=15, show_default=True,
@@ -191,12 +200,14 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
               type=click.Path(file_okay=False), help="Output directory.")
 @click.option("--report", is_flag=True, help="Also write the best design's report.html.")
 def optimize(model, vary, samples, duration, cycles, seed, path_point, path_range, fluctuation,
-             backend, minimize, constraints, popsize, maxiter, outdir, report):
-    """Minimize a metric of MODEL over --vary ranges, subject to --constraint.
+             backend, minimize, maximize, constraints, popsize, maxiter, outdir, report):
+    """Minimize (or maximize) a metric of MODEL over --vary ranges, subject to --constraint.
 
     Differential evolution (a generation solved as one batch of designs), then a batched
     compass search. Writes OUTDIR/best.toml (the model file with the best values),
-    OUTDIR/optimize.json and the best design's OUTDIR/summary.json (and report.html).
+    OUTDIR/optimize.json and the best design's OUTDIR/summary.json (and report.html). When no
+    design meets every constraint it exits with status 3, naming the constraint nearest to
+    holding, and writes nothing.
     """
     from .. import design
     from ..analysis import analyze
@@ -210,21 +221,26 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     paths, bounds, _ = parse_vary(vary)
     q_range = _path_range(path_range)
     sp, t, bounds, _ = _setup(model, vary, samples, duration, cycles)
-    res = run(model, dict(zip(paths, bounds)), t, minimize, constraints, seed=seed,
-              popsize=popsize, maxiter=maxiter, backend=None if backend == "auto" else backend,
+    res = run(model, dict(zip(paths, bounds)), t, minimize, constraints, maximize=maximize,
+              seed=seed, popsize=popsize, maxiter=maxiter,
+              backend=None if backend == "auto" else backend,
               path_point=path_point, path_range=q_range, fluctuation=fluctuation)
+    _check_feasible(res, model)
     best = res.model
     sol = analyze(best, t, allow_singular=True)
     summ = design.summary(sol, fluctuation=fluctuation, path_point=path_point or best.path_point,
                           path_range=q_range, default_range=best.path_range)
-    info = {"model": os.fspath(model), "minimize": minimize,
+    verb = "minimize" if res.sense == "min" else "maximize"
+    info = {"model": os.fspath(model), verb: res.objective, "objective": res.objective,
+            "sense": res.sense,
             "constraints": [str(c) for c in res_constraints(constraints)],
             "feasible": res.feasible, "parameters": res.values, "metrics": res.metrics,
             "evaluations": res.evaluations, "generations": res.generations,
             "seconds": res.seconds, "seed": seed, "samples": len(t),
             "history": res.history}
     files = {"best.toml": lambda p: p.write_text(
-                 f"# {minimize} minimized by linkdyn optimize from {Path(model).name}\n"
+                 f"# {res.objective} {verb}d by linkdyn optimize from {Path(model).name}"
+                 + "".join(f", {c}" for c in res.constraints) + "\n"
                  + dumps_toml(res.data), encoding="utf-8"),
              "optimize.json": lambda p: p.write_text(json.dumps(_json_safe(info), indent=2)),
              "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
@@ -239,13 +255,25 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     info["files"] = list(files)
     write_outputs(out, files, owned=owned_before(out, "optimize.json", (
         "best.toml", "summary.json", "report.html", "plot_*.png", "plot_*.svg")))
-    state = "feasible" if res.feasible else "NOT feasible (no design met every constraint)"
-    click.echo(f"best design ({state}) after {res.evaluations} designs in {res.seconds:.3g} s:")
+    click.echo(f"best design (feasible) after {res.evaluations} designs in {res.seconds:.3g} s:")
     for p, v in res.values.items():
         click.echo(f"  {p} = {v:.6g}")
     for n, v in res.metrics.items():
         click.echo(f"  {n} = {v:.6g}")
     click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
+
+
+def _check_feasible(res, model) -> None:
+    """An infeasible optimum is an error (exit 3, nothing written): it names the constraint
+    nearest to holding, by how much it is missed in the constraint's unit, and the design."""
+    from .optimize import Infeasible
+
+    if res.feasible:
+        return
+    at = ", ".join(f"{p} = {v:.6g}" for p, v in res.values.items())
+    raise Infeasible(f"{Path(model).name}: no design in the --vary ranges meets every "
+                     f"constraint after {res.evaluations} designs; the nearest to holding is "
+                     f"{res.nearest()}, at {at}. Relax that constraint or widen the ranges")
 
 
 def res_constraints(texts):

@@ -22,6 +22,15 @@ Each metric is computed by the same functions the summary of ``linkdyn analyze``
     Flywheel that keeps the first constant-speed revolute driver within a coefficient of speed
     fluctuation C_s (default 0.02) over its first cycle, kg m^2
     (:func:`linkdyn.design.energy.energy_fluctuation`, ``flywheel_inertia``).
+``stroke_<joint>``
+    Travel (largest minus smallest coordinate) of each undriven guide on the ground, the slider
+    of a slider-crank, m (:func:`linkdyn.design.path.travel`, as the summary's
+    ``joint_travel``).
+
+Senses: every metric is better smaller (:func:`sense` ``'min'``) except
+``min_transmission_angle`` and ``stroke_<joint>``, better larger (``'max'``). Whatever ranks
+designs (the sweep's best designs and Pareto fronts, ``compare --sweep --by``, ``optimize``)
+ranks by :func:`cost`, the metric signed so that smaller is better.
 """
 
 from __future__ import annotations
@@ -32,17 +41,62 @@ from ..design import four_bars, shaking_force, transmission_angle
 from ..design.energy import driver_power, energy_fluctuation, first_cycle, flywheel_inertia
 from ..design.fourbar import transmission_worst
 from ..design.overview import peak, rms
-from ..design.path import _in_range, _parse_point, default_path_point, line_fit, max_deviation
+from ..design.path import (_in_range, _parse_point, default_path_point, line_fit, max_deviation,
+                           travel)
 from ..errors import ModelError
 from .. import joints as jk
-from ..model import Model
+from ..model import GROUND, Model
 from ..motion import ConstantSpeed
 
-__all__ = ["names", "evaluate", "path_spec", "reads_reactions"]
+__all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost", "ranked",
+           "unit"]
+
+# metrics a designer wants large; every other metric is better small
+_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_")
+
+
+def sense(name: str) -> str:
+    """``'max'`` for a metric that is better larger (``min_transmission_angle``,
+    ``stroke_<joint>``), ``'min'`` for every other (efforts, forces, deviation, flywheel)."""
+    return "max" if name.startswith(_LARGER_IS_BETTER) else "min"
+
+
+def cost(name: str, x):
+    """The metric ``x`` signed so that smaller is better: ``x``, or ``-x`` where
+    :func:`sense` is ``'max'``. Ranking, Pareto fronts and the optimizer use it."""
+    x = np.asarray(x, float)
+    return -x if sense(name) == "max" else x
+
+
+def ranked(df, name: str) -> np.ndarray:
+    """Row positions of the valid designs of a sweep table ``df`` with a finite ``name``, best
+    first by :func:`cost` (ties: the lower design number first)."""
+    col = df[name].to_numpy(float)
+    ok = np.flatnonzero(df["valid"].to_numpy(bool) & np.isfinite(col))
+    return ok[np.lexsort((df["design"].to_numpy()[ok], cost(name, col[ok])))]
+
+
+def unit(name: str) -> str:
+    """The SI unit of a metric's values: ``'N m'`` or ``'N'`` for an effort (by its column's
+    ``tau_``/``force_`` prefix), ``'N'`` for joint and shaking forces, ``'rad'``, ``'m'``,
+    ``'kg m^2'``."""
+    if name.startswith(("peak_tau_", "rms_tau_")):
+        return "N m"
+    if name.startswith(("peak_", "rms_")):
+        return "N"
+    return {"min_transmission_angle": "rad", "path_deviation": "m",
+            "flywheel_inertia": "kg m^2"}.get(name, "m" if name.startswith("stroke_") else "")
 
 
 def _effort(model: Model, joint: str) -> str:
     return f"{jk.get(model.joint(joint).kind).effort}_{joint}"
+
+
+def _guides(model: Model) -> list[str]:
+    """Undriven guides on the ground (a slider-crank's slider): the joints with a stroke."""
+    driven = {d.joint for d in model.drivers}
+    return [j.name for j in model.joints if j.body_a == GROUND and j.name not in driven
+            and not jk.get(j.kind).angular and "axis" in jk.get(j.kind).keys]
 
 
 def _flywheel_driver(model: Model) -> int | None:
@@ -75,6 +129,7 @@ def names(model: Model, *, path_point=None) -> list[str]:
     out.append("peak_shaking_force")
     if _flywheel_driver(model) is not None:
         out.append("flywheel_inertia")
+    out += [f"stroke_{j}" for j in _guides(model)]
     return out
 
 
@@ -146,6 +201,12 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
         out["peak_shaking_force"] = peak(np.linalg.norm(shaking_force(sol), axis=-1))
     if "flywheel_inertia" in want:
         out["flywheel_inertia"] = _flywheel(sol, models, fluctuation)
+    names_j = [j.name for j in m.joints]
+    for j in _guides(m):
+        if f"stroke_{j}" in want:
+            k = names_j.index(j)
+            lo, hi = travel(sol.t, sol.kin.q[..., k], sol.kin.qd[..., k], sol.kin.qdd[..., k])
+            out[f"stroke_{j}"] = hi - lo
     return {w: out[w] for w in wanted}
 
 

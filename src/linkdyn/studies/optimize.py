@@ -1,4 +1,5 @@
-"""Optimization over design parameters: minimize a metric subject to metric constraints.
+"""Optimization over design parameters: minimize (or maximize) a metric subject to metric
+constraints.
 
 The global search is scipy's differential evolution with the population evaluated as one batch
 of designs per generation (``vectorized=True``: one ``analyze`` over a design axis, never a loop
@@ -6,7 +7,10 @@ over designs). The local polish that follows is a compass search, also batched: 
 the 2 P designs one step along each parameter axis at once, keeps the best and halves the step
 when none improves. Constraints are met by ranking (Deb's rule): a feasible design beats any
 infeasible one, infeasible ones compare by their total violation, a design that cannot be
-solved comes last.
+solved comes last. A maximized metric is minimized as its negative. When no design meets every
+constraint the result says so (``feasible`` False) and names, by :meth:`Result.nearest`, the
+constraint its design misses by the least; the command line then exits with status 3 and
+writes nothing.
 """
 
 from __future__ import annotations
@@ -17,9 +21,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import LinkdynError, ModelError
 from . import checks
-from .metrics import check_names
+from .metrics import check_names, unit
 from .params import Space, check_ranges, space, with_values
 from .runner import Task, check_size, evaluate
 
@@ -31,21 +35,36 @@ _UNITS = {"length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254},
           "force": {"N": 1.0},
           "torque": {"N m": 1.0, "Nm": 1.0},
           "inertia": {"kg m^2": 1.0, "kgm2": 1.0}}
+_FACTOR = {u: f for t in _UNITS.values() for u, f in t.items()}   # any unit -> SI factor
 _SI = {"length": "m", "angle": "rad", "force": "N", "torque": "N m", "inertia": "kg m^2"}
 BIG = 1e30  # score of an infeasible design, plus its violation
 
 
+class Infeasible(LinkdynError):
+    """No design in the ranges meets every constraint (exit status 3): the message names the
+    constraint nearest to holding and by how much it is missed."""
+
+    exit_code = 3
+
+
 @dataclass(frozen=True)
 class Constraint:
-    """``metric <= value`` (or ``>=``), value in SI."""
+    """``metric <= value`` (or ``>=``), value in SI; ``unit`` the one it was written in ('' for
+    SI), for messages."""
 
     metric: str
     upper: bool
     value: float
+    unit: str = ""
 
     def violation(self, x: np.ndarray) -> np.ndarray:
         """How far (SI, >= 0) each metric value is outside the bound; NaN where not solved."""
         return np.maximum(x - self.value, 0.0) if self.upper else np.maximum(self.value - x, 0.0)
+
+    def shown(self, x: float) -> str:
+        """An SI value of the metric in the constraint's unit, with the unit."""
+        u = self.unit or unit(self.metric)
+        return f"{x / _FACTOR.get(self.unit, 1.0):.4g} {u}".rstrip()
 
     def __str__(self) -> str:
         return f"{self.metric} {'<=' if self.upper else '>='} {self.value:g}"
@@ -78,7 +97,7 @@ def parse_constraint(text: str) -> Constraint:
         raise fail(f"{text!r} is a strict bound ({op})", f"Write {op}= (a bound the best "
                    "design may reach, as a continuous metric's optimum does)")
     kind = quantity(metric)
-    units = _UNITS.get(kind, {}) if kind else {u: f for t in _UNITS.values() for u, f in t.items()}
+    units = _UNITS.get(kind, {}) if kind else _FACTOR
     if unit and unit not in units:
         what = f"{metric} is in {_SI[kind]}" if kind else "the unit is not known"
         raise fail(f"{text!r}: {what}, so '{unit}' does not fit it",
@@ -91,7 +110,7 @@ def parse_constraint(text: str) -> Constraint:
             from None
     if not np.isfinite(value):
         raise fail(f"the bound of {text!r} is not finite", "Write a finite number")
-    return Constraint(metric, op == "<=", value)
+    return Constraint(metric, op == "<=", value, unit)
 
 
 def _names(model, wanted, option: str, path_point) -> list[str]:
@@ -113,7 +132,8 @@ class Result:
     metrics : dict[str, float]
         Its objective and constraint metrics, SI.
     feasible : bool
-        It meets every constraint (and is valid).
+        It meets every constraint (and is valid). When not, it is the design that misses them
+        by the least (total violation relative to each bound).
     data : dict
         The model file's structure with the best values (write it with
         :func:`linkdyn.io.writer.dumps_toml`).
@@ -122,7 +142,11 @@ class Result:
         Designs solved, and generations of the global search.
     seconds : float
     history : list of float
-        Best score after each generation and polish step.
+        Best score after each generation and polish step (the objective, negated when
+        maximized, for a feasible design).
+    objective, sense : str
+        The metric optimized and ``'min'`` or ``'max'``.
+    constraints : list of Constraint
     """
 
     values: dict
@@ -134,13 +158,36 @@ class Result:
     generations: int = 0
     seconds: float = 0.0
     history: list = field(default_factory=list)
+    objective: str = ""
+    sense: str = "min"
+    constraints: list = field(default_factory=list)
+
+    def misses(self) -> list:
+        """``(constraint, violation SI)`` of each constraint the design does not meet, the one
+        nearest to holding (smallest violation relative to its bound) first."""
+        out = [(c, float(c.violation(self.metrics[c.metric]))) for c in self.constraints]
+        out = [(c, v) for c, v in out if not v <= 0.0]   # NaN (not solved) misses too
+        return sorted(out, key=lambda cv: cv[1] / max(abs(cv[0].value), 1e-300))
+
+    def nearest(self) -> str:
+        """The constraint nearest to holding in words, in its unit: ``'path_deviation <= 0.1
+        mm, missed by 0.012 mm (path_deviation = 0.112 mm)'``; '' when feasible."""
+        miss = self.misses()
+        if self.feasible or not miss:
+            return ""
+        c, v = miss[0]
+        bound = f"{c.metric} {'<=' if c.upper else '>='} {c.shown(c.value)}"
+        return (f"{bound}, missed by {c.shown(v)} ({c.metric} = {c.shown(self.metrics[c.metric])})"
+                + (f"; {len(miss) - 1} other constraint(s) missed too" if len(miss) > 1 else ""))
 
 
 class _Objective:
-    """Scores of a batch of designs: the objective where feasible, else BIG + violation."""
+    """Scores of a batch of designs: the objective's cost (negated when maximized) where
+    feasible, else BIG + violation."""
 
-    def __init__(self, task: Task, minimize: str, constraints):
-        self.task, self.minimize, self.constraints = task, minimize, list(constraints)
+    def __init__(self, task: Task, objective: str, sign: float, constraints):
+        self.task, self.objective, self.sign = task, objective, sign
+        self.constraints = list(constraints)
         self.evaluations = 0
         self.best = (np.inf, None, None)  # score, values, metrics
 
@@ -148,7 +195,7 @@ class _Objective:
         x = np.atleast_2d(x)
         cols = evaluate(self.task, x)
         self.evaluations += len(x)
-        f = cols[self.minimize]
+        f = self.sign * cols[self.objective]
         viol = sum((c.violation(cols[c.metric]) / max(abs(c.value), 1e-300)
                     for c in self.constraints), np.zeros(len(x)))
         score = np.where(viol > 0, BIG * (1.0 + viol), f)
@@ -157,15 +204,16 @@ class _Objective:
         if score[k] < self.best[0]:
             self.best = (float(score[k]), x[k].copy(),
                          {n: float(cols[n][k]) for n in dict.fromkeys(
-                             [self.minimize] + [c.metric for c in self.constraints])})
+                             [self.objective] + [c.metric for c in self.constraints])})
         return score
 
 
-def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int | None = 0,
+def optimize(model, bounds: dict, t, minimize: str | None = None, constraints=(), *,
+             maximize: str | None = None, seed: int | None = 0,
              popsize: int = 15, maxiter: int = 60, tol: float = 1e-6, polish: bool = True,
              backend: str | None = None, path_point=None, path_range=None,
              fluctuation: float = 0.02) -> Result:
-    """Minimize a metric over design parameters, subject to metric constraints.
+    """Minimize (or maximize) a metric over design parameters, subject to metric constraints.
 
     Parameters
     ----------
@@ -175,8 +223,9 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
         ``{path: (lo, hi)}`` in the file's units.
     t : array_like (T,)
         Sample times, s.
-    minimize : str
-        A metric name (see :mod:`linkdyn.studies.metrics`).
+    minimize, maximize : str
+        The metric to minimize, or (one or the other) to maximize, e.g.
+        ``maximize="min_transmission_angle"`` (see :mod:`linkdyn.studies.metrics`).
     constraints : sequence of str or Constraint
         E.g. ``"path_deviation<=0.1mm"``.
     seed : int or None
@@ -189,9 +238,16 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
     Returns
     -------
     Result
+        ``feasible`` False when no design met every constraint (``Result.nearest()`` names the
+        constraint missed by the least).
     """
     from scipy.optimize import differential_evolution
 
+    if (minimize is None) == (maximize is None):
+        raise ModelError("give one metric to minimize or to maximize", field="--minimize",
+                         fix="Give --minimize METRIC or --maximize METRIC (one of them)")
+    objective = minimize if maximize is None else maximize
+    sign = 1.0 if maximize is None else -1.0
     start = time.perf_counter()
     cons = [c if isinstance(c, Constraint) else parse_constraint(c) for c in constraints]
     lohi = _bounds(bounds)
@@ -201,14 +257,15 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
     sp: Space = space(model, list(bounds))
     check_ranges(sp, lohi)
     base = sp.model()
-    names = tuple(dict.fromkeys(_names(base, [minimize], "--minimize", path_point)
+    names = tuple(dict.fromkeys(_names(base, [objective], "--minimize" if maximize is None else "--maximize",
+                                       path_point)
                                 + _names(base, [c.metric for c in cons], "--constraint",
                                          path_point)))
     task = Task(sp, t, names, backend, path_point, path_range, fluctuation)
     # the designs of every generation and of the polish, bounded as a sweep's
     check_size(task, popsize * len(lohi) * (maxiter + 1) + 80 * len(lohi), option="--popsize")
     task = task.with_builder([a for a, _ in lohi], [b for _, b in lohi])
-    obj = _Objective(task, minimize, cons)
+    obj = _Objective(task, objective, sign, cons)
     history: list[float] = []
 
     def batch(xT):  # scipy passes the population as (P, S)
@@ -228,7 +285,8 @@ def optimize(model, bounds: dict, t, minimize: str, constraints=(), *, seed: int
     return Result(values={p.path: float(v) for p, v in zip(sp.params, x)}, metrics=mets,
                   feasible=bool(score < BIG), data=data, model=sp.model(x),
                   evaluations=obj.evaluations, generations=int(res.nit),
-                  seconds=time.perf_counter() - start, history=history)
+                  seconds=time.perf_counter() - start, history=history, objective=objective,
+                  sense="min" if maximize is None else "max", constraints=cons)
 
 
 def _bounds(bounds) -> list[tuple[float, float]]:

@@ -584,7 +584,8 @@ def _address(text: str) -> tuple[str | None, int | None]:
 
 def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None) -> dict:
     """``summary.json`` of a sweep: what was varied, how many designs are valid, and for each
-    metric its range over the valid designs and the design where it is smallest."""
+    metric its range over the valid designs, the design where it is smallest, its unit (SI),
+    its sense (``'min'`` or ``'max'``: which way is better) and its best valid design."""
     valid = df["valid"].to_numpy()
     out = {"model": task.space.source, "designs": int(len(df)), "valid": int(valid.sum()),
            "invalid": int((~valid).sum()), "samples": int(len(task.t)),
@@ -599,12 +600,17 @@ def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None)
     out["invalid_reasons"] = {str(k): int(v) for k, v in list(reasons.items())[:10]}
     for name in task.metrics:
         col = df[name].to_numpy(float)
-        if not np.any(np.isfinite(col)):
+        rows = metrics_mod.ranked(df, name)
+        if not len(rows):
             out["metrics"][name] = None
             continue
         k = int(np.nanargmin(col))
         out["metrics"][name] = {"min": float(np.nanmin(col)), "max": float(np.nanmax(col)),
-                                "min_design": int(df["design"].iloc[k])}
+                                "min_design": int(df["design"].iloc[k]),
+                                "unit": metrics_mod.unit(name),
+                                "sense": metrics_mod.sense(name),
+                                "best": float(col[rows[0]]),
+                                "best_design": int(df["design"].iloc[rows[0]])}
     return out
 
 
@@ -612,14 +618,11 @@ PREVIEWS = 3   # best designs of each metric whose own report the sweep page sho
 
 
 def best_designs(df, metrics, n: int = PREVIEWS) -> list[int]:
-    """Rows of the ``n`` valid designs with the lowest value of each metric (lowest first,
-    ties by design number), each row once, in the order met."""
-    valid = df["valid"].to_numpy(bool)
+    """Rows of the ``n`` best valid designs of each metric (by its sense, best first, ties by
+    design number: :func:`linkdyn.studies.metrics.ranked`), each row once, in the order met."""
     rows: list[int] = []
     for name in metrics:
-        col = df[name].to_numpy(float)
-        ok = np.flatnonzero(valid & np.isfinite(col))
-        for k in ok[np.lexsort((ok, col[ok]))][:n]:
+        for k in metrics_mod.ranked(df, name)[:n]:
             if int(k) not in rows:
                 rows.append(int(k))
     return rows

@@ -14,8 +14,13 @@
   var hide = document.getElementById("hideinvalid");
   var bm = document.getElementById("bm"), bn = document.getElementById("bn");
 
-  function fill(sel, names, k) {
-    names.forEach(function (c) { var o = h("option", "", sel, c); o.value = c; });
+  // a metric's sense: +1 where smaller is better, -1 where larger is (D.senses)
+  function sgn(m) { return D.senses && D.senses[m] === "max" ? -1 : 1; }
+  function fill(sel, names, k, senses) {
+    names.forEach(function (c) {
+      var o = h("option", "", sel, senses ? c + (sgn(c) < 0 ? " (larger)" : " (smaller)") : c);
+      o.value = c;
+    });
     if (names.length) sel.value = names[Math.min(k, names.length - 1)];
   }
   function label(c) { return D.units[c] ? c + " (" + D.units[c] + ")" : c; }
@@ -94,12 +99,12 @@
     svg.addEventListener("pointerleave", function () { tip.style.display = "none"; if (hot) hot.classList.remove("hot"); });
   }
 
-  // the best valid designs of a metric, lowest first
+  // the best valid designs of a metric in its sense (largest first where larger is better)
   function best() {
-    var m = bm.value, col = D.cols[m], n = +bn.value, t = document.getElementById("best");
+    var m = bm.value, col = D.cols[m], n = +bn.value, t = document.getElementById("best"), s = sgn(m);
     var rows = [];
     for (var i = 0; i < N; i++) if (D.valid[i] && fin(col[i])) rows.push(i);
-    rows.sort(function (i, j) { return col[i] - col[j] || i - j; });
+    rows.sort(function (i, j) { return s * (col[i] - col[j]) || i - j; });
     rows = rows.slice(0, n);
     t.innerHTML = "";
     var hr = h("tr", "", h("thead", "", t));
@@ -143,7 +148,7 @@
   // default axes: the first two metrics (the front's), else the first parameter and the metric
   var two = D.metrics.length > 1;
   fill(sx, columns, two ? D.params.length : 0); fill(sy, columns, D.params.length + (two ? 1 : 0));
-  fill(pa, D.metrics, 0); fill(pb, D.metrics, 1); fill(bm, D.metrics, 0);
+  fill(pa, D.metrics, 0, true); fill(pb, D.metrics, 1, true); fill(bm, D.metrics, 0, true);
   [sx, sy, pa, pb, hide, document.getElementById("logx"), document.getElementById("logy")].forEach(function (s) { s.addEventListener("change", draw); });
   [bm, bn].forEach(function (s) { s.addEventListener("change", best); });
   draw(); best();

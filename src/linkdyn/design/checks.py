@@ -1,0 +1,196 @@
+"""What ``linkdyn check`` proves about a model before a run: that it assembles, where it locks,
+what its dyads are.
+
+Over the run (:func:`over_run`)
+    The model is solved over the run ``analyze`` would make (its ``[analysis]`` samples and
+    duration). Where a loop stops closing, the driver value where it locks is bracketed by
+    bisection in time between the last sample that closes and the first that does not (each
+    round solves the run up to the bracket again with 32 samples across it, so continuation
+    follows the same branch), and the error names the loop (its cut joint and links).
+
+Slider-crank dyads (:func:`slider_cranks`)
+    A guide on the ground whose slider is pinned to a rod driven by a crank turning about a
+    ground pivot: crank r, rod l (pin to pin), offset e (distance of the crank pivot from the
+    slide line). The crank turns fully when ``r + e < l``; the stroke and the transmission
+    angle (rod against the guide's normal) over the run come from the solved run.
+
+Free coordinates (:func:`free_coordinates`)
+    A model with fewer drivers than its mobility is meant for ``simulate``: the partition that
+    ``simulate`` makes names the free coordinates, and the model is assembled at t = 0 with
+    them at their ``[initial]`` values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import joints as jk
+from ..errors import AssemblyError
+from ..io.units import ANGLE_UNITS, LENGTH_UNITS
+from ..model import GROUND, Model
+from ..planar import cross
+
+__all__ = ["over_run", "loops", "SliderCrank", "slider_cranks", "free_coordinates", "shown",
+           "span", "length"]
+
+REFINE = 3          # bisection rounds of where a loop locks (32 samples each)
+
+
+def shown(model: Model, joint: str, value: float) -> str:
+    """A joint coordinate (rad or m) in the model file's unit, with the unit: ``'142.3 deg'``."""
+    if jk.get(model.joint(joint).kind).angular:
+        return f"{value / ANGLE_UNITS[model.angle_unit]:.6g} {model.angle_unit}"
+    return f"{value / LENGTH_UNITS[model.length_unit]:.6g} {model.length_unit}"
+
+
+def span(model: Model, joint: str, lo: float, hi: float) -> str:
+    """A range of a joint coordinate in the file's unit: ``'0 .. 360 deg'``."""
+    a, b = shown(model, joint, lo), shown(model, joint, hi)
+    return f"{a.rsplit(' ', 1)[0]} .. {b}"
+
+
+def length(model: Model, value: float) -> str:
+    """A length (m) in the model file's unit, with the unit."""
+    return f"{value / LENGTH_UNITS[model.length_unit]:.4g} {model.length_unit}"
+
+
+def loops(model: Model, topo) -> list[tuple[str, list[str]]]:
+    """Each loop as ``(cut joint, its links in tree order)``: the bodies on the tree paths
+    from the cut joint's two bodies up to their nearest common ancestor."""
+    index = {b: i for i, b in enumerate(topo.bodies)}
+
+    def up(i):
+        path = [i]
+        while topo.parent[path[-1]] >= 0:
+            path.append(topo.parent[path[-1]])
+        return path
+
+    out = []
+    for j in topo.cut:
+        jt = model.joints[j]
+        a, b = up(index[jt.body_a]), up(index[jt.body_b])
+        common = next(i for i in a if i in b)
+        body = sorted(set(a[:a.index(common) + 1]) | set(b[:b.index(common) + 1]))
+        out.append((jt.name, [topo.bodies[i] for i in body]))
+    return out
+
+
+def _drivers(model: Model, t: float) -> dict[str, float]:
+    from ..kinematics import driver_values
+    v = driver_values(model, np.array([float(t)]))[0][:, 0]
+    return {d.joint: float(x) for d, x in zip(model.drivers, v)}
+
+
+def _bracket(model: Model, t: np.ndarray, k: int) -> tuple[float, float]:
+    """Times ``(last that closes, first that does not)`` around the first invalid sample ``k``
+    of the run ``t``, narrowed by :data:`REFINE` rounds of 32 samples."""
+    from ..analysis import analyze
+
+    lo, hi = float(t[k - 1]), float(t[k])
+    head = t[:k - 1]
+    for _ in range(REFINE):
+        fine = np.linspace(lo, hi, 33)
+        sol = analyze(model, np.r_[head, fine], allow_singular=True, backend="numpy")
+        bad = np.flatnonzero(~sol.valid[len(head):])
+        if not len(bad) or bad[0] == 0:
+            break
+        lo, hi = float(fine[bad[0] - 1]), float(fine[bad[0]])
+        head = np.r_[head, fine[:bad[0] - 1]]
+    return lo, hi
+
+
+def over_run(model: Model, t: np.ndarray, topo):
+    """Solve ``model`` over the run ``t``; on failure an :class:`AssemblyError` naming the loop
+    and, when the loops stop closing after t = 0, the driver values between which it locks.
+
+    Returns
+    -------
+    Solution
+    """
+    from ..analysis import analyze
+
+    try:
+        return analyze(model, t, backend="numpy")
+    except AssemblyError as err:
+        if err.time is None:
+            raise
+        where = "; ".join(f"the loop cut at {cut} ({', '.join(links)})"
+                          for cut, links in loops(model, topo))
+        k = int(np.searchsorted(t, err.time))
+        closes = "singular" in err.message
+        if k == 0 or closes or not where:
+            err.message += f" ({where or 'no loop'})"
+            raise
+        lo, hi = _bracket(model, t, k)
+        last = ", ".join(f"q_{j} = {shown(model, j, v)}" for j, v in _drivers(model, lo).items())
+        drv = ", ".join(f"q_{j} = {shown(model, j, v)}" for j, v in _drivers(
+            model, err.time).items())
+        raise AssemblyError(
+            f"at t = {err.time:.6g} s ({drv}): {where} stops closing: it closes up to {last} "
+            f"(t = {lo:.6g} s, within {hi - lo:.2g} s) and not beyond, where the mechanism "
+            "locks", file=model.source,
+            fix="Limit the driver's range ([analysis] duration) or change the link lengths "
+                "so the loop closes over the whole range") from None
+
+
+@dataclass(frozen=True)
+class SliderCrank:
+    """An RRP dyad on a crank: ``guide`` (joint on the ground), ``crank``, ``rod``, ``slider``
+    bodies; ``r`` crank, ``l`` rod (pin to pin), ``e`` offset of the crank pivot from the slide
+    line, m."""
+
+    guide: str
+    crank: str
+    rod: str
+    slider: str
+    r: float
+    l: float
+    e: float
+
+    @property
+    def turns(self) -> bool:
+        """Whether the crank can turn fully: ``r + e < l``."""
+        return self.r + self.e < self.l
+
+
+def _point(model: Model, body: str, joint) -> np.ndarray:
+    return np.asarray(model.body(body).points[joint.point_a if joint.body_a == body
+                                              else joint.point_b], float)
+
+
+def slider_cranks(model: Model) -> list[SliderCrank]:
+    """Every slider-crank dyad: a guide on the ground (:func:`linkdyn.report.keys.slider_rods`)
+    whose rod's other joint is on a crank pinned to the ground by a revolute joint."""
+    from ..report.keys import slider_rods
+
+    out = []
+    for g, rod, pin, other in slider_rods(model):
+        rj = next(j for j in model.joints if rod in (j.body_a, j.body_b)
+                  and (j.point_a if j.body_a == rod else j.point_b) == other)
+        crank = rj.body_b if rj.body_a == rod else rj.body_a
+        pivot = [j for j in model.joints if crank in (j.body_a, j.body_b) and j is not rj
+                 and GROUND in (j.body_a, j.body_b) and jk.get(j.kind).angular]
+        if crank == GROUND or not pivot:
+            continue
+        p = pivot[0]
+        r = float(np.linalg.norm(_point(model, crank, rj) - _point(model, crank, p)))
+        l = float(np.linalg.norm(np.asarray(model.body(rod).points[other], float)
+                                 - np.asarray(model.body(rod).points[pin], float)))
+        axis = np.asarray(g.axis, float) / np.linalg.norm(g.axis)
+        e = abs(float(cross(axis, _point(model, GROUND, p) - _point(model, GROUND, g))))
+        out.append(SliderCrank(g.name, crank, rod, g.body_b, r, l, e))
+    return out
+
+
+def free_coordinates(model: Model):
+    """The partition ``simulate`` makes of a model with free degrees of freedom and its start:
+    ``(partition, q0)``, ``partition.free`` the joints it integrates, q0 (n,) the tree
+    coordinates assembled at t = 0 (:func:`linkdyn.forward._start`). Raises what ``simulate``
+    would: a wrong ``[initial]`` (ModelError), a start that cannot be assembled
+    (AssemblyError)."""
+    from .. import forward
+
+    part = forward.partition(model)
+    return part, forward._start(part)
