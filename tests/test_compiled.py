@@ -264,22 +264,6 @@ def test_analyze_allow_singular_flags_the_same_samples():
     assert str(err.value) == str(err_ref.value)
 
 
-def test_backend_choice(monkeypatch):
-    monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
-    assert compiled.use_compiled("compiled") and not compiled.use_compiled("numpy")
-    # auto: compiled only for a batch that repays the first compilation
-    assert not compiled.use_compiled("auto", compiled.AUTO_MIN_SAMPLES - 1)
-    assert compiled.use_compiled("auto", compiled.AUTO_MIN_SAMPLES)
-    monkeypatch.setenv("LINKDYN_BACKEND", "numpy")
-    assert not compiled.use_compiled(None, 10 ** 9)
-    monkeypatch.setenv("LINKDYN_BACKEND", "Compiled")
-    assert compiled.use_compiled(None)
-    with pytest.raises(ValueError, match="backend must be one of auto, numpy, compiled"):
-        compiled.use_compiled("fast")
-    model = linkdyn.load(linkdyn.example_path("hoeken"))
-    assert linkdyn.analyze(model, np.linspace(0, 1, 5)).kin.arrays is not None
-
-
 def test_factor_of_a_sparse_system():
     """Twelve unknowns, sparse as a long chain's J_dep (where a zero multiplier leaves its row
     as it is): factor and substitute solve every finite sample as LAPACK does, with the

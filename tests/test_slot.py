@@ -225,7 +225,8 @@ def test_the_compiled_backend_runs_the_slot():
     model = yoke_example()
     kinds = [j.kind for j in model.joints]
     assert compiled.unsupported(kinds) == []
-    assert compiled.use_compiled("auto", 10**9, kinds) == (compiled.numba is not None)
+    big = linkdyn.backend.Work(10**9, len(model.bodies) - 1)
+    assert linkdyn.backend.choose("auto", big, kinds).compiled == (compiled.numba is not None)
     if compiled.numba is None:
         return
     # every column as numpy gives it (tests/test_golden.py holds both to the stored numbers)

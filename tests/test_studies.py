@@ -457,10 +457,11 @@ def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(examp
     # the branch followed with its nodes closed by the compiled kernel (the compiled backend's
     # path): numpy's nodes, reach and rates to rounding, the same nodes that do not close
     if importlib.util.find_spec("numba"):
+        from linkdyn.kinematics import compiled_nodes
         t = np.linspace(-0.4, 2.5, 40)
         with np.errstate(all="ignore"):
             ref = follow(models, lay, t, single=False)
-            got = follow(models, lay, t, single=False, compiled=True)
+            got = follow(models, lay, t, single=False, nodes=compiled_nodes.close)
         assert np.array_equal(got.nodes, ref.nodes) and np.array_equal(got.reach, ref.reach)
         for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
             assert np.array_equal(np.isnan(a), np.isnan(b)) and np.isfinite(b).any()

@@ -19,8 +19,7 @@ from .io.writer import model_to_dict, save
 from .model import Body, Driver, Joint, Load, Model
 from .studies import sweep
 from .studies.optimize import optimize
-
-__version__ = "0.1.0"
+from ._version import __version__
 
 load = load_model
 

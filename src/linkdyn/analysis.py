@@ -12,7 +12,8 @@ from functools import cached_property, partial
 
 import numpy as np
 
-from . import batch, compiled, kinematics, loads as loads_mod, reactions as reactions_mod
+from . import backend as backend_mod
+from . import batch, kinematics, loads as loads_mod, reactions as reactions_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics,  # noqa: F401
@@ -388,7 +389,8 @@ def times_argument(func: str, t) -> np.ndarray:
 
 
 def _arguments(model, t, allow_singular, backend):
-    """``analyze``'s arguments checked and normalized: ``(model, t, backend)``.
+    """``analyze``'s arguments checked and normalized: ``(model, t, backend)``, the backend
+    chosen for the work (:func:`linkdyn.backend.choose`).
 
     Raises TypeError naming the parameter for a wrong type and ModelError (field ``model``,
     ``t``, ``backend`` or ``LINKDYN_BACKEND``) for a wrong value.
@@ -418,20 +420,13 @@ def _arguments(model, t, allow_singular, backend):
                          fix="Pass finite times, e.g. numpy.linspace(0, duration, samples)")
     if not isinstance(allow_singular, (bool, np.bool_)):
         raise wrong_type("analyze", "allow_singular", allow_singular, "True or False")
-    if backend is not None and not isinstance(backend, str):
+    if backend is not None and not isinstance(backend, (str, backend_mod.Backend)):
         raise wrong_type("analyze", "backend", backend, "a str")
-    field = "backend" if backend else "LINKDYN_BACKEND"
-    name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
-    if name not in compiled.BACKENDS:
-        raise InvalidValue(f"unknown backend '{name}'", field=field,
-                         fix=f"Use one of {', '.join(compiled.BACKENDS)}"
-                             + ("" if backend else ", or unset LINKDYN_BACKEND"))
     first = model if isinstance(model, Model) else model[0]
-    missing = compiled.unsupported(j.kind for j in first.joints)
-    if name == "compiled" and missing:
-        raise InvalidValue(f"the compiled backend does not support {', '.join(missing)} joints",
-                         field=field, fix="Use the numpy or auto backend")
-    return model, t, name
+    designs = 1 if isinstance(model, Model) else len(model)
+    be = backend_mod.choose(backend, backend_mod.Work(t.size * designs, len(first.bodies) - 1),
+                            [j.kind for j in first.joints])
+    return model, t, be
 
 
 def _load_field(model, k: int) -> str:
@@ -524,23 +519,33 @@ def _design_reactions(sol: Solution, k: int):
     return batch.reactions(sol.reactions, k)
 
 
-def _backend(fast: bool) -> tuple:
-    """The dynamics and reactions stages of one backend, ``dynamics(kin, loads)`` and
-    ``reactions(model, kin, loads, dyn)``: the compiled kernels or the numpy solvers."""
-    if fast:
-        return compiled_dynamics.solve, _compiled_reactions
+def stage_functions(backend: backend_mod.Backend) -> tuple:
+    """The dynamics and reactions stages of ``backend``, ``dynamics(kin, loads)`` and
+    ``reactions(model, kin, loads, dyn)``: the compiled kernels or the numpy solvers (the one
+    place that maps a backend to them; ``simulate``'s outputs ask it too)."""
+    if backend.compiled:
+        return _compiled_dynamics, _compiled_reactions
     return denoc.solve, _numpy_reactions
 
 
+def _compiled_dynamics(kin, applied):
+    dyn = compiled_dynamics.solve(kin, applied)
+    backend_mod.mark_cached("dynamics")
+    return dyn
+
+
 def _compiled_reactions(model, kin, applied, dyn):
-    return compiled_dynamics.reactions(kin, applied, dyn)
+    react = compiled_dynamics.reactions(kin, applied, dyn)
+    backend_mod.mark_cached("reactions")
+    return react
 
 
 def _numpy_reactions(model, kin, applied, dyn):
     return reactions_mod.solve(model, kin, dyn)
 
 
-def _stages(model, t, backend: str, layout=None, reactions: bool = True, start=None):
+def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool = True,
+            start=None):
     """The stages of an analysis composed: ``(kin, applied, dyn, react, valid)``, ``valid`` the
     samples that close clear of a singular position. ``model``: a Model, or D Models (a batch;
     with ``layout``, their stacked layout, and the models only give their ``[assembly]``
@@ -549,21 +554,31 @@ def _stages(model, t, backend: str, layout=None, reactions: bool = True, start=N
     first read."""
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
-    fast = compiled.use_compiled(backend, t.size * len(models), [j.kind for j in models[0].joints])
     # without reactions and applied loads, the compiled dynamics runs in the kinematics'
     # blocks (dynamics.compiled.sweep), and the kinematics keep less per sample
-    fused = (fast and not reactions and layout is not None
+    fused = (backend.compiled and not reactions and layout is not None
              and compiled_dynamics.fusable(layout))
-    kin = kinematics.solve(model, t, layout=layout, backend="compiled" if fast else "numpy",
-                           start=start, run=compiled_dynamics.sweep if fused else None)
+    kin = kinematics.solve(model, t, layout=layout, backend=backend, start=start,
+                           run=compiled_dynamics.sweep if fused else None)
     # a batch: gravity, loads' values, springs and dampers from the layout, per design
     applied = loads_mod.wrenches(None if designs else model, kin)
-    dynamics, reactions_stage = _backend(fast)
+    dynamics, reactions_stage = stage_functions(backend)
     swept = getattr(kin, "swept", None) is not None   # the dynamics already solved
+    if swept:
+        backend_mod.mark_cached("sweep")
     dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)
     react = partial(reactions_stage, models[0], kin, applied, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     return kin, applied, dyn, react() if reactions else react, valid
+
+
+def layout_stages(layout, reactions: bool) -> tuple[str, ...]:
+    """The stages (:data:`linkdyn.backend.STAGES`) that :func:`analyze_layout` runs compiled
+    for ``layout``: the sweep kernel alone without reactions and applied loads (gravity
+    aside), else the kinematics, the dynamics and, if asked, the reactions."""
+    if not reactions and compiled_dynamics.fusable(layout):
+        return ("sweep",)
+    return ("kinematics", "dynamics") + (("reactions",) if reactions else ())
 
 
 def analyze_layout(models, layout, t, *, backend: str | None = None, designs=None,
@@ -598,8 +613,12 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
         pass a singular position flagged in ``valid``, never raised).
     """
     t = np.asarray(t, dtype=float)
-    name = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
-    kin, applied, dyn, react, valid = _stages(list(models), t, name, layout, reactions, start)
+    models = list(models)
+    be = backend_mod.choose(backend, backend_mod.Work(t.size * layout.designs,
+                                                      len(models[0].bodies) - 1,
+                                                      stages=layout_stages(layout, reactions)),
+                            [j.kind for j in models[0].joints])
+    kin, applied, dyn, react, valid = _stages(models, t, be, layout, reactions, start)
     valid = _finite(models[0], kin, applied, dyn, react, valid, False)
     return Solution(models[0], kin, applied, dyn, react, valid,
                     designs if designs is not None else tuple(models))
@@ -625,8 +644,10 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
         Keep samples that do not close or are singular as NaN rows instead of raising.
     backend : {'auto', 'numpy', 'compiled'}, optional
         Run the per-sample work in numpy array passes or in the compiled kernels of
-        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
-        numba is installed and the batch is large). Both give the same numbers to rounding.
+        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: the one expected
+        to finish first for this many samples and bodies, counting the kernels' first
+        compilation unless numba's cache holds them, :func:`linkdyn.backend.choose`). Both
+        give the same numbers to rounding.
 
     Raises
     ------

@@ -51,6 +51,8 @@ def main():
     multipliers) and the driver efforts come from one small linear solve per sample, then every
     other joint reaction body by body.
     """
+    from .backend import show_progress
+    show_progress(lambda line: click.echo(line, err=True))   # e.g. before a first compilation
 
 
 # ---------------------------------------------------------------------------- example

@@ -27,8 +27,8 @@ cut-joint constraints (coordinate partitioning, F1).
   integrated less their whole turns (F12); the solver's history moves with its state
   (:func:`restate`).
 - The right-hand side runs numpy's stages, or one compiled function per evaluation
-  (:mod:`linkdyn.forward_compiled`, ``backend=``); the outputs of a compiled run are computed
-  by the compiled kernels of ``analyze``'s stages.
+  (:mod:`linkdyn.forward_compiled`, ``backend=``, chosen by :mod:`linkdyn.backend`); the
+  outputs of a compiled run are computed by the compiled kernels of ``analyze``'s stages.
 """
 
 from __future__ import annotations
@@ -41,8 +41,8 @@ from functools import cached_property
 
 import numpy as np
 
-from . import compiled, joints as jk, loads as loads_mod
-from .analysis import SINGULAR, Solution, _backend, blame_loads, times_argument
+from . import backend as backend_mod, joints as jk, loads as loads_mod
+from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
 from .errors import ArgumentError, AssemblyError, ModelError, quiet, wrong_type
 from .kinematics.layout import ANGULAR, Layout, compile_layout
@@ -70,8 +70,6 @@ PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
 # moves with a constant shift of the state (:func:`restate`; not LSODA, ODEPACK's)
 UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
-AUTO_RHS = 20_000    # backend "auto": right-hand sides after which the compiled one is used
-#                      (compiling costs ~30 s once, about as much as 20,000 numpy evaluations)
 
 
 class _Free:
@@ -549,7 +547,7 @@ def _arguments(model, t, rtol, atol, method, max_steps, backend, project):
     if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
         raise ArgumentError(f"simulate: max_steps must be a positive int, got {max_steps!r}",
                             field="max_steps", fix="Pass e.g. max_steps=50000")
-    if backend is not None and not isinstance(backend, str):
+    if backend is not None and not isinstance(backend, (str, backend_mod.Backend)):
         raise wrong_type("simulate", "backend", backend, "a str")
     if not isinstance(project, (bool, np.bool_)):
         raise wrong_type("simulate", "project", project, "True or False")
@@ -579,10 +577,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     backend : {'auto', 'numpy', 'compiled'}, optional
         The right-hand side's evaluation (default ``LINKDYN_BACKEND`` or ``'auto'``): numpy's
         array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
-        with numba installed); ``'auto'`` compiles once a run has made :data:`AUTO_RHS`
-        evaluations. The outputs are computed by the same backend's stages: once the compiled
-        right-hand side runs, it gives their free accelerations and closed positions, and the
-        compiled kinematics, dynamics and reactions kernels the rest.
+        with numba installed); ``'auto'`` starts on numpy and switches to compiled once the
+        evaluations made would have paid for the compiled code's start-up (loading it from
+        numba's cache, or its first compilation: :meth:`linkdyn.backend.Backend.pays_after`).
+        The outputs are computed by the same backend's stages: once the compiled right-hand
+        side runs, it gives their free accelerations and closed positions, and the compiled
+        kinematics, dynamics and reactions kernels the rest.
     project : bool
         With a one-step method (RK45, DOP853, RK23, Radau): after every accepted step, scale
         the free rates onto the energy balance ``T + V - W = E(0)`` (F11), which keeps the
@@ -608,16 +608,16 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                                       project)
     src = model.source
     kinds = [j.kind for j in model.joints]
-    try:
-        fast = compiled.use_compiled(backend, 0, kinds)                  # asked for
-        may = compiled.use_compiled(backend, compiled.AUTO_MIN_SAMPLES, kinds)   # once it pays
-    except (ValueError, ImportError) as err:
-        raise ModelError(str(err), field="backend" if backend else "LINKDYN_BACKEND",
-                         fix=f"Use one of {', '.join(compiled.BACKENDS)}"
-                             + ("" if backend else ", or unset LINKDYN_BACKEND")) from None
+    backend_mod.choose(backend, None, kinds)
     part = partition(model, free)
     topo = part.layout.topo
     nd, nf = part.n_drivers, len(part.free)
+    # the work of a right-hand side: the 1 + f inverse dynamics of F5 over the moving bodies
+    work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
+    be = backend_mod.choose(backend, work, kinds)
+    pays = be.pays_after(work)
+    fast = be.compiled
+    compiled_after = 0 if fast else None
     q0 = _start(part)
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
@@ -731,16 +731,24 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     system.shift(list(topo_free(part)), whole)
                     system.accept(solver.t, solver.y)
             y, t_now = solver.y, solver.t
-            if may and not fast and nfev + system.nfev >= AUTO_RHS:
-                fast = True          # "auto": the compiled right-hand side pays from here on
-                system.use_compiled()
+            if nfev + system.nfev >= pays:
+                # "auto": numpy's evaluations so far would have paid for the compiled start-up
+                be = be.reconsider(backend_mod.Work(1 + nf, work.bodies, nfev + system.nfev,
+                                                    work.stages))
+                pays = be.pays_after(work)
+                if be.compiled:
+                    fast, compiled_after = True, nfev + system.nfev
+                    system.use_compiled()
             if _better(part, J) is not None:
                 break
     nfev += system.nfev
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
-                 energy_projections=projections)
-    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel)
+                 energy_projections=projections, backend=be.name,
+                 compiled_after=compiled_after)
+    if fast:
+        backend_mod.mark_cached("rhs")
+    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
 
 
 def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
@@ -876,16 +884,17 @@ def _hermite(a, b, t):
             + v1[:, None] * (h * h11))
 
 
-def _outputs(parts: list[Partition], segment, t, Y, guesses, stats,
-             kernel=None) -> Simulation:
+def _outputs(parts: list[Partition], segment, t, Y, guesses, stats, kernel,
+             backend) -> Simulation:
     """Every ``analyze`` quantity at the output states, each sample in the partition it was
     integrated in (``parts[segment[k]]``, all on one tree): the free accelerations (F6), then
     the kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as
     ``analyze``; the segments' results joined along the samples. With ``kernel`` (the run's
-    compiled right-hand side) the free accelerations and closed positions come from it."""
+    compiled right-hand side) the free accelerations and closed positions come from it, and
+    ``backend`` (the run's) gives the stages after it."""
     groups = [np.flatnonzero(segment == k) for k in range(len(parts))]
     groups = [(parts[k], g) for k, g in enumerate(groups) if len(g)]
-    done = [_stages(p, t[g], Y[:, g], guesses[:, g], kernel) for p, g in groups]
+    done = [_stages(p, t[g], Y[:, g], guesses[:, g], kernel, backend) for p, g in groups]
     stats["free_effort_residual"] = max(d[-2] for d in done)
     stats["closure_residual"] = max(d[-1] for d in done)
     if len(done) == 1:
@@ -897,14 +906,15 @@ def _outputs(parts: list[Partition], segment, t, Y, guesses, stats,
                       free=parts[0].free, stats=stats)
 
 
-def _stages(part: Partition, t, Y, guesses, kernel=None):
+def _stages(part: Partition, t, Y, guesses, kernel, backend):
     """``(kin, loads, dyn, reactions, valid, free effort residual, closure residual)`` at the
     output states ``Y`` (2 nf + 1, T) of one partition, ``guesses`` (n, T) their tree
     coordinates; ``kernel``: the run's compiled right-hand side (:class:`.forward_compiled.Kernel`,
     of any partition), which then gives the free accelerations and the closed positions
     (numpy's stages where its Newton's method does not close the loops), and the stages after
     it are the compiled kernels (the kinematics kernel at the closed positions, the dynamics
-    and reactions kernels), as ``analyze`` chooses them (:func:`.analysis._backend`)."""
+    and reactions kernels) of ``backend``, the run's, as ``analyze`` maps a backend to them
+    (:func:`.analysis.stage_functions`)."""
     model, lay = part.model, part.layout
     nd, nf = part.n_drivers, len(part.free)
     q_f, qd_f = Y[:nf], Y[nf:2 * nf]
@@ -937,7 +947,7 @@ def _stages(part: Partition, t, Y, guesses, kernel=None):
             guesses[:, open_] = close(lay, q_ind[:, open_], guesses[:, open_])[0]
         kin = at_closed(part.inner, lay, t, guesses, qd_ind, qdd_ind)
     applied = loads_mod.wrenches(model, kin)
-    dynamics, reactions_stage = _backend(kernel is not None)
+    dynamics, reactions_stage = stage_functions(backend)
     dyn = dynamics(kin, applied)
     react = reactions_stage(part.inner, kin, applied, dyn)
     # the free joints' efforts vanish at the solution of F6: what is left is rounding

@@ -12,9 +12,10 @@ topology's integer arrays (computed once per layout) and views of its numbers wi
 axis last, ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(..., D, T)``.
 
 Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
-variable ``LINKDYN_BACKEND``. ``"auto"`` compiles only for batches of at least
-:data:`AUTO_MIN_SAMPLES` samples: the first use compiles the kernels (40-45 s, then cached
-on disk beside the modules), which only a large batch repays.
+variable ``LINKDYN_BACKEND``; :mod:`linkdyn.backend` resolves it, ``"auto"`` by the work to be
+done and by whether numba's on-disk cache (beside the modules) already holds the kernels: their
+first compilation takes about a minute of CPU, loading them from the cache a fraction of a
+second.
 
 The equations themselves are the steps of :mod:`linkdyn.steps` (registered here with numba),
 which the numpy solvers call on whole arrays. numba caches each kernel on disk by its own file
@@ -38,8 +39,8 @@ try:  # optional: the numpy path is complete without it
 except ImportError:  # pragma: no cover - depends on the environment
     numba = None
 
-BACKENDS = ("auto", "numpy", "compiled")
-AUTO_MIN_SAMPLES = 200_000   # batch size (samples x designs) from which "auto" compiles
+# beside the stamp of the sources: which stages' kernels numba's cache holds (linkdyn.backend)
+CACHE_RECORD = "numba-stages.json"
 
 # joint kind codes inside the kernels: the registry's (linkdyn.joints.CODES; 0 the ground)
 GROUND, REV, PRI = 0, jk.CODES["revolute"], jk.CODES["prismatic"]
@@ -123,7 +124,8 @@ def choose(cond, a, b):
 def _drop_stale_caches() -> None:
     """Delete the kernels' on-disk caches when any source file of the package has changed
     since they were written (numba checks only each kernel's own file, not the steps it
-    calls). The package's files' sizes and modification times are the stamp."""
+    calls), and the record of which stages they hold (:data:`CACHE_RECORD`). The package's
+    files' sizes and modification times are the stamp."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     files = sorted(os.path.join(d, f) for d, _, fs in os.walk(root) for f in fs
                    if f.endswith(".py"))
@@ -140,7 +142,7 @@ def _drop_stale_caches() -> None:
     try:
         for d, _, fs in os.walk(root):
             for f in fs:
-                if f.endswith((".nbi", ".nbc")):
+                if f.endswith((".nbi", ".nbc")) or f == CACHE_RECORD:
                     os.remove(os.path.join(d, f))
         os.makedirs(os.path.dirname(path), exist_ok=True)
         with open(path, "w") as fh:
@@ -158,30 +160,6 @@ def unsupported(kinds) -> list[str]:
     """The joint kinds among ``kinds`` that the kernels have no code for (not in :data:`CODES`:
     none of the registered kinds)."""
     return sorted({k for k in kinds if k not in CODES})
-
-
-def use_compiled(backend: str | None = None, samples: int = 0, kinds=()) -> bool:
-    """Whether to run the compiled kernels for ``backend`` (default: ``LINKDYN_BACKEND`` or
-    ``"auto"``, which uses them when numba is installed, the batch has at least
-    :data:`AUTO_MIN_SAMPLES` ``samples`` and the kernels know every joint kind in ``kinds``).
-
-    Raises
-    ------
-    ValueError
-        An unknown backend, or ``"compiled"`` asked for a model with a joint kind the kernels
-        do not support (``"auto"`` then runs numpy).
-    """
-    backend = (backend or os.environ.get("LINKDYN_BACKEND") or "auto").lower()
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, not {backend!r}")
-    missing = unsupported(kinds)
-    if backend == "compiled" and missing:
-        raise ValueError(f"the compiled backend does not support {', '.join(missing)} joints; "
-                         "use backend='numpy' or 'auto' (which runs numpy for this model)")
-    if backend == "compiled" and numba is None:
-        raise ImportError("the compiled backend needs numba: pip install 'linkdyn[fast]'")
-    return backend == "compiled" or (backend == "auto" and numba is not None and not missing
-                                      and samples >= AUTO_MIN_SAMPLES)
 
 
 @inline

@@ -163,7 +163,6 @@ def _point(model: Model, body: str, joint) -> np.ndarray:
 def slider_cranks(model: Model) -> list[SliderCrank]:
     """Every slider-crank dyad: a guide on the ground (:func:`linkdyn.report.keys.slider_rods`)
     whose rod's other joint is on a crank pinned to the ground by a revolute joint."""
-    from ..report.keys import slider_rods
 
     out = []
     for g, rod, pin, other in slider_rods(model):
@@ -194,3 +193,28 @@ def free_coordinates(model: Model):
 
     part = forward.partition(model)
     return part, forward._start(part)
+
+
+def slider_rods(m) -> list:
+    """``(guide joint, rod, rod's pin point on the slider, rod's other joint point)`` for each
+    guide fixed on the ground (a joint with an axis, not angular) whose slider is pinned to a
+    rod with a second joint: the slider-crank's RRP dyads. (A guide on a moving link, as in an
+    inverted slider-crank, has another transmission angle and is left out.)"""
+    out = []
+    for g in m.joints:
+        kind = jk.get(g.kind)
+        if kind.angular or "axis" not in kind.keys or g.body_a != GROUND:
+            continue
+        slider = g.body_b
+        for r in m.joints:
+            if r is g or not jk.get(r.kind).angular or slider not in (r.body_a, r.body_b):
+                continue
+            rod, pin = (r.body_a, r.point_a) if r.body_b == slider else (r.body_b, r.point_b)
+            if rod in (GROUND, g.body_a):
+                continue
+            others = [(j.point_a if j.body_a == rod else j.point_b) for j in m.joints
+                      if j is not r and rod in (j.body_a, j.body_b)]
+            others = [p for p in others if p != pin]
+            if others:
+                out.append((g, rod, pin, others[0]))
+    return out

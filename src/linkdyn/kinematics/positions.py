@@ -309,7 +309,7 @@ class Branch:
 
 
 def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
-           start: np.ndarray | None = None, compiled: bool = False) -> Branch:
+           start: np.ndarray | None = None, nodes=None) -> Branch:
     """Assemble at t = 0 on the branch of the ``[assembly]`` guess and follow it through
     continuation nodes over the times ``t`` (driver travel at most ``STEP_ANGLE`` rad or
     ``STEP_LENGTH`` of the size between nodes: a loop over driver steps, not samples).
@@ -318,8 +318,10 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     raises :class:`AssemblyError`; else a design that cannot be assembled is NaN. ``start``
     (n, D): the designs' assembly, already solved by :func:`assemble` (a sweep assembles a
     chunk's designs at once, then solves them in batches; each design's assembly does not
-    depend on the designs solved with it). ``compiled``: close the nodes of a mechanism of
-    dyads by the compiled kernel (:mod:`.compiled_nodes`; the same steps, to rounding).
+    depend on the designs solved with it). ``nodes``: another backend's closing of a mechanism
+    of dyads' nodes, ``nodes(lay, Q, QD_drv, modes, q0, k0) -> (Q, QD_dep, ok)`` as
+    :func:`_follow_dyads` does it here (the compiled backend's
+    :func:`.compiled_nodes.close`: the same steps, to rounding); default these numpy passes.
     """
     q_start = start if start is not None else assemble(
         models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0, raise_error=single)
@@ -331,7 +333,7 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
     if not lay.topo.dependent or not hi > lo:
         return Branch(q_start, modes)
-    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes, compiled))
+    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes, nodes))
 
 
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
@@ -357,15 +359,14 @@ def _at_node(x: np.ndarray, k: int, ndim: int) -> np.ndarray:
     return x.reshape(x.shape + (1,) * (ndim - x.ndim))
 
 
-def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None,
-            compiled: bool = False):
+def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes=None):
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
     Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
     interval ``reach`` (..., 2) over which each branch was followed."""
     if lay.dyads is not None:
-        return _follow_dyads(lay, q0, lo, hi, modes, compiled)
+        return _follow_dyads(lay, q0, lo, hi, modes, nodes)
     if q0.ndim == 1:
         return _follow_newton(lay, q0, lo, hi)
     # designs: Newton's batch is (D, 1), the trailing axis standing for time
@@ -404,12 +405,11 @@ def unwrap_step(ok_a, ok_b, q_a, q_b):
     return select(ok_a & ok_b, wrapped(q_b - q_a), 0.0)
 
 
-def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes,
-                  compiled: bool = False):
+def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes, close=None):
     """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
-    in closed form in the assembly ``modes`` (``compiled``: by the compiled kernel of
-    :mod:`.compiled_nodes`), and the dependent angles are unwrapped along the nodes (which
-    the driver crosses in steps of at most ``STEP_ANGLE``)."""
+    in closed form in the assembly ``modes`` (by ``close`` if given: :func:`follow`'s
+    ``nodes``), and the dependent angles are unwrapped along the nodes (which the driver
+    crosses in steps of at most ``STEP_ANGLE``)."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
     nodes = np.unique(np.concatenate((_travel_nodes(lay, 0.0, lo),
@@ -419,9 +419,8 @@ def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes,
     shape = (len(drv),) + q0.shape[1:] + (len(nodes),)
     Q = np.repeat(q0[..., None], len(nodes), axis=-1)
     Q[drv] = nq.reshape(shape)
-    if compiled:   # closed, the rates solved and the angles unwrapped by the kernel
-        from . import compiled_nodes
-        Q, x, ok = compiled_nodes.close(lay, Q, nqd.reshape(shape), modes, q0, k0)
+    if close is not None:   # closed, the rates solved and the angles unwrapped by another backend
+        Q, x, ok = close(lay, Q, nqd.reshape(shape), modes, q0, k0)
     else:
         Q, pose = dyads.solve(lay, lay.dyads, Q, forward_positions, sides=modes)
         J = closure_jacobian(lay, pose, motion_vectors(lay, pose))

@@ -15,10 +15,11 @@ from functools import partial
 import numpy as np
 
 from .. import joints as jk
+from ..backend import Work, choose, mark_cached
 from ..errors import ModelError
-from .. import compiled
 from ..model import Model
 from . import compiled as kc
+from . import compiled_nodes
 from .layout import Layout, compile_designs, compile_layout
 from .positions import ACCEPT, Branch, follow
 from .recursion import Pose, motion_vectors
@@ -46,10 +47,11 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
         NaN instead of raising.
     t : array_like (T,)
         Sample times, s.
-    backend : {'auto', 'numpy', 'compiled'}, optional
+    backend : {'auto', 'numpy', 'compiled'} or linkdyn.backend.Backend, optional
         Run the per-sample work in numpy array passes or in the compiled kernels of
-        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: compiled when
-        numba is installed and the batch is large).
+        :mod:`linkdyn.compiled` (default ``LINKDYN_BACKEND`` or ``'auto'``: the one expected
+        to finish first, :func:`linkdyn.backend.choose`); ``analyze`` passes the backend it
+        chose.
     start : ndarray (n, D), optional
         The designs' tree coordinates assembled at t = 0 (:func:`.positions.assemble`, NaN
         for a design that does not assemble), if already solved.
@@ -70,12 +72,17 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     # the state: the drivers' coordinates, rates and accelerations, (n_drivers, T), with designs
     # (n_drivers, D, T)
     q_ind, qd_ind, qdd_ind = lay.driver_values(t)
-    fast = compiled.use_compiled(backend, t.size * len(models))   # the kernel runs every kind
+    be = choose(backend, Work(t.size * len(models), len(models[0].bodies) - 1,
+                              stages=("kinematics",)), [j.kind for j in models[0].joints])
     # the branch: the [assembly] guess describes the mechanism at t = 0; assembled there and
-    # followed to the samples
-    branch = follow(models, lay, t, single, start, compiled=fast)
-    if fast:
-        return _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch, run or kc.run)
+    # followed to the samples (on the compiled backend its nodes closed by its kernel)
+    branch = follow(models, lay, t, single, start,
+                    nodes=compiled_nodes.close if be.compiled else None)
+    if be.compiled:
+        kin = _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch, run or kc.run)
+        if run is None or run is kc.run:
+            mark_cached("kinematics")
+        return kin
     kin = at_state(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch.guess(lay, t), branch.modes)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, kin.residual)
@@ -183,6 +190,7 @@ def at_closed(model, lay: Layout, t, q, qd_ind, qdd_ind) -> KinematicSolution:
     """
     t = np.asarray(t, dtype=float)
     out = kc.run(lay, t, q[list(lay.topo.driven)], qd_ind, qdd_ind, q=q)
+    mark_cached("kinematics")
     return _from_kernel(model, lay, t, out, out["err"].reshape(t.shape))
 
 

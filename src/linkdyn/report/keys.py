@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import joints as jk
+from ..design.checks import slider_rods
 from ..model import GROUND
 
 NOISE = 1e-12  # relative to the scale of the quantity's unit family
@@ -155,31 +156,6 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
                       "note": f"max deviation over {float(ps.get('length_m') or 0) * 1e3:.4g} mm"
                               + (" (whole run)" if ps.get("range") is None else "")})
     return items
-
-
-def slider_rods(m) -> list:
-    """``(guide joint, rod, rod's pin point on the slider, rod's other joint point)`` for each
-    guide fixed on the ground (a joint with an axis, not angular) whose slider is pinned to a
-    rod with a second joint: the slider-crank's RRP dyads. (A guide on a moving link, as in an
-    inverted slider-crank, has another transmission angle and is left out.)"""
-    out = []
-    for g in m.joints:
-        kind = jk.get(g.kind)
-        if kind.angular or "axis" not in kind.keys or g.body_a != GROUND:
-            continue
-        slider = g.body_b
-        for r in m.joints:
-            if r is g or not jk.get(r.kind).angular or slider not in (r.body_a, r.body_b):
-                continue
-            rod, pin = (r.body_a, r.point_a) if r.body_b == slider else (r.body_b, r.point_b)
-            if rod in (GROUND, g.body_a):
-                continue
-            others = [(j.point_a if j.body_a == rod else j.point_b) for j in m.joints
-                      if j is not r and rod in (j.body_a, j.body_b)]
-            others = [p for p in others if p != pin]
-            if others:
-                out.append((g, rod, pin, others[0]))
-    return out
 
 
 def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:

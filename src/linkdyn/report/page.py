@@ -67,11 +67,8 @@ def _script(name: str) -> str:
 
 
 def _version() -> str:
-    try:
-        from .. import __version__
-        return __version__
-    except ImportError:  # pragma: no cover
-        return ""
+    from .._version import __version__
+    return __version__
 
 
 _SHELL = """<!DOCTYPE html>

@@ -25,6 +25,16 @@ import numpy as np
 
 from ..errors import ModelError
 
+
+def _pandas():
+    """pandas, or an ImportError that says how to install it."""
+    try:
+        import pandas as pd
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError("sweeps need pandas: pip install 'linkdyn[parquet]'") from exc
+    return pd
+
+
 CHUNKS = "chunks"
 STATE = "study.json"
 # a chunk, or a worker's temporary file of one (killed before its atomic rename)
@@ -112,7 +122,6 @@ def prepare_chunks(outdir: Path, fingerprint: str, designs: int, chunk: int,
 def read_chunk(outdir: Path, k: int, names, size: int) -> dict | None:
     """Chunk ``k``'s columns, or None when its file is damaged (it is then computed again):
     columns ``names`` of ``size`` rows, ``valid`` boolean."""
-    from .runner import _pandas
 
     try:
         df = _pandas().read_parquet(chunk_path(outdir, k))
@@ -177,7 +186,6 @@ def read_designs(path) -> tuple[np.ndarray, list[str]]:
     a device is refused at once) with at most :data:`MAX_PARAMETERS` columns.
     """
     from ..io.files import FileRefused, read_text
-    from .runner import _pandas
 
     def fail(message, fix):
         return ModelError(message, file=os.fspath(path), field="--designs-csv", fix=fix)
@@ -227,7 +235,6 @@ def read_sweep(folder, option: str = "--sweep"):
         not what a sweep writes (a key, a column or a type missing).
     """
     from ..io.files import read_text
-    from .runner import _pandas
 
     folder = Path(folder)
     spec, table = folder / "summary.json", folder / "designs.parquet"

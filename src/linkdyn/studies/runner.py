@@ -25,12 +25,13 @@ from typing import Any
 
 import numpy as np
 
-from .. import compiled
-from ..analysis import SINGULAR, analyze, analyze_layout, failure
+from .. import backend as backend_mod
+from ..analysis import SINGULAR, analyze, analyze_layout, failure, layout_stages
 from ..errors import AssemblyError, ModelError
 from ..kinematics import driver_values
 from ..kinematics.positions import assemble, not_assembled
 from . import checks, files
+from .files import _pandas
 from . import metrics as metrics_mod
 from . import vectorize
 from .params import Space
@@ -45,14 +46,6 @@ CHUNK_SAMPLES = (1_000_000, 10_000_000)
 # 5e4 where each batch's fixed Python costs (assembly, continuation nodes, metrics) take over,
 # 1.1-1.6 s at 2.5e5 and 4-6.5 s at 1e6)
 BATCH_SAMPLES = 150_000
-
-
-def _pandas():
-    try:
-        import pandas as pd
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("sweeps need pandas: pip install 'linkdyn[parquet]'") from exc
-    return pd
 
 
 # --- the designs ------------------------------------------------------------------------------
@@ -134,7 +127,7 @@ class Task:
     space: Space
     t: np.ndarray
     metrics: tuple[str, ...]
-    backend: str | None = None
+    backend: str | backend_mod.Backend | None = None   # chosen once for the sweep by run()
     path_point: str | None = None
     path_range: tuple | None = None
     fluctuation: float = 0.02
@@ -207,7 +200,7 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
     for k in apart:   # no assembly mode closes its dyads: analyze's error, nothing solved
         reason[k] = _reason(_not_assembled(task.space.model(values[k]), builder.layout))
     # the backend chosen once for the chunk, so that a small last batch runs it too
-    backend = _backend(task, D * len(task.t))
+    backend = _backend(task, D * len(task.t), builder.layout)
     at = 0   # the batch's columns of ``start``, the chunk's assembly
     for idx in batches:
         sub = lay if len(idx) == D else lay.take(idx)
@@ -221,11 +214,15 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
     return {"valid": valid, "reason": reason, **out}
 
 
-def _backend(task: Task, samples: int) -> str:
-    """The backend of ``task`` resolved for ``samples`` design-samples ('auto': compiled from
-    :data:`linkdyn.compiled.AUTO_MIN_SAMPLES`), so that every batch of a sweep runs it."""
-    kinds = [j.kind for j in task.space.model().joints]
-    return "compiled" if compiled.use_compiled(task.backend, samples, kinds) else "numpy"
+def _backend(task: Task, samples: int, layout=None) -> backend_mod.Backend:
+    """The backend of ``task`` chosen (:func:`linkdyn.backend.choose`) for ``samples``
+    design-samples of its model (``layout``: the study's, whose loads say whether the sweep
+    kernel runs it), so that every batch of a sweep runs it."""
+    base = task.space.model()
+    reactions = metrics_mod.reads_reactions(task.metrics)
+    stages = layout_stages(layout, reactions) if layout is not None else backend_mod.ANALYSIS
+    work = backend_mod.Work(samples, len(base.bodies) - 1, stages=stages)
+    return backend_mod.choose(task.backend, work, [j.kind for j in base.joints])
 
 
 def _batches(builder, lay, guesses, idx, T: int):
@@ -420,7 +417,7 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     if task.builder is None and D:   # the map from parameters to layouts, derived once
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
     if D:   # one backend for every chunk and batch, by the size of the whole sweep
-        task = replace(task, backend=_backend(task, D * T))
+        task = replace(task, backend=_backend(task, D * T, task.builder.layout))
     chunk = int(chunk or default_chunk(D, T, workers))
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}

@@ -33,6 +33,7 @@ so its reason is the loader's own message.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -42,7 +43,9 @@ from ..kinematics.layout import Layout, compile_layout
 from ..model import Model, point_spread
 from ..motion import ConstantSpeed
 from ..topology import build
-from .params import Space
+
+if TYPE_CHECKING:   # a study's Space is read, never built, here: params imports this module
+    from .params import Space
 
 RTOL = 1e-12  # affine and additive to this fraction of each number's scale over the probes
 
