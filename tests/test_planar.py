@@ -157,3 +157,81 @@ def test_solve_small_by_lapack_solves_and_flags_singular_samples():
             np.testing.assert_allclose(K[..., k] @ x[:, k], b[:, k], atol=1e-9)
             assert rel[k] > 1e-6
         assert np.all(np.isnan(x[:, 1:3])) and np.all(rel[1:3] < 1e-13)
+
+
+# --- the algebra the solvers' steps are written in (tuples of component arrays) ----------------
+
+def paper_mass_matrix(mass, inertia, d):
+    """M_i of eq. (10) about O_i (3, 3), the mass centre at ``d`` (2,) from O_i, written out."""
+    i_o = inertia + mass * d @ d
+    return np.array([[i_o, -mass * d[1], mass * d[0]], [-mass * d[1], mass, 0.0],
+                     [mass * d[0], 0.0, mass]])
+
+
+masses = st.floats(0.01, 10)
+
+
+@SETTINGS
+@given(masses, masses, arrays(2), arrays(3), arrays(3))
+def test_inertia_times_is_the_mass_matrix_and_symmetric(mass, inertia, d, x, y):
+    # M_O x against the paper's matrix, sample by sample; x . M y = y . M x; the kinetic energy
+    # 1/2 t . M_O t = 1/2 m |v_C|^2 + 1/2 I_C w^2, v_C the velocity of the mass centre
+    Mx = pl._stack(pl.inertia_times(mass, inertia, d, x))
+    for k in range(N):
+        close(Mx[:, k], paper_mass_matrix(mass, inertia, d[:, k]) @ x[:, k], 1e4)
+    My = pl._stack(pl.inertia_times(mass, inertia, d, y))
+    close(pl.dot(x, My), pl.dot(y, Mx), 1e6)
+    v_c = pl.shift_twist(x, d)[1:]
+    close(0.5 * pl.dot(x, Mx), 0.5 * mass * pl.dot(v_c, v_c) + 0.5 * inertia * x[0] ** 2, 1e6)
+
+
+@SETTINGS
+@given(masses, masses, arrays(2), arrays(3), arrays(3))
+def test_newton_euler_in_cross_products_is_the_paper_form(mass, inertia, d, t, td):
+    # M_O (td - crm(t, [0, v_O])) + t x* (M_O t) = M_i td_i + W_i M_i E_i t_i (eq. 10), the
+    # matrices of the paper written out (W_i = w~ on the force rows, E_i = diag(1, 0, 0))
+    a = pl._stack(pl.minus(td, pl.crm(t, pl.translation(pl.linear(t)))))
+    h = pl.inertia_times(mass, inertia, d, t)
+    got = pl._stack(pl.plus(pl.inertia_times(mass, inertia, d, a), pl.crf(t, h)))
+    for k in range(N):
+        M = paper_mass_matrix(mass, inertia, d[:, k])
+        w = t[0, k]
+        W = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -w], [0.0, w, 0.0]])
+        want = M @ td[:, k] + W @ M @ np.diag([1.0, 0.0, 0.0]) @ t[:, k]
+        close(got[:, k], want, 1e5)
+
+
+@SETTINGS
+@given(arrays(3), arrays(3), arrays(2), arrays(2))
+def test_at_moving_is_the_rate_of_the_shift(t, td, a, da):
+    # d/ds A(a + s da) (t + s td) at s = 0, by a central difference (exact up to rounding:
+    # the shift is bilinear in a and t)
+    h = 0.5
+    fd = (pl.shift_twist(t + h * td, a + h * da) - pl.shift_twist(t - h * td, a - h * da)) / (2 * h)
+    shifted, rate = pl.at_moving(t, td, a, da)
+    close(pl._stack(shifted), pl.shift_twist(t, a), 1e2)
+    close(pl._stack(rate), fd, 1e3)
+
+
+@SETTINGS
+@given(angles, arrays(2), arrays(2), arrays(2), arrays(2))
+def test_points_vectors_and_pure_parts(angle, r, p, v, f):
+    c, s = np.cos(angle), np.sin(angle)
+    # a body point r + R p: a rigid transform keeps distances, and is the shift's translation
+    close(pl._stack(pl.placed(c, s, r, p)), r + pl.rotate(angle, p), 1e2)
+    q = pl._stack(pl.placed(c, s, r, v))
+    close(pl.dot(q - pl._stack(pl.placed(c, s, r, p)), q - pl._stack(pl.placed(c, s, r, p))),
+          pl.dot(v - p, v - p), 1e3)
+    close(pl._stack(pl.relative(p, pl.offset(p, v))), v, 1e2)
+    # the power of a translation on a pure force is v . f, on a couple zero; a couple is the
+    # same about every point, a pure force gains the moment a x f
+    m, n = pl.translation(v), pl.pure_force(f)
+    close(pl.dot(m, n), pl.dot(v, f), 1e3)
+    close(pl.dot(m, pl.couple(f[0])), np.zeros(N))
+    close(pl._stack(pl.about(pl.couple(f[0]), p)), pl._stack(pl.couple(f[0])), 10)
+    close(pl.about(n, p)[0], pl.cross(p, f), 1e2)
+    # the vector space operations
+    x, y = pl.force(f[0], v), pl.force(v[1], f)
+    close(pl._stack(pl.minus(pl.plus(x, y), y)), x, 1e2)
+    close(pl._stack(pl.plus(pl.scaled(angle, x), pl.negated(pl.scaled(angle, x)))),
+          np.zeros((3, N)), 1e2)
