@@ -321,16 +321,17 @@ def _inverse_dynamics(L, c, s, r, e, tw, td, w_ext, wt, Q):
 # --- the kernel --------------------------------------------------------------------------------
 
 @njit
-def rhs_kernel(L, loads, lnum, roots, code, value, t0, t, y, drv, ext, ref, S, o_y, o_state,
+def rhs_kernel(held, loads, lnum, roots, code, value, t0, t, y, drv, ext, ref, S, o_y, o_state,
                o_J, o_e):
     """``y' = F(t, y)`` (F7) at one state, ``y = [q_f, qd_f, W]``.
 
     Parameters
     ----------
-    L : View
-        The partition's layout as the kernels read it (:attr:`.kinematics.layout.Layout.view`,
-        one design): ``L.driven`` the independent tree bodies (drivers', then free),
-        ``L.dependent`` the dependent ones.
+    held : numba typed List
+        Of one item, ``L``: the partition's layout as the kernels read it
+        (:attr:`.kinematics.layout.Layout.view`, one design; ``L.driven`` the independent tree
+        bodies, drivers' then free, ``L.dependent`` the dependent ones), held in a list so that
+        a call passes one object, not the view's forty arrays (:class:`Kernel`).
     loads, lnum, roots, code, value
         The loads (:func:`_loads`) and their formulas' program (:func:`run_program`), whose
         variables are ``[t, q of each joint, qd of each joint, ext]``.
@@ -356,6 +357,7 @@ def rhs_kernel(L, loads, lnum, roots, code, value, t0, t, y, drv, ext, ref, S, o
         0: done (``y'`` NaN where the state is singular); 1: Newton's method from the guess
         did not close the loops (nothing written: the caller takes the numpy path).
     """
+    L = held[0]
     ind, dep = L.driven, L.dependent
     n, m, k_ind, nc = L.parent.shape[0], dep.shape[0], ind.shape[0], L.cut_a.shape[0]
     nd = drv.shape[1]
@@ -546,10 +548,22 @@ def tables(part) -> dict:
     its layout's view (``view``, :attr:`linkdyn.kinematics.layout.Layout.view`, one design)
     and its loads' tables (:func:`_load_tables`)."""
     lay = part.layout
-    out = dict(view=lay.view)
+    out = dict(view=_held(lay.view))
     out.update(_load_tables(lay, len(part.inner.joints)))
     return {k: np.ascontiguousarray(v) if isinstance(v, np.ndarray) else v
             for k, v in out.items()}
+
+
+def _held(view):
+    """The view in a numba typed List of one item (the kernel then unboxes one object per call;
+    the view itself without numba)."""
+    try:
+        from numba.typed import List
+    except ImportError:  # pragma: no cover
+        return [view]
+    held = List()
+    held.append(view)
+    return held
 
 
 def _load_tables(lay, n_joints: int) -> dict:
