@@ -45,7 +45,7 @@ from . import backend as backend_mod, joints as jk, loads as loads_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
 from .errors import ArgumentError, AssemblyError, ModelError, quiet, wrong_type
-from .kinematics.layout import ANGULAR, Layout, compile_layout
+from .kinematics.layout import Layout, compile_layout
 from .kinematics.positions import assembly_guess, assemble, driver_values
 from .kinematics.solution import at_closed
 from .kinematics.state import at_state, close
@@ -857,7 +857,7 @@ def _growth(part: Partition, J: np.ndarray) -> float:
         return np.inf
     if not len(dep):
         return 1.0
-    unit = np.where(lay.tree[:, ANGULAR], 1.0, float(lay.size))   # rad, or m per size
+    unit = np.where(lay.view.angular, 1.0, float(lay.size))   # rad, or m per size
     with np.errstate(all="ignore"):
         try:
             S = np.linalg.solve(J[:, dep - 1] * unit[dep], -J[:, free - 1] * unit[free])

@@ -29,9 +29,6 @@ from . import joints as jk
 from .analysis import SINGULAR
 from .compiled import factor, njit, substitute
 from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
-from .kinematics import layout as lt
-from .kinematics.layout import (ANGULAR, CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
-                                SIGN)
 from .kinematics.compiled import PIVOT_TOL
 from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
@@ -41,11 +38,6 @@ from .loads import body_point, damper_force, force_at, spring_force, weight
 from .planar import turned
 
 
-# columns of the integer tables: the layout's, each tree row with its model joint appended
-# (n, 5), each cut row with its model joint before its metres (nc, 9)
-JOINT = ANGULAR + 1
-CUT_JOINT = lt.CUT_METRES
-CUT_METRES = CUT_JOINT + 1
 # load kinds (loads (L, 6): [kind, body, body2, joint, value row 1, value row 2])
 LOAD_KINDS = {"force": 0, "torque": 1, "joint_torque": 2, "joint_force": 3, "spring": 4,
               "damper": 5}
@@ -132,90 +124,95 @@ def run_program(code, value, x, reg):
 
 # --- the stages of one state -------------------------------------------------------------------
 
+# The stages read the layout's view ``L`` (:attr:`linkdyn.kinematics.layout.Layout.view`) by
+# name, its one design (index 0 of the design axis).
+
 @njit
-def _place(tree, geo, q, phi, c, s, r, e):
+def _place(L, q, phi, c, s, r, e):
     """Poses of all bodies from the tree coordinates ``q`` (:func:`child_pose`)."""
-    for i in range(1, tree.shape[0]):
-        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
-        turn = (math.cos(sign * q[i]), math.sin(sign * q[i])) if tree[i, ANGULAR] else (1.0, 0.0)
-        ph, co, si, o, ax = child_pose(code, sign, q[i], turn, geo[i, 4],
-                                       (geo[i, 2], geo[i, 3]), (geo[i, 0], geo[i, 1]), phi[p],
-                                       c[p], s[p], (r[p, 0], r[p, 1]))
+    for i in range(1, L.parent.shape[0]):
+        p, code, sign = L.parent[i], L.kind[i], float(L.sign[i])
+        turn = (math.cos(sign * q[i]), math.sin(sign * q[i])) if L.angular[i] else (1.0, 0.0)
+        ph, co, si, o, ax = child_pose(code, sign, q[i], turn, L.angle[i, 0],
+                                       (L.axis[i, 0, 0], L.axis[i, 1, 0]),
+                                       (L.joint_point[i, 0, 0], L.joint_point[i, 1, 0]),
+                                       phi[p], c[p], s[p], (r[p, 0], r[p, 1]))
         phi[i], c[i], s[i], r[i, 0], r[i, 1], e[i, 0], e[i, 1] = ph, co, si, o[0], o[1], ax[0], ax[1]
 
 
 @njit
-def _frames(cuts, cgeo, c, s, r, P):
+def _frames(L, c, s, r, P):
     """Every cut's points on its bodies and its axis, global (:func:`cut_frame`): ``P``
     (nc, 6) rows ``[r_Pa, r_Pb, e_a]``."""
-    for k in range(cuts.shape[0]):
-        a, b = cuts[k, CUT_A], cuts[k, CUT_B]
+    for k in range(L.cut_a.shape[0]):
+        a, b = L.cut_a[k], L.cut_b[k]
         r_pa, r_pb, e_a = cut_frame(c[a], s[a], (r[a, 0], r[a, 1]), c[b], s[b],
-                                    (r[b, 0], r[b, 1]), (cgeo[k, 0], cgeo[k, 1]),
-                                    (cgeo[k, 2], cgeo[k, 3]), (cgeo[k, 4], cgeo[k, 5]))
+                                    (r[b, 0], r[b, 1]), (L.cut_pa[k, 0, 0], L.cut_pa[k, 1, 0]),
+                                    (L.cut_pb[k, 0, 0], L.cut_pb[k, 1, 0]),
+                                    (L.cut_axis[k, 0, 0], L.cut_axis[k, 1, 0]))
         P[k, 0], P[k, 1], P[k, 2], P[k, 3], P[k, 4], P[k, 5] = (r_pa[0], r_pa[1], r_pb[0],
                                                                  r_pb[1], e_a[0], e_a[1])
 
 
 @njit
-def _residual(cuts, cgeo, size, phi, P, g):
+def _residual(L, phi, P, g):
     """The closure residual ``g`` (n_rows,) (the kinds' ``residual``); returns it scaled, the
-    largest row with the metres over ``size`` (:func:`~linkdyn.kinematics.positions.scaled_error`)."""
-    err = 0.0
-    for k in range(cuts.shape[0]):
-        a, b, row, rows = cuts[k, CUT_A], cuts[k, CUT_B], cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
-        x = jk.residual(cuts[k, CUT_KIND], cgeo[k, 6], phi[a], phi[b], (P[k, 4], P[k, 5]),
+    largest row with the metres over the size (:func:`~linkdyn.kinematics.positions.scaled_error`)."""
+    err, size = 0.0, L.size[0]
+    for k in range(L.cut_a.shape[0]):
+        a, b, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
+        x = jk.residual(L.cut_kind[k], L.cut_angle[k, 0], phi[a], phi[b], (P[k, 4], P[k, 5]),
                         (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
         for j in range(rows):
             g[row + j] = x[j]
-            err = scaled_error(err, x[j], cuts[k, CUT_METRES + j] != 0, size)
+            err = scaled_error(err, x[j], L.cut_metres[k, j] != 0, size)
     return err
 
 
 @njit
-def _jacobian(tree, cuts, side, r, e, P, J):
+def _jacobian(L, r, e, P, J):
     """The closure Jacobian ``J`` (n_rows, n - 1) (:func:`jacobian_column`)."""
     J[:, :] = 0.0
-    for k in range(cuts.shape[0]):
-        row, rows = cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
-        for j in range(1, tree.shape[0]):
-            if side[k, j] == 0:
+    for k in range(L.cut_a.shape[0]):
+        row, rows = L.cut_row[k], L.cut_rows[k]
+        for j in range(1, L.parent.shape[0]):
+            if L.side[k, j] == 0:
                 continue
-            x = jacobian_column(cuts[k, CUT_KIND], tree[j, KIND], float(tree[j, SIGN]),
-                                side[k, j], (e[j, 0], e[j, 1]), (r[j, 0], r[j, 1]),
-                                (P[k, 2], P[k, 3]), (P[k, 4], P[k, 5]))
+            x = jacobian_column(L.cut_kind[k], L.kind[j], float(L.sign[j]), L.side[k, j],
+                                (e[j, 0], e[j, 1]), (r[j, 0], r[j, 1]), (P[k, 2], P[k, 3]),
+                                (P[k, 4], P[k, 5]))
             for m in range(rows):
                 J[row + m, j - 1] = x[m]
 
 
 @njit
-def _twists(tree, r, e, qd, tw):
+def _twists(L, r, e, qd, tw):
     """Twists of all bodies (:func:`child_twist`, eq. 2)."""
-    for i in range(1, tree.shape[0]):
-        p = tree[i, PARENT]
+    for i in range(1, L.parent.shape[0]):
+        p = L.parent[i]
         tw[i, 0], tw[i, 1], tw[i, 2] = child_twist(
-            tree[i, KIND], float(tree[i, SIGN]), (e[i, 0], e[i, 1]),
+            L.kind[i], float(L.sign[i]), (e[i, 0], e[i, 1]),
             (tw[p, 0], tw[p, 1], tw[p, 2]), (r[p, 0], r[p, 1]), (r[i, 0], r[i, 1]), qd[i])
 
 
 @njit
-def _twist_rates(tree, r, e, tw, qd, qdd, td):
+def _twist_rates(L, r, e, tw, qd, qdd, td):
     """Twist rates of all bodies (:func:`child_twist_rate`)."""
-    for i in range(1, tree.shape[0]):
-        p = tree[i, PARENT]
+    for i in range(1, L.parent.shape[0]):
+        p = L.parent[i]
         td[i, 0], td[i, 1], td[i, 2] = child_twist_rate(
-            tree[i, KIND], float(tree[i, SIGN]), (e[i, 0], e[i, 1]),
+            L.kind[i], float(L.sign[i]), (e[i, 0], e[i, 1]),
             (tw[p, 0], tw[p, 1], tw[p, 2]), (td[p, 0], td[p, 1], td[p, 2]),
             (tw[i, 0], tw[i, 1], tw[i, 2]), (r[p, 0], r[p, 1]), (r[i, 0], r[i, 1]), qd[i],
             qdd[i])
 
 
 @njit
-def _bias(cuts, r, tw, td, P, b):
+def _bias(L, r, tw, td, P, b):
     """Minus the rate of the cut rows, ``-d/dt (S x)`` (:func:`cut_bias`), into ``b``."""
-    for k in range(cuts.shape[0]):
-        a, bb, row, rows = cuts[k, CUT_A], cuts[k, CUT_B], cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
-        x = cut_bias(cuts[k, CUT_KIND], (P[k, 4], P[k, 5]), (tw[a, 0], tw[a, 1], tw[a, 2]),
+    for k in range(L.cut_a.shape[0]):
+        a, bb, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
+        x = cut_bias(L.cut_kind[k], (P[k, 4], P[k, 5]), (tw[a, 0], tw[a, 1], tw[a, 2]),
                      (td[a, 0], td[a, 1], td[a, 2]), (r[a, 0], r[a, 1]),
                      (tw[bb, 0], tw[bb, 1], tw[bb, 2]), (td[bb, 0], td[bb, 1], td[bb, 2]),
                      (r[bb, 0], r[bb, 1]), (P[k, 2], P[k, 3]))
@@ -224,16 +221,16 @@ def _bias(cuts, r, tw, td, P, b):
 
 
 @njit
-def _joint_motion(tree, cuts, phi, r, tw, P, jq, jqd):
+def _joint_motion(L, phi, r, tw, P, jq, jqd):
     """Coordinate and rate of every model joint: a tree joint's from the tree coordinates
     (already in ``jq``, ``jqd`` by the caller), a cut joint's by :func:`cut_coordinate`."""
-    for k in range(cuts.shape[0]):
-        a, b = cuts[k, CUT_A], cuts[k, CUT_B]
-        x = cut_coordinate(cuts[k, CUT_KIND], (P[k, 4], P[k, 5]), phi[a],
+    for k in range(L.cut_a.shape[0]):
+        a, b = L.cut_a[k], L.cut_b[k]
+        x = cut_coordinate(L.cut_kind[k], (P[k, 4], P[k, 5]), phi[a],
                            (tw[a, 0], tw[a, 1], tw[a, 2]), (0.0, 0.0, 0.0), (r[a, 0], r[a, 1]),
                            phi[b], (tw[b, 0], tw[b, 1], tw[b, 2]), (0.0, 0.0, 0.0),
                            (r[b, 0], r[b, 1]), (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
-        jq[cuts[k, CUT_JOINT]], jqd[cuts[k, CUT_JOINT]] = x[0], x[1]
+        jq[L.cut_joint[k]], jqd[L.cut_joint[k]] = x[0], x[1]
 
 
 @njit
@@ -245,17 +242,18 @@ def _add(w, i, x):
 
 
 @njit
-def _loads(geo, gravity, loads, lnum, roots, reg, c, s, r, tw, jqd, w):
+def _loads(L, loads, lnum, roots, reg, c, s, r, tw, jqd, w):
     """Applied wrenches ``w`` (n, 3) about each O_i (the ground's row is not used) and the
     potential energy and power of the loads (loads.wrenches), the formulas' values in ``reg``
     (``roots`` (L, 2) their rows)."""
     pe, power = 0.0, 0.0
     w[:, :] = 0.0
+    gravity = (L.gravity[0, 0], L.gravity[1, 0])
     if gravity[0] != 0 or gravity[1] != 0:
-        for i in range(1, geo.shape[0]):
+        for i in range(1, L.parent.shape[0]):
             r_c, _ = body_point(c[i], s[i], (r[i, 0], r[i, 1]), (tw[i, 0], tw[i, 1], tw[i, 2]),
-                                (geo[i, 5], geo[i, 6]))
-            f, pe_i = weight(geo[i, 7], (gravity[0], gravity[1]), r_c)
+                                (L.com[i, 0, 0], L.com[i, 1, 0]))
+            f, pe_i = weight(L.mass[i, 0], gravity, r_c)
             _add(w, i, force_at(f, (r[i, 0], r[i, 1]), r_c))
             pe += pe_i
     for m in range(loads.shape[0]):
@@ -295,13 +293,14 @@ def _loads(geo, gravity, loads, lnum, roots, reg, c, s, r, tw, jqd, w):
 
 
 @njit
-def _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q):
+def _inverse_dynamics(L, c, s, r, e, tw, td, w_ext, wt, Q):
     """``Q`` (n,) of the motion ``tw``, ``td`` under ``w_ext``: Newton–Euler
     (:func:`newton_euler_wrench`), the backward recursion (:func:`plus_child`) and
     :func:`generalized_force`; returns the kinetic energy."""
-    n, ke = tree.shape[0], 0.0
+    n, ke = L.parent.shape[0], 0.0
     for i in range(1, n):
-        x, ke_i = newton_euler_wrench(geo[i, 7], geo[i, 8], (geo[i, 5], geo[i, 6]), c[i], s[i],
+        x, ke_i = newton_euler_wrench(L.mass[i, 0], L.inertia[i, 0],
+                                      (L.com[i, 0, 0], L.com[i, 1, 0]), c[i], s[i],
                                       (tw[i, 0], tw[i, 1], tw[i, 2]),
                                       (td[i, 0], td[i, 1], td[i, 2]),
                                       (w_ext[i, 0], w_ext[i, 1], w_ext[i, 2]))
@@ -309,12 +308,12 @@ def _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q):
         ke += ke_i
     wt[0, :] = 0.0
     for i in range(n - 1, 0, -1):
-        p = tree[i, PARENT]
+        p = L.parent[i]
         wt[p, 0], wt[p, 1], wt[p, 2] = plus_child((wt[p, 0], wt[p, 1], wt[p, 2]),
                                                   (wt[i, 0], wt[i, 1], wt[i, 2]),
                                                   (r[i, 0], r[i, 1]), (r[p, 0], r[p, 1]))
     for i in range(1, n):
-        Q[i] = generalized_force(tree[i, KIND], float(tree[i, SIGN]), (e[i, 0], e[i, 1]),
+        Q[i] = generalized_force(L.kind[i], float(L.sign[i]), (e[i, 0], e[i, 1]),
                                  (wt[i, 0], wt[i, 1], wt[i, 2]))
     return ke
 
@@ -322,23 +321,17 @@ def _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q):
 # --- the kernel --------------------------------------------------------------------------------
 
 @njit
-def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, code, value,
-               t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
+def rhs_kernel(held, loads, lnum, roots, code, value, t0, t, y, drv, ext, ref, S, o_y, o_state,
+               o_J, o_e):
     """``y' = F(t, y)`` (F7) at one state, ``y = [q_f, qd_f, W]``.
 
     Parameters
     ----------
-    tree : int (n, 5)
-        ``[parent, kind code, sign, angular, model joint]`` per tree body.
-    geo : float (n, 10)
-        ``[joint point (2), axis (2), angle, com (2), mass, inertia, Newton step scale]``.
-    cuts : int (nc, 9)
-        ``[a, b, kind code, first row, rows, model joint, metres (3)]``; ``cgeo`` (nc, 7)
-        ``[pa (2), pb (2), axis (2), angle]``; ``side`` (nc, n).
-    ind, dep : int
-        Independent (drivers', then free) and dependent tree bodies.
-    misc : float (4,)
-        ``[gravity x, gravity y, size, reference time]``.
+    held : numba typed List
+        Of one item, ``L``: the partition's layout as the kernels read it
+        (:attr:`.kinematics.layout.Layout.view`, one design; ``L.driven`` the independent tree
+        bodies, drivers' then free, ``L.dependent`` the dependent ones), held in a list so that
+        a call passes one object, not the view's forty arrays (:class:`Kernel`).
     loads, lnum, roots, code, value
         The loads (:func:`_loads`) and their formulas' program (:func:`run_program`), whose
         variables are ``[t, q of each joint, qd of each joint, ext]``.
@@ -349,8 +342,10 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
     ext : float (E,)
         Values of the loads that are functions of time only, at ``t``, where they have no
         formula.
+    t0 : float
+        The reference state's time.
     ref : float (3, n)
-        The reference state's tree coordinates, rates and accelerations at ``misc[3]``; ``S``
+        The reference state's tree coordinates, rates and accelerations at ``t0``; ``S``
         (m, k) the dependent coordinates' share of the independent ones there (0 x 0: none).
     o_y : float (2 nf + 1,)
         ``y'``; ``o_state`` (3, n) the tree coordinates, rates and accelerations; ``o_J``
@@ -362,18 +357,16 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         0: done (``y'`` NaN where the state is singular); 1: Newton's method from the guess
         did not close the loops (nothing written: the caller takes the numpy path).
     """
-    n, m, k_ind, nc = tree.shape[0], dep.shape[0], ind.shape[0], cuts.shape[0]
+    L = held[0]
+    ind, dep = L.driven, L.dependent
+    n, m, k_ind, nc = L.parent.shape[0], dep.shape[0], ind.shape[0], L.cut_a.shape[0]
     nd = drv.shape[1]
     nf = k_ind - nd
-    nj = 0   # the model's joints: every one is a tree joint or a cut joint
-    for i in range(n):
-        nj = max(nj, tree[i, JOINT] + 1)
-    for k in range(nc):
-        nj = max(nj, cuts[k, CUT_JOINT] + 1)
-    size = misc[2]
+    nj = n - 1 + nc   # the model's joints: every one is a tree joint or a cut joint
+    size = L.size[0]
     # the guess: the reference extrapolated, its dependent rows moved by their share of the
     # independent coordinates' deviation from the extrapolation                     (F2)
-    dt = t - misc[3]
+    dt = t - t0
     q = np.empty(n)
     for i in range(n):
         q[i] = ref[0, i] + ref[1, i] * dt + 0.5 * ref[2, i] * dt ** 2
@@ -403,12 +396,12 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
     perm = np.empty((m, 1), np.int64)
     rel = np.empty(1)
     b, x = np.empty((m, 1)), np.empty((m, 1))
-    _place(tree, geo, q, phi, c, s, r, e)
-    _frames(cuts, cgeo, c, s, r, P)
-    err = _residual(cuts, cgeo, size, phi, P, g)
+    _place(L, q, phi, c, s, r, e)
+    _frames(L, c, s, r, P)
+    err = _residual(L, phi, P, g)
     if m > 0:
         for _ in range(MAXITER):
-            _jacobian(tree, cuts, side, r, e, P, J)
+            _jacobian(L, r, e, P, J)
             for a in range(m):
                 b[a, 0] = -g[a]
                 for k in range(m):
@@ -417,20 +410,21 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
             substitute(A, perm, rel, m, 1, b, x, 0.0)
             step = 0.0
             for a in range(m):
-                u = abs(x[a, 0]) * geo[dep[a], 9]
+                # Newton's step in rad, or in m relative to the size
+                u = abs(x[a, 0]) * (1.0 if L.angular[dep[a]] else 1.0 / size)
                 step = math.nan if u != u or step != step else max(step, u)
             # a step of a radian or the mechanism's size is no correction of a nearby guess
             for a in range(m):
                 if math.isfinite(x[a, 0]) and step < 1.0:
                     q[dep[a]] += x[a, 0]
-            _place(tree, geo, q, phi, c, s, r, e)
-            _frames(cuts, cgeo, c, s, r, P)
-            err = _residual(cuts, cgeo, size, phi, P, g)
+            _place(L, q, phi, c, s, r, e)
+            _frames(L, c, s, r, P)
+            err = _residual(L, phi, P, g)
             if not step > STEP_TOL:
                 break
     if not err <= ACCEPT:
         return 1
-    _jacobian(tree, cuts, side, r, e, P, J)
+    _jacobian(L, r, e, P, J)
     # rates: J_dep qd_dep = -J_ind qd_ind                                          (eqs. 4-5)
     qd = np.zeros(n)
     for j in range(nd):
@@ -459,19 +453,19 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         factor(At, m, 1, perm_t, rel_t)
         piv_dyn = rel_t[0]
     tw, td = np.zeros((n, 3)), np.zeros((n, 3))
-    _twists(tree, r, e, qd, tw)
+    _twists(L, r, e, qd, tw)
     # the loads: formulas of t and the joints' motion, then the wrenches
     jq, jqd = np.zeros(nj), np.zeros(nj)
     for i in range(1, n):
-        jq[tree[i, JOINT]], jqd[tree[i, JOINT]] = q[i], qd[i]
-    _joint_motion(tree, cuts, phi, r, tw, P, jq, jqd)
+        jq[L.tree_joint[i]], jqd[L.tree_joint[i]] = q[i], qd[i]
+    _joint_motion(L, phi, r, tw, P, jq, jqd)
     xv = np.empty(1 + 2 * nj + ext.shape[0])
     xv[0] = t
     xv[1:1 + nj], xv[1 + nj:1 + 2 * nj], xv[1 + 2 * nj:] = jq, jqd, ext
     reg = np.empty(code.shape[0])
     run_program(code, value, xv, reg)
     w_ext = np.zeros((n, 3))
-    pe, power = _loads(geo, misc[:2], loads, lnum, roots, reg, c, s, r, tw, jqd, w_ext)
+    pe, power = _loads(L, loads, lnum, roots, reg, c, s, r, tw, jqd, w_ext)
     # 1 + nf acceleration cases: qdd_f = 0, then each unit free acceleration        (F5)
     qdd = np.zeros((1 + nf, n))
     tau = np.zeros((k_ind, 1 + nf))
@@ -484,17 +478,17 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         if cs > 0:
             qdd_c[ind[nd + cs - 1]] = 1.0
         # J_dep qdd_dep = -bias(qdd_dep = 0)                                       (eqs. 6-7)
-        _twist_rates(tree, r, e, tw, qd, qdd_c, td)
+        _twist_rates(L, r, e, tw, qd, qdd_c, td)
         if m > 0:
-            _bias(cuts, r, tw, td, P, b)
+            _bias(L, r, tw, td, P, b)
             substitute(A, perm, rel, m, 1, b, x, PIVOT_TOL)
             for a in range(m):
                 qdd_c[dep[a]] = x[a, 0]
-            _twist_rates(tree, r, e, tw, qd, qdd_c, td)
+            _twist_rates(L, r, e, tw, qd, qdd_c, td)
         for i in range(n):
             ok = ok and math.isfinite(qd[i]) and math.isfinite(qdd_c[i])
         # the DeNOC inverse dynamics: Q, then J_dep^T lam = Q_dep, tau = Q_ind - J_ind^T lam
-        ke = _inverse_dynamics(tree, geo, c, s, r, e, tw, td, w_ext, wt, Q)
+        ke = _inverse_dynamics(L, c, s, r, e, tw, td, w_ext, wt, Q)
         if cs == 0:
             o_e[0], o_e[1] = ke, pe
         if m > 0:
@@ -504,7 +498,7 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
         for j in range(k_ind):
             col, tau_j = ind[j] - 1, Q[ind[j]]
             for k in range(nc):   # one cut's share at a time: tau = Q_ind - J_ind^T lam
-                row, rows = cuts[k, CUT_ROW], cuts[k, CUT_ROWS]
+                row, rows = L.cut_row[k], L.cut_rows[k]
                 tau_j = less_cut(tau_j, (J[row, col], J[row + 1, col] if rows > 1 else 0.0,
                                          J[row + 2, col] if rows > 2 else 0.0),
                                  (lam[row, 0], lam[row + 1, 0] if rows > 1 else 0.0,
@@ -550,30 +544,26 @@ def rhs_kernel(tree, geo, cuts, cgeo, side, ind, dep, misc, loads, lnum, roots, 
 # --- the layout and the loads as the kernel's arrays ------------------------------------------
 
 def tables(part) -> dict:
-    """The kernel's arrays of a simulation's partition (:class:`linkdyn.forward.Partition`),
-    read from the numeric layout (its integer tables and, design 0's, numbers): the one place
-    that knows the layout's arrays."""
-    lay, topo, model = part.layout, part.layout.topo, part.inner
-    idx, nc = lay.indices, topo.n_loops
-
-    def num(name):   # design 0's number, entity first
-        return lay.per_design(name)[..., 0]
-    size = float(num("size"))
-    scale = np.where(lay.tree[:, ANGULAR], 1.0, 1.0 / size)   # Newton's step in rad, or m/size
-    tree = np.concatenate([lay.tree, idx["tree_joint"][:, None]], axis=1)
-    tree[0, JOINT] = 0
-    cuts = np.concatenate([lay.cut_table[:, :lt.CUT_METRES], idx["cut_joint"][:, None],
-                           lay.cut_table[:, lt.CUT_METRES:]], axis=1).reshape(nc, 9)
-    geo = np.concatenate([num("joint_point"), num("axis"), num("angle")[:, None], num("com"),
-                          num("mass")[:, None], num("inertia")[:, None], scale[:, None]], axis=1)
-    cgeo = np.concatenate([num("cut_pa"), num("cut_pb"), num("cut_axis"),
-                           num("cut_angle")[:, None]], axis=1).reshape(nc, 7)
-    out = dict(tree=tree, geo=geo, cuts=cuts, cgeo=cgeo, side=np.ascontiguousarray(lay.side),
-               ind=idx["driven"], dep=idx["dependent"],
-               misc=np.array([lay.gravity[0], lay.gravity[1], size, 0.0]))
-    out.update(_load_tables(lay, len(model.joints)))
+    """The kernel's arrays of a simulation's partition (:class:`linkdyn.forward.Partition`):
+    its layout's view (``view``, :attr:`linkdyn.kinematics.layout.Layout.view`, one design)
+    and its loads' tables (:func:`_load_tables`)."""
+    lay = part.layout
+    out = dict(view=_held(lay.view))
+    out.update(_load_tables(lay, len(part.inner.joints)))
     return {k: np.ascontiguousarray(v) if isinstance(v, np.ndarray) else v
             for k, v in out.items()}
+
+
+def _held(view):
+    """The view in a numba typed List of one item (the kernel then unboxes one object per call;
+    the view itself without numba)."""
+    try:
+        from numba.typed import List
+    except ImportError:  # pragma: no cover
+        return [view]
+    held = List()
+    held.append(view)
+    return held
 
 
 def _load_tables(lay, n_joints: int) -> dict:
@@ -624,11 +614,9 @@ class Kernel:
         self.part = part
         tab = tables(part)
         self.external = tab.pop("external")
-        self.args = tuple(tab[k] for k in ("tree", "geo", "cuts", "cgeo", "side", "ind", "dep",
-                                           "misc", "loads", "lnum", "roots", "code", "value"))
-        self.misc = tab["misc"]
+        self.args = tuple(tab[k] for k in ("view", "loads", "lnum", "roots", "code", "value"))
         self.nd = part.n_drivers
-        n, rows = len(tab["tree"]), tab["dep"].shape[0]
+        n, rows = part.layout.topo.n, len(part.layout.topo.dependent)
         self.noS = np.zeros((0, 0))
         self.drv_none = np.zeros((3, 0))
         self.ext_none = np.zeros(0)
@@ -643,7 +631,6 @@ class Kernel:
         Jacobian of the last call, :attr:`energy` its kinetic and potential energy."""
         from .kinematics.positions import driver_values
         t0, q, qd, qdd, S = ref
-        self.misc[3] = t0
         drv = self.drv_none
         if self.nd:
             drv = np.ascontiguousarray(np.stack(driver_values(self.part.model, np.array([t])))
@@ -654,7 +641,8 @@ class Kernel:
             ext = np.array([np.reshape(lay.load_values(lay.loads[m], tt), -1)[k]
                             for m, k in self.external])
         out = np.empty(len(y))
-        status = rhs_kernel(*self.args, float(t), np.ascontiguousarray(y, dtype=float), drv, ext,
+        status = rhs_kernel(*self.args, float(t0), float(t),
+                            np.ascontiguousarray(y, dtype=float), drv, ext,
                             np.stack((q, qd, qdd)),
                             self.noS if S is None else np.ascontiguousarray(S), out,
                             self.state, self.J, self.energy)

@@ -49,9 +49,13 @@ class Body:
     inertia: float = 0.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Joint:
-    """A lower pair between body ``body_a`` (first) and body ``body_b`` (second).
+    """A pair between body ``body_a`` (first) and body ``body_b`` (second).
+
+    ``Joint(name, kind, body_a, point_a, body_b, point_b, *values, numbers=None, **named)``:
+    the kind's numbers (:attr:`linkdyn.joints.JointKind.numbers`, SI) by position in the
+    kind's order, by name, or as the dict ``numbers``; those not given take their defaults.
 
     Attributes
     ----------
@@ -60,10 +64,11 @@ class Joint:
         A kind registered in :mod:`linkdyn.joints` (``'revolute'``, ``'prismatic'``, ...).
     body_a, point_a, body_b, point_b : str
         ``connect = ["body_a.point_a", "body_b.point_b"]``.
-    axis : ndarray (2,)
-        Kinds with an axis only: unit sliding direction in ``body_a``'s frame.
-    angle : float
-        Prismatic only: fixed angle of ``body_b``'s frame relative to ``body_a``'s, rad.
+    numbers : dict
+        The kind's numbers by name, SI: a float, or an array of the number's shape (e.g. a
+        slider's ``axis`` (2,), unit sliding direction in ``body_a``'s frame, and ``angle``,
+        rad, the fixed angle of ``body_b``'s frame to ``body_a``'s). Each is also an attribute
+        (``joint.axis``); a number of another kind reads as that number's default.
     """
 
     name: str
@@ -72,8 +77,37 @@ class Joint:
     point_a: str
     body_b: str
     point_b: str
-    axis: np.ndarray = field(default_factory=lambda: np.array([1.0, 0.0]))
-    angle: float = 0.0
+    numbers: dict
+
+    def __init__(self, name, kind, body_a, point_a, body_b, point_b, *values, numbers=None,
+                 **named):
+        from . import joints as jk
+        if kind not in jk.REGISTRY:   # no declarations to hold them to (topology names it)
+            if values:
+                raise TypeError(f"unknown joint kind {kind!r}: give its numbers by name")
+            held = dict(numbers or {}, **named)
+        else:
+            declared = jk.REGISTRY[kind].numbers
+            names = [x.name for x in declared]
+            if len(values) > len(names):
+                raise TypeError(f"a {kind} joint takes {len(names)} numbers "
+                                f"({', '.join(names)}), not {len(values)}")
+            other = [k for k in named if k not in names]
+            if other:
+                raise TypeError(f"a {kind} joint has no number {other[0]!r}")
+            # ``numbers`` (as dataclasses.replace passes them): the kind's own of them
+            given = {**dict(numbers or {}), **dict(zip(names, values)), **named}
+            held = {x.name: x.value(given.get(x.name)) for x in declared}
+        for k, v in (("name", name), ("kind", kind), ("body_a", body_a), ("point_a", point_a),
+                     ("body_b", body_b), ("point_b", point_b), ("numbers", held)):
+            object.__setattr__(self, k, v)
+
+    def __getattr__(self, name: str):
+        from . import joints as jk
+        numbers = self.__dict__.get("numbers")
+        if numbers is None or name not in jk.NUMBERS:
+            raise AttributeError(name)
+        return numbers[name] if name in numbers else jk.NUMBERS[name].value()
 
 
 @dataclass(frozen=True)

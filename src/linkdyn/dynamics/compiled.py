@@ -37,8 +37,6 @@ from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
 from ..loads import Loads, force_at, weight
 from ..planar import last, turned
-from ..kinematics.layout import (CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, KIND, PARENT,
-                                 SIGN)
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
 from .denoc import (DynamicSolution, generalized_force, less_cut, newton_euler_wrench,
@@ -53,13 +51,13 @@ BLOCK = 1024
 # --- the dynamics stage -----------------------------------------------------------------------
 
 @njit
-def _composite(parent, r, d, k0, nb, di, ki, w):
+def _composite(L, r, d, k0, nb, di, ki, w):
     """The backward recursion :func:`~linkdyn.dynamics.denoc.plus_child` (``w_p += A(r_i -
     r_p)^T w_i``), leaves first, in place on the wrenches ``w`` (n, 3, ., .) of a block, taken at
     design ``di`` from sample ``ki`` (denoc.composite)."""
     ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in r and in w
-    for i in range(len(parent) - 1, 0, -1):
-        p = parent[i]
+    for i in range(len(L.parent) - 1, 0, -1):
+        p = L.parent[i]
         r_i, r_p = vector_views(r, i, d, ks), vector_views(r, p, d, ks)
         w_i, w_p = screw_views(w, i, di, kw), screw_views(w, p, di, kw)
         for k in range(nb):
@@ -69,20 +67,20 @@ def _composite(parent, r, d, k0, nb, di, ki, w):
 
 
 @njit
-def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke,
-                  o_wstar, o_wtilde):
+def _newton_euler(L, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke, o_wstar,
+                  o_wtilde):
     """:func:`~linkdyn.dynamics.denoc.newton_euler_wrench` of every body over a block into
     ``w_star``, copied into ``w_tilde`` to start its recursion, and the kinetic energy summed
     over the bodies into ``ke`` (block,). The ground's rows stay as allocated (zero). ``w_const`` (n, 3, 1, block):
     ``w_ext`` repeated over a block when it is constant in time (one sample, ``w_ext``
     (n, 3, D, 1))."""
-    n = mass.shape[0]
+    n = L.mass.shape[0]
     ks = slice(k0, k0 + nb)   # the block's samples
     kw = slice(ki, ki + nb)   # the block's samples in the internals (see _dynamics)
     ke[:nb] = 0.0
     for i in range(1, n):
-        mi, ii = mass[i, dp], inertia[i, dp]
-        com_i = (com[i, 0, dp], com[i, 1, dp])
+        mi, ii = L.mass[i, dp], L.inertia[i, dp]
+        com_i = (L.com[i, 0, dp], L.com[i, 1, dp])
         c_i, s_i = c[i, d, ks], s[i, d, ks]
         tw_i, twd_i = screw_views(tw, i, d, ks), screw_views(twd, i, d, ks)
         if w_ext.shape[3] == 1:   # constant in time
@@ -101,12 +99,12 @@ def _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ex
 
 
 @njit
-def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q):
+def _generalized(L, d, k0, nb, di, ki, e, o_wtilde, o_Q):
     """:func:`~linkdyn.dynamics.denoc.generalized_force` ``Q_i = p_i . w_tilde_i`` into ``o_Q``
     (the ground's row stays as allocated, zero)."""
     ks = slice(k0, k0 + nb)   # the block's samples
-    for i in range(1, len(kind)):
-        code, si = kind[i], sign[i]
+    for i in range(1, len(L.kind)):
+        code, si = L.kind[i], L.sign[i]
         wtilde_i = screw_views(o_wtilde, i, di, slice(ki, ki + nb))
         e_i = vector_views(e, i, d, ks)
         o_Q_i = o_Q[i, di, ki:ki + nb]
@@ -116,11 +114,11 @@ def _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q):
 
 
 @njit
-def _multipliers(dep, drv, cut_row, cut_rows, d, k0, nb, J, Q, A, lam, piv, o_lam, o_tau,
-                 o_pivot):
+def _multipliers(L, d, k0, nb, J, Q, A, lam, piv, o_lam, o_tau, o_pivot):
     """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27) cut by cut
     (:func:`~linkdyn.dynamics.denoc.less_cut`), a block at a time; ``Q`` (n, block) the block's
     generalized forces (a view of ``o_Q``)."""
+    dep, drv, cut_row, cut_rows = L.dependent, L.driven, L.cut_row, L.cut_rows
     m, n_rows, n_drv = dep.shape[0], J.shape[0], drv.shape[0]
     last = max(n_rows - 1, 0)
     ks = slice(k0, k0 + nb)   # the block's samples
@@ -159,18 +157,19 @@ def _multipliers(dep, drv, cut_row, cut_rows, d, k0, nb, J, Q, A, lam, piv, o_la
 # --- the reactions stage ----------------------------------------------------------------------
 
 @njit
-def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, cut_pb, cut_axis,
-                  d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
+def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
     """:func:`~linkdyn.reactions.cut_wrench` of every cut joint over a block: ``S^T lam`` summed
-    on both bodies about their O into ``wc`` (n, 3, block), and the cut joints' reactions.
-    ``cut_row``, ``cut_rows`` (n_cut,): each cut's first row in ``lam`` and its number of rows;
-    ``zero`` (block,): zeros, the padding of a cut with fewer than three rows."""
+    on both bodies about their O into ``wc`` (n, 3, block), and the cut joints' reactions
+    (each cut's rows of ``lam`` from ``L.cut_row``, ``L.cut_rows`` of them); ``zero``
+    (block,): zeros, the padding of a cut with fewer than three rows."""
     ks = slice(k0, k0 + nb)   # the block's samples
     wc[:, :, :nb] = 0.0
-    for cc in range(cut_a.shape[0]):
-        a, b, code, row, rows = cut_a[cc], cut_b[cc], cut_kind[cc], cut_row[cc], cut_rows[cc]
-        pa, pb = (cut_pa[cc, 0, dp], cut_pa[cc, 1, dp]), (cut_pb[cc, 0, dp], cut_pb[cc, 1, dp])
-        axis = (cut_axis[cc, 0, dp], cut_axis[cc, 1, dp])
+    for cc in range(L.cut_a.shape[0]):
+        a, b, code = L.cut_a[cc], L.cut_b[cc], L.cut_kind[cc]
+        row, rows = L.cut_row[cc], L.cut_rows[cc]
+        pa = (L.cut_pa[cc, 0, dp], L.cut_pa[cc, 1, dp])
+        pb = (L.cut_pb[cc, 0, dp], L.cut_pb[cc, 1, dp])
+        axis = (L.cut_axis[cc, 0, dp], L.cut_axis[cc, 1, dp])
         c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], vector_views(r, a, d, ks)
         c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], vector_views(r, b, d, ks)
         wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
@@ -178,7 +177,7 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, 
         # the cut's multipliers, padded with zeros to three
         lam_c = (lam[row, :nb], lam[row + 1, :nb] if rows > 1 else zero[:nb],
                  lam[row + 2, :nb] if rows > 2 else zero[:nb])
-        on_c = screw_views(o_on, cut_joint[cc], d, ks)
+        on_c = screw_views(o_on, L.cut_joint[cc], d, ks)
         for k in range(nb):
             x_a, x_b = (r_a[0][k], r_a[1][k]), (r_b[0][k], r_b[1][k])
             _, r_pb, e_a = cut_frame(c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b, pa, pb, axis)
@@ -190,8 +189,7 @@ def _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, 
 
 
 @njit
-def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb, di,
-                    ki, keep, c, s, r, e, tau, wc, ws, o_tree, o_on):
+def _tree_reactions(L, d, dp, k0, nb, di, ki, keep, c, s, r, e, tau, wc, ws, o_tree, o_on):
     """``R_i`` by the backward recursion of ``w_star - w_cut`` (reactions.tree_wrenches) and
     the reaction of every tree joint from it (reactions.solve): the driver's effort removed by
     :func:`~linkdyn.reactions.without_effort`, the opposite taken about the parent's joint point
@@ -199,7 +197,7 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
     (n, 3, 1, block): the block's ``w_star``. With the internals ``keep``, a joint whose
     reaction is ``R_i`` itself (the child is its second body, not driven) is not written:
     :func:`reactions` gives it ``R_i``'s rows."""
-    n = parent.shape[0]
+    n = L.parent.shape[0]
     ks, kw = slice(k0, k0 + nb), slice(ki, ki + nb)   # the block's samples, in the internals
     # R_i = w_star_i - w_cut_i (the ground's w_star_0 = 0), then R_p += A(r_i - r_p)^T R_i
     for i in range(n):
@@ -208,13 +206,13 @@ def _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, d
         for k in range(nb):
             R_i[0][k], R_i[1][k], R_i[2][k] = minus((wstar_i[0][k], wstar_i[1][k], wstar_i[2][k]),
                                                     (wc_i[0][k], wc_i[1][k], wc_i[2][k]))
-    _composite(parent, r, d, k0, nb, di, ki, o_tree)
+    _composite(L, r, d, k0, nb, di, ki, o_tree)
     for i in range(1, n):
-        si, dr, p = sign[i], driver_of[i], parent[i]
+        si, dr, p = L.sign[i], L.driver_of[i], L.parent[i]
         if keep and si > 0 and dr < 0:   # R_i as is
             continue
-        code, jp = kind[i], (joint_point[i, 0, dp], joint_point[i, 1, dp])
-        R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, tree_joint[i], d, ks)
+        code, jp = L.kind[i], (L.joint_point[i, 0, dp], L.joint_point[i, 1, dp])
+        R_i, on_i = screw_views(o_tree, i, di, kw), screw_views(o_on, L.tree_joint[i], d, ks)
         e_i, r_i = vector_views(e, i, d, ks), vector_views(r, i, d, ks)
         r_p, c_p, s_p = vector_views(r, p, d, ks), c[p, d, ks], s[p, d, ks]
         tau_i = tau[max(dr, 0), :nb]
@@ -241,22 +239,22 @@ def _constant(w_ext, d, w_const):
 # --- the kernels ------------------------------------------------------------------------------
 
 @njit
-def _dynamics(parent, kind, sign, dep, drv, cut_row, cut_rows, com, mass, inertia, c, s, r, e,
-              tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot, block,
-              keep):
+def _dynamics(L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke,
+              o_pivot, block, keep):
     """The dynamics of every sample: ``w_star``, ``w_tilde = N_l^T w_star``, ``Q = N_d^T
     w_tilde``, ``lam``, ``tau`` and the kinetic energy; arguments as in :func:`solve`, outputs
     written in place (component-first, batch ``(D, T)`` last) into zeroed arrays (the ground's
-    ``w_star`` and ``Q`` rows, zero by construction, are not written).
+    ``w_star`` and ``Q`` rows, zero by construction, are not written); ``L`` the layout's view
+    (:attr:`linkdyn.kinematics.layout.Layout.view`).
 
     The internals ``o_wstar``, ``o_wtilde``, ``o_Q`` are outputs like the others when ``keep``;
     else one block's scratch, (n, 3, 1, block) and (n, 1, block). The samples are taken
     ``block`` at a time: each stage runs over the bodies, and for each body over the samples
     of the block, which are independent.
     """
-    n, m = parent.shape[0], dep.shape[0]   # m = the cut rows: J_dep^T lam = Q_dep
+    n, m = L.parent.shape[0], L.dependent.shape[0]   # m = the cut rows: J_dep^T lam = Q_dep
     D, T = c.shape[1], c.shape[2]
-    n_designs = mass.shape[1]
+    n_designs = L.mass.shape[1]
     B = block
     # scratch for one block of samples, allocated once per call
     w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
@@ -273,28 +271,26 @@ def _dynamics(parent, kind, sign, dep, drv, cut_row, cut_rows, com, mass, inerti
             di, ki = (d, k0) if keep else (0, 0)
             if not keep:   # the ground's w_tilde only accumulates
                 o_wtilde[0, :, 0, :nb] = 0.0
-            _newton_euler(com, mass, inertia, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const,
-                          ke, o_wstar, o_wtilde)
+            _newton_euler(L, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke, o_wstar,
+                          o_wtilde)
             o_ke[d, k0:k0 + nb] = ke[:nb]
-            _composite(parent, r, d, k0, nb, di, ki, o_wtilde)
-            _generalized(kind, sign, d, k0, nb, di, ki, e, o_wtilde, o_Q)
-            _multipliers(dep, drv, cut_row, cut_rows, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A,
-                         lam, piv, o_lam, o_tau, o_pivot)
+            _composite(L, r, d, k0, nb, di, ki, o_wtilde)
+            _generalized(L, d, k0, nb, di, ki, e, o_wtilde, o_Q)
+            _multipliers(L, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A, lam, piv, o_lam, o_tau,
+                         o_pivot)
 
 
 @njit
-def _reactions(parent, kind, sign, driver_of, tree_joint, cut_a, cut_b, cut_kind, cut_joint,
-               cut_row, cut_rows, joint_point, com, mass, inertia, cut_pa, cut_pb, cut_axis, c, s,
-               r, e, tw, twd, w_ext, lam, tau, o_on, o_tree, block, keep):
+def _reactions(L, c, s, r, e, tw, twd, w_ext, lam, tau, o_on, o_tree, block, keep):
     """Every joint's reaction at every sample from the multipliers ``lam`` (n_rows, D, T) and
     the efforts ``tau`` (n_drivers, D, T): the cut wrenches, ``R_i`` by the backward recursion
     of ``w_star - w_cut`` (``w_star`` of the block by the same step as the dynamics), then
     every tree joint's reaction; arguments as in :func:`reactions`, outputs written in place
     into zeroed arrays. ``o_tree`` per sample when ``keep``, else one block's scratch
     (n, 3, 1, block)."""
-    n, n_rows, n_drv = parent.shape[0], lam.shape[0], tau.shape[0]
+    n, n_rows, n_drv = L.parent.shape[0], lam.shape[0], tau.shape[0]
     D, T = c.shape[1], c.shape[2]
-    n_designs = mass.shape[1]
+    n_designs = L.mass.shape[1]
     B = block
     w_const = np.zeros((n, 3, 1, B))
     ws, ws2 = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B))   # w_star of the block
@@ -311,12 +307,10 @@ def _reactions(parent, kind, sign, driver_of, tree_joint, cut_a, cut_b, cut_kind
                 lam_b[a, :nb] = lam[a, d, k0:k0 + nb]
             for a in range(n_drv):
                 tau_b[a, :nb] = tau[a, d, k0:k0 + nb]
-            _newton_euler(com, mass, inertia, d, dp, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const,
-                          ke, ws, ws2)
-            _cut_wrenches(cut_a, cut_b, cut_kind, cut_joint, cut_row, cut_rows, cut_pa, cut_pb,
-                          cut_axis, d, dp, k0, nb, c, s, r, lam_b, zero, wc, o_on)
-            _tree_reactions(parent, kind, sign, driver_of, tree_joint, joint_point, d, dp, k0, nb,
-                            di, ki, keep, c, s, r, e, tau_b, wc, ws, o_tree, o_on)
+            _newton_euler(L, d, dp, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const, ke, ws, ws2)
+            _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam_b, zero, wc, o_on)
+            _tree_reactions(L, d, dp, k0, nb, di, ki, keep, c, s, r, e, tau_b, wc, ws, o_tree,
+                            o_on)
 
 
 # --- the sweep: the kinematics kernel's blocks and the dynamics, fused -------------------------
@@ -336,15 +330,15 @@ def _keep(x, out, d, k0, nb):
 
 
 @njit
-def _weights(com, mass, g, dp, nb, c, s, r, w):
+def _weights(L, g, dp, nb, c, s, r, w):
     """Every body's weight ``m_i g`` at its mass centre as a wrench about O_i
     (:func:`~linkdyn.loads.weight`, :func:`~linkdyn.loads.force_at`, as
     :func:`linkdyn.loads.wrenches` applies gravity) over one block, from the block's poses
     ``c``, ``s`` (n, 1, block), ``r`` (n, 2, 1, block) into ``w`` (n, 3, 1, block); design
-    ``dp`` of ``com``, ``mass`` and of the gravity ``g`` (2,)."""
+    ``dp`` of the mass centres and masses, the gravity ``g`` (2,)."""
     ks = slice(0, nb)
-    for i in range(1, mass.shape[0]):
-        mi, com_i = mass[i, dp], (com[i, 0, dp], com[i, 1, dp])
+    for i in range(1, L.mass.shape[0]):
+        mi, com_i = L.mass[i, dp], (L.com[i, 0, dp], L.com[i, 1, dp])
         c_i, s_i, (rx_i, ry_i) = c[i, 0, ks], s[i, 0, ks], vector_views(r, i, 0, ks)
         w_i = screw_views(w, i, 0, ks)
         for k in range(nb):
@@ -355,19 +349,19 @@ def _weights(com, mass, g, dp, nb, c, s, r, w):
 
 
 @njit
-def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia, gravity, q, phi,
-           c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke, o_pivot, block):
+def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke,
+           o_pivot, block):
     """The kinematics of every sample (:func:`linkdyn.kinematics.compiled.block` on one
     block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block,
     under the weights of :func:`_weights`): only ``KEPT`` of the kinematics (``e``: the rows
     ``axes``) and the dynamics' ``lam``, ``tau``, kinetic energy and pivot reach the outputs
-    (component-first, batch ``(D, T)`` last; written in place). ``kin``: the kinematics
-    kernel's inputs (:func:`linkdyn.kinematics.compiled.inputs`); ``gravity`` (2, D or 1).
+    (component-first, batch ``(D, T)`` last; written in place). ``L``: the layout's view,
+    ``X`` the kinematics kernel's inputs (:func:`linkdyn.kinematics.compiled.inputs`).
     """
-    (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
-     modes, q_in, q_drv, qd_drv, qdd_drv) = kin
-    n, nc, m, nv, n_rows = len(tree), len(cuts), len(dep), len(drv), o_lam.shape[0]
-    D, T = size.shape[0], t_s.shape[0]
+    n, nc, m, nv, n_rows = len(L.parent), len(L.cut_a), len(L.dependent), len(L.driven), \
+        o_lam.shape[0]
+    D, T = L.size.shape[0], X.t_s.shape[0]
+    gravity = L.gravity
     B = block
     # the work arrays' place as an int64, not a literal 0: the callees then reuse the
     # compilation of the other kernels' calls instead of one of their own
@@ -387,15 +381,13 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
     wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
     lam_b, tau_b, pivot_b = np.zeros((n_rows, 1, B)), np.zeros((nv, 1, B)), np.zeros((1, B))
     for d in range(D):
-        dp = d if mass.shape[1] > 1 else 0
+        dp = d if L.mass.shape[1] > 1 else 0
         dg = d if gravity.shape[1] > 1 else 0
         g = (gravity[0, dg], gravity[1, dg])
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
-            kc.block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
-                     Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, z, z, err,
-                     pivot, fin, tmp)
-            kc._cut_motion(cuts, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
+            kc.block(L, X, d, k0, nb, work, z, z, err, pivot, fin, tmp)
+            kc._cut_motion(L, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
             for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
                            (qdd_w, qdd)):
                 _keep(x, out, d, k0, nb)
@@ -407,15 +399,14 @@ def _sweep(kin, axes, parent, kind, sign, cut_row, cut_rows, com, mass, inertia,
                 _keep(cut_w[ci], cut[ci], d, k0, nb)
             # the dynamics of the block (the ground's w_tilde only accumulates)
             if g[0] != 0.0 or g[1] != 0.0:   # else no applied wrench: w_b stays zero
-                _weights(com, mass, g, dp, nb, c_w, s_w, r_w, w_b)
+                _weights(L, g, dp, nb, c_w, s_w, r_w, w_b)
             wtilde[0, :, 0, :nb] = 0.0
-            _newton_euler(com, mass, inertia, z, dp, z, nb, z, z, c_w, s_w, tw_w, td_w, w_b, w_b,
-                          ke, wstar, wtilde)
+            _newton_euler(L, z, dp, z, nb, z, z, c_w, s_w, tw_w, td_w, w_b, w_b, ke, wstar,
+                          wtilde)
             o_ke[d, k0:k0 + nb] = ke[:nb]
-            _composite(parent, r_w, z, z, nb, z, z, wtilde)
-            _generalized(kind, sign, z, z, nb, z, z, e_w, wtilde, Q)
-            _multipliers(dep, drv, cut_row, cut_rows, z, z, nb, J_w, Q[:, 0, 0:nb], A, lam, piv,
-                         lam_b, tau_b, pivot_b)
+            _composite(L, r_w, z, z, nb, z, z, wtilde)
+            _generalized(L, z, z, nb, z, z, e_w, wtilde, Q)
+            _multipliers(L, z, z, nb, J_w, Q[:, 0, 0:nb], A, lam, piv, lam_b, tau_b, pivot_b)
             _keep(lam_b, o_lam, d, k0, nb)
             _keep(tau_b, o_tau, d, k0, nb)
             o_pivot[d, k0:k0 + nb] = pivot_b[0, :nb]
@@ -444,20 +435,17 @@ def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
         (n_rows, D, T), ``tau`` (n_drivers, D, T), ``ke`` and ``dyn_pivot`` (D, T).
     """
     args = kc.inputs(lay, t, q_drv, qd_drv, qdd_drv, **closing)
-    topo, P = lay.topo, _arrays(lay)
+    topo, L = lay.topo, lay.view
     n, nc, D, T = topo.n, topo.n_loops, max(lay.designs, 1), len(t)
     shapes = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
               "qd": (n,), "qdd": (n,), "cut": (nc, 3), "pivot": (), "err": ()}
     # every number of these is written (the ground's rows too), but e's rows without an axis
     out = {k: (np.zeros if k == "e" else np.empty)(shape + (D, T)) for k, shape in shapes.items()}
     out["finite"] = np.empty((D, T), np.bool_)
-    dyn = {"lam": np.empty((topo.n_rows, D, T)), "tau": np.empty((len(P["driven"]), D, T)),
+    dyn = {"lam": np.empty((topo.n_rows, D, T)), "tau": np.empty((len(L.driven), D, T)),
            "ke": np.empty((D, T)), "dyn_pivot": np.empty((D, T))}
     axes = np.array([i for i in range(1, n) if "axis" in jk.get(lay.kind[i]).keys], np.int64)
-    _sweep(args, axes, *(P[k] for k in ("parent", "kind", "sign", "cut_row", "cut_rows", "com",
-                                       "mass", "inertia")), kc.fixed(lay.per_design("gravity")),
-           *out.values(),
-           *dyn.values(), min(BLOCK, T))
+    _sweep(L, args, axes, *out.values(), *dyn.values(), min(BLOCK, T))
     out.update(dyn)
     return out
 
@@ -513,21 +501,6 @@ def _inputs(kin: KinematicSolution) -> dict:
     }
 
 
-def _arrays(lay) -> dict:
-    """What the kernels read of the layout ``lay``: the topology's integer arrays (columns of
-    its tables) and its numbers with the design axis last, C-contiguous and read-only
-    (:func:`linkdyn.kinematics.compiled.fixed`)."""
-    tree, cuts, idx = lay.tree, lay.cut_table, lay.indices
-    out = {"parent": tree[:, PARENT], "kind": tree[:, KIND], "sign": tree[:, SIGN],
-           "cut_a": cuts[:, CUT_A], "cut_b": cuts[:, CUT_B], "cut_kind": cuts[:, CUT_KIND],
-           "cut_row": cuts[:, CUT_ROW], "cut_rows": cuts[:, CUT_ROWS]}
-    out.update({k: idx[k] for k in ("dependent", "driven", "driver_of", "tree_joint",
-                                     "cut_joint")})
-    out.update({k: lay.per_design(k) for k in ("joint_point", "com", "mass", "inertia", "cut_pa",
-                                                "cut_pb", "cut_axis")})
-    return {k: kc.fixed(v) for k, v in out.items()}   # one array type each: compiled once
-
-
 def _applied(loads: Loads, shape) -> np.ndarray:
     """``w_ext`` (n, 3, D, Tw) of ``loads``: one sample (Tw = 1) when no wrench varies in time
     (all broadcast along t, stride 0, as a body without loads), else every sample (Tw = T)."""
@@ -575,7 +548,7 @@ def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> Dyna
     shape = kin.shape
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
-    P = _arrays(kin.layout)
+    L = kin.layout.view
     n, n_rows = kin.layout.topo.n, kin.layout.topo.n_rows
     # zeroed outputs: the pages of the rows the kernel leaves zero are never touched; the
     # internals per sample, or for one block
@@ -583,10 +556,9 @@ def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> Dyna
     at = (D, T) if internals else (1, block)
     out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
            "Q": np.zeros((n,) + at), "lam": np.zeros((n_rows, D, T)),
-           "tau": np.zeros((len(P["driven"]), D, T)), "ke": np.zeros((D, T)),
+           "tau": np.zeros((len(L.driven), D, T)), "ke": np.zeros((D, T)),
            "pivot": np.zeros((D, T))}
-    _dynamics(*(P[k] for k in ("parent", "kind", "sign", "dependent", "driven", "cut_row",
-                               "cut_rows", "com", "mass", "inertia")), x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
+    _dynamics(L, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
               _applied(loads, shape), out["wstar"], out["wtilde"], out["Q"], out["lam"],
               out["tau"], out["ke"], out["pivot"], block, internals)
     lam, tau = _comps(out["lam"], shape), _comps(out["tau"], shape)
@@ -623,26 +595,23 @@ def reactions(kin: KinematicSolution, loads: Loads, dyn: DynamicSolution,
     shape = kin.shape
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
-    P = _arrays(kin.layout)
+    L = kin.layout.view
     n = kin.layout.topo.n
     block = min(BLOCK, T)
     on = np.zeros((kin.layout.n_joints, 3, D, T))
     tree = np.zeros((n, 3) + ((D, T) if internals else (1, block)))
     lam, tau = (_plain(np.moveaxis(a, -1, 0).reshape(a.shape[-1], D, T))
                 for a in (dyn.lam, dyn.tau))
-    _reactions(*(P[k] for k in ("parent", "kind", "sign", "driver_of", "tree_joint", "cut_a",
-                                "cut_b", "cut_kind", "cut_joint", "cut_row", "cut_rows",
-                                "joint_point", "com", "mass", "inertia", "cut_pa", "cut_pb",
-                                "cut_axis")), x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"],
-               _applied(loads, shape), lam, tau, on, tree, block, internals)
+    _reactions(L, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], _applied(loads, shape),
+               lam, tau, on, tree, block, internals)
     if not internals:   # the kernel again, keeping them, when first read
         return Reactions(_per(on, shape), _Again(reactions, kin, loads, dyn).tree)
     # a tree joint whose child is its second body and is not driven reports R_i itself (the
     # same array, as in reactions.solve): the kernel left its rows of ``on`` unwritten
     on_second, tree = _per(on, shape), _per(tree, shape)
     for i in range(1, n):
-        if P["sign"][i] > 0 and P["driver_of"][i] < 0:
-            on_second[P["tree_joint"][i]] = tree[i]
+        if L.sign[i] > 0 and L.driver_of[i] < 0:
+            on_second[L.tree_joint[i]] = tree[i]
     return Reactions(on_second, tree)
 
 

@@ -121,22 +121,35 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
             r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
                    "A joint joins two different bodies; check the body names in connect")
         accepts = jk.get(kind).keys
-        for key in ("axis", "angle"):
+        for key in jk.NUMBERS:
             if key in entry and key not in accepts:
                 takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
                 r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
                        f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
-        extra = {}
-        if "axis" in accepts:
-            axis = r.vector(entry.get("axis", [1.0, 0.0]), f"{f}.axis")
-            if np.hypot(*axis) == 0:
-                r.fail(f"{f}.axis", "the axis is zero",
-                       f"Give the sliding direction in the frame of body '{a}', e.g. axis = [1, 0]")
-            extra["axis"] = axis / np.hypot(*axis)
-        if "angle" in accepts:
-            extra["angle"] = r.number(entry.get("angle", 0.0), f"{f}.angle", r.angle_name) * r.angle
+        extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", a)
+                 for x in jk.get(kind).numbers}
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
     return joints
+
+
+def _number(r: _Reader, x: jk.Number, value: Any, field: str, body_a: str):
+    """A joint's number ``x`` (declared by its kind) from the file's ``value`` (None: its
+    default), in SI: a length or an angle converted from the file's units, a direction made a
+    unit vector."""
+    scale, unit = {"angle": (r.angle, r.angle_name),
+                   "length": (r.length, r.length_name)}.get(x.unit, (1.0, ""))
+    if value is None:
+        return x.value()
+    if not x.shape:
+        return r.number(value, field, unit) * scale
+    v = r.vector(value, field, unit) * scale
+    if x.direction:
+        if np.hypot(*v) == 0:
+            r.fail(field, f"the {x.name} is zero",
+                   f"Give the {x.doc or 'direction'} in the frame of body '{body_a}', "
+                   f"e.g. {x.name} = [1, 0]")
+        v = v / np.hypot(*v)
+    return v
 
 
 def link_pairs(bodies, joints) -> list[tuple[str, str, str, str, str]]:

@@ -97,11 +97,10 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
     for j in model.joints:
         entry = {"name": j.name, "type": j.kind,
                  "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
-        keys = jk.get(j.kind).keys
-        if "axis" in keys:
-            entry["axis"] = _vec(j.axis)
-        if "angle" in keys:
-            entry["angle"] = _num(j.angle / A)
+        for x in jk.get(j.kind).numbers:   # the kind's numbers, in the file's units
+            scale = {"angle": A, "length": L}.get(x.unit, 1.0)
+            v = j.numbers[x.name]
+            entry[x.name] = _vec(v, scale) if x.shape else _num(v / scale)
         joints.append(entry)
     out["joints"] = joints
 

@@ -1,8 +1,10 @@
 """Joint kinds: one module per kind behind one protocol (:class:`JointKind`), and the registry.
 
 Nothing else in linkdyn branches on a joint's kind: the solvers ask the kind (``get(name)``)
-for its freedoms, placement, motion vector, cut rows, cut wrench and coordinate. To add a kind,
-write a module defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
+for its freedoms, placement, motion vector, cut rows, cut wrench and coordinate, and the model
+file, the model, the layout and the design studies carry the numbers it declares per joint
+(:attr:`JointKind.numbers`, gathered in :data:`NUMBERS`). To add a kind, write a module
+defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
 :data:`REGISTRY` below (``docs/architecture.md``).
 """
 
@@ -10,11 +12,29 @@ from __future__ import annotations
 
 from . import prismatic, revolute, slot
 from ..steps import by_kind
-from .base import JointKind, line_motion
+from .base import JointKind, Number, line_motion
 
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
                                                        slot.KIND)}
+
+
+def _numbers() -> dict[str, Number]:
+    """Every number some kind declares, by name, in the order of first declaration; a name two
+    kinds declare must mean the same (shape and unit)."""
+    out: dict[str, Number] = {}
+    for kind in REGISTRY.values():
+        for x in kind.numbers:
+            same = out.setdefault(x.name, x)
+            if (same.shape, same.unit) != (x.shape, x.unit):
+                raise TypeError(f"joint kind {kind.name!r} declares {x.name!r} with another "
+                                f"shape or unit than an earlier kind")
+    return out
+
+
+#: Every per-joint number of the registered kinds, by name: each joint row of the numeric
+#: layout has every one of them (a kind's own value, else the number's default).
+NUMBERS: dict[str, Number] = _numbers()
 
 
 #: Each kind's integer code, as the numeric layout and the compiled kernels carry it (0: none).
@@ -58,4 +78,4 @@ def get(name: str) -> JointKind:
                                + ", ".join(REGISTRY)) from None
 
 
-__all__ = ["CODES", "JointKind", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]
+__all__ = ["CODES", "JointKind", "NUMBERS", "Number", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]

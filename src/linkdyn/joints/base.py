@@ -24,10 +24,62 @@ instance ``KIND``; :mod:`linkdyn.joints` registers it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 
 from ..planar import dot, normal
 from ..steps import step
+
+
+@dataclass(frozen=True)
+class Number:
+    """One number a joint kind takes per joint, as the model file, the model, the layout, the
+    kernels' view of it and the design studies carry it.
+
+    Attributes
+    ----------
+    name : str
+        Its model-file key, its name in :attr:`linkdyn.model.Joint.numbers`, and (``cut_``
+        before it for a cut joint's) its array in the numeric layout and its kernels' view.
+    shape : tuple
+        ``()`` a number, ``(2,)`` a vector ``[x, y]``.
+    unit : str
+        ``'angle'`` or ``'length'`` (converted from the file's ``[units]``), else ``''``
+        (written as it is, SI).
+    default : float or tuple
+        Its value where the file does not give it.
+    direction : bool
+        A direction: made a unit vector on reading; zero is refused.
+    design : bool
+        Whether a design parameter may vary it (a sweep's designs differ in it); if not, every
+        design of a batch must share it.
+    doc : str
+        What it is, for messages and the model format's reference.
+    """
+
+    name: str
+    shape: tuple = ()
+    unit: str = ""
+    default: Any = 0.0
+    direction: bool = False
+    design: bool = True
+    doc: str = ""
+
+    def value(self, x=None) -> np.ndarray | float:
+        """``x`` (SI) as this number's value, the default where None: a float, or a float
+        array of :attr:`shape`."""
+        x = self.default if x is None else x
+        return float(x) if not self.shape else np.array(x, float).reshape(self.shape)
+
+
+#: a slider's or a slot's axis: a unit direction fixed in the joint's first body, in its frame
+AXIS = Number("axis", (2,), "", (1.0, 0.0), direction=True,
+              doc="sliding direction")
+#: a slider's fixed angle of the second body's frame to the first's
+ANGLE = Number("angle", (), "angle", 0.0,
+               doc="fixed angle of the second body's frame relative to the first's")
 
 
 class JointKind:
@@ -45,8 +97,11 @@ class JointKind:
         Whether it can be a tree joint (one coordinate places the child); if not, it is always cut.
     angular : bool
         Its coordinate ``q`` is an angle (rad; else a length, m).
+    numbers : tuple[Number, ...]
+        The numbers it takes per joint (its model-file keys beyond ``name``, ``type``,
+        ``connect``), in the order :class:`~linkdyn.model.Joint` takes them positionally.
     keys : tuple[str, ...]
-        Model-file keys it accepts beyond ``name``, ``type``, ``connect``.
+        Their names (read-only).
     row_units : tuple[str, ...]
         ``'rad'`` or ``'m'`` for each cut row (the closure residual is scaled by them).
     reaction : tuple[str, ...]
@@ -64,7 +119,7 @@ class JointKind:
     freedoms = 1
     tree = True
     angular = True
-    keys: tuple[str, ...] = ()
+    numbers: tuple[Number, ...] = ()
     row_units: tuple[str, ...] = ()
     reaction: tuple[str, ...] = ("Fx", "Fy")
     multipliers: tuple[tuple[str, str], ...] = ()
@@ -74,6 +129,16 @@ class JointKind:
     @property
     def rows(self) -> int:
         return 3 - self.freedoms
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return tuple(x.name for x in self.numbers)
+
+    def tree_numbers(self, values: dict, sign: int) -> dict:
+        """The joint's numbers ``values`` (name -> SI value, as the model holds them) as its
+        tree row of the layout holds them, for a tree joint whose child is its second body
+        (``sign = +1``) or its first (``-1``): by default the same."""
+        return values
 
     def __repr__(self) -> str:
         return f"<joint kind {self.name!r}>"

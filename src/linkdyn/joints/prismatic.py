@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..planar import dot, normal, turned, wrapped
+from ..planar import dot, normal, rotate, turned, wrapped
 from ..steps import step
-from .base import JointKind, line_motion
+from .base import ANGLE, AXIS, JointKind, line_motion
 
 
 class Prismatic(JointKind):
@@ -20,12 +20,19 @@ class Prismatic(JointKind):
     freedoms = 1
     tree = True
     angular = False
-    keys = ("axis", "angle")
+    numbers = (AXIS, ANGLE)
     row_units = ("rad", "m")
     reaction = ("Fx", "Fy", "M")
     multipliers = (("moment", "N m"), ("normal force", "N"))
     effort = "force"
     dyad = "P"
+
+    def tree_numbers(self, values: dict, sign: int) -> dict:
+        # the axis is fixed in the joint's first body; the tree row holds it in the parent's
+        # frame: a parent that is the second body sees it turned by -angle
+        if sign > 0:
+            return values
+        return dict(values, axis=rotate(np.asarray(-values["angle"]), values["axis"]))
 
     @staticmethod
     @step

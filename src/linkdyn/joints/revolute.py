@@ -16,7 +16,7 @@ class Revolute(JointKind):
     freedoms = 1
     tree = True
     angular = True
-    keys = ()
+    numbers = ()
     row_units = ("m", "m")
     reaction = ("Fx", "Fy")
     multipliers = (("x", "N"), ("y", "N"))

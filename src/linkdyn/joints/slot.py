@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from ..planar import dot, normal
 from ..steps import step
-from .base import JointKind, line_motion
+from .base import AXIS, JointKind, line_motion
 
 
 class Slot(JointKind):
@@ -21,7 +21,7 @@ class Slot(JointKind):
     freedoms = 2
     tree = False
     angular = False
-    keys = ("axis",)
+    numbers = (AXIS,)
     row_units = ("m",)
     reaction = ("Fx", "Fy")
     multipliers = (("normal force", "N"),)

@@ -20,19 +20,18 @@ sample loops call nothing from the C library where they can help it (angles by
 instructions.
 
 All per-sample arrays are component-first with the batch ``(D, T)`` last, indexed
-``[..., d, t]``. The kernel reads the numeric layout (:class:`.layout.Layout`) itself: the
-topology as its integer arrays ``tree`` (n, 4) rows ``[parent, kind, sign, angular]`` and
-``cuts`` (n_cut, 8) rows ``[a, b, kind, first row, rows, metres (3)]`` (:attr:`.Layout.tree`,
-:attr:`.Layout.cut_table`: kinds by their codes, :data:`linkdyn.joints.CODES`; ``metres``: 1
-for a cut row in m, which the residual scales by the size), and the numbers as views of the
-layout's arrays with the design axis last (:meth:`.Layout.per_design`): ``geo`` = (joint
-point (n, 2, D), axis (n, 2, D), angle (n, D)) and ``cgeo`` = (pa, pb, axis (n_cut, 2, D),
-angle (n_cut, D)).
+``[..., d, t]``. The kernel reads the numeric layout (:class:`.layout.Layout`) through its view
+(:attr:`.Layout.view`, a :data:`.layout.View`): named arrays, read by name (``L.parent[i]``,
+``L.cut_rows[c]``, ``L.joint_point[i, 0, d]``, a joint kind's numbers such as ``L.axis``,
+``L.cut_angle``), the topology's integer arrays and every number with the design axis last,
+built once per layout; kinds by their codes (:data:`linkdyn.joints.CODES`). The per-call
+inputs (times, nodes, drivers' values) come as :data:`Inputs`.
 """
 
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
@@ -40,8 +39,7 @@ from .. import joints as jk
 from ..compiled import PRI, factor, inline, njit, screw_views, substitute, vector_views
 from ..planar import turned
 from . import dyads as dy
-from .layout import (ANGULAR, CUT_A, CUT_B, CUT_KIND, CUT_METRES, CUT_ROW, CUT_ROWS,
-                     DYAD_SHAPES, KIND, PARENT, SIGN, Layout)
+from .layout import DYAD_SHAPES, Layout, fixed
 from .positions import nearest_node, scaled_error
 from .recursion import (child_pose, child_twist, child_twist_rate, cut_bias, cut_coordinate,
                         cut_frame, jacobian_column)
@@ -79,17 +77,16 @@ def _pose(phi, c, s, r, e, i, d, ks):
 
 
 @njit
-def _place(tree, geo, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
-    """Poses of all bodies (:func:`.recursion.child_pose`) of design d (``geo``) into the work
-    arrays at ``w``, ``kw``; ``cq``, ``sq`` (n, block): cosine and sine of ``s q_i`` for the
-    angular joints."""
+def _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
+    """Poses of all bodies (:func:`.recursion.child_pose`) of design d of the layout's view
+    ``L`` into the work arrays at ``w``, ``kw``; ``cq``, ``sq`` (n, block): cosine and sine of
+    ``s q_i`` for the angular joints."""
     ks = slice(kw, kw + nb)   # the block's samples in the work arrays
-    jp, slide, ang = geo   # joint points, slider axes, angles
     c[0, w, ks] = 1.0   # the ground's other rows stay zero
-    for i in range(1, len(tree)):
-        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
-        joint, axis = (jp[i, 0, d], jp[i, 1, d]), (slide[i, 0, d], slide[i, 1, d])
-        angle = ang[i, d]
+    for i in range(1, len(L.parent)):
+        p, code, sign = L.parent[i], L.kind[i], float(L.sign[i])
+        joint = (L.joint_point[i, 0, d], L.joint_point[i, 1, d])
+        axis, angle = (L.axis[i, 0, d], L.axis[i, 1, d]), L.angle[i, d]
         phi_p, c_p, s_p, rx_p, ry_p, _, _ = _pose(phi, c, s, r, e, p, w, ks)
         phi_i, c_i, s_i, rx_i, ry_i, ex_i, ey_i = _pose(phi, c, s, r, e, i, w, ks)
         q_i, cq_i, sq_i = q[i, w, ks], cq[i], sq[i]
@@ -101,14 +98,14 @@ def _place(tree, geo, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
 
 
 @njit
-def _rotate(anc, tree, root, rot, d, k0, nb, phi, c, s, r, e):
+def _rotate(L, root, rot, d, k0, nb, phi, c, s, r, e):
     """Turn body ``root`` and every body beyond it, sample k by the turn ``rot[:, k]`` =
     ``[angle, cos, sin, centre x, centre y]`` (dyads.turned_pose)."""
     ks = slice(k0, k0 + nb)
-    for j in range(1, len(tree)):
-        if not anc[j, root]:
+    for j in range(1, len(L.parent)):
+        if not L.ancestors[j, root]:
             continue
-        prismatic = tree[j, KIND] == PRI
+        prismatic = L.kind[j] == PRI
         phi_j, c_j, s_j, rx_j, ry_j, ex_j, ey_j = _pose(phi, c, s, r, e, j, d, ks)
         for k in range(nb):
             rot_k = (rot[0, k], rot[1, k], rot[2, k], rot[3, k], rot[4, k])
@@ -145,22 +142,29 @@ def _turns(out, k, rot):
     out[4, k] = rot[4]
 
 
+@inline
+def _cut_points(L, ci, d):
+    """Cut ci's points on its bodies a and b (relative to O_a, O_b), design d."""
+    return ((L.cut_pa[ci, 0, d], L.cut_pa[ci, 1, d]), (L.cut_pb[ci, 0, d], L.cut_pb[ci, 1, d]))
+
+
 @njit
-def _close(dyads, anc, tree, cuts, cgeo, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
+def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
     """Close every loop dyad by dyad (dyads.solve): each dyad's shape step (dyads.split,
     chain, slide, swing) gives the two turns of the samples, one sample loop per shape
     (a chain's lower turn, dyads.chain_lower, once the upper turn has moved its body); the
-    subtrees beyond its two unknown joints turn. Design d's numbers (``cgeo``, ``modes``),
-    the work arrays at ``wd``, ``kw``; ``up``, ``low`` (5, block) scratch for the two turns."""
+    subtrees beyond its two unknown joints turn. Design d's numbers (of the view ``L``, and
+    ``modes``), the work arrays at ``wd``, ``kw``; ``up``, ``low`` (5, block) scratch for the
+    two turns."""
     ks = slice(kw, kw + nb)
-    cpa, cpb, cax, cang = cgeo
-    for m in range(dyads.shape[0]):
-        shape, cut, ju, jl, on_b = dyads[m, 0], dyads[m, 1], dyads[m, 2], dyads[m, 3], dyads[m, 4]
+    for m in range(L.dyad_shape.shape[0]):
+        shape, cut, ju, jl = L.dyad_shape[m], L.dyad_cut[m], L.dyad_upper[m], L.dyad_lower[m]
+        on_b = L.dyad_on_b[m]
         side = modes[m, d]
-        A = _body(c, s, r, cuts[cut, CUT_A], wd, ks)
-        B = _body(c, s, r, cuts[cut, CUT_B], wd, ks)
-        pa, pb = (cpa[cut, 0, d], cpa[cut, 1, d]), (cpb[cut, 0, d], cpb[cut, 1, d])
-        axis, angle = (cax[cut, 0, d], cax[cut, 1, d]), cang[cut, d]
+        A = _body(c, s, r, L.cut_a[cut], wd, ks)
+        B = _body(c, s, r, L.cut_b[cut], wd, ks)
+        pa, pb = _cut_points(L, cut, d)
+        axis, angle = (L.cut_axis[cut, 0, d], L.cut_axis[cut, 1, d]), L.cut_angle[cut, d]
         # the cut's body on the side of both unknown joints (chain, slide), and the other
         M, F, pm, pf = (B, A, pb, pa) if on_b else (A, B, pa, pb)
         sgn = 1.0 if on_b else -1.0
@@ -190,32 +194,31 @@ def _close(dyads, anc, tree, cuts, cgeo, modes, d, wd, kw, nb, q, phi, c, s, r, 
                                 (x2x[k], x2y[k]), side)
                 _turns(up, k, u)
                 _turns(low, k, w)
-        _rotate(anc, tree, ju, up, wd, kw, nb, phi, c, s, r, e)
+        _rotate(L, ju, up, wd, kw, nb, phi, c, s, r, e)
         if shape == CHAIN:
             for k in range(nb):
                 m_k = (low[3, k], low[4, k])
                 _turns(low, k, dy.chain_lower(_at(M, k), _at(F, k), pm, pf, m_k))
-        _rotate(anc, tree, jl, low, wd, kw, nb, phi, c, s, r, e)
+        _rotate(L, jl, low, wd, kw, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
         q_u, q_l = q[ju, wd, ks], q[jl, wd, ks]
         for k in range(nb):
-            q_u[k] += tree[ju, SIGN] * up[0, k]
-            q_l[k] += tree[jl, SIGN] * low[0, k]
+            q_u[k] += L.sign[ju] * up[0, k]
+            q_l[k] += L.sign[jl] * low[0, k]
 
 
 @njit
-def _cut_frames(cuts, cgeo, d, w, kw, nb, c, s, r, P):
+def _cut_frames(L, d, w, kw, nb, c, s, r, P):
     """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
     loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
-    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]`` (design d's ``cgeo``, the poses
+    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]`` (design d's numbers, the poses
     at ``w``, ``kw``)."""
     ks = slice(kw, kw + nb)
-    cpa, cpb, cax, _ = cgeo
-    for ci in range(len(cuts)):
-        c_a, s_a, rx_a, ry_a = _body(c, s, r, cuts[ci, CUT_A], w, ks)
-        c_b, s_b, rx_b, ry_b = _body(c, s, r, cuts[ci, CUT_B], w, ks)
-        pa, pb = (cpa[ci, 0, d], cpa[ci, 1, d]), (cpb[ci, 0, d], cpb[ci, 1, d])
-        axis = (cax[ci, 0, d], cax[ci, 1, d])
+    for ci in range(len(L.cut_a)):
+        c_a, s_a, rx_a, ry_a = _body(c, s, r, L.cut_a[ci], w, ks)
+        c_b, s_b, rx_b, ry_b = _body(c, s, r, L.cut_b[ci], w, ks)
+        pa, pb = _cut_points(L, ci, d)
+        axis = (L.cut_axis[ci, 0, d], L.cut_axis[ci, 1, d])
         P_c = P[ci]
         for k in range(nb):
             r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k], s_b[k],
@@ -232,16 +235,17 @@ def _frame(P_c, k):
 
 
 @njit
-def _residual(cuts, cgeo, size, d, k0, w, kw, nb, phi, P, err):
+def _residual(L, d, k0, w, kw, nb, phi, P, err):
     """Loop-closure residual (the kinds' ``residual`` steps), its rows in metres relative to
-    ``size``, max over the cut rows (:func:`.positions.scaled_error`), into ``err`` (D, T) at
+    the layout's size, max over the cut rows (:func:`.positions.scaled_error`), into ``err`` (D, T) at
     design d, samples from ``k0``; the angles ``phi`` at ``w``, ``kw``."""
     err_d = err[d, k0:k0 + nb]
     err_d[:] = 0.0
-    for ci in range(len(cuts)):
+    size = L.size
+    for ci in range(len(L.cut_a)):
         P_c = P[ci]
-        a, b, code, angle = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND], cgeo[3][ci, d]
-        m0, m1, m2 = cuts[ci, CUT_METRES], cuts[ci, CUT_METRES + 1], cuts[ci, CUT_METRES + 2]
+        a, b, code, angle = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci], L.cut_angle[ci, d]
+        m0, m1, m2 = L.cut_metres[ci, 0], L.cut_metres[ci, 1], L.cut_metres[ci, 2]
         phi_a, phi_b = phi[a, w, kw:kw + nb], phi[b, w, kw:kw + nb]
         for k in range(nb):   # the padded rows are zero
             r_pa, r_pb, e_a = _frame(P_c, k)
@@ -252,20 +256,20 @@ def _residual(cuts, cgeo, size, d, k0, w, kw, nb, phi, P, err):
 
 
 @njit
-def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
+def _jacobian(L, d, k0, nb, r, e, P, J):
     """Loop-closure Jacobian J (n_rows, n - 1): each cut's rows of each tree joint's rate
     (:func:`.recursion.jacobian_column`, eqs. 20-24); the columns of joints that move both
     bodies of a cut alike, or neither, stay zero."""
     ks = slice(k0, k0 + nb)
     last = J.shape[0] - 1
-    for ci in range(len(cuts)):
+    for ci in range(len(L.cut_a)):
         P_c = P[ci]
-        cut, row, rows = cuts[ci, CUT_KIND], cuts[ci, CUT_ROW], cuts[ci, CUT_ROWS]
-        for j in range(1, len(tree)):
-            f = side[ci, j]
+        cut, row, rows = L.cut_kind[ci], L.cut_row[ci], L.cut_rows[ci]
+        for j in range(1, len(L.parent)):
+            f = L.side[ci, j]
             if f == 0:
                 continue
-            code, sign = tree[j, KIND], float(tree[j, SIGN])
+            code, sign = L.kind[j], float(L.sign[j])
             rx_j, ry_j = vector_views(r, j, d, ks)
             ex_j, ey_j = vector_views(e, j, d, ks)
             # cut ci's rows (a view of a row past the cut's is never written)
@@ -284,11 +288,11 @@ def _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J):
 
 
 @njit
-def _twists(tree, d, k0, nb, r, e, rate, tw):
+def _twists(L, d, k0, nb, r, e, rate, tw):
     """Twists of every body (:func:`.recursion.child_twist`, eq. 2); ``rate`` (n, D, T)."""
     ks = slice(k0, k0 + nb)
-    for i in range(1, len(tree)):   # the ground's row stays zero
-        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
+    for i in range(1, len(L.parent)):   # the ground's row stays zero
+        p, code, sign = L.parent[i], L.kind[i], float(L.sign[i])
         w_i, vx_i, vy_i = screw_views(tw, i, d, ks)
         w_p, vx_p, vy_p = screw_views(tw, p, d, ks)
         rx_i, ry_i = vector_views(r, i, d, ks)
@@ -312,11 +316,11 @@ def _motion(tw, td, r, i, d, ks):
 
 
 @njit
-def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
+def _twist_rates(L, d, k0, nb, r, e, tw, qd, qdd, td):
     """Twist rates of every body (:func:`.recursion.child_twist_rate`)."""
     ks = slice(k0, k0 + nb)
-    for i in range(1, len(tree)):   # the ground's row stays zero
-        p, code, sign = tree[i, PARENT], tree[i, KIND], float(tree[i, SIGN])
+    for i in range(1, len(L.parent)):   # the ground's row stays zero
+        p, code, sign = L.parent[i], L.kind[i], float(L.sign[i])
         w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i = _motion(tw, td, r, i, d, ks)
         w_p, vx_p, vy_p, al_p, ax_p, ay_p, rx_p, ry_p = _motion(tw, td, r, p, d, ks)
         ex_i, ey_i = vector_views(e, i, d, ks)
@@ -329,15 +333,15 @@ def _twist_rates(tree, d, k0, nb, r, e, tw, qd, qdd, td):
 
 
 @njit
-def _bias(cuts, d, k0, nb, r, tw, td, P, bias):
+def _bias(L, d, k0, nb, r, tw, td, P, bias):
     """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td``
     (:func:`.recursion.cut_bias`); ``bias`` (n_rows, block)."""
     ks = slice(k0, k0 + nb)
     last = bias.shape[0] - 1
-    for ci in range(len(cuts)):
+    for ci in range(len(L.cut_a)):
         P_c = P[ci]
-        a, b, cut = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND]
-        row, rows = cuts[ci, CUT_ROW], cuts[ci, CUT_ROWS]
+        a, b, cut = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci]
+        row, rows = L.cut_row[ci], L.cut_rows[ci]
         w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         B0, B1, B2 = bias[row], bias[min(row + 1, last)], bias[min(row + 2, last)]
@@ -378,13 +382,13 @@ def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
 
 
 @njit
-def _cut_motion(cuts, d, k0, nb, phi, r, tw, td, P, out):
+def _cut_motion(L, d, k0, nb, phi, r, tw, td, P, out):
     """Coordinate, rate and acceleration of every cut joint (:func:`.recursion.cut_coordinate`);
     ``out`` (n_cut, 3, D, T)."""
     ks = slice(k0, k0 + nb)
-    for ci in range(len(cuts)):
+    for ci in range(len(L.cut_a)):
         P_c = P[ci]
-        a, b, cut = cuts[ci, CUT_A], cuts[ci, CUT_B], cuts[ci, CUT_KIND]
+        a, b, cut = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci]
         w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
@@ -410,10 +414,10 @@ def _finite(d, k0, w, kw, nb, qd, qdd, fin):
 
 
 @inline
-def _coordinates(tree, i, q_from, q_i, cq_i, sq_i, nb):
+def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
     """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
     ``s q_i`` for an angular joint (the ``turn`` of :func:`.recursion.child_pose`)."""
-    angular, sign = tree[i, ANGULAR], tree[i, SIGN]
+    angular, sign = L.angular[i], L.sign[i]
     for k in range(nb):
         q_i[k] = q_from[k]
         if angular:
@@ -451,111 +455,103 @@ def _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs):
             acc[k] = -acc[k]
 
 
+#: The per-call inputs of :func:`kernel` and :func:`block` beside the layout's view: the times
+#: ``t_s`` (T,); the continuation ``nodes`` (K,) s with their coordinates ``Qn`` (n, D, K) and
+#: the cosines and sines ``cQ``, ``sQ`` of ``s Qn``, each design's times clamped to ``lo``,
+#: ``hi`` (D,); the dyads' assembly ``modes`` (n_dyads, D); ``q_in`` (n, D, T) the coordinates
+#: closing the loops where there are no nodes (K = 0); the drivers' coordinates, rates and
+#: accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T).
+Inputs = namedtuple("Inputs", ("t_s", "nodes", "lo", "hi", "Qn", "cQ", "sQ", "modes", "q_in",
+                               "q_drv", "qd_drv", "qdd_drv"), module=__name__)
+
+
 @njit
-def block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ,
-          sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
+def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     """Positions, rates and accelerations of the samples ``k0`` .. ``k0 + nb`` of design d
-    (arguments as in :func:`kernel`): the per-sample arrays ``work`` = ``(q, phi, c, s, r, e,
-    J, qd, qdd, tw, td)`` written at design ``w``, samples from ``kw`` (the outputs
-    themselves, ``w, kw = d, k0``, or one block's scratch, ``0, 0``); ``err``, ``pivot``,
-    ``fin`` (D, T) at d, ``k0``; ``tmp`` the block's scratch (:func:`scratch`)."""
+    (the layout's view ``L``, the inputs ``X``, as in :func:`kernel`): the per-sample arrays
+    ``work`` = ``(q, phi, c, s, r, e, J, qd, qdd, tw, td)`` written at design ``w``, samples
+    from ``kw`` (the outputs themselves, ``w, kw = d, k0``, or one block's scratch, ``0,
+    0``); ``err``, ``pivot``, ``fin`` (D, T) at d, ``k0``; ``tmp`` the block's scratch
+    (:func:`scratch`)."""
     q, phi, c, s, r, e, J, qd, qdd, tw, td = work
     cq, sq, up, low, rhs, P, A, sol, col, perm, node = tmp
-    n, nd, nv = len(tree), len(dep), len(drv)
+    dep, drv, nodes = L.dependent, L.driven, X.nodes
+    n, nd, nv = len(L.parent), len(dep), len(drv)
     ks, kws = slice(k0, k0 + nb), slice(kw, kw + nb)   # the samples, in the work arrays
     # coordinates: the nearest node's (or the closed ones) and the drivers'
     if nodes.shape[0] > 0:
         for k in range(nb):
-            node[k] = nearest(nodes, min(max(t_s[k0 + k], lo[d]), hi[d]))
+            node[k] = nearest(nodes, min(max(X.t_s[k0 + k], X.lo[d]), X.hi[d]))
         for i in range(1, n):
             q_i, cq_i, sq_i = q[i, w, kws], cq[i], sq[i]
-            Qn_i, cQ_i, sQ_i = Qn[i, d], cQ[i, d], sQ[i, d]
+            Qn_i, cQ_i, sQ_i = X.Qn[i, d], X.cQ[i, d], X.sQ[i, d]
             for k in range(nb):
                 jn = node[k]
                 q_i[k], cq_i[k], sq_i[k] = Qn_i[jn], cQ_i[jn], sQ_i[jn]
     else:
         for i in range(1, n):
-            _coordinates(tree, i, q_in[i, d, ks], q[i, w, kws], cq[i], sq[i], nb)
+            _coordinates(L, i, X.q_in[i, d, ks], q[i, w, kws], cq[i], sq[i], nb)
     for j in range(nv):
         i = drv[j]
-        _coordinates(tree, i, q_drv[j, d, ks], q[i, w, kws], cq[i], sq[i], nb)
+        _coordinates(L, i, X.q_drv[j, d, ks], q[i, w, kws], cq[i], sq[i], nb)
     # positions, the loops closed in closed form from the nodes
-    _place(tree, geo, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
+    _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
     if nodes.shape[0] > 0:
-        _close(dyads, anc, tree, cuts, cgeo, modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
-    _cut_frames(cuts, cgeo, d, w, kw, nb, c, s, r, P)
-    _residual(cuts, cgeo, size, d, k0, w, kw, nb, phi, P, err)
-    _jacobian(tree, side, cuts, w, kw, nb, r, e, P, J)
+        _close(L, X.modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
+    _cut_frames(L, d, w, kw, nb, c, s, r, P)
+    _residual(L, d, k0, w, kw, nb, phi, P, err)
+    _jacobian(L, w, kw, nb, r, e, P, J)
     # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
     for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
         qdd[dep[m], w, kws] = 0.0
     for j in range(nv):
-        qd[drv[j], w, kws], qdd[drv[j], w, kws] = qd_drv[j, d, ks], qdd_drv[j, d, ks]
-    _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs)
+        qd[drv[j], w, kws], qdd[drv[j], w, kws] = X.qd_drv[j, d, ks], X.qdd_drv[j, d, ks]
+    _driven_rhs(drv, nd, J, w, kws, X.qd_drv, d, ks, nb, rhs)
     if nd:   # J_dep, factored once for the rates and the accelerations
         _factor_dep(dep, J, w, kw, nb, A, perm, col)
         _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qd, sol)
     for k in range(nb):
         pivot[d, k0 + k] = col[k] if nd else 1.0
-    _twists(tree, w, kw, nb, r, e, qd, tw)
+    _twists(L, w, kw, nb, r, e, qd, tw)
     # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
-    _twist_rates(tree, w, kw, nb, r, e, tw, qd, qdd, td)
+    _twist_rates(L, w, kw, nb, r, e, tw, qd, qdd, td)
     if nd:
-        _bias(cuts, w, kw, nb, r, tw, td, P, rhs)
+        _bias(L, w, kw, nb, r, tw, td, P, rhs)
         for row in range(nd):
             for k in range(nb):
                 rhs[row, k] = -rhs[row, k]
         _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qdd, sol)
-        _twist_rates(tree, w, kw, nb, r, e, tw, qd, qdd, td)
+        _twist_rates(L, w, kw, nb, r, e, tw, qd, qdd, td)
     _finite(d, k0, w, kw, nb, qd, qdd, fin)
 
 
 @njit
-def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size,
-           t_s, nodes, lo, hi, Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv,
-           q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block_size):
-    """Positions, rates and accelerations at the times ``t_s`` (T,), written into the outputs
-    ``q`` ... ``err`` (see :func:`run`), which come zeroed: the rows that stay zero (the
-    ground's, a revolute joint's slider axis) are never written.
+def kernel(L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block_size):
+    """Positions, rates and accelerations at the times ``X.t_s`` (T,) of the layout whose view
+    is ``L`` (:attr:`.Layout.view`), written into the outputs ``q`` ... ``err`` (see
+    :func:`run`), which come zeroed: the rows that stay zero (the ground's, a revolute joint's
+    slider axis) are never written.
 
-    With continuation nodes (``nodes`` (K,) s, their coordinates ``Qn`` (n, D, K) and the
-    cosines and sines ``cQ``, ``sQ`` of ``s Qn``), the loops are closed dyad by dyad from the
-    node nearest to each time clamped to ``[lo, hi]`` (D,), in the assembly ``modes``
-    (n_dyads, D); without (K = 0), ``q_in`` (n, D, T) already closes them. Driver coordinates,
-    rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T). Each block of
-    samples is :func:`block`, written in place, then the cut joints' motion.
+    With continuation nodes (``X.nodes``, :data:`Inputs`), the loops are closed dyad by dyad
+    from the node nearest to each time clamped to ``[lo, hi]``, in the assembly ``modes``;
+    without (K = 0), ``X.q_in`` already closes them. Each block of samples is :func:`block`,
+    written in place, then the cut joints' motion.
     """
-    D, T = size.shape[0], t_s.shape[0]
-    tmp = scratch(len(tree), len(cuts), len(dep), J.shape[0], block_size)
+    D, T = L.size.shape[0], X.t_s.shape[0]
+    tmp = scratch(len(L.parent), len(L.cut_a), len(L.dependent), J.shape[0], block_size)
     work = (q, phi, c, s, r, e, J, qd, qdd, tw, td)
     for d in range(D):
         for k0 in range(0, T, block_size):
             nb = min(block_size, T - k0)
-            block(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi,
-                  Qn, cQ, sQ, modes, q_in, q_drv, qd_drv, qdd_drv, d, k0, nb, work, d, k0, err,
-                  pivot, fin, tmp)
-            _cut_motion(cuts, d, k0, nb, phi, r, tw, td, tmp[5], cut)
-
-
-def fixed(x) -> np.ndarray | tuple:
-    """``x`` (an array, or a tuple of them) as C-contiguous, read-only arrays of their dtype:
-    views, copied only where not C-contiguous. numba compiles a kernel once per combination of
-    its arguments' layouts ('C', 'A', 'F') and read-only flags; every array input of the
-    kernels goes through this, so each compiles once whatever the caller passed (a broadcast
-    view, a column of a table, an unpickled layout, a sweep's design-last views)."""
-    if isinstance(x, tuple):
-        return tuple(fixed(a) for a in x)
-    x = np.asarray(x)
-    v = np.ascontiguousarray(x, dtype=x.dtype).view()
-    v.flags.writeable = False
-    return v
+            block(L, X, d, k0, nb, work, d, k0, err, pivot, fin, tmp)
+            _cut_motion(L, d, k0, nb, phi, r, tw, td, tmp[5], cut)
 
 
 def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
-           lo=None, hi=None, modes=()) -> tuple:
-    """The inputs of :func:`kernel` (and of :func:`block`), from ``tree`` to ``qdd_drv``, for
-    the arguments of :func:`run`: each array C-contiguous and read-only (:func:`fixed`)."""
-    topo, idx = lay.topo, lay.indices
+           lo=None, hi=None, modes=()) -> Inputs:
+    """The per-call :data:`Inputs` of :func:`kernel` (and of :func:`block`) for the arguments
+    of :func:`run`: each array C-contiguous and read-only (:func:`fixed`)."""
+    topo, L = lay.topo, lay.view
     n = topo.n
     D, T = max(lay.designs, 1), len(t)
     t = np.ascontiguousarray(t, dtype=float)
@@ -571,23 +567,19 @@ def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=
     # cos and sin of s q at the nodes, for the angular joints the nodes give (the kernel takes
     # the drivers' per sample; ``turn`` is unused for the other kinds)
     cQ, sQ = np.ones_like(Qn), np.zeros_like(Qn)
-    rows = [i for i in range(1, n) if lay.tree[i, ANGULAR] and i not in topo.driven]
+    rows = [i for i in range(1, n) if L.angular[i] and i not in topo.driven]
     if Qn.shape[-1] and rows:
         x = np.asarray(topo.sign, float)[rows, None, None] * Qn[rows]
         cQ[rows], sQ[rows] = np.cos(x), np.sin(x)
     md = np.zeros((len(modes), D))
     for k, m in enumerate(modes):
         md[k] = np.reshape(m, -1)
-    # the layout's numbers as views, design axis last
-    geo = tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle"))
-    cgeo = tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle"))
-    drv = idx["driven"]
+    nv = len(L.driven)
     drivers = [np.ascontiguousarray(np.broadcast_to(
-        np.reshape(x, (len(drv), -1, T)), (len(drv), D, T)), dtype=float)
+        np.reshape(x, (nv, -1, T)), (nv, D, T)), dtype=float)
         for x in (q_drv, qd_drv, qdd_drv)]
-    return fixed((lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
-                  lay.dyad_table, geo, cgeo, lay.per_design("size"), t,
-                  np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in, *drivers))
+    return Inputs(*fixed((t, np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in,
+                          *drivers)))
 
 
 def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
@@ -618,5 +610,5 @@ def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=Non
     # ground's, and the slider axis e of a revolute joint
     out = {k: np.zeros(shape + (D, T)) for k, shape in out.items()}
     out["finite"] = np.zeros((D, T), np.bool_)
-    kernel(*args, *out.values(), min(BLOCK, T))
+    kernel(lay.view, args, *out.values(), min(BLOCK, T))
     return out

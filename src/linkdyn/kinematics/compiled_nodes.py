@@ -22,14 +22,14 @@ import numpy as np
 from ..compiled import njit
 from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _driven_rhs, _factor_dep,
                        _jacobian, _place, _solve_dep, fixed, scratch)
-from .layout import ANGULAR, Layout
+from .layout import Layout
 from .positions import unwrap_step
 
 
 @njit
-def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, q0, k_zero,
-           x, ok, phi, c, s, r, e, J, block):
-    """Close the loops of the coordinates ``q`` (n, D, K) in place, dyad by dyad in the
+def kernel(L, modes, q, qd_drv, q0, k_zero, x, ok, phi, c, s, r, e, J, block):
+    """Close the loops of the layout whose view is ``L`` (:attr:`.Layout.view`) at the
+    coordinates ``q`` (n, D, K) in place, dyad by dyad in the
     assembly ``modes`` (n_dyads, D) (the dependent coordinates of ``q`` are the guess that
     sets their winding, the driven ones the drivers' values), and write the dependent rates
     for the driver rates ``qd_drv`` (n_drivers, D, K) into ``x[dep]`` (n, D, K; NaN where
@@ -38,22 +38,23 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, 
     ``k_zero`` (t = 0; :func:`.positions.unwrap_step`), NaN where a node is not ``ok``.
     ``phi`` ... ``J``: zeroed scratch shaped as the kinematics kernel's outputs
     (:func:`.compiled.run`)."""
-    n, nd = len(tree), len(dep)
+    dep, drv = L.dependent, L.driven
+    n, nd = len(L.parent), len(dep)
     D, K = q.shape[1], q.shape[2]
-    cq, sq, up, low, rhs, P, A, sol, col, perm, _ = scratch(n, len(cuts), nd, J.shape[0], block)
+    cq, sq, up, low, rhs, P, A, sol, col, perm, _ = scratch(n, len(L.cut_a), nd, J.shape[0],
+                                                            block)
     path = np.zeros(K)
     for d in range(D):
         for k0 in range(0, K, block):
             nb = min(block, K - k0)
             ks = slice(k0, k0 + nb)
             for i in range(1, n):   # cosines and sines of the guess's joint angles
-                _coordinates(tree, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
+                _coordinates(L, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
             # design d's numbers, and its nodes in the arrays at d, k0
-            _place(tree, geo, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
-            _close(dyads, anc, tree, cuts, cgeo, modes, d, d, k0, nb, q, phi, c, s, r, e, up,
-                   low)
-            _cut_frames(cuts, cgeo, d, d, k0, nb, c, s, r, P)
-            _jacobian(tree, side, cuts, d, k0, nb, r, e, P, J)
+            _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
+            _close(L, modes, d, d, k0, nb, q, phi, c, s, r, e, up, low)
+            _cut_frames(L, d, d, k0, nb, c, s, r, P)
+            _jacobian(L, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
             _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, nb, rhs)
             if nd:
@@ -67,7 +68,7 @@ def kernel(tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, modes, q, qd_drv, 
                 ok_d[k] = ok_d[k] & math.isfinite(q[i, d, k]) & math.isfinite(x[i, d, k])
         for m in range(nd):   # unwind along the nodes, anchored at the assembly (t = 0)
             i = dep[m]
-            if not tree[i, ANGULAR]:
+            if not L.angular[i]:
                 continue
             q_i = q[i, d]
             path[0] = 0.0
@@ -84,12 +85,12 @@ def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes, q0: np.ndarray,
     (n_drivers, ..., K), and whether each node closes with finite rates (..., K): what
     :func:`.positions._follow_dyads` gives by :func:`.dyads.solve`,
     :func:`.recursion.dependent_rates` and :func:`.positions.unwrap_step`, by :func:`kernel`."""
-    topo, idx = lay.topo, lay.indices
+    topo, L = lay.topo, lay.view
     n, K = topo.n, Q.shape[-1]
     D = max(lay.designs, 1)
     batch = Q.shape[1:]
     q = np.array(np.broadcast_to(Q.reshape(n, -1, K), (n, D, K)), dtype=float)   # a copy
-    drv = idx["driven"]
+    drv = L.driven
     # the inputs as one array type, so that the kernel compiles once (compiled.fixed)
     qd = fixed(np.broadcast_to(qd_drv.reshape(len(drv), -1, K), (len(drv), D, K)).astype(float))
     start = fixed(np.broadcast_to(q0.reshape(n, -1), (n, D)).astype(float))
@@ -99,10 +100,6 @@ def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes, q0: np.ndarray,
     x, ok = np.zeros((n, D, K)), np.zeros((D, K), np.bool_)
     scratch = [np.zeros(shape + (D, K)) for shape in ((n,), (n,), (n,), (n, 2), (n, 2),
                                                        (topo.n_rows, n - 1))]
-    geo = fixed(tuple(lay.per_design(f) for f in ("joint_point", "axis", "angle")))
-    cgeo = fixed(tuple(lay.per_design(f) for f in ("cut_pa", "cut_pb", "cut_axis", "cut_angle")))
-    kernel(lay.tree, idx["ancestors"], idx["dependent"], drv, lay.cut_table, lay.side,
-           lay.dyad_table, geo, cgeo, md, q, qd, start, int(k0), x, ok, *scratch,
-           min(BLOCK, K))
-    return (q.reshape((n,) + batch), x[idx["dependent"]].reshape((-1,) + batch),
+    kernel(L, fixed(md), q, qd, start, int(k0), x, ok, *scratch, min(BLOCK, K))
+    return (q.reshape((n,) + batch), x[L.dependent].reshape((-1,) + batch),
             ok.reshape(batch))

@@ -6,6 +6,7 @@ per layout."""
 
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass, field, replace
 from functools import cached_property, partial
 from typing import Any, Callable
@@ -16,7 +17,6 @@ from .. import joints as jk
 from ..errors import ModelError
 from ..model import Model, point_spread
 from ..motion import ConstantSpeed
-from ..planar import rotate
 from ..topology import Topology, build
 from . import dyads
 
@@ -24,8 +24,8 @@ from . import dyads
 @dataclass(frozen=True)
 class Cut:
     """One cut joint as the numpy solvers read it (a view of :class:`Layout`'s cut arrays):
-    bodies ``a``, ``b`` (tree indices), points relative to O_a, O_b in the bodies' frames,
-    the axis fixed in a, the joint's angle."""
+    bodies ``a``, ``b`` (tree indices), points relative to O_a, O_b in the bodies' frames, and
+    its kind's numbers (``numbers``, also attributes: ``c.axis`` fixed in a, ``c.angle``)."""
 
     joint: int
     kind: str
@@ -33,8 +33,13 @@ class Cut:
     b: int
     pa: np.ndarray
     pb: np.ndarray
-    axis: np.ndarray
-    angle: float
+    numbers: dict
+
+    def __getattr__(self, name: str):
+        numbers = self.__dict__.get("numbers")
+        if numbers is None or name not in numbers:
+            raise AttributeError(name)
+        return numbers[name]
 
 
 @dataclass(frozen=True)
@@ -63,46 +68,70 @@ class LoadRow:
     #                          or (2, D, 1) with designs
 
 
-# dyad shape codes of Layout.dyad_table (linkdyn.kinematics.dyads)
+# dyad shape codes of the kernels' view (linkdyn.kinematics.dyads)
 DYAD_SHAPES = {"split": 0, "chain": 1, "slide": 2, "swing": 3}
-# columns of Layout.tree and Layout.cut_table
-PARENT, KIND, SIGN, ANGULAR = range(4)
-CUT_A, CUT_B, CUT_KIND, CUT_ROW, CUT_ROWS, CUT_METRES = range(6)
+#: the numbers of the bodies and cuts every layout has (the joints' own: :data:`jk.NUMBERS`)
+BODY_NUMBERS = ("joint_point", "origin", "com", "mass", "inertia", "cut_pa", "cut_pb", "size",
+                "gravity")
+
+#: The kernels' view of a layout (:attr:`Layout.view`): named arrays, read by name.
+#: Per tree body i (n,), int64: ``parent``, ``kind`` (code, :data:`linkdyn.joints.CODES`; 0 the
+#: ground), ``sign``, ``angular`` (1: the joint's coordinate is an angle), ``tree_joint`` (its
+#: model joint), ``driver_of`` (driver number, else -1); ``ancestors`` (n, n); ``dependent``,
+#: ``driven`` (tree indices). Per cut joint (n_cut,), int64: ``cut_a``, ``cut_b`` (tree
+#: indices), ``cut_kind``, ``cut_row`` (its first row of the stacked closure arrays),
+#: ``cut_rows``, ``cut_joint`` (its model joint), ``cut_metres`` (n_cut, 3) (1 for each of its
+#: rows in m, padded to three); ``side`` (n_cut, n) float, the sign of tree joint k in cut c's
+#: closure. Per dyad of the closed-form plan (n_dyads,), int64: ``dyad_shape``
+#: (:data:`DYAD_SHAPES`), ``dyad_cut``, ``dyad_upper``, ``dyad_lower``, ``dyad_on_b`` (1: the
+#: side of both unknown joints is the cut's second body). Then every number
+#: (:attr:`Layout.NUMBERS`) with the design axis last, D = 1 for one mechanism: ``joint_point``,
+#: ``origin``, ``com`` (n, 2, D), ``mass``, ``inertia`` (n, D), ``cut_pa``, ``cut_pb``
+#: (n_cut, 2, D), ``size`` (D,), ``gravity`` (2, D), and each joint number of the kinds
+#: (:data:`linkdyn.joints.NUMBERS`) per tree joint under its name (``axis`` (n, 2, D), ``angle``
+#: (n, D)) and per cut joint with ``cut_`` before it (``cut_axis``, ``cut_angle``).
+View = namedtuple("View", (
+    "parent", "kind", "sign", "angular", "tree_joint", "driver_of", "ancestors", "dependent",
+    "driven", "cut_a", "cut_b", "cut_kind", "cut_row", "cut_rows", "cut_joint", "cut_metres",
+    "side", "dyad_shape", "dyad_cut", "dyad_upper", "dyad_lower", "dyad_on_b")
+    + BODY_NUMBERS + tuple(jk.NUMBERS) + tuple(f"cut_{k}" for k in jk.NUMBERS),
+    module=__name__)
 
 
 @dataclass(frozen=True)
 class Layout:
     """The numeric layout: a model's numbers for its topology, SI, in tree order (index 0 =
     ground), read by both backends (the numpy solvers index an entity's row, the compiled
-    kernels the whole arrays, :meth:`per_design`).
+    kernels their named view of the whole arrays, :attr:`view`).
 
     Per body, one array each (entity first): ``joint_point`` (n, 2): body i's parent's joint
-    point relative to O_parent, parent frame; ``axis`` (n, 2): slider axis of body i's tree
-    joint in the parent's frame; ``angle`` (n,): its joint's angle; ``origin`` (n, 2): O_i in
-    body i's own frame; ``com`` (n, 2), ``mass``, ``inertia`` (n,). ``points[i]``: dict of
-    body i's named points relative to O_i, body frame. Per cut joint (``topo.cut``):
-    ``cut_kind``, ``cut_a``, ``cut_b`` (kinds and tree indices of its bodies), ``cut_pa``,
-    ``cut_pb`` (n_cut, 2) its points relative to O_a, O_b, ``cut_axis`` (n_cut, 2) its axis
-    in a's frame, ``cut_angle`` (n_cut,); :attr:`cuts` views them as :class:`Cut` objects.
-    ``size``: characteristic length, m. ``gravity``: (2,) m/s^2, global frame.
-    ``motions[k]``: the motions of driver k (``model.drivers[k]``, moving tree joint
-    ``topo.driven[k]``), one per design. ``loads``: one :class:`LoadRow` per ``model.loads``
-    entry.
+    point relative to O_parent, parent frame; ``origin`` (n, 2): O_i in body i's own frame;
+    ``com`` (n, 2), ``mass``, ``inertia`` (n,). ``points[i]``: dict of body i's named points
+    relative to O_i, body frame. Per tree joint, each number the joint kinds declare
+    (:data:`linkdyn.joints.NUMBERS`) in ``joint_numbers[name]`` (n,) + its shape, as the kind
+    puts it in the parent's frame (:meth:`~linkdyn.joints.JointKind.tree_numbers`; a kind's
+    default where its kind has none), also read as an attribute: ``axis`` (n, 2), the slider
+    axis in the parent's frame, ``angle`` (n,). Per cut joint (``topo.cut``): ``cut_kind``,
+    ``cut_a``, ``cut_b`` (kinds and tree indices of its bodies), ``cut_pa``, ``cut_pb``
+    (n_cut, 2) its points relative to O_a, O_b, and its numbers in ``cut_numbers[name]``,
+    also read as ``cut_<name>`` (``cut_axis`` (n_cut, 2) in a's frame, ``cut_angle``);
+    :attr:`cuts` views them as :class:`Cut` objects. ``size``: characteristic length, m.
+    ``gravity``: (2,) m/s^2, global frame. ``motions[k]``: the motions of driver k
+    (``model.drivers[k]``, moving tree joint ``topo.driven[k]``), one per design. ``loads``:
+    one :class:`LoadRow` per ``model.loads`` entry.
 
     ``designs``: 0 for one mechanism; D for D stacked designs (:func:`stack_layouts`), where
     every number gains a design axis shaped to broadcast against ``(D, T)`` batches: ``(n, 2,
     D, 1)`` for vectors, ``(n, D, 1)`` for numbers (so ``joint_point[i]`` is ``(2, D, 1)``),
     ``size`` (D, 1), ``gravity`` (2, D, 1).
 
-    The topology's integer arrays the kernels index (:attr:`tree`, :attr:`cut_table`,
-    :attr:`side`, :attr:`dyad_table`, ...) are computed once per layout, on first read.
+    The kernels' view (:attr:`view`, a :data:`View` of named arrays) is built once per
+    layout, on first read.
     """
 
     topo: Topology
     kind: tuple[str, ...]
     joint_point: np.ndarray
-    axis: np.ndarray
-    angle: np.ndarray
     origin: np.ndarray
     points: tuple[dict, ...]
     com: np.ndarray
@@ -113,24 +142,43 @@ class Layout:
     cut_b: tuple[int, ...]
     cut_pa: np.ndarray
     cut_pb: np.ndarray
-    cut_axis: np.ndarray
-    cut_angle: np.ndarray
     size: Any
     dyads: tuple | None = None  # closed-form plan (linkdyn.dyads), None: Newton's method
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(2))
     motions: tuple = ()
     loads: tuple = ()
     designs: int = 0
+    joint_numbers: dict = field(default_factory=dict)
+    cut_numbers: dict = field(default_factory=dict)
 
     # the numbers every design has its own of (the design axis -2 with designs)
-    NUMBERS = ("joint_point", "axis", "angle", "origin", "com", "mass", "inertia", "cut_pa",
-               "cut_pb", "cut_axis", "cut_angle", "size", "gravity")
+    NUMBERS = BODY_NUMBERS + tuple(jk.NUMBERS) + tuple(f"cut_{k}" for k in jk.NUMBERS)
+
+    def __getattr__(self, name: str):
+        # the joints' numbers by name: ``axis`` (tree rows), ``cut_axis`` (cut rows)
+        d = self.__dict__
+        if "joint_numbers" not in d:
+            raise AttributeError(name)
+        if name in d["joint_numbers"]:
+            return d["joint_numbers"][name]
+        if name.startswith("cut_") and name[4:] in d["cut_numbers"]:
+            return d["cut_numbers"][name[4:]]
+        raise AttributeError(name)
+
+    def with_numbers(self, **numbers) -> Layout:
+        """A copy with the :attr:`NUMBERS` given replaced (the joints' by their attribute
+        names, ``axis``, ``cut_axis``), and any other field."""
+        tree = {k: numbers.pop(k) for k in list(numbers) if k in jk.NUMBERS}
+        cut = {k[4:]: numbers.pop(k) for k in list(numbers)
+               if k.startswith("cut_") and k[4:] in jk.NUMBERS}
+        return replace(self, **numbers, joint_numbers={**self.joint_numbers, **tree},
+                       cut_numbers={**self.cut_numbers, **cut})
 
     @cached_property
     def cuts(self) -> tuple[Cut, ...]:
         """Each cut joint's numbers as a :class:`Cut` (views of the cut arrays)."""
         return tuple(Cut(j, self.cut_kind[k], self.cut_a[k], self.cut_b[k], self.cut_pa[k],
-                         self.cut_pb[k], self.cut_axis[k], self.cut_angle[k])
+                         self.cut_pb[k], {x: v[k] for x, v in self.cut_numbers.items()})
                      for k, j in enumerate(self.topo.cut))
 
     @property
@@ -147,58 +195,40 @@ class Layout:
         return x.reshape(x.shape[:-2] + (self.designs,)) if self.designs else x[..., None]
 
     @cached_property
-    def tree(self) -> np.ndarray:
-        """(n, 4) int64 rows ``[parent, kind, sign, angular]`` of the tree joints: the kind by
-        its code (:data:`linkdyn.joints.CODES`, 0 the ground), angular 1 where the joint's
-        coordinate is an angle."""
+    def view(self) -> View:
+        """The kernels' view of this layout (:data:`View`): the topology's integer arrays and
+        every number with the design axis last (:meth:`per_design`), each C-contiguous and
+        read-only (numba compiles a kernel once per layout of its arrays); built once."""
         topo = self.topo
-        return _frozen(np.array([[topo.parent[i], jk.CODES[k] if i else 0, topo.sign[i],
-                                  int(bool(i) and jk.get(k).angular)]
-                                 for i, k in enumerate(self.kind)], np.int64).reshape(-1, 4))
-
-    @cached_property
-    def cut_table(self) -> np.ndarray:
-        """(n_cut, 8) int64 rows ``[a, b, kind, first row, rows, metres (3)]``: each cut's
-        bodies, kind code, first row in the stacked closure arrays and number of rows (its
-        kind's), and 1 for each of its rows (padded to three) in m, else 0."""
-        rows = []
-        for k in range(self.topo.n_loops):
-            units = jk.get(self.cut_kind[k]).row_units
-            rows.append([self.cut_a[k], self.cut_b[k], jk.CODES[self.cut_kind[k]],
-                         self.topo.row_slice(k).start, len(units)]
-                        + [int(j < len(units) and units[j] == "m") for j in range(3)])
-        return _frozen(np.array(rows, np.int64).reshape(-1, 8))
-
-    @cached_property
-    def side(self) -> np.ndarray:
-        """(n_cut, n): the sign of tree joint k in cut c's closure (+1 on the path to its
-        second body, -1 to its first, 0 both or neither)."""
-        anc = np.asarray(self.topo.ancestors, np.int64)
-        return _frozen(np.array([anc[b] - anc[a] for a, b in zip(self.cut_a, self.cut_b)],
-                                float).reshape(-1, self.topo.n))
-
-    @cached_property
-    def dyad_table(self) -> np.ndarray:
-        """(n_dyads, 5) int64 rows ``[shape, cut, upper, lower, side (0: a, 1: b)]`` of the
-        closed-form plan (empty without one)."""
-        return _frozen(np.array([[DYAD_SHAPES[x.shape], x.cut, x.upper, x.lower,
-                                  int(x.side == "b")] for x in (self.dyads or ())],
-                                np.int64).reshape(-1, 5))
-
-    @cached_property
-    def indices(self) -> dict:
-        """The topology's other integer arrays, int64: ``ancestors`` (n, n), ``dependent``,
-        ``driven`` (tree indices), ``driver_of`` (n,) (driver number of a tree joint, else
-        -1), ``tree_joint`` (n,) (its model joint), ``cut_joint`` (n_cut,)."""
-        topo = self.topo
-        driver_of = np.full(topo.n, -1, np.int64)
+        n = topo.n
+        kinds = [jk.get(k) if i else None for i, k in enumerate(self.kind)]
+        driver_of = np.full(n, -1, np.int64)
         driver_of[list(topo.driven)] = np.arange(len(topo.driven))
-        out = {"ancestors": np.array(topo.ancestors, np.int64),
-               "dependent": np.array(topo.dependent, np.int64),
-               "driven": np.array(topo.driven, np.int64), "driver_of": driver_of,
-               "tree_joint": np.array(topo.tree_joint, np.int64),
-               "cut_joint": np.array(topo.cut, np.int64)}
-        return {k: _frozen(v) for k, v in out.items()}
+        units = [jk.get(k).row_units for k in self.cut_kind]
+        plan = self.dyads or ()
+        anc = np.asarray(topo.ancestors, np.int64).reshape(n, n)
+
+        def ints(xs, *shape):
+            return np.array(xs, np.int64).reshape((len(xs),) + shape)
+        out = dict(
+            parent=ints(topo.parent), kind=ints([jk.CODES[k.name] if k else 0 for k in kinds]),
+            sign=ints(topo.sign), angular=ints([int(bool(k) and k.angular) for k in kinds]),
+            tree_joint=ints(topo.tree_joint), driver_of=driver_of, ancestors=anc,
+            dependent=ints(topo.dependent), driven=ints(topo.driven),
+            cut_a=ints(self.cut_a), cut_b=ints(self.cut_b),
+            cut_kind=ints([jk.CODES[k] for k in self.cut_kind]),
+            cut_row=ints([topo.row_slice(k).start for k in range(topo.n_loops)]),
+            cut_rows=ints([len(u) for u in units]), cut_joint=ints(topo.cut),
+            cut_metres=ints([[int(j < len(u) and u[j] == "m") for j in range(3)]
+                             for u in units], 3),
+            side=np.array([anc[b] - anc[a] for a, b in zip(self.cut_a, self.cut_b)],
+                          float).reshape(-1, n),
+            dyad_shape=ints([DYAD_SHAPES[x.shape] for x in plan]),
+            dyad_cut=ints([x.cut for x in plan]), dyad_upper=ints([x.upper for x in plan]),
+            dyad_lower=ints([x.lower for x in plan]),
+            dyad_on_b=ints([int(x.side == "b") for x in plan]))
+        out.update({k: self.per_design(k) for k in self.NUMBERS})
+        return View(**{k: fixed(v) for k, v in out.items()})
 
     # --- designs ---------------------------------------------------------------------------
     def take(self, idx) -> Layout:
@@ -214,7 +244,7 @@ class Layout:
                               damping=take(x.damping), values=tuple(x.values[i] for i in idx),
                               axis=None if x.axis is None else take(x.axis))
                       for x in self.loads)
-        return replace(self, **{f: take(getattr(self, f)) for f in self.NUMBERS},
+        return self.with_numbers(**{f: take(getattr(self, f)) for f in self.NUMBERS},
                        points=tuple({k: take(v) for k, v in pts.items()} for pts in self.points),
                        loads=loads, motions=tuple(tuple(m[i] for i in idx) for m in self.motions),
                        designs=len(idx))
@@ -233,8 +263,8 @@ class Layout:
         loads = tuple(replace(r, stiffness=num(r.stiffness), free_length=num(r.free_length),
                               damping=num(r.damping), values=(r.values[k],),
                               axis=None if r.axis is None else one(r.axis)) for r in self.loads)
-        return replace(
-            self, **{f: one(getattr(self, f)) for f in self.NUMBERS if f != "size"},
+        return self.with_numbers(
+            **{f: one(getattr(self, f)) for f in self.NUMBERS if f != "size"},
             size=num(self.size),
             points=tuple({name: one(x) for name, x in pts.items()} for pts in self.points),
             motions=tuple((m[k],) for m in self.motions), loads=loads, designs=0)
@@ -363,26 +393,24 @@ def compile_layout(model: Model, topo: Topology | None = None, *, plan: bool = T
 
     origin = [np.zeros(2)] + [np.asarray(own_point(topo.tree_joint[i], i), float)
                               for i in range(1, topo.n)]
-    kind, joint_point, axis, angle = [""], [np.zeros(2)], [np.zeros(2)], [0.0]
+    kind, joint_point = [""], [np.zeros(2)]
+    # each joint's numbers as its kind declares them (a number of another kind: its default;
+    # the ground's row zero); a tree joint's as its kind puts them in the parent's frame
+    tree_numbers = [{k: np.zeros(x.shape) for k, x in jk.NUMBERS.items()}]
     for i in range(1, topo.n):
         jt, p = model.joints[topo.tree_joint[i]], topo.parent[i]
         kind.append(jt.kind)
         joint_point.append(np.asarray(own_point(topo.tree_joint[i], p), float) - origin[p])
-        # a slider's axis is fixed in the joint's first body; store it in the parent's frame
-        ax = np.asarray(jt.axis, float)
-        if topo.sign[i] < 0:
-            ax = rotate(np.asarray(-jt.angle), ax)
-        axis.append(ax)
-        angle.append(float(jt.angle))
+        tree_numbers.append(jk.get(jt.kind).tree_numbers(_numbers(jt), topo.sign[i]))
     cuts = [model.joints[j] for j in topo.cut]
+    cut_numbers = [_numbers(jt) for jt in cuts]
     a = [pos[jt.body_a] for jt in cuts]
     b = [pos[jt.body_b] for jt in cuts]
     points = tuple({k: np.asarray(v, float) - origin[i] for k, v in b_.points.items()}
                    for i, b_ in enumerate(bodies))
     size = point_spread([v for b_ in model.bodies for v in b_.points.values()])
     lay = Layout(
-        topo, tuple(kind), _rows(joint_point, (2,)), _rows(axis, (2,)), _rows(angle, ()),
-        _rows(origin, (2,)), points,
+        topo, tuple(kind), _rows(joint_point, (2,)), _rows(origin, (2,)), points,
         _rows([np.asarray(b_.com, float) - origin[i] for i, b_ in enumerate(bodies)], (2,)),
         _rows([float(b_.mass) for b_ in bodies], ()),
         _rows([float(b_.inertia) for b_ in bodies], ()),
@@ -390,12 +418,20 @@ def compile_layout(model: Model, topo: Topology | None = None, *, plan: bool = T
         _rows([np.asarray(bodies[a_].points[jt.point_a], float) - origin[a_]
                for jt, a_ in zip(cuts, a)], (2,)),
         _rows([np.asarray(bodies[b_].points[jt.point_b], float) - origin[b_]
-               for jt, b_ in zip(cuts, b)], (2,)),
-        _rows([np.asarray(jt.axis, float) for jt in cuts], (2,)),
-        _rows([float(jt.angle) for jt in cuts], ()), size,
+               for jt, b_ in zip(cuts, b)], (2,)), size,
         gravity=np.asarray(model.gravity, float).reshape(2),
-        motions=tuple((d.motion,) for d in model.drivers), loads=load_rows(model, topo))
+        motions=tuple((d.motion,) for d in model.drivers), loads=load_rows(model, topo),
+        joint_numbers={k: _rows([v[k] for v in tree_numbers], x.shape)
+                       for k, x in jk.NUMBERS.items()},
+        cut_numbers={k: _rows([v[k] for v in cut_numbers], x.shape)
+                     for k, x in jk.NUMBERS.items()})
     return replace(lay, dyads=dyads.plan(lay)) if plan else lay
+
+
+def _numbers(jt) -> dict:
+    """Every joint number (:data:`linkdyn.joints.NUMBERS`) of the joint ``jt``: its kind's
+    own, the default of the others."""
+    return {k: np.asarray(getattr(jt, k), float) for k in jk.NUMBERS}
 
 
 def _rows(xs, shape: tuple) -> np.ndarray:
@@ -403,9 +439,19 @@ def _rows(xs, shape: tuple) -> np.ndarray:
     return np.array(xs, float).reshape((len(xs),) + shape)
 
 
-def _frozen(x: np.ndarray) -> np.ndarray:
-    x.flags.writeable = False
-    return x
+def fixed(x) -> np.ndarray | tuple:
+    """``x`` (an array, or a tuple of them) as C-contiguous, read-only arrays of their dtype:
+    views, copied only where not C-contiguous. numba compiles a kernel once per combination of
+    its arguments' layouts ('C', 'A', 'F') and read-only flags; every array input of the
+    kernels goes through this (the layout's :attr:`Layout.view` too), so each compiles once
+    whatever the caller passed (a broadcast view, a column of a table, an unpickled layout, a
+    sweep's design-last views)."""
+    if isinstance(x, tuple):
+        return tuple(fixed(a) for a in x)
+    x = np.asarray(x)
+    v = np.ascontiguousarray(x, dtype=x.dtype).view()
+    v.flags.writeable = False
+    return v
 
 
 def load_rows(model: Model, topo: Topology) -> tuple[LoadRow, ...]:
@@ -502,8 +548,8 @@ def stack_layouts(layouts: list[Layout]) -> Layout:
                           axis=None if row.axis is None else stacked([l.loads[k].axis
                                                                       for l in layouts]))
                   for k, row in enumerate(first.loads))
-    return replace(first, **{f: stacked([getattr(l, f) for l in layouts])
-                             for f in Layout.NUMBERS},
+    return first.with_numbers(**{f: stacked([getattr(l, f) for l in layouts])
+                                 for f in Layout.NUMBERS},
                    points=points, loads=loads,
                    motions=tuple(tuple(l.motions[k][0] for l in layouts)
                                  for k in range(len(first.motions))),

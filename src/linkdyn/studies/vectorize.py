@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .. import joints as jk
 from ..errors import ModelError
 from ..io.reader import MAX_MAGNITUDE, MIN_MAGNITUDE
 from ..kinematics.layout import Layout, compile_layout
@@ -51,6 +52,13 @@ RTOL = 1e-12  # affine and additive to this fraction of each number's scale over
 
 
 # --- the numbers of one design's layout, flat ---------------------------------------------------
+
+#: the layout's numbers per tree body and per cut joint, with each one's shape: the bodies' and
+#: every number the joint kinds declare (linkdyn.joints.NUMBERS), which the map carries alike
+_PER_BODY = {"joint_point": (2,), "origin": (2,), "com": (2,), "mass": (), "inertia": (),
+             **{k: x.shape for k, x in jk.NUMBERS.items()}}
+_PER_CUT = {"pa": (2,), "pb": (2,), **{k: x.shape for k, x in jk.NUMBERS.items()}}
+
 
 def _load_constants(row) -> tuple[int, ...]:
     """Indices of a load value's constant components (a number in the file), else ()."""
@@ -67,15 +75,14 @@ def _entries(model: Model, lay: Layout) -> list[tuple[tuple, np.ndarray]]:
     """
     out = []
     n = lay.topo.n
-    for name in ("joint_point", "axis", "origin", "com"):
-        out += [((name, i), np.asarray(getattr(lay, name)[i], float)) for i in range(n)]
-    for name in ("angle", "mass", "inertia"):
-        out += [((name, i), np.array([getattr(lay, name)[i]], float)) for i in range(n)]
+    for name in _PER_BODY:
+        out += [((name, i), np.asarray(getattr(lay, name)[i], float).reshape(-1))
+                for i in range(n)]
     for i in range(n):
         out += [(("points", i, p), np.asarray(x, float)) for p, x in lay.points[i].items()]
     for k, c in enumerate(lay.cuts):
         out += [(("cut", k, f), np.asarray(getattr(c, f), float).reshape(-1))
-                for f in ("pa", "pb", "axis", "angle")]
+                for f in _PER_CUT]
     out.append((("gravity",), np.asarray(lay.gravity, float)))
     for k, r in enumerate(lay.loads):
         out += [(("load", k, f), np.array([getattr(r, f)], float))
@@ -204,12 +211,10 @@ class Builder:
             motions.append(same)
         raw = np.stack([col[k].T for k, *_ in self.keys if k[0] == "raw"])  # (points, 2, D)
         guesses = {k: col[k][:, 0] for k, *_ in self.keys if k[0] in ("assembly_phi", "assembly_q")}
-        out = replace(
-            lay, **{f: rows(lambda i, f=f: (f, i), n, (2,) if f in ("joint_point", "axis",
-                                                                     "origin", "com") else ())
-                    for f in ("joint_point", "axis", "angle", "origin", "com", "mass", "inertia")},
-            **{f"cut_{f}": rows(lambda k, f=f: ("cut", k, f), nc, () if f == "angle" else (2,))
-               for f in ("pa", "pb", "axis", "angle")},
+        out = lay.with_numbers(
+            **{f: rows(lambda i, f=f: (f, i), n, shape) for f, shape in _PER_BODY.items()},
+            **{f"cut_{f}": rows(lambda k, f=f: ("cut", k, f), nc, shape)
+               for f, shape in _PER_CUT.items()},
             points=tuple({p: vec(("points", i, p)) for p in lay.points[i]} for i in range(n)),
             size=point_spread(raw)[:, None], gravity=vec(("gravity",)),
             motions=tuple(motions), loads=tuple(loads), designs=D)
