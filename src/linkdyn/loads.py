@@ -14,9 +14,9 @@ import numpy as np
 
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
+from .kinematics.recursion import relative
 from .model import Model
-from .planar import (_stack, about, at, dot, linear, offset, pure_force, relative, stack_last,
-                     turned, twist)
+from .planar import _stack, about, at, dot, stack_last, turned, twist
 from .steps import select, step
 
 
@@ -67,14 +67,15 @@ def body_point(c, s, r, t, p):
     the body's cosine ``c``, sine ``s``, reference point ``r`` and twist ``t`` at O."""
     # r + R p, and the velocity of A(R p) t
     a = turned(c, s, p)
-    return offset(r, a), linear(at(t, a))
+    v = at(t, a)
+    return (r[0] + a[0], r[1] + a[1]), (v[1], v[2])
 
 
 @step
 def force_at(f, r_o, r):
     """The wrench ``(n, fx, fy)`` about ``r_o`` of the force ``f`` applied at ``r``:
     ``[(r - r_o) x f, f]``."""
-    return about(pure_force(f), relative(r_o, r))
+    return about((0.0, f[0], f[1]), relative(r_o, r))
 
 
 @step

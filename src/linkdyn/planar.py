@@ -10,25 +10,16 @@ In the plane the cross-product tensor of the seed paper becomes the 90-degree ro
 ``z x a = perp(a) = [-a_y, a_x]``; a twist seen from another point is ``A(a) t`` and a wrench
 carried back is ``A(a)^T w`` (eq. 2).
 
-The solvers are written in this algebra: every per-body equation (twist propagation, the
-Jacobian, the twist rates and the closure bias, Newton-Euler, the DeNOC reduction, the reactions,
-the loads) is a step (:mod:`linkdyn.steps`) calling the operations below on component tuples,
-which numpy runs on whole arrays and numba inlines in its sample loops: :func:`at` and
-:func:`about` (the shift ``A(a)`` of a motion vector and its transpose on a force vector),
-:func:`crm` and :func:`crf` (the motion and force cross products, ``crf(v) = -crm(v)^T``),
-:func:`at_moving` (a shift and its rate to a moving point), :func:`inertia_times` (``M_O x``),
-:func:`turned`, :func:`placed` (a vector rotated, a body point placed), the parts
-:func:`angular`, :func:`linear`, :func:`translation`, :func:`pure_force`, :func:`couple` and
-the vector-space steps :func:`plus`, :func:`minus`, :func:`scaled`, :func:`negated`.
-
-The same names are the API a spatial module would define, with 6-vectors ``[w (3), v (3)]`` in
-place of ``[w, vx, vy]`` (Featherstone's spatial algebra restricted to the plane), so 6-D loops
-add an algebra module and joint kinds, not a second solver. On arrays: :func:`motion`,
-:func:`force` pack a motion vector (twist) and a force vector (wrench); :func:`shift_twist`
-and :func:`shift_wrench` transport them between points; :func:`cross_motion` (``v x m``) and
-:func:`cross_force` (``v x* f``); a :class:`Transform` (rotation and origin of a new frame)
-maps motion vectors with :func:`transform_motion` and force vectors with
-:func:`transform_force`, so that power ``m . f`` is invariant.
+The motion/force API is the one a spatial module would share, with 6-vectors
+``[w (3), v (3)]`` in place of ``[w, vx, vy]`` (Featherstone's spatial algebra restricted to
+the plane): a motion vector (twist) and a force vector (wrench) are component groups, an
+angular part and a linear part (:func:`motion`, :func:`force`, :func:`angular`,
+:func:`linear`); :func:`shift_twist` and :func:`shift_wrench` transport them between points;
+:func:`cross_motion` (``v x m``) and :func:`cross_force` (``v x* f``) are the two cross
+products; a :class:`Transform` (rotation and origin of a new frame) maps motion vectors with
+:func:`transform_motion` and force vectors with :func:`transform_force`, so that power
+``m . f`` is invariant. Only the size of the groups and the bodies of these functions would
+change for 6-D loops.
 """
 
 from __future__ import annotations
@@ -55,12 +46,6 @@ def _stack(parts) -> np.ndarray:
 
 
 # --- steps on component tuples (linkdyn.steps): the algebra, written once for both backends ---
-#
-# Every solver step (the recursions, Newton-Euler, the reduction, the reactions, the loads)
-# spells its equation with these operations, on component tuples: a vector ``(x, y)``, a motion
-# vector (twist) ``(w, vx, vy)``, a force vector (wrench) ``(n, fx, fy)``. A spatial module
-# would define the same names on 3-vectors and 6-tuples ``(w (3), v (3))``; only their bodies
-# would change.
 
 @step
 def normal(a):
@@ -76,82 +61,6 @@ def turned(c, s, a):
 
 
 @step
-def relative(a, b):
-    """The vector ``b - a`` of two vectors ``(x, y)``."""
-    return (b[0] - a[0], b[1] - a[1])
-
-
-@step
-def offset(r, a):
-    """The point ``r + a`` of a point and a vector ``(x, y)``."""
-    return (r[0] + a[0], r[1] + a[1])
-
-
-@step
-def placed(c, s, r, p):
-    """The point ``p`` of a body (its frame, from its origin) in global coordinates,
-    ``r + R p``, the body's origin at ``r`` and its angle of cosine ``c``, sine ``s``."""
-    return offset(r, turned(c, s, p))
-
-
-@step
-def angular(x):
-    """Angular part of a motion or force vector: ``w`` of a twist, the moment ``n`` of a
-    wrench (a scalar in the plane)."""
-    return x[0]
-
-
-@step
-def linear(x):
-    """Linear part of a motion or force vector ``(x, y)``: the velocity of the point a twist is
-    taken at, or the force of a wrench."""
-    return x[1:]
-
-
-@step
-def translation(v):
-    """The motion vector ``[0, v]`` of a translation at velocity ``v`` ``(x, y)``."""
-    return (0.0, v[0], v[1])
-
-
-@step
-def pure_force(f):
-    """The force vector ``[0, f]`` of a force ``f`` ``(x, y)`` through the point it is taken
-    about."""
-    return (0.0, f[0], f[1])
-
-
-@step
-def couple(n):
-    """The force vector ``[n, 0]`` of a couple ``n`` (N m)."""
-    return (n, 0.0, 0.0)
-
-
-@step
-def plus(x, y):
-    """``x + y`` of two motion or two force vectors."""
-    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
-
-
-@step
-def minus(x, y):
-    """``x - y`` of two motion or two force vectors."""
-    return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
-
-
-@step
-def scaled(k, x):
-    """``k x`` of a scalar and a motion or force vector."""
-    return (k * x[0], k * x[1], k * x[2])
-
-
-@step
-def negated(x):
-    """``-x`` of a motion or force vector."""
-    return (-x[0], -x[1], -x[2])
-
-
-@step
 def at(t, a):
     """The twist ``t`` ``(w, vx, vy)`` of a body at a point O, taken at O + a: ``A(a) t``
     (eq. 2; the velocity gains ``w perp(a)``)."""
@@ -163,41 +72,6 @@ def about(w, a):
     """The wrench ``w`` ``(n, fx, fy)`` about a point P, taken about P - a: ``A(a)^T w`` (the
     moment gains ``a x f``)."""
     return ((a[0] * w[2] - a[1] * w[1]) + w[0], w[1], w[2])
-
-
-@step
-def crm(v, m):
-    """Motion cross product ``v x m`` of two motion vectors at one point:
-    ``[0, w_v perp(m_lin) - w_m perp(v_lin)]``; ``crm(v) = [[0, 0, 0], [v_y, 0, -w],
-    [-v_x, w, 0]]`` (spatial: ``[w x m_w, w x m_v + v x m_w]``)."""
-    return (0.0, -(v[0] * m[2]) + m[0] * v[2], v[0] * m[1] - m[0] * v[1])
-
-
-@step
-def crf(v, f):
-    """Force cross product ``v x* f`` of a motion vector and a force vector at one point:
-    ``[v_lin x f_lin, w perp(f_lin)]``, ``crf(v) = -crm(v)^T`` (spatial: ``[w x n + v x f,
-    w x f]``), so ``(v x m) . f = -m . (v x* f)``."""
-    return (v[1] * f[2] - v[2] * f[1], -(v[0] * f[2]), v[0] * f[1])
-
-
-@step
-def at_moving(t, td, a, da):
-    """A body's twist ``t`` and twist rate ``td`` at O, taken at the point O + a that moves at
-    ``da`` relative to O (not a point of the body, in general): ``A(a) t`` and its rate
-    ``A(a) td + crm(t, [0, da])`` (the shift turning with the body, ``d/dt A(a) =
-    [[0, 0], [perp(da), 0]]``)."""
-    return at(t, a), plus(at(td, a), crm(t, translation(da)))
-
-
-@step
-def inertia_times(mass, inertia, d, x):
-    """``M_O x``: the spatial inertia about O of a body of ``mass`` (kg) and moment of inertia
-    ``inertia`` about its mass centre (kg m^2), the mass centre at ``d`` ``(x, y)`` from O, times
-    the motion vector ``x`` at O: ``M_O = A(d)^T diag(I_C, m, m) A(d)`` (a twist gives the
-    momentum about O, a twist rate the rate of change of momentum it causes)."""
-    x_c = at(x, d)
-    return about((inertia * x_c[0], mass * x_c[1], mass * x_c[2]), d)
 
 
 @step
@@ -275,16 +149,31 @@ def force(n, f) -> np.ndarray:
     return twist(n, f)
 
 
+def angular(x: np.ndarray) -> np.ndarray:
+    """Angular part (...) of a motion or force vector (3, ...): ``w`` or the moment ``n``."""
+    return x[0]
+
+
+def linear(x: np.ndarray) -> np.ndarray:
+    """Linear part (2, ...) of a motion or force vector (3, ...): ``v`` or the force ``f``."""
+    return x[1:]
+
+
 def cross_motion(v: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Motion cross product ``v x m`` (3, ...) of motion vectors (3, ...) at one point
-    (:func:`crm`; the rate of ``m`` fixed in a body moving at ``v``)."""
-    return _stack(crm(v, m))
+    """Motion cross product ``v x m`` (3, ...) of motion vectors at one point:
+    ``[0, w_v perp(m_lin) - w_m perp(v_lin)]`` (the rate of ``m`` fixed in a body moving at
+    ``v``); in matrix form ``crm(v) = [[0, 0, 0], [v_y, 0, -w], [-v_x, w, 0]]``."""
+    w, a = v[0], v[1:]
+    return motion(np.zeros(np.broadcast_shapes(np.shape(w), np.shape(m[0]))),
+                  w * perp(m[1:]) - m[0] * perp(a))
 
 
 def cross_force(v: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Force cross product ``v x* f`` (3, ...) of a motion vector and a force vector (3, ...)
-    at one point (:func:`crf`, the dual of :func:`cross_motion`)."""
-    return _stack(crf(v, f))
+    """Force cross product ``v x* f`` (3, ...) of a motion vector and a force vector at one
+    point: ``[v_lin x f_lin, w perp(f_lin)]``, the dual of :func:`cross_motion`:
+    ``crf(v) = -crm(v)^T``, so ``(v x m) . f = -m . (v x* f)``."""
+    w, a = v[0], v[1:]
+    return force(cross(a, f[1:]), w * perp(f[1:]))
 
 
 class Transform(NamedTuple):

@@ -20,9 +20,9 @@ import numpy as np
 from . import joints as jk
 from .dynamics.denoc import DynamicSolution, _array, composite
 from .kinematics import KinematicSolution
-from .kinematics.recursion import _axis, cut_frame
+from .kinematics.recursion import _axis, cut_frame, relative
 from .model import Model
-from .planar import about, first, minus, negated, placed, plus, relative, scaled, stack_last
+from .planar import about, first, stack_last, turned
 from .steps import step
 
 
@@ -69,6 +69,18 @@ class Reactions:
 # --- the steps: each equation once, for both backends (linkdyn.steps) ------------------------
 
 @step
+def plus(x, y):
+    """``x + y`` of two wrenches ``(n, fx, fy)``."""
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
+
+
+@step
+def minus(x, y):
+    """``x - y`` of two wrenches ``(n, fx, fy)``."""
+    return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
+
+
+@step
 def cut_wrench(code, e_a, lam, r_pb, r_a, r_b):
     """The constraint wrench of a cut joint of kind ``code`` on its two bodies.
 
@@ -90,14 +102,16 @@ def cut_wrench(code, e_a, lam, r_pb, r_a, r_b):
     """
     # S^T lam acts at the cut point on the second body, its opposite on the first
     on_b = jk.wrench(code, e_a, lam)
-    return on_b, about(on_b, relative(r_b, r_pb)), negated(about(on_b, relative(r_a, r_pb)))
+    w_a = about(on_b, relative(r_a, r_pb))
+    return on_b, about(on_b, relative(r_b, r_pb)), (-w_a[0], -w_a[1], -w_a[2])
 
 
 @step
 def without_effort(code, s, e, w, tau):
     """``w - tau p_i``: the wrench through tree joint i of kind ``code`` (sign ``s``, global axis
     ``e``) less its driver's effort ``tau`` (N m or N), leaving the reaction."""
-    return minus(w, scaled(tau, jk.motion(code, s, e)))
+    p = jk.motion(code, s, e)
+    return (w[0] - tau * p[0], w[1] - tau * p[1], w[2] - tau * p[2])
 
 
 @step
@@ -105,7 +119,9 @@ def flipped(w, r_i, c_p, s_p, r_p, joint_p):
     """``A(r_i - r_P)^T (-w)``: the opposite of a wrench ``w`` about O_i (on the child), about
     the parent's joint point ``r_P = r_p + R_p joint_p`` (the reaction on the parent when it is
     the joint's second body); ``c_p``, ``s_p``, ``r_p`` the parent's cosine, sine and O_p."""
-    return about(negated(w), relative(placed(c_p, s_p, r_p, joint_p), r_i))
+    j = turned(c_p, s_p, joint_p)
+    return about((-w[0], -w[1], -w[2]),
+                 relative((r_p[0] + j[0], r_p[1] + j[1]), r_i))
 
 
 # --- the numpy path: the steps on whole arrays, loops over cuts and bodies --------------------

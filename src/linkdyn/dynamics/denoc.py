@@ -2,12 +2,7 @@
 
 For each body, the uncoupled Newton–Euler wrench about O_i (eq. 10)
 
-    w_star_i = M_i td_i + W_i M_i E_i t_i - w_ext_i
-             = M_O (td_i - crm(t_i, [0, v_i])) + crf(t_i, M_O t_i) - w_ext_i,
-
-(the second line in the algebra of :mod:`linkdyn.planar`, as Featherstone's inverse dynamics
-writes it: ``M_O`` the spatial inertia about O_i, ``td_i - crm(t_i, [0, v_i])`` the spatial
-acceleration, ``crf`` the force cross product)
+    w_star_i = M_i td_i + W_i M_i E_i t_i - w_ext_i,
 
 is reduced by the DeNOC matrices without forming them: the backward recursion
 
@@ -29,11 +24,10 @@ from typing import Callable
 import numpy as np
 
 from ..kinematics import KinematicSolution
-from ..kinematics.recursion import _axis
+from ..kinematics.recursion import _axis, relative
 from ..loads import Loads
 from .. import joints as jk
-from ..planar import (about, crf, crm, dot, inertia_times, last, linear, minus, plus, relative,
-                      solve_small, stack_last, translation, turned)
+from ..planar import about, at, cross, dot, last, solve_small, stack_last, turned
 from ..steps import step
 
 
@@ -123,23 +117,26 @@ def newton_euler_wrench(mass, inertia, com, c, s, t, td, w_ext):
     w_star : (n, fx, fy)
         ``M_i td_i + W_i M_i E_i t_i - w_ext_i`` about O_i, N m / N.
     ke : float or array
-        ``1/2 t . M_O t = 1/2 m |v_C|^2 + 1/2 I_C w^2``, J.
+        ``1/2 m |v_C|^2 + 1/2 I_C w^2``, J.
     """
-    # d = R com; the momentum about O, h = M_O t; the spatial acceleration at the point fixed
-    # in space where O is, a = td - crm(t, [0, v_O]); M_i td_i + W_i M_i E_i t_i = M_O a + t x* h
+    # d = R com;  n = I_O al + m d x a_O,  f = m (a_O + al perp(d) - w^2 d),  minus w_ext
     d = turned(c, s, com)
-    h = inertia_times(mass, inertia, d, t)
-    a = minus(td, crm(t, translation(linear(t))))
-    w_star = minus(plus(inertia_times(mass, inertia, d, a), crf(t, h)), w_ext)
-    # kinetic energy 1/2 t . M_O t
-    return w_star, 0.5 * dot(t, h)
+    w2 = t[0] * t[0]
+    i_o = inertia + mass * dot(d, d)
+    n = (i_o * td[0] + mass * cross(d, (td[1], td[2]))) - w_ext[0]
+    fx = mass * (td[1] - td[0] * d[1] - w2 * d[0]) - w_ext[1]
+    fy = mass * (td[2] + td[0] * d[0] - w2 * d[1]) - w_ext[2]
+    # kinetic energy with the mass centre's velocity v_C = v_O + w perp(d)
+    v_c = at(t, d)
+    return (n, fx, fy), 0.5 * mass * (v_c[1] * v_c[1] + v_c[2] * v_c[2]) + 0.5 * inertia * w2
 
 
 @step
 def plus_child(w_parent, w_child, r_child, r_parent):
     """``w_p + A(r_i - r_p)^T w_i``: a child's wrench about O_i added to its parent's about O_p
     (one term of the backward recursion of ``N_l^T``)."""
-    return plus(w_parent, about(w_child, relative(r_parent, r_child)))
+    m = about(w_child, relative(r_parent, r_child))
+    return (w_parent[0] + m[0], w_parent[1] + m[1], w_parent[2] + m[2])
 
 
 @step

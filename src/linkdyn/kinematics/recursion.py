@@ -4,7 +4,7 @@ Along the tree,
 
 - positions:      phi_i = phi_p + s q_i,   O_i = joint point (+ s q_i e for a slider),
 - twists (eq. 2): t_i = A(r_i - r_p) t_p + p_i qd_i,
-- twist rates:    td_i = A(r_i - r_p) td_p + crm(t_p, [0, v_i - v_p]) + p_i qdd_i + pd_i qd_i.
+- twist rates:    td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i.
 
 At every cut joint the relative twist of its two bodies, taken at the cut point and reduced by
 the cut-row selection S, must vanish: ``J qd = 0``; its rate gives the closure bias. Arrays are
@@ -12,11 +12,9 @@ component-first, one per body (see :mod:`linkdyn.planar`); the loops run over bo
 
 Each equation is one step (:mod:`linkdyn.steps`) on component tuples, per body or per cut:
 :func:`child_pose`, :func:`child_twist`, :func:`child_twist_rate`, :func:`cut_frame`,
-:func:`jacobian_column`, :func:`cut_bias`, :func:`cut_coordinate`, :func:`point_accel`, each
-written in the motion and force operations of :mod:`linkdyn.planar` (``at``, ``at_moving``,
-``crm``, ``placed``, ...) and the joint kinds' steps. The functions below call them on whole
-arrays, one body or cut at a time; the compiled kernel (:mod:`.compiled`) calls the same steps on
-the scalars of each sample.
+:func:`jacobian_column`, :func:`cut_bias`, :func:`cut_coordinate`, :func:`point_accel`. The
+functions below call them on whole arrays, one body or cut at a time; the compiled kernel
+(:mod:`.compiled`) calls the same steps on the scalars of each sample.
 """
 
 from __future__ import annotations
@@ -26,8 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import joints as jk
-from ..planar import (_stack, angular, at, at_moving, crm, linear, minus, placed, plus,
-                      relative, rotate_cs, scaled, solve_small, translation, turned)
+from ..planar import _stack, at, rotate_cs, solve_small, turned
 from ..steps import select, step
 from .layout import Cut, Layout
 
@@ -56,6 +53,12 @@ class Pose:
 
 
 # --- the steps: one body or cut, on component tuples (arrays or floats) ------------------------
+
+@step
+def relative(a, b):
+    """The vector ``b - a`` of two vectors ``(x, y)``."""
+    return (b[0] - a[0], b[1] - a[1])
+
 
 @step
 def child_pose(code, s, q, turn, angle, axis_p, joint_p, phi_p, c_p, s_p, r_p):
@@ -87,8 +90,9 @@ def child_pose(code, s, q, turn, angle, axis_p, joint_p, phi_p, c_p, s_p, r_p):
         joint's global axis ((0, 0) for a kind without one).
     """
     # the joint point r_p + R_p j on the parent; the child placed from it by the joint's kind
+    j = turned(c_p, s_p, joint_p)
     return jk.place(code, s, q, turn, angle, axis_p, phi_p, c_p, s_p,
-                    placed(c_p, s_p, r_p, joint_p))
+                    (r_p[0] + j[0], r_p[1] + j[1]))
 
 
 @step
@@ -109,13 +113,13 @@ def child_twist_rate(code, s, e, t_p, td_p, t_i, r_p, r_i, rate, accel):
     ``t_p``, ``td_p``: the parent's twist and twist rate at O_p; ``t_i`` body i's twist at O_i;
     ``rate``, ``accel``: the joint's rate and acceleration; the rest as :func:`child_twist`.
     """
-    # td_i = A(r_i - r_p) td_p + crm(t_p, [0, v_i - v_p]) + p_i qdd_i + pd_i qd_i: the rate
-    # of the shift to O_i, which moves at v_i - v_p from O_p; pd_i turning at the angular
-    # velocity of the body carrying the axis (the joint's first body)
-    _, x = at_moving(t_p, td_p, relative(r_p, r_i), relative(linear(t_p), linear(t_i)))
+    # td_i = A(r_i - r_p) td_p + [0, w_p perp(v_i - v_p)] + p_i qdd_i + pd_i qd_i, with pd_i
+    # turning at the angular velocity of the body carrying the axis (the joint's first body)
+    x = at(td_p, relative(r_p, r_i))
+    w = t_p[0]
+    x = (x[0], x[1] - w * (t_i[2] - t_p[2]), x[2] + w * (t_i[1] - t_p[1]))
     x = jk.plus_motion(code, s, e, x, accel)
-    return jk.plus_motion_rate(code, s, e, select(s > 0, angular(t_p), angular(t_i)), x,
-                               rate)
+    return jk.plus_motion_rate(code, s, e, select(s > 0, t_p[0], t_i[0]), x, rate)
 
 
 @step
@@ -127,7 +131,9 @@ def cut_frame(c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis):
     Returns ``r_Pa``, ``r_Pb`` (m) and ``e_a``, each ``(x, y)``.
     """
     # r_Pa = r_a + R_a pa,  r_Pb = r_b + R_b pb,  e_a = R_a axis
-    return placed(c_a, s_a, r_a, pa), placed(c_b, s_b, r_b, pb), turned(c_a, s_a, axis)
+    ua, ub = turned(c_a, s_a, pa), turned(c_b, s_b, pb)
+    return ((r_a[0] + ua[0], r_a[1] + ua[1]), (r_b[0] + ub[0], r_b[1] + ub[1]),
+            turned(c_a, s_a, axis))
 
 
 @step
@@ -140,15 +146,18 @@ def jacobian_column(cut, code, s, side, e, r_k, r_pb, e_a):
     (:func:`cut_frame`).
     """
     # side S_c A(r_Pb - r_k) p_k            (eqs. 20-24)
-    return jk.selected(cut, e_a, scaled(side, at(jk.motion(code, s, e), relative(r_k, r_pb))))
+    x = at(jk.motion(code, s, e), relative(r_k, r_pb))
+    return jk.selected(cut, e_a, (side * x[0], side * x[1], side * x[2]))
 
 
 @step
 def moving_point(t, td, r, r_pt, v_pt):
     """Twist and twist rate of a body (``t``, ``td`` at O = ``r``) taken at a point ``r_pt``
     moving with velocity ``v_pt`` (not a point of the body)."""
-    # A(a) t and its rate A(a) td + crm(t, [0, v_pt - v_O]), a = r_pt - r
-    return at_moving(t, td, relative(r, r_pt), relative(linear(t), v_pt))
+    a = relative(r, r_pt)
+    # d/dt [w, v + w perp(a)] = [al, a_O + al perp(a) + w perp(v_pt - v_O)]
+    return at(t, a), (td[0], td[1] - td[0] * a[1] - t[0] * (v_pt[1] - t[2]),
+                      td[2] + td[0] * a[0] + t[0] * (v_pt[0] - t[1]))
 
 
 @step
@@ -159,20 +168,21 @@ def cut_bias(cut, e_a, t_a, td_a, r_a, t_b, td_b, r_b, r_pb):
     ``t_*``, ``td_*``, ``r_*``: the bodies' twists, twist rates and reference points; ``r_Pb``,
     ``e_a`` from :func:`cut_frame`.
     """
-    # both bodies' motion at P, which moves with b; d/dt (S x) = S x' + (dS/dt) x
-    v_pb = linear(at(t_b, relative(r_b, r_pb)))
-    tb, ab = moving_point(t_b, td_b, r_b, r_pb, v_pb)
-    ta, aa = moving_point(t_a, td_a, r_a, r_pb, v_pb)
-    return plus(jk.selected(cut, e_a, minus(ab, aa)),
-                jk.selected_rate(cut, e_a, angular(t_a), minus(tb, ta)))
+    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x
+    v_pb = at(t_b, relative(r_b, r_pb))
+    tb, ab = moving_point(t_b, td_b, r_b, r_pb, (v_pb[1], v_pb[2]))
+    ta, aa = moving_point(t_a, td_a, r_a, r_pb, (v_pb[1], v_pb[2]))
+    x = jk.selected(cut, e_a, (ab[0] - aa[0], ab[1] - aa[1], ab[2] - aa[2]))
+    y = jk.selected_rate(cut, e_a, t_a[0], (tb[0] - ta[0], tb[1] - ta[1], tb[2] - ta[2]))
+    return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
 
 @step
 def point_accel(t, td, a):
     """Acceleration ``(x, y)`` of the body point at offset ``a`` from O, the body's twist and
     twist rate ``t``, ``td`` taken at O."""
-    # the point moves at w perp(a) = crm(t, [0, a]) from O: a_O + al perp(a) - w^2 a
-    return linear(at_moving(t, td, a, linear(crm(t, translation(a))))[1])
+    # a_O + al perp(a) - w^2 a
+    return (td[1] - td[0] * a[1] - t[0] ** 2 * a[0], td[2] + td[0] * a[0] - t[0] ** 2 * a[1])
 
 
 @step
@@ -184,11 +194,11 @@ def cut_coordinate(cut, e_a, phi_a, t_a, td_a, r_a, phi_b, t_b, td_b, r_b, r_pa,
     """
     # the second body's cut point seen from the first's: d, d', d''; the kind's coordinate
     oa, ob = relative(r_a, r_pa), relative(r_b, r_pb)
-    va, vb = linear(at(t_a, oa)), linear(at(t_b, ob))
+    va, vb = at(t_a, oa), at(t_b, ob)
     aa, ab = point_accel(t_a, td_a, oa), point_accel(t_b, td_b, ob)
-    return jk.coordinate(cut, e_a, (phi_a, angular(t_a), angular(td_a)),
-                         (phi_b, angular(t_b), angular(td_b)), relative(r_pa, r_pb),
-                         relative(va, vb), relative(aa, ab))
+    return jk.coordinate(cut, e_a, (phi_a, t_a[0], td_a[0]), (phi_b, t_b[0], td_b[0]),
+                         relative(r_pa, r_pb), (vb[1] - va[1], vb[2] - va[2]),
+                         relative(aa, ab))
 
 
 # --- the recursions on arrays: a loop over bodies (or cuts), each step on whole arrays -------
