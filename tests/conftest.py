@@ -25,7 +25,7 @@ NUMBA_GROUP = "numba"
 # files whose every test runs compiled code: the compiled backend, the sweep kernel or the
 # benchmark scripts (a file of compiled tests left out compiles the kernels a second time, on
 # another worker, at the same time)
-NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel")
+NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel", "test_backend")
 # a parametrized test whose id has the "compiled" backend among its parameters
 COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
 
