@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 import linkdyn
-from linkdyn.cli import _times
+from linkdyn.sampling import times as sample_times
 
 SAMPLES = 61
 DATA = Path(__file__).with_name("data")
@@ -47,7 +47,7 @@ SIMULATE_EXAMPLES = sorted(p.stem for p in
 def times(name: str) -> tuple[linkdyn.Model, np.ndarray]:
     """An example's model and its default run's ``SAMPLES`` sample times, s."""
     mech = linkdyn.load(linkdyn.example_path(name))
-    return mech, _times(mech, SAMPLES, None, None)
+    return mech, sample_times(mech, SAMPLES, None, None)
 
 
 def key(example: str, column: str) -> str:

@@ -451,13 +451,14 @@ def example_runs(tmp_path_factory):
     """Each bundled example analyzed once with --report: (report.html, results.csv columns)."""
     cache = {}
 
-    from linkdyn.cli import _times, write_csv
+    from linkdyn.cli import write_csv
+    from linkdyn.sampling import times as sample_times
 
     def get(example):
         if example not in cache:  # what `analyze --report` writes, without the static figures
             out = tmp_path_factory.mktemp(example)
             mech = linkdyn.load(linkdyn.example_path(example))
-            sol = linkdyn.analyze(mech, _times(mech, None, None, None))
+            sol = linkdyn.analyze(mech, sample_times(mech, None, None, None))
             report.outputs(sol, design.summary(sol))["report.html"](out / "report.html")
             write_csv(sol, out / "results.csv")
             names = (out / "results.csv").read_text().splitlines()[0].split(",")

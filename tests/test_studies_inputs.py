@@ -252,11 +252,11 @@ def test_resume_computes_a_damaged_chunk_again(model_dir, tmp_path, damage):
     model, out = model_dir / "hoeken.toml", tmp_path / "o"
     args = ["sweep", model, *VARY, "--chunk", 1, "-o", out]
     fresh = pd.read_parquet(model_dir / "sweep" / "designs.parquet")
-    from linkdyn.cli import _times
+    from linkdyn.sampling import times as sample_times
     from linkdyn.studies import runner
     with pytest.raises(KeyboardInterrupt):   # the same sweep, stopped after its first chunk
         sp = linkdyn.studies.space(model, [O4])
-        task = runner.Task(sp, _times(sp.model(), 11, None, None),
+        task = runner.Task(sp, sample_times(sp.model(), 11, None, None),
                            tuple(json.loads((model_dir / "sweep" / "summary.json").read_text())
                                  ["metrics"]), "numpy", None, None, 0.02)
         runner.run(task, np.array([[85.0], [90.0], [95.0]]), outdir=out, chunk=1,

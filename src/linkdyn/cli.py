@@ -7,7 +7,6 @@ passes a singular position. User errors print one message and no traceback.
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import sys
 import threading
@@ -20,6 +19,7 @@ import numpy as np
 
 from .errors import LinkdynError, ModelError
 from .outputs import ANALYSIS_OUTPUTS, check_outdir, write_outputs
+from .sampling import check_memory, times as sample_times
 
 EXAMPLES = "examples"
 
@@ -223,7 +223,7 @@ def _check_run(mech, topo) -> None:
     from .report.keys import guide_transmission_angle, slider_rods
 
     try:
-        t = _times(mech, None, None, None)
+        t = sample_times(mech, None, None, None)
     except ModelError as err:   # no run defined: the start only
         over_run(mech, np.zeros(1), topo)
         click.echo(f"assembles at t = 0 (no run to check over: {err.message})")
@@ -271,75 +271,6 @@ def _assembly_at_zero(mech, topo) -> str:
 
 
 # ---------------------------------------------------------------------------- analyze
-
-BYTES_PER_VALUE = 64   # peak memory of a run per result column and sample (measured ~32 B)
-
-
-def _memory() -> float:
-    """Physical memory of this machine, bytes (inf if unknown)."""
-    try:
-        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
-        return float("inf")
-
-
-def _check_memory(mech, samples: int, field: str) -> None:
-    """Raise, naming ``field`` and the limit, when ``samples`` samples of ``mech``'s results
-    would not fit in this machine's memory."""
-    columns = (2 + 5 * len(mech.joints) + 3 * len(mech.moving_bodies) + len(mech.drivers)
-               + 2 * sum(len(b.points) for b in mech.moving_bodies))
-    need = float(samples) * columns * BYTES_PER_VALUE
-    if need > _memory():
-        raise ModelError(f"{samples} samples would need about {need / 1e9:.3g} GB of memory, more "
-                         f"than this machine has ({_memory() / 1e9:.3g} GB)", field=field,
-                         fix="Give fewer samples, or split the run into parts with --duration")
-
-
-def _times(mech, samples, duration, cycles) -> np.ndarray:
-    """Sample times: the options, else the model's [analysis], else 361 samples of one cycle.
-
-    Each number is checked where it comes from (the option, or the model's ``analysis.*``
-    field): at least 2 samples, and no more than the memory of the machine holds; a finite,
-    positive duration; cycles only for a driver turning at constant speed.
-    """
-    n_field = "--samples" if samples is not None else "analysis.samples"
-    if samples is None:
-        samples = mech.samples or 361
-    if samples < 2:
-        raise ModelError(f"{n_field} must be at least 2, got {samples}", field=n_field,
-                         fix="Give --samples 2 or more")
-    _check_memory(mech, samples, n_field)
-    if duration is None and cycles is None:
-        duration, cycles = mech.duration, mech.cycles
-        d_field, c_field = "analysis.duration", "analysis.cycles"
-    else:
-        d_field, c_field = "--duration", "--cycles"
-    if cycles is not None and not (cycles > 0 and np.isfinite(cycles)):
-        raise ModelError(f"{c_field} must be a positive number, got {cycles}", field=c_field,
-                         fix="Give a positive, finite number of driver turns")
-    if duration is None:
-        periods = [d.period for d in mech.drivers if d.period]
-        if not periods:
-            if cycles is not None:
-                raise ModelError("a cycle is one turn of a driver turning at constant speed, and "
-                                 "no driver of this model does", field=c_field,
-                                 fix="Give --duration T (s) instead")
-            raise ModelError("no duration: the drivers do not rotate at constant speed, so "
-                             "a cycle is undefined", field="analysis.duration",
-                             fix="Give --duration T (s) or [analysis] duration")
-        duration = (1.0 if cycles is None else cycles) * periods[0]
-        if not np.isfinite(duration):  # a speed so small that a turn takes forever
-            k = next(k for k, d in enumerate(mech.drivers) if d.period)
-            raise ModelError(f"a turn of driver {mech.drivers[k].joint} takes {periods[0]:.6g} "
-                             "s at this speed, so a cycle cannot be sampled",
-                             field=f"drivers[{k}].motion",
-                             fix="Give --duration T (s), or a larger speed")
-        d_field = c_field if cycles is not None else d_field
-    if not (duration > 0 and np.isfinite(duration)):
-        raise ModelError(f"the duration must be positive and finite (s), got "
-                         f"{duration}", field=d_field, fix="Give a positive duration in s")
-    return np.linspace(0.0, float(duration), int(samples))
-
 
 class _Progress:
     """Progress of a long run on a terminal: after ``delay`` s (at once for a big run) one line
@@ -616,7 +547,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         from .design.path import _parse_point
         _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
     q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
-    t = _times(mech, samples, duration, cycles)
+    t = sample_times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
         # everything is computed (solution, summary, its text) before any file is written
@@ -624,7 +555,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         try:
             sol = run(mech, t, allow_singular=allow_singular,
                       backend=_backend(ctx, backend))
-        except MemoryError:  # below the estimate of _times, yet more than is free now
+        except MemoryError:  # below the estimate of sample_times, yet more than is free now
             raise ModelError(f"not enough free memory for {len(t)} samples", field="--samples",
                              fix="Give fewer samples, or split the run into parts with "
                                  "--duration") from None
@@ -708,7 +639,7 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     check_outdir(outdir)
     runs, names = [], []
     for path, stem, mech, _ in designs:
-        sol = run(mech, _times(mech, samples, duration, cycles), backend=_backend(ctx, backend))
+        sol = run(mech, sample_times(mech, samples, duration, cycles), backend=_backend(ctx, backend))
         summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
                               default_range=mech.path_range)
         name = stem if stem not in names else f"{stem} ({len(names) + 1})"
@@ -799,7 +730,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     if samples < 2:
         raise ModelError(f"{n_field} must be at least 2, got {samples}", field=n_field,
                          fix="Give --samples 2 or more")
-    _check_memory(mech, samples, n_field)
+    check_memory(mech, samples, n_field)
     t = np.linspace(0.0, float(duration), int(samples))
     # everything is computed (solution, summary, its text) before any file is written
     sol = run(mech, t, rtol=rtol, atol=atol, method=method, backend=_backend(ctx, backend),

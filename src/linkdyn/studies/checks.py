@@ -16,6 +16,7 @@ import os
 import numpy as np
 
 from ..errors import ModelError
+from ..sampling import memory
 
 #: Largest seed (numpy and scipy take seeds from 0 to 2**32 - 1 alike).
 MAX_SEED = 2 ** 32 - 1
@@ -32,14 +33,6 @@ BYTES_PER_REASON = 250
 RATES = {"compiled": 4e6, "numpy": 4e5}
 #: Longest local sweep accepted (estimated at :data:`RATES`), s: one day.
 MAX_SECONDS = 86_400.0
-
-
-def _memory() -> float:
-    """Physical memory of this machine, bytes (inf if unknown)."""
-    try:
-        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
-        return float("inf")
 
 
 def _integer(value, option: str, what: str):
@@ -154,7 +147,7 @@ def sweep_size(designs: int, params: int, metrics: int, samples: int, *, workers
         What set the number of designs, for the message.
     """
     need = float(designs) * ((params + metrics + 2) * BYTES_PER_DESIGN_VALUE + BYTES_PER_REASON)
-    have = _memory()
+    have = memory()
     if need > have:
         raise ModelError(f"{designs:,} designs would need about {need / 1e9:.3g} GB of memory "
                          f"for their table, more than this machine has ({have / 1e9:.3g} GB)",

@@ -11,7 +11,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..cli import _json_safe, _path_range, _times
+from ..cli import _json_safe, _path_range
+from ..sampling import times as sample_times
 from ..errors import ModelError
 from ..outputs import check_outdir, write_outputs
 
@@ -73,7 +74,7 @@ def _setup(model, vary, samples, duration, cycles):
     paths, bounds, counts = parse_vary(vary)
     sp = space(model, paths)
     check_ranges(sp, bounds)
-    t = _times(sp.model(), samples, duration, cycles)
+    t = sample_times(sp.model(), samples, duration, cycles)
     return sp, t, bounds, counts
 
 
@@ -134,7 +135,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
         values, paths = files.read_designs(designs_csv)
         from .params import space
         sp = space(model, paths)
-        t = _times(sp.model(), samples, duration, cycles)
+        t = sample_times(sp.model(), samples, duration, cycles)
         bounds, counts = None, None
         method = "csv"
     else:
