@@ -157,7 +157,7 @@ class Backend:
 
 
 def choose(backend: str | Backend | None = None, work: Work | None = None, kinds=(), *,
-           source: str = "") -> Backend:
+           source: str = "", runs: bool = True) -> Backend:
     """The backend to run ``work`` on.
 
     Parameters
@@ -173,6 +173,9 @@ def choose(backend: str | Backend | None = None, work: Work | None = None, kinds
         ``"auto"`` and is refused under ``"compiled"``.
     source : str
         The model's file, for the error message.
+    runs : bool
+        Whether ``work`` runs now on the backend chosen (then a cold compilation is announced,
+        :func:`announce`); ``False`` for a question only, such as a study's size check.
 
     Raises
     ------
@@ -204,19 +207,22 @@ def choose(backend: str | Backend | None = None, work: Work | None = None, kinds
                                fix="Install it with pip install 'linkdyn[fast]', or use the "
                                    "numpy or auto backend")
         chosen = Backend("compiled", "compiled", work, True)
-        announce(chosen)
+        if runs:
+            announce(chosen)
         return chosen
     can = not missing and _compiled.numba is not None
     if name == "numpy" or not can or work is None:
         return Backend("numpy", name, work, can)
-    return _auto(work)
+    return _auto(work, runs)
 
 
-def _auto(work: Work) -> Backend:
-    """``"auto"``'s choice for ``work``: the smaller estimated time."""
+def _auto(work: Work, runs: bool = True) -> Backend:
+    """``"auto"``'s choice for ``work``: the smaller estimated time (announced if it
+    ``runs``)."""
     fast = work.compiled_seconds() <= work.numpy_seconds()
     chosen = Backend("compiled" if fast else "numpy", "auto", work, True)
-    announce(chosen)
+    if runs:
+        announce(chosen)
     return chosen
 
 

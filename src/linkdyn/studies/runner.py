@@ -114,7 +114,8 @@ def check_size(task: Task, designs: int, *, workers: int = 1, scheduler=None,
     """Refuse a study of ``designs`` designs of ``task`` that cannot fit in memory or finish
     (:func:`.checks.sweep_size`, at the backend it would run)."""
     checks.sweep_size(designs, len(task.space.params), len(task.metrics), len(task.t),
-                      workers=workers, backend=_backend(task, designs * len(task.t)),
+                      workers=workers,
+                      backend=_backend(task, designs * len(task.t), runs=False).name,
                       local=scheduler is None, option=option)
 
 
@@ -214,7 +215,7 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
     return {"valid": valid, "reason": reason, **out}
 
 
-def _backend(task: Task, samples: int, layout=None) -> backend_mod.Backend:
+def _backend(task: Task, samples: int, layout=None, runs: bool = True) -> backend_mod.Backend:
     """The backend of ``task`` chosen (:func:`linkdyn.backend.choose`) for ``samples``
     design-samples of its model (``layout``: the study's, whose loads say whether the sweep
     kernel runs it), so that every batch of a sweep runs it."""
@@ -222,7 +223,7 @@ def _backend(task: Task, samples: int, layout=None) -> backend_mod.Backend:
     reactions = metrics_mod.reads_reactions(task.metrics)
     stages = layout_stages(layout, reactions) if layout is not None else backend_mod.ANALYSIS
     work = backend_mod.Work(samples, len(base.bodies) - 1, stages=stages)
-    return backend_mod.choose(task.backend, work, [j.kind for j in base.joints])
+    return backend_mod.choose(task.backend, work, [j.kind for j in base.joints], runs=runs)
 
 
 def _batches(builder, lay, guesses, idx, T: int):
