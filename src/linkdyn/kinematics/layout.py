@@ -165,6 +165,11 @@ class Layout:
             return d["cut_numbers"][name[4:]]
         raise AttributeError(name)
 
+    def __getstate__(self) -> dict:
+        # without the cached view and cuts: an unpickled array is writable, and the kernels,
+        # compiled for the read-only arrays of a view, would compile again for it
+        return {k: v for k, v in self.__dict__.items() if k not in ("view", "cuts")}
+
     def with_numbers(self, **numbers) -> Layout:
         """A copy with the :attr:`NUMBERS` given replaced (the joints' by their attribute
         names, ``axis``, ``cut_axis``), and any other field."""
