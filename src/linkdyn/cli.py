@@ -761,6 +761,40 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 
+# ---------------------------------------------------------------------------- equilibrium
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@_ALLOW_OUTSIDE
+def equilibrium(model, as_json, allow_outside):
+    """The static equilibrium of MODEL's free joints under its loads, from [initial] q (else the
+    assembly), drivers held at their t = 0 position, and whether it is stable."""
+    _equilibrium(model, as_json, allow_outside, with_modes=False)
+
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@_ALLOW_OUTSIDE
+def modes(model, as_json, allow_outside):
+    """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
+    damping ratios and mode shapes of the free joints and every tree joint."""
+    _equilibrium(model, as_json, allow_outside, with_modes=True)
+
+
+def _equilibrium(model, as_json, allow_outside, with_modes):
+    from . import io, modal as eq_mod
+
+    mech = io.load_model(model, allow_outside=allow_outside)
+    eq = eq_mod.equilibrium(mech)
+    md = eq_mod.modes(eq) if with_modes else None
+    if as_json:
+        click.echo(json.dumps(_json_safe(eq_mod.as_dict(eq, md)), indent=2))
+    else:
+        click.echo(eq_mod.text(eq, md))
+
+
 # ---------------------------------------------------------------------------- reproduce
 
 @main.command()

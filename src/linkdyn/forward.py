@@ -371,11 +371,14 @@ class _System:
             g[self.dep] += S @ (q_ind - g[self.ind])
         return g
 
-    def evaluate(self, t, q_f, qd_f, guess):
-        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+    def reduced(self, t, q_f, qd_f, guess):
+        """The free coordinates' equations of motion ``H qdd_f + h = 0`` at the states
+        ``(t, q_f, qd_f)``, each (nf, T) but t (T,), from a tree-coordinate ``guess`` (n, T).
 
-        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
-        and the power of drivers and non-conservative loads (T,).
+        Returns ``H`` (nf, nf, T) (kg m^2, kg m or kg), ``h`` (nf, T) (N m or N: the effort
+        an actuator in each free joint would need to hold ``qdd_f = 0``), the efforts ``tau``
+        of every independent joint (k, 1 + nf, T) of the batch, and its kinematics, loads and
+        dynamics (1 + nf, T) (sample 0: ``qdd_f = 0``; 1 + j: ``qdd_f = e_j``).
         """
         nd, nf = self.nd, self.nf
         part, lay = self.part, self.lay
@@ -395,6 +398,17 @@ class _System:
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
         H = tau[nd:, 1:] - h[:, None]                            # (row, column, T)
+        return H, h, tau, kin, applied, dyn
+
+    def evaluate(self, t, q_f, qd_f, guess):
+        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+
+        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
+        and the power of drivers and non-conservative loads (T,).
+        """
+        nd, nf = self.nd, self.nf
+        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess)
+        q_d, qd_d, qdd_d = driver_values(self.part.model, t)
         # no actuator in a free joint: H qdd_f = -h                             (F6)
         if nf == 1:
             qdd_f = -h / H[0]
