@@ -56,6 +56,12 @@ def _motion_dict(motion, scale: float, table_file: str | None):
         if motion.scale != scale:  # q = motion.scale * f(t) in SI; the file multiplies by scale
             text = f"{motion.scale / scale!r}*({text})"
         return {"kind": "expression", "q": text}
+    if isinstance(motion, _motion.SegmentMotion):
+        segs = [{"law": x.law, "time": _num(x.time)} if x.law == "dwell" else
+                {"law": x.law, "to": _num(x.to / scale), "time": _num(x.time)}
+                for x in motion.segments]
+        return {"kind": "segments", "start": _num(motion.start / scale), "segments": segs,
+                "repeat": motion.repeat}
     if isinstance(motion, _motion.TableMotion):
         if table_file is None:
             raise ValueError("a motion table is written beside the model file; give save() a path")
