@@ -356,12 +356,12 @@ BAD_MODELS = {
     "misspelt key": (
         lambda s: edit(s, "mass = 5.0", "mas = 5.0"),
         "bodies.coupler", ["unknown key 'mas'", "Did you mean 'mass'?"]),
-    "zero mass": (
-        lambda s: edit(s, "mass = 5.0", "mass = 0.0"),
-        "bodies.coupler.mass", ["must be positive", "0 kg"]),
+    "negative mass": (
+        lambda s: edit(s, "mass = 5.0", "mass = -5.0"),
+        "bodies.coupler.mass", ["must not be negative", "-5 kg"]),
     "negative inertia": (
         lambda s: edit(s, "inertia = 88473.60", "inertia = -88473.60"),
-        "bodies.coupler.inertia", ["must be positive", "-88473.6"]),
+        "bodies.coupler.inertia", ["must not be negative", "-88473.6"]),
     "dangling body": (
         lambda s: s + LONELY,
         "bodies.lonely", ["body 'lonely' is not connected to the ground"]),

@@ -256,6 +256,34 @@ def conditioning(part: Partition, J: np.ndarray) -> tuple[float, tuple[int, ...]
         return current, best, np.inf
 
 
+def check_inertia(part: Partition, system: "_System", q: np.ndarray) -> None:
+    """Refuse free coordinates that move no mass: where massless links or point masses leave
+    the generalized inertia ``H`` of the free coordinates singular at the tree coordinates
+    ``q`` (n,), t = 0, ``H qdd_f = -h`` has no solution (F6).
+
+    Raises
+    ------
+    ModelError
+        Naming the bodies without mass or inertia (field ``bodies``).
+    """
+    model = part.model
+    massless = [b.name for b in model.moving_bodies if b.mass == 0 or b.inertia == 0]
+    if not massless:
+        return
+    nf = len(part.free)
+    t = np.zeros(1)
+    q_f = q[list(part.layout.topo.driven[part.n_drivers:])][:, None]
+    H = system.reduced(t, q_f, np.zeros((nf, 1)), q[:, None])[0][:, :, 0]
+    w = np.linalg.eigvalsh(0.5 * (H + H.T)) if np.all(np.isfinite(H)) else np.array([np.nan])
+    if np.min(w) > 1e-12 * max(float(np.max(np.abs(w))), 1e-300):
+        return
+    raise ModelError(
+        f"the free coordinates ({', '.join(part.free)}) move no mass: their mass matrix is "
+        f"singular, with massless links or point masses ({', '.join(massless)})",
+        file=model.source, field="bodies",
+        fix="Give the bodies the free joints move a mass and an inertia, or drive those joints")
+
+
 def _start(part: Partition) -> np.ndarray:
     """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
     ``[initial] q`` (else the ``[assembly]`` guess)."""
@@ -638,6 +666,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     q_f0 = q0[list(topo.driven[nd:])]
     system = _System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
+    check_inertia(part, system, q0)
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import joints as jk
 from .errors import AssemblyError, ModelError
-from .forward import Partition, _start, _System, partition
+from .forward import Partition, _start, _System, check_inertia, partition
 from .kinematics.positions import driver_values
 from .model import Model
 
@@ -219,6 +219,7 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilib
     q_tree = _start(part)
     q_f = q_tree[free_bodies].copy()
     system = _System(part, q_tree, np.zeros(topo.n))
+    check_inertia(part, system, q_tree)
     state = np.concatenate((q_f, np.zeros(nf), [0.0]))
     if system.accept(0.0, state) is None:
         raise AssemblyError("the mechanism does not close at its start", file=src,
