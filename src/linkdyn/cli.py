@@ -795,6 +795,36 @@ def _equilibrium(model, as_json, allow_outside, with_modes):
         click.echo(eq_mod.text(eq, md))
 
 
+# ---------------------------------------------------------------------------- cam
+
+@main.command()
+@click.argument("camfile", type=click.Path(dir_okay=False))
+@click.option("-o", "--outdir", default="out/cam", show_default=True,
+              type=click.Path(file_okay=False), help="Folder for cam.csv.")
+def cam(camfile, outdir):
+    """Design a disc cam from its follower's motion (CAMFILE: [units] and [cam] with
+    [[cam.segments]]): prints the lift, SVAJ peaks, the largest pressure angle, the smallest
+    radius of curvature and any undercutting, and writes cam.csv (SVAJ, pressure angle,
+    curvature, the pitch curve and the profile's points, SI)."""
+    from . import cams
+
+    check_outdir(outdir)
+    design, n = cams.read(camfile)
+    prof = cams.profile(design, n)
+    table = cams.columns(prof)
+
+    def write(path):
+        import csv
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(list(table))
+            for row in zip(*(v.tolist() for v in table.values())):
+                w.writerow([repr(x) for x in row])
+    written = write_outputs(outdir, {"cam.csv": write}, owned=("cam.csv",))
+    click.echo(cams.text(prof))
+    click.echo(f"wrote {', '.join(map(str, written))}")
+
+
 # ---------------------------------------------------------------------------- reproduce
 
 @main.command()
