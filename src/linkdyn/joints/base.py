@@ -136,6 +136,12 @@ class JointKind:
     dyad : str or None
         Its letter in the closed-form dyads of :mod:`linkdyn.kinematics.dyads` (``'R'``,
         ``'P'``); None: loops it closes use Newton's method.
+    periodic : bool
+        Whether its closure rows are unchanged by a whole turn of either body (a lower pair's
+        are; a gear's are not: turning one gear a whole turn moves the other by the ratio).
+        If not, the assembly keeps the dependent angles Newton's method found (no whole
+        turns moved to bring them near the guess) and ``simulate`` integrates the free
+        angles with their whole turns (F12 off).
     """
 
     name = ""
@@ -148,6 +154,7 @@ class JointKind:
     multipliers: tuple[tuple[str, str], ...] = ()
     effort: str | None = None
     dyad: str | None = None
+    periodic = True
 
     @property
     def rows(self) -> int:
