@@ -520,6 +520,14 @@ def test_a_centre_distance_that_is_not_the_radii_is_refused_naming_the_joint():
     assert "joint 'G'" in text and "90 mm" in text and "80 mm" in text and "t = 0" in text
 
 
+def test_a_pinion_off_its_rack_is_refused_naming_the_joint():
+    m = rack_and_pinion()
+    off = dataclasses.replace(m, joints=m.joints[:2] + (rack("R", "bar.S", "pinion.O", 28.0),))
+    with pytest.raises(AssemblyError) as err:
+        analyze(off, T)
+    assert "joint 'R' (rack)" in str(err.value) and "0.03 m, not 0.028 m" in str(err.value)
+
+
 def test_the_cli_reports_the_misfit_with_exit_3(tmp_path, capsys):
     from linkdyn.cli import main
     p = tmp_path / "pair.toml"

@@ -138,10 +138,11 @@ class Gear(JointKind):
 
     def fit(self, nums, f):
         """How far the assembled pair is from meshing at its pitch circles: ``|d| - |r_a + s
-        r_b|`` (m, the batch shape of ``d``), and what that distance should be (m)."""
+        r_b|`` (m, the batch shape of ``d``), what that distance should be (m) and what it is."""
         ra, rb, internal = nums[0], nums[1], nums[2]
         want = np.abs(ra + (1.0 - 2.0 * internal) * rb)
-        return np.hypot(f[1][0], f[1][1]) - want, want, "the centre distance"
+        return np.hypot(f[1][0], f[1][1]) - want, want, \
+            "the centre distance (|radius_a + radius_b|, internal |radius_a - radius_b|)"
 
     def refuse(self, numbers: dict) -> str | None:
         """Why a gear's numbers are not a gear pair (None: they are)."""

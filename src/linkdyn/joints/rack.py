@@ -30,6 +30,8 @@ the pitch line, so the reduced dynamics do not depend on it; a pinion whose cent
 
 from __future__ import annotations
 
+import math
+
 from ..planar import dot, normal
 from ..steps import step
 from .base import AXIS, JointKind, Number, line_motion
@@ -89,14 +91,13 @@ class Rack(JointKind):
 
     def fit(self, nums, f):
         """How far the assembled pinion is from meshing: its centre's distance from the pitch
-        line, ``d . n - radius`` (m), and what it should be (m)."""
+        line, ``d . n - radius`` (m), what it should be (m) and what it is."""
         n = (-f[0][1], f[0][0])
         return f[1][0] * n[0] + f[1][1] * n[1] - nums[0], nums[0], \
-            "the pinion centre's distance from the pitch line (on the left of the axis)"
+            "the pinion centre's distance from the pitch line (radius, on the left of the axis)"
 
     def refuse(self, numbers: dict) -> str | None:
         """Why a rack's numbers are not a rack and pinion (None: they are)."""
-        import math
         if not numbers["radius"] > 0:
             return "radius must be positive (the pinion's pitch radius)"
         if not 0 <= numbers["pressure_angle"] < math.pi / 2:

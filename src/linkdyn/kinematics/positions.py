@@ -158,12 +158,12 @@ def _misfit(models: list[Model], lay: Layout, q: np.ndarray, q_drv0, t0: float,
                 jt = m.joints[c.joint]
                 raise AssemblyError(
                     f"joint '{jt.name}' ({c.kind}): {what} is {have / scale:.6g} {unit}, not "
-                    f"{wanted / scale:.6g} {unit} as its pitch radii need"
+                    f"{wanted / scale:.6g} {unit}"
                     + (f" (design {d})" if len(models) > 1 else ""),
                     file=m.source, time=t0,
                     drivers=_drivers_at(m, lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)]),
-                    fix="Place the gears' centres at the pitch radii's distance, or correct "
-                        "the radii")
+                    fix=f"Place the points of joint '{jt.name}' so that it meshes at its "
+                        "pitch radii, or correct the radii")
             bad |= off
     return bad
 
