@@ -687,10 +687,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
     # tolerance on it would otherwise loosen as a crank turns on (rtol |q_f| grows with the
     # turns, and with it the error of every step). Not when a load formula reads a joint
-    # coordinate: a whole turn less would change that load
+    # coordinate: a whole turn less would change that load; nor with a cut whose rows are not
+    # periodic in the angles (a gear's: a whole turn of one gear turns the other by the ratio)
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
-    unwound = method in UNWOUND and not reads_coordinates(model)
+    unwound = (method in UNWOUND and not reads_coordinates(model)
+               and all(jk.get(k).periodic for k in part.layout.cut_kind))
     pace = np.inf      # the step size at the last check of the pace
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):

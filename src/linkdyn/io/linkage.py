@@ -132,6 +132,9 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
                        f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
         extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", a)
                  for x in jk.get(kind).numbers}
+        why = jk.get(kind).refuse(extra)
+        if why:
+            r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
     return joints
 

@@ -347,7 +347,7 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
         a, b = c.a, c.b
         r_pa, r_pb, e = _cut_frames(lay, pose, c)
         # the kind's coordinate from the bodies' motion (cut_coordinate)
-        motion = cut_coordinate(jk.CODES[c.kind], e, pose.phi[a], tw[a], twd[a], pose.r[a],
+        motion = cut_coordinate(jk.CODES[c.kind], c.own, e, pose.phi[a], tw[a], twd[a], pose.r[a],
                                 pose.phi[b], tw[b], twd[b], pose.r[b], r_pa, r_pb)
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
     return tuple(cols)
