@@ -309,3 +309,19 @@ def test_a_failed_export_keeps_the_earlier_file(tmp_path):
     res = run("export", linkdyn.example_path("hoeken"), "--to", "svg", "--at", "nan", "-o", out)
     _one_error(res, 2, "--at")
     assert out.read_text(encoding="utf-8") == "earlier"
+
+
+def test_the_documented_export_commands_run(tmp_path, monkeypatch):
+    """The commands of docs/cli.md's export section, on the bundled Hoeken model."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text("utf-8")
+    section = text[text.index("## `linkdyn export`"):]
+    block = section[section.index("```sh") + 5:]
+    block = block[:block.index("```")]
+    commands = [ln.split() for ln in block.strip().splitlines()]
+    assert commands and all(c[:2] == ["linkdyn", "export"] for c in commands)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "hoeken.toml").write_text(linkdyn.example_path("hoeken").read_text("utf-8"))
+    for c in commands:
+        res = run(*c[1:])
+        assert res.exit_code == 0, (c, res.output)
+        assert (tmp_path / c[c.index("-o") + 1]).stat().st_size > 0

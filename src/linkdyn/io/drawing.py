@@ -181,8 +181,8 @@ def layer_name(name: str) -> str:
 
 
 def dxf(d: Drawing) -> str:
-    """The drawing as ASCII DXF R12 (text): a HEADER (``$ACADVER`` AC1009, ``$INSUNITS``), a
-    LAYER table (one layer per body, ``JOINTS``, ``GROUND`` and one per path) and the ENTITIES:
+    """The drawing as ASCII DXF R12 (text): a HEADER (``$ACADVER`` AC1009, ``$INSUNITS``), the
+    LTYPE table (``CONTINUOUS``), a LAYER table (one layer per body, ``JOINTS``, ``GROUND`` and one per path) and the ENTITIES:
     a ``LINE`` per outline edge, a ``CIRCLE`` per joint, a 2-D ``POLYLINE`` per path."""
     rows: list[tuple[int, str]] = []
 
@@ -194,7 +194,9 @@ def dxf(d: Drawing) -> str:
     layers = list(dict.fromkeys(layers))
     put((0, "SECTION"), (2, "HEADER"), (9, "$ACADVER"), (1, "AC1009"),
         (9, "$INSUNITS"), (70, DXF_UNITS[d.unit]), (0, "ENDSEC"))
-    put((0, "SECTION"), (2, "TABLES"), (0, "TABLE"), (2, "LAYER"), (70, len(layers)))
+    put((0, "SECTION"), (2, "TABLES"), (0, "TABLE"), (2, "LTYPE"), (70, 1),
+        (0, "LTYPE"), (2, "CONTINUOUS"), (70, 0), (3, "Solid line"), (72, 65), (73, 0),
+        (40, "0.0"), (0, "ENDTAB"), (0, "TABLE"), (2, "LAYER"), (70, len(layers)))
     for k, name in enumerate(layers):
         put((0, "LAYER"), (2, name), (70, 0), (62, 1 + k % 7), (6, "CONTINUOUS"))
     put((0, "ENDTAB"), (0, "ENDSEC"), (0, "SECTION"), (2, "ENTITIES"))
