@@ -92,6 +92,27 @@ def slider_crank():
                  assembly_q={"J4": 0.2289}, cut=("J3",))
 
 
+def reversed_hoeken():
+    """Hoeken with J1 and J2 written the other way round: MuJoCo's tree reaches each joint's
+    first body from its second (qpos = -q, the driver's gear -1)."""
+    m = hoeken((0.3, -9.81))
+    j1, j2 = rev("J1", "crank.O1", "ground.O1"), rev("J2", "coupler.O2", "crank.O2")
+    return dataclasses.replace(m, joints=(j1, j2) + m.joints[2:], drivers=(
+        Driver("J1", ExpressionMotion("-(4.7*t + 0.8*sin(6*t))")),))
+
+
+def reversed_slider():
+    """The slider-crank with its slide written slider first, the slider's frame turned by
+    -0.3 rad from the ground's (``angle`` 0.3 of the ground's to the slider's) and the axis in
+    the slider's frame: a reversed slide between frames that are not parallel."""
+    m = slider_crank()
+    a = 0.3
+    j4 = pri("J4", "slider.B", "ground.G", axis=(math.cos(a), math.sin(a)), angle=a)
+    return dataclasses.replace(m, joints=m.joints[:3] + (j4,),
+                               assembly_phi={**m.assembly_phi, "slider": -a},
+                               assembly_q={"J4": -0.2289})
+
+
 def spring_loaded():
     """The Hoeken linkage in a vertical plane with a spring (ground to the coupler point) and a
     damper (crank pin to rocker pin), exported as MuJoCo tendons; the crank accelerates."""
@@ -117,6 +138,8 @@ CASES = {
         45 * RPM),
     "hoeken-spring-damper": (spring_loaded, 4.7),
     "slider-crank": (slider_crank, 20.0),
+    "hoeken-reversed-joints": (reversed_hoeken, 4.7),
+    "slider-crank-reversed-slide": (reversed_slider, 20.0),
     # linkdyn cuts the slide J4; MuJoCo's tree is cut at the wrist pin instead
     "slider-crank-example": (lambda: example("slider_crank"), 6.0),
     # prismatic tree joints between rotating bodies (frames turned by the slide's angle)
