@@ -149,6 +149,20 @@ def test_svg_and_dxf_joints_and_paths_are_linkdyns(name, at, traced, tmp_path):
             dist = np.linalg.norm(ends[:, None] - pts[None], axis=-1)
             assert np.max(np.min(dist, axis=1)) <= 1e-9     # every end is a point of the body
             assert np.max(np.min(dist, axis=0)) <= 1e-9     # every point is an end
+        # a fixed guide: a ground line through the guide's point along its axis, spanning the
+        # sliding point's travel in results.csv
+        for j in model.joints:
+            if j.body_a == "ground" and j.kind in ("prismatic", "slot"):
+                o = np.asarray(model.body("ground").points[j.point_a]) / unit
+                e = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+                travel = ((np.stack([table[f"x_{j.body_b}.{j.point_b}"],
+                                     table[f"y_{j.body_b}.{j.point_b}"]], axis=1) / unit - o) @ e)
+                def off(x):  # distance of the point x from the guide's line
+                    v = np.array(x) - o
+                    return abs(e[0] * v[1] - e[1] * v[0])
+                on = [ln for ln in lines["ground"] if off(ln[:2]) <= 1e-9 and off(ln[2:]) <= 1e-9]
+                spans = [sorted(((np.array(ln[k:k + 2]) - o) @ e) for k in (0, 2)) for ln in on]
+                assert any(a < travel.min() and b > travel.max() for a, b in spans), j.name
         # every traced path is results.csv's columns, in the model's unit
         keys = ({p: p for p in paths} if fmt == "svg" else
                 {p: next(t for t in traced if f"PATH-{t.replace('.', '-').upper()}" == p)

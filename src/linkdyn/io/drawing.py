@@ -8,8 +8,9 @@ frame (x right, y up):
   report draws it, on the body's own layer;
 - each joint as a circle at its second body's point (``connect[1]``; for a revolute joint the
   two points coincide), layer ``joints``;
-- each ground pivot (a ground point a joint uses) marked by a triangle under it, layer
-  ``ground``;
+- each ground pivot (a ground point a joint uses) marked by a triangle under it, and each
+  fixed guide (a prismatic or slot joint whose first body is the ground) as its line over the
+  sliding point's travel during the run, layer ``ground``;
 - the path of every point the report traces (:func:`linkdyn.report.data.traced_points`) over
   one run (the times ``linkdyn analyze`` solves by default), each on a layer
   ``path-<body>-<point>``.
@@ -27,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import joints as jk
 from ..model import GROUND, Model
 from .units import LENGTH_UNITS
 
@@ -121,6 +123,15 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
     # a ground pivot's triangle: apex at the pivot, base 2.5 r below it
     lines[GROUND] = [np.array([c, c + (-1.5 * r, -2.5 * r), c + (1.5 * r, -2.5 * r), c])
                      for c in pivots.values()]
+    # a fixed guide (a joint with an axis on the ground): the line o + s e over the travel of
+    # the sliding point during the run, s = (r_B - o) . e, 2 r beyond each end
+    for j in model.joints:
+        if j.body_a == GROUND and "axis" in jk.get(j.kind).keys:
+            o = where(GROUND, j.point_a)
+            e = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+            travel = (np.asarray(run.point(j.body_b, j.point_b)) * scale - o) @ e
+            lo, hi = float(np.min(travel)) - 2 * r, float(np.max(travel)) + 2 * r
+            lines[GROUND].append(np.array([o + lo * e, o + hi * e]))
     return Drawing(model.length_unit, float(sol.t[-1]), lines, joints, pivots, paths, r)
 
 
