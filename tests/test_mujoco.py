@@ -408,3 +408,47 @@ def test_a_simulated_motion_satisfies_mujocos_equations(name):
             np.testing.assert_allclose(d.site_xpos[m.site(f"{b.name}.{p}").id][[0, 2]],
                                        sol.point(b.name, p)[2], atol=1e-9)
     assert check_against_mujoco(model, sol, export.text, name) <= RTOL
+
+
+# ----------------------------------------------------------------------------------------------
+# massless links and point masses
+
+
+@pytest.mark.parametrize("case", ["hoeken-massless-coupler", "slider-crank-point-masses"])
+def test_massless_links_and_point_masses_get_mujocos_lower_bounds(case):
+    """MuJoCo needs every moving body's mass and inertia positive: the export gives a massless
+    link or point mass MuJoCo's lower bounds (1e-12 of the largest), names them, and MuJoCo's
+    efforts and cut forces then differ from linkdyn's by about that fraction."""
+    from test_dynamics import MODELS
+
+    model = dataclasses.replace(MODELS[case](), drivers=(
+        Driver("J1", ExpressionMotion("4 + 5*t + 0.8*sin(6*t)")),))
+    light = [b.name for b in model.moving_bodies if b.mass == 0 or b.inertia == 0]
+    assert light
+    t = np.linspace(0.0, 1.0, 9)
+    sol = analyze(model, t)
+    export = mjcf(model, at=0.1)
+    assert any(all(n in x for n in light) and "boundmass" in x for x in export.omitted)
+    m = mujoco.MjModel.from_xml_string(export.text)
+    big = max(b.mass for b in model.moving_bodies)
+    for b in model.moving_bodies:          # only the light bodies are raised, to tiny values
+        k = m.body(b.name).id
+        if b.mass == 0:
+            assert 0 < m.body_mass[k] <= 1e-11 * big
+        else:
+            assert m.body_mass[k] == b.mass
+        assert np.all(m.body_inertia[k] > 0)
+    # MuJoCo's equations see the bounds: raised to 1e-3 of the largest they are off ...
+    with pytest.raises(AssertionError, match="differs from MuJoCo"):
+        check_against_mujoco(model, sol, _bounded(export.text, 1e-3), case)
+    # ... and at the export's they agree with linkdyn's to 1e-12
+    assert check_against_mujoco(model, sol, export.text, case) <= RTOL
+
+
+def _bounded(text, fraction):
+    """``text`` with MuJoCo's bounds raised to ``fraction`` of the largest mass and inertia."""
+    import re
+    out = re.sub(r'boundmass="([^"]+)"',
+                 lambda g: f'boundmass="{float(g[1]) / 1e-12 * fraction!r}"', text)
+    return re.sub(r'boundinertia="([^"]+)"',
+                  lambda g: f'boundinertia="{float(g[1]) / 1e-12 * fraction!r}"', out)

@@ -30,7 +30,11 @@ What is written:
   points, ``stiffness``, ``springlength``, ``damping``); every named point a ``<site>``
   ``BODY.POINT``; a keyframe ``at`` with the positions, rates and driver targets at that time.
 
-Point forces, torques, joint torques and forces and friction depend on time or on the state in
+MuJoCo needs every moving body's mass and inertia positive: a massless link or a point mass
+is given MuJoCo's lower bounds (``<compiler boundmass boundinertia>``, :data:`BOUND` times the
+largest moving mass and the largest of the inertias and that mass times the size squared, at
+least 1e-14), named in :attr:`Mjcf.omitted`. Point forces, torques, joint
+torques and forces and friction depend on time or on the state in
 ways MJCF cannot hold; they are left out and named in :attr:`Mjcf.omitted` (and a comment of
 the file). Writing the file needs no ``mujoco``; loading it in MuJoCo does
 (``pip install 'linkdyn[mujoco]'``).
@@ -52,6 +56,9 @@ from ..model import GROUND, Model
 #: Stiffness of the drivers' servos: the mechanism's moving mass at its size (or, for a
 #: slider, its moving mass) responds at about sqrt(KP_RATE) = 100 rad/s.
 KP_RATE = 1e4  # 1/s^2
+#: A massless link's or point mass's mass and inertia in MuJoCo (which needs them positive):
+#: this fraction of the largest moving body's (``<compiler boundmass boundinertia>``).
+BOUND = 1e-12
 
 
 @dataclass(frozen=True)
@@ -65,8 +72,9 @@ class Mjcf:
     cut : tuple[str, ...]
         The joints closed by ``connect`` constraints (the cut joints of MuJoCo's tree).
     omitted : tuple[str, ...]
-        What is left out: the joints of ``leave_out`` (``"joint 'name'"``) and the loads MJCF
-        cannot hold (``"kind 'name'"``, the load's name or else its body).
+        What is left out or changed: the joints of ``leave_out`` (``"joint 'name'"``), zero
+        masses and inertias (the bodies and MuJoCo's bounds) and the loads MJCF cannot hold
+        (``"kind 'name'"``, the load's name or else its body).
     """
 
     text: str
@@ -241,7 +249,23 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
     root.append(ET.Comment(
         " linkdyn export: the plane (x, y) of the mechanism is MuJoCo's (x, z); SI units; "
         f"bodies at their pose at t = {at!r} s "))
-    ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
+    compiler = ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
+    # MuJoCo needs a positive mass and inertia on every moving body: a massless link or a
+    # point mass gets its lower bound, BOUND times the largest (omitted: the bound named)
+    moving = model.moving_bodies
+    if any(b.mass <= 0 or b.inertia <= 0 for b in moving):
+        big_m = max([b.mass for b in moving] + [0.0]) or 1.0
+        big_i = max([b.inertia for b in moving] + [big_m * size ** 2])
+        # above MuJoCo's mjMINVAL (1e-15) whatever the units
+        bound_m, bound_i = max(BOUND * big_m, 1e-14), max(BOUND * big_i, 1e-14)
+        compiler.set("boundmass", _num(bound_m))
+        compiler.set("boundinertia", _num(bound_i))
+        light = [b.name for b in moving if b.mass <= 0 or b.inertia <= 0]
+        omitted_bounds = [f"a zero mass or inertia ({', '.join(light)}: MuJoCo's lower "
+                          f"bounds boundmass {bound_m:.3g} kg, boundinertia "
+                          f"{bound_i:.3g} kg m^2)"]
+    else:
+        omitted_bounds = []
     g = np.asarray(model.gravity, float)
     opt = ET.SubElement(root, "option", gravity=_xz(g))
     ET.SubElement(opt, "flag", contact="disable")
@@ -292,7 +316,8 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
             ET.SubElement(eq, "connect", name=name, site1=f"{jt.body_b}.{jt.point_b}",
                           site2=f"{jt.body_a}.{jt.point_a}")
 
-    omitted, tendons = [f"joint '{name}'" for name in leave_out], []
+    omitted = [f"joint '{name}'" for name in leave_out] + omitted_bounds
+    tendons = []
     for ld in model.loads:
         label = f"{ld.kind} '{ld.name or ld.body}'"
         if ld.kind in ("spring", "damper"):
