@@ -849,6 +849,32 @@ def reproduce(name, outdir):
     click.echo(f"see {out / 'README.txt'} for what each figure shows and the sign conventions")
 
 
+# ---------------------------------------------------------------------------- export
+
+@main.command("export")
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--to", "to", required=True, type=click.Choice(["mjcf", "svg", "dxf"]),
+              help="mjcf: a MuJoCo model; svg, dxf: the drawing at --at and the traced paths.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="File to write [default: the model's name with .xml, .svg or .dxf].")
+@click.option("--at", type=float, default=0.0, show_default=True,
+              help="Time in s of the pose drawn (svg, dxf) or the MJCF's bodies are placed at.")
+@_ALLOW_OUTSIDE
+def export(model, to, output, at, allow_outside):
+    """Write MODEL as a MuJoCo model (MJCF) or its drawing (SVG, DXF) for CAD."""
+    from . import io
+    from .io.export import FORMATS, export as run
+    from .outputs import check_file, write_file
+
+    out = Path(output) if output else Path(Path(model).stem + FORMATS[to])
+    check_file(out)
+    done = run(io.load_model(model, allow_outside=allow_outside), to, at=at)
+    write_file(out, done.text)
+    for note in done.notes:
+        click.echo(note)
+    click.echo(f"wrote {out}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 

@@ -198,3 +198,57 @@ def _remove_stale(out: Path, files: Mapping, owned: Iterable[str]) -> None:
                 os.unlink(e.path)
             except OSError:
                 pass
+
+
+def check_file(path, option: str = "-o") -> None:
+    """Check, without creating anything, that ``path`` can be written as one file: it is not a
+    folder, and its folder exists (or can be created) and is writable.
+
+    Raises
+    ------
+    ModelError
+        Naming ``option`` (exit status 2).
+    """
+    p = Path(os.path.abspath(path))
+    if os.path.isdir(p):
+        raise ModelError(f"cannot write '{path}': it is a folder", field=option,
+                         fix=f"Give {option} a file name")
+    if os.path.lexists(p) and not os.access(p, os.W_OK):
+        raise ModelError(f"cannot write '{path}': it is not writable", field=option,
+                         fix=f"Give {option} a file you can write")
+    check_outdir(p.parent, option)
+
+
+def write_file(path, text: str, option: str = "-o") -> Path:
+    """Write ``text`` (UTF-8) to the file ``path``, all or nothing: into a temporary file
+    beside it, then renamed over it, so a failure leaves no partial file and any earlier file
+    intact. Its folder is created if missing.
+
+    Raises
+    ------
+    ModelError
+        Naming ``option``: the file or its folder cannot be written.
+    """
+    check_file(path, option)
+    p = Path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+    except OSError as err:
+        raise ModelError(f"cannot write '{path}': {err.strerror or err}", field=option,
+                         fix=f"Give {option} a file you can write") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, p)
+    except BaseException as err:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(err, OSError):
+            raise ModelError(f"cannot write '{path}': {err.strerror or err}", field=option,
+                             fix=f"Give {option} a file you can write") from None
+        raise
+    return p

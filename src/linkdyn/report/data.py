@@ -76,7 +76,7 @@ def _known_column(name: str) -> bool:
                                                                "potential_energy")
 
 
-def _body_shape(points: dict) -> tuple[str, list[str]]:
+def body_shape(points: dict) -> tuple[str, list[str]]:
     """How to draw a body from its named points: ``dot``, ``bar`` (two points), ``line``
     (collinear points, in order along the line) or ``polygon`` (convex hull, CCW)."""
     names = list(points)
@@ -114,8 +114,24 @@ def _ground_outline(ground, used: set) -> list[str]:
     pts = {p: xy for p, xy in ground.points.items() if f"{GROUND}.{p}" in used}
     if len(pts) < 3:
         return [f"{GROUND}.{p}" for p in pts]
-    shape, outline = _body_shape(pts)
+    shape, outline = body_shape(pts)
     return [f"{GROUND}.{p}" for p in (outline if shape == "polygon" else pts)]
+
+
+def traced_points(model) -> list[str]:
+    """The points whose paths the report traces (and ``linkdyn export --to svg|dxf`` draws),
+    as ``BODY.POINT`` in body and point order: the points of moving bodies that no joint uses
+    (coupler points), and the second points of joints between two bodies neither of which is
+    pivoted on the ground (e.g. the tool point of a five-bar)."""
+    joints = model.joints
+    used = {f"{j.body_a}.{j.point_a}" for j in joints} | {f"{j.body_b}.{j.point_b}" for j in joints}
+    grounded = {j.body_a for j in joints if j.body_b == GROUND} | {
+        j.body_b for j in joints if j.body_a == GROUND}
+    floating = {f"{j.body_b}.{j.point_b}" for j in joints
+                if GROUND not in (j.body_a, j.body_b)
+                and not ({j.body_a, j.body_b} & grounded)}
+    return [f"{b.name}.{p}" for b in model.moving_bodies for p in b.points
+            if f"{b.name}.{p}" not in used or f"{b.name}.{p}" in floating]
 
 
 def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
@@ -165,7 +181,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
 
     bodies = []
     for k, b in enumerate(m.moving_bodies):
-        shape, outline = _body_shape(b.points)
+        shape, outline = body_shape(b.points)
         bodies.append({"name": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)], "shape": shape,
                        "outline": [f"{b.name}.{p}" for p in outline],
                        "points": [f"{b.name}.{p}" for p in b.points]})
@@ -195,15 +211,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         add(f"Fx:{j.name}", sol.reactions.force[..., k, 0])
         add(f"Fy:{j.name}", sol.reactions.force[..., k, 1])
         add(f"F:{j.name}", np.linalg.norm(sol.reactions.force[..., k, :], axis=-1))
-    # traced: points no joint uses (coupler points), and joints between two bodies that are
-    # not pivoted on the ground (e.g. the tool point of a five-bar)
-    grounded = {j.body_a for j in joints if j.body_b == GROUND} | {
-        j.body_b for j in joints if j.body_a == GROUND}
-    floating = {f"{j.body_b}.{j.point_b}" for j in joints
-                if GROUND not in (j.body_a, j.body_b)
-                and not ({j.body_a, j.body_b} & grounded)}
-    traces = [pid for pid in points if not points[pid].get("static")
-              and (pid not in used or pid in floating)]
+    traces = traced_points(m)
     allxy = np.concatenate(bounds)
     lo, hi = allxy.min(0), allxy.max(0)
     size = float(max(np.max(hi - lo), 1e-9))
