@@ -561,7 +561,10 @@ def test_the_bundled_geared_fivebar_meshes_and_its_gears_turn_opposite():
 @pytest.mark.parametrize("internal", [0, 1])
 def test_gear_train_matches_mujoco_joint_equality(internal):
     mujoco = pytest.importorskip("mujoco")
-    from test_mujoco import _load_forces, _xz
+    from test_mujoco import _load_forces
+
+    def _xz(v):   # linkdyn (x, y) -> MuJoCo 'x 0 y'
+        return f"{v[0]:.17g} 0 {v[1]:.17g}"
 
     model = train(internal)
     sol = analyze(model, T)
