@@ -133,15 +133,18 @@ def check(model, allow_outside):
     model with free coordinates (for simulate) is assembled at t = 0 with its [initial] values.
     """
     from . import design, io
+    from .units import Units
 
     mech = io.load_model(model, allow_outside=allow_outside)
+    u = Units.of(mech)
     topo, free = _check_topology(mech)
     click.echo(f"{mech.name}  ({model})")
     if mech.description:
         click.echo(f"  {mech.description}")
     click.echo(f"bodies ({len(mech.bodies)}):")
     for b in mech.bodies:
-        extra = "" if b.name == "ground" else f"  mass {b.mass:.6g} kg, I_c {b.inertia:.6g} kg m^2"
+        extra = "" if b.name == "ground" else (f"  mass {u.show(b.mass, 'mass')}, I_c "
+                                               f"{u.show(b.inertia, 'inertia')}")
         click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
     click.echo(f"joints ({len(mech.joints)}):")
     for k, j in enumerate(mech.joints):
@@ -164,7 +167,7 @@ def check(model, allow_outside):
     if topo.n_loops and not (mech.assembly_phi or mech.assembly_q) and not free:
         click.echo("assembly: " + _assembly_at_zero(mech, topo))
     for fb in design.four_bars(mech):
-        L = ", ".join(f"{k} {v * 1e3:.6g} mm" for k, v in
+        L = ", ".join(f"{k} {u.show(v, 'length')}" for k, v in
                       zip(("ground", "input", "coupler", "output"), fb.lengths))
         click.echo(f"four-bar {fb.input}/{fb.coupler}/{fb.output}: {fb.grashof} ({L})")
     for sc in design.checks.slider_cranks(mech):
@@ -221,6 +224,9 @@ def _check_run(mech, topo) -> None:
     from . import design
     from .design.checks import length, over_run, span
     from .report.keys import guide_transmission_angle, slider_rods
+    from .units import Units
+
+    u = Units.of(mech)
 
     try:
         t = sample_times(mech, None, None, None)
@@ -236,20 +242,20 @@ def _check_run(mech, topo) -> None:
     click.echo(f"assembles at t = 0 and over the run ({len(t)} samples, t = 0 .. "
                f"{t[-1]:.4g} s{', ' + ranges if ranges else ''}), clear of singular positions")
     for fb in design.four_bars(mech):
-        mu = np.degrees(design.transmission_angle(sol, fb))
-        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb))
+        mu = design.transmission_angle(sol, fb)
+        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb), u)
         click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)}")
     guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
     for g, rod, pin, other in slider_rods(mech):
         if g.name not in guides:
             continue
         lo, hi = design.path.joint_travel(sol, g.name)
-        mu = guide_transmission_angle(sol, g, rod, pin, other)
+        mu = np.radians(guide_transmission_angle(sol, g, rod, pin, other))
         click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
                    f"{span(mech, g.name, lo, hi)}); transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg (rod against the guide's "
-                   "normal)")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)} (rod against the "
+                   "guide's normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -267,7 +273,8 @@ def _assembly_at_zero(mech, topo) -> str:
                 "zero angles (analyze stops with exit status 3)")
     phi = {b.name: float(kin.pose.phi[kin.layout.topo.bodies.index(b.name)][0])
            for b in mech.moving_bodies}
-    return assembly_words(phi, 0.0)
+    from .units import Units
+    return assembly_words(phi, 0.0, Units.of(mech))
 
 
 # ---------------------------------------------------------------------------- analyze
@@ -366,29 +373,37 @@ def write_parquet(sol, path: Path) -> None:
 
 def summary_text(s: dict) -> str:
     """The printed summary of an ``analyze`` run, from its summary dict (computed before any
-    file is written, so a failure here leaves nothing behind)."""
+    file is written, so a failure here leaves nothing behind), in the model file's units
+    (``s['units']``, :class:`linkdyn.units.Units`)."""
     from .report.tables import denoise
+    from .units import Units
 
     s = denoise(s)  # a rounding residual (a cycle's net work of 1e-16 J) prints as 0
+    u = Units(**s.get("units", {}))
     lines: list[str] = []
     echo = lines.append
 
     def num(x, fmt, scale=1.0):  # a figure the run could not give (None or NaN) is "n/a"
         return "n/a" if x is None or not np.isfinite(x) else format(x * scale, fmt)
 
+    def shown(x, quantity, digits=4):   # an SI value in the file's unit, with the unit
+        return u.show(x, quantity, digits)
+
+    def deg(x):   # a summary figure kept in degrees, in the file's angle unit
+        return None if x is None else np.radians(x)
+
     echo(f"{s['model']}: {s['samples']} samples over {num(s['duration_s'], '.6g')} s")
     echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
          f"{', '.join(s['cut_joints']) or 'none'}")
     asm = s.get("assembly")
     if asm and not asm["guess"] and s["loops"]:
-        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'])}")
+        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'], u)}")
     for fb in s["four_bars"]:
         ta = fb["transmission_angle_deg"]
         echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
              f"{fb['links']['output']}: {fb['grashof']}"
              + (f"; {fb['motion']['words']}" if fb.get("motion", {}).get("words") else "")
-             + "; transmission angle "
-             f"{num(ta['min'], '.2f')}..{num(ta['max'], '.2f')} deg")
+             + f"; transmission angle {u.span(deg(ta['min']), deg(ta['max']), 'angle', 4)}")
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
@@ -400,7 +415,7 @@ def summary_text(s: dict) -> str:
     for j, e in s.get("driver_energy", {}).items():
         if e["work_J"] is not None:
             fw = e["flywheel"]
-            fly = (f"; flywheel {num(fw['inertia_kg_m2'], '.4g')} kg m^2 for C_s = "
+            fly = (f"; flywheel {shown(fw['inertia_kg_m2'], 'inertia')} for C_s = "
                    f"{num(fw['speed_fluctuation'], '.3g')}" if fw else "")
             echo(f"  driver {j}: work {num(e['work_J'], '.4g')} J "
                  f"(+{num(e['positive_work_J'], '.4g')} / "
@@ -413,13 +428,13 @@ def summary_text(s: dict) -> str:
              f"(about the origin) peak {num(mz['peak'], '.6g')} N m")
     ps = s.get("path_straightness")
     if ps:
+        q = "angle" if ps.get("range_unit", "rad") == "rad" else "length"
         echo(f"  path of {ps['point']}: deviation from a straight line max "
-             f"{num(ps['max_deviation_m'], '.4g', 1e3)} mm, RMS "
-             f"{num(ps['rms_deviation_m'], '.4g', 1e3)} mm over "
-             f"{num(ps['length_m'], '.4g', 1e3)} mm"
+             f"{shown(ps['max_deviation_m'], 'length')}, RMS "
+             f"{shown(ps['rms_deviation_m'], 'length')} over "
+             f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
-                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')}"
-                f" {ps.get('range_unit', 'rad')})"))
+                f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         m = r.get("peak_moment_Nm")
@@ -435,7 +450,7 @@ def summary_text(s: dict) -> str:
     smp = s.get("sampling")
     if smp and smp["coarse"]:
         step = max(smp["driver_step"].values())
-        echo(f"  NOTE: the samples are up to {np.degrees(step):.4g} deg of driver travel apart: "
+        echo(f"  NOTE: the samples are up to {shown(step, 'angle')} of driver travel apart: "
              "peaks, travel, work and the path are those of the samples, not of the motion "
              "between them; give more --samples to resolve it")
     if s["invalid_samples"]:
@@ -444,9 +459,13 @@ def summary_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def assembly_words(phi: dict, time: float) -> str:
-    """The assembly mode chosen without an ``[assembly]`` guess, in words."""
-    angles = ", ".join(f"phi_{b} = {np.degrees(v):.4g} deg" for b, v in phi.items()
+def assembly_words(phi: dict, time: float, units=None) -> str:
+    """The assembly mode chosen without an ``[assembly]`` guess, in words, the angles (rad in
+    ``phi``) in ``units``' angle unit (:class:`linkdyn.units.Units`; None: deg)."""
+    from .units import Units
+
+    units = units or Units(angle="deg")
+    angles = ", ".join(f"phi_{b} = {units.show(v, 'angle', 4)}" for b, v in phi.items()
                        if v is not None)
     return (f"no [assembly] guess in the model: solved from zero angles, the mechanism starts "
             f"(t = {time:.4g} s) with {angles}; give [assembly] phi near another position to "
@@ -457,49 +476,48 @@ def print_summary(s: dict) -> None:
     click.echo(summary_text(s))
 
 
-def _path_range(text):
-    """``'A:B'`` -> (A, B) finite floats, or None."""
+def _path_range(text, mech):
+    """``--path-range 'A:B'`` -> (A, B) in SI (rad or m) of ``mech``'s first driver coordinate,
+    or None: a bare number is in the model file's unit, a number with a unit in that unit
+    (``110deg:250deg``, ``0.1m:0.2m``; :meth:`linkdyn.units.Units.parse`)."""
+    from .units import Units, coordinate
+
     if text is None:
         return None
-    try:
-        a, b = (float(x) for x in text.split(":"))
-    except ValueError:
+    if not mech.drivers:
+        raise ModelError("--path-range is a range of the first driver, and the model has "
+                         "none", field="--path-range", fix="Drop --path-range")
+    quantity = coordinate(mech, mech.drivers[0].joint)
+    u = Units.of(mech)
+    example = "--path-range 110:250" if quantity == "angle" else "--path-range 0.1:0.2"
+    parts = text.split(":")
+    if len(parts) != 2:
         raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
-                         fix="Give two numbers, e.g. --path-range 110:250") from None
-    if not (np.isfinite(a) and np.isfinite(b)):
-        raise ModelError(f"--path-range must be two finite numbers, got '{text}'",
-                         field="--path-range", fix="Give two numbers, e.g. --path-range 110:250")
+                         fix=f"Give two numbers in the file's unit ({u.unit(quantity)[0]}), e.g. "
+                             f"{example}")
+    a, b = (u.parse(x, quantity, "--path-range", example) for x in parts)
     return a, b
 
 
-def _driver_unit(mech) -> tuple[str, float]:
-    """Unit name of the first driver's coordinate in the model file, and SI per unit."""
-    from . import joints as jk
-    from .io.units import ANGLE_UNITS, LENGTH_UNITS
-
-    if jk.get(mech.joint(mech.drivers[0].joint).kind).angular:
-        return mech.angle_unit, ANGLE_UNITS[mech.angle_unit]
-    return mech.length_unit, LENGTH_UNITS[mech.length_unit]
-
-
-def _check_path_range(sol, text: str, given, si) -> None:
+def _check_path_range(sol, si) -> None:
     """Raise, naming --path-range, unless the run has 3 samples or more in the range ``si``
-    (the ``given`` range in the file's unit)."""
+    (rad or m), which the message gives in the file's unit."""
     from .design.path import _in_range
+    from .units import Units, coordinate
 
     mech = sol.model
-    unit, scale = _driver_unit(mech)
     joint = mech.drivers[0].joint
+    u, quantity = Units.of(mech), coordinate(mech, joint)
     q = sol.kin.q[..., [j.name for j in mech.joints].index(joint)]
     n = int(np.sum(_in_range(mech, q, si) & np.isfinite(q)))
     if n >= 3:
         return
-    lo, hi = float(np.nanmin(q)) / scale, float(np.nanmax(q)) / scale
-    raise ModelError(f"the run never reaches the range {given[0]:g}..{given[1]:g} {unit} of "
+    raise ModelError(f"the run never reaches the range {u.span(*si, quantity)} of "
                      f"q_{joint} with the 3 samples a line needs (it holds {n}); this run "
-                     f"covers {lo:.6g}..{hi:.6g} {unit}", field="--path-range",
+                     f"covers {u.span(float(np.nanmin(q)), float(np.nanmax(q)), quantity)}",
+                     field="--path-range",
                      fix=f"Give a range A:B of the first driver's coordinate that the run "
-                         f"covers, in the model file's unit ({unit})")
+                         f"covers, in the model file's unit ({u.unit(quantity)[0]})")
 
 
 @main.command()
@@ -524,7 +542,8 @@ def _check_path_range(sol, text: str, given, si) -> None:
                    "coupler point, if any).")
 @click.option("--path-range", metavar="A:B",
               help="Range of the first driver's coordinate for --path-point, in the model "
-                   "file's angle unit (length unit for a slider); default: the whole run.")
+                   "file's angle unit (length unit for a slider), or with a unit "
+                   "(110deg:250deg); default: the whole run.")
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
@@ -538,15 +557,11 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
     check_outdir(outdir)
-    given = _path_range(path_range)
     mech = io.load_model(model, allow_outside=allow_outside)
-    if given is not None and not mech.drivers:
-        raise ModelError("--path-range is a range of the first driver, and the model has "
-                         "none", field="--path-range", fix="Drop --path-range")
+    q_range = _path_range(path_range, mech)   # SI, from the file's unit
     if path_point is not None:
         from .design.path import _parse_point
         _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
-    q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
     t = sample_times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
@@ -561,7 +576,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
                                  "--duration") from None
         progress.step("summary")
         if q_range is not None:
-            _check_path_range(sol, path_range, given, q_range)
+            _check_path_range(sol, q_range)
         summ = design.summary(sol, fluctuation=fluctuation,
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)

@@ -52,6 +52,7 @@ from .kinematics.state import at_state, close
 from .model import Driver, Model
 from .planar import solve_small
 from .topology import build, mobility
+from .units import joint_units
 
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
@@ -643,7 +644,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     if J is None:
         _blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q0),
+                            drivers=_values(part, q0), units=joint_units(model),
                             fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
@@ -708,6 +709,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
                     file=src, time=float(t_old), drivers=_values(part, before[1]),
+                    units=joint_units(part.model),
                     fix="Check the loads and [initial]; a stiff spring needs --method Radau "
                         "or BDF; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
@@ -778,7 +780,7 @@ def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
-            time=float(solver.t), drivers=_values(part, q),
+            time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
                 f"{max_steps * h:.3g} s or less")
     return h
@@ -801,7 +803,8 @@ def _blame_loads(system: _System, last) -> None:
     if kin.valid[0]:
         blame_loads(part.model, kin, dict(file=part.model.source, time=float(t[0]),
                                           drivers=dict(zip((d.joint for d in part.inner.drivers),
-                                                           q_ind[:, 0].tolist()))))
+                                                           q_ind[:, 0].tolist())),
+                                          units=joint_units(part.model)))
 
 
 def restate(solver, y: np.ndarray, f: np.ndarray) -> None:
