@@ -338,7 +338,7 @@ class Solution:
 
     def __repr__(self) -> str:
         rows = "".join(f"\n  {k}: {v}" for k, v in self.key_numbers())
-        return f"<linkdyn.Solution {self._headline()}{rows}>"
+        return f"<linkdyn.{type(self).__name__} {self._headline()}{rows}>"
 
     def _repr_html_(self) -> str:
         import html

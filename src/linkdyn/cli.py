@@ -344,31 +344,55 @@ def _json_safe(x):
     return x
 
 
-def write_csv(sol, path: Path) -> None:
-    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly.
+def _columns(sol, units: str) -> dict:
+    """The result columns to write: SI as SPEC says (``units='si'``), or in the model file's
+    units with the unit in each name (``'model'``, :func:`linkdyn.units.model_columns`)."""
+    if units == "model":
+        from .units import Units, model_columns
+        return model_columns(sol.columns, sol.units, Units.of(sol.model))
+    return sol.columns
+
+
+def write_csv(sol, path: Path, units: str = "si") -> None:
+    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly;
+    SI, or with ``units='model'`` in the model file's units (``q_J1 [deg]``).
 
     Uses pyarrow's CSV writer when it is installed (about ten times faster for long runs).
     """
+    cols = _columns(sol, units)
     try:
         import pyarrow as pa
         from pyarrow import csv as pacsv
     except ImportError:
-        names, data = sol.to_array()
+        names = list(cols)
+        data = np.stack([np.asarray(cols[k], float) for k in names], axis=-1)
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
         return
-    table = pa.table({k: np.asarray(v, dtype=float) for k, v in sol.columns.items()})
+    table = pa.table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     with open(path, "wb") as f:
         f.write((",".join(table.column_names) + "\n").encode())
         pacsv.write_csv(table, f, pacsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
-def write_parquet(sol, path: Path) -> None:
+def write_parquet(sol, path: Path, units: str = "si") -> None:
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow as pa
+        import pyarrow.parquet as pq
     except ImportError:
         raise ModelError("--format parquet needs pyarrow", field="--format",
                          fix="pip install 'linkdyn[parquet]', or use --format csv") from None
-    sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+    if units == "si":
+        sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+        return
+    pq.write_table(pa.table({k: np.asarray(v, float) for k, v in _columns(sol, units).items()}),
+                   path)
+
+
+_UNITS = click.option(
+    "--units", "table_units", type=click.Choice(["si", "model"]), default="si",
+    show_default=True,
+    help="Units of results.csv: SI (m, rad, N, ...), or the model file's (mm, deg, ...) with "
+         "the unit in each column's header, e.g. 'q_J1 [deg]'.")
 
 
 def summary_text(s: dict) -> str:
@@ -495,7 +519,11 @@ def _path_range(text, mech):
         raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
                          fix=f"Give two numbers in the file's unit ({u.unit(quantity)[0]}), e.g. "
                              f"{example}")
-    a, b = (u.parse(x, quantity, "--path-range", example) for x in parts)
+    try:
+        a, b = (u.parse(x, quantity, "--path-range", example) for x in parts)
+    except ModelError as err:
+        raise ModelError(f"--path-range must be A:B, got '{text}': {err.message}",
+                         field="--path-range", fix=err.fix) from None
     return a, b
 
 
@@ -544,11 +572,13 @@ def _check_path_range(sol, si) -> None:
               help="Range of the first driver's coordinate for --path-point, in the model "
                    "file's angle unit (length unit for a slider), or with a unit "
                    "(110deg:250deg); default: the whole run.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_singular,
-            fluctuation, path_point, path_range, plots_, backend, allow_outside):
+            fluctuation, path_point, path_range, plots_, backend, allow_outside,
+            table_units="si"):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -583,8 +613,8 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         text = summary_text(summ)
         files = {
             "results.csv" if fmt == "csv" else "results.parquet":
-                (lambda p: write_csv(sol, p)) if fmt == "csv" else
-                (lambda p: write_parquet(sol, p)),
+                (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+                (lambda p: write_parquet(sol, p, table_units)),
             "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
                                                               allow_nan=False)),
         }
@@ -643,6 +673,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
     if sweep_dir is not None:
+        from .studies.files import need_parquet
+        need_parquet("compare --sweep")   # designs.parquet: say how to install, no traceback
         designs += compare_mod.sweep_best(sweep_dir, by_metric, n_best)
     elif by_metric is not None:
         raise ModelError("--by ranks a sweep's designs, and no --sweep is given", field="--by",
@@ -718,11 +750,12 @@ def simulation_summary(sol, summ: dict) -> dict:
 @click.option("--no-project", "no_project", is_flag=True,
               help="Do not put each step's end back on the energy balance (F11); the "
                    "integrator's own steps only.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, report, no_project,
-             backend, allow_outside):
+             backend, allow_outside, table_units="si"):
     """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
@@ -762,7 +795,8 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
                   for sw in sim["coordinate_switches"]))
     files = {
         "results.csv" if fmt == "csv" else "results.parquet":
-            (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
+            (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+            (lambda p: write_parquet(sol, p, table_units)),
         "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
                                                           allow_nan=False)),
     }

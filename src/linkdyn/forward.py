@@ -41,6 +41,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .brief import brief_repr
+
 from . import backend as backend_mod, joints as jk, loads as loads_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
@@ -98,6 +100,8 @@ class Partition:
     free : tuple[str, ...]
         Joints whose coordinates are integrated.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     model: Model
     inner: Model
@@ -268,7 +272,7 @@ def _start(part: Partition) -> np.ndarray:
     return assemble([part.inner], lay, np.concatenate((q_drv, q_free)), 0.0)[:, 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)   # Solution's short repr, not every array's numbers
 class Simulation(Solution):
     """A :class:`~linkdyn.analysis.Solution` computed by :func:`simulate`.
 

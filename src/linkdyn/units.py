@@ -27,7 +27,7 @@ import numpy as np
 from .errors import ModelError
 from .io.units import ANGLE_UNITS, LENGTH_UNITS
 
-__all__ = ["Units", "QUANTITIES", "coordinate", "joint_units", "of"]
+__all__ = ["Units", "QUANTITIES", "coordinate", "joint_units", "model_columns", "of"]
 
 # the quantities a value may be: how its unit is made from the file's length L and angle A
 QUANTITIES = ("length", "angle", "angular_rate", "angular_acceleration", "velocity",
@@ -145,6 +145,27 @@ class Units:
                              fix=f"Give the number alone (the file's unit, {name}) or with one "
                                  f"of {', '.join(self.accepted(quantity))}")
         return number * size
+
+
+# the quantity of each SI unit a result column is in (``Solution.units``)
+_SI_QUANTITY = {"s": "time", "rad": "angle", "m": "length", "rad/s": "angular_rate",
+                "m/s": "velocity", "rad/s^2": "angular_acceleration", "m/s^2": "acceleration",
+                "N": "force", "N m": "torque", "J": "energy", "W": "power", "kg": "mass",
+                "kg m^2": "inertia"}
+
+
+def model_columns(columns: dict, si_units: dict, units: Units) -> dict:
+    """Result columns (name -> SI array, :attr:`linkdyn.Solution.columns`) in the model file's
+    ``units``, each name followed by its unit: ``{'q_J1 [deg]': ..., 'x_coupler.P [mm]': ...}``
+    (``results.csv --units model``). A column of a unit without a quantity here stays SI, named
+    with its SI unit."""
+    out = {}
+    for name, values in columns.items():
+        si = si_units.get(name, "")
+        quantity = _SI_QUANTITY.get(si)
+        unit, size = units.unit(quantity) if quantity else (si, 1.0)
+        out[f"{name} [{unit}]" if unit else name] = np.asarray(values, float) / size
+    return out
 
 
 def of(model) -> Units:

@@ -171,6 +171,10 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             # three samples a line needs (else no straightness is reported)
             if default_range is not None and np.sum(valid) >= 3:
                 out["path_straightness"] = path_straightness(sol, point, None)
+    ps = out["path_straightness"]
+    if ps and ps["range"] is not None:   # the range as a person typed it, in the file's unit
+        ps["range_shown"] = units.span(*ps["range"], "angle" if ps["range_unit"] == "rad"
+                                       else "length")
     out["health"] = health(sol)
     return out
 

@@ -127,6 +127,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     from . import runner as sweep_mod
     from .metrics import check_names
 
+    files.need_parquet("sweep")   # designs.parquet: say how to install, before any work
     workers, chunk = checks.workers(workers), checks.count(chunk, "--chunk", "designs per chunk")
     designs, seed = checks.count(designs, "--designs", "designs"), checks.seed(seed)
     check_outdir(outdir)

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..brief import brief_repr
 from ..errors import LinkdynError, ModelError
 from . import checks
 from .metrics import check_names, quantity, unit
@@ -140,6 +141,8 @@ class Result:
         The metric optimized and ``'min'`` or ``'max'``.
     constraints : list of Constraint
     """
+
+    __repr__ = brief_repr   # not the whole model and its data (linkdyn.brief)
 
     values: dict
     metrics: dict
