@@ -188,6 +188,20 @@ def test_a_sweeps_path_range_is_in_the_files_unit(hoeken, tmp_path):
     assert res.exit_code == 2 and "--path-range" in res.output and "not a unit of angle" in res.output
 
 
+def test_vary_bounds_may_carry_a_unit(hoeken, tmp_path):
+    pd = pytest.importorskip("pandas")
+    tables = []
+    for k, vary in enumerate(["bodies.ground.points.O4[0]=80:100:3", "bodies.ground.points.O4[0]=8cm:0.1m:3"]):
+        res = run("sweep", hoeken, "--vary", vary, "-o", tmp_path / f"v{k}")
+        assert res.exit_code == 0, res.output
+        tables.append(pd.read_parquet(tmp_path / f"v{k}" / "designs.parquet"))
+    assert list(tables[1]["bodies.ground.points.O4[0]"]) == pytest.approx([80, 90, 100], rel=1e-14)
+    pd.testing.assert_frame_equal(tables[0], tables[1], rtol=1e-12)
+    res = run("sweep", hoeken, "--vary", "bodies.ground.points.O4[0]=8deg:100:3", "-o", tmp_path / "x")
+    assert res.exit_code == 2 and "not a unit of length" in res.output
+    assert not (tmp_path / "x").exists()
+
+
 def test_optimize_prints_and_bounds_in_the_files_units(hoeken, tmp_path):
     """``min_transmission_angle = 0.476449`` (rad) and ``path_deviation = 9.99994e-05`` (m) for a
     deg/mm file; a bare constraint bound is now in the file's unit (0.1 = 0.1 mm)."""

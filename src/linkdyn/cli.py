@@ -434,8 +434,9 @@ def summary_text(s: dict) -> str:
             echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
                  f"{num(ma['max'], '.4g')}{frame}")
     for j, d in s["drivers"].items():
-        echo(f"  driver {j}: peak {d['effort']} {num(d['peak'], '.6g')} {d['unit']} at "
-             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {num(d['rms'], '.6g')} {d['unit']}")
+        q = "force" if d["effort"] == "force" else "torque"
+        echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "
+             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {shown(d['rms'], q, 6)}")
     for j, e in s.get("driver_energy", {}).items():
         if e["work_J"] is not None:
             fw = e["flywheel"]
@@ -447,9 +448,9 @@ def summary_text(s: dict) -> str:
                  f"{num(e['energy_fluctuation_J'], '.4g')} J{fly}")
     if "shaking" in s:
         f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
-        echo(f"  shaking force peak {num(f['peak'], '.6g')} N at t = "
-             f"{num(f['peak_time_s'], '.4g')} s, RMS {num(f['rms'], '.6g')} N; shaking moment "
-             f"(about the origin) peak {num(mz['peak'], '.6g')} N m")
+        echo(f"  shaking force peak {shown(f['peak'], 'force', 6)} at t = "
+             f"{num(f['peak_time_s'], '.4g')} s, RMS {shown(f['rms'], 'force', 6)}; shaking "
+             f"moment (about the origin) peak {shown(mz['peak'], 'torque', 6)}")
     ps = s.get("path_straightness")
     if ps:
         q = "angle" if ps.get("range_unit", "rad") == "rad" else "length"
@@ -464,8 +465,8 @@ def summary_text(s: dict) -> str:
         m = r.get("peak_moment_Nm")
         if m is not None and r.get("peak_force_N") and abs(m) <= 1e-12 * r["peak_force_N"]:
             m = 0.0  # rounding noise: below 1e-12 of the joint's force times a metre
-        extra = f", moment {num(m, '.6g')} N m" if "peak_moment_Nm" in r else ""
-        echo(f"    {j:8s} {num(r['peak_force_N'], '.6g')} N at t = "
+        extra = f", moment {shown(m, 'torque', 6)}" if "peak_moment_Nm" in r else ""
+        echo(f"    {j:8s} {shown(r['peak_force_N'], 'force', 6)} at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "

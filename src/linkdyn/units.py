@@ -117,6 +117,13 @@ class Units:
         known = {_aliases(n): s for n, s in Units.accepted(quantity).items()}
         return known.get(_aliases(unit))
 
+    def quantity_of(self, name: str) -> str | None:
+        """The quantity whose unit in these units is ``name`` (``'mm'`` -> ``'length'``,
+        ``'kg mm^2'`` -> ``'inertia'``, ``'rev/min'`` -> ``'angular_rate'``); None if none is."""
+        if name == "rev/min":
+            return "angular_rate"
+        return next((q for q in QUANTITIES if q != "number" and self.unit(q)[0] == name), None)
+
     def parse(self, text, quantity: str, field: str = "", example: str = "") -> float:
         """A typed value to SI: a bare number is in these units (the file's), a number with a
         unit of the quantity in that unit (``'30deg'``, ``'0.1 mm'``, ``'45rpm'``).

@@ -19,20 +19,30 @@ from ..units import Units
 from .metrics import quantity
 
 _VARY = re.compile(r"\s*([^=\s]+)\s*=\s*([^:]+):([^:]+?)(?::(\d+))?\s*\Z")
+_UNIT_BOUND = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*[A-Za-z][\w/^ ]*\Z")
 
 
 def parse_vary(texts) -> tuple[list[str], list[tuple[float, float]], list[int | None]]:
     """``PATH=LO:HI[:N]`` options -> paths, bounds, counts (None where no N)."""
     paths, bounds, counts = [], [], []
+    def _bound(x):   # a number in the file's units, or a text with a unit (_with_units)
+        try:
+            return float(x)
+        except ValueError:
+            if _UNIT_BOUND.match(x):
+                return x.strip()
+            raise
+
     for text in texts:
         m = _VARY.match(text)
         try:
-            lo, hi = float(m.group(2)), float(m.group(3))
+            _bound(m.group(2)), _bound(m.group(3))
         except (AttributeError, ValueError):
             raise ModelError(f"cannot read --vary {text!r}", field="--vary",
                              fix="Write PATH=LO:HI or PATH=LO:HI:N in the file's units, e.g. "
                                  "--vary bodies.ground.points.O4[0]=80:100:11") from None
         n = int(m.group(4)) if m.group(4) else None
+        lo, hi = (_bound(x) for x in (m.group(2), m.group(3)))
         if n is not None and n < 1:
             raise ModelError(f"--vary {text!r} asks for {n} values", field="--vary",
                              fix="Give N >= 1")
@@ -76,9 +86,35 @@ def _setup(model, vary, samples, duration, cycles):
                          fix="Drop one of them")
     paths, bounds, counts = parse_vary(vary)
     sp = space(model, paths)
+    bounds = _with_units(sp, bounds)
     check_ranges(sp, bounds)
     t = sample_times(sp.model(), samples, duration, cycles)
     return sp, t, bounds, counts
+
+
+def _with_units(sp, bounds) -> list[tuple[float, float]]:
+    """``--vary`` bounds in each parameter's unit (the file's): a bound typed with a unit
+    (``80mm``, ``8cm``, ``1.2 kg``, ``30deg``) is converted to it; a bare number is already
+    in it."""
+    units = Units(**{k: v for k, v in sp.data.get("units", {}).items()
+                     if k in ("length", "angle")}) if isinstance(sp.data.get("units"), dict) \
+        else Units()
+    out = []
+    for p, pair in zip(sp.params, bounds):
+        q = units.quantity_of(p.unit)
+        conv = []
+        for b in pair:
+            if isinstance(b, str):
+                if q is None:
+                    raise ModelError(f"--vary {p.path}: a bound with a unit ({b!r}) needs a "
+                                     f"parameter of one quantity; {p.path} is in {p.unit or 'no unit'}",
+                                     field="--vary", fix="Give the bound as a bare number in "
+                                                         "the file's units")
+                name = "rpm" if p.unit == "rev/min" else p.unit
+                b = units.parse(b, q, "--vary") / (Units.size(name, q) or 1.0)
+            conv.append(float(b))
+        out.append(tuple(conv))
+    return out
 
 
 def _show_progress(flag):
