@@ -235,13 +235,13 @@ class SegmentMotion:
         """``(q, qd, qdd)`` at times ``t`` (s, any shape); each of the shape of ``t``."""
         return self.svaj(t)[:3]
 
-    def describe(self, unit: str = "rad") -> str:
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
         """E.g. ``'from 0 rad: cycloidal to 1.047 rad in 0.5 s, dwell 0.25 s, ... (repeats
-        every 1.5 s)'``."""
+        every 1.5 s)'``, in ``unit`` of ``scale`` SI (the file's: ``'cycloidal to 60 deg'``)."""
         parts = [f"dwell {x.time:.4g} s" if x.law == "dwell" else
-                 f"{x.law} to {x.to:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
+                 f"{x.law} to {x.to / scale:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
         tail = f" (repeats every {self.period:.4g} s)" if self.repeat else " (then holds)"
-        return f"from {self.start:.4g} {unit}: " + ", ".join(parts) + tail
+        return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
 
 
 @dataclass(frozen=True, eq=False)
