@@ -220,8 +220,8 @@ TORQUE = '\n[[loads]]\nkind = "torque"\nbody = "coupler"\nvalue = "{}"\n'
     (["--duration", "inf"], 2, ["--duration", "positive and finite", "inf"]),
     (["--cycles", "nan"], 2, ["--cycles"]),
     (["--samples", 1000000000000], 2, ["--samples", "memory"]),
-    (["--path-range", "110:250", "--duration", 0.1], 2, ["--path-range", "110..250 deg",
-                                                         "covers 0..27 deg"]),
+    (["--path-range", "110:250", "--duration", 0.1], 2, ["--path-range", "110 .. 250 deg",
+                                                         "covers 0 .. 27 deg"]),
     (["--path-range", "1:x"], 2, ["--path-range", "A:B"]),
 ])
 def test_run_options(args, code, fragments, tmp_path):

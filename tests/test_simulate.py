@@ -204,8 +204,10 @@ def test_a_singular_position_of_the_mechanism_exits_3_naming_the_time_and_values
     d["assembly"]["phi"]["bob"] = -90.0
     d.pop("topology")
     m = linkdyn.model_from_dict(d)
-    with pytest.raises(AssemblyError, match=r"at t = 0\.1[0-9]+ s \(q_J4 = -0\.7[0-9]+, "
-                                            r"q_J5 = -1\.[0-9]+\).*cannot pass") as err:
+    # the coordinates in the file's unit (deg): -0.7x rad and -1.x rad before issue 23
+    with pytest.raises(AssemblyError, match=r"at t = 0\.1[0-9]+ s \(q_J4 = -4[0-5]\.[0-9]+ deg, "
+                                            r"q_J5 = -(?:[5-9][0-9]|1[01][0-9])(?:\.[0-9]+)? deg\)"
+                                            r".*cannot pass") as err:
         simulate(m, np.linspace(0.0, 0.5, 3), rtol=1e-4, atol=1e-6)
     assert err.value.exit_code == 3
 

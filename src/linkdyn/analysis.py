@@ -20,6 +20,7 @@ from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numer
                      wrong_type)
 from . import joints as jk
 from .model import Model
+from .units import joint_units
 
 SINGULAR = 1e-10  # relative pivot of J_dep below which a position counts as singular
 
@@ -337,7 +338,7 @@ class Solution:
 
     def __repr__(self) -> str:
         rows = "".join(f"\n  {k}: {v}" for k, v in self.key_numbers())
-        return f"<linkdyn.Solution {self._headline()}{rows}>"
+        return f"<linkdyn.{type(self).__name__} {self._headline()}{rows}>"
 
     def _repr_html_(self) -> str:
         import html
@@ -371,7 +372,7 @@ def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
     return AssemblyError(
         "the mechanism passes a singular (toggle or dead-centre) position" if closes else
         "the loops stop closing: the mechanism cannot reach this driver position",
-        file=model.source, time=float(t_k), drivers=drivers,
+        file=model.source, time=float(t_k), drivers=drivers, units=joint_units(model),
         fix=("Change the link lengths or the driver's range so it avoids the toggle, or pass "
              "--allow-singular to keep the other samples" if closes else
              "Limit the driver's range (duration) or change the link lengths"))
@@ -437,7 +438,7 @@ def _load_field(model, k: int) -> str:
 def _at(model, time: float) -> dict:
     """Where an AssemblyError happens: the file, the time and the drivers' values."""
     q = kinematics.driver_values(model, np.array([time]))[0][:, 0]
-    return dict(file=model.source, time=time,
+    return dict(file=model.source, time=time, units=joint_units(model),
                 drivers={d.joint: float(v) for d, v in zip(model.drivers, q)})
 
 

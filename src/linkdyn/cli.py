@@ -133,15 +133,18 @@ def check(model, allow_outside):
     model with free coordinates (for simulate) is assembled at t = 0 with its [initial] values.
     """
     from . import design, io
+    from .units import Units
 
     mech = io.load_model(model, allow_outside=allow_outside)
+    u = Units.of(mech)
     topo, free = _check_topology(mech)
     click.echo(f"{mech.name}  ({model})")
     if mech.description:
         click.echo(f"  {mech.description}")
     click.echo(f"bodies ({len(mech.bodies)}):")
     for b in mech.bodies:
-        extra = "" if b.name == "ground" else f"  mass {b.mass:.6g} kg, I_c {b.inertia:.6g} kg m^2"
+        extra = "" if b.name == "ground" else (f"  mass {u.show(b.mass, 'mass')}, I_c "
+                                               f"{u.show(b.inertia, 'inertia')}")
         click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
     click.echo(f"joints ({len(mech.joints)}):")
     for k, j in enumerate(mech.joints):
@@ -164,7 +167,7 @@ def check(model, allow_outside):
     if topo.n_loops and not (mech.assembly_phi or mech.assembly_q) and not free:
         click.echo("assembly: " + _assembly_at_zero(mech, topo))
     for fb in design.four_bars(mech):
-        L = ", ".join(f"{k} {v * 1e3:.6g} mm" for k, v in
+        L = ", ".join(f"{k} {u.show(v, 'length')}" for k, v in
                       zip(("ground", "input", "coupler", "output"), fb.lengths))
         click.echo(f"four-bar {fb.input}/{fb.coupler}/{fb.output}: {fb.grashof} ({L})")
     for sc in design.checks.slider_cranks(mech):
@@ -221,6 +224,9 @@ def _check_run(mech, topo) -> None:
     from . import design
     from .design.checks import length, over_run, span
     from .report.keys import guide_transmission_angle, slider_rods
+    from .units import Units
+
+    u = Units.of(mech)
 
     try:
         t = sample_times(mech, None, None, None)
@@ -236,20 +242,20 @@ def _check_run(mech, topo) -> None:
     click.echo(f"assembles at t = 0 and over the run ({len(t)} samples, t = 0 .. "
                f"{t[-1]:.4g} s{', ' + ranges if ranges else ''}), clear of singular positions")
     for fb in design.four_bars(mech):
-        mu = np.degrees(design.transmission_angle(sol, fb))
-        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb))
+        mu = design.transmission_angle(sol, fb)
+        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb), u)
         click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)}")
     guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
     for g, rod, pin, other in slider_rods(mech):
         if g.name not in guides:
             continue
         lo, hi = design.path.joint_travel(sol, g.name)
-        mu = guide_transmission_angle(sol, g, rod, pin, other)
+        mu = np.radians(guide_transmission_angle(sol, g, rod, pin, other))
         click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
                    f"{span(mech, g.name, lo, hi)}); transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg (rod against the guide's "
-                   "normal)")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)} (rod against the "
+                   "guide's normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -267,7 +273,8 @@ def _assembly_at_zero(mech, topo) -> str:
                 "zero angles (analyze stops with exit status 3)")
     phi = {b.name: float(kin.pose.phi[kin.layout.topo.bodies.index(b.name)][0])
            for b in mech.moving_bodies}
-    return assembly_words(phi, 0.0)
+    from .units import Units
+    return assembly_words(phi, 0.0, Units.of(mech))
 
 
 # ---------------------------------------------------------------------------- analyze
@@ -337,70 +344,103 @@ def _json_safe(x):
     return x
 
 
-def write_csv(sol, path: Path) -> None:
-    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly.
+def _columns(sol, units: str) -> dict:
+    """The result columns to write: SI as SPEC says (``units='si'``), or in the model file's
+    units with the unit in each name (``'model'``, :func:`linkdyn.units.model_columns`)."""
+    if units == "model":
+        from .units import Units, model_columns
+        return model_columns(sol.columns, sol.units, Units.of(sol.model))
+    return sol.columns
+
+
+def write_csv(sol, path: Path, units: str = "si") -> None:
+    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly;
+    SI, or with ``units='model'`` in the model file's units (``q_J1 [deg]``).
 
     Uses pyarrow's CSV writer when it is installed (about ten times faster for long runs).
     """
+    cols = _columns(sol, units)
     try:
         import pyarrow as pa
         from pyarrow import csv as pacsv
     except ImportError:
-        names, data = sol.to_array()
+        names = list(cols)
+        data = np.stack([np.asarray(cols[k], float) for k in names], axis=-1)
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
         return
-    table = pa.table({k: np.asarray(v, dtype=float) for k, v in sol.columns.items()})
+    table = pa.table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     with open(path, "wb") as f:
         f.write((",".join(table.column_names) + "\n").encode())
         pacsv.write_csv(table, f, pacsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
-def write_parquet(sol, path: Path) -> None:
+def write_parquet(sol, path: Path, units: str = "si") -> None:
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow as pa
+        import pyarrow.parquet as pq
     except ImportError:
         raise ModelError("--format parquet needs pyarrow", field="--format",
                          fix="pip install 'linkdyn[parquet]', or use --format csv") from None
-    sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+    if units == "si":
+        sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+        return
+    pq.write_table(pa.table({k: np.asarray(v, float) for k, v in _columns(sol, units).items()}),
+                   path)
+
+
+_UNITS = click.option(
+    "--units", "table_units", type=click.Choice(["si", "model"]), default="si",
+    show_default=True,
+    help="Units of results.csv: SI (m, rad, N, ...), or the model file's (mm, deg, ...) with "
+         "the unit in each column's header, e.g. 'q_J1 [deg]'.")
 
 
 def summary_text(s: dict) -> str:
     """The printed summary of an ``analyze`` run, from its summary dict (computed before any
-    file is written, so a failure here leaves nothing behind)."""
+    file is written, so a failure here leaves nothing behind), in the model file's units
+    (``s['units']``, :class:`linkdyn.units.Units`)."""
     from .report.tables import denoise
+    from .units import Units
 
     s = denoise(s)  # a rounding residual (a cycle's net work of 1e-16 J) prints as 0
+    u = Units(**s.get("units", {}))
     lines: list[str] = []
     echo = lines.append
 
     def num(x, fmt, scale=1.0):  # a figure the run could not give (None or NaN) is "n/a"
         return "n/a" if x is None or not np.isfinite(x) else format(x * scale, fmt)
 
+    def shown(x, quantity, digits=4):   # an SI value in the file's unit, with the unit
+        return u.show(x, quantity, digits)
+
+    def deg(x):   # a summary figure kept in degrees, in the file's angle unit
+        return None if x is None else np.radians(x)
+
     echo(f"{s['model']}: {s['samples']} samples over {num(s['duration_s'], '.6g')} s")
     echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
          f"{', '.join(s['cut_joints']) or 'none'}")
     asm = s.get("assembly")
     if asm and not asm["guess"] and s["loops"]:
-        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'])}")
+        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'], u)}")
     for fb in s["four_bars"]:
         ta = fb["transmission_angle_deg"]
         echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
              f"{fb['links']['output']}: {fb['grashof']}"
              + (f"; {fb['motion']['words']}" if fb.get("motion", {}).get("words") else "")
-             + "; transmission angle "
-             f"{num(ta['min'], '.2f')}..{num(ta['max'], '.2f')} deg")
+             + f"; transmission angle {u.span(deg(ta['min']), deg(ta['max']), 'angle', 4)}")
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
             echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
                  f"{num(ma['max'], '.4g')}{frame}")
     for j, d in s["drivers"].items():
-        echo(f"  driver {j}: peak {d['effort']} {num(d['peak'], '.6g')} {d['unit']} at "
-             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {num(d['rms'], '.6g')} {d['unit']}")
+        q = "force" if d["effort"] == "force" else "torque"
+        echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "
+             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {shown(d['rms'], q, 6)}")
     for j, e in s.get("driver_energy", {}).items():
         if e["work_J"] is not None:
             fw = e["flywheel"]
-            fly = (f"; flywheel {num(fw['inertia_kg_m2'], '.4g')} kg m^2 for C_s = "
+            fly = (f"; flywheel {shown(fw['inertia_kg_m2'], 'inertia')} for C_s = "
                    f"{num(fw['speed_fluctuation'], '.3g')}" if fw else "")
             echo(f"  driver {j}: work {num(e['work_J'], '.4g')} J "
                  f"(+{num(e['positive_work_J'], '.4g')} / "
@@ -408,25 +448,25 @@ def summary_text(s: dict) -> str:
                  f"{num(e['energy_fluctuation_J'], '.4g')} J{fly}")
     if "shaking" in s:
         f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
-        echo(f"  shaking force peak {num(f['peak'], '.6g')} N at t = "
-             f"{num(f['peak_time_s'], '.4g')} s, RMS {num(f['rms'], '.6g')} N; shaking moment "
-             f"(about the origin) peak {num(mz['peak'], '.6g')} N m")
+        echo(f"  shaking force peak {shown(f['peak'], 'force', 6)} at t = "
+             f"{num(f['peak_time_s'], '.4g')} s, RMS {shown(f['rms'], 'force', 6)}; shaking "
+             f"moment (about the origin) peak {shown(mz['peak'], 'torque', 6)}")
     ps = s.get("path_straightness")
     if ps:
+        q = "angle" if ps.get("range_unit", "rad") == "rad" else "length"
         echo(f"  path of {ps['point']}: deviation from a straight line max "
-             f"{num(ps['max_deviation_m'], '.4g', 1e3)} mm, RMS "
-             f"{num(ps['rms_deviation_m'], '.4g', 1e3)} mm over "
-             f"{num(ps['length_m'], '.4g', 1e3)} mm"
+             f"{shown(ps['max_deviation_m'], 'length')}, RMS "
+             f"{shown(ps['rms_deviation_m'], 'length')} over "
+             f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
-                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')}"
-                f" {ps.get('range_unit', 'rad')})"))
+                f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         m = r.get("peak_moment_Nm")
         if m is not None and r.get("peak_force_N") and abs(m) <= 1e-12 * r["peak_force_N"]:
             m = 0.0  # rounding noise: below 1e-12 of the joint's force times a metre
-        extra = f", moment {num(m, '.6g')} N m" if "peak_moment_Nm" in r else ""
-        echo(f"    {j:8s} {num(r['peak_force_N'], '.6g')} N at t = "
+        extra = f", moment {shown(m, 'torque', 6)}" if "peak_moment_Nm" in r else ""
+        echo(f"    {j:8s} {shown(r['peak_force_N'], 'force', 6)} at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
@@ -435,7 +475,7 @@ def summary_text(s: dict) -> str:
     smp = s.get("sampling")
     if smp and smp["coarse"]:
         step = max(smp["driver_step"].values())
-        echo(f"  NOTE: the samples are up to {np.degrees(step):.4g} deg of driver travel apart: "
+        echo(f"  NOTE: the samples are up to {shown(step, 'angle')} of driver travel apart: "
              "peaks, travel, work and the path are those of the samples, not of the motion "
              "between them; give more --samples to resolve it")
     if s["invalid_samples"]:
@@ -444,9 +484,13 @@ def summary_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def assembly_words(phi: dict, time: float) -> str:
-    """The assembly mode chosen without an ``[assembly]`` guess, in words."""
-    angles = ", ".join(f"phi_{b} = {np.degrees(v):.4g} deg" for b, v in phi.items()
+def assembly_words(phi: dict, time: float, units=None) -> str:
+    """The assembly mode chosen without an ``[assembly]`` guess, in words, the angles (rad in
+    ``phi``) in ``units``' angle unit (:class:`linkdyn.units.Units`; None: deg)."""
+    from .units import Units
+
+    units = units or Units(angle="deg")
+    angles = ", ".join(f"phi_{b} = {units.show(v, 'angle', 4)}" for b, v in phi.items()
                        if v is not None)
     return (f"no [assembly] guess in the model: solved from zero angles, the mechanism starts "
             f"(t = {time:.4g} s) with {angles}; give [assembly] phi near another position to "
@@ -457,49 +501,52 @@ def print_summary(s: dict) -> None:
     click.echo(summary_text(s))
 
 
-def _path_range(text):
-    """``'A:B'`` -> (A, B) finite floats, or None."""
+def _path_range(text, mech):
+    """``--path-range 'A:B'`` -> (A, B) in SI (rad or m) of ``mech``'s first driver coordinate,
+    or None: a bare number is in the model file's unit, a number with a unit in that unit
+    (``110deg:250deg``, ``0.1m:0.2m``; :meth:`linkdyn.units.Units.parse`)."""
+    from .units import Units, coordinate
+
     if text is None:
         return None
-    try:
-        a, b = (float(x) for x in text.split(":"))
-    except ValueError:
+    if not mech.drivers:
+        raise ModelError("--path-range is a range of the first driver, and the model has "
+                         "none", field="--path-range", fix="Drop --path-range")
+    quantity = coordinate(mech, mech.drivers[0].joint)
+    u = Units.of(mech)
+    example = "--path-range 110:250" if quantity == "angle" else "--path-range 0.1:0.2"
+    parts = text.split(":")
+    if len(parts) != 2:
         raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
-                         fix="Give two numbers, e.g. --path-range 110:250") from None
-    if not (np.isfinite(a) and np.isfinite(b)):
-        raise ModelError(f"--path-range must be two finite numbers, got '{text}'",
-                         field="--path-range", fix="Give two numbers, e.g. --path-range 110:250")
+                         fix=f"Give two numbers in the file's unit ({u.unit(quantity)[0]}), e.g. "
+                             f"{example}")
+    try:
+        a, b = (u.parse(x, quantity, "--path-range", example) for x in parts)
+    except ModelError as err:
+        raise ModelError(f"--path-range must be A:B, got '{text}': {err.message}",
+                         field="--path-range", fix=err.fix) from None
     return a, b
 
 
-def _driver_unit(mech) -> tuple[str, float]:
-    """Unit name of the first driver's coordinate in the model file, and SI per unit."""
-    from . import joints as jk
-    from .io.units import ANGLE_UNITS, LENGTH_UNITS
-
-    if jk.get(mech.joint(mech.drivers[0].joint).kind).angular:
-        return mech.angle_unit, ANGLE_UNITS[mech.angle_unit]
-    return mech.length_unit, LENGTH_UNITS[mech.length_unit]
-
-
-def _check_path_range(sol, text: str, given, si) -> None:
+def _check_path_range(sol, si) -> None:
     """Raise, naming --path-range, unless the run has 3 samples or more in the range ``si``
-    (the ``given`` range in the file's unit)."""
+    (rad or m), which the message gives in the file's unit."""
     from .design.path import _in_range
+    from .units import Units, coordinate
 
     mech = sol.model
-    unit, scale = _driver_unit(mech)
     joint = mech.drivers[0].joint
+    u, quantity = Units.of(mech), coordinate(mech, joint)
     q = sol.kin.q[..., [j.name for j in mech.joints].index(joint)]
     n = int(np.sum(_in_range(mech, q, si) & np.isfinite(q)))
     if n >= 3:
         return
-    lo, hi = float(np.nanmin(q)) / scale, float(np.nanmax(q)) / scale
-    raise ModelError(f"the run never reaches the range {given[0]:g}..{given[1]:g} {unit} of "
+    raise ModelError(f"the run never reaches the range {u.span(*si, quantity)} of "
                      f"q_{joint} with the 3 samples a line needs (it holds {n}); this run "
-                     f"covers {lo:.6g}..{hi:.6g} {unit}", field="--path-range",
+                     f"covers {u.span(float(np.nanmin(q)), float(np.nanmax(q)), quantity)}",
+                     field="--path-range",
                      fix=f"Give a range A:B of the first driver's coordinate that the run "
-                         f"covers, in the model file's unit ({unit})")
+                         f"covers, in the model file's unit ({u.unit(quantity)[0]})")
 
 
 @main.command()
@@ -524,12 +571,15 @@ def _check_path_range(sol, text: str, given, si) -> None:
                    "coupler point, if any).")
 @click.option("--path-range", metavar="A:B",
               help="Range of the first driver's coordinate for --path-point, in the model "
-                   "file's angle unit (length unit for a slider); default: the whole run.")
+                   "file's angle unit (length unit for a slider), or with a unit "
+                   "(110deg:250deg); default: the whole run.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_singular,
-            fluctuation, path_point, path_range, plots_, backend, allow_outside):
+            fluctuation, path_point, path_range, plots_, backend, allow_outside,
+            table_units="si"):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -538,15 +588,11 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
     check_outdir(outdir)
-    given = _path_range(path_range)
     mech = io.load_model(model, allow_outside=allow_outside)
-    if given is not None and not mech.drivers:
-        raise ModelError("--path-range is a range of the first driver, and the model has "
-                         "none", field="--path-range", fix="Drop --path-range")
+    q_range = _path_range(path_range, mech)   # SI, from the file's unit
     if path_point is not None:
         from .design.path import _parse_point
         _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
-    q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
     t = sample_times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
@@ -561,15 +607,15 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
                                  "--duration") from None
         progress.step("summary")
         if q_range is not None:
-            _check_path_range(sol, path_range, given, q_range)
+            _check_path_range(sol, q_range)
         summ = design.summary(sol, fluctuation=fluctuation,
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)
         text = summary_text(summ)
         files = {
             "results.csv" if fmt == "csv" else "results.parquet":
-                (lambda p: write_csv(sol, p)) if fmt == "csv" else
-                (lambda p: write_parquet(sol, p)),
+                (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+                (lambda p: write_parquet(sol, p, table_units)),
             "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
                                                               allow_nan=False)),
         }
@@ -628,6 +674,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
     if sweep_dir is not None:
+        from .studies.files import need_parquet
+        need_parquet("compare --sweep")   # designs.parquet: say how to install, no traceback
         designs += compare_mod.sweep_best(sweep_dir, by_metric, n_best)
     elif by_metric is not None:
         raise ModelError("--by ranks a sweep's designs, and no --sweep is given", field="--by",
@@ -703,11 +751,12 @@ def simulation_summary(sol, summ: dict) -> dict:
 @click.option("--no-project", "no_project", is_flag=True,
               help="Do not put each step's end back on the energy balance (F11); the "
                    "integrator's own steps only.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, report, no_project,
-             backend, allow_outside):
+             backend, allow_outside, table_units="si"):
     """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
@@ -747,7 +796,8 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
                   for sw in sim["coordinate_switches"]))
     files = {
         "results.csv" if fmt == "csv" else "results.parquet":
-            (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
+            (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+            (lambda p: write_parquet(sol, p, table_units)),
         "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
                                                           allow_nan=False)),
     }

@@ -41,6 +41,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .brief import brief_repr
+
 from . import backend as backend_mod, joints as jk, loads as loads_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
@@ -52,6 +54,7 @@ from .kinematics.state import at_state, close
 from .model import Driver, Model
 from .planar import solve_small
 from .topology import build, mobility
+from .units import joint_units
 
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
@@ -97,6 +100,8 @@ class Partition:
     free : tuple[str, ...]
         Joints whose coordinates are integrated.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     model: Model
     inner: Model
@@ -295,7 +300,7 @@ def _start(part: Partition) -> np.ndarray:
     return assemble([part.inner], lay, np.concatenate((q_drv, q_free)), 0.0)[:, 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)   # Solution's short repr, not every array's numbers
 class Simulation(Solution):
     """A :class:`~linkdyn.analysis.Solution` computed by :func:`simulate`.
 
@@ -672,7 +677,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     if J is None:
         _blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q0),
+                            drivers=_values(part, q0), units=joint_units(model),
                             fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
@@ -739,6 +744,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
                     file=src, time=float(t_old), drivers=_values(part, before[1]),
+                    units=joint_units(part.model),
                     fix="Check the loads and [initial]; a stiff spring needs --method Radau "
                         "or BDF; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
@@ -809,7 +815,7 @@ def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
-            time=float(solver.t), drivers=_values(part, q),
+            time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
                 f"{max_steps * h:.3g} s or less")
     return h
@@ -832,7 +838,8 @@ def _blame_loads(system: _System, last) -> None:
     if kin.valid[0]:
         blame_loads(part.model, kin, dict(file=part.model.source, time=float(t[0]),
                                           drivers=dict(zip((d.joint for d in part.inner.drivers),
-                                                           q_ind[:, 0].tolist()))))
+                                                           q_ind[:, 0].tolist())),
+                                          units=joint_units(part.model)))
 
 
 def restate(solver, y: np.ndarray, f: np.ndarray) -> None:

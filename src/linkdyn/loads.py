@@ -12,6 +12,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .brief import brief_repr
+
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
 from .kinematics.recursion import relative
@@ -40,6 +42,8 @@ class Loads:
         (it enters no balance of the moving bodies; the shaking load includes it); a broadcast
         zero as in ``wrenches`` when there are none.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     wrenches: list
     potential_energy: np.ndarray

@@ -343,12 +343,11 @@ def _text(names, q) -> str:
 # --- what a person reads: the file's units, each number with its unit ----------------------
 
 def _unit(model: Model, joint: str) -> tuple[str, float, bool]:
-    """The file's unit of joint ``joint``'s coordinate, its size in SI, and whether an angle."""
-    from .io.units import ANGLE_UNITS, LENGTH_UNITS
-    kind = jk.get(model.joint(joint).kind)
-    if kind.angular:
-        return model.angle_unit, ANGLE_UNITS[model.angle_unit], True
-    return model.length_unit, LENGTH_UNITS[model.length_unit], False
+    """The file's unit of joint ``joint``'s coordinate, its size in SI, and whether an angle
+    (:class:`linkdyn.units.Units`, the one formatter of what a person reads)."""
+    from .units import Units, coordinate
+    quantity = coordinate(model, joint)
+    return (*Units.of(model).unit(quantity), quantity == "angle")
 
 
 def as_dict(eq: Equilibrium, md: Modes | None = None) -> dict:

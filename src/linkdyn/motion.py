@@ -47,10 +47,14 @@ class ConstantSpeed:
         rad/s (revolute) or m/s (prismatic).
     start : float
         q at t = 0, rad or m.
+    rpm : bool
+        The model file gave the speed in revolutions per minute (``rpm = 45``): the summary
+        and :func:`linkdyn.save` say it in rpm again.
     """
 
     speed: float
     start: float = 0.0
+    rpm: bool = field(default=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "speed", _finite("speed", self.speed))
@@ -66,9 +70,12 @@ class ConstantSpeed:
         t = _time(t)
         return self.start + self.speed * t, np.full_like(t, self.speed), np.zeros_like(t)
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'constant speed 4.712 rad/s from 0'`` (``unit``: 'rad' or 'm')."""
-        return f"constant speed {self.speed:.4g} {unit}/s from {self.start:.4g}"
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'constant speed 4.712 rad/s from 0'``, ``'constant speed 45 rpm from 0'``, in
+        ``unit`` of ``scale`` SI ('deg', pi/180; 'mm', 1e-3)."""
+        if self.rpm:
+            return f"constant speed {self.speed * 30 / math.pi:.4g} rpm from {self.start / scale:.4g}"
+        return f"constant speed {self.speed / scale:.4g} {unit}/s from {self.start / scale:.4g}"
 
 
 @dataclass(frozen=True)
@@ -110,10 +117,12 @@ class ExpressionMotion:
         t = _time(t)
         return tuple(self.scale * g(t) for g in (self.expr, self.d1, self.d2))
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'q(t) = 0.3 + 6.0*t + 0.4*sin(5*t) rad'`` or ``'q(t) = 0.0174533*(30*t) rad'``."""
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'q(t) = 0.3 + 6.0*t + 0.4*sin(5*t) rad'``, ``'q(t) = 30*t deg'`` (``unit`` of
+        ``scale`` SI, the file's), or ``'q(t) = 0.0174533*(30*t) rad'`` in another unit."""
         text = self.text.strip()
-        return f"q(t) = {text if self.scale == 1 else f'{self.scale:.6g}*({text})'} {unit}"
+        factor = self.scale / scale
+        return f"q(t) = {text if factor == 1 else f'{factor:.6g}*({text})'} {unit}"
 
 
 @dataclass(frozen=True)
@@ -226,13 +235,13 @@ class SegmentMotion:
         """``(q, qd, qdd)`` at times ``t`` (s, any shape); each of the shape of ``t``."""
         return self.svaj(t)[:3]
 
-    def describe(self, unit: str = "rad") -> str:
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
         """E.g. ``'from 0 rad: cycloidal to 1.047 rad in 0.5 s, dwell 0.25 s, ... (repeats
-        every 1.5 s)'``."""
+        every 1.5 s)'``, in ``unit`` of ``scale`` SI (the file's: ``'cycloidal to 60 deg'``)."""
         parts = [f"dwell {x.time:.4g} s" if x.law == "dwell" else
-                 f"{x.law} to {x.to:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
+                 f"{x.law} to {x.to / scale:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
         tail = f" (repeats every {self.period:.4g} s)" if self.repeat else " (then holds)"
-        return f"from {self.start:.4g} {unit}: " + ", ".join(parts) + tail
+        return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
 
 
 @dataclass(frozen=True, eq=False)
@@ -381,9 +390,10 @@ class TableMotion:
             t = np.clip(t, t0, t1)
         return tuple(self.scale * self.spline(t, nu) for nu in (0, 1, 2))
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'table of 37 rows, t from 0 to 2 s'``."""
-        factor = "" if self.scale == 1 else f", q x {self.scale:.6g} to {unit}"
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'table of 37 rows, t from 0 to 2 s, q in deg'`` (``unit`` of ``scale`` SI)."""
+        factor = (f", q in {unit}" if self.scale == scale and scale != 1 else "" if self.scale == scale
+                  else f", q x {self.scale / scale:.6g} to {unit}")
         return f"table of {len(self.t)} rows, t from {self.t[0]:.4g} to {self.t[-1]:.4g} s{factor}"
 
 

@@ -17,6 +17,8 @@ from typing import Callable
 
 import numpy as np
 
+from .brief import brief_repr
+
 from . import joints as jk
 from .dynamics.denoc import DynamicSolution, _array, composite
 from .kinematics import KinematicSolution
@@ -48,6 +50,8 @@ class Reactions:
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     on_second: list
     internals: list | Callable = field(repr=False, compare=False)

@@ -38,7 +38,9 @@ def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tu
                    "Drive one of the mechanism's revolute or prismatic joints instead")
         revolute = kind.angular
         motion, period = _motion_of(r, entry["motion"], f"{f}.motion", revolute)
-        description = motion.describe("rad" if revolute else "m")
+        # in the file's unit of the joint's coordinate, as a person typed it
+        description = motion.describe(*((r.angle_name, r.angle) if revolute
+                                        else (r.length_name, r.length)))
         drivers[joint] = (f, Driver(joint, motion, description=description, period=period))
     return drivers
 
@@ -65,7 +67,7 @@ def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
                  else r.number(spec["speed"], f"{f}.speed", f"{unit}/s") * scale)
         start = r.number(spec.get("start", 0.0), f"{f}.start", unit) * scale
         period = 2 * math.pi / abs(speed) if revolute and speed != 0 else None
-        return _motion.ConstantSpeed(speed, start=start), period
+        return _motion.ConstantSpeed(speed, start=start, rpm="rpm" in spec), period
     if kind == "expression":
         if "q" not in spec:
             r.fail(f"{f}.q", "missing required key 'q'",

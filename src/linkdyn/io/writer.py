@@ -47,10 +47,24 @@ def _load_value(value, vector: bool):
     return comps if vector else comps[0]
 
 
+def _back(si: float, read) -> float | int:
+    """The shortest decimal ``x`` that the reader turns back into ``si`` exactly (``read(x) ==
+    si``): ``rpm = 120`` stays 120, not 119.99999999999999; the plain quotient if none does."""
+    for digits in range(1, 18):
+        x = float(f"{si / read(1.0):.{digits}g}")
+        if read(x) == si:
+            return _num(x)
+    return _num(si / read(1.0))
+
+
 def _motion_dict(motion, scale: float, table_file: str | None):
     if isinstance(motion, _motion.ConstantSpeed):
-        return {"kind": "constant_speed", "speed": _num(motion.speed / scale),
-                "start": _num(motion.start / scale)}
+        start = _back(motion.start, lambda x: x * scale)
+        if motion.rpm:   # the file's own speed unit (io.drivers reads rpm x 2 pi / 60)
+            return {"kind": "constant_speed",
+                    "rpm": _back(motion.speed, lambda x: x * 2 * math.pi / 60), "start": start}
+        return {"kind": "constant_speed", "speed": _back(motion.speed, lambda x: x * scale),
+                "start": start}
     if isinstance(motion, _motion.ExpressionMotion):
         text = motion.text.strip()
         if motion.scale != scale:  # q = motion.scale * f(t) in SI; the file multiplies by scale

@@ -13,6 +13,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..brief import brief_repr
+
 from .. import joints as jk
 from ..errors import ModelError
 from ..model import Model, point_spread
@@ -136,6 +138,8 @@ class Layout:
     The kernels' view (:attr:`view`, a :data:`View` of named arrays) is built once per
     layout, on first read.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     topo: Topology
     kind: tuple[str, ...]

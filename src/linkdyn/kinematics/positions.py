@@ -16,6 +16,7 @@ from ..errors import AssemblyError
 from ..io.units import LENGTH_UNITS
 from .. import joints as jk
 from ..model import Model
+from ..units import joint_units
 from ..planar import solve_small, wrap, wrapped
 from ..steps import select, step
 from . import dyads
@@ -124,6 +125,7 @@ def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0
         "the mechanism cannot be assembled: the loops do not close"
         + (f" (design {design})" if design is not None else ""),
         file=model.source, time=t0, drivers=_drivers_at(model, lay, q_drv0),
+        units=joint_units(model),
         fix="Check the link lengths and the [assembly] guess")
 
 

@@ -20,6 +20,8 @@ from functools import cached_property
 
 import numpy as np
 
+from ..brief import brief_repr
+
 from .. import joints as jk
 from ..planar import last, shift_twist, solve_small, stack_last
 from . import dyads
@@ -63,6 +65,8 @@ class KinematicSolution:
         per-body lists above are views of, batch flattened to (D, T): ``c``, ``s`` (n, D, T),
         ``r``, ``e`` (n, 2, D, T), ``tw``, ``twd`` (n, 3, D, T), ``J`` (n_rows, n - 1, D, T).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     layout: Layout
     t: np.ndarray

@@ -26,13 +26,39 @@ import numpy as np
 from ..errors import ModelError
 
 
+class MissingExtra(ModelError, ImportError):
+    """A study without the optional packages it needs (pandas, pyarrow): exit status 2, one
+    line saying how to install them, no traceback (an ``ImportError`` too, for Python
+    callers)."""
+
+
+INSTALL = ("Install the extra: pip install 'linkdyn[parquet]' (from a checkout: "
+           ".venv/bin/pip install -e '.[parquet]')")
+
+
 def _pandas():
-    """pandas, or an ImportError that says how to install it."""
+    """pandas, or a :class:`MissingExtra` that says how to install it."""
     try:
         import pandas as pd
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("sweeps need pandas: pip install 'linkdyn[parquet]'") from exc
+    except ImportError:
+        raise MissingExtra("sweeps need pandas (their table of designs is a DataFrame)",
+                           field="pandas", fix=INSTALL) from None
     return pd
+
+
+def need_parquet(command: str) -> None:
+    """Raise :class:`MissingExtra` before any work unless pandas and pyarrow (the parquet files
+    ``command`` writes and reads) are importable."""
+    missing = []
+    for name in ("pandas", "pyarrow"):
+        try:
+            __import__(name)
+        except ImportError:
+            missing.append(name)
+    if missing:
+        raise MissingExtra(f"linkdyn {command} needs {' and '.join(missing)}, which "
+                           f"{'is' if len(missing) == 1 else 'are'} not installed",
+                           field=missing[0], fix=INSTALL)
 
 
 CHUNKS = "chunks"
