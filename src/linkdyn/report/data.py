@@ -71,7 +71,7 @@ def multiplier_labels(sol) -> list[tuple[str, str, str]]:
 
 def _known_column(name: str) -> bool:
     prefixes = ("q_", "qd_", "qdd_", "phi_", "omega_", "alpha_", "tau_", "force_", "Fx_", "Fy_",
-                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_")
+                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_", "power_", "value_")
     return name == "t" or name.startswith(prefixes) or name in ("kinetic_energy",
                                                                "potential_energy")
 
@@ -350,6 +350,22 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         energy.append({"key": add("pe", cols["potential_energy"]), "label": "potential",
                        "color": PALETTE[1]})
     panel("Design", "Energy", "J", energy, "J")
+    # each load's value against time, and the power of every driver and load
+    from ..loads import VALUE_COLUMNS, VALUE_UNITS, labels
+    for n, (ld, label) in enumerate(zip(m.loads, labels(m))):
+        names = VALUE_COLUMNS[ld.kind]
+        if not all(f"{c}_{label}" in cols for c in names):
+            continue
+        tint = (X_COLOR, Y_COLOR) if len(names) > 1 else (PALETTE[n % len(PALETTE)],)
+        panel("Loads and power", f"{label} ({ld.kind.replace('_', ' ')})", VALUE_UNITS[ld.kind],
+              [{"key": add(f"col:{c}_{label}", cols[f"{c}_{label}"]),
+                "label": {"value_x": "x", "value_y": "y"}.get(c, ld.kind.replace("_", " ")),
+                "color": colour} for c, colour in zip(names, tint)])
+    powers = [c for c in cols if c.startswith("power_")]
+    if powers:
+        panel("Loads and power", "Power of the drivers and loads", "W",
+              [{"key": add(f"col:{c}", cols[c]), "label": c[len("power_"):],
+                "color": PALETTE[n % len(PALETTE)]} for n, c in enumerate(powers)])
     for n, name in enumerate(c for c in cols if not _known_column(c)):
         vals = np.asarray(cols[name], float)
         if vals.shape != np.shape(sol.t):
