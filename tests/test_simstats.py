@@ -304,3 +304,65 @@ def test_a_coordinate_that_swings_takes_the_window_of_the_one_that_turns(simulat
     assert s["J5"]["mean"] == pytest.approx(mean, rel=1e-9, abs=1e-12)
     # printed in the file's own unit (this file is in rad)
     assert re.search(r"speed of J5 over the last turn of J1 .* rad/s", text)
+
+
+# ---------------------------------------------------------------------------- the report
+
+from test_report import Page, browser  # noqa: E402,F401  (the report tests' Chromium)
+
+
+def test_report_plots_each_load_and_the_powers_against_time():
+    from linkdyn.report import page_data
+
+    mech = linkdyn.load(linkdyn.example_path("toggle_spring"))
+    t = np.linspace(0.0, 0.05, 21)
+    sol = linkdyn.simulate(mech, t, method="Radau", rtol=1e-5, atol=1e-7, backend="numpy")
+    data = page_data(sol)
+    plots = {p["title"]: p for p in data["plots"] if p["section"] == "Loads and power"}
+    assert set(plots) == {"loads.spring (spring)", "loads.damper (damper)",
+                          "Power of the drivers and loads"}
+    spring = plots["loads.spring (spring)"]["series"][0]["key"]
+    # the page's series (5 significant digits) is the tension column
+    np.testing.assert_allclose(np.asarray(data["series"][spring], float),
+                               sol.columns["value_loads.spring"], rtol=1e-4)
+    drawn = {ld["kind"]: ld for ld in data["geom"]["loads"]}
+    assert drawn["spring"]["at"] == "ground.A" and drawn["spring"]["to"] == "slider.B"
+    assert set(drawn) == {"spring", "damper"}
+
+
+def test_report_draws_the_motor_springs_and_dampers(browser, tmp_path):
+    # the motor's torque is a formula of the crank's speed: the drawing takes its simulated value
+    runner = CliRunner()
+    for name, extra in (("hoeken_motor", ["--duration", "1", "--samples", "31"]),
+                        ("toggle_spring", ["--duration", "0.05", "--samples", "21",
+                                           "--method", "Radau", "--rtol", "1e-5", "--atol", "1e-7"])):
+        model = tmp_path / f"{name}.toml"
+        model.write_text(linkdyn.example_path(name).read_text("utf-8"), "utf-8")
+        res = runner.invoke(main, ["simulate", str(model), "-o", str(tmp_path / name), "--report",
+                                   *extra])
+        assert res.exit_code == 0, res.output
+    cols = read_csv(tmp_path / "toggle_spring" / "results.csv")
+    pg = Page(browser, tmp_path / "toggle_spring" / "report.html")
+    try:
+        p = pg.page
+        shapes = p.eval_on_selector_all(".fspring, .fdamper", """es => es.map(e => [
+            e.getAttribute('class'), e.style.display !== 'none', (e.getAttribute('d') || '').length])""")
+        assert sorted(s[0] for s in shapes) == ["fdamper", "fspring"]
+        assert all(s[1] and s[2] > 20 for s in shapes), shapes
+        p.check("#show-forces")
+        texts = p.eval_on_selector_all(".flabels text", "ts => ts.map(t => t.textContent)")
+        spring = next(x for x in texts if x.startswith("spring "))
+        assert float(spring.split()[1]) == pytest.approx(cols["value_loads.spring"][0], rel=1e-3)
+        assert not pg.errors, pg.errors
+    finally:
+        pg.close()
+    pg = Page(browser, tmp_path / "hoeken_motor" / "report.html")
+    try:
+        pg.page.check("#show-forces")
+        arcs = pg.page.eval_on_selector_all(".ftorque", "es => es.map(e => e.style.display !== 'none')")
+        assert arcs == [True]       # the motor's torque, 3.2 N m at the start
+        texts = pg.page.eval_on_selector_all(".flabels text", "ts => ts.map(t => t.textContent)")
+        assert "motor 3.200 N m" in texts, texts
+        assert not pg.errors, pg.errors
+    finally:
+        pg.close()
