@@ -366,3 +366,37 @@ def test_report_draws_the_motor_springs_and_dampers(browser, tmp_path):
         assert not pg.errors, pg.errors
     finally:
         pg.close()
+
+
+def test_force_arrows_stay_visible_after_a_brief_peak(browser, tmp_path):
+    # the released four-bar's joint forces are ~80 N most of the run and 890 N for a moment:
+    # scaled to that peak, every other frame's arrows were a tenth of their size
+    model = tmp_path / "fourbar_release.toml"
+    model.write_text(linkdyn.example_path("fourbar_release").read_text("utf-8"), "utf-8")
+    res = CliRunner().invoke(main, ["simulate", str(model), "-o", str(tmp_path / "o"), "--report",
+                                    "--duration", "2", "--samples", "241"])
+    assert res.exit_code == 0, res.output
+    cols = read_csv(tmp_path / "o" / "results.csv")
+    joints = [c[3:] for c in cols if c.startswith("Fx_")]
+    frame_max = np.max([np.hypot(cols[f"Fx_{j}"], cols[f"Fy_{j}"]) for j in joints], axis=0)
+    assert np.max(frame_max) > 5 * np.median(frame_max)       # a brief peak
+    pg = Page(browser, tmp_path / "o" / "report.html")
+    try:
+        p = pg.page
+        p.check("#show-forces")
+        _, _, vw, vh = (float(x) for x in p.get_attribute("#anim", "viewBox").split())
+        legend = p.locator("#force-legend")
+        scale = float(legend.get_attribute("data-length")) / float(legend.get_attribute("data-force"))
+        # the scale's force (0.2 of the view) is not the peak's: the peak's arrow is longer
+        assert np.max(frame_max) * scale > 2 * 0.2 * min(vw, 1.6 * vh)
+        k = int(np.argsort(frame_max)[len(frame_max) // 2])     # a frame of median force
+        p.eval_on_selector("#scrubber", f"s => {{ s.value = '{k}'; s.dispatchEvent(new Event('input')); }}")
+        lengths = p.eval_on_selector_all(".farrow[data-joint]", """as => as.map(a =>
+            a.style.display === 'none' ? 0 : Math.hypot(a.getAttribute('x2') - a.getAttribute('x1'),
+                                                         a.getAttribute('y2') - a.getAttribute('y1')))""")
+        # still drawn to the scale (the arrow of the largest force), and a good part of the view
+        assert max(lengths) == pytest.approx(frame_max[k] * scale, rel=2e-3)
+        assert max(lengths) > 0.1 * min(vw, 1.6 * vh)
+        assert not pg.errors, pg.errors
+    finally:
+        pg.close()

@@ -195,6 +195,24 @@
   (G.loads || []).forEach(function (l) { if (l.kind === "force") fall = Math.max(fall, hyp(l.x, l.y)); });
   if (G.shaking) fall = Math.max(fall, hyp(G.shaking.fx, G.shaking.fy));
   D.drivers.forEach(function (d) { if (d.unit === "N") fall = Math.max(fall, seriesMax(d.key)); });
+  // the scale's force: the 95th percentile over the frames of the largest force drawn in each
+  // (not the run's peak), so that a brief peak (the start of a run-up, a dead point) does not
+  // shrink every other frame's arrows to nothing; an arrow of a peak frame may leave the view
+  var frameMax = [];
+  for (var i = 0; i < N; i++) frameMax.push(0);
+  function biggest(kx, ky) {
+    if (!S[kx] || (ky && !S[ky])) return;
+    for (var i = 0; i < N; i++) {
+      var v = ky ? Math.hypot(S[kx][i], S[ky][i]) : Math.abs(S[kx][i]);
+      if (fin(v) && v > frameMax[i]) frameMax[i] = v;
+    }
+  }
+  G.joints.forEach(function (j) { biggest("Fx:" + j.name, "Fy:" + j.name); });
+  (G.loads || []).forEach(function (l) { if (l.kind === "force") biggest(l.x, l.y); });
+  if (G.shaking) biggest(G.shaking.fx, G.shaking.fy);
+  D.drivers.forEach(function (d) { if (d.unit === "N") biggest(d.key); });
+  var ranked = frameMax.filter(function (v) { return v > 0; }).sort(function (a, b) { return a - b; });
+  if (ranked.length) fall = Math.min(fall, ranked[Math.floor(0.95 * (ranked.length - 1))]);
   var fscale = fall > 0 ? 0.2 * Math.min(VW, VH * 1.6) / fall : 0;
   var fleg = null;
   if (fscale > 0) {
