@@ -400,3 +400,21 @@ def test_force_arrows_stay_visible_after_a_brief_peak(browser, tmp_path):
         assert not pg.errors, pg.errors
     finally:
         pg.close()
+
+
+def test_a_batch_gives_each_design_its_own_load_and_power_columns():
+    # two designs whose spring differs (500 and 1000 N/m): each design's columns are its own
+    from dataclasses import replace
+
+    base = fivebar(False)
+    stiff = replace(base, loads=tuple(replace(ld, stiffness=2 * ld.stiffness)
+                                      if ld.kind == "spring" else ld for ld in base.loads))
+    t = np.linspace(0.0, 0.5, 51)
+    batch = linkdyn.analyze([base, stiff], t, backend="numpy").columns
+    for k, m in enumerate((base, stiff)):
+        one = linkdyn.analyze(m, t, backend="numpy").columns
+        for c in [c for c in one if c.startswith(("power_", "value_"))]:
+            np.testing.assert_allclose(batch[c][k], one[c], rtol=1e-12, atol=1e-12, err_msg=c)
+    # the same motion (both cranks driven): twice the stiffness, twice the tension k (l - l0)
+    np.testing.assert_allclose(batch["value_loads.spring"][1], 2 * batch["value_loads.spring"][0],
+                               rtol=1e-12)
