@@ -198,6 +198,13 @@ class Solution:
         return self.loads.potential_energy
 
     @property
+    def driver_powers(self) -> np.ndarray:
+        """Power of each driver (T, n_drivers), W: its effort times its joint's rate,
+        ``tau qd`` (driver order)."""
+        idx = [self._joint(d.joint) for d in self.model.drivers]
+        return self.dyn.tau * self.kin.qd[..., idx]
+
+    @property
     def driver_power(self) -> np.ndarray:
         """Total power of the drivers (T,), W."""
         qd = self.kin.joint_motion[1]
@@ -251,6 +258,16 @@ class Solution:
             put(f"vy_{b}.{p}", v[..., 1], "m/s")
             put(f"ax_{b}.{p}", a[..., 0], "m/s^2")
             put(f"ay_{b}.{p}", a[..., 1], "m/s^2")
+        # each driver's power tau qd; each load's value and power (loads.wrenches)
+        for d, p in zip(m.drivers, np.moveaxis(self.driver_powers, -1, 0)):
+            put(f"power_{d.joint}", p, "W")
+        for ld, label, value, p in zip(m.loads, loads_mod.labels(m), self.loads.values,
+                                       self.loads.powers):
+            names = loads_mod.VALUE_COLUMNS[ld.kind]
+            for k, name in enumerate(names):
+                put(f"{name}_{label}", value[k] if len(names) > 1 else value,
+                    loads_mod.VALUE_UNITS[ld.kind])
+            put(f"power_{label}", p, "W")
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols, units

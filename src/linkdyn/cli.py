@@ -442,10 +442,27 @@ def summary_text(s: dict) -> str:
             fw = e["flywheel"]
             fly = (f"; flywheel {shown(fw['inertia_kg_m2'], 'inertia')} for C_s = "
                    f"{num(fw['speed_fluctuation'], '.3g')}" if fw else "")
-            echo(f"  driver {j}: work {num(e['work_J'], '.4g')} J "
-                 f"(+{num(e['positive_work_J'], '.4g')} / "
-                 f"{num(e['negative_work_J'], '.4g')}), energy fluctuation "
+            work = (f"work {num(e['work_J'], '.4g')} J (+{num(e['positive_work_J'], '.4g')} / "
+                    f"{num(e['negative_work_J'], '.4g')})")
+            if "joint" in e:   # an actuator inside a joint (a motor's joint_torque)
+                ld = s.get("load_energy", {}).get(j, {})
+                peak = (f"peak {'torque' if e['kind'] == 'joint_torque' else 'force'} "
+                        f"{num(ld.get('peak'), '.4g')} {ld.get('unit', '')} at t = "
+                        f"{num(ld.get('peak_time_s'), '.4g')} s, " if ld else "")
+                echo(f"  actuator {j} ({e['kind']} in {e['joint']}): {peak}{work}, mean power "
+                     f"{num(e['mean_power_W'], '.4g')} W")
+                continue
+            echo(f"  driver {j}: {work}, energy fluctuation "
                  f"{num(e['energy_fluctuation_J'], '.4g')} J{fly}")
+    for label, e in s.get("load_energy", {}).items():
+        if e["kind"] in ("joint_torque", "joint_force") or e["work_J"] is None:
+            continue   # printed with the drivers
+        what = {"force": "force", "spring": "tension", "damper": "tension"}.get(e["kind"],
+                                                                                "torque")
+        extra = (f", dissipated {num(e['dissipated_J'], '.4g')} J" if e["kind"] == "damper"
+                 else " (counted in the potential energy)" if e["kind"] == "spring" else "")
+        echo(f"  {e['kind']} {label}: peak {what} {num(e['peak'], '.4g')} {e['unit']} at t = "
+             f"{num(e['peak_time_s'], '.4g')} s, work {num(e['work_J'], '.4g')} J{extra}")
     if "shaking" in s:
         f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
         echo(f"  shaking force peak {shown(f['peak'], 'force', 6)} at t = "
@@ -710,8 +727,14 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
 # ---------------------------------------------------------------------------- simulate
 
 def simulation_summary(sol, summ: dict) -> dict:
-    """``summ`` (of :func:`linkdyn.design.summary`) with the simulation's figures added."""
+    """``summ`` (of :func:`linkdyn.design.summary`) with the simulation's figures added: the
+    speed of the independent coordinates (:func:`linkdyn.design.speed_statistics`), the
+    energy account (:func:`linkdyn.design.energy_account`) and the integration's figures."""
+    from . import design
+
     s = dict(summ)
+    s["speed"] = design.speed_statistics(sol)
+    s["energy_account_J"] = design.energy_account(sol)
     s["simulation"] = {
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
@@ -729,6 +752,50 @@ def simulation_summary(sol, summ: dict) -> dict:
                      "work": float(sol.work[-1])},
     }
     return s
+
+
+def speed_text(s: dict, mech) -> str:
+    """The printed lines of a simulation's speed statistics and energy account (from its
+    summary dict), each ending in a newline: a turning coordinate's speed in rpm, another's
+    in the model file's angle or length unit per second."""
+    from .design.speed import RPM
+    from .io.units import ANGLE_UNITS, LENGTH_UNITS
+
+    def num(x, fmt):
+        return "n/a" if x is None or not np.isfinite(x) else format(x, fmt)
+
+    lines = []
+    for j, e in s.get("speed", {}).items():
+        w = e["window"]
+        if e["turns"]:
+            unit, vals = "rpm", (e["mean_rpm"], e["min_rpm"], e["max_rpm"])
+            size = None
+        else:
+            name = mech.angle_unit if e["unit"] == "rad/s" else mech.length_unit
+            size = (ANGLE_UNITS if e["unit"] == "rad/s" else LENGTH_UNITS)[name]
+            unit, vals = f"{name}/s", tuple(x / size for x in (e["mean"], e["min"], e["max"]))
+        cf = e["coefficient_of_fluctuation"]
+        run_up = f"run-up {num(e['run_up_time_s'], '.4g')} s"
+        if e["steady"] is False:
+            change = e["mean_change"] * (RPM if e["turns"] else 1.0 / size)
+            run_up += (f"; NOT steady yet: the mean speed changed by {change:+.4g} {unit} from "
+                       "the window before (run longer)")
+        elif e["steady"] is None:
+            run_up += "; steadiness unknown (the run holds less than two windows)"
+        lines.append(
+            f"  speed of {j} over the {w['over']} (t = {num(w['start_s'], '.4g')}.."
+            f"{num(w['end_s'], '.4g')} s): mean {num(vals[0], '.6g')} {unit}, min "
+            f"{num(vals[1], '.6g')}, max {num(vals[2], '.6g')} {unit}, coefficient of "
+            "fluctuation " + (num(cf, ".4g") if cf is not None else
+                              "not meaningful (it swings to and fro)") + f"; {run_up}")
+    a = s.get("energy_account_J")
+    if a and a["residual"] is not None:
+        lines.append(
+            f"  energy: kinetic {a['kinetic_change'] + 0.0:+.4g} J, potential "
+            f"{a['potential_change'] + 0.0:+.4g} J = drivers {a['driver_work'] + 0.0:+.4g} J + "
+            f"loads {a['load_work'] + 0.0:+.4g} J - dampers {a['damper_dissipation'] + 0.0:.4g} J"
+            f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
+    return "".join(line + "\n" for line in lines)
 
 
 @main.command()
@@ -786,7 +853,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
               project=not no_project)
     summ = simulation_summary(sol, design.summary(sol))
     sim = summ["simulation"]
-    text = summary_text(summ) + "\n" + (
+    text = summary_text(summ) + "\n" + speed_text(summ, mech) + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
         f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
         f"{sim['rhs_evaluations']} evaluations; energy balance drift "

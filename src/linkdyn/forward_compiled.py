@@ -285,10 +285,10 @@ def _loads(L, loads, lnum, roots, reg, c, s, r, tw, jqd, w):
             p2, v2 = body_point(c[j], s[j], r_j, (tw[j, 0], tw[j, 1], tw[j, 2]),
                                 (lnum[m, 2], lnum[m, 3]))
             if kind == SPRING:
-                f, pe_m = spring_force(lnum[m, 6], lnum[m, 7], p1, p2)
+                f, pe_m, _ = spring_force(lnum[m, 6], lnum[m, 7], p1, p2)
                 pe += pe_m
             else:
-                f, pw = damper_force(lnum[m, 8], p1, v1, p2, v2)
+                f, pw, _ = damper_force(lnum[m, 8], p1, v1, p2, v2)
                 power += pw
             _add(w, i, force_at(f, r_i, p1))
             _add(w, j, force_at((-f[0], -f[1]), r_j, p2))

@@ -9,7 +9,7 @@ from ..errors import ModelError, quiet
 from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
-from .energy import driver_energy
+from .energy import driver_energy, load_energy
 from .fourbar import (four_bars, link_travel, mechanical_advantage, transmission_angle,
                       transmission_worst, travel_words)
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
@@ -158,6 +158,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         "includes": "ground-joint reactions, driver reactions and ground-anchored springs and "
                     "dampers, as loads on the ground"}
     out["driver_energy"] = driver_energy(sol, fluctuation)
+    out["load_energy"] = load_energy(sol)
     point = path_point or default_path_point(m)
     out["path_straightness"] = None
     if point:
