@@ -170,3 +170,61 @@ def test_outputs_leave_unrelated_files_and_lookalike_folders_untouched(tmp_path)
     for p, data in mine.items():
         assert p.read_bytes() == data, p
     assert (out / "results.csv").is_file() and (out / "summary.json").is_file()
+
+
+LOAD = '\n[[loads]]\nkind = "torque"\nbody = "crank"\nvalue = "{}"\n'
+
+
+@pytest.mark.parametrize("formula,t_bad", [("log(0.1 - t)", 0.1), ("3.2/qd_J1", 0.0)])
+def test_simulate_names_a_load_that_is_not_finite_not_the_mechanism(formula, t_bad, tmp_path):
+    # log(0.1 - t) is finite up to t = 0.1 s only: the steps shorten towards it (the loads'
+    # fault, not a lock of the mechanism); 3.2/qd_J1 is infinite at rest, t = 0
+    out = tmp_path / "out"
+    path = model(tmp_path, text=RELEASE + LOAD.format(formula))
+    res = run("simulate", path, "-o", out, "--duration", 0.2, "--samples", 5,
+              "--backend", "numpy")
+    line = user_error(res, 3, str(path), "loads[0]", "not finite", "at t = ")
+    assert "locks" not in line
+    with pytest.raises(linkdyn.AssemblyError) as err:
+        linkdyn.simulate(linkdyn.load(path), np.linspace(0.0, 0.2, 5), backend="numpy")
+    assert err.value.time == pytest.approx(t_bad, abs=1e-4)
+    nothing_written(out)
+
+
+def test_a_duration_far_beyond_reach_is_refused_after_a_few_steps(tmp_path):
+    import time
+
+    m = linkdyn.load(model(tmp_path, text=RELEASE))
+    start = time.process_time()
+    with pytest.raises(linkdyn.AssemblyError, match="more steps of") as err:
+        linkdyn.simulate(m, np.linspace(0.0, 1e300, 5), backend="numpy")
+    # after about ten steps of the first second (was: 200 steps, several seconds)
+    assert err.value.time < 1.0 and "--duration" in str(err.value)
+    assert time.process_time() - start < 4.0
+    out = tmp_path / "out"
+    user_error(run("simulate", model(tmp_path, text=RELEASE), "-o", out, "--duration", 1e300,
+                   "--samples", 5, "--backend", "numpy"), 3, "at t = ", "--duration")
+    nothing_written(out)
+
+
+def test_an_earlier_runs_report_is_removed_and_the_users_report_is_kept(tmp_path):
+    out = tmp_path / "out"
+    args = ["analyze", model(tmp_path), "-o", out, "--samples", 9]
+    assert run(*args, "--report").exit_code == 0
+    ours = {p.name for p in out.iterdir()}
+    assert "report.html" in ours and any(n.startswith("plot_") for n in ours)
+    assert set(json.loads((out / "summary.json").read_text())["files"]) == ours
+    # the report and plots of the earlier run would describe another run: removed
+    assert run(*args).exit_code == 0
+    assert sorted(p.name for p in out.iterdir()) == ["results.csv", "summary.json"]
+    # a report.html no run wrote is the user's: kept, and so is a user's plot
+    (out / "report.html").write_text("mine")
+    (out / "plot_mine.png").write_bytes(b"mine")
+    for extra in ([], ["--format", "parquet"], []):
+        assert run(*args, *extra).exit_code == 0
+        assert (out / "report.html").read_text() == "mine"
+        assert (out / "plot_mine.png").read_bytes() == b"mine"
+    assert not (out / "results.parquet").exists()   # the run's own other format: removed
+    res = run("simulate", model(tmp_path, text=RELEASE), "-o", out, "--duration", 0.05,
+              "--samples", 3, "--backend", "numpy")
+    assert res.exit_code == 0 and (out / "report.html").read_text() == "mine"
