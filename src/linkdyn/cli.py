@@ -714,7 +714,7 @@ def simulation_summary(sol, summ: dict) -> dict:
               help="Absolute tolerance of the ODE solver (rad, m, per s, J).")
 @click.option("--method", type=click.Choice(["DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"]),
               default="DOP853", show_default=True,
-              help="scipy ODE solver; Radau or BDF for stiff springs.")
+              help="scipy ODE solver; an implicit one (BDF, LSODA, Radau) for stiff springs.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
 @click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")

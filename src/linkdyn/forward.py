@@ -660,7 +660,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
     unwound = method in UNWOUND and not reads_coordinates(model)
-    pace = (np.inf, False)    # the step size at the last check of the pace, and its verdict
+    pace = np.inf      # the step size at the last check of the pace
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -717,8 +717,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
                     file=src, time=float(t_old), drivers=_values(part, before[1]),
-                    fix="Check the loads and [initial]; a stiff spring needs --method Radau "
-                        "or BDF; or shorten --duration to the time given")
+                    fix="Check the loads and [initial]; a stiff spring needs "
+                        f"{_implicit(method)}; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
@@ -774,26 +774,30 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
 
 
-def _pace(last: tuple[float, bool], solver, t_end: float, max_steps: int, limit: float,
-          src: str, part, q: np.ndarray) -> tuple[float, bool]:
-    """The step size now and whether the run looks hopeless at it: it would need more than
-    ``limit`` steps to reach ``t_end``. Raise an AssemblyError naming the time when it looked
-    hopeless at the last check too (``last``: that check's step size and verdict) and the step
-    size did not grow tenfold since: a duration far beyond the motion's time scale, which would
-    otherwise run for hours before stopping at ``max_steps`` (a step size that dips for a while,
-    as an implicit method's at a turning point of a stiff motion, does not stop the run).
-    ``q`` (n,): the tree coordinates there, for the message."""
+def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
+          q: np.ndarray) -> float:
+    """The step size now; raise an AssemblyError naming the time when, at a step size that
+    did not grow tenfold since the last check (``last``), the run would need more than
+    ``limit`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there, for the
+    message (a duration far beyond the motion's time scale, or steps collapsed for good,
+    which would otherwise run for hours before stopping at ``max_steps``)."""
     h = float(solver.step_size)
     need = (t_end - solver.t) / h if h > 0 else np.inf
-    hopeless = bool(need > limit)
-    if hopeless and last[1] and h < 10 * last[0]:
+    if np.isfinite(last) and h < 10 * last and need > limit:
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
             time=float(solver.t), drivers=_values(part, q),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
-                f"{max_steps * h:.3g} s or less")
-    return h, hopeless
+                f"{max_steps * h:.3g} s or less; for a stiff spring, "
+                + _implicit(type(solver).__name__))
+    return h
+
+
+def _implicit(method: str) -> str:
+    """The advice for a stiff spring: the implicit methods other than ``method``."""
+    others = [m for m in ("BDF", "LSODA", "Radau") if m != method]
+    return f"--method {others[0]} or {others[1]}"
 
 
 def _blame_loads(system: _System, last) -> None:
