@@ -63,7 +63,7 @@ ATOL_MIN = 1e-18     # smallest atol: rad, m, J well below the rounding of the s
 PACE = 100           # steps between the checks that the run can end within max_steps
 HOPELESS = 1000      # ... it cannot when, at a steady step size, it needs this many times more
 EARLY = 5            # the first checks, after EARLY and 2 EARLY steps: a run that needs more
-FAR = 1e12           # than FAR steps at its pace (a duration far beyond reach) stops at once
+FAR = 1e15           # than FAR steps at its pace (a duration far beyond reach) stops at once
 WALL = 3             # steps cut short by a right-hand side not finite beyond them, none
                      # passing the earliest such time: they approach a time the loads cannot pass
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
@@ -660,7 +660,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
     unwound = method in UNWOUND and not reads_coordinates(model)
-    pace = np.inf      # the step size at the last check of the pace
+    pace = early = np.inf      # the step size at the last check of the pace (of each kind)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -706,9 +706,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             if walls >= WALL:
                 _blame_loads(system, system.bad)
                 walls = 0
-            if solver.status == "running" and (steps % PACE == 0 or steps in (EARLY, 2 * EARLY)):
-                pace = _pace(pace, solver, t_end, max_steps,
-                             HOPELESS * max_steps if steps >= PACE else FAR, src, part,
+            # the pace: after EARLY and 2 EARLY steps against FAR (each check against the
+            # one before of its kind), then every PACE steps against HOPELESS * max_steps
+            if solver.status == "running" and steps in (EARLY, 2 * EARLY):
+                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1])
+            if solver.status == "running" and steps % PACE == 0:
+                pace = _pace(pace, solver, t_end, max_steps, HOPELESS * max_steps, src, part,
                              system.ref[1])
             if failed or steps > max_steps:
                 raise AssemblyError(
