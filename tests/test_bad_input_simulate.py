@@ -317,7 +317,7 @@ def simulation_mutants(draw):
     return name, d, [simulation_change(draw, d) for _ in range(draw(st.integers(1, 2)))]
 
 
-OPTIONS = {"t": ["inf", "descending", "negative"], "rtol": [1e-20, 0.0, 2.0, math.nan, "1e-8"],
+OPTIONS = {"t": ["inf", "descending", "negative"], "rtol": [0.0, 2.0, math.nan, "1e-8"],
            "atol": [1e-300, -1.0, math.inf, [1e-8]], "method": ["Euler", 3]}
 
 
