@@ -18,7 +18,7 @@ import click
 import numpy as np
 
 from .errors import LinkdynError, ModelError
-from .outputs import ANALYSIS_OUTPUTS, check_outdir, write_outputs
+from .outputs import ANALYSIS_OUTPUTS, check_outdir, owned_before, write_outputs
 from .sampling import check_memory, times as sample_times
 
 EXAMPLES = "examples"
@@ -629,13 +629,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)
         text = summary_text(summ)
-        files = {
-            "results.csv" if fmt == "csv" else "results.parquet":
-                (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
-                (lambda p: write_parquet(sol, p, table_units)),
-            "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
-                                                              allow_nan=False)),
-        }
+        files = _results(sol, summ, fmt, table_units)
         if report:
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
@@ -643,9 +637,35 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             from . import plots as plots_mod
             files.update(plots_mod.outputs(sol))
         progress.total = 2 + len(files)
-        written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS, progress=progress)
+        written = _write_results(outdir, files, progress)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _results(sol, summ: dict, fmt: str, table_units: str = "si") -> dict:
+    """The results table (SI, or the file's units: ``table_units``, ``--units model``) and
+    ``summary.json`` of ``analyze`` and ``simulate`` as writers for :func:`_write_results`;
+    ``summary.json`` lists every file of the run (``files``), filled in by
+    :func:`_write_results`."""
+    files = {
+        "results.csv" if fmt == "csv" else "results.parquet":
+            (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+            (lambda p: write_parquet(sol, p, table_units)),
+        "summary.json": lambda p: p.write_text(json.dumps(
+            {**_json_safe(summ), "files": list(files)}, indent=2, allow_nan=False)),
+    }
+    return files
+
+
+def _write_results(outdir, files: dict, progress=None) -> list[Path]:
+    """Write ``files`` (of :func:`_results`, with the report and plots) all or nothing. A file
+    of an earlier run that this run does not write again (the other table format, the report
+    and plots of an earlier ``--report`` run) is removed only when that run's ``summary.json``
+    lists it as its own: a ``report.html`` or ``results.csv`` no run wrote is the user's and
+    stays as it is."""
+    return write_outputs(outdir, files, owned=owned_before(outdir, "summary.json",
+                                                           ANALYSIS_OUTPUTS),
+                         progress=progress)
 
 
 # ---------------------------------------------------------------------------- compare
@@ -811,7 +831,7 @@ def speed_text(s: dict, mech) -> str:
               help="Absolute tolerance of the ODE solver (rad, m, per s, J).")
 @click.option("--method", type=click.Choice(["DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"]),
               default="DOP853", show_default=True,
-              help="scipy ODE solver; Radau or BDF for stiff springs.")
+              help="scipy ODE solver; an implicit one (BDF, LSODA, Radau) for stiff springs.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
 @click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
@@ -861,19 +881,13 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
         + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "
                   f"t = {sw['t_s']:.6g} s (a dead point of the previous ones)"
                   for sw in sim["coordinate_switches"]))
-    files = {
-        "results.csv" if fmt == "csv" else "results.parquet":
-            (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
-            (lambda p: write_parquet(sol, p, table_units)),
-        "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
-                                                          allow_nan=False)),
-    }
+    files = _results(sol, summ, fmt, table_units)
     if report:
         from . import plots as plots_mod
         from . import report as report_mod
         files.update(report_mod.outputs(sol, summ))
         files.update(plots_mod.outputs(sol))
-    written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS)
+    written = _write_results(outdir, files)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
 

@@ -65,6 +65,10 @@ RTOL_MAX = 0.01      # largest rtol (a relative error of 1 %; at 10 % the energy
 ATOL_MIN = 1e-18     # smallest atol: rad, m, J well below the rounding of the state's numbers
 PACE = 100           # steps between the checks that the run can end within max_steps
 HOPELESS = 1000      # ... it cannot when, at a steady step size, it needs this many times more
+EARLY = 5            # the first checks, after EARLY and 2 EARLY steps: a run that needs more
+FAR = 1e15           # than FAR steps at its pace (a duration far beyond reach) stops at once
+WALL = 3             # steps cut short by a right-hand side not finite beyond them, none
+                     # passing the earliest such time: they approach a time the loads cannot pass
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
 # the methods whose steps the energy projection joins (F11): the one-step methods, whose next
 # step is a function of the state alone (not BDF's history, nor LSODA's)
@@ -474,6 +478,7 @@ class _System:
             out = self.kernel(t, y, self.ref)
             if out is not None:
                 self.last = (t, y.copy(), None, None)
+                self._check(t, y, out)
                 return out
         tt = np.array([t])
         q_ind = np.concatenate((driver_values(self.part.model, tt)[0], y[:nf, None]))
@@ -481,9 +486,16 @@ class _System:
                                         self.guess(tt, q_ind))
         self.last = (t, y.copy(), kin, qdd)
         out = np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
-        if not np.all(np.isfinite(out)):
-            self.bad = (t, y.copy())   # the last state the step was refused at: for messages
+        self._check(t, y, out)
         return out
+
+    def _check(self, t, y, out) -> None:
+        """Keep ``(t, y)`` as :attr:`bad`, for the messages, when its right-hand side ``out`` is
+        not finite at a finite state: the last state a step was refused at. (A state that is
+        not finite itself, a Runge-Kutta stage built from such a right-hand side, would hide
+        the load that was not finite.)"""
+        if not np.all(np.isfinite(out)) and np.all(np.isfinite(y)):
+            self.bad = (t, y.copy())
 
     def shift(self, rows, by) -> None:
         """Move the reference's tree coordinates ``rows`` by ``by``: whole turns of free angles,
@@ -698,7 +710,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
     unwound = (method in UNWOUND and not reads_coordinates(model)
                and all(jk.get(k).periodic for k in part.layout.cut_kind))
-    pace = np.inf      # the step size at the last check of the pace
+    pace = early = np.inf      # the step size at the last check of the pace (of each kind)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -718,8 +730,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             switches.append((t_now, part.free))
         solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
         recent = [solver.t]      # the times of the last steps
+        walls, wall = 0, np.inf   # such steps, and the earliest time not finite
         while solver.status == "running":
-            t_old, before = solver.t, system.ref
+            t_old, before, bad = solver.t, system.ref, system.bad
             message = solver.step()
             steps += 1
             # a motion approaching a position it cannot pass (a singular position of the
@@ -735,8 +748,21 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             if failed:
                 _blame_loads(system, system.bad)     # a load that is not finite, by its field
                 _blame_loads(system, system.last)
-            if steps % PACE == 0 and solver.status == "running":
-                pace = _pace(pace, solver, t_end, max_steps, src, part, system.ref[1])
+            # a load not finite just beyond the steps, which shorten towards it: name it
+            if system.bad is not bad:
+                walls, wall = walls + 1, min(wall, system.bad[0])
+            if solver.t > wall:
+                walls, wall = 0, np.inf
+            if walls >= WALL:
+                _blame_loads(system, system.bad)
+                walls = 0
+            # the pace: after EARLY and 2 EARLY steps against FAR (each check against the
+            # one before of its kind), then every PACE steps against HOPELESS * max_steps
+            if solver.status == "running" and steps in (EARLY, 2 * EARLY):
+                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1])
+            if solver.status == "running" and steps % PACE == 0:
+                pace = _pace(pace, solver, t_end, max_steps, HOPELESS * max_steps, src, part,
+                             system.ref[1])
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
@@ -745,8 +771,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     + (f"; the solver says: {message}" if message else ""),
                     file=src, time=float(t_old), drivers=_values(part, before[1]),
                     units=joint_units(part.model),
-                    fix="Check the loads and [initial]; a stiff spring needs --method Radau "
-                        "or BDF; or shorten --duration to the time given")
+                    fix="Check the loads and [initial]; a stiff spring needs "
+                        f"{_implicit(method)}; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
@@ -802,23 +828,30 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
 
 
-def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
+def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
           q: np.ndarray) -> float:
     """The step size now; raise an AssemblyError naming the time when, at a step size that
     did not grow tenfold since the last check (``last``), the run would need more than
-    ``HOPELESS * max_steps`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there,
-    for the message (a duration far beyond the motion's
-    time scale, which would otherwise run for hours before stopping at ``max_steps``)."""
+    ``limit`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there, for the
+    message (a duration far beyond the motion's time scale, or steps collapsed for good,
+    which would otherwise run for hours before stopping at ``max_steps``)."""
     h = float(solver.step_size)
     need = (t_end - solver.t) / h if h > 0 else np.inf
-    if np.isfinite(last) and h < 10 * last and need > HOPELESS * max_steps:
+    if np.isfinite(last) and h < 10 * last and need > limit:
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
             time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
-                f"{max_steps * h:.3g} s or less")
+                f"{max_steps * h:.3g} s or less; for a stiff spring, "
+                + _implicit(type(solver).__name__))
     return h
+
+
+def _implicit(method: str) -> str:
+    """The advice for a stiff spring: the implicit methods other than ``method``."""
+    others = [m for m in ("BDF", "LSODA", "Radau") if m != method]
+    return f"--method {others[0]} or {others[1]}"
 
 
 def _blame_loads(system: _System, last) -> None:

@@ -15,14 +15,19 @@ How a new command uses it::
     written = write_outputs(outdir, files, owned=("designs.parquet", "summary.json"))
 
 Each value of ``files`` writes one file at the path it is given (inside a temporary folder);
-``owned`` lists the names (shell patterns) the command writes, so an earlier run's file of that
-family that this run does not write (``results.csv`` when writing ``results.parquet``, a plot
-no longer drawn) is removed. Nothing else in the folder is touched.
+``owned`` lists the names (shell patterns) of an earlier run's files that this run removes when
+it does not write them again (``results.csv`` when writing ``results.parquet``, a report of an
+earlier ``--report`` run). A command lists the files it wrote in its manifest
+(``summary.json``, ``optimize.json``: ``"files"``) and passes :func:`owned_before`, the files of
+its family the earlier run's manifest lists: a file of that family that no run of it wrote (the
+user's ``report.html``) is never touched, nor is anything else in the folder.
 """
 
 from __future__ import annotations
 
 import fnmatch
+import glob
+import json
 import os
 import shutil
 import tempfile
@@ -35,6 +40,24 @@ from .errors import ModelError
 #: the report and the static plots.
 ANALYSIS_OUTPUTS = ("results.csv", "results.parquet", "summary.json", "report.html",
                     "plot_*.png", "plot_*.svg")
+
+
+def owned_before(outdir, manifest: str, patterns) -> tuple[str, ...]:
+    """The files matching ``patterns`` that the earlier run of a command in ``outdir`` wrote
+    (the ``files`` listed by its ``manifest``, e.g. ``summary.json``), as patterns for
+    :func:`write_outputs`'s ``owned``: a new run removes those it does not write again, and
+    never a file of that family that no run wrote (none when the folder holds no manifest, or
+    one that is not the command's)."""
+    from .io.files import read_text
+    try:
+        listed = json.loads(read_text(Path(outdir) / manifest)).get("files", [])
+    except (OSError, ValueError, AttributeError):   # absent, not a manifest, not ours
+        return ()
+    if not isinstance(listed, list):
+        return ()
+    return tuple(glob.escape(n) for n in listed
+                 if isinstance(n, str) and os.path.basename(n) == n
+                 and any(fnmatch.fnmatchcase(n, p) for p in patterns))
 
 
 def _error(outdir, why: str, option: str) -> ModelError:

@@ -259,10 +259,46 @@ def save(model: Model, path: str | os.PathLike) -> Path:
     # JSON with the same structure for *.json, as load reads it
     text = (json.dumps(data, indent=2, allow_nan=False) + "\n" if suffix == ".json"
             else dumps_toml(data))
+    files = {}
     for j, motion in tables.items():
         unit = A if jk.get(model.joint(j).kind).angular else L
         q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
         rows = "\n".join(f"{ti!r},{qi!r}" for ti, qi in zip(motion.t.tolist(), q.tolist()))
-        (path.parent / names[j]).write_text("t,q\n" + rows + "\n", encoding="utf-8")
-    path.write_text(text, encoding="utf-8")
+        files[path.parent / names[j]] = "t,q\n" + rows + "\n"
+    files[path] = text
+    _write_all(files, path)
     return path
+
+
+def _write_all(files: dict[Path, str], path: Path) -> None:
+    """Write every ``{file: text}`` all or nothing: each into a temporary file beside it, then
+    each moved into place (an atomic replace); on a failure the temporary files are removed
+    and nothing is written. Raises a ModelError naming ``path`` for what the system refuses
+    (a missing folder, a folder at the path, no permission)."""
+    import tempfile
+
+    done: dict[Path, str] = {}
+    try:
+        for target, text in files.items():
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}-", dir=target.parent)
+            done[target] = tmp
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(text)
+            os.chmod(tmp, 0o666 & ~_umask())   # as a plain open() would create it
+        for target, tmp in done.items():
+            os.replace(tmp, target)
+    except OSError as err:
+        for tmp in done.values():
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        raise ModelError(f"cannot write the model file: {err.strerror or err}", file=str(path),
+                         field="path", fix="Give the path of a file in a folder that exists and "
+                                           "that you can write to") from None
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

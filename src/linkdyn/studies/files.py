@@ -14,7 +14,6 @@ touched and a damaged or foreign file is refused with a message naming it.
 
 from __future__ import annotations
 
-import glob
 import io
 import json
 import os
@@ -24,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..outputs import owned_before  # noqa: F401  (the studies' manifests: summary, optimize.json)
 
 
 class MissingExtra(ModelError, ImportError):
@@ -184,25 +184,6 @@ def remove_chunks(outdir: Path) -> None:
             folder.rmdir()
         except OSError:   # the user put files there meanwhile
             pass
-
-
-def owned_before(outdir, manifest: str, patterns) -> tuple[str, ...]:
-    """The files matching ``patterns`` that the earlier run of the command in ``outdir`` wrote
-    (the ``files`` listed by its ``manifest``), as patterns for
-    :func:`linkdyn.outputs.write_outputs`'s ``owned``: a new run removes those it does not write
-    again, and never a file of that family that no run wrote."""
-    import fnmatch
-
-    from ..io.files import read_text
-    try:
-        listed = json.loads(read_text(Path(outdir) / manifest)).get("files", [])
-    except (OSError, ValueError, AttributeError):   # absent, not a manifest, not ours
-        return ()
-    if not isinstance(listed, list):
-        return ()
-    return tuple(glob.escape(n) for n in listed
-                 if isinstance(n, str) and os.path.basename(n) == n
-                 and any(fnmatch.fnmatchcase(n, p) for p in patterns))
 
 
 def read_designs(path) -> tuple[np.ndarray, list[str]]:
