@@ -28,13 +28,16 @@ NUMBA_GROUP = "numba"
 NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel", "test_backend")
 # a parametrized test whose id has the "compiled" backend among its parameters
 COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
+# a test whose name says it runs the compiled backend, or both backends
+COMPILED_NAME = re.compile(r"compiled|both_backends")
 
 
 def uses_numba(nodeid: str) -> bool:
     """Whether the test ``nodeid`` compiles or runs numba kernels: a test of a file of compiled
-    tests, or one parametrized with the ``"compiled"`` backend."""
+    tests, one parametrized with the ``"compiled"`` backend, or one whose name says so."""
     path, _, name = nodeid.partition("::")
-    return Path(path).stem.startswith(NUMBA_FILES) or bool(COMPILED_PARAM.search(name))
+    return (Path(path).stem.startswith(NUMBA_FILES) or bool(COMPILED_PARAM.search(name))
+            or bool(COMPILED_NAME.search(name.split("[")[0])))
 
 
 @pytest.hookimpl(tryfirst=True, optionalhook=True)   # before xdist's own choice of scheduler
