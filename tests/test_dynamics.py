@@ -250,8 +250,21 @@ def massless(model, names, point=False):
     return dataclasses.replace(model, name=model.name + "-massless", bodies=bodies)
 
 
+def hoeken_rod():
+    """The loaded Hoeken with its rocker a massless rod: a distance constraint between the
+    ground's O4 and the coupler's O3."""
+    m = hoeken(True)
+    bodies = tuple(b for b in m.bodies if b.name != "rocker")
+    joints = tuple(j for j in m.joints if j.name not in ("J3", "J4")) + (
+        Joint("R", "distance", "ground", "O4", "coupler", "O3", length=0.1152),)
+    loads = tuple(x for x in m.loads if x.body != "rocker")
+    return dataclasses.replace(m, name="hoeken-rod", bodies=bodies, joints=joints, loads=loads,
+                               cut=None, assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG})
+
+
 MODELS = {
     "hoeken": hoeken,
+    "hoeken-rod": hoeken_rod,
     "hoeken-massless-coupler": lambda: massless(hoeken(True), ("coupler",)),
     "slider-crank-point-masses": lambda: massless(slider_crank(), ("rod", "slider"), point=True),
     "hoeken-loaded": lambda: hoeken(True),
@@ -440,7 +453,7 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
-UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1}  # reaction unknowns per joint, by kind
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1}  # reaction unknowns per joint
 
 
 def joint_columns(model):
@@ -488,6 +501,13 @@ def ne_system(sol):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
+        elif jt.kind == "distance":
+            # a rod's force along the line of its two points (applied anywhere on that line)
+            d = x - sol.point(jt.body_a, jt.point_a)
+            u = d / np.linalg.norm(d, axis=-1, keepdims=True)
+            normals[jt.name] = (u, u)
+            put(jt.body_b, c0, u, x)
+            put(jt.body_a, c0, -u, x)
         else:
             phi_a = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(T)
             e = rot(phi_a, np.asarray(jt.axis, float) / np.linalg.norm(jt.axis))
@@ -550,7 +570,7 @@ def reported_unknowns(sol):
         elif jt.kind == PRISMATIC:
             n = normals[jt.name][1]
             parts.append(np.stack((np.sum(f * n, -1), sol.reactions.moment[..., k]), -1))
-        else:  # a slot: the normal force only
+        else:  # a slot: the normal force only; a distance: the rod's force
             parts.append(np.sum(f * normals[jt.name][1], -1)[..., None])
     parts.append(sol.dyn.tau)
     return np.concatenate(parts, axis=-1)
@@ -817,7 +837,11 @@ def test_body_wrench_balance_with_reported_reactions(name):
     for k, jt in enumerate(model.joints):
         if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        if jt.kind != REVOLUTE:  # prismatic and slot reactions are normal to the axis
+        if jt.kind == "distance":  # a rod's reaction lies along the rod
+            u = normals[jt.name][0]
+            across = cross(u, sol.reactions.force[..., k, :])
+            assert np.max(np.abs(across)) <= RTOL * fs
+        elif jt.kind != REVOLUTE:  # prismatic and slot reactions are normal to the axis
             e = normals[jt.name][0]
             along = np.sum(sol.reactions.force[..., k, :] * e, -1)
             assert np.max(np.abs(along)) <= RTOL * fs
