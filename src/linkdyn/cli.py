@@ -420,6 +420,9 @@ def summary_text(s: dict) -> str:
              + ("" if ps["range"] is None else
                 f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')}"
                 f" {ps.get('range_unit', 'rad')})"))
+    if s.get("friction"):
+        from .friction import summary_lines
+        lines.extend(summary_lines(s["friction"]))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         m = r.get("peak_moment_Nm")

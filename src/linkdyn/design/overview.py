@@ -167,6 +167,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             if default_range is not None and np.sum(valid) >= 3:
                 out["path_straightness"] = path_straightness(sol, point, None)
     out["health"] = health(sol)
+    if getattr(sol, "friction", None) is not None:   # energy lost per joint, efficiency
+        from .. import friction
+        out["friction"] = friction.summary(sol)
     return out
 
 

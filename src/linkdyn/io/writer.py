@@ -119,6 +119,14 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
             entry.update(joint=ld.joint, value=_load_value(ld.value, False))
             loads.append(entry)
             continue
+        if ld.kind == "friction":   # in a joint, in the file's units
+            angular = jk.get(model.joint(ld.joint).kind).angular
+            entry.update(joint=ld.joint, coefficient=_num(ld.coefficient))
+            if angular:
+                entry["radius"] = _num(ld.radius / L)
+            entry["transition_speed"] = _num(ld.transition_speed / (A if angular else L))
+            loads.append(entry)
+            continue
         entry["body"] = ld.body
         if ld.point is not None:
             entry["point"] = ld.point
