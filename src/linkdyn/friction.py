@@ -400,7 +400,7 @@ def summary_lines(s: dict) -> list[str]:
     eff = s["efficiency"]
     out.append(f"  friction: {num(s['energy_lost_J'], '.6g')} J lost over the run"
                + (f" ({num(per, '.6g')} J per cycle)" if per is not None else "")
-               + f", efficiency {num(None if eff is None else 100 * eff, '.4g')}%"
+               + f", efficiency {num(None if eff is None else 100 * eff, '.2f')}%"
                + f" of the drivers' {num(s['driver_work_J'], '.6g')} J"
                + f"; Newton {s['newton_iterations']} iterations, residual "
                + f"{num(s['residual_rel'], '.1e')}")
