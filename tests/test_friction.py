@@ -425,3 +425,28 @@ def test_simulate_refuses_friction_naming_the_load():
     with pytest.raises(ModelError, match="friction") as err:
         linkdyn.simulate(dataclasses.replace(m, drivers=()), np.linspace(0, 0.1, 3))
     assert err.value.field.startswith("loads[")
+
+
+def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
+    """A sweep's friction metrics are each design's own run's energy lost and efficiency."""
+    p = tmp_path / "m.toml"
+    # a brake torque on the crank makes the efficiency a real fraction
+    p.write_text(TOML.replace("{extra}", '[[loads]]\nkind = "torque"\nbody = "crank"\n'
+                                         'value = -0.5'))
+    m = linkdyn.load(p)
+    t = np.linspace(0, 1, 73)
+    masses = [0.6, 1.2, 2.4]
+    df = linkdyn.sweep(m, {"bodies.crank.mass": masses}, t, metrics=["friction_loss", "efficiency"])
+    for k, mass in enumerate(masses):
+        one = dataclasses.replace(m, bodies=tuple(
+            dataclasses.replace(b, mass=mass) if b.name == "crank" else b for b in m.bodies))
+        sol = analyze(one, t)
+        lost = -np.trapezoid(sol.friction.power[0], t)
+        work = np.trapezoid(sol.driver_power, t)
+        assert df["friction_loss"][k] == pytest.approx(lost, rel=1e-9)
+        assert df["efficiency"][k] == pytest.approx(1 - lost / work, rel=1e-9)
+        # the brake takes 0.5 N m x 2 pi out over the turn: the rest of the work is lost
+        assert work == pytest.approx(lost + 0.5 * 2 * math.pi, rel=1e-6)
+        assert 0.5 < df["efficiency"][k] < 1
+    from linkdyn.studies import metrics
+    assert metrics.sense("efficiency") == "max"

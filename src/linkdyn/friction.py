@@ -350,34 +350,51 @@ def columns(fr: Friction, model: Model):
         yield f"friction_power_{j}", fr.power[k], "W"
 
 
+def energies(sol) -> tuple[np.ndarray, np.ndarray]:
+    """The energy each friction load dissipates over the run (k, ...) and the drivers' net
+    work over it (...), J: trapezoidal integrals over the valid samples of ``-power`` and of
+    the drivers' power, over the last (time) axis (a batch: one per design)."""
+    t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
+
+    def integral(p):
+        p = np.where(valid, p, 0.0)
+        return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
+
+    return -integral(sol.friction.power), integral(sol.driver_power)
+
+
+def efficiency(lost, work):
+    """The mechanical efficiency over the run, ``1 - lost / work``: the share of the drivers'
+    net work not lost in friction (delivered to the loads or stored); NaN where the drivers do
+    no positive net work."""
+    work = np.asarray(work, float)
+    ok = work > 0
+    return np.where(ok, 1.0 - np.asarray(lost) / np.where(ok, work, 1.0), np.nan)
+
+
 def summary(sol) -> dict:
     """The friction figures of a solution over its run, SI: per friction joint the energy
     it dissipates (J, over the run and per cycle of the first driver when the run spans whole
     cycles), its peak effort; the drivers' net work; the mechanical efficiency
-    ``1 - lost / work`` (the share of the drivers' net work over the run not lost in friction;
-    None when the drivers do no positive net work); Newton's iterations and residual."""
-    fr, t, valid = sol.friction, np.asarray(sol.t), np.asarray(sol.valid, bool)
-
-    def integral(p):  # trapezoidal rule over the valid samples, J
-        p = np.where(valid, p, 0.0)
-        return float(np.sum(0.5 * (p[1:] + p[:-1]) * np.diff(t))) if t.size > 1 else 0.0
-
+    (:func:`efficiency`; None when the drivers do no positive net work); Newton's iterations
+    and residual."""
+    fr = sol.friction
+    per_joint, work = energies(sol)
     cycles = _cycles(sol)
     joints = {}
-    lost = 0.0
     for k, j in enumerate(fr.joints):
-        e = -integral(fr.power[k])
-        lost += e
-        peak = float(np.nanmax(np.abs(fr.effort[k]), initial=0.0))
+        e = float(per_joint[k])
         joints[j] = {"effort": "torque" if fr.angular[k] else "force",
-                     "unit": "N m" if fr.angular[k] else "N", "peak": peak,
+                     "unit": "N m" if fr.angular[k] else "N",
+                     "peak": float(np.nanmax(np.abs(fr.effort[k]), initial=0.0)),
                      "energy_lost_J": e,
                      "energy_lost_per_cycle_J": e / cycles if cycles else None}
-    work = integral(sol.driver_power)
+    lost = float(np.sum(per_joint))
+    eff = float(efficiency(lost, work))
     return {"joints": joints, "energy_lost_J": lost,
             "energy_lost_per_cycle_J": lost / cycles if cycles else None,
-            "cycles": cycles, "driver_work_J": work,
-            "efficiency": 1.0 - lost / work if work > 0 else None,
+            "cycles": cycles, "driver_work_J": float(work),
+            "efficiency": eff if np.isfinite(eff) else None,
             "newton_iterations": fr.iterations, "residual_rel": fr.residual}
 
 
