@@ -299,7 +299,6 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     iterations = np.zeros(shape, int)
     done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
     eye = np.eye(k)
-    det = np.ones(shape)
     for _ in range(MAX_ITERATIONS + 1):
         F = F0 + np.einsum("jlc...,l...->jc...", A, f)
         g, dg = _equations(fr, F, qd)
@@ -309,16 +308,20 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
                                             axis=(0, -1), initial=0.0)[..., None])
         # J = I - dg/dF . A, per sample (..., k, k)
         J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
-        det = np.linalg.det(J)
-        ok = big_r <= TOL * np.maximum(scale, 1e-300)
-        # a singular J (a fold of the friction equations) ends that sample's iterations
-        done = done | ok | ~(np.abs(det) > 1e-14)
+        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
         if np.all(done):
             break
-        step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
-                                np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None])[..., 0]
+        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
+        try:
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
+        except np.linalg.LinAlgError:
+            # a singular J (a fold of the friction equations) ends that sample's iterations
+            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
+                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
         f = f - np.moveaxis(step_, -1, 0)
         iterations = iterations + ~done
+    det = np.linalg.det(J)
     converged = np.all(np.isfinite(f), axis=0) & (
         np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
     # a solution not reached from the frictionless one (J no longer positive) locks too
