@@ -82,20 +82,24 @@ def ne_friction_solve(sol, iterations=400):
 
     zero = np.zeros(T + (2,))
     arm, speed, qd, which = [], [], [], []
+    extra = []   # (static arm, stiction speed, viscous, preload) of each
     for c, ld in enumerate(fl):
         jt = model.joint(ld.joint)
         k = [j.name for j in model.joints].index(ld.joint)
         x = sol.point(jt.body_b, jt.point_b)
         # a unit friction effort: a couple (revolute) or a force along the axis at b's point
+        lever = ld.radius if jt.kind == REVOLUTE else 1.0
         if jt.kind == REVOLUTE:
             put(jt.body_b, c, zero, x, 1.0)
             put(jt.body_a, c, zero, x, -1.0)
-            arm.append(ld.coefficient * ld.radius)
         else:
             e = normals[jt.name][0]
             put(jt.body_b, c, e, x)
             put(jt.body_a, c, -e, x)
-            arm.append(ld.coefficient)
+        arm.append(ld.coefficient * lever)
+        mu_s = ld.coefficient if ld.static_coefficient is None else ld.static_coefficient
+        v_s = 10 * ld.transition_speed if ld.stiction_speed is None else ld.stiction_speed
+        extra.append((mu_s * lever, v_s, ld.viscous, ld.preload))
         speed.append(ld.transition_speed)
         qd.append(sol.kin.qd[..., k])
         which.append((jt.kind, col[k]))
@@ -103,9 +107,12 @@ def ne_friction_solve(sol, iterations=400):
     f = np.zeros(T + (len(fl),))
     for _ in range(iterations):
         xs = np.einsum("...ij,...j->...i", Kinv, rhs - np.einsum("...ij,...j->...i", Kf, f))
-        new = np.stack([-a * (np.linalg.norm(xs[..., c0:c0 + 2], axis=-1) if kind == REVOLUTE
-                              else np.abs(xs[..., c0])) * np.tanh(v / s)
-                        for a, s, v, (kind, c0) in zip(arm, speed, qd, which)], axis=-1)
+        # f = -(a_d + (a_s - a_d) exp(-(qd/v_s)^2)) (|F| + preload) tanh(qd/v) - b qd
+        new = np.stack([-(a + (a_s - a) * np.exp(-(v / v_s) ** 2))
+                        * ((np.linalg.norm(xs[..., c0:c0 + 2], axis=-1) if kind == REVOLUTE
+                            else np.abs(xs[..., c0])) + pre) * np.tanh(v / s) - b * v
+                        for a, s, v, (kind, c0), (a_s, v_s, b, pre)
+                        in zip(arm, speed, qd, which, extra)], axis=-1)
         if np.max(np.abs(new - f)) <= 1e-16 * max(np.max(np.abs(new)), 1e-300):
             f = new
             break
@@ -119,7 +126,21 @@ FRICTION_MODELS = {
     "slider-crank": lambda: with_friction(MODELS["slider-crank"](), 0.2),
     "scotch-yoke": lambda: with_friction(MODELS["scotch-yoke"](), 0.2, 6 * MM),
     "stephenson": lambda: with_friction(MODELS["stephenson"](), 0.1, 5 * MM),
+    "slider-crank-stribeck": lambda: stribeck(MODELS["slider-crank"]()),
 }
+
+
+def stribeck(model):
+    """Friction at every joint with a static coefficient, a blend speed near the joints'
+    rates, viscous terms and preloads."""
+    extra = []
+    for j in model.joints:
+        revolute = j.kind == REVOLUTE
+        extra.append(joint_friction(model, j.name, 0.12, 7 * MM, 0.05 if revolute else 0.01,
+                                    static_coefficient=0.3,
+                                    stiction_speed=3.0 if revolute else 0.3,
+                                    viscous=0.002 if revolute else 0.5, preload=40.0))
+    return dataclasses.replace(model, loads=model.loads + tuple(extra))
 
 
 @pytest.mark.parametrize("name", list(FRICTION_MODELS))
@@ -354,17 +375,22 @@ samples = 73
 
 def test_model_file_reads_and_writes_friction(tmp_path):
     p = tmp_path / "m.toml"
-    p.write_text(TOML.replace("{extra}", "transition_speed = 2.0"))
+    p.write_text(TOML.replace("{extra}", "transition_speed = 2.0\nstatic_coefficient = 0.3\n"
+                                         "stiction_speed = 5.0\nviscous = 0.001\npreload = 20"))
     m = linkdyn.load(p)
     (ld,) = m.loads
     assert (ld.kind, ld.joint, ld.coefficient) == ("friction", "J1", 0.25)
     assert ld.radius == pytest.approx(0.01) and ld.transition_speed == pytest.approx(2 * DEG)
+    # deg/s -> rad/s; N m s/deg -> N m s/rad
+    assert ld.stiction_speed == pytest.approx(5 * DEG) and ld.viscous == pytest.approx(0.001 / DEG)
+    assert (ld.static_coefficient, ld.preload) == (0.3, 20.0)
     q = tmp_path / "back.toml"
     linkdyn.save(m, q)
     back = linkdyn.load(q).loads[0]
     assert (back.kind, back.joint, back.name, back.body, back.body2) == (
         ld.kind, ld.joint, ld.name, ld.body, ld.body2)
-    for key in ("coefficient", "radius", "transition_speed"):
+    for key in ("coefficient", "radius", "transition_speed", "static_coefficient",
+                "stiction_speed", "viscous", "preload"):
         assert getattr(back, key) == pytest.approx(getattr(ld, key), rel=1e-14)
     p.write_text(TOML.replace("{extra}", ""))   # the default transition speed
     assert linkdyn.load(p).loads[0].transition_speed == 0.01
@@ -450,3 +476,18 @@ def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
         assert 0.5 < df["efficiency"][k] < 1
     from linkdyn.studies import metrics
     assert metrics.sense("efficiency") == "max"
+
+
+@pytest.mark.parametrize("stiction, mu_eff", [(1e-3, 0.2), (1e6, 0.45)])
+def test_incline_with_static_coefficient_viscous_and_preload(stiction, mu_eff):
+    """Pushed up at 0.5 m/s: F = W sin + mu (W cos + P0) + b v, with mu the dynamic coefficient
+    far above the stiction speed and the static one far below it."""
+    angle, mass, v, b, p0 = 25 * DEG, 2.0, 0.5, 3.0, 7.0
+    m = incline_block(angle, 0.0, v, mass)
+    m = dataclasses.replace(m, loads=(joint_friction(
+        m, "J1", 0.2, transition_speed=1e-9, static_coefficient=0.45, stiction_speed=stiction,
+        viscous=b, preload=p0),))
+    sol = analyze(m, np.linspace(0, 1, 5))
+    W = mass * G
+    expect = W * math.sin(angle) + mu_eff * (W * math.cos(angle) + p0) + b * v
+    check(sol.dyn.tau[..., 0], np.full(5, expect), 1e-12)

@@ -56,7 +56,10 @@ def default_transition_speed(angular: bool) -> float:
 
 
 def joint_friction(model: Model, joint: str, coefficient: float, radius: float = 0.0,
-                   transition_speed: float | None = None, name: str = "") -> Load:
+                   transition_speed: float | None = None, name: str = "", *,
+                   static_coefficient: float | None = None,
+                   stiction_speed: float | None = None, viscous: float = 0.0,
+                   preload: float = 0.0) -> Load:
     """The :class:`~linkdyn.model.Load` of friction in ``model``'s joint ``joint``, SI.
 
     Parameters
@@ -68,13 +71,32 @@ def joint_friction(model: Model, joint: str, coefficient: float, radius: float =
     transition_speed : float, optional
         Rate of the tanh smoothing, rad/s (revolute) or m/s (sliding); default
         :func:`default_transition_speed`.
+    static_coefficient : float, optional
+        mu at rest (default ``coefficient``, the dynamic one); the coefficient blends from it
+        to ``coefficient`` as ``exp(-(qd / stiction_speed)^2)`` fades.
+    stiction_speed : float, optional
+        Rate of that blend, rad/s or m/s; default 10 x the transition speed.
+    viscous : float
+        Viscous coefficient b, N m s/rad or N s/m: an effort ``-b qd`` more.
+    preload : float
+        A load added to the joint's force magnitude, N (a bearing's or a guide's preload).
     """
     jt = model.joint(joint)
     angular = jk.get(jt.kind).angular
     speed = default_transition_speed(angular) if transition_speed is None else transition_speed
     return Load("friction", jt.body_b, jt.point_b, None, jt.body_a, jt.point_a, name=name,
                 joint=joint, coefficient=float(coefficient),
-                radius=float(radius) if angular else 0.0, transition_speed=float(speed))
+                radius=float(radius) if angular else 0.0, transition_speed=float(speed),
+                static_coefficient=None if static_coefficient is None
+                else float(static_coefficient),
+                stiction_speed=None if stiction_speed is None else float(stiction_speed),
+                viscous=float(viscous), preload=float(preload))
+
+
+def stiction_speed(load: Load) -> float:
+    """The rate of a friction load's static-to-dynamic blend, rad/s or m/s: its own, else 10
+    times its transition speed."""
+    return 10.0 * load.transition_speed if load.stiction_speed is None else load.stiction_speed
 
 
 def present(model: Model) -> bool:
@@ -87,7 +109,9 @@ class Row:
     """One friction load in tree indices: its joint (model order) and bodies (the second
     ``body``, the first ``body2``), the second body's joint point, the axis of a sliding joint
     in the first body's frame (None: a revolute joint, the effort is a couple), and per design
-    ``arm`` (mu r, m, or mu) and ``speed`` (rad/s or m/s): floats, or (D, 1)."""
+    ``arm`` and ``arm_static`` (mu r, m, or mu; dynamic and at rest), ``speed`` and
+    ``stiction`` (the rates of the tanh and of the static blend, rad/s or m/s), ``viscous``
+    (N m s/rad or N s/m) and ``preload`` (N): floats, or (D, 1)."""
 
     label: str
     joint: int
@@ -97,6 +121,10 @@ class Row:
     axis: np.ndarray | None
     arm: object
     speed: object
+    arm_static: object = 0.0
+    stiction: object = 1.0
+    viscous: object = 0.0
+    preload: object = 0.0
 
 
 def rows(models, topo) -> tuple[Row, ...]:
@@ -116,29 +144,39 @@ def rows(models, topo) -> tuple[Row, ...]:
             v = np.array([f(m.loads[n]) for m in models], float)
             return float(v[0]) if len(models) == 1 else v[:, None]
 
+        r = (lambda x: x.radius) if angular else (lambda x: 1.0)
         out.append(Row(ld.name or ld.joint, names.index(ld.joint), pos[jt.body_b],
                        pos[jt.body_a], jt.point_b,
                        None if angular else np.asarray(jt.axis, float),
-                       per(lambda x: x.coefficient * (x.radius if angular else 1.0)),
-                       per(lambda x: x.transition_speed)))
+                       per(lambda x: x.coefficient * r(x)), per(lambda x: x.transition_speed),
+                       per(lambda x: (x.coefficient if x.static_coefficient is None
+                                      else x.static_coefficient) * r(x)),
+                       per(stiction_speed), per(lambda x: x.viscous),
+                       per(lambda x: x.preload)))
     return tuple(out)
 
 
 # --- the reaction-dependent load: its effort and derivative, one equation ---------------------
 
 @step
-def coulomb(arm, speed, fx, fy, qd):
-    """Friction effort ``f = -arm |F| tanh(qd / speed)`` in a joint whose reaction force is
-    ``F = (fx, fy)`` and rate ``qd``, and its derivative ``(df/dfx, df/dfy)``.
+def coulomb(arm, arm_static, stiction, speed, viscous, preload, fx, fy, qd):
+    """Friction effort in a joint whose reaction force is ``F = (fx, fy)`` and rate ``qd``,
+    and its derivative ``(df/dfx, df/dfy)``:
 
-    ``arm`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding one (f a force,
-    N). At ``F = 0`` the derivative is taken as 0 (|F| has no derivative there)."""
-    # |F| = sqrt(fx^2 + fy^2); f = -arm |F| s, s = tanh(qd / v); df/dF = -arm s F / |F|
+        f = -a(qd) (|F| + preload) tanh(qd / speed) - viscous qd,
+        a(qd) = arm + (arm_static - arm) exp(-(qd / stiction)^2),
+
+    ``arm``, ``arm_static`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding
+    one (f a force, N), dynamic and at rest. At ``F = 0`` the derivative is taken as 0 (|F| has
+    no derivative there)."""
+    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) tanh(qd / v) F / |F|
     size = np.sqrt(fx * fx + fy * fy)
+    x = qd / stiction
+    a = arm + (arm_static - arm) * np.exp(-x * x)
     s = np.tanh(qd / speed)
     safe = select(size > 0, size, 1.0)
-    k = select(size > 0, -arm * s / safe, 0.0)
-    return -arm * size * s, (k * fx, k * fy)
+    k = select(size > 0, -a * s / safe, 0.0)
+    return -a * (size + preload) * s - viscous * qd, (k * fx, k * fy)
 
 
 # --- the solution ------------------------------------------------------------------------------
@@ -245,7 +283,8 @@ def _equations(friction_rows, F, qd):
     (k, 2, ...) and rates qd (k, ...)."""
     g, dg = [], []
     for k, r in enumerate(friction_rows):
-        gk, (gx, gy) = coulomb(r.arm, r.speed, F[k, 0], F[k, 1], qd[k])
+        gk, (gx, gy) = coulomb(r.arm, r.arm_static, r.stiction, r.speed, r.viscous,
+                               r.preload, F[k, 0], F[k, 1], qd[k])
         g.append(gk)
         dg.append(np.stack([gx, gy]))
     return np.stack(g), np.stack(dg)

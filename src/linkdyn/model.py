@@ -150,6 +150,10 @@ class Load:
     coefficient: float = 0.0       # friction: coefficient of friction mu, 1
     radius: float = 0.0            # friction in a revolute joint: the pin radius, m
     transition_speed: float = 0.0  # friction: rate of the tanh smoothing, rad/s or m/s
+    static_coefficient: float | None = None  # friction: mu at rest (None: ``coefficient``)
+    stiction_speed: float | None = None      # friction: rate of the static-to-dynamic blend
+    viscous: float = 0.0           # friction: viscous coefficient, N m s/rad or N s/m
+    preload: float = 0.0           # friction: load added to |F|, N
 
 
 @dataclass(frozen=True)

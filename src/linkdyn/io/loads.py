@@ -20,9 +20,11 @@ LOAD_KEYS = {"force": ("kind", "name", "body", "point", "value"),
              "damper": ("kind", "name", "body", "point", "body2", "point2", "damping"),
              "joint_torque": ("kind", "name", "joint", "value"),
              "joint_force": ("kind", "name", "joint", "value"),
-             "friction": ("kind", "name", "joint", "coefficient", "radius", "transition_speed")}
+             "friction": ("kind", "name", "joint", "coefficient", "radius", "transition_speed",
+                          "static_coefficient", "stiction_speed", "viscous", "preload")}
 #: keys a kind may leave out (the rest but ``name`` are required)
-OPTIONAL_KEYS = {"friction": ("radius", "transition_speed")}
+OPTIONAL_KEYS = {"friction": ("radius", "transition_speed", "static_coefficient",
+                              "stiction_speed", "viscous", "preload")}
 
 
 @dataclass(frozen=True)
@@ -182,5 +184,18 @@ def _friction(r: _Reader, entry: dict, f: str, name: str, joints: dict[str, Join
                          positive=True) * unit
     else:
         speed = default_transition_speed(kind.angular)
+    static = (r.number(entry["static_coefficient"], f"{f}.static_coefficient",
+                       nonnegative=True) if "static_coefficient" in entry else None)
+    stiction = (r.number(entry["stiction_speed"], f"{f}.stiction_speed", unit_name,
+                         positive=True) * unit if "stiction_speed" in entry else None)
+    # viscous: N m per (angle unit / s) or N per (length unit / s), to SI
+    effort = "N m" if kind.angular else "N"
+    per_rate = r.angle_name if kind.angular else r.length_name
+    viscous = (r.number(entry["viscous"], f"{f}.viscous", f"{effort} s/{per_rate}",
+                        nonnegative=True) / unit if "viscous" in entry else 0.0)
+    preload = (r.number(entry["preload"], f"{f}.preload", "N", nonnegative=True)
+               if "preload" in entry else 0.0)
     return Load("friction", jt.body_b, jt.point_b, None, jt.body_a, jt.point_a, name=name,
-                joint=joint, coefficient=mu, radius=radius, transition_speed=speed)
+                joint=joint, coefficient=mu, radius=radius, transition_speed=speed,
+                static_coefficient=static, stiction_speed=stiction, viscous=viscous,
+                preload=preload)
