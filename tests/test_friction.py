@@ -491,3 +491,17 @@ def test_incline_with_static_coefficient_viscous_and_preload(stiction, mu_eff):
     W = mass * G
     expect = W * math.sin(angle) + mu_eff * (W * math.cos(angle) + p0) + b * v
     check(sol.dyn.tau[..., 0], np.full(5, expect), 1e-12)
+
+
+def test_sweep_varies_a_friction_coefficient(tmp_path):
+    """A friction number as a design parameter reaches each design: the pin's loss is
+    proportional to its coefficient (the crank's pin force does not depend on it)."""
+    p = tmp_path / "m.toml"
+    p.write_text(TOML.replace("{extra}", ""))
+    mus = [0.1, 0.2, 0.4]
+    df = linkdyn.sweep(p, {"loads.pin.coefficient": mus}, np.linspace(0, 1, 73),
+                       metrics=["friction_loss"])
+    loss = df["friction_loss"].to_numpy()
+    one = analyze(linkdyn.load(p), np.linspace(0, 1, 73))
+    ref = -np.trapezoid(one.friction.power[0], one.t) / 0.25
+    np.testing.assert_allclose(loss, ref * np.array(mus), rtol=1e-9)
