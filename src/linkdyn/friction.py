@@ -252,7 +252,14 @@ def cases(kin, C: int):
                    motion=_tile(list(kin.motion), C, T), twists=_tile(list(kin.twists), C, T),
                    rates=_tile(list(kin.rates), C, T), jacobian=_tile(kin.jacobian, C, T),
                    pivot=_tile(kin.pivot, C, T), residual=_tile(kin.residual, C, T),
-                   valid=_tile(kin.valid, C, T), arrays=None)
+                   valid=_tile(kin.valid, C, T),
+                   # the compiled kernels' contiguous inputs (n, ..., D, T), if there are
+                   arrays=None if kin.arrays is None else
+                   {key: _tile(kin.arrays[key], C, T) for key in _ARRAYS})
+
+
+#: the arrays of a compiled kinematics the dynamics and reactions kernels read
+_ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
 
 
 def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
