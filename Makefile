@@ -16,14 +16,20 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $@ $(VENV)/.installed
 
+# make demo: the core and the parquet extra (pandas, pyarrow), which linkdyn sweep needs
+$(VENV)/.installed-demo: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[parquet]"
+	touch $@ $(VENV)/.installed
+
 $(VENV)/.installed-fast: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast,parquet]"
 	touch $@ $(VENV)/.installed
 
-demo: $(VENV)/.installed
+demo: $(VENV)/.installed-demo
 	$(BIN)/linkdyn example hoeken > hoeken.toml
 	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
 	@echo "Results: out/hoeken/results.csv, out/hoeken/summary.json, plots out/hoeken/plot_*.png and the report out/hoeken/report.html"
+	@echo "Run linkdyn from the venv: . $(BIN)/activate (or $(BIN)/linkdyn ...)"
 
 # every core (pytest-xdist); the compiled-backend tests share one worker (tests/conftest.py)
 test: $(VENV)/.installed-test

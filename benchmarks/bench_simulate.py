@@ -73,10 +73,9 @@ def mujoco_run(model, ref, t, dt, free, motor=None):
     """MuJoCo from linkdyn's initial state: the free joint's angle at the times t, and the
     wall and CPU time of its stepping loop."""
     import mujoco
-    from test_mujoco import _relative, mjcf
+    from linkdyn.io.mjcf import mjcf
 
-    xml, tree = mjcf(model)
-    root = ET.fromstring(xml)
+    root = ET.fromstring(mjcf(model, sol=ref, at=float(ref.t[0])).text)
     root.find("option").set("timestep", repr(dt))
     root.find("option").set("integrator", "RK4")
     for c in root.iter("connect"):
@@ -84,9 +83,7 @@ def mujoco_run(model, ref, t, dt, free, motor=None):
         c.set("solimp", "0.9999 0.9999 0.001")
     m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
     d = mujoco.MjData(m)
-    for child, (parent, jt) in tree.items():
-        d.qpos[m.joint(jt.name).qposadr[0]] = _relative(ref, child, parent, jt, "q")[0]
-        d.qvel[m.joint(jt.name).dofadr[0]] = _relative(ref, child, parent, jt, "qd")[0]
+    mujoco.mj_resetDataKeyframe(m, d, 0)    # linkdyn's initial positions and rates
     adr, dof = m.joint(free).qposadr[0], m.joint(free).dofadr[0]
     per = int(round((t[1] - t[0]) / dt))
     out = np.empty(len(t))

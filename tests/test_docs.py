@@ -21,7 +21,7 @@ from click.testing import CliRunner
 
 import linkdyn
 import linkdyn.io as lio
-from linkdyn.cli import example_names, main
+from linkdyn.cli import example_names, main, simulation_example_names
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -191,14 +191,16 @@ def test_every_glossary_code_name_exists_in_the_source():
 
 # ------------------------------------------------------------------------------- outputs
 
-def _run(name: str, tmp_path: Path):
-    """``linkdyn analyze`` on a short run of a bundled example: (csv header, summary dict)."""
+def _run(name: str, tmp_path: Path, command: str = "analyze"):
+    """``linkdyn analyze`` (or ``simulate``) on a short run of a bundled example: (csv header,
+    summary dict)."""
     model = tmp_path / f"{name}.toml"
     model.write_text(Path(linkdyn.example_path(name)).read_text(encoding="utf-8"),
                      encoding="utf-8")
     out = tmp_path / "out"
-    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(out), "--samples", "9",
-                                    "--duration", "0.1"])
+    duration = "0.1" if command == "analyze" else "0.02"
+    res = CliRunner().invoke(main, [command, str(model), "-o", str(out), "--samples", "9",
+                                    "--duration", duration])
     assert res.exit_code == 0, res.output
     header = (out / "results.csv").read_text(encoding="utf-8").splitlines()[0].split(",")
     return header, json.loads((out / "summary.json").read_text(encoding="utf-8"))
@@ -216,22 +218,29 @@ def _keys(x, names: set[str]):
             yield from _keys(v, names)
 
 
-@pytest.mark.parametrize("name", example_names())
-def test_results_columns_and_summary_keys_are_documented(name, tmp_path):
+@pytest.mark.parametrize("command, name", [("analyze", n) for n in example_names()]
+                         + [("simulate", n) for n in simulation_example_names()])
+def test_results_columns_and_summary_keys_are_documented(command, name, tmp_path):
     text = read("cli.md")
-    header, summary = _run(name, tmp_path)
+    header, summary = _run(name, tmp_path, command)
     mech = linkdyn.load(linkdyn.example_path(name))
-    # a column is documented by its pattern: q_<joint>, x_<body>.<point>, or its exact name
+    labels = set(linkdyn.loads.labels(mech))   # loads.<name> or loads[<k>]
+    # a column is documented by its pattern: q_<joint>, x_<body>.<point>, power_loads.<name>,
+    # or its exact name
     patterns = set()
     for col in header:
         m = re.match(r"([A-Za-z]+)_(.+)$", col)
         known = m and (m.group(2) in {j.name for j in mech.joints} | {b.name for b in mech.bodies}
-                       or "." in m.group(2))
-        patterns.add(f"{m.group(1)}_<" if known else col)
+                       | labels or "." in m.group(2))
+        label = next((x for x in labels if col.endswith(f"_{x}")), None)
+        if label:
+            patterns.add(col[:-len(label)] + "loads.<")
+        else:
+            patterns.add(f"{m.group(1)}_<" if known else col)
     missing = sorted(p for p in patterns if (p + ">" if p.endswith("<") else p) not in text
                      and not (p.endswith("<") and p in text))
     assert not missing, f"docs/cli.md: document the results.csv columns {missing}"
-    names = {j.name for j in mech.joints} | {b.name for b in mech.bodies}
+    names = {j.name for j in mech.joints} | {b.name for b in mech.bodies} | labels
     keys = sorted(set(_keys(summary, names)))
     missing = [k for k in keys if f"`{k}`" not in text]
     assert not missing, f"docs/cli.md: document the summary.json keys {missing}"

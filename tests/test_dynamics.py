@@ -242,8 +242,18 @@ def slotted_lever():
                  loads, GRAVITY, assembly_phi={"crank": 0.3, "lever": 1.0})
 
 
+def massless(model, names, point=False):
+    """``model`` with the bodies ``names`` massless (mass and inertia 0), or point masses
+    (``point``: their inertia 0, their mass kept)."""
+    bodies = tuple(dataclasses.replace(b, inertia=0.0, mass=b.mass if point else 0.0)
+                   if b.name in names else b for b in model.bodies)
+    return dataclasses.replace(model, name=model.name + "-massless", bodies=bodies)
+
+
 MODELS = {
     "hoeken": hoeken,
+    "hoeken-massless-coupler": lambda: massless(hoeken(True), ("coupler",)),
+    "slider-crank-point-masses": lambda: massless(slider_crank(), ("rod", "slider"), point=True),
     "hoeken-loaded": lambda: hoeken(True),
     "slider-crank": slider_crank,
     "slider-crank-cut-J3": lambda: slider_crank(("J3",)),

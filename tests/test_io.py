@@ -377,12 +377,12 @@ BAD = {
     "misspelt motion key": (
         "rpm = 45.0", "rmp = 45.0", "drivers[0].motion",
         ["unknown key 'rmp'", "Did you mean 'rpm'?", 'keys for kind = "constant_speed"']),
-    "zero mass": (
-        "mass = 3.0", "mass = 0", "bodies.rocker.mass", ["must be positive", "positive mass in kg"]),
+    "negative mass": (
+        "mass = 3.0", "mass = -1", "bodies.rocker.mass", ["must not be negative", "0 or more"]),
     "missing mass": ("mass = 3.0\n", "", "bodies.rocker.mass", ["needs a mass", "kg"]),
     "negative inertia": (
         "inertia = 13271.76", "inertia = -5.0", "bodies.rocker.inertia",
-        ["must be positive", "positive moment of inertia in kg mm^2"]),
+        ["must not be negative", "moment of inertia in kg mm^2, 0 or more"]),
     "negative centroidal inertia": (
         "inertia = 725.80", "inertia = 500.0", "bodies.crank.inertia",
         ["about point 'O1'", "m d^2 = 544.354", "parallel-axis"]),

@@ -337,6 +337,18 @@ def test_loop_closure_residual_and_joint_geometry(name):
             # the two pins coincide, and q is the relative angle (not wrapped)
             assert np.max(np.linalg.norm(pb - pa, axis=-1)) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], fb - fa, rtol=0, atol=1e-12)
+        elif j.kind == "gear":
+            # the centres at the pitch distance, and the pitch circles roll on each other: the
+            # arcs rolled relative to the line of centres are equal (opposite for internal)
+            sgn = -1.0 if j.internal else 1.0
+            d = pb - pa
+            alpha = np.arctan2(d[:, 1], d[:, 0])
+            assert np.max(np.abs(np.linalg.norm(d, axis=-1) - abs(j.radius_a + sgn * j.radius_b))
+                          ) <= 1e-10 * L, j.name
+            roll = j.radius_a * (fa - alpha) + sgn * j.radius_b * (fb - alpha - j.phase)
+            assert np.max(np.abs(roll)) <= 1e-10 * L, j.name
+            np.testing.assert_allclose(kin.q[:, k], j.radius_a * (fa - alpha), rtol=0,
+                                       atol=1e-12 * L)
         else:
             # a slider's frames keep their relative angle (a slot's pin turns freely); the points
             # stay on the slide line through P_a

@@ -58,8 +58,10 @@ def test_a_sweep_names_the_largest_transmission_angle_best(swept):
     assert s["min_transmission_angle"]["sense"] == "max"
     assert s["min_transmission_angle"]["best"] == ok.min_transmission_angle.max()
     assert s["peak_tau_J1"]["best_design"] == best_tau and s["peak_tau_J1"]["unit"] == "N m"
-    assert re.search(rf"min_transmission_angle .* rad  \(best: design {best_mu}, the largest\)",
-                     printed)
+    # printed in the model file's angle unit (deg), its range the table's (SI) in degrees
+    mu = ok.min_transmission_angle
+    assert (f"min_transmission_angle   {np.degrees(mu.min()):.6g} .. {np.degrees(mu.max()):.6g} "
+            f"deg  (best: design {best_mu}, the largest)") in printed
     assert re.search(rf"peak_tau_J1 .* N m  \(best: design {best_tau}, the smallest\)", printed)
     # the best designs with their own report pages: the largest angles, not the smallest
     from linkdyn.studies.runner import best_designs

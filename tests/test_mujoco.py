@@ -1,41 +1,48 @@
-"""Driver efforts and loop forces against MuJoCo's rigid-body dynamics.
+"""Driver efforts and loop forces against MuJoCo's rigid-body dynamics, on linkdyn's own
+MJCF export (:mod:`linkdyn.io.mjcf`, ``linkdyn export --to mjcf``).
 
-Each linkdyn model is rebuilt as an MJCF open tree (the same spanning tree, cut at the same
-joint) closed by ``<equality><connect site1=... site2=...>``. linkdyn's plane (x, y) is MuJoCo's
-(x, z): a point (x, y) maps to (x, 0, y), a counter-clockwise angle in linkdyn is a rotation about
-MuJoCo's -y, hence every hinge has ``axis="0 -1 0"``, and a moment about linkdyn's z is a torque
-along MuJoCo's -y.
+The exporter is the one recipe: the test does not build a second MJCF to compare with it. The
+independent check is MuJoCo's own dynamics of the exported file: a wrong body placement, frame,
+mass, inertia, gravity, spring, sign of a joint or cut, or actuator gear makes MuJoCo's
+equations disagree with linkdyn's numbers. The test reads the structure back from MuJoCo's
+compiled model (which body each joint moves, the actuators' gears and joints), not from the
+exporter's code: linkdyn's plane (x, y) is MuJoCo's (x, z), and a joint's ``qpos`` is ``s q``,
+``q`` linkdyn's coordinate and ``s = +1`` when the joint moves its second body (MuJoCo's
+``jnt_bodyid``), ``-1`` when its first.
 
 With linkdyn's positions, rates and accelerations loaded into ``qpos``, ``qvel`` and ``qacc``,
 MuJoCo's equations of motion give
 
-    M qacc + qfrc_bias = S tau + J^T lam + qfrc_loads,
+    M qacc + qfrc_bias - qfrc_passive = S tau + J^T lam + qfrc_loads,
 
 ``J = efc_J`` the connect rows (site1 minus site2, three per connect; the out-of-plane row is
-identically zero), ``S`` the driven degrees of freedom. Least squares gives ``[tau; lam]``:
-``tau`` must equal linkdyn's driver effort and ``lam`` (the force on site1's body) linkdyn's
-reaction at the cut joint (site1 is on the joint's second body, so ``lam`` is the force by the
-first body on the second). ``qfrc_inverse`` is NOT used: for a closed loop it mixes the loop
-force into the crank's generalized force.
+identically zero), ``S`` the actuators' transmission (gear on the joint's dof), ``qfrc_passive``
+the exported springs and dampers, ``qfrc_loads`` the loads MJCF cannot hold, applied here by
+``mj_applyFT``. Least squares gives ``[tau; lam]``: ``tau`` must equal linkdyn's driver effort
+and ``lam`` (the force on site1's body, the joint's second) linkdyn's reaction at the cut joint,
+to 1e-12 of their peak. ``qfrc_inverse`` is NOT used: for a closed loop it mixes the loop force
+into the crank's generalized force.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import xml.etree.ElementTree as ET
 
-import mujoco
 import numpy as np
 import pytest
 
+from linkdyn import example_path, load
 from linkdyn.analysis import analyze
-from linkdyn.model import PRISMATIC, REVOLUTE, Driver, Load, Model
+from linkdyn.io.mjcf import mjcf
+from linkdyn.model import Driver, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
+
+mujoco = pytest.importorskip("mujoco")  # the extra linkdyn[mujoco]; the export itself needs none
 
 from builders import DEG, RPM, body, pri, rev
 
-RTOL = 1e-8
+RTOL = 1e-12   # of the peak of each effort and reaction
 
 
 # ----------------------------------------------------------------------------------------------
@@ -85,6 +92,43 @@ def slider_crank():
                  assembly_q={"J4": 0.2289}, cut=("J3",))
 
 
+def reversed_hoeken():
+    """Hoeken with J1 and J2 written the other way round: MuJoCo's tree reaches each joint's
+    first body from its second (qpos = -q, the driver's gear -1)."""
+    m = hoeken((0.3, -9.81))
+    j1, j2 = rev("J1", "crank.O1", "ground.O1"), rev("J2", "coupler.O2", "crank.O2")
+    return dataclasses.replace(m, joints=(j1, j2) + m.joints[2:], drivers=(
+        Driver("J1", ExpressionMotion("-(4.7*t + 0.8*sin(6*t))")),))
+
+
+def reversed_slider():
+    """The slider-crank with its slide written slider first, the slider's frame turned by
+    -0.3 rad from the ground's (``angle`` 0.3 of the ground's to the slider's) and the axis in
+    the slider's frame: a reversed slide between frames that are not parallel."""
+    m = slider_crank()
+    a = 0.3
+    j4 = pri("J4", "slider.B", "ground.G", axis=(math.cos(a), math.sin(a)), angle=a)
+    return dataclasses.replace(m, joints=m.joints[:3] + (j4,),
+                               assembly_phi={**m.assembly_phi, "slider": -a},
+                               assembly_q={"J4": -0.2289})
+
+
+def spring_loaded():
+    """The Hoeken linkage in a vertical plane with a spring (ground to the coupler point) and a
+    damper (crank pin to rocker pin), exported as MuJoCo tendons; the crank accelerates."""
+    loads = (Load("spring", "ground", "O4", body2="coupler", point2="P", stiffness=800.0,
+                  free_length=0.15, name="k1"),
+             Load("damper", "crank", "O2", body2="rocker", point2="O3", damping=3.0, name="c1"))
+    return dataclasses.replace(hoeken((0.0, -9.81), loads),
+                               drivers=(Driver("J1", ExpressionMotion("4.7*t + 0.8*sin(6*t)")),))
+
+
+def example(name, q="0.3 + 6*t + 0.8*sin(5*t)"):
+    """A bundled example whose driver accelerates (so inertia of every kind enters)."""
+    m = load(example_path(name))
+    return dataclasses.replace(m, drivers=(Driver(m.drivers[0].joint, ExpressionMotion(q)),))
+
+
 CASES = {
     "hoeken-seed": (hoeken, 45 * RPM),
     "hoeken-gravity-loads": (
@@ -92,92 +136,31 @@ CASES = {
             Load("force", "coupler", "P", value=lambda t: np.array([-20.0, 35.0])),
             Load("torque", "rocker", value=lambda t: 0.5 + 0.0 * np.asarray(t)))),
         45 * RPM),
+    "hoeken-spring-damper": (spring_loaded, 4.7),
     "slider-crank": (slider_crank, 20.0),
+    "hoeken-reversed-joints": (reversed_hoeken, 4.7),
+    "slider-crank-reversed-slide": (reversed_slider, 20.0),
+    # linkdyn cuts the slide J4; MuJoCo's tree is cut at the wrist pin instead
+    "slider-crank-example": (lambda: example("slider_crank"), 6.0),
+    # prismatic tree joints between rotating bodies (frames turned by the slide's angle)
+    "inverted-slider-crank": (lambda: example("inverted_slider_crank"), 6.0),
+    # two loops, a tree with branches (MuJoCo's depth-first order differs from linkdyn's)
+    "watt2": (lambda: example("watt2"), 6.0),
 }
 
 
 # ----------------------------------------------------------------------------------------------
-# MJCF from a linkdyn model
-
-
-def _xz(v):
-    """linkdyn (x, y) -> MuJoCo 'x 0 y'."""
-    return f"{v[0]:.17g} 0 {v[1]:.17g}"
-
-
-def _tree(model):
-    """Spanning tree of the model without its cut joints: child -> (parent, joint)."""
-    cut = set(model.cut or ())
-    tree, seen, queue = {}, {"ground"}, ["ground"]
-    while queue:
-        here = queue.pop(0)
-        for jt in model.joints:
-            if jt.name in cut or here not in (jt.body_a, jt.body_b):
-                continue
-            child = jt.body_b if jt.body_a == here else jt.body_a
-            if child not in seen:
-                seen.add(child)
-                tree[child] = (here, jt)
-                queue.append(child)
-    return tree
-
-
-def mjcf(model):
-    """MJCF text of the model's open tree with its cut joints as ``connect`` constraints.
-
-    At ``qpos = 0`` every child body's frame is parallel to its parent's and its joint point
-    coincides with the parent's, so a hinge's ``qpos`` is ``phi_child - phi_parent`` and a slide's
-    is the displacement of the child's joint point from the parent's along the axis.
-    """
-    tree = _tree(model)
-    g = np.asarray(model.gravity, float)
-    root = ET.Element("mujoco", model=model.name)
-    ET.SubElement(root, "compiler", angle="radian")
-    ET.SubElement(root, "option", gravity=f"{g[0]:.17g} 0 {g[1]:.17g}", jacobian="dense")
-    world = ET.SubElement(root, "worldbody")
-    elements = {"ground": world}
-    for name, pt in model.body("ground").points.items():
-        ET.SubElement(world, "site", name=f"ground.{name}", pos=_xz(pt))
-    pending = list(tree)
-    while pending:
-        for child in list(pending):
-            parent, jt = tree[child]
-            if parent not in elements:
-                continue
-            pending.remove(child)
-            pb, cb = model.body(parent), model.body(child)
-            p_parent = pb.points[jt.point_a if jt.body_a == parent else jt.point_b]
-            p_child = cb.points[jt.point_b if jt.body_b == child else jt.point_a]
-            el = ET.SubElement(elements[parent], "body", name=child,
-                               pos=_xz(np.asarray(p_parent) - np.asarray(p_child)))
-            if jt.kind == REVOLUTE:
-                ET.SubElement(el, "joint", name=jt.name, type="hinge", axis="0 -1 0",
-                              pos=_xz(p_child))
-            else:
-                assert jt.body_b == child and jt.angle == 0.0, "slide: child second, no angle"
-                ET.SubElement(el, "joint", name=jt.name, type="slide",
-                              axis=_xz(np.asarray(jt.axis) / np.linalg.norm(jt.axis)),
-                              pos=_xz(p_child))
-            ET.SubElement(el, "inertial", pos=_xz(cb.com), mass=f"{cb.mass:.17g}",
-                          diaginertia=" ".join([f"{cb.inertia:.17g}"] * 3))
-            for name, pt in cb.points.items():
-                ET.SubElement(el, "site", name=f"{child}.{name}", pos=_xz(pt))
-            elements[child] = el
-    eq = ET.SubElement(root, "equality")
-    for name in model.cut or ():
-        jt = model.joint(name)
-        assert jt.kind == REVOLUTE, "a connect closes a revolute loop only"
-        # site1 on the second body: the constraint force on site1's body is by A on B
-        ET.SubElement(eq, "connect", name=name, site1=f"{jt.body_b}.{jt.point_b}",
-                      site2=f"{jt.body_a}.{jt.point_a}")
-    return ET.tostring(root, encoding="unicode"), tree
+# MuJoCo's equations at linkdyn's motion
 
 
 def _load_forces(model, m, d, time):
-    """The model's force and torque loads at ``time`` as MuJoCo generalized forces (nv,), at
-    the state already in ``d`` (linkdyn's z moment is MuJoCo's -y torque)."""
+    """The model's loads MJCF does not hold (forces, torques) at ``time`` as MuJoCo
+    generalized forces (nv,), at the state already in ``d`` (linkdyn's z moment is MuJoCo's -y
+    torque). Springs and dampers are in the export (MuJoCo's ``qfrc_passive``)."""
     q_loads = np.zeros(m.nv)
     for ld in model.loads:
+        if ld.kind in ("spring", "damper"):
+            continue
         bid = m.body(ld.body).id
         if ld.kind == "force":
             f = np.asarray(ld.value(time), float)
@@ -188,19 +171,96 @@ def _load_forces(model, m, d, time):
             tq = float(np.asarray(ld.value(time)))
             mujoco.mj_applyFT(m, d, np.zeros(3), np.array([0.0, -tq, 0.0]),
                               d.xipos[bid].copy(), bid, q_loads)
-        else:  # pragma: no cover - the cases here have no springs or dampers
+        else:  # pragma: no cover - the cases here have no other loads
             raise NotImplementedError(ld.kind)
     return q_loads
 
 
-def _relative(sol, child, parent, jt, what):
-    """Hinge: phi/omega/alpha of the child minus the parent's; slide: linkdyn's q/qd/qdd."""
-    if jt.kind == PRISMATIC:
-        k = [j.name for j in sol.model.joints].index(jt.name)
-        return {"q": sol.kin.q, "qd": sol.kin.qd, "qdd": sol.kin.qdd}[what][:, k]
-    f = {"q": sol.phi, "qd": sol.omega, "qdd": sol.alpha}[what]
-    base = np.zeros(sol.t.shape) if parent == "ground" else f(parent)
-    return f(child) - base
+def set_state(model, sol, m, d, k):
+    """Load linkdyn's sample k into ``d`` (qpos = s q, qvel = s qd) and return qacc = s qdd;
+    ``s`` from the body MuJoCo's joint moves. Then check every named point is where linkdyn
+    puts it."""
+    index = {jt.name: j for j, jt in enumerate(model.joints)}
+    qacc = np.zeros(m.nv)
+    for jid in range(m.njnt):
+        jt = model.joint(m.joint(jid).name)
+        moved = m.body(m.jnt_bodyid[jid]).name
+        assert moved in (jt.body_a, jt.body_b)
+        s = 1.0 if moved == jt.body_b else -1.0
+        j, dof = index[jt.name], m.jnt_dofadr[jid]
+        d.qpos[m.jnt_qposadr[jid]] = s * sol.kin.q[k, j]
+        d.qvel[dof] = s * sol.kin.qd[k, j]
+        qacc[dof] = s * sol.kin.qdd[k, j]
+    mujoco.mj_forward(m, d)
+    for b in model.moving_bodies:
+        for name in b.points:
+            xyz = d.site_xpos[m.site(f"{b.name}.{name}").id]
+            np.testing.assert_allclose(xyz[[0, 2]], sol.point(b.name, name)[k], atol=1e-12)
+            assert abs(xyz[1]) < 1e-15
+    return qacc
+
+
+def _actuators(model, m):
+    """S (nv, n_drivers): each actuator's gear on its joint's dof, in the drivers' order."""
+    S = np.zeros((m.nv, m.nu))
+    names = []
+    for a in range(m.nu):
+        jid = m.actuator_trnid[a, 0]
+        S[m.jnt_dofadr[jid], a] = m.actuator_gear[a, 0]
+        names.append(m.joint(jid).name)
+    assert names == [drv.joint for drv in model.drivers]
+    return S
+
+
+def _peak_error(ref, got):
+    return float(np.max(np.abs(ref - got)) / np.max(np.abs(ref)))
+
+
+def check_against_mujoco(model, sol, xml, case=""):
+    """MuJoCo's efforts and connect forces on the MJCF ``xml`` at linkdyn's motion ``sol``
+    equal linkdyn's to RTOL of their peaks; returns the largest relative error."""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    nv = m.nv
+    assert nv == len(model.moving_bodies)
+    cut_names = [m.eq(e).name for e in range(m.neq)]
+    S = _actuators(model, m)
+    taus, lams = [], []
+    for k in range(len(sol.t)):
+        qacc = set_state(model, sol, m, d, k)
+        M = np.zeros((nv, nv))
+        mujoco.mj_fullM(m, d, M)                      # MuJoCo 4: mj_fullM(m, d, dst)
+        assert d.nefc == 3 * len(cut_names)
+        J = np.array(d.efc_J[:d.nefc * nv]).reshape(d.nefc, nv)
+        # the connect rows are d(site1 - site2)/dq, site1 on the joint's second body
+        for c, name in enumerate(cut_names):
+            jt = model.joint(name)
+            jac = []
+            for site in (f"{jt.body_b}.{jt.point_b}", f"{jt.body_a}.{jt.point_a}"):
+                jp = np.zeros((3, nv))
+                mujoco.mj_jacSite(m, d, jp, None, m.site(site).id)
+                jac.append(jp)
+            np.testing.assert_allclose(J[3 * c:3 * c + 3], jac[0] - jac[1], atol=1e-14)
+        q_loads = _load_forces(model, m, d, sol.t[k])
+        rhs = M @ qacc + d.qfrc_bias - d.qfrc_passive - q_loads
+        A = np.hstack((S, J.T))
+        x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
+        assert np.linalg.norm(A @ x - rhs) <= 1e-12 * np.linalg.norm(rhs)
+        taus.append(x[:m.nu])
+        lams.append(x[m.nu:].reshape(len(cut_names), 3))
+    taus, lams = np.array(taus), np.array(lams)
+    worst = 0.0
+    for c, drv in enumerate(model.drivers):
+        err = _peak_error(sol.effort(drv.joint), taus[:, c])
+        assert err <= RTOL, f"{case}: tau_{drv.joint} differs from MuJoCo by {err:.2e}"
+        worst = max(worst, err)
+    for c, name in enumerate(cut_names):
+        ref = sol.reaction(name)
+        err = _peak_error(ref, lams[:, c][:, [0, 2]])
+        assert err <= RTOL, f"{case}: reaction at {name} differs from MuJoCo by {err:.2e}"
+        assert np.max(np.abs(lams[:, c, 1])) <= RTOL * np.max(np.abs(ref))
+        worst = max(worst, err)
+    return worst
 
 
 # ----------------------------------------------------------------------------------------------
@@ -213,90 +273,54 @@ def test_efforts_and_loop_forces_match_mujoco(case):
     model = build()
     t = np.linspace(0.0, 2 * math.pi / speed, 13)[:-1] + 0.01
     sol = analyze(model, t)
-    xml, tree = mjcf(model)
-    m = mujoco.MjModel.from_xml_string(xml)
+    export = mjcf(model, at=0.2)
+    assert set(export.cut) <= {j.name for j in model.joints if j.kind == "revolute"}
+    assert len(export.cut) == len(sol.topology.cut)
+    check_against_mujoco(model, sol, export.text, case)
+
+
+@pytest.mark.parametrize("name", ["hoeken", "slider_crank", "watt2", "inverted_slider_crank"])
+def test_the_export_loads_assembled_at_its_time(name):
+    """qpos0 (the joints' ``ref``) is the pose at ``at``; the keyframe adds the rates and the
+    servos' targets (each actuator's length equals its target: the servo holds the motion)."""
+    model = load(example_path(name))
+    at = 0.037
+    sol = analyze(model, np.array([at]))
+    m = mujoco.MjModel.from_xml_string(mjcf(model, at=at).text)
     d = mujoco.MjData(m)
-    nv = m.nv
-    assert nv == len(tree) and m.neq == len(model.cut)
-
-    dof = {jt.name: m.jnt_dofadr[m.joint(jt.name).id] for _, jt in tree.values()}
-    drivers = model.drivers
-    cut_names = list(model.cut)
-
-    taus, lams = [], []
-    for k in range(len(t)):
-        for child, (parent, jt) in tree.items():
-            i = m.jnt_qposadr[m.joint(jt.name).id]
-            d.qpos[i] = _relative(sol, child, parent, jt, "q")[k]
-            d.qvel[dof[jt.name]] = _relative(sol, child, parent, jt, "qd")[k]
-        qacc = np.zeros(nv)
-        for child, (parent, jt) in tree.items():
-            qacc[dof[jt.name]] = _relative(sol, child, parent, jt, "qdd")[k]
-        mujoco.mj_forward(m, d)
-
-        # the mapping is right: every named point is where linkdyn puts it
-        for b in model.moving_bodies:
-            for name in b.points:
-                xyz = d.site_xpos[m.site(f"{b.name}.{name}").id]
-                np.testing.assert_allclose(xyz[[0, 2]], sol.point(b.name, name)[k], atol=1e-12)
-                assert abs(xyz[1]) < 1e-15
-
-        M = np.zeros((nv, nv))
-        mujoco.mj_fullM(m, d, M)                      # MuJoCo 4: mj_fullM(m, d, dst)
-        assert d.nefc == 3 * len(cut_names)
-        J = np.array(d.efc_J[:d.nefc * nv]).reshape(d.nefc, nv)
-        # the connect rows are d(site1 - site2)/dq
-        for c, name in enumerate(cut_names):
-            jt = model.joint(name)
-            jac = []
-            for site in (f"{jt.body_b}.{jt.point_b}", f"{jt.body_a}.{jt.point_a}"):
-                jp = np.zeros((3, nv))
-                mujoco.mj_jacSite(m, d, jp, None, m.site(site).id)
-                jac.append(jp)
-            np.testing.assert_allclose(J[3 * c:3 * c + 3], jac[0] - jac[1], atol=1e-14)
-
-        # applied loads as generalized forces (linkdyn z moment -> MuJoCo -y torque)
-        q_loads = _load_forces(model, m, d, t[k])
-
-        # S: the actuator's generalized force on the tree dof (+tau on the joint's second body)
-        S = np.zeros((nv, len(drivers)))
-        for c, drv in enumerate(drivers):
-            jt = model.joint(drv.joint)
-            child = next(ch for ch, (_, j) in tree.items() if j.name == jt.name)
-            S[dof[jt.name], c] = 1.0 if jt.body_b == child else -1.0
-
-        rhs = M @ qacc + d.qfrc_bias - q_loads
-        A = np.hstack((S, J.T))
-        x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
-        assert np.linalg.norm(A @ x - rhs) <= 1e-10 * np.linalg.norm(rhs)
-        taus.append(x[:len(drivers)])
-        lams.append(x[len(drivers):].reshape(len(cut_names), 3))
-    taus, lams = np.array(taus), np.array(lams)
-
-    for c, drv in enumerate(drivers):
-        ref = sol.effort(drv.joint)
-        err = np.max(np.abs(ref - taus[:, c])) / np.max(np.abs(ref))
-        assert err <= RTOL, f"{case}: tau_{drv.joint} differs from MuJoCo by {err:.2e}"
-    for c, name in enumerate(cut_names):
-        ref = sol.reaction(name)
-        mj = lams[:, c][:, [0, 2]]
-        err = np.max(np.abs(ref - mj)) / np.max(np.abs(ref))
-        assert err <= RTOL, f"{case}: reaction at {name} differs from MuJoCo by {err:.2e}"
-        assert np.max(np.abs(lams[:, c, 1])) <= 1e-9 * np.max(np.abs(ref))
+    mujoco.mj_forward(m, d)
+    size = max(np.ptp(np.concatenate([sol.point(b.name, p) for b in model.moving_bodies
+                                      for p in b.points]), axis=0))
+    for b in model.moving_bodies:
+        for p in b.points:
+            xyz = d.site_xpos[m.site(f"{b.name}.{p}").id]
+            np.testing.assert_allclose(xyz[[0, 2]], sol.point(b.name, p)[0], atol=1e-14 * size)
+    assert np.max(np.abs(d.efc_pos), initial=0.0) <= 1e-14 * size       # the loops are closed
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    mujoco.mj_forward(m, d)
+    assert d.time == at
+    np.testing.assert_allclose(d.actuator_length, d.ctrl, atol=1e-14)
+    # the rates keep the loops closed: J qvel = 0
+    J = np.array(d.efc_J[:d.nefc * m.nv]).reshape(d.nefc, m.nv)
+    assert np.max(np.abs(J @ d.qvel), initial=0.0) <= 1e-12 * np.max(np.abs(d.qvel)) * size
+    for b in model.moving_bodies:   # and turn every body at linkdyn's rate
+        vel = np.zeros(6)
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, m.body(b.name).id, vel, 0)
+        np.testing.assert_allclose(-vel[1], sol.omega(b.name)[0], atol=1e-12)
 
 
 # ----------------------------------------------------------------------------------------------
 # the slot joint (pin in slot)
 #
-# MuJoCo has no point-on-line equality, so the slot's one constraint row is built here from
-# MuJoCo's point Jacobians: the pin's velocity as a point of the pin body minus the velocity of
-# the slotted body's point at the pin, along the slot's normal n. MuJoCo's M, bias forces and
-# applied loads of the open tree (slot removed) then give [tau; lam] by least squares; lam n is
-# the force of the slotted body on the pin, linkdyn's reaction at the slot.
+# MuJoCo has no point-on-line equality, so the export leaves the slot out (``leave_out``) and
+# the slot's one constraint row is built here from MuJoCo's point Jacobians: the pin's velocity
+# as a point of the pin body minus the velocity of the slotted body's point at the pin, along
+# the slot's normal n. MuJoCo's M, bias forces and applied loads of the open tree then give
+# [tau; lam] by least squares; lam n is the force of the slotted body on the pin, linkdyn's
+# reaction at the slot.
 
 
 def _slot_cases():
-    from linkdyn import example_path, load
     from test_dynamics import slotted_lever
 
     yoke = load(example_path("scotch_yoke"))
@@ -315,25 +339,16 @@ def test_slot_joint_matches_mujoco(case):
     slot = next(j for j in model.joints if j.kind == "slot")
     t = np.linspace(0.0, 1.0, 9) + 0.01
     sol = analyze(model, t)
-    xml, tree = mjcf(dataclasses.replace(
-        model, joints=tuple(j for j in model.joints if j is not slot), cut=()))
-    m = mujoco.MjModel.from_xml_string(xml)
+    export = mjcf(model, leave_out=(slot.name,))
+    assert export.cut == () and f"joint '{slot.name}'" in export.omitted
+    m = mujoco.MjModel.from_xml_string(export.text)
     d = mujoco.MjData(m)
     nv = m.nv
-    assert nv == len(tree) == len(model.bodies) - 1 and m.neq == 0
-    dof = {jt.name: m.jnt_dofadr[m.joint(jt.name).id] for _, jt in tree.values()}
+    assert nv == len(model.bodies) - 1 and m.neq == 0
+    S = _actuators(model, m)
     taus, lams, normals = [], [], []
     for k in range(len(t)):
-        qacc = np.zeros(nv)
-        for child, (parent, jt) in tree.items():
-            d.qpos[m.jnt_qposadr[m.joint(jt.name).id]] = _relative(sol, child, parent, jt, "q")[k]
-            d.qvel[dof[jt.name]] = _relative(sol, child, parent, jt, "qd")[k]
-            qacc[dof[jt.name]] = _relative(sol, child, parent, jt, "qdd")[k]
-        mujoco.mj_forward(m, d)
-        for b in model.moving_bodies:
-            for name in b.points:
-                xyz = d.site_xpos[m.site(f"{b.name}.{name}").id]
-                np.testing.assert_allclose(xyz[[0, 2]], sol.point(b.name, name)[k], atol=1e-12)
+        qacc = set_state(model, sol, m, d, k)
         M = np.zeros((nv, nv))
         mujoco.mj_fullM(m, d, M)
         # the slot row: n . (J_pin on b - J_point at the pin on a), n normal to the slot
@@ -352,23 +367,88 @@ def test_slot_joint_matches_mujoco(case):
         # linkdyn's rates keep the pin in the slot
         assert abs(row @ d.qvel) <= 1e-12 * np.linalg.norm(row) * np.linalg.norm(d.qvel)
         q_loads = _load_forces(model, m, d, t[k])
-        S = np.zeros((nv, len(model.drivers)))
-        for c_, drv in enumerate(model.drivers):
-            jt = model.joint(drv.joint)
-            child = next(ch for ch, (_, j) in tree.items() if j.name == jt.name)
-            S[dof[jt.name], c_] = 1.0 if jt.body_b == child else -1.0
-        rhs = M @ qacc + d.qfrc_bias - q_loads
+        rhs = M @ qacc + d.qfrc_bias - d.qfrc_passive - q_loads
         A = np.hstack((S, row[:, None]))
         x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
-        assert np.linalg.norm(A @ x - rhs) <= 1e-10 * np.linalg.norm(rhs)
-        taus.append(x[:len(model.drivers)])
+        assert np.linalg.norm(A @ x - rhs) <= 1e-12 * np.linalg.norm(rhs)
+        taus.append(x[:m.nu])
         lams.append(x[-1])
         normals.append(n)
     taus, force = np.array(taus), np.array(lams)[:, None] * np.array(normals)
     for c_, drv in enumerate(model.drivers):
-        ref = sol.effort(drv.joint)
-        err = np.max(np.abs(ref - taus[:, c_])) / np.max(np.abs(ref))
+        err = _peak_error(sol.effort(drv.joint), taus[:, c_])
         assert err <= RTOL, f"{case}: tau_{drv.joint} differs from MuJoCo by {err:.2e}"
-    ref = sol.reaction(slot.name)
-    err = np.max(np.abs(ref - force)) / np.max(np.abs(ref))
+    err = _peak_error(sol.reaction(slot.name), force)
     assert err <= RTOL, f"{case}: slot reaction differs from MuJoCo by {err:.2e}"
+
+
+# ----------------------------------------------------------------------------------------------
+# models with free degrees of freedom (linkdyn simulate)
+
+
+@pytest.mark.parametrize("name", ["fourbar_release", "toggle_spring"])
+def test_a_simulated_motion_satisfies_mujocos_equations(name):
+    """A model without drivers (its free joints in the tree, as ``simulate`` keeps them),
+    placed at its simulated pose: at every output sample of ``simulate`` MuJoCo's equations of
+    the export hold with linkdyn's accelerations, the cut-joint forces being linkdyn's
+    reactions (no effort: S is empty)."""
+    from linkdyn import simulate
+
+    model = load(example_path(name))
+    t = np.linspace(0.0, 0.2, 5)
+    sol = simulate(model, t, rtol=1e-9, atol=1e-11)
+    export = mjcf(model, at=0.1)
+    m = mujoco.MjModel.from_xml_string(export.text)
+    assert m.nu == len(model.drivers)
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    mujoco.mj_forward(m, d)
+    for b in model.moving_bodies:           # placed where the simulation is at 0.1 s
+        for p in b.points:
+            np.testing.assert_allclose(d.site_xpos[m.site(f"{b.name}.{p}").id][[0, 2]],
+                                       sol.point(b.name, p)[2], atol=1e-9)
+    assert check_against_mujoco(model, sol, export.text, name) <= RTOL
+
+
+# ----------------------------------------------------------------------------------------------
+# massless links and point masses
+
+
+@pytest.mark.parametrize("case", ["hoeken-massless-coupler", "slider-crank-point-masses"])
+def test_massless_links_and_point_masses_get_mujocos_lower_bounds(case):
+    """MuJoCo needs every moving body's mass and inertia positive: the export gives a massless
+    link or point mass MuJoCo's lower bounds (1e-12 of the largest), names them, and MuJoCo's
+    efforts and cut forces then differ from linkdyn's by about that fraction."""
+    from test_dynamics import MODELS
+
+    model = dataclasses.replace(MODELS[case](), drivers=(
+        Driver("J1", ExpressionMotion("4 + 5*t + 0.8*sin(6*t)")),))
+    light = [b.name for b in model.moving_bodies if b.mass == 0 or b.inertia == 0]
+    assert light
+    t = np.linspace(0.0, 1.0, 9)
+    sol = analyze(model, t)
+    export = mjcf(model, at=0.1)
+    assert any(all(n in x for n in light) and "boundmass" in x for x in export.omitted)
+    m = mujoco.MjModel.from_xml_string(export.text)
+    big = max(b.mass for b in model.moving_bodies)
+    for b in model.moving_bodies:          # only the light bodies are raised, to tiny values
+        k = m.body(b.name).id
+        if b.mass == 0:
+            assert 0 < m.body_mass[k] <= 1e-11 * big
+        else:
+            assert m.body_mass[k] == b.mass
+        assert np.all(m.body_inertia[k] > 0)
+    # MuJoCo's equations see the bounds: raised to 1e-3 of the largest they are off ...
+    with pytest.raises(AssertionError, match="differs from MuJoCo"):
+        check_against_mujoco(model, sol, _bounded(export.text, 1e-3), case)
+    # ... and at the export's they agree with linkdyn's to 1e-12
+    assert check_against_mujoco(model, sol, export.text, case) <= RTOL
+
+
+def _bounded(text, fraction):
+    """``text`` with MuJoCo's bounds raised to ``fraction`` of the largest mass and inertia."""
+    import re
+    out = re.sub(r'boundmass="([^"]+)"',
+                 lambda g: f'boundmass="{float(g[1]) / 1e-12 * fraction!r}"', text)
+    return re.sub(r'boundinertia="([^"]+)"',
+                  lambda g: f'boundinertia="{float(g[1]) / 1e-12 * fraction!r}"', out)

@@ -76,16 +76,23 @@ def scaled(value, factor):
 
 
 @st.composite
-def mutants(draw):
+def mutants(draw, dicts=None, extra=None):
     """A bundled example's parsed TOML with one to three mutations: a value replaced (extreme,
     non-finite, another type, a formula, another name of the model), a key removed or
-    added, or a number scaled."""
-    name = draw(st.sampled_from(EXAMPLES))
-    d = copy.deepcopy(DICTS[name])
+    added, or a number scaled. ``dicts``: the models to start from (default: the examples
+    for analyze); ``extra(draw, d)``: a further kind of mutation of ``d``, returning what it
+    changed (drawn as often as a load)."""
+    dicts = DICTS if dicts is None else dicts
+    name = draw(st.sampled_from(sorted(dicts)))
+    d = copy.deepcopy(dicts[name])
     changes = []
     for _ in range(draw(st.integers(1, 3))):
         how = draw(st.sampled_from(["extreme", "odd", "name", "delete", "add", "scale",
-                                    "number", "number", "mild", "mild", "mild", "load", "load"]))
+                                    "number", "number", "mild", "mild", "mild", "load", "load"]
+                                   + ["extra"] * 3 * (extra is not None)))
+        if how == "extra":
+            changes.append(("extra", extra(draw, d)))
+            continue
         if how == "load":   # a load whose formula may be undefined or overflow somewhere
             bodies = d.get("bodies") if isinstance(d.get("bodies"), list) else []
             body = draw(st.sampled_from([b["name"] for b in bodies if isinstance(b, dict)
@@ -220,8 +227,8 @@ TORQUE = '\n[[loads]]\nkind = "torque"\nbody = "coupler"\nvalue = "{}"\n'
     (["--duration", "inf"], 2, ["--duration", "positive and finite", "inf"]),
     (["--cycles", "nan"], 2, ["--cycles"]),
     (["--samples", 1000000000000], 2, ["--samples", "memory"]),
-    (["--path-range", "110:250", "--duration", 0.1], 2, ["--path-range", "110..250 deg",
-                                                         "covers 0..27 deg"]),
+    (["--path-range", "110:250", "--duration", 0.1], 2, ["--path-range", "110 .. 250 deg",
+                                                         "covers 0 .. 27 deg"]),
     (["--path-range", "1:x"], 2, ["--path-range", "A:B"]),
 ])
 def test_run_options(args, code, fragments, tmp_path):

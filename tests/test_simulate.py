@@ -204,8 +204,10 @@ def test_a_singular_position_of_the_mechanism_exits_3_naming_the_time_and_values
     d["assembly"]["phi"]["bob"] = -90.0
     d.pop("topology")
     m = linkdyn.model_from_dict(d)
-    with pytest.raises(AssemblyError, match=r"at t = 0\.1[0-9]+ s \(q_J4 = -0\.7[0-9]+, "
-                                            r"q_J5 = -1\.[0-9]+\).*cannot pass") as err:
+    # the coordinates in the file's unit (deg): -0.7x rad and -1.x rad before issue 23
+    with pytest.raises(AssemblyError, match=r"at t = 0\.1[0-9]+ s \(q_J4 = -4[0-5]\.[0-9]+ deg, "
+                                            r"q_J5 = -(?:[5-9][0-9]|1[01][0-9])(?:\.[0-9]+)? deg\)"
+                                            r".*cannot pass") as err:
         simulate(m, np.linspace(0.0, 0.5, 3), rtol=1e-4, atol=1e-6)
     assert err.value.exit_code == 3
 
@@ -350,13 +352,13 @@ def test_released_four_bar_matches_mujoco():
     open tree closed by a stiff ``connect`` (RK4, small steps) over a short horizon."""
     mujoco = pytest.importorskip("mujoco")
     import xml.etree.ElementTree as ET
-    from test_mujoco import _relative, hoeken, mjcf
+    from linkdyn.io.mjcf import mjcf
+    from test_mujoco import hoeken
 
     model = replace(hoeken((0.0, -G)), drivers=(), initial_q={"J1": 0.5})
     t = np.linspace(0.0, 0.25, 6)
     sol = simulate(model, t, rtol=1e-10, atol=1e-12)
-    xml, tree = mjcf(model)
-    root = ET.fromstring(xml)
+    root = ET.fromstring(mjcf(model, sol=sol, at=0.0).text)   # placed at the start, at rest
     root.find("option").set("timestep", "2e-5")
     root.find("option").set("integrator", "RK4")
     for c in root.iter("connect"):
@@ -364,8 +366,7 @@ def test_released_four_bar_matches_mujoco():
         c.set("solimp", "0.9999 0.9999 0.001")
     m = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
     d = mujoco.MjData(m)
-    for child, (parent, jt) in tree.items():
-        d.qpos[m.joint(jt.name).qposadr[0]] = _relative(sol, child, parent, jt, "q")[0]
+    mujoco.mj_resetDataKeyframe(m, d, 0)
     crank = []
     steps = int(round(t[-1] / 2e-5 / (len(t) - 1)))
     for k in range(len(t)):

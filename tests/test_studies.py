@@ -56,7 +56,7 @@ def test_a_bad_path_names_itself_and_the_fix(path, words):
 
 
 def test_ranges_are_checked_against_the_model():
-    with pytest.raises(ModelError, match=r"bodies.crank.mass = -1 kg .*must be positive"):
+    with pytest.raises(ModelError, match=r"bodies.crank.mass = -1 kg .*must not be negative"):
         check_ranges(space(HOEKEN, ["bodies.crank.mass"]), [(-1.0, 2.0)])
     # an inertia about O1 below m d^2 is infeasible: the loader's parallel-axis check names it
     with pytest.raises(ModelError, match=r"bodies.crank.inertia = 100 kg mm\^2.*parallel-axis"):
@@ -122,7 +122,7 @@ def test_every_metric_of_a_sweep_is_analyzes_metric_of_that_design(backend):
 def test_a_design_with_an_invalid_model_is_kept_with_the_loaders_message():
     df = linkdyn.sweep(HOEKEN, {"bodies.crank.mass": [1.0, -1.0]}, T, metrics=["peak_tau_J1"])
     assert df.valid.tolist() == [True, False]
-    assert df.reason[1].startswith("bodies.crank.mass: must be positive")
+    assert df.reason[1].startswith("bodies.crank.mass: must not be negative")
 
 
 def test_unknown_metric_is_refused_with_the_closest():
@@ -262,7 +262,7 @@ def test_sweep_command_writes_the_table_and_summary(tmp_path):
 @pytest.mark.parametrize("args, words", [
     (["--vary", "bodies.crank.mass=1:2:3:4"], ["cannot read --vary"]),
     (["--vary", "bodies.crank.mas=1:2"], ["bodies.crank.mas", "Did you mean 'mass'"]),
-    (["--vary", "bodies.crank.mass=-1:2"], ["must be positive"]),
+    (["--vary", "bodies.crank.mass=-1:2"], ["must not be negative"]),
     (["--vary", "bodies.crank.mass=1:1.8", "--metric", "peak_tau"], ["no metric 'peak_tau'"]),
     ([], ["nothing to vary"]),
     # the crank pin may reach the crank's pivot: a link of zero length

@@ -60,8 +60,26 @@ def test_keeps_the_files_units(tmp_path):
     assert data["bodies"][1]["points"]["O2"] == [38.1, 0]
     # the inertia about O1 in the file is written about the mass centre: 725.80 - 1.5 * 19.05^2
     assert data["bodies"][1]["inertia"] == pytest.approx(725.80 - 1.5 * 19.05 ** 2, rel=1e-13)
-    assert data["drivers"][0]["motion"]["speed"] == pytest.approx(45 * 6.0, rel=1e-14)  # deg/s
+    assert data["drivers"][0]["motion"]["rpm"] == 45   # the file's own speed unit, exactly
     assert data["analysis"]["path_range"] == pytest.approx([110, 250], rel=1e-14)
+
+
+@pytest.mark.parametrize("spec, key, value", [
+    ("rpm = 120", "rpm", 120), ("speed = 720", "speed", 720), ("rpm = 45.5", "rpm", 45.5),
+    ("speed = 0.3", "speed", 0.3), ("rpm = -33.3", "rpm", -33.3)])
+def test_a_speed_is_written_in_the_unit_the_file_gave_it(tmp_path, spec, key, value):
+    """Issue 23: ``rpm = 120`` was saved as ``speed = 719.9999999999999`` (deg/s). The speed
+    comes back in its own unit, as the shortest number that reads back to the same SI speed."""
+    text = linkdyn.example_path("hoeken").read_text()
+    assert "rpm = 45.0" in text
+    src = tmp_path / "m.toml"
+    src.write_text(text.replace("rpm = 45.0", spec))
+    m = linkdyn.load(src)
+    data = tomllib.loads(linkdyn.save(m, tmp_path / "copy.toml").read_text())
+    motion = data["drivers"][0]["motion"]
+    assert motion[key] == value and ({"rpm", "speed"} - {key}).isdisjoint(motion)
+    again = linkdyn.load(tmp_path / "copy.toml").drivers[0].motion
+    assert again.speed == m.drivers[0].motion.speed   # the same SI speed, bit for bit
 
 
 def test_table_motion_is_written_beside_the_model(tmp_path):

@@ -13,6 +13,7 @@ from importlib import resources
 
 from .analysis import Solution, analyze
 from .forward import Simulation, simulate
+from .modal import Equilibrium, Modes, equilibrium, modes
 from .errors import AssemblyError, LinkdynError, ModelError
 from .io import load_model, model_from_dict
 from .io.writer import model_to_dict, save
@@ -38,4 +39,5 @@ def example_path(name: str):
 __all__ = ["load", "load_model", "model_from_dict", "analyze", "Solution", "simulate",
            "Simulation", "Model", "Body",
            "Joint", "Driver", "Load", "ModelError", "AssemblyError", "LinkdynError",
-           "example_path", "save", "model_to_dict", "sweep", "optimize"]
+           "example_path", "save", "model_to_dict", "sweep", "optimize", "equilibrium",
+           "modes", "Equilibrium", "Modes"]

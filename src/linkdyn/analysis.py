@@ -21,6 +21,7 @@ from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numer
                      wrong_type)
 from . import joints as jk
 from .model import Model
+from .units import joint_units
 
 SINGULAR = 1e-10  # relative pivot of J_dep below which a position counts as singular
 
@@ -202,6 +203,13 @@ class Solution:
         return self.loads.potential_energy
 
     @property
+    def driver_powers(self) -> np.ndarray:
+        """Power of each driver (T, n_drivers), W: its effort times its joint's rate,
+        ``tau qd`` (driver order)."""
+        idx = [self._joint(d.joint) for d in self.model.drivers]
+        return self.dyn.tau * self.kin.qd[..., idx]
+
+    @property
     def driver_power(self) -> np.ndarray:
         """Total power of the drivers (T,), W."""
         qd = self.kin.joint_motion[1]
@@ -247,9 +255,6 @@ class Solution:
         put("kinetic_energy", self.kinetic_energy, "J")
         if self.loads.has_potential:
             put("potential_energy", self.potential_energy, "J")
-        if self.friction is not None:   # beyond SPEC's list: each friction load's effort, power
-            for name, values, unit in friction_mod.columns(self.friction, m):
-                put(name, values, unit)
         # beyond SPEC's list (which ends at kinetic_energy): each named point's velocity and
         # acceleration, global components
         for b, p in points:
@@ -258,6 +263,21 @@ class Solution:
             put(f"vy_{b}.{p}", v[..., 1], "m/s")
             put(f"ax_{b}.{p}", a[..., 0], "m/s^2")
             put(f"ay_{b}.{p}", a[..., 1], "m/s^2")
+        # each driver's power tau qd; each load's value and power (loads.wrenches)
+        for d, p in zip(m.drivers, np.moveaxis(self.driver_powers, -1, 0)):
+            put(f"power_{d.joint}", p, "W")
+        for ld, label, value, p in zip(m.loads, loads_mod.labels(m), self.loads.values,
+                                       self.loads.powers):
+            if ld.kind in loads_mod.REACTION_KINDS:
+                continue   # the friction columns below
+            names = loads_mod.VALUE_COLUMNS[ld.kind]
+            for k, name in enumerate(names):
+                put(f"{name}_{label}", value[k] if len(names) > 1 else value,
+                    loads_mod.VALUE_UNITS[ld.kind])
+            put(f"power_{label}", p, "W")
+        if self.friction is not None:   # each friction load's effort and power
+            for name, values, unit in friction_mod.columns(self.friction, m):
+                put(name, values, unit)
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols, units
@@ -345,7 +365,7 @@ class Solution:
 
     def __repr__(self) -> str:
         rows = "".join(f"\n  {k}: {v}" for k, v in self.key_numbers())
-        return f"<linkdyn.Solution {self._headline()}{rows}>"
+        return f"<linkdyn.{type(self).__name__} {self._headline()}{rows}>"
 
     def _repr_html_(self) -> str:
         import html
@@ -379,7 +399,7 @@ def failure(model: Model, t_k: float, residual: float) -> AssemblyError:
     return AssemblyError(
         "the mechanism passes a singular (toggle or dead-centre) position" if closes else
         "the loops stop closing: the mechanism cannot reach this driver position",
-        file=model.source, time=float(t_k), drivers=drivers,
+        file=model.source, time=float(t_k), drivers=drivers, units=joint_units(model),
         fix=("Change the link lengths or the driver's range so it avoids the toggle, or pass "
              "--allow-singular to keep the other samples" if closes else
              "Limit the driver's range (duration) or change the link lengths"))
@@ -445,7 +465,7 @@ def _load_field(model, k: int) -> str:
 def _at(model, time: float) -> dict:
     """Where an AssemblyError happens: the file, the time and the drivers' values."""
     q = kinematics.driver_values(model, np.array([time]))[0][:, 0]
-    return dict(file=model.source, time=time,
+    return dict(file=model.source, time=time, units=joint_units(model),
                 drivers={d.joint: float(v) for d, v in zip(model.drivers, q)})
 
 

@@ -50,7 +50,8 @@ def loads(ld, k: int, layout):
     (whether it has a potential energy is its own)."""
     return replace(ld, wrenches=take_each(ld.wrenches, k),
                    potential_energy=ld.potential_energy[k], power=ld.power[k],
-                   on_ground=take(ld.on_ground, k), has_potential=has_potential(layout))
+                   on_ground=take(ld.on_ground, k), has_potential=has_potential(layout),
+                   values=tuple(take_each(ld.values, k)), powers=tuple(take_each(ld.powers, k)))
 
 
 def _dynamics_internals(internals, k: int) -> tuple:

@@ -18,7 +18,7 @@ import click
 import numpy as np
 
 from .errors import LinkdynError, ModelError
-from .outputs import ANALYSIS_OUTPUTS, check_outdir, write_outputs
+from .outputs import ANALYSIS_OUTPUTS, check_outdir, owned_before, write_outputs
 from .sampling import check_memory, times as sample_times
 
 EXAMPLES = "examples"
@@ -133,15 +133,18 @@ def check(model, allow_outside):
     model with free coordinates (for simulate) is assembled at t = 0 with its [initial] values.
     """
     from . import design, io
+    from .units import Units
 
     mech = io.load_model(model, allow_outside=allow_outside)
+    u = Units.of(mech)
     topo, free = _check_topology(mech)
     click.echo(f"{mech.name}  ({model})")
     if mech.description:
         click.echo(f"  {mech.description}")
     click.echo(f"bodies ({len(mech.bodies)}):")
     for b in mech.bodies:
-        extra = "" if b.name == "ground" else f"  mass {b.mass:.6g} kg, I_c {b.inertia:.6g} kg m^2"
+        extra = "" if b.name == "ground" else (f"  mass {u.show(b.mass, 'mass')}, I_c "
+                                               f"{u.show(b.inertia, 'inertia')}")
         click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
     click.echo(f"joints ({len(mech.joints)}):")
     for k, j in enumerate(mech.joints):
@@ -164,7 +167,7 @@ def check(model, allow_outside):
     if topo.n_loops and not (mech.assembly_phi or mech.assembly_q) and not free:
         click.echo("assembly: " + _assembly_at_zero(mech, topo))
     for fb in design.four_bars(mech):
-        L = ", ".join(f"{k} {v * 1e3:.6g} mm" for k, v in
+        L = ", ".join(f"{k} {u.show(v, 'length')}" for k, v in
                       zip(("ground", "input", "coupler", "output"), fb.lengths))
         click.echo(f"four-bar {fb.input}/{fb.coupler}/{fb.output}: {fb.grashof} ({L})")
     for sc in design.checks.slider_cranks(mech):
@@ -221,6 +224,9 @@ def _check_run(mech, topo) -> None:
     from . import design
     from .design.checks import length, over_run, span
     from .report.keys import guide_transmission_angle, slider_rods
+    from .units import Units
+
+    u = Units.of(mech)
 
     try:
         t = sample_times(mech, None, None, None)
@@ -236,20 +242,20 @@ def _check_run(mech, topo) -> None:
     click.echo(f"assembles at t = 0 and over the run ({len(t)} samples, t = 0 .. "
                f"{t[-1]:.4g} s{', ' + ranges if ranges else ''}), clear of singular positions")
     for fb in design.four_bars(mech):
-        mu = np.degrees(design.transmission_angle(sol, fb))
-        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb))
+        mu = design.transmission_angle(sol, fb)
+        words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb), u)
         click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)}")
     guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
     for g, rod, pin, other in slider_rods(mech):
         if g.name not in guides:
             continue
         lo, hi = design.path.joint_travel(sol, g.name)
-        mu = guide_transmission_angle(sol, g, rod, pin, other)
+        mu = np.radians(guide_transmission_angle(sol, g, rod, pin, other))
         click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
                    f"{span(mech, g.name, lo, hi)}); transmission "
-                   f"angle {np.min(mu):.4g} .. {np.max(mu):.4g} deg (rod against the guide's "
-                   "normal)")
+                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)} (rod against the "
+                   "guide's normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -267,7 +273,8 @@ def _assembly_at_zero(mech, topo) -> str:
                 "zero angles (analyze stops with exit status 3)")
     phi = {b.name: float(kin.pose.phi[kin.layout.topo.bodies.index(b.name)][0])
            for b in mech.moving_bodies}
-    return assembly_words(phi, 0.0)
+    from .units import Units
+    return assembly_words(phi, 0.0, Units.of(mech))
 
 
 # ---------------------------------------------------------------------------- analyze
@@ -337,89 +344,139 @@ def _json_safe(x):
     return x
 
 
-def write_csv(sol, path: Path) -> None:
-    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly.
+def _columns(sol, units: str) -> dict:
+    """The result columns to write: SI as SPEC says (``units='si'``), or in the model file's
+    units with the unit in each name (``'model'``, :func:`linkdyn.units.model_columns`)."""
+    if units == "model":
+        from .units import Units, model_columns
+        return model_columns(sol.columns, sol.units, Units.of(sol.model))
+    return sol.columns
+
+
+def write_csv(sol, path: Path, units: str = "si") -> None:
+    """``results.csv``: one row per sample, SPEC columns, every value round-trips exactly;
+    SI, or with ``units='model'`` in the model file's units (``q_J1 [deg]``).
 
     Uses pyarrow's CSV writer when it is installed (about ten times faster for long runs).
     """
+    cols = _columns(sol, units)
     try:
         import pyarrow as pa
         from pyarrow import csv as pacsv
     except ImportError:
-        names, data = sol.to_array()
+        names = list(cols)
+        data = np.stack([np.asarray(cols[k], float) for k in names], axis=-1)
         np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
         return
-    table = pa.table({k: np.asarray(v, dtype=float) for k, v in sol.columns.items()})
+    table = pa.table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     with open(path, "wb") as f:
         f.write((",".join(table.column_names) + "\n").encode())
         pacsv.write_csv(table, f, pacsv.WriteOptions(include_header=False, quoting_style="none"))
 
 
-def write_parquet(sol, path: Path) -> None:
+def write_parquet(sol, path: Path, units: str = "si") -> None:
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow as pa
+        import pyarrow.parquet as pq
     except ImportError:
         raise ModelError("--format parquet needs pyarrow", field="--format",
                          fix="pip install 'linkdyn[parquet]', or use --format csv") from None
-    sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+    if units == "si":
+        sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
+        return
+    pq.write_table(pa.table({k: np.asarray(v, float) for k, v in _columns(sol, units).items()}),
+                   path)
+
+
+_UNITS = click.option(
+    "--units", "table_units", type=click.Choice(["si", "model"]), default="si",
+    show_default=True,
+    help="Units of results.csv: SI (m, rad, N, ...), or the model file's (mm, deg, ...) with "
+         "the unit in each column's header, e.g. 'q_J1 [deg]'.")
 
 
 def summary_text(s: dict) -> str:
     """The printed summary of an ``analyze`` run, from its summary dict (computed before any
-    file is written, so a failure here leaves nothing behind)."""
+    file is written, so a failure here leaves nothing behind), in the model file's units
+    (``s['units']``, :class:`linkdyn.units.Units`)."""
     from .report.tables import denoise
+    from .units import Units
 
     s = denoise(s)  # a rounding residual (a cycle's net work of 1e-16 J) prints as 0
+    u = Units(**s.get("units", {}))
     lines: list[str] = []
     echo = lines.append
 
     def num(x, fmt, scale=1.0):  # a figure the run could not give (None or NaN) is "n/a"
         return "n/a" if x is None or not np.isfinite(x) else format(x * scale, fmt)
 
+    def shown(x, quantity, digits=4):   # an SI value in the file's unit, with the unit
+        return u.show(x, quantity, digits)
+
+    def deg(x):   # a summary figure kept in degrees, in the file's angle unit
+        return None if x is None else np.radians(x)
+
     echo(f"{s['model']}: {s['samples']} samples over {num(s['duration_s'], '.6g')} s")
     echo(f"  mobility {s['mobility']}, loops {s['loops']}, cut joints: "
          f"{', '.join(s['cut_joints']) or 'none'}")
     asm = s.get("assembly")
     if asm and not asm["guess"] and s["loops"]:
-        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'])}")
+        echo(f"  assembly: {assembly_words(asm['start_phi_rad'], asm['start_time_s'], u)}")
     for fb in s["four_bars"]:
         ta = fb["transmission_angle_deg"]
         echo(f"  four-bar {fb['links']['input']}/{fb['links']['coupler']}/"
              f"{fb['links']['output']}: {fb['grashof']}"
              + (f"; {fb['motion']['words']}" if fb.get("motion", {}).get("words") else "")
-             + "; transmission angle "
-             f"{num(ta['min'], '.2f')}..{num(ta['max'], '.2f')} deg")
+             + f"; transmission angle {u.span(deg(ta['min']), deg(ta['max']), 'angle', 4)}")
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
             echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
                  f"{num(ma['max'], '.4g')}{frame}")
     for j, d in s["drivers"].items():
-        echo(f"  driver {j}: peak {d['effort']} {num(d['peak'], '.6g')} {d['unit']} at "
-             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {num(d['rms'], '.6g')} {d['unit']}")
+        q = "force" if d["effort"] == "force" else "torque"
+        echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "
+             f"t = {num(d['peak_time_s'], '.4g')} s, RMS {shown(d['rms'], q, 6)}")
     for j, e in s.get("driver_energy", {}).items():
         if e["work_J"] is not None:
             fw = e["flywheel"]
-            fly = (f"; flywheel {num(fw['inertia_kg_m2'], '.4g')} kg m^2 for C_s = "
+            fly = (f"; flywheel {shown(fw['inertia_kg_m2'], 'inertia')} for C_s = "
                    f"{num(fw['speed_fluctuation'], '.3g')}" if fw else "")
-            echo(f"  driver {j}: work {num(e['work_J'], '.4g')} J "
-                 f"(+{num(e['positive_work_J'], '.4g')} / "
-                 f"{num(e['negative_work_J'], '.4g')}), energy fluctuation "
+            work = (f"work {num(e['work_J'], '.4g')} J (+{num(e['positive_work_J'], '.4g')} / "
+                    f"{num(e['negative_work_J'], '.4g')})")
+            if "joint" in e:   # an actuator inside a joint (a motor's joint_torque)
+                ld = s.get("load_energy", {}).get(j, {})
+                peak = (f"peak {'torque' if e['kind'] == 'joint_torque' else 'force'} "
+                        f"{num(ld.get('peak'), '.4g')} {ld.get('unit', '')} at t = "
+                        f"{num(ld.get('peak_time_s'), '.4g')} s, " if ld else "")
+                echo(f"  actuator {j} ({e['kind']} in {e['joint']}): {peak}{work}, mean power "
+                     f"{num(e['mean_power_W'], '.4g')} W")
+                continue
+            echo(f"  driver {j}: {work}, energy fluctuation "
                  f"{num(e['energy_fluctuation_J'], '.4g')} J{fly}")
+    for label, e in s.get("load_energy", {}).items():
+        if e["kind"] in ("joint_torque", "joint_force") or e["work_J"] is None:
+            continue   # printed with the drivers
+        what = {"force": "force", "spring": "tension", "damper": "tension"}.get(e["kind"],
+                                                                                "torque")
+        extra = (f", dissipated {num(e['dissipated_J'], '.4g')} J" if e["kind"] == "damper"
+                 else " (counted in the potential energy)" if e["kind"] == "spring" else "")
+        echo(f"  {e['kind']} {label}: peak {what} {num(e['peak'], '.4g')} {e['unit']} at t = "
+             f"{num(e['peak_time_s'], '.4g')} s, work {num(e['work_J'], '.4g')} J{extra}")
     if "shaking" in s:
         f, mz = s["shaking"]["force_N"], s["shaking"]["moment_Nm"]
-        echo(f"  shaking force peak {num(f['peak'], '.6g')} N at t = "
-             f"{num(f['peak_time_s'], '.4g')} s, RMS {num(f['rms'], '.6g')} N; shaking moment "
-             f"(about the origin) peak {num(mz['peak'], '.6g')} N m")
+        echo(f"  shaking force peak {shown(f['peak'], 'force', 6)} at t = "
+             f"{num(f['peak_time_s'], '.4g')} s, RMS {shown(f['rms'], 'force', 6)}; shaking "
+             f"moment (about the origin) peak {shown(mz['peak'], 'torque', 6)}")
     ps = s.get("path_straightness")
     if ps:
+        q = "angle" if ps.get("range_unit", "rad") == "rad" else "length"
         echo(f"  path of {ps['point']}: deviation from a straight line max "
-             f"{num(ps['max_deviation_m'], '.4g', 1e3)} mm, RMS "
-             f"{num(ps['rms_deviation_m'], '.4g', 1e3)} mm over "
-             f"{num(ps['length_m'], '.4g', 1e3)} mm"
+             f"{shown(ps['max_deviation_m'], 'length')}, RMS "
+             f"{shown(ps['rms_deviation_m'], 'length')} over "
+             f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
-                f" (driver range {num(ps['range'][0], '.4g')}..{num(ps['range'][1], '.4g')}"
-                f" {ps.get('range_unit', 'rad')})"))
+                f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))
@@ -428,8 +485,8 @@ def summary_text(s: dict) -> str:
         m = r.get("peak_moment_Nm")
         if m is not None and r.get("peak_force_N") and abs(m) <= 1e-12 * r["peak_force_N"]:
             m = 0.0  # rounding noise: below 1e-12 of the joint's force times a metre
-        extra = f", moment {num(m, '.6g')} N m" if "peak_moment_Nm" in r else ""
-        echo(f"    {j:8s} {num(r['peak_force_N'], '.6g')} N at t = "
+        extra = f", moment {shown(m, 'torque', 6)}" if "peak_moment_Nm" in r else ""
+        echo(f"    {j:8s} {shown(r['peak_force_N'], 'force', 6)} at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
@@ -438,7 +495,7 @@ def summary_text(s: dict) -> str:
     smp = s.get("sampling")
     if smp and smp["coarse"]:
         step = max(smp["driver_step"].values())
-        echo(f"  NOTE: the samples are up to {np.degrees(step):.4g} deg of driver travel apart: "
+        echo(f"  NOTE: the samples are up to {shown(step, 'angle')} of driver travel apart: "
              "peaks, travel, work and the path are those of the samples, not of the motion "
              "between them; give more --samples to resolve it")
     if s["invalid_samples"]:
@@ -447,9 +504,13 @@ def summary_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def assembly_words(phi: dict, time: float) -> str:
-    """The assembly mode chosen without an ``[assembly]`` guess, in words."""
-    angles = ", ".join(f"phi_{b} = {np.degrees(v):.4g} deg" for b, v in phi.items()
+def assembly_words(phi: dict, time: float, units=None) -> str:
+    """The assembly mode chosen without an ``[assembly]`` guess, in words, the angles (rad in
+    ``phi``) in ``units``' angle unit (:class:`linkdyn.units.Units`; None: deg)."""
+    from .units import Units
+
+    units = units or Units(angle="deg")
+    angles = ", ".join(f"phi_{b} = {units.show(v, 'angle', 4)}" for b, v in phi.items()
                        if v is not None)
     return (f"no [assembly] guess in the model: solved from zero angles, the mechanism starts "
             f"(t = {time:.4g} s) with {angles}; give [assembly] phi near another position to "
@@ -460,49 +521,52 @@ def print_summary(s: dict) -> None:
     click.echo(summary_text(s))
 
 
-def _path_range(text):
-    """``'A:B'`` -> (A, B) finite floats, or None."""
+def _path_range(text, mech):
+    """``--path-range 'A:B'`` -> (A, B) in SI (rad or m) of ``mech``'s first driver coordinate,
+    or None: a bare number is in the model file's unit, a number with a unit in that unit
+    (``110deg:250deg``, ``0.1m:0.2m``; :meth:`linkdyn.units.Units.parse`)."""
+    from .units import Units, coordinate
+
     if text is None:
         return None
-    try:
-        a, b = (float(x) for x in text.split(":"))
-    except ValueError:
+    if not mech.drivers:
+        raise ModelError("--path-range is a range of the first driver, and the model has "
+                         "none", field="--path-range", fix="Drop --path-range")
+    quantity = coordinate(mech, mech.drivers[0].joint)
+    u = Units.of(mech)
+    example = "--path-range 110:250" if quantity == "angle" else "--path-range 0.1:0.2"
+    parts = text.split(":")
+    if len(parts) != 2:
         raise ModelError(f"--path-range must be A:B, got '{text}'", field="--path-range",
-                         fix="Give two numbers, e.g. --path-range 110:250") from None
-    if not (np.isfinite(a) and np.isfinite(b)):
-        raise ModelError(f"--path-range must be two finite numbers, got '{text}'",
-                         field="--path-range", fix="Give two numbers, e.g. --path-range 110:250")
+                         fix=f"Give two numbers in the file's unit ({u.unit(quantity)[0]}), e.g. "
+                             f"{example}")
+    try:
+        a, b = (u.parse(x, quantity, "--path-range", example) for x in parts)
+    except ModelError as err:
+        raise ModelError(f"--path-range must be A:B, got '{text}': {err.message}",
+                         field="--path-range", fix=err.fix) from None
     return a, b
 
 
-def _driver_unit(mech) -> tuple[str, float]:
-    """Unit name of the first driver's coordinate in the model file, and SI per unit."""
-    from . import joints as jk
-    from .io.units import ANGLE_UNITS, LENGTH_UNITS
-
-    if jk.get(mech.joint(mech.drivers[0].joint).kind).angular:
-        return mech.angle_unit, ANGLE_UNITS[mech.angle_unit]
-    return mech.length_unit, LENGTH_UNITS[mech.length_unit]
-
-
-def _check_path_range(sol, text: str, given, si) -> None:
+def _check_path_range(sol, si) -> None:
     """Raise, naming --path-range, unless the run has 3 samples or more in the range ``si``
-    (the ``given`` range in the file's unit)."""
+    (rad or m), which the message gives in the file's unit."""
     from .design.path import _in_range
+    from .units import Units, coordinate
 
     mech = sol.model
-    unit, scale = _driver_unit(mech)
     joint = mech.drivers[0].joint
+    u, quantity = Units.of(mech), coordinate(mech, joint)
     q = sol.kin.q[..., [j.name for j in mech.joints].index(joint)]
     n = int(np.sum(_in_range(mech, q, si) & np.isfinite(q)))
     if n >= 3:
         return
-    lo, hi = float(np.nanmin(q)) / scale, float(np.nanmax(q)) / scale
-    raise ModelError(f"the run never reaches the range {given[0]:g}..{given[1]:g} {unit} of "
+    raise ModelError(f"the run never reaches the range {u.span(*si, quantity)} of "
                      f"q_{joint} with the 3 samples a line needs (it holds {n}); this run "
-                     f"covers {lo:.6g}..{hi:.6g} {unit}", field="--path-range",
+                     f"covers {u.span(float(np.nanmin(q)), float(np.nanmax(q)), quantity)}",
+                     field="--path-range",
                      fix=f"Give a range A:B of the first driver's coordinate that the run "
-                         f"covers, in the model file's unit ({unit})")
+                         f"covers, in the model file's unit ({u.unit(quantity)[0]})")
 
 
 @main.command()
@@ -527,12 +591,15 @@ def _check_path_range(sol, text: str, given, si) -> None:
                    "coupler point, if any).")
 @click.option("--path-range", metavar="A:B",
               help="Range of the first driver's coordinate for --path-point, in the model "
-                   "file's angle unit (length unit for a slider); default: the whole run.")
+                   "file's angle unit (length unit for a slider), or with a unit "
+                   "(110deg:250deg); default: the whole run.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_singular,
-            fluctuation, path_point, path_range, plots_, backend, allow_outside):
+            fluctuation, path_point, path_range, plots_, backend, allow_outside,
+            table_units="si"):
     """Solve kinematics and inverse dynamics of MODEL; write results and a summary."""
     from . import design, io
     from .analysis import analyze as run
@@ -541,15 +608,11 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         raise ModelError("give --duration or --cycles, not both", field="--duration",
                          fix="Drop one of them")
     check_outdir(outdir)
-    given = _path_range(path_range)
     mech = io.load_model(model, allow_outside=allow_outside)
-    if given is not None and not mech.drivers:
-        raise ModelError("--path-range is a range of the first driver, and the model has "
-                         "none", field="--path-range", fix="Drop --path-range")
+    q_range = _path_range(path_range, mech)   # SI, from the file's unit
     if path_point is not None:
         from .design.path import _parse_point
         _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
-    q_range = None if given is None else tuple(x * _driver_unit(mech)[1] for x in given)
     t = sample_times(mech, samples, duration, cycles)
     progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
@@ -564,18 +627,12 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
                                  "--duration") from None
         progress.step("summary")
         if q_range is not None:
-            _check_path_range(sol, path_range, given, q_range)
+            _check_path_range(sol, q_range)
         summ = design.summary(sol, fluctuation=fluctuation,
                               path_point=path_point or mech.path_point, path_range=q_range,
                               default_range=mech.path_range)
         text = summary_text(summ)
-        files = {
-            "results.csv" if fmt == "csv" else "results.parquet":
-                (lambda p: write_csv(sol, p)) if fmt == "csv" else
-                (lambda p: write_parquet(sol, p)),
-            "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
-                                                              allow_nan=False)),
-        }
+        files = _results(sol, summ, fmt, table_units)
         if report:
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
@@ -583,9 +640,35 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             from . import plots as plots_mod
             files.update(plots_mod.outputs(sol))
         progress.total = 2 + len(files)
-        written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS, progress=progress)
+        written = _write_results(outdir, files, progress)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _results(sol, summ: dict, fmt: str, table_units: str = "si") -> dict:
+    """The results table (SI, or the file's units: ``table_units``, ``--units model``) and
+    ``summary.json`` of ``analyze`` and ``simulate`` as writers for :func:`_write_results`;
+    ``summary.json`` lists every file of the run (``files``), filled in by
+    :func:`_write_results`."""
+    files = {
+        "results.csv" if fmt == "csv" else "results.parquet":
+            (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
+            (lambda p: write_parquet(sol, p, table_units)),
+        "summary.json": lambda p: p.write_text(json.dumps(
+            {**_json_safe(summ), "files": list(files)}, indent=2, allow_nan=False)),
+    }
+    return files
+
+
+def _write_results(outdir, files: dict, progress=None) -> list[Path]:
+    """Write ``files`` (of :func:`_results`, with the report and plots) all or nothing. A file
+    of an earlier run that this run does not write again (the other table format, the report
+    and plots of an earlier ``--report`` run) is removed only when that run's ``summary.json``
+    lists it as its own: a ``report.html`` or ``results.csv`` no run wrote is the user's and
+    stays as it is."""
+    return write_outputs(outdir, files, owned=owned_before(outdir, "summary.json",
+                                                           ANALYSIS_OUTPUTS),
+                         progress=progress)
 
 
 # ---------------------------------------------------------------------------- compare
@@ -631,6 +714,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
     if sweep_dir is not None:
+        from .studies.files import need_parquet
+        need_parquet("compare --sweep")   # designs.parquet: say how to install, no traceback
         designs += compare_mod.sweep_best(sweep_dir, by_metric, n_best)
     elif by_metric is not None:
         raise ModelError("--by ranks a sweep's designs, and no --sweep is given", field="--by",
@@ -665,8 +750,14 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
 # ---------------------------------------------------------------------------- simulate
 
 def simulation_summary(sol, summ: dict) -> dict:
-    """``summ`` (of :func:`linkdyn.design.summary`) with the simulation's figures added."""
+    """``summ`` (of :func:`linkdyn.design.summary`) with the simulation's figures added: the
+    speed of the independent coordinates (:func:`linkdyn.design.speed_statistics`), the
+    energy account (:func:`linkdyn.design.energy_account`) and the integration's figures."""
+    from . import design
+
     s = dict(summ)
+    s["speed"] = design.speed_statistics(sol)
+    s["energy_account_J"] = design.energy_account(sol)
     s["simulation"] = {
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
@@ -686,6 +777,50 @@ def simulation_summary(sol, summ: dict) -> dict:
     return s
 
 
+def speed_text(s: dict, mech) -> str:
+    """The printed lines of a simulation's speed statistics and energy account (from its
+    summary dict), each ending in a newline: a turning coordinate's speed in rpm, another's
+    in the model file's angle or length unit per second."""
+    from .design.speed import RPM
+    from .io.units import ANGLE_UNITS, LENGTH_UNITS
+
+    def num(x, fmt):
+        return "n/a" if x is None or not np.isfinite(x) else format(x, fmt)
+
+    lines = []
+    for j, e in s.get("speed", {}).items():
+        w = e["window"]
+        if e["turns"]:
+            unit, vals = "rpm", (e["mean_rpm"], e["min_rpm"], e["max_rpm"])
+            size = None
+        else:
+            name = mech.angle_unit if e["unit"] == "rad/s" else mech.length_unit
+            size = (ANGLE_UNITS if e["unit"] == "rad/s" else LENGTH_UNITS)[name]
+            unit, vals = f"{name}/s", tuple(x / size for x in (e["mean"], e["min"], e["max"]))
+        cf = e["coefficient_of_fluctuation"]
+        run_up = f"run-up {num(e['run_up_time_s'], '.4g')} s"
+        if e["steady"] is False:
+            change = e["mean_change"] * (RPM if e["turns"] else 1.0 / size)
+            run_up += (f"; NOT steady yet: the mean speed changed by {change:+.4g} {unit} from "
+                       "the window before (run longer)")
+        elif e["steady"] is None:
+            run_up += "; steadiness unknown (the run holds less than two windows)"
+        lines.append(
+            f"  speed of {j} over the {w['over']} (t = {num(w['start_s'], '.4g')}.."
+            f"{num(w['end_s'], '.4g')} s): mean {num(vals[0], '.6g')} {unit}, min "
+            f"{num(vals[1], '.6g')}, max {num(vals[2], '.6g')} {unit}, coefficient of "
+            "fluctuation " + (num(cf, ".4g") if cf is not None else
+                              "not meaningful (it swings to and fro)") + f"; {run_up}")
+    a = s.get("energy_account_J")
+    if a and a["residual"] is not None:
+        lines.append(
+            f"  energy: kinetic {a['kinetic_change'] + 0.0:+.4g} J, potential "
+            f"{a['potential_change'] + 0.0:+.4g} J = drivers {a['driver_work'] + 0.0:+.4g} J + "
+            f"loads {a['load_work'] + 0.0:+.4g} J - dampers {a['damper_dissipation'] + 0.0:.4g} J"
+            f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
+    return "".join(line + "\n" for line in lines)
+
+
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @click.option("-o", "--outdir", default="out", show_default=True, type=click.Path(file_okay=False),
@@ -699,18 +834,19 @@ def simulation_summary(sol, summ: dict) -> dict:
               help="Absolute tolerance of the ODE solver (rad, m, per s, J).")
 @click.option("--method", type=click.Choice(["DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA"]),
               default="DOP853", show_default=True,
-              help="scipy ODE solver; Radau or BDF for stiff springs.")
+              help="scipy ODE solver; an implicit one (BDF, LSODA, Radau) for stiff springs.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet"]), default="csv",
               show_default=True)
 @click.option("--report", is_flag=True, help="Also write plots and a self-contained report.html.")
 @click.option("--no-project", "no_project", is_flag=True,
               help="Do not put each step's end back on the energy balance (F11); the "
                    "integrator's own steps only.")
+@_UNITS
 @_BACKEND
 @_ALLOW_OUTSIDE
 @click.pass_context
 def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, report, no_project,
-             backend, allow_outside):
+             backend, allow_outside, table_units="si"):
     """Integrate the free degrees of freedom of MODEL from [initial] under its loads (forward
     dynamics); drivers, if any, still prescribe their joints. Writes the same results as
     analyze, plus potential_energy and work, and the energy balance in the summary."""
@@ -740,7 +876,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
               project=not no_project)
     summ = simulation_summary(sol, design.summary(sol))
     sim = summ["simulation"]
-    text = summary_text(summ) + "\n" + (
+    text = summary_text(summ) + "\n" + speed_text(summ, mech) + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
         f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
         f"{sim['rhs_evaluations']} evaluations; energy balance drift "
@@ -748,19 +884,78 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
         + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "
                   f"t = {sw['t_s']:.6g} s (a dead point of the previous ones)"
                   for sw in sim["coordinate_switches"]))
-    files = {
-        "results.csv" if fmt == "csv" else "results.parquet":
-            (lambda p: write_csv(sol, p)) if fmt == "csv" else (lambda p: write_parquet(sol, p)),
-        "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
-                                                          allow_nan=False)),
-    }
+    files = _results(sol, summ, fmt, table_units)
     if report:
         from . import plots as plots_mod
         from . import report as report_mod
         files.update(report_mod.outputs(sol, summ))
         files.update(plots_mod.outputs(sol))
-    written = write_outputs(outdir, files, owned=ANALYSIS_OUTPUTS)
+    written = _write_results(outdir, files)
     click.echo(text)
+    click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+# ---------------------------------------------------------------------------- equilibrium
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@_ALLOW_OUTSIDE
+def equilibrium(model, as_json, allow_outside):
+    """The static equilibrium of MODEL's free joints under its loads, from [initial] q (else the
+    assembly), drivers held at their t = 0 position, and whether it is stable."""
+    _equilibrium(model, as_json, allow_outside, with_modes=False)
+
+
+@main.command()
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@_ALLOW_OUTSIDE
+def modes(model, as_json, allow_outside):
+    """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
+    damping ratios and mode shapes of the free joints and every tree joint."""
+    _equilibrium(model, as_json, allow_outside, with_modes=True)
+
+
+def _equilibrium(model, as_json, allow_outside, with_modes):
+    from . import io, modal as eq_mod
+
+    mech = io.load_model(model, allow_outside=allow_outside)
+    eq = eq_mod.equilibrium(mech)
+    md = eq_mod.modes(eq) if with_modes else None
+    if as_json:
+        click.echo(json.dumps(_json_safe(eq_mod.as_dict(eq, md)), indent=2))
+    else:
+        click.echo(eq_mod.text(eq, md))
+
+
+# ---------------------------------------------------------------------------- cam
+
+@main.command()
+@click.argument("camfile", type=click.Path(dir_okay=False))
+@click.option("-o", "--outdir", default="out/cam", show_default=True,
+              type=click.Path(file_okay=False), help="Folder for cam.csv.")
+def cam(camfile, outdir):
+    """Design a disc cam from its follower's motion (CAMFILE: [units] and [cam] with
+    [[cam.segments]]): prints the lift, SVAJ peaks, the largest pressure angle, the smallest
+    radius of curvature and any undercutting, and writes cam.csv (SVAJ, pressure angle,
+    curvature, the pitch curve and the profile's points, SI)."""
+    from . import cams
+
+    check_outdir(outdir)
+    design, n = cams.read(camfile)
+    prof = cams.profile(design, n)
+    table = cams.columns(prof)
+
+    def write(path):
+        import csv
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            w = csv.writer(fh)
+            w.writerow(list(table))
+            for row in zip(*(v.tolist() for v in table.values())):
+                w.writerow([repr(x) for x in row])
+    written = write_outputs(outdir, {"cam.csv": write}, owned=("cam.csv",))
+    click.echo(cams.text(prof))
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 
@@ -786,6 +981,32 @@ def reproduce(name, outdir):
     click.echo(f"{sol.model.name}: {len(sol.t)} samples over {sol.t[-1] - sol.t[0]:.6g} s")
     click.echo(f"wrote {', '.join(map(str, written))}")
     click.echo(f"see {out / 'README.txt'} for what each figure shows and the sign conventions")
+
+
+# ---------------------------------------------------------------------------- export
+
+@main.command("export")
+@click.argument("model", type=click.Path(dir_okay=False))
+@click.option("--to", "to", required=True, type=click.Choice(["mjcf", "svg", "dxf"]),
+              help="mjcf: a MuJoCo model; svg, dxf: the drawing at --at and the traced paths.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="File to write [default: the model's name with .xml, .svg or .dxf].")
+@click.option("--at", type=float, default=0.0, show_default=True,
+              help="Time in s of the pose drawn (svg, dxf) or the MJCF's bodies are placed at.")
+@_ALLOW_OUTSIDE
+def export(model, to, output, at, allow_outside):
+    """Write MODEL as a MuJoCo model (MJCF) or its drawing (SVG, DXF) for CAD."""
+    from . import io
+    from .io.export import FORMATS, export as run
+    from .outputs import check_file, write_file
+
+    out = Path(output) if output else Path(Path(model).stem + FORMATS[to])
+    check_file(out)
+    done = run(io.load_model(model, allow_outside=allow_outside), to, at=at)
+    write_file(out, done.text)
+    for note in done.notes:
+        click.echo(note)
+    click.echo(f"wrote {out}")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -50,20 +50,31 @@ class AssemblyError(LinkdynError):
         First time (s) where it fails.
     drivers : dict[str, float]
         Driver joint coordinates at that time (rad or m).
+    units : dict[str, tuple[str, float]] or None
+        Each joint's coordinate unit in the model file, ``{joint: (name, SI size)}``
+        (:func:`linkdyn.units.joint_units`): the message gives the driver values in it, with the
+        unit; None: SI numbers without a unit (a model built in Python has no file units).
     """
 
     exit_code = 3
 
     def __init__(self, message: str, *, file: str = "", time: float | None = None,
-                 drivers: dict[str, float] | None = None, fix: str = ""):
+                 drivers: dict[str, float] | None = None, fix: str = "",
+                 units: dict[str, tuple[str, float]] | None = None):
         self.message, self.file, self.time, self.drivers, self.fix = (
             message, file, time, drivers or {}, fix)
+        self.units = units or {}
         super().__init__(self.__str__())
+
+    def _driver(self, joint: str, value: float) -> str:
+        """``q_J1 = 139 deg``: a driver value in the file's unit (SI without units)."""
+        name, size = self.units.get(joint, ("", 1.0))
+        return f"q_{joint} = {value / size:.6g} {name}".rstrip()
 
     def __str__(self) -> str:
         parts = [self.file] if self.file else []
         if self.time is not None:
-            drv = ", ".join(f"q_{k} = {v:.6g}" for k, v in self.drivers.items())
+            drv = ", ".join(self._driver(k, v) for k, v in self.drivers.items())
             parts.append(f"at t = {self.time:.6g} s" + (f" ({drv})" if drv else ""))
         text = ": ".join(parts + [self.message])
         return f"{text}. {self.fix}" if self.fix else text

@@ -41,6 +41,8 @@ from functools import cached_property
 
 import numpy as np
 
+from .brief import brief_repr
+
 from . import backend as backend_mod, joints as jk, loads as loads_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
@@ -52,6 +54,7 @@ from .kinematics.state import at_state, close
 from .model import Driver, Model
 from .planar import solve_small
 from .topology import build, mobility
+from .units import joint_units
 
 METHODS = ("RK45", "DOP853", "RK23", "Radau", "BDF", "LSODA")
 MAX_STEPS = 50_000
@@ -62,6 +65,10 @@ RTOL_MAX = 0.01      # largest rtol (a relative error of 1 %; at 10 % the energy
 ATOL_MIN = 1e-18     # smallest atol: rad, m, J well below the rounding of the state's numbers
 PACE = 100           # steps between the checks that the run can end within max_steps
 HOPELESS = 1000      # ... it cannot when, at a steady step size, it needs this many times more
+EARLY = 5            # the first checks, after EARLY and 2 EARLY steps: a run that needs more
+FAR = 1e15           # than FAR steps at its pace (a duration far beyond reach) stops at once
+WALL = 3             # steps cut short by a right-hand side not finite beyond them, none
+                     # passing the earliest such time: they approach a time the loads cannot pass
 SWITCH = 8.0         # growth of the dependent rates past which the free coordinates change (F10)
 # the methods whose steps the energy projection joins (F11): the one-step methods, whose next
 # step is a function of the state alone (not BDF's history, nor LSODA's)
@@ -97,6 +104,8 @@ class Partition:
     free : tuple[str, ...]
         Joints whose coordinates are integrated.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     model: Model
     inner: Model
@@ -256,6 +265,34 @@ def conditioning(part: Partition, J: np.ndarray) -> tuple[float, tuple[int, ...]
         return current, best, np.inf
 
 
+def check_inertia(part: Partition, system: "_System", q: np.ndarray) -> None:
+    """Refuse free coordinates that move no mass: where massless links or point masses leave
+    the generalized inertia ``H`` of the free coordinates singular at the tree coordinates
+    ``q`` (n,), t = 0, ``H qdd_f = -h`` has no solution (F6).
+
+    Raises
+    ------
+    ModelError
+        Naming the bodies without mass or inertia (field ``bodies``).
+    """
+    model = part.model
+    massless = [b.name for b in model.moving_bodies if b.mass == 0 or b.inertia == 0]
+    if not massless:
+        return
+    nf = len(part.free)
+    t = np.zeros(1)
+    q_f = q[list(part.layout.topo.driven[part.n_drivers:])][:, None]
+    H = system.reduced(t, q_f, np.zeros((nf, 1)), q[:, None])[0][:, :, 0]
+    w = np.linalg.eigvalsh(0.5 * (H + H.T)) if np.all(np.isfinite(H)) else np.array([np.nan])
+    if np.min(w) > 1e-12 * max(float(np.max(np.abs(w))), 1e-300):
+        return
+    raise ModelError(
+        f"the free coordinates ({', '.join(part.free)}) move no mass: their mass matrix is "
+        f"singular, with massless links or point masses ({', '.join(massless)})",
+        file=model.source, field="bodies",
+        fix="Give the bodies the free joints move a mass and an inertia, or drive those joints")
+
+
 def _start(part: Partition) -> np.ndarray:
     """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
     ``[initial] q`` (else the ``[assembly]`` guess)."""
@@ -267,7 +304,7 @@ def _start(part: Partition) -> np.ndarray:
     return assemble([part.inner], lay, np.concatenate((q_drv, q_free)), 0.0)[:, 0]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)   # Solution's short repr, not every array's numbers
 class Simulation(Solution):
     """A :class:`~linkdyn.analysis.Solution` computed by :func:`simulate`.
 
@@ -371,11 +408,14 @@ class _System:
             g[self.dep] += S @ (q_ind - g[self.ind])
         return g
 
-    def evaluate(self, t, q_f, qd_f, guess):
-        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+    def reduced(self, t, q_f, qd_f, guess):
+        """The free coordinates' equations of motion ``H qdd_f + h = 0`` at the states
+        ``(t, q_f, qd_f)``, each (nf, T) but t (T,), from a tree-coordinate ``guess`` (n, T).
 
-        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
-        and the power of drivers and non-conservative loads (T,).
+        Returns ``H`` (nf, nf, T) (kg m^2, kg m or kg), ``h`` (nf, T) (N m or N: the effort
+        an actuator in each free joint would need to hold ``qdd_f = 0``), the efforts ``tau``
+        of every independent joint (k, 1 + nf, T) of the batch, and its kinematics, loads and
+        dynamics (1 + nf, T) (sample 0: ``qdd_f = 0``; 1 + j: ``qdd_f = e_j``).
         """
         nd, nf = self.nd, self.nf
         part, lay = self.part, self.lay
@@ -395,6 +435,17 @@ class _System:
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
         H = tau[nd:, 1:] - h[:, None]                            # (row, column, T)
+        return H, h, tau, kin, applied, dyn
+
+    def evaluate(self, t, q_f, qd_f, guess):
+        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+
+        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
+        and the power of drivers and non-conservative loads (T,).
+        """
+        nd, nf = self.nd, self.nf
+        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess)
+        q_d, qd_d, qdd_d = driver_values(self.part.model, t)
         # no actuator in a free joint: H qdd_f = -h                             (F6)
         if nf == 1:
             qdd_f = -h / H[0]
@@ -427,6 +478,7 @@ class _System:
             out = self.kernel(t, y, self.ref)
             if out is not None:
                 self.last = (t, y.copy(), None, None)
+                self._check(t, y, out)
                 return out
         tt = np.array([t])
         q_ind = np.concatenate((driver_values(self.part.model, tt)[0], y[:nf, None]))
@@ -434,9 +486,16 @@ class _System:
                                         self.guess(tt, q_ind))
         self.last = (t, y.copy(), kin, qdd)
         out = np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
-        if not np.all(np.isfinite(out)):
-            self.bad = (t, y.copy())   # the last state the step was refused at: for messages
+        self._check(t, y, out)
         return out
+
+    def _check(self, t, y, out) -> None:
+        """Keep ``(t, y)`` as :attr:`bad`, for the messages, when its right-hand side ``out`` is
+        not finite at a finite state: the last state a step was refused at. (A state that is
+        not finite itself, a Runge-Kutta stage built from such a right-hand side, would hide
+        the load that was not finite.)"""
+        if not np.all(np.isfinite(out)) and np.all(np.isfinite(y)):
+            self.bad = (t, y.copy())
 
     def shift(self, rows, by) -> None:
         """Move the reference's tree coordinates ``rows`` by ``by``: whole turns of free angles,
@@ -637,12 +696,13 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     q_f0 = q0[list(topo.driven[nd:])]
     system = _System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
+    check_inertia(part, system, q0)
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
         _blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q0),
+                            drivers=_values(part, q0), units=joint_units(model),
                             fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
@@ -657,11 +717,13 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
     # tolerance on it would otherwise loosen as a crank turns on (rtol |q_f| grows with the
     # turns, and with it the error of every step). Not when a load formula reads a joint
-    # coordinate: a whole turn less would change that load
+    # coordinate: a whole turn less would change that load; nor with a cut whose rows are not
+    # periodic in the angles (a gear's: a whole turn of one gear turns the other by the ratio)
     turns = np.zeros(nf)
     angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
-    unwound = method in UNWOUND and not reads_coordinates(model)
-    pace = np.inf      # the step size at the last check of the pace
+    unwound = (method in UNWOUND and not reads_coordinates(model)
+               and all(jk.get(k).periodic for k in part.layout.cut_kind))
+    pace = early = np.inf      # the step size at the last check of the pace (of each kind)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
@@ -681,8 +743,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             switches.append((t_now, part.free))
         solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
         recent = [solver.t]      # the times of the last steps
+        walls, wall = 0, np.inf   # such steps, and the earliest time not finite
         while solver.status == "running":
-            t_old, before = solver.t, system.ref
+            t_old, before, bad = solver.t, system.ref, system.bad
             message = solver.step()
             steps += 1
             # a motion approaching a position it cannot pass (a singular position of the
@@ -698,8 +761,21 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             if failed:
                 _blame_loads(system, system.bad)     # a load that is not finite, by its field
                 _blame_loads(system, system.last)
-            if steps % PACE == 0 and solver.status == "running":
-                pace = _pace(pace, solver, t_end, max_steps, src, part, system.ref[1])
+            # a load not finite just beyond the steps, which shorten towards it: name it
+            if system.bad is not bad:
+                walls, wall = walls + 1, min(wall, system.bad[0])
+            if solver.t > wall:
+                walls, wall = 0, np.inf
+            if walls >= WALL:
+                _blame_loads(system, system.bad)
+                walls = 0
+            # the pace: after EARLY and 2 EARLY steps against FAR (each check against the
+            # one before of its kind), then every PACE steps against HOPELESS * max_steps
+            if solver.status == "running" and steps in (EARLY, 2 * EARLY):
+                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1])
+            if solver.status == "running" and steps % PACE == 0:
+                pace = _pace(pace, solver, t_end, max_steps, HOPELESS * max_steps, src, part,
+                             system.ref[1])
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
@@ -707,8 +783,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
                     file=src, time=float(t_old), drivers=_values(part, before[1]),
-                    fix="Check the loads and [initial]; a stiff spring needs --method Radau "
-                        "or BDF; or shorten --duration to the time given")
+                    units=joint_units(part.model),
+                    fix="Check the loads and [initial]; a stiff spring needs "
+                        f"{_implicit(method)}; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
@@ -764,23 +841,30 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
 
 
-def _pace(last: float, solver, t_end: float, max_steps: int, src: str, part,
+def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
           q: np.ndarray) -> float:
     """The step size now; raise an AssemblyError naming the time when, at a step size that
     did not grow tenfold since the last check (``last``), the run would need more than
-    ``HOPELESS * max_steps`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there,
-    for the message (a duration far beyond the motion's
-    time scale, which would otherwise run for hours before stopping at ``max_steps``)."""
+    ``limit`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there, for the
+    message (a duration far beyond the motion's time scale, or steps collapsed for good,
+    which would otherwise run for hours before stopping at ``max_steps``)."""
     h = float(solver.step_size)
     need = (t_end - solver.t) / h if h > 0 else np.inf
-    if np.isfinite(last) and h < 10 * last and need > HOPELESS * max_steps:
+    if np.isfinite(last) and h < 10 * last and need > limit:
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
-            time=float(solver.t), drivers=_values(part, q),
+            time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
-                f"{max_steps * h:.3g} s or less")
+                f"{max_steps * h:.3g} s or less; for a stiff spring, "
+                + _implicit(type(solver).__name__))
     return h
+
+
+def _implicit(method: str) -> str:
+    """The advice for a stiff spring: the implicit methods other than ``method``."""
+    others = [m for m in ("BDF", "LSODA", "Radau") if m != method]
+    return f"--method {others[0]} or {others[1]}"
 
 
 def _blame_loads(system: _System, last) -> None:
@@ -800,7 +884,8 @@ def _blame_loads(system: _System, last) -> None:
     if kin.valid[0]:
         blame_loads(part.model, kin, dict(file=part.model.source, time=float(t[0]),
                                           drivers=dict(zip((d.joint for d in part.inner.drivers),
-                                                           q_ind[:, 0].tolist()))))
+                                                           q_ind[:, 0].tolist())),
+                                          units=joint_units(part.model)))
 
 
 def restate(solver, y: np.ndarray, f: np.ndarray) -> None:

@@ -29,7 +29,7 @@ from . import joints as jk
 from .analysis import SINGULAR
 from .compiled import factor, njit, substitute
 from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
-from .kinematics.compiled import PIVOT_TOL
+from .kinematics.compiled import PIVOT_TOL, cut_numbers
 from .kinematics.positions import ACCEPT, scaled_error
 from .kinematics.recursion import (child_pose, child_twist, child_twist_rate, cut_bias,
                                    cut_coordinate, cut_frame, jacobian_column)
@@ -161,8 +161,9 @@ def _residual(L, phi, P, g):
     err, size = 0.0, L.size[0]
     for k in range(L.cut_a.shape[0]):
         a, b, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
-        x = jk.residual(L.cut_kind[k], L.cut_angle[k, 0], phi[a], phi[b], (P[k, 4], P[k, 5]),
-                        (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
+        x = jk.residual(L.cut_kind[k], cut_numbers(L, k, 0),
+                        jk.frame((P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]), (P[k, 4], P[k, 5])),
+                        phi[a], phi[b])
         for j in range(rows):
             g[row + j] = x[j]
             err = scaled_error(err, x[j], L.cut_metres[k, j] != 0, size)
@@ -178,8 +179,9 @@ def _jacobian(L, r, e, P, J):
         for j in range(1, L.parent.shape[0]):
             if L.side[k, j] == 0:
                 continue
-            x = jacobian_column(L.cut_kind[k], L.kind[j], float(L.sign[j]), L.side[k, j],
-                                (e[j, 0], e[j, 1]), (r[j, 0], r[j, 1]), (P[k, 2], P[k, 3]),
+            x = jacobian_column(L.cut_kind[k], cut_numbers(L, k, 0), L.kind[j],
+                                float(L.sign[j]), L.side[k, j], (e[j, 0], e[j, 1]),
+                                (r[j, 0], r[j, 1]), (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]),
                                 (P[k, 4], P[k, 5]))
             for m in range(rows):
                 J[row + m, j - 1] = x[m]
@@ -212,10 +214,11 @@ def _bias(L, r, tw, td, P, b):
     """Minus the rate of the cut rows, ``-d/dt (S x)`` (:func:`cut_bias`), into ``b``."""
     for k in range(L.cut_a.shape[0]):
         a, bb, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
-        x = cut_bias(L.cut_kind[k], (P[k, 4], P[k, 5]), (tw[a, 0], tw[a, 1], tw[a, 2]),
-                     (td[a, 0], td[a, 1], td[a, 2]), (r[a, 0], r[a, 1]),
-                     (tw[bb, 0], tw[bb, 1], tw[bb, 2]), (td[bb, 0], td[bb, 1], td[bb, 2]),
-                     (r[bb, 0], r[bb, 1]), (P[k, 2], P[k, 3]))
+        x = cut_bias(L.cut_kind[k], cut_numbers(L, k, 0), (P[k, 4], P[k, 5]),
+                     (tw[a, 0], tw[a, 1], tw[a, 2]), (td[a, 0], td[a, 1], td[a, 2]),
+                     (r[a, 0], r[a, 1]), (tw[bb, 0], tw[bb, 1], tw[bb, 2]),
+                     (td[bb, 0], td[bb, 1], td[bb, 2]), (r[bb, 0], r[bb, 1]),
+                     (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
         for m in range(rows):
             b[row + m, 0] = -x[m]
 
@@ -226,7 +229,7 @@ def _joint_motion(L, phi, r, tw, P, jq, jqd):
     (already in ``jq``, ``jqd`` by the caller), a cut joint's by :func:`cut_coordinate`."""
     for k in range(L.cut_a.shape[0]):
         a, b = L.cut_a[k], L.cut_b[k]
-        x = cut_coordinate(L.cut_kind[k], (P[k, 4], P[k, 5]), phi[a],
+        x = cut_coordinate(L.cut_kind[k], cut_numbers(L, k, 0), (P[k, 4], P[k, 5]), phi[a],
                            (tw[a, 0], tw[a, 1], tw[a, 2]), (0.0, 0.0, 0.0), (r[a, 0], r[a, 1]),
                            phi[b], (tw[b, 0], tw[b, 1], tw[b, 2]), (0.0, 0.0, 0.0),
                            (r[b, 0], r[b, 1]), (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
@@ -282,10 +285,10 @@ def _loads(L, loads, lnum, roots, reg, c, s, r, tw, jqd, w):
             p2, v2 = body_point(c[j], s[j], r_j, (tw[j, 0], tw[j, 1], tw[j, 2]),
                                 (lnum[m, 2], lnum[m, 3]))
             if kind == SPRING:
-                f, pe_m = spring_force(lnum[m, 6], lnum[m, 7], p1, p2)
+                f, pe_m, _ = spring_force(lnum[m, 6], lnum[m, 7], p1, p2)
                 pe += pe_m
             else:
-                f, pw = damper_force(lnum[m, 8], p1, v1, p2, v2)
+                f, pw, _ = damper_force(lnum[m, 8], p1, v1, p2, v2)
                 power += pw
             _add(w, i, force_at(f, r_i, p1))
             _add(w, j, force_at((-f[0], -f[1]), r_j, p2))

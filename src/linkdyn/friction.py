@@ -125,6 +125,7 @@ class Row:
     stiction: object = 1.0
     viscous: object = 0.0
     preload: object = 0.0
+    load: int = -1          # its place in model.loads
 
 
 def rows(models, topo) -> tuple[Row, ...]:
@@ -152,7 +153,7 @@ def rows(models, topo) -> tuple[Row, ...]:
                        per(lambda x: (x.coefficient if x.static_coefficient is None
                                       else x.static_coefficient) * r(x)),
                        per(stiction_speed), per(lambda x: x.viscous),
-                       per(lambda x: x.preload)))
+                       per(lambda x: x.preload), n))
     return tuple(out)
 
 
@@ -264,19 +265,25 @@ _ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
 
 def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
     """``applied`` plus the friction efforts ``efforts`` (k, ...) inside their joints: the
-    wrenches on the moving bodies, the ground's share in ``on_ground`` and their power in
-    ``power``."""
+    wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
+    ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
+    effort and its power)."""
     w = [np.array(np.broadcast_to(x, (3,) + kin.shape)) for x in applied.wrenches]
     w[0] = np.zeros((3,) + kin.shape)
     power = applied.power
     qd = kin.joint_motion[1]
+    values, powers = list(applied.values), list(applied.powers)
     for row, x in zip(friction_rows, efforts):
         add_joint_effort(w, kin, row.body, row.body2, row.point, row.axis, x)
-        power = power + x * qd[row.joint]
+        p = x * qd[row.joint]
+        power = power + p
+        if values and powers:
+            values[row.load], powers[row.load] = x, p
     # the ground's O_0 is the global origin: its share joins the anchored loads' there
     on_ground = applied.on_ground + w[0]
     w[0] = np.broadcast_to(np.zeros((3,) + (1,) * len(kin.shape)), (3,) + kin.shape)
-    return replace(applied, wrenches=w, power=power, on_ground=on_ground)
+    return replace(applied, wrenches=w, power=power, on_ground=on_ground,
+                   values=tuple(values), powers=tuple(powers))
 
 
 def _forces(react, friction_rows) -> np.ndarray:
@@ -330,7 +337,8 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     tiled = replace(applied, wrenches=[_tile(np.broadcast_to(w, (3,) + shape), C, T)
                                        for w in applied.wrenches],
                     power=_tile(np.broadcast_to(applied.power, shape), C, T),
-                    on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T))
+                    on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T),
+                    values=(), powers=())
     loaded = _with_efforts(tiled, big, fr, units)
     dyn_c = dynamics(big, loaded)
     react_c = reactions_stage(model, big, loaded, dyn_c)

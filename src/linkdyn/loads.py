@@ -12,6 +12,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .brief import brief_repr
+
 from .kinematics import KinematicSolution
 from .kinematics.layout import load_rows
 from .kinematics.recursion import relative
@@ -39,18 +41,51 @@ class Loads:
         Wrench of the springs and dampers anchored on the ground on it, about the global origin
         (it enters no balance of the moving bodies; the shaking load includes it); a broadcast
         zero as in ``wrenches`` when there are none.
+    values : tuple of ndarray
+        Each load's value (``model.loads`` order), SI: a ``force`` its global components
+        ``(2, T)`` N; a ``torque`` or ``joint_torque`` ``(T,)`` N m; a ``joint_force`` ``(T,)``
+        N; a ``spring`` or ``damper`` its tension ``(T,)`` N (positive pulling its two points
+        together: a stretched spring, a lengthening damper). Empty when not asked for.
+    powers : tuple of ndarray (T,)
+        Each load's power on the mechanism, W (``model.loads`` order): ``f . v`` of a force at
+        its point, ``n omega`` of a torque, the effort times the joint's rate inside a joint,
+        ``f . (v_1 - v_2)`` of a spring or damper on its two points (a spring's is minus the rate
+        of its potential energy, which ``power`` leaves out; a damper's is never positive).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     wrenches: list
     potential_energy: np.ndarray
     power: np.ndarray
     has_potential: bool
     on_ground: np.ndarray
+    values: tuple = ()
+    powers: tuple = ()
 
     @property
     def w_ext(self) -> np.ndarray:
         """Applied wrenches stacked components last, (T, n, 3), tree order."""
         return stack_last(self.wrenches)
+
+
+#: the columns of each load kind's value (``results.csv``: ``<column>_<label>``): a force's
+#: global components, else one number (a torque, an effort inside a joint, a tension); not
+#: ``Fx_``, ``tau_``, ``force_``, which name the reactions and the drivers' efforts
+VALUE_COLUMNS = {"force": ("value_x", "value_y"), "torque": ("value",),
+                 "joint_torque": ("value",), "joint_force": ("value",), "spring": ("value",),
+                 "damper": ("value",)}
+VALUE_UNITS = {"force": "N", "torque": "N m", "joint_torque": "N m", "joint_force": "N",
+               "spring": "N", "damper": "N"}
+
+
+def labels(model: Model) -> tuple[str, ...]:
+    """Each load's label (``model.loads`` order), as error messages name it: ``loads.<name>``
+    for a load whose name no other load shares, else ``loads[<k>]`` (k its position in the
+    file's ``[[loads]]``, from 0). The result columns and the summary use it."""
+    names = [ld.name for ld in model.loads]
+    return tuple(f"loads.{n}" if n and names.count(n) == 1 else f"loads[{k}]"
+                 for k, n in enumerate(names))
 
 
 def has_potential(lay) -> bool:
@@ -86,8 +121,8 @@ def weight(mass, g, r_c):
 
 @step
 def spring_force(stiffness, free_length, r1, r2):
-    """Force ``(x, y)`` of a spring on its first point ``r1`` (minus it on ``r2``) and its
-    potential energy, J."""
+    """Force ``(x, y)`` of a spring on its first point ``r1`` (minus it on ``r2``), its
+    potential energy, J, and its tension ``k (l - l0)``, N (positive when stretched)."""
     # tension k (l - l0) pulls the two points together; zero free length: the force k d,
     # defined also where the two points meet
     d = relative(r1, r2)
@@ -96,20 +131,20 @@ def spring_force(stiffness, free_length, r1, r2):
     zero = free_length == 0
     f = (select(zero, stiffness * d[0], tension * (d[0] / length)),
          select(zero, stiffness * d[1], tension * (d[1] / length)))
-    return f, 0.5 * stiffness * (length - free_length) ** 2
+    return f, 0.5 * stiffness * (length - free_length) ** 2, tension
 
 
 @step
 def damper_force(damping, r1, v1, r2, v2):
-    """Force ``(x, y)`` of a damper on its first point (minus it on the second) and its power
-    (negative), W."""
+    """Force ``(x, y)`` of a damper on its first point (minus it on the second), its power
+    (negative), W, and its tension ``c dl/dt``, N (positive while it lengthens)."""
     # tension c dl/dt along the line of the two points
     d = relative(r1, r2)
     length = np.sqrt(dot(d, d))
     u = (d[0] / length, d[1] / length)
     rate = dot(u, relative(v1, v2))
     tension = damping * rate
-    return (tension * u[0], tension * u[1]), -damping * rate ** 2
+    return (tension * u[0], tension * u[1]), -damping * rate ** 2, tension
 
 
 # --- the numpy path: the steps on whole arrays, a loop over the loads -------------------------
@@ -200,6 +235,7 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
             f, pe_i = weight(lay.mass[i], g, r_c)
             _add_force(w, kin, i, r_c, np.stack([np.broadcast_to(x, r_c.shape[1:]) for x in f]))
             pe += pe_i
+    values_, powers = [], []   # each load's value and power, model.loads order
     for load in lay.loads:
         i = load.body
         if load.kind == "force":
@@ -210,33 +246,42 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
             f = f.reshape(f.shape[:1] + (1,) * (len(shape) + 1 - f.ndim) + f.shape[1:])
             f = np.broadcast_to(f, (2,) + shape)
             _add_force(w, kin, i, r, f)
-            power += dot(f, v)
+            # its power f . v at the point
+            value, p = f, dot(f, v)
         elif load.kind == "torque":
             tq = np.broadcast_to(values(lay, load, kin), shape)
             w[i] = w[i] + twist(tq, np.zeros((2,) + shape))
-            power += tq * kin.twists[i][0]
+            # its power n omega
+            value, p = tq, tq * kin.twists[i][0]
         elif load.kind in ("joint_torque", "joint_force"):
             x = np.broadcast_to(values(lay, load, kin), shape)
             add_joint_effort(w, kin, i, load.body2, load.point,
                              None if load.kind == "joint_torque" else load.axis, x)
             # its power: the effort times the joint's rate
-            power += x * kin.joint_motion[1][load.joint]
+            value, p = x, x * kin.joint_motion[1][load.joint]
         elif load.kind in REACTION_KINDS:
-            continue   # applied with the reactions it depends on (linkdyn.friction.solve)
+            # applied with the reactions it depends on: linkdyn.friction.solve adds its wrench
+            # and fills its value and power in
+            value, p = np.zeros(shape), np.zeros(shape)
         else:  # spring or damper between two points, force along the line joining them
             j = load.body2
             r1, v1 = _point(kin, i, load.point)
             r2, v2 = _point(kin, j, load.point2)
             if load.kind == "spring":
-                f, pe_k = spring_force(load.stiffness, load.free_length, r1, r2)
+                f, pe_k, value = spring_force(load.stiffness, load.free_length, r1, r2)
                 pe += pe_k
+                # its power f . v1 - f . v2 on its two points: -d(pe_k)/dt
+                p = dot(_stack(f), v1 - v2)
             else:
-                f, power_k = damper_force(load.damping, r1, v1, r2, v2)
-                power += power_k
+                f, p, value = damper_force(load.damping, r1, v1, r2, v2)
             f = _stack(f)
             _add_force(w, kin, i, r1, f)
             _add_force(w, kin, j, r2, -f)
+        values_.append(np.broadcast_to(value, (2,) + shape if load.kind == "force" else shape))
+        powers.append(np.broadcast_to(p, shape))
+        if load.kind != "spring":   # a spring's work is in the potential energy
+            power = power + powers[-1]
     # the ground's O_0 is the global origin: w[0] is the load on the ground about it, which does
     # no work and is not part of the moving bodies' balance
     on_ground, w[0] = w[0], zero
-    return Loads(w, pe, power, has_pe, on_ground)
+    return Loads(w, pe, power, has_pe, on_ground, tuple(values_), tuple(powers))

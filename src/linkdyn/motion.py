@@ -22,7 +22,7 @@ if TYPE_CHECKING:                            # imported when a table is built (s
 from .errors import InvalidValue, ModelError
 from .expr import Expr, parse
 
-__all__ = ["ConstantSpeed", "ExpressionMotion", "TableMotion"]
+__all__ = ["ConstantSpeed", "ExpressionMotion", "Segment", "SegmentMotion", "TableMotion"]
 
 
 def _time(t) -> np.ndarray:
@@ -47,10 +47,14 @@ class ConstantSpeed:
         rad/s (revolute) or m/s (prismatic).
     start : float
         q at t = 0, rad or m.
+    rpm : bool
+        The model file gave the speed in revolutions per minute (``rpm = 45``): the summary
+        and :func:`linkdyn.save` say it in rpm again.
     """
 
     speed: float
     start: float = 0.0
+    rpm: bool = field(default=False, compare=False)
 
     def __post_init__(self):
         object.__setattr__(self, "speed", _finite("speed", self.speed))
@@ -66,9 +70,12 @@ class ConstantSpeed:
         t = _time(t)
         return self.start + self.speed * t, np.full_like(t, self.speed), np.zeros_like(t)
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'constant speed 4.712 rad/s from 0'`` (``unit``: 'rad' or 'm')."""
-        return f"constant speed {self.speed:.4g} {unit}/s from {self.start:.4g}"
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'constant speed 4.712 rad/s from 0'``, ``'constant speed 45 rpm from 0'``, in
+        ``unit`` of ``scale`` SI ('deg', pi/180; 'mm', 1e-3)."""
+        if self.rpm:
+            return f"constant speed {self.speed * 30 / math.pi:.4g} rpm from {self.start / scale:.4g}"
+        return f"constant speed {self.speed / scale:.4g} {unit}/s from {self.start / scale:.4g}"
 
 
 @dataclass(frozen=True)
@@ -110,10 +117,131 @@ class ExpressionMotion:
         t = _time(t)
         return tuple(self.scale * g(t) for g in (self.expr, self.d1, self.d2))
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'q(t) = 0.3 + 6.0*t + 0.4*sin(5*t) rad'`` or ``'q(t) = 0.0174533*(30*t) rad'``."""
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'q(t) = 0.3 + 6.0*t + 0.4*sin(5*t) rad'``, ``'q(t) = 30*t deg'`` (``unit`` of
+        ``scale`` SI, the file's), or ``'q(t) = 0.0174533*(30*t) rad'`` in another unit."""
         text = self.text.strip()
-        return f"q(t) = {text if self.scale == 1 else f'{self.scale:.6g}*({text})'} {unit}"
+        factor = self.scale / scale
+        return f"q(t) = {text if factor == 1 else f'{factor:.6g}*({text})'} {unit}"
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a :class:`SegmentMotion`: from the previous segment's end to ``to`` in
+    ``time`` by a motion law (:data:`linkdyn.laws.LAWS`; ``'dwell'`` holds its start).
+
+    Attributes
+    ----------
+    law : str
+    to : float
+        The coordinate at its end, rad or m (a dwell's is its start).
+    time : float
+        Its duration, s (> 0).
+    """
+
+    law: str
+    to: float
+    time: float
+
+
+@dataclass(frozen=True, eq=False)
+class SegmentMotion:
+    """A joint swung between values by motion laws, segment after segment, with dwells: e.g.
+    a rise by a cycloidal law, a dwell, a return by a 3-4-5 polynomial, a dwell. Each law
+    starts and ends at rest (:mod:`linkdyn.laws`), so the rate is continuous at every join.
+
+    Attributes
+    ----------
+    start : float
+        The coordinate at t = 0, rad or m.
+    segments : tuple[Segment, ...]
+    repeat : bool
+        Repeat the segments for ever (the last must end at ``start``): the motion is periodic,
+        ``period`` = the sum of the durations. Else the joint holds its last value after them
+        (and its start before t = 0).
+    """
+
+    start: float
+    segments: tuple
+    repeat: bool = True
+
+    def __post_init__(self):
+        from . import laws
+        object.__setattr__(self, "start", _finite("start", self.start))
+        segs = tuple(self.segments)
+        if not segs:
+            raise InvalidValue("a segment motion needs at least one segment", field="segments",
+                               fix='Give segments = [{ law = "cycloidal", to = ..., time = ... }]')
+        for k, x in enumerate(segs):
+            if x.law not in laws.LAWS:
+                raise InvalidValue(f"unknown motion law {x.law!r}", field=f"segments[{k}].law",
+                                   fix=f"Use one of {', '.join(laws.LAWS)}")
+            if not (math.isfinite(x.time) and x.time > 0):
+                raise InvalidValue(f"a segment's time must be positive and finite, got {x.time}",
+                                   field=f"segments[{k}].time", fix="Give its duration in s")
+            _finite(f"segments[{k}].to", x.to)
+        object.__setattr__(self, "segments", segs)
+        ends = np.array([self.start] + [x.to for x in segs], float)
+        # a dwell holds the value it starts at
+        for k, x in enumerate(segs):
+            if x.law == "dwell":
+                ends[k + 1] = ends[k]
+        object.__setattr__(self, "_ends", ends)
+        object.__setattr__(self, "_times", np.concatenate(([0.0], np.cumsum([x.time for x in segs]))))
+        if self.repeat and not math.isclose(ends[-1], ends[0], rel_tol=1e-12, abs_tol=1e-15):
+            raise InvalidValue(
+                f"the segments end at {ends[-1]:.6g}, not at the start {ends[0]:.6g}: repeated, "
+                "the joint would jump at each repeat", field="segments",
+                fix="End the last segment at the start, or set repeat = false")
+
+    @property
+    def period(self) -> float | None:
+        """Time of one cycle (s), the sum of the durations, when the motion repeats."""
+        return float(self._times[-1]) if self.repeat else None
+
+    def _at(self, t):
+        """Segment index, normalized time ``u`` in it, and time in the cycle at ``t``."""
+        t = _time(t)
+        total = self._times[-1]
+        tc = np.mod(t, total) if self.repeat else np.clip(t, 0.0, total)
+        k = np.clip(np.searchsorted(self._times, tc, side="right") - 1, 0, len(self.segments) - 1)
+        u = (tc - self._times[k]) / np.diff(self._times)[k]
+        return k, u
+
+    def svaj(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd, qddd)``: coordinate, rate, acceleration and jerk at times ``t``."""
+        from . import laws
+        k, u = self._at(t)
+        h = (self._ends[1:] - self._ends[:-1])[k]
+        T = np.diff(self._times)[k]
+        out = [np.zeros_like(u) for _ in range(4)]
+        for j, x in enumerate(self.segments):
+            on = k == j
+            if not np.any(on):
+                continue
+            parts = laws.rise(x.law, u[on])
+            # q = q_k + h s(u), and h s^(n)(u) / T^n                    (SVAJ)
+            for n in range(4):
+                out[n][on] = h[on] * parts[n] / T[on] ** n
+        out[0] = out[0] + self._ends[:-1][k]
+        if not self.repeat:      # at rest before t = 0 and after the last segment
+            t = _time(t)
+            still = (t < 0) | (t > self._times[-1])
+            for n in range(1, 4):
+                out[n] = np.where(still, 0.0, out[n])
+        return tuple(out)
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd)`` at times ``t`` (s, any shape); each of the shape of ``t``."""
+        return self.svaj(t)[:3]
+
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'from 0 rad: cycloidal to 1.047 rad in 0.5 s, dwell 0.25 s, ... (repeats
+        every 1.5 s)'``, in ``unit`` of ``scale`` SI (the file's: ``'cycloidal to 60 deg'``)."""
+        parts = [f"dwell {x.time:.4g} s" if x.law == "dwell" else
+                 f"{x.law} to {x.to / scale:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
+        tail = f" (repeats every {self.period:.4g} s)" if self.repeat else " (then holds)"
+        return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
 
 
 @dataclass(frozen=True, eq=False)
@@ -262,9 +390,10 @@ class TableMotion:
             t = np.clip(t, t0, t1)
         return tuple(self.scale * self.spline(t, nu) for nu in (0, 1, 2))
 
-    def describe(self, unit: str = "rad") -> str:
-        """E.g. ``'table of 37 rows, t from 0 to 2 s'``."""
-        factor = "" if self.scale == 1 else f", q x {self.scale:.6g} to {unit}"
+    def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
+        """E.g. ``'table of 37 rows, t from 0 to 2 s, q in deg'`` (``unit`` of ``scale`` SI)."""
+        factor = (f", q in {unit}" if self.scale == scale and scale != 1 else "" if self.scale == scale
+                  else f", q x {self.scale / scale:.6g} to {unit}")
         return f"table of {len(self.t)} rows, t from {self.t[0]:.4g} to {self.t[-1]:.4g} s{factor}"
 
 

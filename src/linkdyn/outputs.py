@@ -15,14 +15,19 @@ How a new command uses it::
     written = write_outputs(outdir, files, owned=("designs.parquet", "summary.json"))
 
 Each value of ``files`` writes one file at the path it is given (inside a temporary folder);
-``owned`` lists the names (shell patterns) the command writes, so an earlier run's file of that
-family that this run does not write (``results.csv`` when writing ``results.parquet``, a plot
-no longer drawn) is removed. Nothing else in the folder is touched.
+``owned`` lists the names (shell patterns) of an earlier run's files that this run removes when
+it does not write them again (``results.csv`` when writing ``results.parquet``, a report of an
+earlier ``--report`` run). A command lists the files it wrote in its manifest
+(``summary.json``, ``optimize.json``: ``"files"``) and passes :func:`owned_before`, the files of
+its family the earlier run's manifest lists: a file of that family that no run of it wrote (the
+user's ``report.html``) is never touched, nor is anything else in the folder.
 """
 
 from __future__ import annotations
 
 import fnmatch
+import glob
+import json
 import os
 import shutil
 import tempfile
@@ -35,6 +40,24 @@ from .errors import ModelError
 #: the report and the static plots.
 ANALYSIS_OUTPUTS = ("results.csv", "results.parquet", "summary.json", "report.html",
                     "plot_*.png", "plot_*.svg")
+
+
+def owned_before(outdir, manifest: str, patterns) -> tuple[str, ...]:
+    """The files matching ``patterns`` that the earlier run of a command in ``outdir`` wrote
+    (the ``files`` listed by its ``manifest``, e.g. ``summary.json``), as patterns for
+    :func:`write_outputs`'s ``owned``: a new run removes those it does not write again, and
+    never a file of that family that no run wrote (none when the folder holds no manifest, or
+    one that is not the command's)."""
+    from .io.files import read_text
+    try:
+        listed = json.loads(read_text(Path(outdir) / manifest)).get("files", [])
+    except (OSError, ValueError, AttributeError):   # absent, not a manifest, not ours
+        return ()
+    if not isinstance(listed, list):
+        return ()
+    return tuple(glob.escape(n) for n in listed
+                 if isinstance(n, str) and os.path.basename(n) == n
+                 and any(fnmatch.fnmatchcase(n, p) for p in patterns))
 
 
 def _error(outdir, why: str, option: str) -> ModelError:
@@ -198,3 +221,57 @@ def _remove_stale(out: Path, files: Mapping, owned: Iterable[str]) -> None:
                 os.unlink(e.path)
             except OSError:
                 pass
+
+
+def check_file(path, option: str = "-o") -> None:
+    """Check, without creating anything, that ``path`` can be written as one file: it is not a
+    folder, and its folder exists (or can be created) and is writable.
+
+    Raises
+    ------
+    ModelError
+        Naming ``option`` (exit status 2).
+    """
+    p = Path(os.path.abspath(path))
+    if os.path.isdir(p):
+        raise ModelError(f"cannot write '{path}': it is a folder", field=option,
+                         fix=f"Give {option} a file name")
+    if os.path.lexists(p) and not os.access(p, os.W_OK):
+        raise ModelError(f"cannot write '{path}': it is not writable", field=option,
+                         fix=f"Give {option} a file you can write")
+    check_outdir(p.parent, option)
+
+
+def write_file(path, text: str, option: str = "-o") -> Path:
+    """Write ``text`` (UTF-8) to the file ``path``, all or nothing: into a temporary file
+    beside it, then renamed over it, so a failure leaves no partial file and any earlier file
+    intact. Its folder is created if missing.
+
+    Raises
+    ------
+    ModelError
+        Naming ``option``: the file or its folder cannot be written.
+    """
+    check_file(path, option)
+    p = Path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{p.name}.", suffix=".tmp")
+    except OSError as err:
+        raise ModelError(f"cannot write '{path}': {err.strerror or err}", field=option,
+                         fix=f"Give {option} a file you can write") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, p)
+    except BaseException as err:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(err, OSError):
+            raise ModelError(f"cannot write '{path}': {err.strerror or err}", field=option,
+                             fix=f"Give {option} a file you can write") from None
+        raise
+    return p

@@ -200,7 +200,7 @@ def fig_multipliers(sol):
 
 def draw_mechanism(ax, sol, frames, *, alpha_min: float = 0.18, mm: bool = True) -> None:
     """Draw the mechanism at the sample indices ``frames`` (faint to solid) with traced paths."""
-    from .report.data import _body_shape
+    from .report.data import body_shape
     m = sol.model
     s = 1e3 if mm else 1.0
     colors = {b.name: PALETTE[n % len(PALETTE)] for n, b in enumerate(m.moving_bodies)}
@@ -222,7 +222,7 @@ def draw_mechanism(ax, sol, frames, *, alpha_min: float = 0.18, mm: bool = True)
     for n, f in enumerate(frames):
         a = alpha_min + (1 - alpha_min) * (n + 1) / len(frames)
         for b in m.moving_bodies:
-            shape, outline = _body_shape(b.points)
+            shape, outline = body_shape(b.points)
             xy = np.array([sol.point(b.name, p)[f] for p in outline]) * s
             if shape == "polygon":
                 ax.fill(xy[:, 0], xy[:, 1], color=colors[b.name], alpha=0.25 * a, lw=0)

@@ -17,9 +17,12 @@ from typing import Callable
 
 import numpy as np
 
+from .brief import brief_repr
+
 from . import joints as jk
 from .dynamics.denoc import DynamicSolution, _array, composite
 from .kinematics import KinematicSolution
+from .joints.base import frame
 from .kinematics.recursion import _axis, cut_frame, relative
 from .model import Model
 from .planar import about, first, stack_last, turned
@@ -47,6 +50,8 @@ class Reactions:
         ``R_i``: total wrench by the parent on body i about O_i through its tree joint, driver
         effort included (tree order).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     on_second: list
     internals: list | Callable = field(repr=False, compare=False)
@@ -81,27 +86,30 @@ def minus(x, y):
 
 
 @step
-def cut_wrench(code, e_a, lam, r_pb, r_a, r_b):
+def cut_wrench(code, nums, e_a, lam, r_pa, r_pb, r_a, r_b):
     """The constraint wrench of a cut joint of kind ``code`` on its two bodies.
 
     Parameters
     ----------
+    nums : tuple
+        The cut's numbers (:meth:`~linkdyn.joints.JointKind.own`).
     e_a : (x, y)
         The joint's axis, fixed in its first body a, global components.
     lam : (l0, l1, l2)
         Its multipliers, padded with zeros to three.
-    r_pb, r_a, r_b : (x, y)
-        The cut point on the second body b, O_a and O_b, m.
+    r_pa, r_pb, r_a, r_b : (x, y)
+        The cut points on the first body a and the second body b, O_a and O_b, m.
 
     Returns
     -------
     on_b : (n, fx, fy)
-        ``S^T lam``, by a on b about the cut point: the joint's reaction.
+        The kind's ``wrench`` (``S^T lam``, and for a gear the radial force that does no
+        work), by a on b about the cut point: the joint's reaction.
     w_b, w_a : (n, fx, fy)
         On b about O_b, ``A(r_Pb - r_b)^T S^T lam``, and its opposite on a about O_a.
     """
-    # S^T lam acts at the cut point on the second body, its opposite on the first
-    on_b = jk.wrench(code, e_a, lam)
+    # the kind's wrench acts at the cut point on the second body, its opposite on the first
+    on_b = jk.wrench(code, nums, frame(r_pa, r_pb, e_a), lam)
     w_a = about(on_b, relative(r_a, r_pb))
     return on_b, about(on_b, relative(r_b, r_pb)), (-w_a[0], -w_a[1], -w_a[2])
 
@@ -138,10 +146,10 @@ def _cuts(kin: KinematicSolution, lam: np.ndarray) -> list:
     lay, pose = kin.layout, kin.pose
     out = []
     for k, c in enumerate(lay.cuts):
-        _, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
-                                 pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
-        out.append((c,) + cut_wrench(jk.CODES[c.kind], e_a,
-                                     _multipliers(lam, lay.topo.row_slice(k)), r_pb,
+        r_pa, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
+                                    pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        out.append((c,) + cut_wrench(jk.CODES[c.kind], c.own, e_a,
+                                     _multipliers(lam, lay.topo.row_slice(k)), r_pa, r_pb,
                                      pose.r[c.a], pose.r[c.b]))
     return out
 

@@ -6,20 +6,25 @@ arrays of the :class:`~linkdyn.Solution`; all values are SI (m, rad, s, N, N m, 
 - :mod:`.fourbar`: four-bar loops, their Grashof type, transmission angle and mechanical
   advantage;
 - :mod:`.shaking`: the shaking force and moment the moving links put on the ground;
-- :mod:`.energy`: driver power and work, energy fluctuation and the flywheel it calls for;
+- :mod:`.energy`: driver and load power and work, damper dissipation, the energy account of a
+  run, energy fluctuation and the flywheel it calls for;
+- :mod:`.speed`: the steady speed of the independent coordinates (mean, min, max, coefficient
+  of fluctuation over the last turn) and the run-up to it;
 - :mod:`.path`: joint travel and the straightness of a point's path;
 - :mod:`.overview`: the run's summary (``summary.json``) and its numerical health.
 """
 
 from . import checks
-from .energy import driver_energy, driver_power, energy_fluctuation, flywheel_inertia
+from .energy import (driver_energy, driver_power, energy_account, energy_fluctuation,
+                     flywheel_inertia, load_energy)
 from .fourbar import FourBar, four_bars, mechanical_advantage, transmission_angle, velocity_ratio
 from .overview import health, summary
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_force, shaking_moment, shaking_wrench
+from .speed import speed_statistics
 
 __all__ = ["FourBar", "four_bars", "transmission_angle", "velocity_ratio",
            "mechanical_advantage", "shaking_wrench", "shaking_force", "shaking_moment",
            "inertia_wrench", "driver_power", "driver_energy", "energy_fluctuation",
            "flywheel_inertia", "joint_travel", "default_path_point", "path_straightness",
-           "summary", "health", "TWO_PI"]
+           "summary", "health", "TWO_PI", "load_energy", "energy_account", "speed_statistics"]

@@ -28,9 +28,9 @@ import numpy as np
 
 from .. import joints as jk
 from ..errors import AssemblyError
-from ..io.units import ANGLE_UNITS, LENGTH_UNITS
 from ..model import GROUND, Model
 from ..planar import cross
+from ..units import Units, coordinate
 
 __all__ = ["over_run", "loops", "SliderCrank", "slider_cranks", "free_coordinates", "shown",
            "span", "length"]
@@ -39,21 +39,19 @@ REFINE = 3          # bisection rounds of where a loop locks (32 samples each)
 
 
 def shown(model: Model, joint: str, value: float) -> str:
-    """A joint coordinate (rad or m) in the model file's unit, with the unit: ``'142.3 deg'``."""
-    if jk.get(model.joint(joint).kind).angular:
-        return f"{value / ANGLE_UNITS[model.angle_unit]:.6g} {model.angle_unit}"
-    return f"{value / LENGTH_UNITS[model.length_unit]:.6g} {model.length_unit}"
+    """A joint coordinate (rad or m) in the model file's unit, with the unit: ``'142.3 deg'``
+    (:meth:`linkdyn.units.Units.show`)."""
+    return Units.of(model).show(value, coordinate(model, joint))
 
 
 def span(model: Model, joint: str, lo: float, hi: float) -> str:
     """A range of a joint coordinate in the file's unit: ``'0 .. 360 deg'``."""
-    a, b = shown(model, joint, lo), shown(model, joint, hi)
-    return f"{a.rsplit(' ', 1)[0]} .. {b}"
+    return Units.of(model).span(lo, hi, coordinate(model, joint))
 
 
 def length(model: Model, value: float) -> str:
     """A length (m) in the model file's unit, with the unit."""
-    return f"{value / LENGTH_UNITS[model.length_unit]:.4g} {model.length_unit}"
+    return Units.of(model).show(value, "length", 4)
 
 
 def loops(model: Model, topo) -> list[tuple[str, list[str]]]:

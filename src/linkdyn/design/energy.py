@@ -18,9 +18,9 @@ from .. import joints as jk
 
 
 def driver_power(sol) -> np.ndarray:
-    """Power of each driver (T, n_drivers), W: ``tau qd`` at its joint."""
-    idx = [[j.name for j in sol.model.joints].index(d.joint) for d in sol.model.drivers]
-    return sol.dyn.tau * sol.kin.qd[..., idx]
+    """Power of each driver (T, n_drivers), W: ``tau qd`` at its joint
+    (:attr:`linkdyn.analysis.Solution.driver_powers`)."""
+    return sol.driver_powers
 
 
 def _cumtrapz(t, y):
@@ -64,32 +64,50 @@ def _constant_speed(d) -> float | None:
     return float(d.motion.speed) if isinstance(d.motion, ConstantSpeed) else None
 
 
+def _work(t, p) -> dict:
+    """Work (trapezoid rule), its positive and negative parts, mean, largest and smallest
+    power of the power ``p`` (T,) W over the times ``t`` (T,) s, its NaN samples left out:
+    ``(entry, t, p)`` with the finite samples; the entry's figures None with fewer than two."""
+    ok = np.isfinite(p)
+    tk, pk = t[ok], p[ok]
+    entry: dict = {"work_J": None, "positive_work_J": None, "negative_work_J": None,
+                   "mean_power_W": None, "max_power_W": None, "min_power_W": None}
+    if len(tk) < 2:
+        return entry, tk, pk
+    span = tk[-1] - tk[0]
+    # W = int P dt, W+ = int max(P, 0) dt, W- = int min(P, 0) dt, P_mean = W / span
+    work = float(_cumtrapz(tk, pk)[-1])
+    entry.update({
+        "work_J": work,
+        "positive_work_J": float(_cumtrapz(tk, np.clip(pk, 0, None))[-1]),
+        "negative_work_J": float(_cumtrapz(tk, np.clip(pk, None, 0))[-1]),
+        "mean_power_W": work / span if span > 0 else None,
+        "max_power_W": float(np.max(pk)), "min_power_W": float(np.min(pk))})
+    return entry, tk, pk
+
+
 def driver_energy(sol, fluctuation: float = 0.02) -> dict:
     """Work, power and energy fluctuation of each driver, with the flywheel a constant-speed
-    revolute driver needs for a coefficient of speed fluctuation ``fluctuation``.
+    revolute driver needs for a coefficient of speed fluctuation ``fluctuation``; then the
+    same of each actuator inside a joint (a ``joint_torque`` or ``joint_force`` load, e.g. a
+    motor with its torque-speed line), keyed by its label (:func:`linkdyn.loads.labels`),
+    with its ``joint`` and ``kind``, and neither energy fluctuation nor flywheel (its speed is
+    not prescribed: :func:`linkdyn.design.speed_statistics` gives the fluctuation it
+    leaves).
 
     Samples that are not valid (NaN rows) are left out of the integrals.
     """
+    from ..loads import labels
+
     m, t = sol.model, sol.t
     power = driver_power(sol)
     out = {}
     for k, d in enumerate(m.drivers):
-        p = power[..., k]
-        ok = np.isfinite(p)
-        tk, pk = t[ok], p[ok]
-        entry: dict = {"work_J": None, "positive_work_J": None, "negative_work_J": None,
-                       "mean_power_W": None, "max_power_W": None, "min_power_W": None,
-                       "energy_fluctuation_J": None, "fluctuation_over": None, "flywheel": None}
+        entry, tk, pk = _work(t, power[..., k])
+        entry.update({"energy_fluctuation_J": None, "fluctuation_over": None, "flywheel": None})
         out[d.joint] = entry
-        if len(tk) < 2:
+        if entry["work_J"] is None:
             continue
-        span = tk[-1] - tk[0]
-        entry.update({
-            "work_J": float(_cumtrapz(tk, pk)[-1]),
-            "positive_work_J": float(_cumtrapz(tk, np.clip(pk, 0, None))[-1]),
-            "negative_work_J": float(_cumtrapz(tk, np.clip(pk, None, 0))[-1]),
-            "mean_power_W": float(_cumtrapz(tk, pk)[-1] / span) if span > 0 else None,
-            "max_power_W": float(np.max(pk)), "min_power_W": float(np.min(pk))})
         # one cycle: the first driver period if the run covers it, else the whole run
         cyc, over = first_cycle(tk, d.period)
         if np.sum(cyc) < 2:
@@ -103,4 +121,73 @@ def driver_energy(sol, fluctuation: float = 0.02) -> dict:
             entry["flywheel"] = {"speed_fluctuation": float(fluctuation),
                                  "mean_speed_rad_s": abs(speed),
                                  "inertia_kg_m2": inertia}
+    for ld, label, p in zip(m.loads, labels(m), sol.loads.powers):
+        if ld.kind not in ("joint_torque", "joint_force"):
+            continue
+        out[label] = {"joint": ld.joint, "kind": ld.kind, **_work(t, np.asarray(p, float))[0],
+                      "energy_fluctuation_J": None, "fluctuation_over": None, "flywheel": None}
+    return out
+
+
+def load_energy(sol) -> dict:
+    """Each load's value and work over the run, keyed by its label
+    (:func:`linkdyn.loads.labels`): ``kind``, ``unit`` and ``peak`` (largest magnitude of its
+    value: a force's length, a torque, an effort inside a joint, a spring's or damper's
+    tension), ``peak_time_s``, then the work of its power (:func:`_work`), and for a damper
+    ``dissipated_J`` (minus its work, never negative). A spring's work is minus the change of
+    its potential energy. NaN samples are left out."""
+    from ..loads import VALUE_UNITS, labels
+
+    m, t = sol.model, np.asarray(sol.t, float)
+    out = {}
+    for ld, label, value, p in zip(m.loads, labels(m), sol.loads.values, sol.loads.powers):
+        if ld.kind == "friction":
+            continue   # the summary's "friction" entry (linkdyn.friction.summary)
+        v = np.asarray(value, float)
+        size = np.hypot(v[0], v[1]) if ld.kind == "force" else np.abs(v)
+        size = np.broadcast_to(size, t.shape)
+        k = int(np.nanargmax(size)) if np.any(np.isfinite(size)) else None
+        entry = {"kind": ld.kind, "unit": VALUE_UNITS[ld.kind],
+                 "peak": None if k is None else float(size[k]),
+                 "peak_time_s": None if k is None else float(t[k]),
+                 **_work(t, np.asarray(p, float))[0]}
+        if ld.kind == "damper":
+            entry["dissipated_J"] = None if entry["work_J"] is None else -entry["work_J"]
+        out[label] = entry
+    return out
+
+
+def energy_account(sol) -> dict:
+    """Where the energy of the run went, J, each work by the trapezoid rule over the samples:
+    ``kinetic_change`` and ``potential_change`` (last sample minus first), ``driver_work``
+    (the drivers', :func:`driver_power`), ``load_work`` (of the loads but springs, whose work
+    is in the potential energy, and dampers), ``damper_dissipation`` (minus the dampers'
+    work) and ``residual`` = kinetic + potential change - (driver work + load work - damper
+    dissipation): zero but for the trapezoid rule's error and the solution's. Samples that are
+    not finite are left out; None without two finite samples."""
+    t = np.asarray(sol.t, float)
+    kin_e = np.asarray(sol.kinetic_energy, float)
+    pot = np.broadcast_to(np.asarray(sol.potential_energy, float), t.shape)
+    drv = np.sum(driver_power(sol), axis=-1) if sol.model.drivers else np.zeros(t.shape)
+    loads = [np.broadcast_to(np.asarray(p, float), t.shape)
+             for ld, p in zip(sol.model.loads, sol.loads.powers)
+             if ld.kind not in ("spring", "damper")]
+    damp = [np.broadcast_to(np.asarray(p, float), t.shape)
+            for ld, p in zip(sol.model.loads, sol.loads.powers) if ld.kind == "damper"]
+    p_loads, p_damp = sum(loads, np.zeros(t.shape)), sum(damp, np.zeros(t.shape))
+    ok = np.isfinite(kin_e) & np.isfinite(pot) & np.isfinite(drv) & np.isfinite(p_loads) \
+        & np.isfinite(p_damp)
+    keys = ("kinetic_change", "potential_change", "driver_work", "load_work",
+            "damper_dissipation", "residual")
+    if np.sum(ok) < 2:
+        return dict.fromkeys(keys)
+    tk = t[ok]
+    out = {"kinetic_change": float(kin_e[ok][-1] - kin_e[ok][0]),
+           "potential_change": float(pot[ok][-1] - pot[ok][0]),
+           "driver_work": float(_cumtrapz(tk, drv[ok])[-1]),
+           "load_work": float(_cumtrapz(tk, p_loads[ok])[-1]),
+           "damper_dissipation": 0.0 - float(_cumtrapz(tk, p_damp[ok])[-1])}
+    # dKE + dPE = W_drivers + W_loads - D_dampers
+    out["residual"] = (out["kinetic_change"] + out["potential_change"]
+                       - (out["driver_work"] + out["load_work"] - out["damper_dissipation"]))
     return out

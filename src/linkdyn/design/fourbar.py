@@ -224,9 +224,12 @@ def link_travel(sol, fb: FourBar) -> dict:
     return out
 
 
-def travel_words(travel: dict) -> str:
+def travel_words(travel: dict, units=None) -> str:
     """``link_travel`` in words: 'in this run the input turns fully, the output swings 77.6
-    deg'."""
+    deg', the swing in ``units``' angle unit (:class:`linkdyn.units.Units`; None: deg)."""
+    from ..units import Units
+
+    units = units or Units(angle="deg")
     parts = []
     for role in ("input", "output"):
         t = travel[role]
@@ -234,6 +237,6 @@ def travel_words(travel: dict) -> str:
             continue
         turns = t["travel_deg"] / 360.0
         parts.append(f"the {role} " + (
-            f"swings {t['travel_deg']:.4g} deg" if not t["full_turn"] else
+            f"swings {units.show(np.radians(t['travel_deg']), 'angle', 4)}" if not t["full_turn"] else
             "turns fully" if turns < 1.0 + 1e-6 else f"turns fully ({turns:.3g} turns)"))
     return ("in this run " + ", ".join(parts)) if parts else ""

@@ -9,11 +9,12 @@ from ..errors import ModelError, quiet
 from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
-from .energy import driver_energy
+from .energy import driver_energy, load_energy
 from .fourbar import (four_bars, link_travel, mechanical_advantage, transmission_angle,
                       transmission_worst, travel_words)
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
+from ..units import Units
 
 
 def peak(x):
@@ -80,9 +81,13 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
                          f"{fluctuation}", field="--fluctuation", fix="Give e.g. 0.02")
     m, topo = sol.model, sol.topology
     t, valid = sol.t, sol.valid
+    units = Units.of(m)
     out: dict = {
         "model": m.name,
         "file": m.source,
+        # the file's units: what the printed summary and the display fields (``motion``,
+        # ``words``, ``range_shown``) are in; every number under a ``_m``/``_rad``/... key is SI
+        "units": {"length": units.length, "angle": units.angle},
         "samples": int(len(t)),
         "duration_s": float(t[-1] - t[0]),
         "mobility": topo.mobility,
@@ -130,7 +135,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             "grashof": fb.grashof,
             "type": fb.type,
             # what the run does, beside what the lengths allow
-            "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb))),
+            "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb), units)),
             "transmission_angle_deg": ta,
             "mechanical_advantage": _extremes(t, mechanical_advantage(sol, fb))})
     out["joint_travel"] = {}
@@ -153,6 +158,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         "includes": "ground-joint reactions, driver reactions and ground-anchored springs and "
                     "dampers, as loads on the ground"}
     out["driver_energy"] = driver_energy(sol, fluctuation)
+    out["load_energy"] = load_energy(sol)
     point = path_point or default_path_point(m)
     out["path_straightness"] = None
     if point:
@@ -166,6 +172,10 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             # three samples a line needs (else no straightness is reported)
             if default_range is not None and np.sum(valid) >= 3:
                 out["path_straightness"] = path_straightness(sol, point, None)
+    ps = out["path_straightness"]
+    if ps and ps["range"] is not None:   # the range as a person typed it, in the file's unit
+        ps["range_shown"] = units.span(*ps["range"], "angle" if ps["range_unit"] == "rad"
+                                       else "length")
     out["health"] = health(sol)
     if getattr(sol, "friction", None) is not None:   # energy lost per joint, efficiency
         from .. import friction

@@ -37,6 +37,7 @@ from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
 from ..loads import Loads, force_at, weight
 from ..planar import last, turned
+from ..kinematics.compiled import cut_numbers
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
 from .denoc import (DynamicSolution, generalized_force, less_cut, newton_euler_wrench,
@@ -170,6 +171,7 @@ def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
         pa = (L.cut_pa[cc, 0, dp], L.cut_pa[cc, 1, dp])
         pb = (L.cut_pb[cc, 0, dp], L.cut_pb[cc, 1, dp])
         axis = (L.cut_axis[cc, 0, dp], L.cut_axis[cc, 1, dp])
+        nums = cut_numbers(L, cc, dp)
         c_a, s_a, r_a = c[a, d, ks], s[a, d, ks], vector_views(r, a, d, ks)
         c_b, s_b, r_b = c[b, d, ks], s[b, d, ks], vector_views(r, b, d, ks)
         wc_a = wc[a, 0, :nb], wc[a, 1, :nb], wc[a, 2, :nb]
@@ -180,9 +182,9 @@ def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
         on_c = screw_views(o_on, L.cut_joint[cc], d, ks)
         for k in range(nb):
             x_a, x_b = (r_a[0][k], r_a[1][k]), (r_b[0][k], r_b[1][k])
-            _, r_pb, e_a = cut_frame(c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b, pa, pb, axis)
-            on, w_b, w_a = cut_wrench(code, e_a, (lam_c[0][k], lam_c[1][k], lam_c[2][k]), r_pb,
-                                      x_a, x_b)
+            r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b, pa, pb, axis)
+            on, w_b, w_a = cut_wrench(code, nums, e_a, (lam_c[0][k], lam_c[1][k], lam_c[2][k]),
+                                      r_pa, r_pb, x_a, x_b)
             wc_b[0][k], wc_b[1][k], wc_b[2][k] = plus((wc_b[0][k], wc_b[1][k], wc_b[2][k]), w_b)
             wc_a[0][k], wc_a[1][k], wc_a[2][k] = plus((wc_a[0][k], wc_a[1][k], wc_a[2][k]), w_a)
             on_c[0][k], on_c[1][k], on_c[2][k] = on

@@ -23,6 +23,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..brief import brief_repr
+
 from ..kinematics import KinematicSolution
 from ..kinematics.recursion import _axis, relative
 from ..loads import Loads
@@ -59,6 +61,8 @@ class DynamicSolution:
         Generalized force at each tree joint (``N^T w_star``), N m or N, tree order (column 0,
         the ground, is zero).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     lam: np.ndarray
     tau: np.ndarray

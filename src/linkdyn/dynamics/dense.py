@@ -51,7 +51,10 @@ Equations
   equals the number of drivers.
 - Reactions: each body's wrench balance about O_i,
   ``M_i td_i + W_i M_i E_i t_i - w_ext_i - w^lam_i = R_i - sum_{children c} A(r_c - r_i)^T R_c``,
-  stacked as ``B R = w_star - G lam`` and solved at once; ``R_i`` is the wrench the parent
+  stacked as ``B R = w_star - w^lam`` and solved at once, ``w^lam`` placing each cut's contact
+  wrench ``W_c`` (the kind's :meth:`~linkdyn.joints.JointKind.contact`: ``S_c^T lam_c``, and
+  for a gear or a rack its radial tooth force, which does no work while the tree holds the
+  centre distance, so ``G lam`` in eq. (27) is unchanged) as ``G`` places ``S_c^T lam``; ``R_i`` is the wrench the parent
   exerts on body i through its tree joint (driver effort included), about O_i.
 """
 
@@ -233,13 +236,16 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
 
         # --- cut joints: S_c, G_c and J = G^T N (eqs. 16-24) -----------------------------------
         G = np.zeros((3 * m, n_rows))
-        S_list = []
+        cut_args = []
         for k, j in enumerate(topo.cut):
             jt = model.joints[j]
+            kind = jk.get(jt.kind)
             a, b = names.index(jt.body_a), names.index(jt.body_b)
             P = point(b, jt.point_b)
-            S = jk.get(jt.kind).selection(axis(jt))
-            S_list.append(S)
+            # the kind's numbers and frame: its axis and d = r_Pb - r_Pa
+            args = (kind.own(jt.numbers), axis(jt), P - point(a, jt.point_a))
+            S = kind.selection(*args)
+            cut_args.append((kind, a, b, P, args))
             cols = topo.row_slice(k)
             if b > 0:
                 G[blk(b), cols] += propagation(P - r[b]).T @ S.T
@@ -263,7 +269,17 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
         for i in range(1, n):
             for c in children[i]:
                 B[blk(i), blk(c)] = -propagation(r[c] - r[i]).T
-        R = np.linalg.solve(B, w_star - G @ lam_i).reshape(m, 3)
+        # the cut wrenches on the bodies: the kinds' contact wrenches W_c (S_c^T lam_c, and a
+        # gear's radial force) placed as G places S^T lam
+        w_lam = np.zeros(3 * m)
+        W = []
+        for k, (kind, a, b, P, args) in enumerate(cut_args):
+            W.append(kind.contact(*args, lam_i[topo.row_slice(k)]))
+            if b > 0:
+                w_lam[blk(b)] += propagation(P - r[b]).T @ W[k]
+            if a > 0:
+                w_lam[blk(a)] -= propagation(P - r[a]).T @ W[k]
+        R = np.linalg.solve(B, w_star - w_lam).reshape(m, 3)
 
         for i in range(1, n):
             j = topo.tree_joint[i]
@@ -286,7 +302,7 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
             force[idx][j] = w_ab[1:]
             moment[idx][j] = w_ab[0]
         for k, j in enumerate(topo.cut):
-            w_ab = S_list[k].T @ lam_i[topo.row_slice(k)]   # on the second body, about its point
+            w_ab = W[k]   # on the second body, about its point
             force[idx][j] = w_ab[1:]
             moment[idx][j] = w_ab[0]
 

@@ -17,7 +17,9 @@ from ..model import Driver, Joint
 from .reader import _quote, _Reader, _expr_fix, _shorten, _type_name
 
 MOTION_KEYS = {"constant_speed": ("kind", "speed", "rpm", "start"),
-               "expression": ("kind", "q"), "table": ("kind", "file")}
+               "expression": ("kind", "q"), "table": ("kind", "file"),
+               "segments": ("kind", "start", "segments", "repeat")}
+SEGMENT_KEYS = ("law", "to", "time")
 
 
 def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tuple[str, Driver]]:
@@ -36,7 +38,9 @@ def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tu
                    "Drive one of the mechanism's revolute or prismatic joints instead")
         revolute = kind.angular
         motion, period = _motion_of(r, entry["motion"], f"{f}.motion", revolute)
-        description = motion.describe("rad" if revolute else "m")
+        # in the file's unit of the joint's coordinate, as a person typed it
+        description = motion.describe(*((r.angle_name, r.angle) if revolute
+                                        else (r.length_name, r.length)))
         drivers[joint] = (f, Driver(joint, motion, description=description, period=period))
     return drivers
 
@@ -63,7 +67,7 @@ def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
                  else r.number(spec["speed"], f"{f}.speed", f"{unit}/s") * scale)
         start = r.number(spec.get("start", 0.0), f"{f}.start", unit) * scale
         period = 2 * math.pi / abs(speed) if revolute and speed != 0 else None
-        return _motion.ConstantSpeed(speed, start=start), period
+        return _motion.ConstantSpeed(speed, start=start, rpm="rpm" in spec), period
     if kind == "expression":
         if "q" not in spec:
             r.fail(f"{f}.q", "missing required key 'q'",
@@ -79,6 +83,8 @@ def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
             r.fail(f"{f}.q", f"q = {_quote(text)} or its derivatives are not finite at t = 0",
                    "The analysis starts at t = 0; give a formula defined there")
         return motion, None
+    if kind == "segments":
+        return _segments(r, spec, f, scale, unit)
     if "file" not in spec:
         r.fail(f"{f}.file", "missing required key 'file'", 'Add file = "profile.csv" (columns t, q)')
     name = r.string(spec["file"], f"{f}.file")
@@ -102,6 +108,49 @@ def _motion_of(r: _Reader, spec: Any, f: str, revolute: bool):
                f"{_shorten(str(e).rstrip('.'), 300)}",
                f"Give a CSV file with columns t (s, increasing) and q ({unit})")
     return table, None
+
+
+def _segments(r: _Reader, spec: dict, f: str, scale: float, unit: str):
+    """A :class:`~linkdyn.motion.SegmentMotion` from ``kind = "segments"``: ``start`` and each
+    segment's ``to`` in the joint's unit, ``time`` in s."""
+    from .. import laws
+    if "segments" not in spec:
+        r.fail(f"{f}.segments", "missing required key 'segments'",
+               'Add segments = [{ law = "cycloidal", to = ..., time = ... }, { law = "dwell", '
+               'time = ... }, ...]')
+    start = r.number(spec.get("start", 0.0), f"{f}.start", unit) * scale
+    repeat = spec.get("repeat", True)
+    if not isinstance(repeat, bool):
+        r.fail(f"{f}.repeat", f"expected true or false, got {_type_name(repeat)}",
+               "Write repeat = true (periodic) or repeat = false (hold the last value)")
+    items = r.entries(spec["segments"], f"{f}.segments")
+    if not items:
+        r.fail(f"{f}.segments", "no segments given",
+               'Give at least one, e.g. { law = "cycloidal", to = 60.0, time = 0.5 }')
+    segs, at = [], start
+    for k, item in enumerate(items):
+        g = f"{f}.segments[{k}]"
+        r.table(item, g, SEGMENT_KEYS, required=("law", "time"))
+        law = r.choice(item["law"], f"{g}.law", tuple(laws.LAWS), "motion law")
+        time = r.number(item["time"], f"{g}.time", "s", positive=True)
+        if law == "dwell":
+            if "to" in item:
+                r.fail(f"{g}.to", "a dwell holds its start: it takes no 'to'",
+                       "Remove to, or use a rise law (cycloidal, harmonic, poly345, poly4567)")
+            to = at
+        else:
+            if "to" not in item:
+                r.fail(f"{g}.to", "missing required key 'to'",
+                       f"Give the coordinate at the segment's end, in {unit}")
+            to = r.number(item["to"], f"{g}.to", unit) * scale
+        segs.append(_motion.Segment(law, to, time))
+        at = to
+    if repeat and not math.isclose(at, start, rel_tol=1e-12, abs_tol=1e-15):
+        r.fail(f"{f}.segments", f"the segments end at {at / scale:.6g} {unit}, not at the start "
+               f"{start / scale:.6g} {unit}: repeated, the joint would jump at each repeat",
+               "End the last segment at the start, or set repeat = false")
+    motion = _motion.SegmentMotion(start, tuple(segs), repeat)
+    return motion, motion.period
 
 
 def _inside(path: Path, folder: Path) -> bool:

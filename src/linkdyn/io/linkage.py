@@ -51,26 +51,30 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
                 r.fail(f"{f}.{key}", f"a moving body needs a {key}",
                        "Add mass = ... (kg)" if key == "mass"
                        else f"Add inertia = ... (kg {Lu}^2, about the mass centre)")
-        mass = r.number(entry["mass"], f"{f}.mass", "kg", positive=True,
-                        fix="Give a positive mass in kg (only the ground is massless)")
+        mass = r.number(entry["mass"], f"{f}.mass", "kg", nonnegative=True,
+                        fix="Give a mass in kg, 0 or more (0: a massless link)")
         com = entry.get("com", [0.0, 0.0])
         if isinstance(com, str):  # the name of one of the body's points
             com = points[r.point(name, points, com, f"{f}.com")]
         else:
             com = r.vector(com, f"{f}.com", Lu) * L
-        inertia = r.number(entry["inertia"], f"{f}.inertia", f"kg {Lu}^2", positive=True,
-                           fix=f"Give a positive moment of inertia in kg {Lu}^2")
+        inertia = r.number(entry["inertia"], f"{f}.inertia", f"kg {Lu}^2", nonnegative=True,
+                           fix=f"Give a moment of inertia in kg {Lu}^2, 0 or more (0: a point "
+                               "mass, or a massless link)")
         if "inertia_about" in entry:
             about = r.point(name, points, entry["inertia_about"], f"{f}.inertia_about")
             d2 = float(np.sum((points[about] - com) ** 2)) / L**2  # |P - C|^2 in length unit^2
-            if inertia - mass * d2 <= 0:
+            # a point mass has exactly m d^2 about P: the rounding of a typed m d^2 is not
+            # an error
+            if inertia - mass * d2 < -1e-9 * mass * d2:
                 r.fail(f"{f}.inertia",
-                       f"inertia {inertia:g} kg {Lu}^2 about point '{about}' is not more than "
+                       f"inertia {inertia:g} kg {Lu}^2 about point '{about}' is less than "
                        f"m d^2 = {mass * d2:g} kg {Lu}^2 (mass centre {math.sqrt(d2):g} {Lu} away), "
                        f"so the inertia about the mass centre would be {inertia - mass * d2:g}",
                        "Check inertia, inertia_about, com and mass: by the parallel-axis theorem "
-                       "the inertia about a point exceeds the centroidal one by m d^2")
-            inertia -= mass * d2  # parallel-axis theorem: I_C = I_P - m |P - C|^2
+                       "the inertia about a point is the centroidal one plus m d^2")
+            # parallel-axis theorem: I_C = I_P - m |P - C|^2
+            inertia = max(inertia - mass * d2, 0.0)
         bodies[name] = Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
     return bodies
 
@@ -128,6 +132,9 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
                        f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
         extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", a)
                  for x in jk.get(kind).numbers}
+        why = jk.get(kind).refuse(extra)
+        if why:
+            r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
     return joints
 

@@ -47,15 +47,35 @@ def _load_value(value, vector: bool):
     return comps if vector else comps[0]
 
 
+def _back(si: float, read) -> float | int:
+    """The shortest decimal ``x`` that the reader turns back into ``si`` exactly (``read(x) ==
+    si``): ``rpm = 120`` stays 120, not 119.99999999999999; the plain quotient if none does."""
+    for digits in range(1, 18):
+        x = float(f"{si / read(1.0):.{digits}g}")
+        if read(x) == si:
+            return _num(x)
+    return _num(si / read(1.0))
+
+
 def _motion_dict(motion, scale: float, table_file: str | None):
     if isinstance(motion, _motion.ConstantSpeed):
-        return {"kind": "constant_speed", "speed": _num(motion.speed / scale),
-                "start": _num(motion.start / scale)}
+        start = _back(motion.start, lambda x: x * scale)
+        if motion.rpm:   # the file's own speed unit (io.drivers reads rpm x 2 pi / 60)
+            return {"kind": "constant_speed",
+                    "rpm": _back(motion.speed, lambda x: x * 2 * math.pi / 60), "start": start}
+        return {"kind": "constant_speed", "speed": _back(motion.speed, lambda x: x * scale),
+                "start": start}
     if isinstance(motion, _motion.ExpressionMotion):
         text = motion.text.strip()
         if motion.scale != scale:  # q = motion.scale * f(t) in SI; the file multiplies by scale
             text = f"{motion.scale / scale!r}*({text})"
         return {"kind": "expression", "q": text}
+    if isinstance(motion, _motion.SegmentMotion):
+        segs = [{"law": x.law, "time": _num(x.time)} if x.law == "dwell" else
+                {"law": x.law, "to": _num(x.to / scale), "time": _num(x.time)}
+                for x in motion.segments]
+        return {"kind": "segments", "start": _num(motion.start / scale), "segments": segs,
+                "repeat": motion.repeat}
     if isinstance(motion, _motion.TableMotion):
         if table_file is None:
             raise ValueError("a motion table is written beside the model file; give save() a path")
@@ -256,10 +276,46 @@ def save(model: Model, path: str | os.PathLike) -> Path:
     # JSON with the same structure for *.json, as load reads it
     text = (json.dumps(data, indent=2, allow_nan=False) + "\n" if suffix == ".json"
             else dumps_toml(data))
+    files = {}
     for j, motion in tables.items():
         unit = A if jk.get(model.joint(j).kind).angular else L
         q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
         rows = "\n".join(f"{ti!r},{qi!r}" for ti, qi in zip(motion.t.tolist(), q.tolist()))
-        (path.parent / names[j]).write_text("t,q\n" + rows + "\n", encoding="utf-8")
-    path.write_text(text, encoding="utf-8")
+        files[path.parent / names[j]] = "t,q\n" + rows + "\n"
+    files[path] = text
+    _write_all(files, path)
     return path
+
+
+def _write_all(files: dict[Path, str], path: Path) -> None:
+    """Write every ``{file: text}`` all or nothing: each into a temporary file beside it, then
+    each moved into place (an atomic replace); on a failure the temporary files are removed
+    and nothing is written. Raises a ModelError naming ``path`` for what the system refuses
+    (a missing folder, a folder at the path, no permission)."""
+    import tempfile
+
+    done: dict[Path, str] = {}
+    try:
+        for target, text in files.items():
+            fd, tmp = tempfile.mkstemp(prefix=f".{target.name}-", dir=target.parent)
+            done[target] = tmp
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(text)
+            os.chmod(tmp, 0o666 & ~_umask())   # as a plain open() would create it
+        for target, tmp in done.items():
+            os.replace(tmp, target)
+    except OSError as err:
+        for tmp in done.values():
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        raise ModelError(f"cannot write the model file: {err.strerror or err}", file=str(path),
+                         field="path", fix="Give the path of a file in a folder that exists and "
+                                           "that you can write to") from None
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

@@ -10,13 +10,14 @@ defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
 
 from __future__ import annotations
 
-from . import prismatic, revolute, slot
+from . import gear, prismatic, rack, revolute, slot
 from ..steps import by_kind
-from .base import JointKind, Number, line_motion
+from .base import WIDTH, JointKind, Number, frame, line_motion
 
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
-                                                       slot.KIND)}
+                                                       slot.KIND,
+                                                       gear.KIND, rack.KIND)}
 
 
 def _numbers() -> dict[str, Number]:
@@ -78,4 +79,4 @@ def get(name: str) -> JointKind:
                                + ", ".join(REGISTRY)) from None
 
 
-__all__ = ["CODES", "JointKind", "NUMBERS", "Number", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]
+__all__ = ["CODES", "WIDTH", "frame", "JointKind", "NUMBERS", "Number", "REGISTRY", "UnknownJointKind", "get", "line_motion", "names"]

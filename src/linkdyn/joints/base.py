@@ -11,9 +11,20 @@ call. For a tree joint (eqs. 1-3 of the seed paper, planar): ``place`` (the chil
 the parent's and ``q``), ``motion`` (the propagation vector ``p_i``), ``plus_motion`` and
 ``plus_motion_rate`` (``x + p_i rate``, ``x + pd_i rate``). For a cut joint at the second body's
 point P, with ``x`` the relative twist of b to a at P: ``residual`` (the position closure rows),
-``selected`` (``S x``), ``selected_rate`` (``(dS/dt) x``), ``wrench`` (``S^T lam`` on b at P)
-and ``coordinate`` (the joint's coordinate, rate and acceleration from its bodies' motion: a cut
-joint's ``q`` is an output, not an unknown). :meth:`JointKind.motion_vector`,
+``selected`` (``S x``), ``selected_rate`` (``(dS/dt) x``), ``wrench`` (the constraint wrench
+on b at P, ``S^T lam`` and any part that does no work) and ``coordinate`` (the joint's
+coordinate, rate and acceleration from its bodies' motion: a cut joint's ``q`` is an output,
+not an unknown).
+
+Every cut step (protocol version 2) takes first the cut's own numbers ``nums`` and its frame
+``f``: ``nums`` is the tuple of the kind's scalar numbers (shape ``()``, in its declaration
+order, :attr:`JointKind.scalars`) padded with zeros to :data:`WIDTH`; ``f = (e_a, d)`` holds
+the axis ``e_a`` (the kind's ``axis`` fixed in a, global; ``(1, 0)`` turned with a for a kind
+without one) and ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m),
+:func:`frame`. A step that needs the frame's motion takes ``fd = (w_a, d')``: the axis turns at
+a's angular velocity ``w_a``, ``d'`` is the rate of ``d`` (m/s). So a kind may depend on both
+cut points (a gear's line of centres) and on any number of its own, with no edit of the
+solvers. :meth:`JointKind.motion_vector`,
 :meth:`JointKind.cut_rows` and :meth:`JointKind.selection` give them as arrays.
 
 Arrays are component-first (see :mod:`linkdyn.planar`): a planar vector is ``(2, ...)``, a
@@ -74,6 +85,18 @@ class Number:
         return float(x) if not self.shape else np.array(x, float).reshape(self.shape)
 
 
+#: the length of a cut's numbers tuple ``nums``, as every cut step takes it (the kind's scalar
+#: numbers, padded with zeros)
+WIDTH = 5
+
+
+@step
+def frame(r_pa, r_pb, e_a):
+    """A cut's frame ``(e_a, d)`` as the cut steps take it: its axis ``e_a`` (global) and
+    ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m)."""
+    return e_a, (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1])
+
+
 #: a slider's or a slot's axis: a unit direction fixed in the joint's first body, in its frame
 AXIS = Number("axis", (2,), "", (1.0, 0.0), direction=True,
               doc="sliding direction")
@@ -113,6 +136,12 @@ class JointKind:
     dyad : str or None
         Its letter in the closed-form dyads of :mod:`linkdyn.kinematics.dyads` (``'R'``,
         ``'P'``); None: loops it closes use Newton's method.
+    periodic : bool
+        Whether its closure rows are unchanged by a whole turn of either body (a lower pair's
+        are; a gear's are not: turning one gear a whole turn moves the other by the ratio).
+        If not, the assembly keeps the dependent angles Newton's method found (no whole
+        turns moved to bring them near the guess) and ``simulate`` integrates the free
+        angles with their whole turns (F12 off).
     """
 
     name = ""
@@ -125,6 +154,7 @@ class JointKind:
     multipliers: tuple[tuple[str, str], ...] = ()
     effort: str | None = None
     dyad: str | None = None
+    periodic = True
 
     @property
     def rows(self) -> int:
@@ -134,6 +164,22 @@ class JointKind:
     def keys(self) -> tuple[str, ...]:
         return tuple(x.name for x in self.numbers)
 
+    @property
+    def scalars(self) -> tuple[str, ...]:
+        """The names of its scalar numbers (shape ``()``), in order: the entries of the
+        ``nums`` tuple its cut steps take (padded with zeros to :data:`WIDTH`)."""
+        out = tuple(x.name for x in self.numbers if not x.shape)
+        if len(out) > WIDTH:
+            raise TypeError(f"joint kind {self.name!r} has more than {WIDTH} scalar numbers")
+        return out
+
+    def own(self, numbers: dict, zero=0.0) -> tuple:
+        """The tuple ``nums`` of its cut steps from a joint's ``numbers`` (name -> value; a
+        value may be an array with a design axis): its :attr:`scalars`, padded with ``zero``
+        to :data:`WIDTH`."""
+        own = tuple(numbers[k] for k in self.scalars)
+        return own + (zero,) * (WIDTH - len(own))
+
     def tree_numbers(self, values: dict, sign: int) -> dict:
         """The joint's numbers ``values`` (name -> SI value, as the model holds them) as its
         tree row of the layout holds them, for a tree joint whose child is its second body
@@ -142,6 +188,18 @@ class JointKind:
 
     def __repr__(self) -> str:
         return f"<joint kind {self.name!r}>"
+
+    # --- checks of a joint the reader and the assembly ask (a kind without them: none) ------
+    def refuse(self, numbers: dict) -> str | None:
+        """Why a joint's numbers (name -> SI value, as read) are not valid for the kind, for
+        the reader's message (exit 2); None: they are."""
+        return None
+
+    #: ``fit(nums, f) -> (misfit, wanted, what)``: for a kind whose rows hold less than its
+    #: geometry needs (a gear's centre distance, held by the tree, not by its row), how far
+    #: the assembled frame is from it (m, the batch shape), the value wanted (m) and what is
+    #: measured; the assembly refuses a misfit (exit 3 naming the joint). None: no such need.
+    fit = None
 
     # --- the kind's steps (linkdyn.steps: static, on component tuples, for both backends) ---
     # A kind defines those that apply as static methods decorated with ``@step``; the solvers
@@ -156,13 +214,15 @@ class JointKind:
     #   plus_motion(s, e, x, rate) -> x + p_i rate
     #   plus_motion_rate(s, e, w_axis, x, rate) -> x + pd_i rate (w_axis: angular velocity
     #       of the body carrying the axis)
-    #   residual(angle, phi_a, phi_b, e_a, r_pa, r_pb) -> rows   position closure (cut joint)
-    #   selected(e_a, x) -> S x                           x: relative twist of b to a at the cut
-    #   selected_rate(e_a, w_a, x) -> (dS/dt) x
-    #   wrench(e_a, lam) -> S^T lam                   on the second body, about the cut point
-    #   coordinate(e_a, a, b, d, dd, dd2) -> q, qd, qdd   a cut joint's coordinate, from the
-    #       bodies' (phi, w, al) and the second body's cut point relative to the first's
-    #       (d, d', d'')
+    # The cut steps (protocol 2) take the cut's numbers ``nums`` (WIDTH-tuple) and frame
+    # ``f = (e_a, d)`` first (module docstring); ``fd = (w_a, d')`` is the frame's rate:
+    #   residual(nums, f, phi_a, phi_b) -> rows   position closure (cut joint)
+    #   selected(nums, f, x) -> S x                   x: relative twist of b to a at the cut
+    #   selected_rate(nums, f, fd, x) -> (dS/dt) x
+    #   wrench(nums, f, lam) -> on the second body about the cut point: S^T lam, plus any
+    #       force that does no work while the tree holds the frame (a gear's radial force)
+    #   coordinate(nums, f, a, b, dd, dd2) -> q, qd, qdd   a cut joint's coordinate, from the
+    #       bodies' (phi, w, al) and the rates d', d'' of d
     place = motion = plus_motion = plus_motion_rate = None
     residual = selected = selected_rate = wrench = coordinate = None
 
@@ -174,16 +234,27 @@ class JointKind:
         p = _stack(self.motion(s, (0.0, 0.0) if e is None else e))
         return p.reshape((3,) + (1,) * ndim) if p.ndim == 1 else p
 
-    def cut_rows(self, e_a, x):
+    def cut_rows(self, nums, f, x):
         """Cut-row selection ``S x`` (rows, ...) of a relative twist or twist rate ``x`` (3, ...)
-        of the second body to the first at the cut point."""
-        return _stack(self.selected(e_a, x)[:self.rows], x[0])
+        of the second body to the first at the cut point (``nums``, ``f``: the cut's numbers
+        and frame, as the cut steps take them)."""
+        return _stack(self.selected(nums, f, x)[:self.rows], x[0])
 
     # --- explicit matrices, for the dense reference -----------------------------------------
-    def selection(self, e_a) -> np.ndarray:
-        """The cut-row selection matrix ``S`` (rows, 3) at one sample, ``e_a`` (2,): the cut
-        rows of the identity's columns."""
-        return np.asarray(self.cut_rows(np.asarray(e_a, float), np.eye(3))).reshape(self.rows, 3)
+    def selection(self, nums, e_a, d) -> np.ndarray:
+        """The cut-row selection matrix ``S`` (rows, 3) at one sample: ``nums`` the cut's
+        numbers (:meth:`own`), ``e_a`` (2,) its global axis, ``d`` (2,) the second body's cut
+        point from the first's; the cut rows of the identity's columns."""
+        f = (np.asarray(e_a, float), np.asarray(d, float))
+        return np.asarray(self.cut_rows(nums, f, np.eye(3))).reshape(self.rows, 3)
+
+    def contact(self, nums, e_a, d, lam) -> np.ndarray:
+        """The constraint wrench (3,) ``[n, fx, fy]`` of the multipliers ``lam`` (rows,) on the
+        second body about its cut point at one sample (the kind's ``wrench``; ``S^T lam`` for
+        a lower pair), for the dense reference."""
+        f = (np.asarray(e_a, float), np.asarray(d, float))
+        lam = tuple(float(x) for x in lam) + (0.0,) * (3 - len(lam))
+        return np.array([float(x) for x in self.wrench(nums, f, lam)])
 
     def _tree_only(self):
         if self.place is None:

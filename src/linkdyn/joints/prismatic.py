@@ -63,35 +63,35 @@ class Prismatic(JointKind):
 
     @staticmethod
     @step
-    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
-        # [phi_b - phi_a - angle (wrapped), (r_Pb - r_Pa) . n],  n = perp(e)
-        return (wrapped(phi_b - phi_a - angle),
-                dot((r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), normal(e_a)), 0.0)
+    def residual(nums, f, phi_a, phi_b):
+        # [phi_b - phi_a - angle (wrapped), d . n],  d = r_Pb - r_Pa,  n = perp(e);
+        # nums = (angle, ...)
+        return (wrapped(phi_b - phi_a - nums[0]), dot(f[1], normal(f[0])), 0.0)
 
     @staticmethod
     @step
-    def selected(e_a, x):
+    def selected(nums, f, x):
         # S = [[1, 0, 0], [0, n_x, n_y]]
-        return (x[0], dot((x[1], x[2]), normal(e_a)), 0.0)
+        return (x[0], dot((x[1], x[2]), normal(f[0])), 0.0)
 
     @staticmethod
     @step
-    def selected_rate(e_a, w_a, x):
+    def selected_rate(nums, f, fd, x):
         # dS/dt x = [0, n_dot . x_v],  n_dot = -w_a e
-        return (0.0, -w_a * dot((x[1], x[2]), e_a), 0.0)
+        return (0.0, -fd[0] * dot((x[1], x[2]), f[0]), 0.0)
 
     @staticmethod
     @step
-    def wrench(e_a, lam):
+    def wrench(nums, f, lam):
         # S^T lam = [lam_0, lam_1 n]
-        n = normal(e_a)
+        n = normal(f[0])
         return (lam[0], lam[1] * n[0], lam[1] * n[1])
 
     @staticmethod
     @step
-    def coordinate(e_a, a, b, d, dd, dd2):
+    def coordinate(nums, f, a, b, dd, dd2):
         # q = d . e along the axis turning with the first body
-        return line_motion(e_a, a[1], a[2], d, dd, dd2)
+        return line_motion(f[0], a[1], a[2], f[1], dd, dd2)
 
 
 KIND = Prismatic()

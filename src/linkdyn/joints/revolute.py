@@ -49,30 +49,31 @@ class Revolute(JointKind):
 
     @staticmethod
     @step
-    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
-        # the two pin points coincide: r_Pb - r_Pa = 0
-        return (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1], 0.0)
+    def residual(nums, f, phi_a, phi_b):
+        # the two pin points coincide: d = r_Pb - r_Pa = 0
+        d = f[1]
+        return (d[0], d[1], 0.0)
 
     @staticmethod
     @step
-    def selected(e_a, x):
+    def selected(nums, f, x):
         # S = [[0, 1, 0], [0, 0, 1]]: the relative velocity at the pin
         return (x[1], x[2], 0.0)
 
     @staticmethod
     @step
-    def selected_rate(e_a, w_a, x):
+    def selected_rate(nums, f, fd, x):
         return (0.0, 0.0, 0.0)
 
     @staticmethod
     @step
-    def wrench(e_a, lam):
+    def wrench(nums, f, lam):
         # S^T lam = [0, lam_x, lam_y]: a force through the pin
         return (0.0, lam[0], lam[1])
 
     @staticmethod
     @step
-    def coordinate(e_a, a, b, d, dd, dd2):
+    def coordinate(nums, f, a, b, dd, dd2):
         # q = phi_b - phi_a and its rates
         return b[0] - a[0], b[1] - a[1], b[2] - a[2]
 

@@ -30,34 +30,34 @@ class Slot(JointKind):
 
     @staticmethod
     @step
-    def residual(angle, phi_a, phi_b, e_a, r_pa, r_pb):
-        # the pin on the slot's line: (r_Pb - r_Pa) . n = 0,  n = perp(e)
-        return (dot((r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), normal(e_a)), 0.0, 0.0)
+    def residual(nums, f, phi_a, phi_b):
+        # the pin on the slot's line: d . n = 0,  d = r_Pb - r_Pa,  n = perp(e)
+        return (dot(f[1], normal(f[0])), 0.0, 0.0)
 
     @staticmethod
     @step
-    def selected(e_a, x):
+    def selected(nums, f, x):
         # S = [[0, n_x, n_y]]: the pin's relative velocity normal to the slot
-        return (dot((x[1], x[2]), normal(e_a)), 0.0, 0.0)
+        return (dot((x[1], x[2]), normal(f[0])), 0.0, 0.0)
 
     @staticmethod
     @step
-    def selected_rate(e_a, w_a, x):
+    def selected_rate(nums, f, fd, x):
         # dS/dt x = n_dot . x_v,  n_dot = -w_a e (the slot turns with its body)
-        return (-w_a * dot((x[1], x[2]), e_a), 0.0, 0.0)
+        return (-fd[0] * dot((x[1], x[2]), f[0]), 0.0, 0.0)
 
     @staticmethod
     @step
-    def wrench(e_a, lam):
+    def wrench(nums, f, lam):
         # S^T lam = [0, lam n]: the normal force through the pin, no moment about it
-        n = normal(e_a)
+        n = normal(f[0])
         return (0.0, lam[0] * n[0], lam[0] * n[1])
 
     @staticmethod
     @step
-    def coordinate(e_a, a, b, d, dd, dd2):
+    def coordinate(nums, f, a, b, dd, dd2):
         # q = d . e, the pin's displacement along the slot turning with the first body
-        return line_motion(e_a, a[1], a[2], d, dd, dd2)
+        return line_motion(f[0], a[1], a[2], f[1], dd, dd2)
 
 
 KIND = Slot()

@@ -143,6 +143,17 @@ def _turns(out, k, rot):
 
 
 @inline
+def cut_numbers(L, ci, d):
+    """Cut ci's numbers as its kind's cut steps take them (``nums``, ``L.cut_own``), design d:
+    a tuple of :data:`linkdyn.joints.WIDTH` floats."""
+    x = L.cut_own
+    return (x[ci, 0, d], x[ci, 1, d], x[ci, 2, d], x[ci, 3, d], x[ci, 4, d])
+
+
+assert jk.WIDTH == 5, "cut_numbers gathers WIDTH numbers"
+
+
+@inline
 def _cut_points(L, ci, d):
     """Cut ci's points on its bodies a and b (relative to O_a, O_b), design d."""
     return ((L.cut_pa[ci, 0, d], L.cut_pa[ci, 1, d]), (L.cut_pb[ci, 0, d], L.cut_pb[ci, 1, d]))
@@ -244,12 +255,12 @@ def _residual(L, d, k0, w, kw, nb, phi, P, err):
     size = L.size
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
-        a, b, code, angle = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci], L.cut_angle[ci, d]
+        a, b, code, nums = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci], cut_numbers(L, ci, d)
         m0, m1, m2 = L.cut_metres[ci, 0], L.cut_metres[ci, 1], L.cut_metres[ci, 2]
         phi_a, phi_b = phi[a, w, kw:kw + nb], phi[b, w, kw:kw + nb]
         for k in range(nb):   # the padded rows are zero
             r_pa, r_pb, e_a = _frame(P_c, k)
-            g = jk.residual(code, angle, phi_a[k], phi_b[k], e_a, r_pa, r_pb)
+            g = jk.residual(code, nums, jk.frame(r_pa, r_pb, e_a), phi_a[k], phi_b[k])
             e = scaled_error(err_d[k], g[0], m0, size[d])
             e = scaled_error(e, g[1], m1, size[d])
             err_d[k] = scaled_error(e, g[2], m2, size[d])
@@ -265,6 +276,7 @@ def _jacobian(L, d, k0, nb, r, e, P, J):
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
         cut, row, rows = L.cut_kind[ci], L.cut_row[ci], L.cut_rows[ci]
+        nums = cut_numbers(L, ci, d)
         for j in range(1, len(L.parent)):
             f = L.side[ci, j]
             if f == 0:
@@ -277,9 +289,9 @@ def _jacobian(L, d, k0, nb, r, e, P, J):
             J1 = J[min(row + 1, last), j - 1, d, ks]
             J2 = J[min(row + 2, last), j - 1, d, ks]
             for k in range(nb):
-                _, r_pb, e_a = _frame(P_c, k)
-                x = jacobian_column(cut, code, sign, f, (ex_j[k], ey_j[k]), (rx_j[k], ry_j[k]),
-                                    r_pb, e_a)
+                r_pa, r_pb, e_a = _frame(P_c, k)
+                x = jacobian_column(cut, nums, code, sign, f, (ex_j[k], ey_j[k]),
+                                    (rx_j[k], ry_j[k]), r_pa, r_pb, e_a)
                 J0[k] = x[0]
                 if rows > 1:
                     J1[k] = x[1]
@@ -345,11 +357,13 @@ def _bias(L, d, k0, nb, r, tw, td, P, bias):
         w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         B0, B1, B2 = bias[row], bias[min(row + 1, last)], bias[min(row + 2, last)]
+        nums = cut_numbers(L, ci, d)
         for k in range(nb):
-            _, r_pb, e_a = _frame(P_c, k)
-            x = cut_bias(cut, e_a, (w_a[k], vx_a[k], vy_a[k]), (al_a[k], ax_a[k], ay_a[k]),
-                         (rx_a[k], ry_a[k]), (w_b[k], vx_b[k], vy_b[k]),
-                         (al_b[k], ax_b[k], ay_b[k]), (rx_b[k], ry_b[k]), r_pb)
+            r_pa, r_pb, e_a = _frame(P_c, k)
+            x = cut_bias(cut, nums, e_a, (w_a[k], vx_a[k], vy_a[k]),
+                         (al_a[k], ax_a[k], ay_a[k]), (rx_a[k], ry_a[k]),
+                         (w_b[k], vx_b[k], vy_b[k]), (al_b[k], ax_b[k], ay_b[k]),
+                         (rx_b[k], ry_b[k]), r_pa, r_pb)
             B0[k] = x[0]
             if rows > 1:
                 B1[k] = x[1]
@@ -393,10 +407,11 @@ def _cut_motion(L, d, k0, nb, phi, r, tw, td, P, out):
         w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
         phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
         q_c, qd_c, qdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
+        nums = cut_numbers(L, ci, d)
         for k in range(nb):
             r_pa, r_pb, e_a = _frame(P_c, k)
             q_c[k], qd_c[k], qdd_c[k] = cut_coordinate(
-                cut, e_a, phi_a[k], (w_a[k], vx_a[k], vy_a[k]), (al_a[k], ax_a[k], ay_a[k]),
+                cut, nums, e_a, phi_a[k], (w_a[k], vx_a[k], vy_a[k]), (al_a[k], ax_a[k], ay_a[k]),
                 (rx_a[k], ry_a[k]), phi_b[k], (w_b[k], vx_b[k], vy_b[k]),
                 (al_b[k], ax_b[k], ay_b[k]), (rx_b[k], ry_b[k]), r_pa, r_pb)
 

@@ -13,6 +13,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..brief import brief_repr
+
 from .. import joints as jk
 from ..errors import ModelError
 from ..model import Model, point_spread
@@ -34,6 +36,12 @@ class Cut:
     pa: np.ndarray
     pb: np.ndarray
     numbers: dict
+
+    @property
+    def own(self) -> tuple:
+        """Its numbers as its kind's cut steps take them (``nums``,
+        :meth:`~linkdyn.joints.JointKind.own`)."""
+        return jk.get(self.kind).own(self.numbers)
 
     def __getattr__(self, name: str):
         numbers = self.__dict__.get("numbers")
@@ -84,7 +92,9 @@ BODY_NUMBERS = ("joint_point", "origin", "com", "mass", "inertia", "cut_pa", "cu
 #: rows in m, padded to three); ``side`` (n_cut, n) float, the sign of tree joint k in cut c's
 #: closure. Per dyad of the closed-form plan (n_dyads,), int64: ``dyad_shape``
 #: (:data:`DYAD_SHAPES`), ``dyad_cut``, ``dyad_upper``, ``dyad_lower``, ``dyad_on_b`` (1: the
-#: side of both unknown joints is the cut's second body). Then every number
+#: side of both unknown joints is the cut's second body). ``cut_own`` (n_cut, WIDTH, D) float:
+#: each cut's numbers as its kind's cut steps take them (``nums``, its kind's scalar numbers in
+#: order, :meth:`~linkdyn.joints.JointKind.own`, padded with zeros). Then every number
 #: (:attr:`Layout.NUMBERS`) with the design axis last, D = 1 for one mechanism: ``joint_point``,
 #: ``origin``, ``com`` (n, 2, D), ``mass``, ``inertia`` (n, D), ``cut_pa``, ``cut_pb``
 #: (n_cut, 2, D), ``size`` (D,), ``gravity`` (2, D), and each joint number of the kinds
@@ -93,7 +103,7 @@ BODY_NUMBERS = ("joint_point", "origin", "com", "mass", "inertia", "cut_pa", "cu
 View = namedtuple("View", (
     "parent", "kind", "sign", "angular", "tree_joint", "driver_of", "ancestors", "dependent",
     "driven", "cut_a", "cut_b", "cut_kind", "cut_row", "cut_rows", "cut_joint", "cut_metres",
-    "side", "dyad_shape", "dyad_cut", "dyad_upper", "dyad_lower", "dyad_on_b")
+    "side", "dyad_shape", "dyad_cut", "dyad_upper", "dyad_lower", "dyad_on_b", "cut_own")
     + BODY_NUMBERS + tuple(jk.NUMBERS) + tuple(f"cut_{k}" for k in jk.NUMBERS),
     module=__name__)
 
@@ -128,6 +138,8 @@ class Layout:
     The kernels' view (:attr:`view`, a :data:`View` of named arrays) is built once per
     layout, on first read.
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     topo: Topology
     kind: tuple[str, ...]
@@ -233,6 +245,11 @@ class Layout:
             dyad_lower=ints([x.lower for x in plan]),
             dyad_on_b=ints([int(x.side == "b") for x in plan]))
         out.update({k: self.per_design(k) for k in self.NUMBERS})
+        # each cut's own numbers (its kind's scalars, padded), (n_cut, WIDTH, D)
+        zero = np.zeros(max(self.designs, 1))
+        own = [jk.get(kind).own({x: out[f"cut_{x}"][k] for x in jk.NUMBERS}, zero)
+               for k, kind in enumerate(self.cut_kind)]
+        out["cut_own"] = np.array(own, float).reshape(len(own), jk.WIDTH, zero.size)
         return View(**{k: fixed(v) for k, v in out.items()})
 
     # --- designs ---------------------------------------------------------------------------

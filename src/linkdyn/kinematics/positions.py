@@ -13,14 +13,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AssemblyError
+from ..io.units import LENGTH_UNITS
 from .. import joints as jk
 from ..model import Model
+from ..units import joint_units
 from ..planar import solve_small, wrap, wrapped
 from ..steps import select, step
 from . import dyads
 from .layout import Layout, motion_steps, motion_values
-from .recursion import (closure_jacobian, closure_residual, dependent_rates, forward_positions,
-                        motion_vectors)
+from .recursion import (_cut_frames, closure_jacobian, closure_residual, dependent_rates,
+                        forward_positions, motion_vectors)
 
 TOL = 1e-12          # closure residual target, relative to the mechanism's size
 ACCEPT = 1e-10       # largest residual accepted as closed
@@ -123,7 +125,49 @@ def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0
         "the mechanism cannot be assembled: the loops do not close"
         + (f" (design {design})" if design is not None else ""),
         file=model.source, time=t0, drivers=_drivers_at(model, lay, q_drv0),
+        units=joint_units(model),
         fix="Check the link lengths and the [assembly] guess")
+
+
+FIT = 1e-6   # a kind's fit (a gear's centre distance) holds to this fraction of the size
+
+
+def _misfit(models: list[Model], lay: Layout, q: np.ndarray, q_drv0, t0: float,
+            raise_error: bool) -> np.ndarray:
+    """Which designs (the batch shape of ``q`` (n, ...) but its first axis) assemble with a
+    cut whose kind's fit fails (:attr:`~linkdyn.joints.JointKind.fit`: a gear pair whose
+    centre distance is not its pitch radii's), or raise :class:`AssemblyError` naming the
+    joint if ``raise_error``."""
+    bad = np.zeros(q.shape[1:], bool)
+    cuts = [c for c in lay.cuts if jk.get(c.kind).fit is not None]
+    if not cuts:
+        return bad
+    with np.errstate(invalid="ignore"):
+        pose = forward_positions(lay, q[..., None])
+        for c in cuts:
+            r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
+            err, want, what = jk.get(c.kind).fit(c.own, jk.frame(r_pa, r_pb, e_a))
+            # |misfit| > FIT size, per design (the batch (..., 1) of the poses)
+            off = np.broadcast_to(np.abs(err) > FIT * np.asarray(lay.size),
+                                  bad.shape + (1,))[..., 0]
+            if raise_error and np.any(off):
+                d = int(np.argmax(off))
+                m = models[min(d, len(models) - 1)]
+                unit = m.length_unit
+                scale = LENGTH_UNITS.get(unit, 1.0)
+                have, wanted = (float(np.broadcast_to(x, bad.shape + (1,)).reshape(-1)[d])
+                                for x in (err + want, want))
+                jt = m.joints[c.joint]
+                raise AssemblyError(
+                    f"joint '{jt.name}' ({c.kind}): {what} is {have / scale:.6g} {unit}, not "
+                    f"{wanted / scale:.6g} {unit}"
+                    + (f" (design {d})" if len(models) > 1 else ""),
+                    file=m.source, time=t0,
+                    drivers=_drivers_at(m, lay, q_drv0[:, min(d, q_drv0.shape[1] - 1)]),
+                    fix=f"Place the points of joint '{jt.name}' so that it meshes at its "
+                        "pitch radii, or correct the radii")
+            bad |= off
+    return bad
 
 
 def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0.0,
@@ -174,6 +218,8 @@ def assemble(models: list[Model], lay: Layout, q_drv0: np.ndarray, t0: float = 0
         rescued = np.any(ok, axis=-1)
         q[:, idx[rescued]] = pick[:, rescued]
         failed[idx[rescued]] = False
+    misfit = _misfit(models, lay, q, q_drv0, t0, raise_error)
+    failed |= misfit
     if np.any(failed):
         if raise_error:
             d = int(np.argmax(failed))
@@ -191,11 +237,15 @@ def _nearest_turn(lay: Layout, q: np.ndarray, q0: np.ndarray) -> np.ndarray:
     but is not the start the user described.
 
     Body by body in tree order: ``e_i = e_parent + sign_i (q_i - q0_i)`` is body i's angle
-    minus its guess; a dependent revolute coordinate takes ``-round(e_i / 2 pi)`` turns.
+    minus its guess; a dependent revolute coordinate takes ``-round(e_i / 2 pi)`` turns. Not
+    where a cut's kind is not periodic in the angles (:attr:`~linkdyn.joints.JointKind.periodic`,
+    a gear): ``q`` is returned as it is.
     """
     topo = lay.topo
     dep = set(topo.dependent)
     q = np.array(q, dtype=float)
+    if not all(jk.get(k).periodic for k in lay.cut_kind):
+        return q   # a whole turn would open a loop (a gear's)
     e = [np.zeros(q.shape[1:])] * topo.n
     for i in range(1, topo.n):
         if not jk.get(lay.kind[i]).angular:

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import joints as jk
+from ..joints.base import frame
 from ..planar import _stack, at, rotate_cs, solve_small, turned
 from ..steps import select, step
 from .layout import Cut, Layout
@@ -137,17 +138,17 @@ def cut_frame(c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis):
 
 
 @step
-def jacobian_column(cut, code, s, side, e, r_k, r_pb, e_a):
+def jacobian_column(cut, nums, code, s, side, e, r_k, r_pa, r_pb, e_a):
     """Column k of a cut's loop-closure Jacobian: its rows (padded to 3) of tree joint k's rate.
 
-    ``cut``: the cut's kind; ``code``, ``s``, ``e``: tree joint k's kind, sign and global
-    axis; ``side``: +1 if joint k is on the path to the cut's second body, -1 to its first,
-    0 both or neither; ``r_k``: O_k; ``r_Pb``, ``e_a``: the cut's point and axis
-    (:func:`cut_frame`).
+    ``cut``, ``nums``: the cut's kind and numbers (:meth:`~linkdyn.joints.JointKind.own`);
+    ``code``, ``s``, ``e``: tree joint k's kind, sign and global axis; ``side``: +1 if joint k
+    is on the path to the cut's second body, -1 to its first, 0 both or neither; ``r_k``:
+    O_k; ``r_Pa``, ``r_Pb``, ``e_a``: the cut's points and axis (:func:`cut_frame`).
     """
     # side S_c A(r_Pb - r_k) p_k            (eqs. 20-24)
     x = at(jk.motion(code, s, e), relative(r_k, r_pb))
-    return jk.selected(cut, e_a, (side * x[0], side * x[1], side * x[2]))
+    return jk.selected(cut, nums, frame(r_pa, r_pb, e_a), (side * x[0], side * x[1], side * x[2]))
 
 
 @step
@@ -161,19 +162,24 @@ def moving_point(t, td, r, r_pt, v_pt):
 
 
 @step
-def cut_bias(cut, e_a, t_a, td_a, r_a, t_b, td_b, r_b, r_pb):
+def cut_bias(cut, nums, e_a, t_a, td_a, r_a, t_b, td_b, r_b, r_pa, r_pb):
     """Rate of a cut's rows ``d/dt (S x)`` (padded to 3), ``x`` the relative twist of its
     second body b to its first a at the cut point P (which moves with b).
 
-    ``t_*``, ``td_*``, ``r_*``: the bodies' twists, twist rates and reference points; ``r_Pb``,
-    ``e_a`` from :func:`cut_frame`.
+    ``cut``, ``nums``: the cut's kind and numbers; ``t_*``, ``td_*``, ``r_*``: the bodies'
+    twists, twist rates and reference points; ``r_Pa``, ``r_Pb``, ``e_a`` from
+    :func:`cut_frame`.
     """
-    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x
+    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x, the frame turning at w_a with
+    # d' = v_Pb - v_Pa
     v_pb = at(t_b, relative(r_b, r_pb))
+    v_pa = at(t_a, relative(r_a, r_pa))
     tb, ab = moving_point(t_b, td_b, r_b, r_pb, (v_pb[1], v_pb[2]))
     ta, aa = moving_point(t_a, td_a, r_a, r_pb, (v_pb[1], v_pb[2]))
-    x = jk.selected(cut, e_a, (ab[0] - aa[0], ab[1] - aa[1], ab[2] - aa[2]))
-    y = jk.selected_rate(cut, e_a, t_a[0], (tb[0] - ta[0], tb[1] - ta[1], tb[2] - ta[2]))
+    f = frame(r_pa, r_pb, e_a)
+    x = jk.selected(cut, nums, f, (ab[0] - aa[0], ab[1] - aa[1], ab[2] - aa[2]))
+    y = jk.selected_rate(cut, nums, f, (t_a[0], (v_pb[1] - v_pa[1], v_pb[2] - v_pa[2])),
+                         (tb[0] - ta[0], tb[1] - ta[1], tb[2] - ta[2]))
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
 
@@ -186,18 +192,18 @@ def point_accel(t, td, a):
 
 
 @step
-def cut_coordinate(cut, e_a, phi_a, t_a, td_a, r_a, phi_b, t_b, td_b, r_b, r_pa, r_pb):
+def cut_coordinate(cut, nums, e_a, phi_a, t_a, td_a, r_a, phi_b, t_b, td_b, r_b, r_pa, r_pb):
     """Coordinate, rate and acceleration of a cut joint (an output, not an unknown).
 
-    ``phi_*``, ``t_*``, ``td_*``, ``r_*``: the bodies' angles, twists, twist rates and
+    ``cut``, ``nums``: the cut's kind and numbers; ``phi_*``, ``t_*``, ``td_*``, ``r_*``: the bodies' angles, twists, twist rates and
     reference points; ``r_Pa``, ``r_Pb``, ``e_a`` from :func:`cut_frame`.
     """
     # the second body's cut point seen from the first's: d, d', d''; the kind's coordinate
     oa, ob = relative(r_a, r_pa), relative(r_b, r_pb)
     va, vb = at(t_a, oa), at(t_b, ob)
     aa, ab = point_accel(t_a, td_a, oa), point_accel(t_b, td_b, ob)
-    return jk.coordinate(cut, e_a, (phi_a, t_a[0], td_a[0]), (phi_b, t_b[0], td_b[0]),
-                         relative(r_pa, r_pb), (vb[1] - va[1], vb[2] - va[2]),
+    return jk.coordinate(cut, nums, frame(r_pa, r_pb, e_a), (phi_a, t_a[0], td_a[0]),
+                         (phi_b, t_b[0], td_b[0]), (vb[1] - va[1], vb[2] - va[2]),
                          relative(aa, ab))
 
 
@@ -245,8 +251,8 @@ def closure_residual(lay: Layout, pose: Pose) -> np.ndarray:
     shape, out = pose.phi[0].shape, []
     for c in lay.cuts:
         r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
-        out.append(_rows(jk.residual(jk.CODES[c.kind], c.angle, pose.phi[c.a], pose.phi[c.b],
-                                     e_a, r_pa, r_pb), jk.get(c.kind).rows, shape))
+        out.append(_rows(jk.residual(jk.CODES[c.kind], c.own, frame(r_pa, r_pb, e_a),
+                                     pose.phi[c.a], pose.phi[c.b]), jk.get(c.kind).rows, shape))
     return np.concatenate(out) if out else np.zeros((0,) + shape)
 
 
@@ -263,14 +269,14 @@ def closure_jacobian(lay: Layout, pose: Pose, p: list | None = None) -> np.ndarr
     topo, shape = lay.topo, pose.phi[0].shape
     J = np.zeros((topo.n_rows, topo.n - 1) + shape)
     for ci, c in enumerate(lay.cuts):
-        _, r_pb, e_a = _cut_frames(lay, pose, c)
+        r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
         rows, n = topo.row_slice(ci), jk.get(c.kind).rows
         side = topo.ancestors[c.b].astype(int) - topo.ancestors[c.a].astype(int)
         for k in range(1, topo.n):
             if side[k]:   # else the joint moves both bodies alike, or neither
                 J[rows, k - 1] = _rows(jacobian_column(
-                    jk.CODES[c.kind], jk.CODES[lay.kind[k]], topo.sign[k], side[k],
-                    _axis(pose.e[k]), pose.r[k], r_pb, e_a), n, shape)
+                    jk.CODES[c.kind], c.own, jk.CODES[lay.kind[k]], topo.sign[k], side[k],
+                    _axis(pose.e[k]), pose.r[k], r_pa, r_pb, e_a), n, shape)
     return J
 
 
@@ -303,9 +309,9 @@ def closure_bias(lay: Layout, pose: Pose, tw: list, td: list) -> np.ndarray:
     the relative twist of the cut's second body to its first at the cut point."""
     shape, out = tw[0].shape[1:], []
     for c in lay.cuts:
-        _, r_pb, e_a = _cut_frames(lay, pose, c)
-        out.append(_rows(cut_bias(jk.CODES[c.kind], e_a, tw[c.a], td[c.a], pose.r[c.a],
-                                  tw[c.b], td[c.b], pose.r[c.b], r_pb),
+        r_pa, r_pb, e_a = _cut_frames(lay, pose, c)
+        out.append(_rows(cut_bias(jk.CODES[c.kind], c.own, e_a, tw[c.a], td[c.a], pose.r[c.a],
+                                  tw[c.b], td[c.b], pose.r[c.b], r_pa, r_pb),
                          jk.get(c.kind).rows, shape))
     return np.concatenate(out) if out else np.zeros((0,) + shape)
 

@@ -20,6 +20,8 @@ from functools import cached_property
 
 import numpy as np
 
+from ..brief import brief_repr
+
 from .. import joints as jk
 from ..planar import last, shift_twist, solve_small, stack_last
 from . import dyads
@@ -63,6 +65,8 @@ class KinematicSolution:
         per-body lists above are views of, batch flattened to (D, T): ``c``, ``s`` (n, D, T),
         ``r``, ``e`` (n, 2, D, T), ``tw``, ``twd`` (n, 3, D, T), ``J`` (n_rows, n - 1, D, T).
     """
+
+    __repr__ = brief_repr   # shapes, not every number (linkdyn.brief)
 
     layout: Layout
     t: np.ndarray
@@ -347,7 +351,7 @@ def joint_values(model, lay, pose, tw, twd, q, qd, qdd):
         a, b = c.a, c.b
         r_pa, r_pb, e = _cut_frames(lay, pose, c)
         # the kind's coordinate from the bodies' motion (cut_coordinate)
-        motion = cut_coordinate(jk.CODES[c.kind], e, pose.phi[a], tw[a], twd[a], pose.r[a],
+        motion = cut_coordinate(jk.CODES[c.kind], c.own, e, pose.phi[a], tw[a], twd[a], pose.r[a],
                                 pose.phi[b], tw[b], twd[b], pose.r[b], r_pa, r_pb)
         cols[0][c.joint], cols[1][c.joint], cols[2][c.joint] = motion
     return tuple(cols)

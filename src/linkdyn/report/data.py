@@ -71,12 +71,12 @@ def multiplier_labels(sol) -> list[tuple[str, str, str]]:
 
 def _known_column(name: str) -> bool:
     prefixes = ("q_", "qd_", "qdd_", "phi_", "omega_", "alpha_", "tau_", "force_", "Fx_", "Fy_",
-                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_")
+                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_", "power_", "value_")
     return name == "t" or name.startswith(prefixes) or name in ("kinetic_energy",
                                                                "potential_energy")
 
 
-def _body_shape(points: dict) -> tuple[str, list[str]]:
+def body_shape(points: dict) -> tuple[str, list[str]]:
     """How to draw a body from its named points: ``dot``, ``bar`` (two points), ``line``
     (collinear points, in order along the line) or ``polygon`` (convex hull, CCW)."""
     names = list(points)
@@ -114,8 +114,24 @@ def _ground_outline(ground, used: set) -> list[str]:
     pts = {p: xy for p, xy in ground.points.items() if f"{GROUND}.{p}" in used}
     if len(pts) < 3:
         return [f"{GROUND}.{p}" for p in pts]
-    shape, outline = _body_shape(pts)
+    shape, outline = body_shape(pts)
     return [f"{GROUND}.{p}" for p in (outline if shape == "polygon" else pts)]
+
+
+def traced_points(model) -> list[str]:
+    """The points whose paths the report traces (and ``linkdyn export --to svg|dxf`` draws),
+    as ``BODY.POINT`` in body and point order: the points of moving bodies that no joint uses
+    (coupler points), and the second points of joints between two bodies neither of which is
+    pivoted on the ground (e.g. the tool point of a five-bar)."""
+    joints = model.joints
+    used = {f"{j.body_a}.{j.point_a}" for j in joints} | {f"{j.body_b}.{j.point_b}" for j in joints}
+    grounded = {j.body_a for j in joints if j.body_b == GROUND} | {
+        j.body_b for j in joints if j.body_a == GROUND}
+    floating = {f"{j.body_b}.{j.point_b}" for j in joints
+                if GROUND not in (j.body_a, j.body_b)
+                and not ({j.body_a, j.body_b} & grounded)}
+    return [f"{b.name}.{p}" for b in model.moving_bodies for p in b.points
+            if f"{b.name}.{p}" not in used or f"{b.name}.{p}" in floating]
 
 
 def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
@@ -165,7 +181,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
 
     bodies = []
     for k, b in enumerate(m.moving_bodies):
-        shape, outline = _body_shape(b.points)
+        shape, outline = body_shape(b.points)
         bodies.append({"name": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)], "shape": shape,
                        "outline": [f"{b.name}.{p}" for p in outline],
                        "points": [f"{b.name}.{p}" for p in b.points]})
@@ -195,15 +211,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         add(f"Fx:{j.name}", sol.reactions.force[..., k, 0])
         add(f"Fy:{j.name}", sol.reactions.force[..., k, 1])
         add(f"F:{j.name}", np.linalg.norm(sol.reactions.force[..., k, :], axis=-1))
-    # traced: points no joint uses (coupler points), and joints between two bodies that are
-    # not pivoted on the ground (e.g. the tool point of a five-bar)
-    grounded = {j.body_a for j in joints if j.body_b == GROUND} | {
-        j.body_b for j in joints if j.body_a == GROUND}
-    floating = {f"{j.body_b}.{j.point_b}" for j in joints
-                if GROUND not in (j.body_a, j.body_b)
-                and not ({j.body_a, j.body_b} & grounded)}
-    traces = [pid for pid in points if not points[pid].get("static")
-              and (pid not in used or pid in floating)]
+    traces = traced_points(m)
     allxy = np.concatenate(bounds)
     lo, hi = allxy.min(0), allxy.max(0)
     size = float(max(np.max(hi - lo), 1e-9))
@@ -350,6 +358,22 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         energy.append({"key": add("pe", cols["potential_energy"]), "label": "potential",
                        "color": PALETTE[1]})
     panel("Design", "Energy", "J", energy, "J")
+    # each load's value against time, and the power of every driver and load
+    from ..loads import VALUE_COLUMNS, VALUE_UNITS, labels
+    for n, (ld, label) in enumerate(zip(m.loads, labels(m))):
+        names = VALUE_COLUMNS[ld.kind]
+        if not all(f"{c}_{label}" in cols for c in names):
+            continue
+        tint = (X_COLOR, Y_COLOR) if len(names) > 1 else (PALETTE[n % len(PALETTE)],)
+        panel("Loads and power", f"{label} ({ld.kind.replace('_', ' ')})", VALUE_UNITS[ld.kind],
+              [{"key": add(f"col:{c}_{label}", cols[f"{c}_{label}"]),
+                "label": {"value_x": "x", "value_y": "y"}.get(c, ld.kind.replace("_", " ")),
+                "color": colour} for c, colour in zip(names, tint)])
+    powers = [c for c in cols if c.startswith("power_")]
+    if powers:
+        panel("Loads and power", "Power of the drivers and loads", "W",
+              [{"key": add(f"col:{c}", cols[c]), "label": c[len("power_"):],
+                "color": PALETTE[n % len(PALETTE)]} for n, c in enumerate(powers)])
     for n, name in enumerate(c for c in cols if not _known_column(c)):
         vals = np.asarray(cols[name], float)
         if vals.shape != np.shape(sol.t):
@@ -359,25 +383,36 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                 "color": PALETTE[n % len(PALETTE)]}])
 
     # external loads drawn on the animation: forces at their points, torques on their bodies
+    # (a motor's joint_torque on its joint's second body), springs and dampers between their
+    # two points; their values as the loads stage computed them (formulas of the state too)
     drawn_loads = []
     for n, ld in enumerate(m.loads):
-        if ld.kind not in ("force", "torque"):
-            continue
-        try:
-            lay = sol.kin.layout
-            v = np.asarray(lay.load_values(lay.loads[n], sol.t), float)
-        except Exception:  # pragma: no cover - a load the page cannot evaluate is not drawn
-            continue
+        if n >= len(sol.loads.values):   # pragma: no cover - a loads stage without values
+            break
+        v = np.asarray(sol.loads.values[n], float)
         label = ld.name or f"{ld.kind} on {ld.body}"
         if ld.kind == "force" and ld.point:
             v = np.broadcast_to(v, (2, len(sol.t)))
             drawn_loads.append({"kind": "force", "at": f"{ld.body}.{ld.point}", "label": label,
                                 "x": add(f"load:{n}:x", v[0]), "y": add(f"load:{n}:y", v[1])})
-        elif ld.kind == "torque":
+        elif ld.kind in ("torque", "joint_torque"):
             v = np.broadcast_to(v, (len(sol.t),))
-            pts = list(m.body(ld.body).points)
-            drawn_loads.append({"kind": "torque", "at": f"{ld.body}.{pts[0]}", "label": label,
+            at = ld.point if ld.kind == "joint_torque" else list(m.body(ld.body).points)[0]
+            drawn_loads.append({"kind": "torque", "at": f"{ld.body}.{at}", "label": label,
                                 "m": add(f"load:{n}:m", v)})
+        elif ld.kind in ("spring", "damper"):
+            v = np.broadcast_to(v, (len(sol.t),))
+            ends = (f"{ld.body}.{ld.point}", f"{ld.body2}.{ld.point2}")
+            drawn_loads.append({"kind": ld.kind, "at": ends[0], "to": ends[1], "label": label,
+                                "v": add(f"load:{n}:v", v), "pair": sorted(ends)})
+    # springs and dampers between the same two points are drawn side by side: each its lane
+    # (-0.5, 0.5 for two, ...)
+    for ld in drawn_loads:
+        if "pair" in ld:
+            same = [x for x in drawn_loads if x.get("pair") == ld["pair"]]
+            ld["lane"] = same.index(ld) - 0.5 * (len(same) - 1)
+    for ld in drawn_loads:
+        ld.pop("pair", None)
     # the shaking force is drawn at the centre of the ground pivots
     pivots = [p for p in _ground_outline(ground, used)]
     shaking = None

@@ -15,22 +15,34 @@ from ..cli import _json_safe, _path_range
 from ..sampling import times as sample_times
 from ..errors import ModelError
 from ..outputs import check_outdir, write_outputs
+from ..units import Units
+from .metrics import quantity
 
 _VARY = re.compile(r"\s*([^=\s]+)\s*=\s*([^:]+):([^:]+?)(?::(\d+))?\s*\Z")
+_UNIT_BOUND = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*[A-Za-z][\w/^ ]*\Z")
 
 
 def parse_vary(texts) -> tuple[list[str], list[tuple[float, float]], list[int | None]]:
     """``PATH=LO:HI[:N]`` options -> paths, bounds, counts (None where no N)."""
     paths, bounds, counts = [], [], []
+    def _bound(x):   # a number in the file's units, or a text with a unit (_with_units)
+        try:
+            return float(x)
+        except ValueError:
+            if _UNIT_BOUND.match(x):
+                return x.strip()
+            raise
+
     for text in texts:
         m = _VARY.match(text)
         try:
-            lo, hi = float(m.group(2)), float(m.group(3))
+            _bound(m.group(2)), _bound(m.group(3))
         except (AttributeError, ValueError):
             raise ModelError(f"cannot read --vary {text!r}", field="--vary",
                              fix="Write PATH=LO:HI or PATH=LO:HI:N in the file's units, e.g. "
                                  "--vary bodies.ground.points.O4[0]=80:100:11") from None
         n = int(m.group(4)) if m.group(4) else None
+        lo, hi = (_bound(x) for x in (m.group(2), m.group(3)))
         if n is not None and n < 1:
             raise ModelError(f"--vary {text!r} asks for {n} values", field="--vary",
                              fix="Give N >= 1")
@@ -54,8 +66,9 @@ def _common(f):
         click.option("--path-point", metavar="BODY.POINT",
                      help="Point of path_deviation (default: the model's [analysis] path_point)."),
         click.option("--path-range", metavar="A:B",
-                     help="Range of the first driver's coordinate for path_deviation, rad or m "
-                          "(default: the model's [analysis] path_range)."),
+                     help="Range of the first driver's coordinate for path_deviation, in the "
+                          "model file's angle (or length) unit, or with a unit (110deg:250deg; "
+                          "default: the model's [analysis] path_range)."),
         click.option("--fluctuation", type=float, default=0.02, show_default=True,
                      help="Coefficient of speed fluctuation of flywheel_inertia."),
         click.option("--backend", type=click.Choice(["auto", "numpy", "compiled"]),
@@ -73,9 +86,35 @@ def _setup(model, vary, samples, duration, cycles):
                          fix="Drop one of them")
     paths, bounds, counts = parse_vary(vary)
     sp = space(model, paths)
+    bounds = _with_units(sp, bounds)
     check_ranges(sp, bounds)
     t = sample_times(sp.model(), samples, duration, cycles)
     return sp, t, bounds, counts
+
+
+def _with_units(sp, bounds) -> list[tuple[float, float]]:
+    """``--vary`` bounds in each parameter's unit (the file's): a bound typed with a unit
+    (``80mm``, ``8cm``, ``1.2 kg``, ``30deg``) is converted to it; a bare number is already
+    in it."""
+    units = Units(**{k: v for k, v in sp.data.get("units", {}).items()
+                     if k in ("length", "angle")}) if isinstance(sp.data.get("units"), dict) \
+        else Units()
+    out = []
+    for p, pair in zip(sp.params, bounds):
+        q = units.quantity_of(p.unit)
+        conv = []
+        for b in pair:
+            if isinstance(b, str):
+                if q is None:
+                    raise ModelError(f"--vary {p.path}: a bound with a unit ({b!r}) needs a "
+                                     f"parameter of one quantity; {p.path} is in {p.unit or 'no unit'}",
+                                     field="--vary", fix="Give the bound as a bare number in "
+                                                         "the file's units")
+                name = "rpm" if p.unit == "rev/min" else p.unit
+                b = units.parse(b, q, "--vary") / (Units.size(name, q) or 1.0)
+            conv.append(float(b))
+        out.append(tuple(conv))
+    return out
 
 
 def _show_progress(flag):
@@ -124,6 +163,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     from . import runner as sweep_mod
     from .metrics import check_names
 
+    files.need_parquet("sweep")   # designs.parquet: say how to install, before any work
     workers, chunk = checks.workers(workers), checks.count(chunk, "--chunk", "designs per chunk")
     designs, seed = checks.count(designs, "--designs", "designs"), checks.seed(seed)
     check_outdir(outdir)
@@ -146,7 +186,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
         sp, t, bounds, counts = _setup(model, vary, samples, duration, cycles)
         method = method or ("grid" if all(counts) else "sobol")
         designs = designs if designs is not None or method == "grid" else 1024
-    q_range = _path_range(path_range)
+    q_range = _path_range(path_range, sp.model())   # SI, from the file's unit
     names = tuple(check_names(sp.model(), list(metrics) or None, path_point=path_point))
     task = sweep_mod.Task(sp, t, names, None if backend == "auto" else backend, path_point,
                           q_range, fluctuation)
@@ -170,18 +210,18 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                + (f" in {stats['seconds']:.3g} s ({rate:.3g} design-samples/s)" if rate else ""))
     for name, m in summ["metrics"].items():
         if m is not None:
-            click.echo(_metric_line(name, m))
+            click.echo(_metric_line(name, m, Units.of(sp.model())))
     pages = [p for p in written if p.name.startswith("design-")]
     click.echo(f"wrote {', '.join(str(p) for p in written if p not in pages)}"
                + (f" and the reports of {len(pages)} best designs "
                   f"({', '.join(p.name for p in pages)})" if pages else ""))
 
 
-def _metric_line(name: str, m: dict) -> str:
-    """A metric of the sweep's summary in one line: its range, unit and best design (by its
-    sense: the largest where larger is better)."""
+def _metric_line(name: str, m: dict, units: Units) -> str:
+    """A metric of the sweep's summary in one line: its range in the model file's unit and
+    its best design (by its sense: the largest where larger is better)."""
     word = "largest" if m["sense"] == "max" else "smallest"
-    return (f"  {name:<24} {m['min']:.6g} .. {m['max']:.6g} {m['unit']}".rstrip()
+    return (f"  {name:<24} {units.span(m['min'], m['max'], quantity(name) or 'number')}"
             + f"  (best: design {m['best_design']}, the {word})")
 
 
@@ -192,7 +232,8 @@ def _metric_line(name: str, m: dict) -> str:
 @click.option("--maximize", metavar="METRIC",
               help="The metric to maximize instead (e.g. min_transmission_angle).")
 @click.option("--constraint", "constraints", multiple=True, metavar='"METRIC<=VALUE"',
-              help="A constraint on a metric (<= or >=; SI, or a unit such as mm, deg). Repeat.")
+              help="A constraint on a metric (<= or >=), in the model file's unit of the "
+                   "metric's quantity, or with a unit such as mm, deg. Repeat.")
 @click.option("--popsize", type=int, default=15, show_default=True,
               help="Differential evolution: population per parameter.")
 @click.option("--maxiter", type=int, default=60, show_default=True,
@@ -220,13 +261,14 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
         raise ModelError("nothing to vary", field="--vary", fix="Give --vary PATH=LO:HI")
     check_outdir(outdir)
     paths, bounds, _ = parse_vary(vary)
-    q_range = _path_range(path_range)
     sp, t, bounds, _ = _setup(model, vary, samples, duration, cycles)
+    q_range = _path_range(path_range, sp.model())   # SI, from the file's unit
+    u = Units.of(sp.model())
     res = run(model, dict(zip(paths, bounds)), t, minimize, constraints, maximize=maximize,
               seed=seed, popsize=popsize, maxiter=maxiter,
               backend=None if backend == "auto" else backend,
               path_point=path_point, path_range=q_range, fluctuation=fluctuation)
-    _check_feasible(res, model)
+    _check_feasible(res, model, sp)
     best = res.model
     sol = analyze(best, t, allow_singular=True)
     summ = design.summary(sol, fluctuation=fluctuation, path_point=path_point or best.path_point,
@@ -234,7 +276,7 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     verb = "minimize" if res.sense == "min" else "maximize"
     info = {"model": os.fspath(model), verb: res.objective, "objective": res.objective,
             "sense": res.sense,
-            "constraints": [str(c) for c in res_constraints(constraints)],
+            "constraints": [str(c) for c in res.constraints],
             "feasible": res.feasible, "parameters": res.values, "metrics": res.metrics,
             "evaluations": res.evaluations, "generations": res.generations,
             "seconds": res.seconds, "seed": seed, "samples": len(t),
@@ -257,26 +299,24 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     write_outputs(out, files, owned=owned_before(out, "optimize.json", (
         "best.toml", "summary.json", "report.html", "plot_*.png", "plot_*.svg")))
     click.echo(f"best design (feasible) after {res.evaluations} designs in {res.seconds:.3g} s:")
-    for p, v in res.values.items():
-        click.echo(f"  {p} = {v:.6g}")
+    units_of = {p.path: p.unit for p in sp.params}
+    for p, v in res.values.items():   # in the file's units, as --vary gave them
+        click.echo(f"  {p} = {v:.6g} {units_of.get(p, '')}".rstrip())
     for n, v in res.metrics.items():
-        click.echo(f"  {n} = {v:.6g}")
+        click.echo(f"  {n} = {u.show(v, quantity(n) or 'number')}")
     click.echo(f"wrote {', '.join(str(out / f) for f in files)}")
 
 
-def _check_feasible(res, model) -> None:
+def _check_feasible(res, model, sp) -> None:
     """An infeasible optimum is an error (exit 3, nothing written): it names the constraint
     nearest to holding, by how much it is missed in the constraint's unit, and the design."""
     from .optimize import Infeasible
 
     if res.feasible:
         return
-    at = ", ".join(f"{p} = {v:.6g}" for p, v in res.values.items())
+    units_of = {p.path: p.unit for p in sp.params}
+    at = ", ".join(f"{p} = {v:.6g} {units_of.get(p, '')}".rstrip() for p, v in res.values.items())
     raise Infeasible(f"{Path(model).name}: no design in the --vary ranges meets every "
                      f"constraint after {res.evaluations} designs; the nearest to holding is "
                      f"{res.nearest()}, at {at}. Relax that constraint or widen the ranges")
 
-
-def res_constraints(texts):
-    from .optimize import parse_constraint
-    return [parse_constraint(c) for c in texts]

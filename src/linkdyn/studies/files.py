@@ -14,7 +14,6 @@ touched and a damaged or foreign file is refused with a message naming it.
 
 from __future__ import annotations
 
-import glob
 import io
 import json
 import os
@@ -24,15 +23,42 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..outputs import owned_before  # noqa: F401  (the studies' manifests: summary, optimize.json)
+
+
+class MissingExtra(ModelError, ImportError):
+    """A study without the optional packages it needs (pandas, pyarrow): exit status 2, one
+    line saying how to install them, no traceback (an ``ImportError`` too, for Python
+    callers)."""
+
+
+INSTALL = ("Install the extra: pip install 'linkdyn[parquet]' (from a checkout: "
+           ".venv/bin/pip install -e '.[parquet]')")
 
 
 def _pandas():
-    """pandas, or an ImportError that says how to install it."""
+    """pandas, or a :class:`MissingExtra` that says how to install it."""
     try:
         import pandas as pd
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("sweeps need pandas: pip install 'linkdyn[parquet]'") from exc
+    except ImportError:
+        raise MissingExtra("sweeps need pandas (their table of designs is a DataFrame)",
+                           field="pandas", fix=INSTALL) from None
     return pd
+
+
+def need_parquet(command: str) -> None:
+    """Raise :class:`MissingExtra` before any work unless pandas and pyarrow (the parquet files
+    ``command`` writes and reads) are importable."""
+    missing = []
+    for name in ("pandas", "pyarrow"):
+        try:
+            __import__(name)
+        except ImportError:
+            missing.append(name)
+    if missing:
+        raise MissingExtra(f"linkdyn {command} needs {' and '.join(missing)}, which "
+                           f"{'is' if len(missing) == 1 else 'are'} not installed",
+                           field=missing[0], fix=INSTALL)
 
 
 CHUNKS = "chunks"
@@ -158,25 +184,6 @@ def remove_chunks(outdir: Path) -> None:
             folder.rmdir()
         except OSError:   # the user put files there meanwhile
             pass
-
-
-def owned_before(outdir, manifest: str, patterns) -> tuple[str, ...]:
-    """The files matching ``patterns`` that the earlier run of the command in ``outdir`` wrote
-    (the ``files`` listed by its ``manifest``), as patterns for
-    :func:`linkdyn.outputs.write_outputs`'s ``owned``: a new run removes those it does not write
-    again, and never a file of that family that no run wrote."""
-    import fnmatch
-
-    from ..io.files import read_text
-    try:
-        listed = json.loads(read_text(Path(outdir) / manifest)).get("files", [])
-    except (OSError, ValueError, AttributeError):   # absent, not a manifest, not ours
-        return ()
-    if not isinstance(listed, list):
-        return ()
-    return tuple(glob.escape(n) for n in listed
-                 if isinstance(n, str) and os.path.basename(n) == n
-                 and any(fnmatch.fnmatchcase(n, p) for p in patterns))
 
 
 def read_designs(path) -> tuple[np.ndarray, list[str]]:

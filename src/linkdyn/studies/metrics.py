@@ -53,7 +53,7 @@ from ..model import GROUND, Model
 from ..motion import ConstantSpeed
 
 __all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost", "ranked",
-           "unit"]
+           "unit", "quantity"]
 
 # metrics a designer wants large; every other metric is better small
 _LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency")
@@ -90,6 +90,20 @@ def unit(name: str) -> str:
         return "N"
     return {"min_transmission_angle": "rad", "path_deviation": "m",
             "flywheel_inertia": "kg m^2", "friction_loss": "J"}.get(name, "m" if name.startswith("stroke_") else "")
+
+
+def quantity(name: str) -> str | None:
+    """What a metric measures, a quantity of :mod:`linkdyn.units` (``'torque'``, ``'force'``,
+    ``'angle'``, ``'length'``, ``'inertia'``), for its display in the file's units and a
+    constraint's bound; None for an unknown name."""
+    if name.startswith(("peak_tau_", "rms_tau_")):
+        return "torque"
+    if name.startswith(("peak_force_", "rms_force_", "peak_F_")) or name == "peak_shaking_force":
+        return "force"
+    if name.startswith("stroke_"):
+        return "length"
+    return {"min_transmission_angle": "angle", "path_deviation": "length",
+            "flywheel_inertia": "inertia"}.get(name)
 
 
 def _effort(model: Model, joint: str) -> str:

@@ -21,22 +21,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..brief import brief_repr
 from ..errors import LinkdynError, ModelError
 from . import checks
-from .metrics import check_names, unit
+from .metrics import check_names, quantity, unit
+from ..units import Units
 from .params import Space, check_ranges, space, with_values
 from .runner import Task, check_size, evaluate
 
 _CONSTRAINT = re.compile(r"\s*([A-Za-z_][\w.]*)\s*(<=|>=|<|>)\s*([-+0-9.eE]+)\s*"
                          r"([A-Za-z][A-Za-z ^0-9]*)?\s*\Z")
-# units a constraint's value may be given in, by the quantity of its metric (SI without one)
-_UNITS = {"length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254},
-          "angle": {"rad": 1.0, "deg": np.pi / 180},
-          "force": {"N": 1.0},
-          "torque": {"N m": 1.0, "Nm": 1.0},
-          "inertia": {"kg m^2": 1.0, "kgm2": 1.0}}
-_FACTOR = {u: f for t in _UNITS.values() for u, f in t.items()}   # any unit -> SI factor
-_SI = {"length": "m", "angle": "rad", "force": "N", "torque": "N m", "inertia": "kg m^2"}
 BIG = 1e30  # score of an infeasible design, plus its violation
 
 
@@ -49,13 +43,15 @@ class Infeasible(LinkdynError):
 
 @dataclass(frozen=True)
 class Constraint:
-    """``metric <= value`` (or ``>=``), value in SI; ``unit`` the one it was written in ('' for
-    SI), for messages."""
+    """``metric <= value`` (or ``>=``), value in SI; ``unit`` the one it was written in (the
+    model file's unit of the metric's quantity when it was a bare number; '' for SI) and
+    ``scale`` the SI size of that unit, for messages."""
 
     metric: str
     upper: bool
     value: float
     unit: str = ""
+    scale: float = 1.0
 
     def violation(self, x: np.ndarray) -> np.ndarray:
         """How far (SI, >= 0) each metric value is outside the bound; NaN where not solved."""
@@ -64,25 +60,17 @@ class Constraint:
     def shown(self, x: float) -> str:
         """An SI value of the metric in the constraint's unit, with the unit."""
         u = self.unit or unit(self.metric)
-        return f"{x / _FACTOR.get(self.unit, 1.0):.4g} {u}".rstrip()
+        return f"{x / self.scale:.4g} {u}".rstrip()
 
     def __str__(self) -> str:
-        return f"{self.metric} {'<=' if self.upper else '>='} {self.value:g}"
+        """``'path_deviation <= 0.1 mm'``: the bound in the unit it was given in."""
+        return f"{self.metric} {'<=' if self.upper else '>='} {self.shown(self.value)}"
 
 
-def quantity(metric: str) -> str | None:
-    """What a metric measures (a key of the constraint units), None for an unknown name."""
-    if metric.startswith(("peak_tau_", "rms_tau_")):
-        return "torque"
-    if metric.startswith(("peak_force_", "rms_force_", "peak_F_")) or metric == "peak_shaking_force":
-        return "force"
-    return {"min_transmission_angle": "angle", "path_deviation": "length",
-            "flywheel_inertia": "inertia"}.get(metric)
-
-
-def parse_constraint(text: str) -> Constraint:
-    """``'path_deviation<=0.1mm'`` -> Constraint: ``<=`` or ``>=``, a finite value in SI or in a
-    unit of the metric's quantity (m, mm, cm, in; rad, deg; N; N m; kg m^2)."""
+def parse_constraint(text: str, units: Units | None = None) -> Constraint:
+    """``'path_deviation<=0.1mm'`` -> Constraint: ``<=`` or ``>=``, a finite value in a unit of
+    the metric's quantity (m, mm, cm, in; rad, deg; N; N m; kg m^2, kg mm^2, ...) or, a bare
+    number, in ``units`` (the model file's units, :class:`linkdyn.units.Units`; None: SI)."""
     m = _CONSTRAINT.match(text) if isinstance(text, str) else None
 
     def fail(message, fix):
@@ -96,21 +84,26 @@ def parse_constraint(text: str) -> Constraint:
     if op in ("<", ">"):
         raise fail(f"{text!r} is a strict bound ({op})", f"Write {op}= (a bound the best "
                    "design may reach, as a continuous metric's optimum does)")
-    kind = quantity(metric)
-    units = _UNITS.get(kind, {}) if kind else _FACTOR
-    if unit and unit not in units:
-        what = f"{metric} is in {_SI[kind]}" if kind else "the unit is not known"
+    units = units or Units()
+    kind = quantity(metric) or "number"   # an unknown metric is named by the caller's check
+    accepted = units.accepted(kind)
+    size = units.size(unit, kind) if kind != "number" else 1.0  # an unknown metric: refused later
+    if unit and size is None:
+        what = (f"{metric} is in {units.unit(kind)[0]}" if kind != "number"
+                else "the unit is not known")
         raise fail(f"{text!r}: {what}, so '{unit}' does not fit it",
-                   f"Give the value in {' or '.join(units)}, or without a unit (SI)" if kind
+                   f"Give the value in {' or '.join(accepted)}, or without a unit (the "
+                   f"model file's, {units.unit(kind)[0]})" if kind != "number"
                    else "Use m, mm, cm, in, rad, deg, N, N m or kg m^2")
+    shown, scale = (unit, size) if unit else units.unit(kind)
     try:
-        value = float(m.group(3)) * units.get(unit, 1.0)
+        value = float(m.group(3)) * scale
     except ValueError:
         raise fail(f"cannot read the number in {text!r}", "Write a plain number, e.g. 1e-4") \
             from None
     if not np.isfinite(value):
         raise fail(f"the bound of {text!r} is not finite", "Write a finite number")
-    return Constraint(metric, op == "<=", value, unit)
+    return Constraint(metric, op == "<=", value, shown, scale)
 
 
 def _names(model, wanted, option: str, path_point) -> list[str]:
@@ -148,6 +141,8 @@ class Result:
         The metric optimized and ``'min'`` or ``'max'``.
     constraints : list of Constraint
     """
+
+    __repr__ = brief_repr   # not the whole model and its data (linkdyn.brief)
 
     values: dict
     metrics: dict
@@ -249,7 +244,6 @@ def optimize(model, bounds: dict, t, minimize: str | None = None, constraints=()
     objective = minimize if maximize is None else maximize
     sign = 1.0 if maximize is None else -1.0
     start = time.perf_counter()
-    cons = [c if isinstance(c, Constraint) else parse_constraint(c) for c in constraints]
     lohi = _bounds(bounds)
     seed = checks.seed(seed)
     popsize = checks.count(popsize, "--popsize", "population per parameter")
@@ -257,6 +251,9 @@ def optimize(model, bounds: dict, t, minimize: str | None = None, constraints=()
     sp: Space = space(model, list(bounds))
     check_ranges(sp, lohi)
     base = sp.model()
+    # a bare bound is in the model file's unit of the metric's quantity
+    cons = [c if isinstance(c, Constraint) else parse_constraint(c, Units.of(base))
+            for c in constraints]
     names = tuple(dict.fromkeys(_names(base, [objective], "--minimize" if maximize is None else "--maximize",
                                        path_point)
                                 + _names(base, [c.metric for c in cons], "--constraint",

@@ -24,8 +24,8 @@ A parameter the map cannot carry (one that changes anything but these numbers, o
 non-affinely, such as a body's ``inertia_about`` point or a slider's axis component) leaves the
 study on the per-design path, with the reason in :attr:`Builder.why`.
 
-The loader's checks of a design's numbers are applied to the arrays: masses and inertias
-positive, spring and damper constants not negative, every number finite and within the file's
+The loader's checks of a design's numbers are applied to the arrays: masses, inertias,
+spring and damper constants not negative, every number finite and within the file's
 magnitude limits, no link of zero length. A design that fails one is built by the per-design path,
 so its reason is the loader's own message.
 """
@@ -241,7 +241,7 @@ class Builder:
 
     def suspect(self, values, Z: np.ndarray, lay: Layout) -> np.ndarray:
         """Designs (D,) bool that may fail a check of the loader: a parameter not finite or
-        beyond the file's magnitude limits, a mass or inertia not positive, a spring or damper
+        beyond the file's magnitude limits, a mass or inertia negative, a spring or damper
         constant negative, a number not finite, a link of zero length. They are built by the
         per-design path, whose message is the design's reason (or which accepts them)."""
         from ..io.linkage import link_pairs, short_links
@@ -252,7 +252,7 @@ class Builder:
                       axis=1)
         bad |= ~np.all(np.isfinite(Z), axis=1)
         for i in range(1, lay.topo.n):
-            bad |= ~(lay.mass[i][:, 0] > 0) | ~(lay.inertia[i][:, 0] > 0)
+            bad |= ~(lay.mass[i][:, 0] >= 0) | ~(lay.inertia[i][:, 0] >= 0)
         for r in lay.loads:
             for x in (r.stiffness, r.free_length, r.damping):
                 bad |= ~(x[:, 0] >= 0)

@@ -195,6 +195,24 @@
   (G.loads || []).forEach(function (l) { if (l.kind === "force") fall = Math.max(fall, hyp(l.x, l.y)); });
   if (G.shaking) fall = Math.max(fall, hyp(G.shaking.fx, G.shaking.fy));
   D.drivers.forEach(function (d) { if (d.unit === "N") fall = Math.max(fall, seriesMax(d.key)); });
+  // the scale's force: the 95th percentile over the frames of the largest force drawn in each
+  // (not the run's peak), so that a brief peak (the start of a run-up, a dead point) does not
+  // shrink every other frame's arrows to nothing; an arrow of a peak frame may leave the view
+  var frameMax = [];
+  for (var i = 0; i < N; i++) frameMax.push(0);
+  function biggest(kx, ky) {
+    if (!S[kx] || (ky && !S[ky])) return;
+    for (var i = 0; i < N; i++) {
+      var v = ky ? Math.hypot(S[kx][i], S[ky][i]) : Math.abs(S[kx][i]);
+      if (fin(v) && v > frameMax[i]) frameMax[i] = v;
+    }
+  }
+  G.joints.forEach(function (j) { biggest("Fx:" + j.name, "Fy:" + j.name); });
+  (G.loads || []).forEach(function (l) { if (l.kind === "force") biggest(l.x, l.y); });
+  if (G.shaking) biggest(G.shaking.fx, G.shaking.fy);
+  D.drivers.forEach(function (d) { if (d.unit === "N") biggest(d.key); });
+  var ranked = frameMax.filter(function (v) { return v > 0; }).sort(function (a, b) { return a - b; });
+  if (ranked.length) fall = Math.min(fall, ranked[Math.floor(0.95 * (ranked.length - 1))]);
   var fscale = fall > 0 ? 0.2 * Math.min(VW, VH * 1.6) / fall : 0;
   var fleg = null;
   if (fscale > 0) {
@@ -209,11 +227,29 @@
   window.__linkdynForces = {scale: fscale};
   // external loads, the driver efforts and the shaking force on the frame
   var loadArrows = (G.loads || []).map(function (l) {
+    var line = l.kind === "spring" || l.kind === "damper";
+    // springs and dampers are part of the drawing (below the bodies' joints), their tension a label
     var a = l.kind === "force" ? el("line", {stroke: "#1565c0", "stroke-width": 2.2, "marker-end": "url(#arrow-load)", "class": "farrow"}, gForces)
-                               : el("path", {fill: "none", stroke: "#1565c0", "stroke-width": 2, "marker-end": "url(#arrow-load)"}, gForces);
+          : line ? el("path", {fill: "none", stroke: "#455a64", "stroke-width": 1.6, "class": "f" + l.kind, "data-load": l.label}, gSliders)
+          : el("path", {fill: "none", stroke: "#1565c0", "stroke-width": 2, "marker-end": "url(#arrow-load)", "class": "ftorque"}, gForces);
     var t = el("text", {"font-size": 11, fill: "#1565c0"}, gFLabels);
     return {l: l, a: a, t: t};
   });
+  function zigzag(x0, y0, x1, y1, kind, lane) {  // a spring's zigzag or a damper's pot between two points
+    var dx = x1 - x0, dy = y1 - y0, L = Math.hypot(dx, dy) || 1, ux = dx / L, uy = dy / L, nx = -uy, ny = ux;
+    var w = 5, a = 0.2 * L, b = 0.8 * L, off = 14 * (lane || 0);   // side by side: 14 px a lane
+    function at(s, o) { return (x0 + ux * s + nx * (o + off)).toFixed(1) + "," + (y0 + uy * s + ny * (o + off)).toFixed(1); }
+    var from = "M" + x0.toFixed(1) + "," + y0.toFixed(1) + " L" + at(0.1 * L, 0), to = " L" + x1.toFixed(1) + "," + y1.toFixed(1);
+    if (kind === "damper") {  // a rod with its plate inside a pot (the cylinder's three sides)
+      var m = 0.5 * L;
+      return from + " L" + at(m, 0) + " M" + at(m, -w * 0.8) + " L" + at(m, w * 0.8) +
+             " M" + at(a + 0.1 * L, -w) + " L" + at(b, -w) + " L" + at(b, w) + " L" + at(a + 0.1 * L, w) +
+             " M" + at(b, 0) + " L" + at(0.9 * L, 0) + to;
+    }
+    var d = from + " L" + at(a, 0), n = 8;
+    for (var i = 1; i < n; i++) d += " L" + at(a + (b - a) * i / n, i % 2 ? w : -w);
+    return d + " L" + at(b, 0) + " L" + at(0.9 * L, 0) + to;
+  }
   var drvArrows = D.drivers.map(function (d) {
     var j = G.joints.filter(function (x) { return x.name === d.joint; })[0];
     var a = d.unit === "N m" ? el("path", {fill: "none", stroke: "#2e7d32", "stroke-width": 2.4, "marker-end": "url(#arrow-drv)"}, gForces)
@@ -363,6 +399,14 @@
         ok = ok && setLine(o.a, x, y, fx, fy);
         o.t.textContent = o.l.label + " " + fmt(Math.hypot(fx, fy), 4) + " N";
         o.tip = ok ? [x + fx * fscale, y - fy * fscale] : null;
+      } else if (o.l.kind === "spring" || o.l.kind === "damper") {
+        var q = P(o.l.to, k), x1 = X(q[0]), y1 = Y(q[1]), v = S[o.l.v][k];
+        ok = ok && fin(x1) && fin(y1);
+        o.a.style.display = ok ? "" : "none";
+        if (ok) o.a.setAttribute("d", zigzag(x, y, x1, y1, o.l.kind, o.l.lane));
+        o.t.textContent = o.l.label + " " + fmt(v, 4) + " N";
+        var Lz = Math.hypot(x1 - x, y1 - y) || 1, off = 14 * (o.l.lane || 0) + 8;
+        o.tip = ok ? [0.5 * (x + x1) - (y1 - y) / Lz * off, 0.5 * (y + y1) + (x1 - x) / Lz * off] : null;
       } else {
         var m = S[o.l.m][k];
         ok = ok && fin(m) && m !== 0;

@@ -1,0 +1,393 @@
+"""Static equilibrium of the free coordinates and the small vibrations about it.
+
+A mechanism with ``f`` free degrees of freedom (mobility minus drivers, as for ``simulate``)
+obeys ``H(q_f) qdd_f + h(q_f, qd_f) = 0`` in its free coordinates (docs/theory.md, F4-F6:
+``h`` is the effort an actuator in each free joint would need to hold ``qdd_f = 0``, ``H`` the
+generalized inertia), with the drivers held at their position at t = 0 and the loads at t = 0.
+
+- **Equilibrium** (E1): ``h(q_f, 0) = 0``, by Newton's method on ``q_f`` from ``[initial] q``
+  (else the assembly), ``q_f <- q_f - K^-1 h`` with the stiffness ``K = dh/dq_f``.
+- **Linearization** (E2): about the equilibrium, ``H dq'' + C dq' + K dq = 0`` with
+  ``K = dh/dq_f`` and ``C = dh/dqd_f`` at ``qd_f = 0`` (dampers and rate-dependent loads; the
+  velocity-quadratic terms vanish there), each column by the fourth-order central difference
+  ``(8 (h(+d) - h(-d)) - (h(+2d) - h(-2d))) / (12 d)`` (truncation ``O(d^4)``), all of them in
+  one batch of the same inverse dynamics ``simulate`` integrates.
+- **Modes** (E3): the eigenvalues ``s`` of ``[[0, I], [-H^-1 K, -H^-1 C]]``: natural frequency
+  ``|s| / 2 pi``, damping ratio ``-Re s / |s|``; undamped (``C = 0``), the symmetric problem
+  ``K v = w^2 H v``. Stable: every ``Re s < 0`` (undamped: every ``w^2 > 0``).
+
+Everything is SI (rad, m, N m, N, kg m^2, Hz); the command line prints in the file's units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import joints as jk
+from .errors import AssemblyError, ModelError
+from .forward import Partition, _start, _System, check_inertia, partition
+from .kinematics.positions import driver_values
+from .model import Model
+
+MAX_ITER = 50        # Newton steps of the equilibrium (E1)
+STEP_TOL = 1e-13     # converged when a step moves q_f less than this (rad, or m per size)
+DELTA = 1e-3         # finite-difference step of E2 (rad, or m per size; rad/s, m/s per size)
+MAX_STEP = 0.5       # largest Newton step (rad, or m per size): the next state must close
+
+
+class _Held:
+    """A driver held at rest at ``value`` (rad or m)."""
+
+    def __init__(self, value: float):
+        self.value = float(value)
+
+    def evaluate(self, t):
+        z = np.zeros(np.shape(t))
+        return z + self.value, z, z
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """A static equilibrium of the free coordinates and the linearized equations about it.
+
+    Attributes
+    ----------
+    model : Model
+    free : tuple[str, ...]
+        The free joints, in the order of every array below.
+    q : ndarray (f,)
+        Their coordinates at equilibrium, rad or m.
+    joint_q : dict[str, float]
+        Every tree joint's coordinate there (drivers at their t = 0 value), rad or m.
+    residual : ndarray (f,)
+        ``h`` at the solution, N m or N (what an actuator in each free joint would still need).
+    iterations : int
+        Newton steps taken.
+    mass, stiffness, damping : ndarray (f, f)
+        ``H``, ``K = dh/dq_f``, ``C = dh/dqd_f`` there (kg m^2 / N m per rad / N m s per rad
+        for angles; kg, N/m, N s/m for lengths; mixed where the coordinates mix).
+    efforts : dict[str, float]
+        The efforts that hold each driver there, N m or N.
+    shape_map : ndarray (n_tree, f)
+        Each tree joint's coordinate change per unit change of each free coordinate (the
+        closure's ``dq_dep/dq_f``), for the mode shapes of every joint.
+    tree_joints : tuple[str, ...]
+        The joints of the rows of ``shape_map``.
+    """
+
+    model: Model
+    free: tuple[str, ...]
+    q: np.ndarray
+    joint_q: dict
+    residual: np.ndarray
+    iterations: int
+    mass: np.ndarray
+    stiffness: np.ndarray
+    damping: np.ndarray
+    efforts: dict
+    shape_map: np.ndarray
+    tree_joints: tuple
+
+    def __repr__(self) -> str:
+        q = ", ".join(f"{j} = {v:.6g}" for j, v in zip(self.free, self.q))
+        return (f"<Equilibrium of {self.model.name!r}: {q} (SI), "
+                f"{'stable' if self.stable else 'unstable'}, {self.iterations} Newton steps>")
+
+    @property
+    def stable(self) -> bool:
+        """Whether small motions about it stay small: every mode decays or oscillates."""
+        return bool(modes(self).stable)
+
+
+@dataclass(frozen=True)
+class Modes:
+    """The small vibrations about an equilibrium (E3).
+
+    Attributes
+    ----------
+    equilibrium : Equilibrium
+    eigenvalues : ndarray (2 f,) complex
+        ``s`` of ``dq = v exp(s t)``, 1/s, sorted by ``|s|``.
+    frequencies : ndarray (m,)
+        Natural frequencies ``|s| / 2 pi``, Hz, one per mode (a conjugate pair, or a real
+        root of an overdamped or unstable coordinate), ascending.
+    damping_ratios : ndarray (m,)
+        ``-Re s / |s|`` (0 undamped, 1 critical; negative: the motion grows).
+    shapes : ndarray (f, m)
+        Each mode's free-coordinate shape, its largest component 1 (real part for a pair).
+    joint_shapes : ndarray (n_tree, m)
+        The same for every tree joint (``equilibrium.tree_joints``).
+    stable : bool
+        Every mode decays or oscillates (undamped: every ``w^2 > 0``).
+    """
+
+    equilibrium: Equilibrium
+    eigenvalues: np.ndarray
+    frequencies: np.ndarray
+    damping_ratios: np.ndarray
+    shapes: np.ndarray
+    joint_shapes: np.ndarray
+    stable: bool
+
+    def __repr__(self) -> str:
+        f = ", ".join(f"{x:.6g}" for x in self.frequencies)
+        return f"<Modes of {self.equilibrium.model.name!r}: {f} Hz>"
+
+
+def _scales(part: Partition) -> np.ndarray:
+    """Size of a unit step of each free coordinate: 1 rad, or the mechanism's size in m."""
+    lay, topo = part.layout, part.layout.topo
+    return np.array([1.0 if jk.get(lay.kind[i]).angular else float(lay.size)
+                     for i in topo.driven[part.n_drivers:]])
+
+
+def _held(model: Model) -> Model:
+    """``model`` with every driver held at rest at its position at t = 0."""
+    if not model.drivers:
+        return model
+    q0 = driver_values(model, np.zeros(1))[0][:, 0]
+    return replace(model, drivers=tuple(replace(d, motion=_Held(v))
+                                        for d, v in zip(model.drivers, q0)))
+
+
+def _linear(system: _System, q_f: np.ndarray, scale: np.ndarray):
+    """``h``, ``H``, ``K``, ``C`` at ``(q_f, qd_f = 0)`` (E2), with the kinematics of the state:
+    the state and its 8 f finite-difference neighbours in one batch."""
+    nf = len(q_f)
+    steps = np.array([1.0, -1.0, 2.0, -2.0])
+    # samples: 0 the state; then q_f + s d e_j, then qd_f + s d e_j (s in steps)
+    dq = np.zeros((nf, 1 + 8 * nf))
+    dqd = np.zeros((nf, 1 + 8 * nf))
+    for j in range(nf):
+        for k, s in enumerate(steps):
+            dq[j, 1 + 4 * j + k] = s * DELTA * scale[j]
+            dqd[j, 1 + 4 * nf + 4 * j + k] = s * DELTA * scale[j]
+    t = np.zeros(dq.shape[1])
+    q = q_f[:, None] + dq
+    q_ind = np.concatenate((driver_values(system.part.model, t)[0], q))
+    H, h, tau, kin, _, dyn = system.reduced(t, q, dqd, system.guess(t, q_ind))
+    ok = kin.valid[0] & (kin.pivot[0] > 1e-9) & (dyn.pivot[0] > 1e-9)
+    if not np.all(ok):
+        return None
+
+    def derivative(offset):
+        # (8 (h(+d) - h(-d)) - (h(+2d) - h(-2d))) / (12 d), column j       (E2)
+        out = np.empty((nf, nf))
+        for j in range(nf):
+            a, b, c, d = (h[:, offset + 4 * j + k] for k in range(4))
+            out[:, j] = (8.0 * (a - b) - (c - d)) / (12.0 * DELTA * scale[j])
+        return out
+    return h[:, 0], H[:, :, 0], derivative(1), derivative(1 + 4 * nf), tau[:, 0, 0], kin
+
+
+def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilibrium:
+    """The static equilibrium of the free coordinates of ``model`` near ``[initial] q`` (else
+    its assembly), with the drivers held at their position at t = 0 and the loads at t = 0.
+
+    Parameters
+    ----------
+    model : Model
+        A mechanism with at least one free degree of freedom (as for ``simulate``).
+    free : tuple of str, optional
+        The free joints (default: ``[initial]``'s, else chosen as ``simulate`` chooses).
+
+    Returns
+    -------
+    Equilibrium
+
+    Raises
+    ------
+    ModelError
+        No free degree of freedom, or an invalid ``[initial]``.
+    AssemblyError
+        The start cannot be assembled, Newton's method leaves the positions the mechanism can
+        reach or does not converge in ``MAX_ITER`` steps (no equilibrium near the start), or
+        the stiffness is singular there (a neutral equilibrium: a mechanism with nothing to
+        hold it, or a dead point).
+    """
+    if not isinstance(model, Model):
+        from .errors import wrong_type
+        raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
+    src = model.source
+    part = partition(_held(model), free)
+    topo = part.layout.topo
+    nd, nf = part.n_drivers, len(part.free)
+    free_bodies = list(topo.driven[nd:])
+    scale = _scales(part)
+    q_tree = _start(part)
+    q_f = q_tree[free_bodies].copy()
+    system = _System(part, q_tree, np.zeros(topo.n))
+    check_inertia(part, system, q_tree)
+    state = np.concatenate((q_f, np.zeros(nf), [0.0]))
+    if system.accept(0.0, state) is None:
+        raise AssemblyError("the mechanism does not close at its start", file=src,
+                            time=0.0, fix="Start the free joints ([initial] q) elsewhere")
+    last = np.inf
+    lin = _linear(system, q_f, scale)
+    for it in range(1, MAX_ITER + 1):
+        if lin is None:
+            raise AssemblyError(
+                "no equilibrium found: Newton's method reached positions the mechanism cannot "
+                "take (a dead point or a loop that does not close)", file=src,
+                fix="Start the free joints ([initial] q) nearer the equilibrium")
+        h, H, K, C, tau, kin = lin
+        with np.errstate(all="ignore"):
+            try:
+                step = np.linalg.solve(K, -h)
+            except np.linalg.LinAlgError:
+                step = np.full(nf, np.nan)
+        if not np.all(np.isfinite(step)):
+            raise AssemblyError(
+                "no equilibrium found: the stiffness of the free coordinates is singular "
+                f"at {_text(part.free, q_f)} (nothing holds the mechanism there, or a dead "
+                "point)", file=src, fix="Add a spring or gravity, or start elsewhere")
+        size = float(np.max(np.abs(step) / scale))
+        if size <= STEP_TOL or (size >= last and last < 1e3 * STEP_TOL):
+            break      # converged, or rounding decides the last digits
+        # a trust region (the next state must still close from this one's guess), and a
+        # step halved until it lowers |h| (scaled by the stiffness): no cycling between two
+        # states
+        step *= min(1.0, MAX_STEP / size)
+        before, norm = system.ref, _norm(h, K, scale)
+        for _ in range(30):
+            trial = q_f + step
+            ok = system.accept(0.0, np.concatenate((trial, np.zeros(nf), [0.0]))) is not None
+            new = _linear(system, trial, scale) if ok else None
+            if new is not None and _norm(new[0], K, scale) < norm:
+                break
+            system.ref = before
+            step = 0.5 * step
+        else:
+            raise AssemblyError(
+                "no equilibrium found: no Newton step from "
+                f"{_text(part.free, q_f)} lowers the generalized forces (h = "
+                f"{_text(part.free, h)} N m or N)", file=src,
+                fix="Start the free joints ([initial] q) nearer the equilibrium")
+        q_f, lin, last = trial, new, size
+    else:
+        raise AssemblyError(f"no equilibrium found in {MAX_ITER} Newton steps from the start",
+                            file=src, fix="Start the free joints ([initial] q) nearer it")
+    # every tree joint's coordinate and its share of the free ones' changes        (F2)
+    tree_joint = topo.tree_joint[1:]
+    names = tuple(model.joints[j].name for j in tree_joint)
+    q_now = system.ref[1]
+    S = system.ref[4]
+    ind, dep = list(topo.driven), list(topo.dependent)
+    shape_map = np.zeros((topo.n, nf))
+    shape_map[free_bodies] = np.eye(nf)
+    if S is not None and len(dep):
+        shape_map[dep] = S[:, nd:]
+    return Equilibrium(
+        model=model, free=part.free, q=q_f, iterations=it,
+        joint_q={n_: float(q_now[i]) for n_, i in zip(names, range(1, topo.n))},
+        residual=h, mass=H, stiffness=K, damping=C,
+        efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
+        shape_map=shape_map[1:], tree_joints=names)
+
+
+def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) -> Modes:
+    """Natural frequencies, damping ratios and mode shapes of the small vibrations about the
+    equilibrium of ``model`` (:func:`equilibrium`, E3), or about a given :class:`Equilibrium`."""
+    eq = model if isinstance(model, Equilibrium) else equilibrium(model, free=free)
+    H, K, C = eq.mass, eq.stiffness, eq.damping
+    nf = len(eq.q)
+    scale = max(float(np.max(np.abs(K))), 1e-300)
+    symmetric = np.max(np.abs(K - K.T)) <= 1e-7 * scale
+    undamped = not np.any(C)
+    if undamped and symmetric:
+        import scipy.linalg as sl
+        # K v = w^2 H v, the symmetric problem (E3)
+        w2, V = sl.eigh(0.5 * (K + K.T), 0.5 * (H + H.T))
+        w = np.sqrt(np.abs(w2))
+        s = np.where(w2 >= 0, 1j * w, w)   # an unstable coordinate: a real root
+        eig = np.concatenate((s, np.conj(s)))
+        freq, zeta = w / (2 * np.pi), np.where(w2 >= 0, 0.0, -1.0)
+        stable = bool(np.all(w2 > 0))
+    else:
+        # the first-order form [[0, I], [-H^-1 K, -H^-1 C]]                     (E3)
+        Hi = np.linalg.inv(H)
+        A = np.block([[np.zeros((nf, nf)), np.eye(nf)], [-Hi @ K, -Hi @ C]])
+        eig, W = np.linalg.eig(A)
+        keep = np.imag(eig) >= 0        # one of each conjugate pair, every real root
+        eig_k, V = eig[keep], W[:nf, keep]
+        order = np.argsort(np.abs(eig_k))
+        eig_k, V = eig_k[order], V[:, order]
+        mag = np.abs(eig_k)
+        freq = mag / (2 * np.pi)
+        with np.errstate(all="ignore"):
+            zeta = np.where(mag > 0, -np.real(eig_k) / mag, 0.0)
+        V = np.real(V * np.exp(-1j * np.angle(V[np.argmax(np.abs(V), axis=0),
+                                                 np.arange(V.shape[1])])))
+        stable = bool(np.all(np.real(eig) < 0))
+    V = np.asarray(V, float)
+    V = V / V[np.argmax(np.abs(V), axis=0), np.arange(V.shape[1])]
+    order = np.argsort(np.abs(eig))
+    return Modes(equilibrium=eq, eigenvalues=eig[order], frequencies=np.asarray(freq),
+                 damping_ratios=np.asarray(zeta), shapes=V, joint_shapes=eq.shape_map @ V,
+                 stable=stable)
+
+
+def _norm(h, K, scale) -> float:
+    """Size of the generalized forces ``h`` as the coordinate change they would need at the
+    stiffness ``K``: |h| per the largest stiffness of a unit step (rad, or m per size)."""
+    k = max(float(np.max(np.abs(K * scale[None, :]))), 1e-300)
+    return float(np.max(np.abs(h))) / k
+
+
+def _text(names, q) -> str:
+    return ", ".join(f"q_{j} = {v:.6g}" for j, v in zip(names, q))
+
+
+# --- what a person reads: the file's units, each number with its unit ----------------------
+
+def _unit(model: Model, joint: str) -> tuple[str, float, bool]:
+    """The file's unit of joint ``joint``'s coordinate, its size in SI, and whether an angle
+    (:class:`linkdyn.units.Units`, the one formatter of what a person reads)."""
+    from .units import Units, coordinate
+    quantity = coordinate(model, joint)
+    return (*Units.of(model).unit(quantity), quantity == "angle")
+
+
+def as_dict(eq: Equilibrium, md: Modes | None = None) -> dict:
+    """The equilibrium (and modes) as plain numbers, SI (rad, m, N m, N, Hz), for JSON."""
+    out = {"free_joints": list(eq.free), "q": dict(zip(eq.free, map(float, eq.q))),
+           "joint_q": eq.joint_q, "residual": list(map(float, eq.residual)),
+           "iterations": eq.iterations, "mass": eq.mass.tolist(),
+           "stiffness": eq.stiffness.tolist(), "damping": eq.damping.tolist(),
+           "driver_efforts": eq.efforts}
+    if md is not None:
+        out["stable"] = md.stable
+        out["modes"] = [
+            {"frequency_hz": float(f), "damping_ratio": float(z),
+             "shape": dict(zip(eq.tree_joints, map(float, md.joint_shapes[:, k])))}
+            for k, (f, z) in enumerate(zip(md.frequencies, md.damping_ratios))]
+    return out
+
+
+def text(eq: Equilibrium, md: Modes | None = None) -> str:
+    """The equilibrium (and modes) as the command line prints them, in the file's units."""
+    m = eq.model
+    lines = [f"{m.name}: static equilibrium of {', '.join(eq.free)}"
+             + (" (drivers held at their t = 0 position)" if m.drivers else "")]
+    for j in eq.tree_joints:
+        unit, si, _ = _unit(m, j)
+        tag = "  (free)" if j in eq.free else ""
+        lines.append(f"  {j} = {eq.joint_q[j] / si:.6g} {unit}{tag}")
+    for j, v in eq.efforts.items():
+        unit = "N m" if jk.get(m.joint(j).kind).angular else "N"
+        lines.append(f"  holding effort of the driver at {j}: {v:.6g} {unit}")
+    res = ", ".join(f"{v:.2e} {'N m' if _unit(m, j)[2] else 'N'}"
+                    for j, v in zip(eq.free, eq.residual))
+    md_ = md if md is not None else modes(eq)
+    lines.append(f"  residual {res} after {eq.iterations} Newton step(s); "
+                 + ("stable" if md_.stable else "UNSTABLE: small motions grow from here"))
+    if md is not None:
+        for k, (f, z) in enumerate(zip(md.frequencies, md.damping_ratios)):
+            shape = ", ".join(f"{j} {md.joint_shapes[i, k]:.4g}"
+                              for i, j in enumerate(eq.tree_joints))
+            what = ("undamped" if z == 0 else f"damping ratio {z:.4g}"
+                    + (" (overdamped root)" if abs(z) == 1 else ""))
+            lines.append(f"  mode {k + 1}: {f:.6g} Hz, {what}; shape (SI ratios) {shape}")
+    return "\n".join(lines)

@@ -1,0 +1,178 @@
+"""Disc cams from a follower motion (``linkdyn.cams``, ``linkdyn cam``): SVAJ by the laws'
+closed forms, the pitch curve's curvature and the pressure angle against finite differences of
+the profile's own points, dwells against circles, and the profile's points putting the follower
+exactly on its prescribed lift (found here by resting the follower on the points)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from linkdyn import cams
+from linkdyn.cli import main
+from linkdyn.motion import Segment
+
+DOC = Path(__file__).resolve().parents[1] / "docs" / "cams.md"
+H, W = 0.02, 300 * 2 * math.pi / 60      # lift 20 mm, 300 rpm
+RISE = math.radians(100.0)
+
+
+def cam(follower="roller", offset=0.005, roller=0.010, base=0.040, rise="cycloidal",
+        back="poly345"):
+    d60, d100 = math.radians(60.0), math.radians(100.0)
+    segs = (Segment("dwell", 0.0, d60), Segment(rise, H, d100), Segment("dwell", H, d100),
+            Segment(back, 0.0, d100))
+    return cams.Cam("test", segs, base, follower, roller if follower == "roller" else 0.0,
+                    offset if follower != "flat" else 0.0, W)
+
+
+def test_svaj_of_a_cycloidal_rise_is_its_closed_form():
+    p = cams.profile(cam(), 3601)
+    on = (p.theta >= math.radians(60)) & (p.theta < math.radians(160))   # the jerk jumps at 160
+    x = (p.theta[on] - math.radians(60)) / RISE
+    b = RISE / W                                 # the rise's duration, s
+    assert p.s[on] == pytest.approx(H * (x - np.sin(2 * np.pi * x) / (2 * np.pi)), abs=1e-14)
+    assert p.v[on] == pytest.approx(H / b * (1 - np.cos(2 * np.pi * x)), abs=1e-12 * H / b)
+    a = 2 * np.pi * H / b ** 2
+    assert p.a[on] == pytest.approx(a * np.sin(2 * np.pi * x), abs=1e-12 * a)
+    j = 4 * np.pi ** 2 * H / b ** 3
+    assert p.j[on] == pytest.approx(j * np.cos(2 * np.pi * x), abs=1e-12 * j)
+
+
+@pytest.mark.parametrize("follower, offset", [("knife", 0.0), ("knife", 0.008),
+                                              ("roller", 0.0), ("roller", 0.005)])
+def test_on_a_dwell_the_pitch_curve_is_a_circle(follower, offset):
+    p = cams.profile(cam(follower, offset), 721)
+    rb, rf = 0.040, (0.010 if follower == "roller" else 0.0)
+    d = math.sqrt((rb + rf) ** 2 - offset ** 2)
+    first = p.theta < math.radians(59)          # the first dwell, at lift 0
+    # the pitch circle's radius, and its pressure angle atan(-e / d)
+    assert p.rho_pitch[first] == pytest.approx(math.hypot(d, offset), rel=1e-12)
+    assert p.pressure_angle[first] == pytest.approx(math.atan2(-offset, d), abs=1e-12)
+    assert np.hypot(*p.pitch[:, first]) == pytest.approx(rb + rf, rel=1e-12)
+    assert np.hypot(*p.profile[:, first]) == pytest.approx(rb, rel=1e-12)
+
+
+def curvature(x, y, h):
+    """Radius of curvature of the sampled curve (x, y), spacing h, by central differences."""
+    x1, y1 = np.gradient(x, h), np.gradient(y, h)
+    x2, y2 = np.gradient(x1, h), np.gradient(y1, h)
+    return (x1 ** 2 + y1 ** 2) ** 1.5 / (x1 * y2 - y1 * x2)
+
+
+@pytest.mark.parametrize("follower", ["knife", "roller"])
+def test_curvature_and_pressure_angle_match_the_profiles_own_points(follower):
+    n = 36001
+    p = cams.profile(cam(follower), n)
+    h = p.theta[1] - p.theta[0]
+    inner = slice(5, -5)
+    # the cam turns counter-clockwise: its frame sees the pitch curve run clockwise; compared
+    # as curvatures (1/rho passes 0 where the curve turns from convex to concave), not across
+    # the joins of the segments (where the jerk jumps)
+    kappa = -1 / curvature(*p.pitch, h)
+    joins = np.radians([0.0, 60.0, 160.0, 260.0, 360.0])
+    smooth = np.min(np.abs(p.theta[:, None] - joins[None, :]), axis=1) > 4 * h
+    err = np.abs(kappa - 1 / p.rho_pitch)[smooth]
+    assert np.max(err) <= 1e-6 * np.max(np.abs(1 / p.rho_pitch))
+    # the pressure angle: the follower's line (y) against the normal of the pitch curve, whose
+    # tangent is the pitch points' difference turned back into the fixed frame
+    tx, ty = np.gradient(p.pitch[0], h), np.gradient(p.pitch[1], h)
+    c, s = np.cos(p.theta), np.sin(p.theta)
+    fx, fy = c * tx - s * ty, s * tx + c * ty
+    # the normal is the tangent turned by 90 deg: its angle from the follower's line (y) is
+    # the tangent's angle from x
+    assert np.max(np.abs(np.arctan2(fy, fx) - p.pressure_angle)[inner]) <= 1e-6
+
+
+@pytest.mark.parametrize("follower", ["knife", "roller", "flat"])
+def test_the_profiles_points_put_the_follower_on_its_lift(follower):
+    # rest the follower on the cut profile (its points only) at each cam angle: where it
+    # touches is the prescribed lift
+    p = cams.profile(cam(follower), 20001)
+    rb, e = 0.040, (0.005 if follower != "flat" else 0.0)
+    rf = 0.010 if follower == "roller" else 0.0
+    d = math.sqrt((rb + rf) ** 2 - e ** 2)
+    for k in range(0, len(p.theta), 997):
+        th = p.theta[k]
+        c, s = math.cos(th), math.sin(th)
+        qx = c * p.profile[0] - s * p.profile[1]       # the profile in the fixed frame at th
+        qy = s * p.profile[0] + c * p.profile[1]
+        if follower == "flat":
+            top = np.max(qy) - rb                      # the face rests on the highest point
+        elif rf:                                       # the roller on the nearest points
+            near = np.abs(qx - e) <= rf
+            lift = qy[near] + np.sqrt(np.maximum(rf ** 2 - (qx[near] - e) ** 2, 0.0))
+            top = np.max(lift) - d
+        else:                                          # the knife where its line cuts the
+            cut = np.nonzero((qx[:-1] - e) * (qx[1:] - e) <= 0)[0]       # profile's polygon
+            w = (e - qx[cut]) / (qx[cut + 1] - qx[cut])
+            top = np.max(qy[cut] + w * (qy[cut + 1] - qy[cut])) - d
+        assert top == pytest.approx(p.s[k], abs=2e-6 * H)
+
+
+def test_a_flat_face_has_the_closed_form_radius_and_warns_of_a_cusp():
+    p = cams.profile(cam("flat"), 3601)
+    # rho = R_b + s + s'' (s'' per rad^2 = a / w^2)
+    assert p.rho == pytest.approx(0.040 + p.s + p.a / W ** 2, abs=1e-15)
+    assert not np.any(p.undercut)
+    small = cams.profile(cam("flat", base=0.005), 3601)
+    assert np.any(small.undercut) and "cusp" in cams.text(small)
+
+
+def test_a_roller_too_big_for_the_profile_is_reported_undercut():
+    # a 50 mm lift in 45 deg on a 10 mm base circle: the pitch curve's nose bends tighter
+    # than a 20 mm roller
+    d45 = math.radians(45.0)
+    segs = (Segment("cycloidal", 0.05, d45), Segment("cycloidal", 0.0, d45),
+            Segment("dwell", 0.0, 2 * math.pi - 2 * d45))
+    p = cams.profile(cams.Cam("nose", segs, 0.010, "roller", 0.020, 0.0, W), 3601)
+    tight = (p.rho_pitch > 0) & (p.rho_pitch < 0.020)
+    assert np.array_equal(p.undercut, tight) and np.any(tight)
+    assert np.any(p.undercut)
+    assert "UNDERCUT" in cams.text(p) and "smaller roller" in cams.text(p)
+
+
+def doc_file() -> str:
+    text = DOC.read_text("utf-8")
+    return text.split("```toml\n", 1)[1].split("```", 1)[0]
+
+
+def test_the_command_prints_in_the_files_units_and_writes_the_table(tmp_path):
+    path = tmp_path / "cam.toml"
+    path.write_text(doc_file(), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    design, n = cams.read(path)
+    p = cams.profile(design, n)
+    k = np.argmax(np.abs(p.pressure_angle))
+    assert f"max pressure angle {math.degrees(abs(p.pressure_angle[k])):.4g} deg" in res.output
+    assert "lift 20 mm" in res.output
+    rows = list(csv.DictReader((tmp_path / "out" / "cam.csv").open()))
+    assert len(rows) == n
+    assert float(rows[k]["pressure_angle_rad"]) == p.pressure_angle[k]
+    # the docs show what the command prints
+    shown = DOC.read_text("utf-8").split("$ linkdyn cam cam.toml\n", 1)[1].split("```", 1)[0]
+    assert [ln for ln in shown.strip().splitlines() if not ln.startswith("wrote")] == \
+        res.output.strip().splitlines()[:-1]
+
+
+@pytest.mark.parametrize("edit, field, words", [
+    (("follower = \"roller\"", "follower = \"mushroom\""), "cam.follower", "unknown follower"),
+    (("roller_radius = 10.0\n", ""), "cam.roller_radius", "missing required key"),
+    (("angle = 60.0", "angle = 50.0"), "cam.segments", "not one turn"),
+    (("to = 0.0", "to = 1.0"), "cam.segments", "not 0"),
+    (("offset = 5.0", "offset = 60.0"), "cam.offset", "prime circle"),
+    (("law = \"poly345\"", "law = \"poly999\""), "cam.segments[3].law", "unknown motion law"),
+])
+def test_a_bad_cam_file_is_named_with_its_fix(tmp_path, edit, field, words):
+    path = tmp_path / "cam.toml"
+    path.write_text(doc_file().replace(*edit), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    assert field in res.output and words in res.output
+    assert not (tmp_path / "out").exists()
