@@ -14,6 +14,7 @@ import numpy as np
 
 from . import backend as backend_mod
 from . import batch, kinematics, loads as loads_mod, reactions as reactions_mod
+from . import friction as friction_mod
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics,  # noqa: F401
@@ -48,6 +49,8 @@ class Solution:
         Samples where the loops close and the position is not singular.
     designs : tuple of Model
         The D models of a batch; empty for a single mechanism.
+    friction : friction.Friction or None
+        The friction loads' efforts, power and Newton's iterations (None without friction).
     """
 
     model: Model
@@ -57,6 +60,7 @@ class Solution:
     react: reactions_mod.Reactions | Callable
     valid: np.ndarray
     designs: tuple = ()
+    friction: friction_mod.Friction | None = None
 
     @cached_property
     def reactions(self) -> reactions_mod.Reactions:
@@ -87,7 +91,8 @@ class Solution:
                         batch.dynamics(self.dyn, k),
                         partial(_design_reactions, self, k) if callable(self.react)
                         else batch.reactions(self.react, k),
-                        self.valid[k])
+                        self.valid[k],
+                        friction=None if self.friction is None else self.friction.design(k))
 
     @property
     def t(self) -> np.ndarray:
@@ -263,11 +268,16 @@ class Solution:
             put(f"power_{d.joint}", p, "W")
         for ld, label, value, p in zip(m.loads, loads_mod.labels(m), self.loads.values,
                                        self.loads.powers):
+            if ld.kind in loads_mod.REACTION_KINDS:
+                continue   # the friction columns below
             names = loads_mod.VALUE_COLUMNS[ld.kind]
             for k, name in enumerate(names):
                 put(f"{name}_{label}", value[k] if len(names) > 1 else value,
                     loads_mod.VALUE_UNITS[ld.kind])
             put(f"power_{label}", p, "W")
+        if self.friction is not None:   # each friction load's effort and power
+            for name, values, unit in friction_mod.columns(self.friction, m):
+                put(name, values, unit)
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols, units
@@ -564,8 +574,9 @@ def _numpy_reactions(model, kin, applied, dyn):
 
 def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool = True,
             start=None):
-    """The stages of an analysis composed: ``(kin, applied, dyn, react, valid)``, ``valid`` the
-    samples that close clear of a singular position. ``model``: a Model, or D Models (a batch;
+    """The stages of an analysis composed: ``(kin, applied, dyn, react, valid, friction)``,
+    ``valid`` the samples that close clear of a singular position (and, with friction loads,
+    do not lock), ``friction`` the :class:`linkdyn.friction.Friction` or None. ``model``: a Model, or D Models (a batch;
     with ``layout``, their stacked layout, and the models only give their ``[assembly]``
     guesses and design 0's names). Without ``reactions``, ``react`` is the reactions stage
     still to run (a function of no argument), for :class:`Solution` to run when they are
@@ -584,10 +595,17 @@ def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool
     swept = getattr(kin, "swept", None) is not None   # the dynamics already solved
     if swept:
         backend_mod.mark_cached("sweep")
+    fr = None
+    if friction_mod.present(models[0]):
+        # friction grows with the reactions: efforts, reactions and friction solved together
+        applied, dyn, react, fr = friction_mod.solve(models, kin, applied, dynamics,
+                                                     reactions_stage)
+        valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR) & ~fr.locked
+        return kin, applied, dyn, react, valid, fr
     dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)
     react = partial(reactions_stage, models[0], kin, applied, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
-    return kin, applied, dyn, react() if reactions else react, valid
+    return kin, applied, dyn, react() if reactions else react, valid, fr
 
 
 def layout_stages(layout, reactions: bool) -> tuple[str, ...]:
@@ -636,10 +654,10 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
                                                       len(models[0].bodies) - 1,
                                                       stages=layout_stages(layout, reactions)),
                             [j.kind for j in models[0].joints])
-    kin, applied, dyn, react, valid = _stages(models, t, be, layout, reactions, start)
+    kin, applied, dyn, react, valid, fr = _stages(models, t, be, layout, reactions, start)
     valid = _finite(models[0], kin, applied, dyn, react, valid, False)
     return Solution(models[0], kin, applied, dyn, react, valid,
-                    designs if designs is not None else tuple(models))
+                    designs if designs is not None else tuple(models), friction=fr)
 
 
 @quiet
@@ -687,12 +705,15 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     if not models:
         raise ModelError("no designs to solve", fix="Pass a model or a non-empty list of models")
     t = np.asarray(t, dtype=float)
-    kin, applied, dyn, react, valid = _stages(models if designs else model, t, backend)
+    kin, applied, dyn, react, valid, fr = _stages(models if designs else model, t, backend)
     model = models[0]
     if not (allow_singular or designs) and not np.all(valid):
         k = int(np.argmin(valid))
         _check_drivers(model, float(kin.t[k]))  # a motion that overflows, not the loops
+        if fr is not None and fr.locked[k]:
+            raise friction_mod.locked_error(model, fr, kin.t, k)
         raise failure(model, kin.t[k], kin.residual[k])
     # every number finite, or the run stops naming the time and the cause
     valid = _finite(model, kin, applied, dyn, react, valid, not (allow_singular or designs))
-    return Solution(model, kin, applied, dyn, react, valid, tuple(models) if designs else ())
+    return Solution(model, kin, applied, dyn, react, valid, tuple(models) if designs else (),
+                    friction=fr)

@@ -477,6 +477,9 @@ def summary_text(s: dict) -> str:
              f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
                 f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
+    if s.get("friction"):
+        from .friction import summary_lines
+        lines.extend(summary_lines(s["friction"]))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         m = r.get("peak_moment_Nm")

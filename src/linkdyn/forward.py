@@ -610,7 +610,20 @@ def _arguments(model, t, rtol, atol, method, max_steps, backend, project):
         raise wrong_type("simulate", "backend", backend, "a str")
     if not isinstance(project, (bool, np.bool_)):
         raise wrong_type("simulate", "project", project, "True or False")
+    _no_friction(model)
     return (model, t, *tolerances(rtol, atol))
+
+
+def _no_friction(model: Model) -> None:
+    """Refuse a model with friction loads: ``simulate`` does not integrate them yet (issue 25
+    item 4); ``analyze`` solves them."""
+    for k, ld in enumerate(model.loads):
+        if ld.kind == "friction":
+            raise ModelError("simulate does not integrate joint friction yet (analyze solves it)",
+                             file=model.source,
+                             field=f"loads.{ld.name}" if ld.name else f"loads[{k}]",
+                             fix="Remove the friction load to simulate, or prescribe the motion "
+                                 "with drivers and run linkdyn analyze")
 
 
 @quiet

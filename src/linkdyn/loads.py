@@ -161,6 +161,31 @@ def _add_force(w, kin, i, r, f):
     w[i] = w[i] + _stack(force_at(f, kin.pose.r[i], r))
 
 
+#: Load kinds whose value depends on the joint reactions: ``wrenches`` leaves them out and the
+#: inverse dynamics applies them with the reactions (:mod:`linkdyn.friction`).
+REACTION_KINDS = ("friction",)
+
+
+def add_joint_effort(w, kin: KinematicSolution, body: int, body2: int, point: str, axis,
+                     x) -> None:
+    """Accumulate into ``w`` (per-body wrenches, tree order) the effort ``x`` (batch shape)
+    inside a joint whose second body is ``body`` (joint point ``point``) and first ``body2``
+    (tree indices): a torque x (N m) for ``axis`` None, else a force x (N) along ``axis``
+    (2,) (or (2, D, 1)), fixed in the first body's frame."""
+    shape = kin.shape
+    if axis is None:
+        # a torque x on the joint's second body and -x on its first
+        w[body] = w[body] + twist(x, np.zeros((2,) + shape))
+        w[body2] = w[body2] - twist(x, np.zeros((2,) + shape))
+    else:
+        # a force x e along the axis (fixed in the first body) at the second body's
+        # point, and -x e on the first body at the same place
+        r_b, _ = _point(kin, body, point)
+        e = kin.pose.rotate(body2, axis)
+        _add_force(w, kin, body, r_b, x * e)
+        _add_force(w, kin, body2, r_b, -x * e)
+
+
 def values(lay, load, kin: KinematicSolution) -> np.ndarray:
     """A load's value at the samples of ``kin``, components first: ``value(t)``, or for a formula
     in joint coordinates and rates (its ``state_variables``, e.g. ``qd_J1``)
@@ -229,21 +254,15 @@ def wrenches(model: Model | None, kin: KinematicSolution) -> Loads:
             # its power n omega
             value, p = tq, tq * kin.twists[i][0]
         elif load.kind in ("joint_torque", "joint_force"):
-            a = load.body2
             x = np.broadcast_to(values(lay, load, kin), shape)
-            if load.kind == "joint_torque":
-                # a torque x on the joint's second body and -x on its first
-                w[i] = w[i] + twist(x, np.zeros((2,) + shape))
-                w[a] = w[a] - twist(x, np.zeros((2,) + shape))
-            else:
-                # a force x e along the axis (fixed in the first body) at the second body's
-                # point, and -x e on the first body at the same place
-                r_b, _ = _point(kin, i, load.point)
-                e = kin.pose.rotate(a, load.axis)
-                _add_force(w, kin, i, r_b, x * e)
-                _add_force(w, kin, a, r_b, -x * e)
+            add_joint_effort(w, kin, i, load.body2, load.point,
+                             None if load.kind == "joint_torque" else load.axis, x)
             # its power: the effort times the joint's rate
             value, p = x, x * kin.joint_motion[1][load.joint]
+        elif load.kind in REACTION_KINDS:
+            # applied with the reactions it depends on: linkdyn.friction.solve adds its wrench
+            # and fills its value and power in
+            value, p = np.zeros(shape), np.zeros(shape)
         else:  # spring or damper between two points, force along the line joining them
             j = load.body2
             r1, v1 = _point(kin, i, load.point)

@@ -128,7 +128,9 @@ class Load:
     N m on ``body``), ``spring`` and ``damper`` (between ``body.point`` and ``body2.point2``;
     ``stiffness`` N/m, ``free_length`` m, ``damping`` N s/m), ``joint_torque`` / ``joint_force``
     (``value`` N m or N inside the revolute or prismatic joint ``joint``: on its second body,
-    ``body``, and minus that on its first, ``body2``). A ``value`` is a callable of time
+    ``body``, and minus that on its first, ``body2``), ``friction`` (in the joint ``joint``, its
+    bodies as for a joint load: ``coefficient``, ``radius`` m for a revolute joint and
+    ``transition_speed`` rad/s or m/s; see :mod:`linkdyn.friction`). A ``value`` is a callable of time
     returning the shape of ``t`` plus the load's components, so constant and time-varying loads
     share one path; one whose ``state_variables`` is not empty also takes the joints' motion
     (see :func:`linkdyn.loads.evaluate`).
@@ -145,6 +147,13 @@ class Load:
     damping: float = 0.0
     name: str = ""
     joint: str = ""
+    coefficient: float = 0.0       # friction: coefficient of friction mu, 1
+    radius: float = 0.0            # friction in a revolute joint: the pin radius, m
+    transition_speed: float = 0.0  # friction: rate of the tanh smoothing, rad/s or m/s
+    static_coefficient: float | None = None  # friction: mu at rest (None: ``coefficient``)
+    stiction_speed: float | None = None      # friction: rate of the static-to-dynamic blend
+    viscous: float = 0.0           # friction: viscous coefficient, N m s/rad or N s/m
+    preload: float = 0.0           # friction: load added to |F|, N
 
 
 @dataclass(frozen=True)

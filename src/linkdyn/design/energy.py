@@ -141,6 +141,8 @@ def load_energy(sol) -> dict:
     m, t = sol.model, np.asarray(sol.t, float)
     out = {}
     for ld, label, value, p in zip(m.loads, labels(m), sol.loads.values, sol.loads.powers):
+        if ld.kind == "friction":
+            continue   # the summary's "friction" entry (linkdyn.friction.summary)
         v = np.asarray(value, float)
         size = np.hypot(v[0], v[1]) if ld.kind == "force" else np.abs(v)
         size = np.broadcast_to(size, t.shape)

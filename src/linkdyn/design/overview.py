@@ -177,6 +177,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         ps["range_shown"] = units.span(*ps["range"], "angle" if ps["range_unit"] == "rad"
                                        else "length")
     out["health"] = health(sol)
+    if getattr(sol, "friction", None) is not None:   # energy lost per joint, efficiency
+        from .. import friction
+        out["friction"] = friction.summary(sol)
     return out
 
 

@@ -19,7 +19,12 @@ LOAD_KEYS = {"force": ("kind", "name", "body", "point", "value"),
                         "free_length"),
              "damper": ("kind", "name", "body", "point", "body2", "point2", "damping"),
              "joint_torque": ("kind", "name", "joint", "value"),
-             "joint_force": ("kind", "name", "joint", "value")}
+             "joint_force": ("kind", "name", "joint", "value"),
+             "friction": ("kind", "name", "joint", "coefficient", "radius", "transition_speed",
+                          "static_coefficient", "stiction_speed", "viscous", "preload")}
+#: keys a kind may leave out (the rest but ``name`` are required)
+OPTIONAL_KEYS = {"friction": ("radius", "transition_speed", "static_coefficient",
+                              "stiction_speed", "viscous", "preload")}
 
 
 @dataclass(frozen=True)
@@ -98,9 +103,13 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             r.fail(f"{f}.kind", "missing required key 'kind'",
                    f"Add kind = one of {', '.join(LOAD_KEYS)}")
         kind = r.choice(entry["kind"], f"{f}.kind", LOAD_KEYS, "load kind")
-        need = tuple(k for k in LOAD_KEYS[kind] if k != "name")
+        need = tuple(k for k in LOAD_KEYS[kind]
+                     if k != "name" and k not in OPTIONAL_KEYS.get(kind, ()))
         r.table(entry, f, LOAD_KEYS[kind], required=need, what=f'keys for kind = "{kind}"')
         name = r.name(entry["name"], f"{f}.name") if "name" in entry else ""
+        if kind == "friction":
+            loads.append(_friction(r, entry, f, name, joints or {}))
+            continue
         if kind in ("joint_torque", "joint_force"):
             # an effort inside a joint: on its second body, minus that on the first
             joint = r.choice(entry["joint"], f"{f}.joint", joints or {}, "joint")
@@ -145,3 +154,48 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             c = r.number(entry["damping"], f"{f}.damping", f"N s/{Lu}", nonnegative=True)
             loads.append(Load(kind, body, point, None, body2, point2, damping=c / L, name=name))
     return loads
+
+
+def _friction(r: _Reader, entry: dict, f: str, name: str, joints: dict[str, Joint]) -> Load:
+    """A ``kind = "friction"`` entry: Coulomb friction in a joint (docs/model-format.md)."""
+    from ..friction import default_transition_speed
+
+    joint = r.choice(entry["joint"], f"{f}.joint", joints, "joint")
+    jt = joints[joint]
+    kind = jk.get(jt.kind)
+    mu = r.number(entry["coefficient"], f"{f}.coefficient", nonnegative=True)
+    if kind.angular:
+        if "radius" not in entry:
+            r.fail(f"{f}.radius", f"friction in the revolute joint '{joint}' needs the pin "
+                   "radius", f"Add radius = the pin's radius ({r.length_name}): the friction "
+                   "couple is coefficient x radius x |joint force|")
+        radius = r.number(entry["radius"], f"{f}.radius", r.length_name,
+                          nonnegative=True) * r.length
+    else:
+        if "radius" in entry:
+            r.fail(f"{f}.radius", f"joint '{joint}' is a {jt.kind} joint: its friction is a "
+                   "force coefficient x |normal force| along the guide, with no radius",
+                   "Remove radius")
+        radius = 0.0
+    unit = r.angle if kind.angular else r.length
+    unit_name = f"{r.angle_name if kind.angular else r.length_name}/s"
+    if "transition_speed" in entry:
+        speed = r.number(entry["transition_speed"], f"{f}.transition_speed", unit_name,
+                         positive=True) * unit
+    else:
+        speed = default_transition_speed(kind.angular)
+    static = (r.number(entry["static_coefficient"], f"{f}.static_coefficient",
+                       nonnegative=True) if "static_coefficient" in entry else None)
+    stiction = (r.number(entry["stiction_speed"], f"{f}.stiction_speed", unit_name,
+                         positive=True) * unit if "stiction_speed" in entry else None)
+    # viscous: N m per (angle unit / s) or N per (length unit / s), to SI
+    effort = "N m" if kind.angular else "N"
+    per_rate = r.angle_name if kind.angular else r.length_name
+    viscous = (r.number(entry["viscous"], f"{f}.viscous", f"{effort} s/{per_rate}",
+                        nonnegative=True) / unit if "viscous" in entry else 0.0)
+    preload = (r.number(entry["preload"], f"{f}.preload", "N", nonnegative=True)
+               if "preload" in entry else 0.0)
+    return Load("friction", jt.body_b, jt.point_b, None, jt.body_a, jt.point_a, name=name,
+                joint=joint, coefficient=mu, radius=radius, transition_speed=speed,
+                static_coefficient=static, stiction_speed=stiction, viscous=viscous,
+                preload=preload)

@@ -139,6 +139,23 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
             entry.update(joint=ld.joint, value=_load_value(ld.value, False))
             loads.append(entry)
             continue
+        if ld.kind == "friction":   # in a joint, in the file's units
+            angular = jk.get(model.joint(ld.joint).kind).angular
+            entry.update(joint=ld.joint, coefficient=_num(ld.coefficient))
+            if angular:
+                entry["radius"] = _num(ld.radius / L)
+            rate = A if angular else L
+            entry["transition_speed"] = _num(ld.transition_speed / rate)
+            if ld.static_coefficient is not None:
+                entry["static_coefficient"] = _num(ld.static_coefficient)
+            if ld.stiction_speed is not None:
+                entry["stiction_speed"] = _num(ld.stiction_speed / rate)
+            if ld.viscous:
+                entry["viscous"] = _num(ld.viscous * rate)
+            if ld.preload:
+                entry["preload"] = _num(ld.preload)
+            loads.append(entry)
+            continue
         entry["body"] = ld.body
         if ld.point is not None:
             entry["point"] = ld.point

@@ -22,13 +22,17 @@ Each metric is computed by the same functions the summary of ``linkdyn analyze``
     Flywheel that keeps the first constant-speed revolute driver within a coefficient of speed
     fluctuation C_s (default 0.02) over its first cycle, kg m^2
     (:func:`linkdyn.design.energy.energy_fluctuation`, ``flywheel_inertia``).
+``friction_loss``, ``efficiency``
+    With friction loads: the energy all of them dissipate over the run, J, and the mechanical
+    efficiency over the run, ``1 - friction_loss / drivers' net work`` (NaN when the drivers do
+    no positive net work), better larger (:func:`linkdyn.friction.energies`, ``efficiency``).
 ``stroke_<joint>``
     Travel (largest minus smallest coordinate) of each undriven guide on the ground, the slider
     of a slider-crank, m (:func:`linkdyn.design.path.travel`, as the summary's
     ``joint_travel``).
 
 Senses: every metric is better smaller (:func:`sense` ``'min'``) except
-``min_transmission_angle`` and ``stroke_<joint>``, better larger (``'max'``). Whatever ranks
+``min_transmission_angle``, ``stroke_<joint>`` and ``efficiency``, better larger (``'max'``). Whatever ranks
 designs (the sweep's best designs and Pareto fronts, ``compare --sweep --by``, ``optimize``)
 ranks by :func:`cost`, the metric signed so that smaller is better.
 """
@@ -52,7 +56,7 @@ __all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost",
            "unit", "quantity"]
 
 # metrics a designer wants large; every other metric is better small
-_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_")
+_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency")
 
 
 def sense(name: str) -> str:
@@ -85,7 +89,7 @@ def unit(name: str) -> str:
     if name.startswith(("peak_", "rms_")):
         return "N"
     return {"min_transmission_angle": "rad", "path_deviation": "m",
-            "flywheel_inertia": "kg m^2"}.get(name, "m" if name.startswith("stroke_") else "")
+            "flywheel_inertia": "kg m^2", "friction_loss": "J"}.get(name, "m" if name.startswith("stroke_") else "")
 
 
 def quantity(name: str) -> str | None:
@@ -144,6 +148,8 @@ def names(model: Model, *, path_point=None) -> list[str]:
     if _flywheel_driver(model) is not None:
         out.append("flywheel_inertia")
     out += [f"stroke_{j}" for j in _guides(model)]
+    if any(ld.kind == "friction" for ld in model.loads):
+        out += ["friction_loss", "efficiency"]
     return out
 
 
@@ -221,6 +227,11 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
             k = names_j.index(j)
             lo, hi = travel(sol.t, sol.kin.q[..., k], sol.kin.qd[..., k], sol.kin.qdd[..., k])
             out[f"stroke_{j}"] = hi - lo
+    if want & {"friction_loss", "efficiency"}:
+        from .. import friction
+        lost, work = friction.energies(sol)
+        out["friction_loss"] = np.sum(lost, axis=0)
+        out["efficiency"] = friction.efficiency(out["friction_loss"], work)
     return {w: out[w] for w in wanted}
 
 

@@ -125,6 +125,11 @@ def _frame(model: Model, lay: Layout) -> tuple:
         tuple((r.kind, r.name, r.body, r.point, r.body2, r.point2, r.joint, r.axis is None,
                value_shape(r.values[0])) for r in lay.loads),
         tuple(model.assembly_phi), tuple(model.assembly_q),
+        # friction numbers are read from each design's model, not from the layout: a parameter
+        # that changes one leaves the study on the per-design path
+        tuple((ld.coefficient, ld.radius, ld.transition_speed, ld.static_coefficient,
+               ld.stiction_speed, ld.viscous, ld.preload)
+              for ld in model.loads if ld.kind == "friction"),
         lay.topo.bodies, lay.topo.parent, lay.topo.tree_joint, lay.topo.sign, lay.topo.cut,
         lay.kind,
     )

@@ -1,0 +1,498 @@
+"""Joint friction that grows with the joint load, solved together with the reactions.
+
+SPEC "Loads that depend on the state": a load ``kind = "friction"`` in a joint is Coulomb
+friction on the joint's second body, minus that on its first, opposing the joint's rate ``qd``:
+
+    f = -c |F| tanh(qd / v),      c = mu r (revolute: a couple, N m)  or  mu (sliding: N),
+
+along the joint's freedom (a couple for a revolute joint; a force along the guide, at the
+second body's joint point, for a prismatic or slot joint), where ``F`` is the joint's reaction
+force (by the first body on the second; for a sliding joint it is the normal force, the guide's
+moment does not enter) and ``v`` the transition speed.
+
+The method (docs/theory.md, "Friction"). At a fixed kinematic state the inverse dynamics is
+linear in the applied wrenches, so every reaction force is affine in the k friction efforts
+``f`` (one per friction load):
+
+    F_j(f) = F0_j + sum_l A_jl f_l,
+
+``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
+in friction joint l. Both come from one run of the backend's own dynamics and reactions stages
+(:func:`linkdyn.analysis.stage_functions`) on 1 + k cases of the samples laid end to end along
+the sample axis (case 0 the applied loads, case l those plus a unit effort in friction joint l),
+so the numpy and the compiled backends solve friction alike. The friction equations
+``f = g(F(f))`` are then a k x k system per sample, solved by a vectorized Newton's method from
+the frictionless solution ``f = 0``; a last run of the stages with the converged efforts gives
+the efforts, multipliers and reactions (which exclude the friction, as they exclude a driver's
+effort: the friction is an applied load).
+
+A load that depends on the reactions answers one question (the interface the load registry
+should carry, :data:`linkdyn.loads.REACTION_KINDS`): given the joint's reaction force and the
+state, its effort and the effort's derivative with respect to that force (:func:`coulomb`); its
+wrench is an effort inside the joint (:func:`linkdyn.loads.add_joint_effort`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from . import joints as jk
+from .loads import Loads, add_joint_effort
+from .model import Load, Model
+from .steps import select, step
+
+#: Newton's method stops when every equation's residual is at most TOL of their scale (the
+#: largest friction effort c |F| of the run, per design).
+TOL = 1e-12
+MAX_ITERATIONS = 50
+
+
+def default_transition_speed(angular: bool) -> float:
+    """The transition speed of the tanh smoothing when a model gives none: 0.01 rad/s for a
+    revolute joint, 0.001 m/s for a sliding one."""
+    return 0.01 if angular else 0.001
+
+
+def joint_friction(model: Model, joint: str, coefficient: float, radius: float = 0.0,
+                   transition_speed: float | None = None, name: str = "", *,
+                   static_coefficient: float | None = None,
+                   stiction_speed: float | None = None, viscous: float = 0.0,
+                   preload: float = 0.0) -> Load:
+    """The :class:`~linkdyn.model.Load` of friction in ``model``'s joint ``joint``, SI.
+
+    Parameters
+    ----------
+    coefficient : float
+        Coefficient of friction mu, 1.
+    radius : float
+        Pin radius, m (revolute joints: the couple is mu r |F|); 0 for a sliding joint.
+    transition_speed : float, optional
+        Rate of the tanh smoothing, rad/s (revolute) or m/s (sliding); default
+        :func:`default_transition_speed`.
+    static_coefficient : float, optional
+        mu at rest (default ``coefficient``, the dynamic one); the coefficient blends from it
+        to ``coefficient`` as ``exp(-(qd / stiction_speed)^2)`` fades.
+    stiction_speed : float, optional
+        Rate of that blend, rad/s or m/s; default 10 x the transition speed.
+    viscous : float
+        Viscous coefficient b, N m s/rad or N s/m: an effort ``-b qd`` more.
+    preload : float
+        A load added to the joint's force magnitude, N (a bearing's or a guide's preload).
+    """
+    jt = model.joint(joint)
+    angular = jk.get(jt.kind).angular
+    speed = default_transition_speed(angular) if transition_speed is None else transition_speed
+    return Load("friction", jt.body_b, jt.point_b, None, jt.body_a, jt.point_a, name=name,
+                joint=joint, coefficient=float(coefficient),
+                radius=float(radius) if angular else 0.0, transition_speed=float(speed),
+                static_coefficient=None if static_coefficient is None
+                else float(static_coefficient),
+                stiction_speed=None if stiction_speed is None else float(stiction_speed),
+                viscous=float(viscous), preload=float(preload))
+
+
+def stiction_speed(load: Load) -> float:
+    """The rate of a friction load's static-to-dynamic blend, rad/s or m/s: its own, else 10
+    times its transition speed."""
+    return 10.0 * load.transition_speed if load.stiction_speed is None else load.stiction_speed
+
+
+def present(model: Model) -> bool:
+    """Whether ``model`` has a friction load."""
+    return any(ld.kind == "friction" for ld in model.loads)
+
+
+@dataclass(frozen=True)
+class Row:
+    """One friction load in tree indices: its joint (model order) and bodies (the second
+    ``body``, the first ``body2``), the second body's joint point, the axis of a sliding joint
+    in the first body's frame (None: a revolute joint, the effort is a couple), and per design
+    ``arm`` and ``arm_static`` (mu r, m, or mu; dynamic and at rest), ``speed`` and
+    ``stiction`` (the rates of the tanh and of the static blend, rad/s or m/s), ``viscous``
+    (N m s/rad or N s/m) and ``preload`` (N): floats, or (D, 1)."""
+
+    label: str
+    joint: int
+    body: int
+    body2: int
+    point: str
+    axis: np.ndarray | None
+    arm: object
+    speed: object
+    arm_static: object = 0.0
+    stiction: object = 1.0
+    viscous: object = 0.0
+    preload: object = 0.0
+    load: int = -1          # its place in model.loads
+
+
+def rows(models, topo) -> tuple[Row, ...]:
+    """The friction loads of ``models`` (one Model, or the D designs of a batch)."""
+    models = [models] if isinstance(models, Model) else list(models)
+    m0 = models[0]
+    pos = {name: k for k, name in enumerate(topo.bodies)}
+    names = [j.name for j in m0.joints]
+    out = []
+    for n, ld in enumerate(m0.loads):
+        if ld.kind != "friction":
+            continue
+        jt = m0.joint(ld.joint)
+        angular = jk.get(jt.kind).angular
+
+        def per(f):  # a float, or (D, 1) over the designs
+            v = np.array([f(m.loads[n]) for m in models], float)
+            return float(v[0]) if len(models) == 1 else v[:, None]
+
+        r = (lambda x: x.radius) if angular else (lambda x: 1.0)
+        out.append(Row(ld.name or ld.joint, names.index(ld.joint), pos[jt.body_b],
+                       pos[jt.body_a], jt.point_b,
+                       None if angular else np.asarray(jt.axis, float),
+                       per(lambda x: x.coefficient * r(x)), per(lambda x: x.transition_speed),
+                       per(lambda x: (x.coefficient if x.static_coefficient is None
+                                      else x.static_coefficient) * r(x)),
+                       per(stiction_speed), per(lambda x: x.viscous),
+                       per(lambda x: x.preload), n))
+    return tuple(out)
+
+
+# --- the reaction-dependent load: its effort and derivative, one equation ---------------------
+
+@step
+def coulomb(arm, arm_static, stiction, speed, viscous, preload, fx, fy, qd):
+    """Friction effort in a joint whose reaction force is ``F = (fx, fy)`` and rate ``qd``,
+    and its derivative ``(df/dfx, df/dfy)``:
+
+        f = -a(qd) (|F| + preload) tanh(qd / speed) - viscous qd,
+        a(qd) = arm + (arm_static - arm) exp(-(qd / stiction)^2),
+
+    ``arm``, ``arm_static`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding
+    one (f a force, N), dynamic and at rest. At ``F = 0`` the derivative is taken as 0 (|F| has
+    no derivative there)."""
+    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) tanh(qd / v) F / |F|
+    size = np.sqrt(fx * fx + fy * fy)
+    x = qd / stiction
+    a = arm + (arm_static - arm) * np.exp(-x * x)
+    s = np.tanh(qd / speed)
+    safe = select(size > 0, size, 1.0)
+    k = select(size > 0, -a * s / safe, 0.0)
+    return -a * (size + preload) * s - viscous * qd, (k * fx, k * fy)
+
+
+# --- the solution ------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Friction:
+    """The friction of a solution.
+
+    Attributes
+    ----------
+    joints : tuple of str
+        The joint of each friction load (load order among the friction loads).
+    labels : tuple of str
+        Each friction load's name (its joint's when it has none).
+    angular : tuple of bool
+        Whether each is a couple (revolute joint) or a force (sliding joint).
+    effort : ndarray (k, ...)
+        The friction effort on each joint's second body (minus it on the first) along the
+        joint's freedom, N m or N, batch shape of the samples; its sign opposes ``qd``.
+    power : ndarray (k, ...)
+        Its power ``effort * qd``, W (never positive: minus the power it dissipates).
+    iterations : int
+        Newton iterations the slowest sample took.
+    residual : float
+        Largest residual of the friction equations at the reported reactions, relative to
+        their scale (the largest c |F| of the run).
+    locked : ndarray (...) bool
+        Samples where the friction equations have no solution reached from the frictionless
+        one (the mechanism locks: it cannot be driven).
+    lock_joint : ndarray (...) int
+        At a locked sample, the friction load (index into ``joints``) with the largest
+        residual; -1 elsewhere.
+    """
+
+    joints: tuple
+    labels: tuple
+    angular: tuple
+    effort: np.ndarray
+    power: np.ndarray
+    iterations: int
+    residual: float
+    locked: np.ndarray
+    lock_joint: np.ndarray
+
+    def design(self, k: int) -> Friction:
+        """Design k of a batch's friction (arrays (k, D, T) -> (k, T))."""
+        return replace(self, effort=self.effort[:, k], power=self.power[:, k],
+                       locked=self.locked[k], lock_joint=self.lock_joint[k])
+
+
+def _tile(x, C: int, T: int):
+    """``x`` with its sample axis (the last, length T) repeated C times; a broadcast length 1
+    there (a constant) stays; None stays None."""
+    if x is None:
+        return None
+    if isinstance(x, (list, tuple)):
+        return type(x)(_tile(y, C, T) for y in x)
+    x = np.asarray(x)
+    if x.ndim == 0 or x.shape[-1] != T:
+        return x
+    return np.concatenate([x] * C, axis=-1)
+
+
+def cases(kin, C: int):
+    """The kinematics ``kin`` (batch shape (T,) or (D, T)) repeated C times along its sample
+    axis, (C T,) or (D, C T): C cases of the same states, for C sets of applied loads."""
+    T = kin.shape[-1]
+    pose = kin.pose
+    return replace(kin, t=_tile(kin.t, C, T),
+                   joint_motion=tuple(_tile(list(x), C, T) for x in kin.joint_motion),
+                   pose=type(pose)(*(_tile(list(x), C, T)
+                                     for x in (pose.phi, pose.c, pose.s, pose.r, pose.e))),
+                   motion=_tile(list(kin.motion), C, T), twists=_tile(list(kin.twists), C, T),
+                   rates=_tile(list(kin.rates), C, T), jacobian=_tile(kin.jacobian, C, T),
+                   pivot=_tile(kin.pivot, C, T), residual=_tile(kin.residual, C, T),
+                   valid=_tile(kin.valid, C, T),
+                   # the compiled kernels' contiguous inputs (n, ..., D, T), if there are
+                   arrays=None if kin.arrays is None else
+                   {key: _tile(kin.arrays[key], C, T) for key in _ARRAYS})
+
+
+#: the arrays of a compiled kinematics the dynamics and reactions kernels read
+_ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
+
+
+def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
+    """``applied`` plus the friction efforts ``efforts`` (k, ...) inside their joints: the
+    wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
+    ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
+    effort and its power)."""
+    w = [np.array(np.broadcast_to(x, (3,) + kin.shape)) for x in applied.wrenches]
+    w[0] = np.zeros((3,) + kin.shape)
+    power = applied.power
+    qd = kin.joint_motion[1]
+    values, powers = list(applied.values), list(applied.powers)
+    for row, x in zip(friction_rows, efforts):
+        add_joint_effort(w, kin, row.body, row.body2, row.point, row.axis, x)
+        p = x * qd[row.joint]
+        power = power + p
+        if values and powers:
+            values[row.load], powers[row.load] = x, p
+    # the ground's O_0 is the global origin: its share joins the anchored loads' there
+    on_ground = applied.on_ground + w[0]
+    w[0] = np.broadcast_to(np.zeros((3,) + (1,) * len(kin.shape)), (3,) + kin.shape)
+    return replace(applied, wrenches=w, power=power, on_ground=on_ground,
+                   values=tuple(values), powers=tuple(powers))
+
+
+def _forces(react, friction_rows) -> np.ndarray:
+    """The reaction forces (k, 2, ...) of the friction joints, by the first body on the
+    second, N."""
+    return np.stack([np.asarray(react.on_second[r.joint])[1:3] for r in friction_rows])
+
+
+def _equations(friction_rows, F, qd):
+    """``g(F)`` (k, ...) and ``dg/dF`` (k, 2, ...) of every friction load at the forces F
+    (k, 2, ...) and rates qd (k, ...)."""
+    g, dg = [], []
+    for k, r in enumerate(friction_rows):
+        gk, (gx, gy) = coulomb(r.arm, r.arm_static, r.stiction, r.speed, r.viscous,
+                               r.preload, F[k, 0], F[k, 1], qd[k])
+        g.append(gk)
+        dg.append(np.stack([gx, gy]))
+    return np.stack(g), np.stack(dg)
+
+
+def solve(models, kin, applied: Loads, dynamics, reactions_stage):
+    """Efforts, reactions and friction of a model with friction loads, solved together.
+
+    Parameters
+    ----------
+    models : Model or sequence of Model
+        The mechanism (or the D designs of a batch, each with its friction numbers).
+    kin : KinematicSolution
+        The kinematics, batch shape (T,) or (D, T).
+    applied : Loads
+        The other applied loads (:func:`linkdyn.loads.wrenches`, which leaves friction out).
+    dynamics, reactions_stage : callable
+        The backend's stages (:func:`linkdyn.analysis.stage_functions`).
+
+    Returns
+    -------
+    (Loads, DynamicSolution, Reactions, Friction)
+        The applied loads with the friction in, the dynamics and the reactions under them, and
+        the friction itself.
+    """
+    model = models if isinstance(models, Model) else list(models)[0]
+    fr = rows(models, kin.layout.topo)
+    k, shape = len(fr), kin.shape
+    T = shape[-1]
+    qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], shape) for r in fr])
+    # 1 + k cases along the sample axis: the loads, then a unit effort in each friction joint
+    C = 1 + k
+    big = cases(kin, C)
+    block = np.repeat(np.arange(C), T)                           # (C T,) case of each sample
+    units = [np.broadcast_to((block == c + 1).astype(float), big.shape) for c in range(k)]
+    tiled = replace(applied, wrenches=[_tile(np.broadcast_to(w, (3,) + shape), C, T)
+                                       for w in applied.wrenches],
+                    power=_tile(np.broadcast_to(applied.power, shape), C, T),
+                    on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T),
+                    values=(), powers=())
+    loaded = _with_efforts(tiled, big, fr, units)
+    dyn_c = dynamics(big, loaded)
+    react_c = reactions_stage(model, big, loaded, dyn_c)
+    Fc = _forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
+    F0 = Fc[..., 0, :]                                           # (k, 2, ...)
+    A = np.moveaxis(Fc[..., 1:, :] - F0[..., None, :], -2, 1)    # (k, l, 2, ...)
+    # Newton's method on r(f) = f - g(F0 + A f) from f = 0, every sample at once
+    f = np.zeros((k,) + shape)
+    g0, _ = _equations(fr, F0, qd)
+    scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
+                      initial=0.0)[..., None]                    # (..., 1) per design
+    iterations = np.zeros(shape, int)
+    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
+    eye = np.eye(k)
+    for _ in range(MAX_ITERATIONS + 1):
+        F = F0 + np.einsum("jlc...,l...->jc...", A, f)
+        g, dg = _equations(fr, F, qd)
+        r = f - g
+        big_r = np.max(np.abs(r), axis=0)
+        scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
+                                            axis=(0, -1), initial=0.0)[..., None])
+        # J = I - dg/dF . A, per sample (..., k, k)
+        J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
+        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
+        if np.all(done):
+            break
+        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
+        try:
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
+        except np.linalg.LinAlgError:
+            # a singular J (a fold of the friction equations) ends that sample's iterations
+            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
+                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
+        f = f - np.moveaxis(step_, -1, 0)
+        iterations = iterations + ~done
+    det = np.linalg.det(J)
+    converged = np.all(np.isfinite(f), axis=0) & (
+        np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
+    # a solution not reached from the frictionless one (J no longer positive) locks too
+    finite_state = np.all(np.isfinite(F0), axis=(0, 1))
+    locked = finite_state & (~converged | ~(det > 0))
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0), -1)
+    f = np.where(locked, np.nan, f)
+    # the stages once more with the converged friction
+    final = _with_efforts(applied, kin, fr, f)
+    dyn = dynamics(kin, final)
+    react = reactions_stage(model, kin, final, dyn)
+    g, _ = _equations(fr, _forces(react, fr), qd)
+    res = np.abs(f - g) / np.maximum(scale, 1e-300)
+    residual = float(np.nanmax(res, initial=0.0)) if res.size else 0.0
+    out = Friction(tuple(model.joints[r.joint].name for r in fr),
+                   tuple(r.label for r in fr), tuple(r.axis is None for r in fr),
+                   f, f * qd, int(np.max(iterations, initial=0)), residual, locked, lock_joint)
+    return final, dyn, react, out
+
+
+# --- what a person reads -----------------------------------------------------------------------
+
+def columns(fr: Friction, model: Model):
+    """The results.csv columns of the friction ``fr``: ``(name, values, unit)`` per friction
+    load, ``friction_<joint>`` (N m or N, the couple or force on the joint's second body
+    along its freedom) and ``friction_power_<joint>`` (W, never positive)."""
+    for k, j in enumerate(fr.joints):
+        yield f"friction_{j}", fr.effort[k], "N m" if fr.angular[k] else "N"
+        yield f"friction_power_{j}", fr.power[k], "W"
+
+
+def energies(sol) -> tuple[np.ndarray, np.ndarray]:
+    """The energy each friction load dissipates over the run (k, ...) and the drivers' net
+    work over it (...), J: trapezoidal integrals over the valid samples of ``-power`` and of
+    the drivers' power, over the last (time) axis (a batch: one per design)."""
+    t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
+
+    def integral(p):
+        p = np.where(valid, p, 0.0)
+        return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
+
+    return -integral(sol.friction.power), integral(sol.driver_power)
+
+
+def efficiency(lost, work):
+    """The mechanical efficiency over the run, ``1 - lost / work``: the share of the drivers'
+    net work not lost in friction (delivered to the loads or stored); NaN where the drivers do
+    no positive net work."""
+    work = np.asarray(work, float)
+    ok = work > 0
+    return np.where(ok, 1.0 - np.asarray(lost) / np.where(ok, work, 1.0), np.nan)
+
+
+def summary(sol) -> dict:
+    """The friction figures of a solution over its run, SI: per friction joint the energy
+    it dissipates (J, over the run and per cycle of the first driver when the run spans whole
+    cycles), its peak effort; the drivers' net work; the mechanical efficiency
+    (:func:`efficiency`; None when the drivers do no positive net work); Newton's iterations
+    and residual."""
+    fr = sol.friction
+    per_joint, work = energies(sol)
+    cycles = _cycles(sol)
+    joints = {}
+    for k, j in enumerate(fr.joints):
+        e = float(per_joint[k])
+        joints[j] = {"effort": "torque" if fr.angular[k] else "force",
+                     "unit": "N m" if fr.angular[k] else "N",
+                     "peak": float(np.nanmax(np.abs(fr.effort[k]), initial=0.0)),
+                     "energy_lost_J": e,
+                     "energy_lost_per_cycle_J": e / cycles if cycles else None}
+    lost = float(np.sum(per_joint))
+    eff = float(efficiency(lost, work))
+    return {"joints": joints, "energy_lost_J": lost,
+            "energy_lost_per_cycle_J": lost / cycles if cycles else None,
+            "cycles": cycles, "driver_work_J": float(work),
+            "efficiency": eff if np.isfinite(eff) else None,
+            "newton_iterations": fr.iterations, "residual_rel": fr.residual}
+
+
+def _cycles(sol) -> float | None:
+    """The first driver's whole cycles over the run (a periodic driver), else None."""
+    m = sol.model
+    if not m.drivers or m.drivers[0].period is None:
+        return None
+    n = (float(sol.t[-1]) - float(sol.t[0])) / m.drivers[0].period
+    return float(round(n)) if round(n) >= 1 and abs(n - round(n)) < 1e-6 else None
+
+
+def summary_lines(s: dict) -> list[str]:
+    """The printed lines of :func:`summary`'s dict."""
+    def num(x, fmt):
+        return "n/a" if x is None or not np.isfinite(x) else format(x, fmt)
+
+    out = []
+    per = s["energy_lost_per_cycle_J"]
+    eff = s["efficiency"]
+    out.append(f"  friction: {num(s['energy_lost_J'], '.6g')} J lost over the run"
+               + (f" ({num(per, '.6g')} J per cycle)" if per is not None else "")
+               + f", efficiency {num(None if eff is None else 100 * eff, '.2f')}%"
+               + f" of the drivers' {num(s['driver_work_J'], '.6g')} J"
+               + f"; Newton {s['newton_iterations']} iterations, residual "
+               + f"{num(s['residual_rel'], '.1e')}")
+    for j, e in s["joints"].items():
+        out.append(f"    {j:8s} peak friction {e['effort']} {num(e['peak'], '.6g')} {e['unit']},"
+                   f" {num(e['energy_lost_J'], '.6g')} J lost")
+    return out
+
+
+def locked_error(model: Model, fr: Friction, t, k: int):
+    """The AssemblyError of the locked sample k (of a single mechanism)."""
+    from .analysis import _at
+    from .errors import AssemblyError
+
+    j = int(fr.lock_joint[k])
+    return AssemblyError(
+        f"the mechanism locks at joint {fr.joints[j]}: its friction grows with the joint "
+        "load faster than the drivers can overcome it (self-locking), so no driver effort "
+        "moves it at this time", **_at(model, float(t[k])),
+        fix=f"Lower the friction coefficient (or radius) of {fr.joints[j]}'s friction load, or "
+            "change the geometry so the load on that joint grows less with the effort")
