@@ -711,7 +711,7 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
         k = int(np.argmin(valid))
         _check_drivers(model, float(kin.t[k]))  # a motion that overflows, not the loops
         if fr is not None and fr.locked[k]:
-            raise friction_mod.locked_error(model, fr, kin.t, k)
+            raise friction_mod.locked_error(model, fr, k, _at(model, float(kin.t[k])))
         raise failure(model, kin.t[k], kin.residual[k])
     # every number finite, or the run stops naming the time and the cause
     valid = _finite(model, kin, applied, dyn, react, valid, not (allow_singular or designs))

@@ -40,19 +40,13 @@ import numpy as np
 
 from . import joints as jk
 from .loads import Loads, add_joint_effort
-from .model import Load, Model
+from .model import Load, Model, default_transition_speed
 from .steps import select, step
 
 #: Newton's method stops when every equation's residual is at most TOL of their scale (the
 #: largest friction effort c |F| of the run, per design).
 TOL = 1e-12
 MAX_ITERATIONS = 50
-
-
-def default_transition_speed(angular: bool) -> float:
-    """The transition speed of the tanh smoothing when a model gives none: 0.01 rad/s for a
-    revolute joint, 0.001 m/s for a sliding one."""
-    return 0.01 if angular else 0.001
 
 
 def joint_friction(model: Model, joint: str, coefficient: float, radius: float = 0.0,
@@ -484,15 +478,15 @@ def summary_lines(s: dict) -> list[str]:
     return out
 
 
-def locked_error(model: Model, fr: Friction, t, k: int):
-    """The AssemblyError of the locked sample k (of a single mechanism)."""
-    from .analysis import _at
+def locked_error(model: Model, fr: Friction, k: int, where: dict):
+    """The AssemblyError of the locked sample k (of a single mechanism); ``where``: the
+    error's file, time, drivers and units there."""
     from .errors import AssemblyError
 
     j = int(fr.lock_joint[k])
     return AssemblyError(
         f"the mechanism locks at joint {fr.joints[j]}: its friction grows with the joint "
         "load faster than the drivers can overcome it (self-locking), so no driver effort "
-        "moves it at this time", **_at(model, float(t[k])),
+        "moves it at this time", **where,
         fix=f"Lower the friction coefficient (or radius) of {fr.joints[j]}'s friction load, or "
             "change the geometry so the load on that joint grows less with the effort")

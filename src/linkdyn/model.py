@@ -25,6 +25,12 @@ class Motion(Protocol):
         ...
 
 
+def default_transition_speed(angular: bool) -> float:
+    """The transition speed of a friction load's tanh smoothing when a model gives none:
+    0.01 rad/s for a revolute joint, 0.001 m/s for a sliding one."""
+    return 0.01 if angular else 0.001
+
+
 @dataclass(frozen=True)
 class Body:
     """A rigid body.

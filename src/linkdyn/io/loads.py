@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import expr as _expr
 from .. import joints as jk
-from ..model import GROUND, Body, Joint, Load
+from ..model import GROUND, Body, Joint, Load, default_transition_speed
 from .reader import _Reader, _count, _entry_field, _type_name
 
 LOAD_KEYS = {"force": ("kind", "name", "body", "point", "value"),
@@ -158,7 +158,6 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
 
 def _friction(r: _Reader, entry: dict, f: str, name: str, joints: dict[str, Joint]) -> Load:
     """A ``kind = "friction"`` entry: Coulomb friction in a joint (docs/model-format.md)."""
-    from ..friction import default_transition_speed
 
     joint = r.choice(entry["joint"], f"{f}.joint", joints, "joint")
     jt = joints[joint]
