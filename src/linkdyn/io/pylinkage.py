@@ -183,7 +183,7 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
     links_in = data["links"]
     for i, ld in enumerate(links_in):
         if not isinstance(ld, dict) or not isinstance(ld.get("id"), str):
-            fail(f"links[{i}]", f"a link must be an object with a text 'id'")
+            fail(f"links[{i}]", "a link must be an object with a text 'id'")
         if ld.get("type", "link") not in LINK_TYPES:
             kind = ld.get("type")
             what = (" (an oscillating crank: linkdyn has no constant-speed back-and-forth "
@@ -202,7 +202,7 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
     joints: dict[str, dict] = {}
     for i, jd in enumerate(data["joints"]):
         if not isinstance(jd, dict) or not isinstance(jd.get("id"), str):
-            fail(f"joints[{i}]", f"a joint must be an object with a text 'id'")
+            fail(f"joints[{i}]", "a joint must be an object with a text 'id'")
         jid, kind = jd["id"], jd.get("type", "revolute")
         if kind not in JOINT_TYPES:
             fail(f"joints[{i}]", f"joint {_quote(jid)} of type {_quote(kind)} cannot be imported: "
