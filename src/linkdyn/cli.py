@@ -1009,6 +1009,34 @@ def export(model, to, output, at, allow_outside):
     click.echo(f"wrote {out}")
 
 
+# ---------------------------------------------------------------------------- import
+
+@main.command("import")
+@click.argument("file", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Model file to write, *.toml or *.json [default: FILE's name with .toml].")
+@click.option("--length-unit", default="m", show_default=True,
+              help="Length unit of FILE's numbers (pylinkage has none): m, mm, cm, in...")
+def import_(file, output, length_unit):
+    """Write a mechanism saved by pylinkage (its JSON) as a linkdyn model file.
+
+    Masses are placeholders (1 kg uniform bars per link); one pylinkage step is one second.
+    """
+    from .io.pylinkage import import_pylinkage, model_text
+    from .outputs import check_file, write_file
+
+    out = Path(output) if output else Path(Path(file).stem + ".toml")
+    if out.suffix.lower() not in (".toml", ".json"):
+        raise ModelError(f"cannot write a model file named '{out}'", field="-o",
+                         fix="Name it *.toml or *.json")
+    check_file(out)
+    done = import_pylinkage(file, length_unit=length_unit)
+    write_file(out, model_text(done, out.suffix))
+    for note in done.notes:
+        click.echo(note)
+    click.echo(f"wrote {out}")
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()
 
