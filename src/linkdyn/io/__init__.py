@@ -76,19 +76,26 @@ def read_model_data(path: str | os.PathLike) -> dict:
     if suffix not in (".toml", ".json"):
         raise ModelError(f"unknown model file type {_quote(suffix or '(none)')}", file=file,
                          fix="Name the file *.toml (TOML) or *.json (JSON)")
+    text = read_input(file, "model file")
+    return _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
+
+
+def read_input(file: str, what: str) -> str:
+    """The text of the input file ``file`` (a ``what``: ``"model file"``, ``"pylinkage
+    file"``), or one ModelError naming it: missing, not a regular file or too large, not
+    readable or not UTF-8."""
     try:
-        text = read_text(file)
+        return read_text(file)
     except FileNotFoundError:
         raise ModelError("file not found", file=file,
                          fix="Check the path and the current directory") from None
     except FileRefused as e:
-        raise ModelError(f"the model file {e}", file=file,
-                         fix=f"Give a model file (a regular file of at most {MAX_FILE_BYTES:,} "
+        raise ModelError(f"the {what} {e}", file=file,
+                         fix=f"Give a {what} (a regular file of at most {MAX_FILE_BYTES:,} "
                              "bytes)") from None
     except (OSError, UnicodeDecodeError) as e:
         raise ModelError(f"cannot read the file ({_shorten(str(e), 120)})", file=file,
                          fix="Give a readable UTF-8 text file") from None
-    return _parse_toml(text, file) if suffix == ".toml" else _parse_json(text, file)
 
 
 @quiet

@@ -47,7 +47,7 @@ import numpy as np
 
 from ..errors import ModelError, wrong_type
 from ..model import GROUND, Model
-from .files import MAX_FILE_BYTES, FileRefused, read_text
+from . import read_input
 from .reader import MAX_NAME, _NAME, _quote, _type_name
 from .syntax import _parse_json
 from .units import LENGTH_UNITS
@@ -93,18 +93,7 @@ def read_pylinkage(path: str | os.PathLike) -> dict:
     if not isinstance(path, (str, os.PathLike)):
         raise wrong_type("read_pylinkage", "path", path, "a str or os.PathLike")
     file = os.fspath(path)
-    try:
-        text = read_text(file)
-    except FileNotFoundError:
-        raise ModelError("file not found", file=file,
-                         fix="Check the path and the current directory") from None
-    except FileRefused as e:
-        raise ModelError(f"the pylinkage file {e}", file=file,
-                         fix=f"Give a regular file of at most {MAX_FILE_BYTES:,} bytes") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise ModelError(f"cannot read the file ({e})", file=file,
-                         fix="Give a readable UTF-8 JSON file") from None
-    return _parse_json(text, file)
+    return _parse_json(read_input(file, "pylinkage file"), file)
 
 
 def import_pylinkage(path: str | os.PathLike, *, length_unit: str = "m") -> Imported:
