@@ -15,7 +15,7 @@ import pytest
 
 import linkdyn
 from linkdyn import expr
-from linkdyn.forward import _start, _System, partition, simulate
+from linkdyn.forward import start_state, System, partition, simulate
 
 pytest.importorskip("numba", reason="the compiled right-hand side needs numba (the fast extra)")
 
@@ -87,9 +87,9 @@ MODELS = {"hoeken_motor": hoeken_motor, "slider_crank": slider_crank,
 def test_compiled_rhs_equals_numpy_at_random_states(name):
     model = MODELS[name]()
     part = partition(model)
-    q0 = _start(part)
+    q0 = start_state(part)
     nf = len(part.free)
-    slow, fast = _System(part, q0, np.zeros(len(q0))), _System(part, q0, np.zeros(len(q0)), True)
+    slow, fast = System(part, q0, np.zeros(len(q0))), System(part, q0, np.zeros(len(q0)), True)
     rng = np.random.default_rng(7)
     y = np.concatenate((q0[list(part.layout.topo.driven[part.n_drivers:])], np.zeros(nf + 1)))
     t = 0.0

@@ -1,5 +1,5 @@
 """How well the free coordinates describe the motion (F10): ``forward.conditioning``'s growth,
-from the null space of the closure by an SVD, against ``forward._growth``, from the same null
+from the null space of the closure by an SVD, against ``forward.closure_growth``, from the same null
 space written in the free coordinates by a solve with ``J_dep``; at random closed states of a
 five-bar with two free freedoms, a free slider-crank (a prismatic joint: the scaled rates) and
 a chain of parallelogram windows."""
@@ -11,7 +11,7 @@ import tomllib
 import numpy as np
 
 import linkdyn
-from linkdyn.forward import _growth, _start, _System, conditioning, partition
+from linkdyn.forward import closure_growth, start_state, System, conditioning, partition
 
 from builders import parallelogram_chain
 
@@ -31,9 +31,9 @@ def test_growth_of_the_free_coordinates_equals_the_null_space_s():
     seen = 0
     for model in models:
         part = partition(model)
-        q0 = _start(part)
+        q0 = start_state(part)
         nf = len(part.free)
-        system = _System(part, q0, np.zeros(len(q0)))
+        system = System(part, q0, np.zeros(len(q0)))
         y0 = np.concatenate((q0[list(part.layout.topo.driven[part.n_drivers:])],
                              np.zeros(nf + 1)))
         for _ in range(5):
@@ -45,5 +45,5 @@ def test_growth_of_the_free_coordinates_equals_the_null_space_s():
             growth = conditioning(part, J)[0]
             # at least 1: the free coordinates' own rates per unit of theirs are the identity
             assert growth >= 1.0 - 1e-12
-            assert abs(_growth(part, J) - growth) <= 1e-9 * growth, model.name
+            assert abs(closure_growth(part, J) - growth) <= 1e-9 * growth, model.name
     assert seen >= 12

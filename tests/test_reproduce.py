@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 import linkdyn
-from linkdyn.cli import _Progress, main
+from linkdyn.cli import Progress, main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -164,7 +164,7 @@ class _Tty(io.StringIO):
 
 def test_progress_bar_on_a_terminal_for_a_big_run():
     stream = _Tty()
-    with _Progress(3, big=True, stream=stream) as p:
+    with Progress(3, big=True, stream=stream) as p:
         p.step("solving")
         import time
         time.sleep(0.3)
@@ -176,6 +176,6 @@ def test_progress_bar_on_a_terminal_for_a_big_run():
 
 def test_progress_waits_before_showing_a_short_run():
     stream = _Tty()
-    with _Progress(2, delay=5.0, stream=stream) as p:
+    with Progress(2, delay=5.0, stream=stream) as p:
         p.step("solving")
     assert stream.getvalue() == ""

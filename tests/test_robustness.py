@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 import linkdyn
 from linkdyn import AssemblyError, LinkdynError, ModelError, design, model_from_dict
-from linkdyn.cli import _json_safe, example_names, example_text, main, summary_text
+from linkdyn.cli import json_safe, example_names, example_text, main, summary_text
 
 EXAMPLES = example_names()
 DICTS = {name: tomllib.loads(example_text(name)) for name in EXAMPLES}
@@ -171,7 +171,7 @@ def test_a_mutated_example_solves_finitely_or_names_the_field_or_time(case):
             sol = linkdyn.analyze(m, run_times(m))
             summ = design.summary(sol)
             summary_text(summ)
-            json.dumps(_json_safe(summ), allow_nan=False)
+            json.dumps(json_safe(summ), allow_nan=False)
     except LinkdynError as err:
         event(type(err).__name__)   # --hypothesis-show-statistics: how the mutants ended
         assert names_a_field_or_time(err), (changes, str(err))

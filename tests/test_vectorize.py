@@ -17,7 +17,7 @@ from linkdyn.kinematics.layout import compile_designs
 from linkdyn.kinematics.positions import assembly_guess
 from linkdyn.studies import Task, sample, space
 from linkdyn.studies.params import check_ranges
-from linkdyn.studies.runner import _evaluate_models, evaluate
+from linkdyn.studies.runner import evaluate_models, evaluate
 from linkdyn.studies.vectorize import derive
 
 HOEKEN = linkdyn.example_path("hoeken")
@@ -123,7 +123,7 @@ def test_a_chunk_built_at_once_gives_the_per_design_paths_rows(backend):
     values[3, 0] = 250.0     # the ground too long: the loops cannot close
     values[7, 3] = -1.0      # a negative mass: the loader's message
     values[9, 0] = 150.0     # assembles, then stops closing
-    got, want = evaluate(task, values), _evaluate_models(task, values)
+    got, want = evaluate(task, values), evaluate_models(task, values)
     assert 0 < want["valid"].sum() < len(values)       # both valid and invalid designs
     assert np.array_equal(got["valid"], want["valid"])
     assert list(got["reason"]) == list(want["reason"])

@@ -279,7 +279,7 @@ def _assembly_at_zero(mech, topo) -> str:
 
 # ---------------------------------------------------------------------------- analyze
 
-class _Progress:
+class Progress:
     """Progress of a long run on a terminal: after ``delay`` s (at once for a big run) one line
     on stderr shows a bar of the steps done, the current step and the elapsed time. Silent when
     the stream is not a terminal (pipes, tests, CI)."""
@@ -331,12 +331,12 @@ class _Progress:
         click.echo("\r" + line[:width].ljust(width), file=self.stream, nl=False)
 
 
-def _json_safe(x):
+def json_safe(x):
     """JSON-ready copy of ``x``: NaN and infinities become null (strict JSON has neither)."""
     if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
+        return {k: json_safe(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_json_safe(v) for v in x]
+        return [json_safe(v) for v in x]
     if isinstance(x, (float, np.floating)):
         return float(x) if np.isfinite(x) else None
     if isinstance(x, np.integer):
@@ -614,7 +614,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         from .design.path import _parse_point
         _parse_point(mech, path_point)   # an unknown BODY.POINT names --path-point
     t = sample_times(mech, samples, duration, cycles)
-    progress = _Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
+    progress = Progress(4, big=len(t) > 1_000_000)  # a bar on a terminal for long runs only
     with progress:
         # everything is computed (solution, summary, its text) before any file is written
         progress.step(f"solving {len(t)} samples")
@@ -655,7 +655,7 @@ def _results(sol, summ: dict, fmt: str, table_units: str = "si") -> dict:
             (lambda p: write_csv(sol, p, table_units)) if fmt == "csv" else
             (lambda p: write_parquet(sol, p, table_units)),
         "summary.json": lambda p: p.write_text(json.dumps(
-            {**_json_safe(summ), "files": list(files)}, indent=2, allow_nan=False)),
+            {**json_safe(summ), "files": list(files)}, indent=2, allow_nan=False)),
     }
     return files
 
@@ -735,7 +735,7 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
         runs.append((name, sol, summ))
     page = compare_mod.render_compare(runs)
     data = {name: {"file": str(path), **({"sweep": row} if row else {}),
-                   "summary": _json_safe(summ)}
+                   "summary": json_safe(summ)}
             for (name, _, summ), (path, _, _, row) in zip(runs, designs)}
     files = {"compare.html": lambda p: p.write_text(page, encoding="utf-8"),
              "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
@@ -924,7 +924,7 @@ def _equilibrium(model, as_json, allow_outside, with_modes):
     eq = eq_mod.equilibrium(mech)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
-        click.echo(json.dumps(_json_safe(eq_mod.as_dict(eq, md)), indent=2))
+        click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))
     else:
         click.echo(eq_mod.text(eq, md))
 

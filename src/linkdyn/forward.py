@@ -170,7 +170,7 @@ def partition(model: Model, free: tuple[str, ...] | None = None) -> Partition:
     for combo in itertools.islice(itertools.combinations(candidates, nf), 200):
         try:
             part = _partition(model, combo)
-            q0 = _start(part)
+            q0 = start_state(part)
         except (ModelError, AssemblyError) as err:
             last_error = err
             continue
@@ -265,7 +265,7 @@ def conditioning(part: Partition, J: np.ndarray) -> tuple[float, tuple[int, ...]
         return current, best, np.inf
 
 
-def check_inertia(part: Partition, system: "_System", q: np.ndarray) -> None:
+def check_inertia(part: Partition, system: "System", q: np.ndarray) -> None:
     """Refuse free coordinates that move no mass: where massless links or point masses leave
     the generalized inertia ``H`` of the free coordinates singular at the tree coordinates
     ``q`` (n,), t = 0, ``H qdd_f = -h`` has no solution (F6).
@@ -293,7 +293,7 @@ def check_inertia(part: Partition, system: "_System", q: np.ndarray) -> None:
         fix="Give the bodies the free joints move a mass and an inertia, or drive those joints")
 
 
-def _start(part: Partition) -> np.ndarray:
+def start_state(part: Partition) -> np.ndarray:
     """Assembled tree coordinates (n,) at t = 0: drivers at their motion's start, free joints at
     ``[initial] q`` (else the ``[assembly]`` guess)."""
     lay, topo = part.layout, part.layout.topo
@@ -356,7 +356,7 @@ class Simulation(Solution):
         return out_c, out_u
 
 
-class _System:
+class System:
     """The ODE ``y' = F(t, y)`` of F7 with ``y = [q_f, qd_f, W]`` and the branch it follows."""
 
     def __init__(self, part: Partition, q0: np.ndarray, qd0: np.ndarray, fast: bool = False):
@@ -690,11 +690,11 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     pays = be.pays_after(work)
     fast = be.compiled
     compiled_after = 0 if fast else None
-    q0 = _start(part)
+    q0 = start_state(part)
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
     q_f0 = q0[list(topo.driven[nd:])]
-    system = _System(part, q0, np.zeros(topo.n), fast)
+    system = System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
     check_inertia(part, system, q0)
     J = system.accept(0.0, y)
@@ -736,7 +736,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             turns = np.zeros(nf)
             angular = np.array([jk.get(part.layout.kind[i]).angular for i in best], bool)
             nfev += system.nfev
-            system = _System(part, q, qd, fast)
+            system = System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
@@ -867,7 +867,7 @@ def _implicit(method: str) -> str:
     return f"--method {others[0]} or {others[1]}"
 
 
-def _blame_loads(system: _System, last) -> None:
+def _blame_loads(system: System, last) -> None:
     """Raise an AssemblyError naming the load (by its field) that is not finite at the state
     of the right-hand side's last evaluation ``last = (t, y, ...)``, where the integration
     stopped: the cause is then that load, not the mechanism. Nothing if every load is finite
@@ -938,13 +938,13 @@ def _better(part: Partition, J: np.ndarray) -> tuple[int, ...] | None:
     """The tree bodies of better free coordinates where those of ``part`` describe the motion
     badly at the state of closure Jacobian ``J`` (growth past ``SWITCH`` and twice the best's),
     else None (F10)."""
-    if _growth(part, J) <= SWITCH:   # the usual case, without conditioning's SVD
+    if closure_growth(part, J) <= SWITCH:   # the usual case, without conditioning's SVD
         return None
     growth, best, best_growth = conditioning(part, J)
     return best if growth > SWITCH and best_growth < growth / 2 else None
 
 
-def _growth(part: Partition, J: np.ndarray) -> float:
+def closure_growth(part: Partition, J: np.ndarray) -> float:
     """``growth`` of :func:`conditioning` for the free coordinates of ``part`` alone, from the
     null space written in them: the dependent rates per unit free rate ``S = -J_dep^-1 J_f``
     (scaled as there), ``max(1, max |S|)``; infinite where ``J_dep`` is not square and
@@ -1030,7 +1030,7 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend):
                 qdd_f[:, k], guesses[:, k], open_[k] = out[nf:2 * nf], kernel.state[0], False
     if np.any(open_):
         # numpy's stages (and their damped restart) where the compiled Newton did not close
-        system = _System(part, guesses[:, 0], np.zeros(lay.topo.n))
+        system = System(part, guesses[:, 0], np.zeros(lay.topo.n))
         qdd_f[:, open_] = system.evaluate(t[open_], q_f[:, open_], qd_f[:, open_],
                                           guesses[:, open_])[0]
     q_d, qd_d, qdd_d = driver_values(model, t)

@@ -629,7 +629,7 @@ class Kernel:
 
     def __call__(self, t: float, y: np.ndarray, ref) -> np.ndarray | None:
         """``y'`` (2 nf + 1,) at ``(t, y)`` from the reference ``ref`` = ``(t0, q, qd, qdd,
-        S)`` (``_System.ref``), else None where Newton's method from the guess does not close
+        S)`` (``System.ref``), else None where Newton's method from the guess does not close
         the loops; :attr:`state` (3, n) and :attr:`J` hold the tree state and the closure
         Jacobian of the last call, :attr:`energy` its kinetic and potential energy."""
         from .kinematics.positions import driver_values

@@ -27,7 +27,7 @@ import numpy as np
 
 from . import joints as jk
 from .errors import AssemblyError, ModelError
-from .forward import Partition, _start, _System, check_inertia, partition
+from .forward import Partition, start_state, System, check_inertia, partition
 from .kinematics.positions import driver_values
 from .model import Model
 
@@ -152,7 +152,7 @@ def _held(model: Model) -> Model:
                                         for d, v in zip(model.drivers, q0)))
 
 
-def _linear(system: _System, q_f: np.ndarray, scale: np.ndarray):
+def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
     """``h``, ``H``, ``K``, ``C`` at ``(q_f, qd_f = 0)`` (E2), with the kinematics of the state:
     the state and its 8 f finite-difference neighbours in one batch."""
     nf = len(q_f)
@@ -216,9 +216,9 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilib
     nd, nf = part.n_drivers, len(part.free)
     free_bodies = list(topo.driven[nd:])
     scale = _scales(part)
-    q_tree = _start(part)
+    q_tree = start_state(part)
     q_f = q_tree[free_bodies].copy()
-    system = _System(part, q_tree, np.zeros(topo.n))
+    system = System(part, q_tree, np.zeros(topo.n))
     check_inertia(part, system, q_tree)
     state = np.concatenate((q_f, np.zeros(nf), [0.0]))
     if system.accept(0.0, state) is None:

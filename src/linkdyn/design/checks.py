@@ -184,13 +184,13 @@ def slider_cranks(model: Model) -> list[SliderCrank]:
 def free_coordinates(model: Model):
     """The partition ``simulate`` makes of a model with free degrees of freedom and its start:
     ``(partition, q0)``, ``partition.free`` the joints it integrates, q0 (n,) the tree
-    coordinates assembled at t = 0 (:func:`linkdyn.forward._start`). Raises what ``simulate``
+    coordinates assembled at t = 0 (:func:`linkdyn.forward.start_state`). Raises what ``simulate``
     would: a wrong ``[initial]`` (ModelError), a start that cannot be assembled
     (AssemblyError)."""
     from .. import forward
 
     part = forward.partition(model)
-    return part, forward._start(part)
+    return part, forward.start_state(part)
 
 
 def slider_rods(m) -> list:

@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..cli import _json_safe, _path_range
+from ..cli import json_safe, _path_range
 from ..sampling import times as sample_times
 from ..errors import ModelError
 from ..outputs import check_outdir, write_outputs
@@ -202,7 +202,7 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
                               workers=workers, scheduler=scheduler,
                               progress=_show_progress(progress))
     summ = sweep_mod.summary(task, df, stats, bounds=bounds, method=method, seed=seed)
-    written = sweep_mod.write_results(out, df, _json_safe(summ), report=report, task=task)
+    written = sweep_mod.write_results(out, df, json_safe(summ), report=report, task=task)
     rate = stats["design_samples_per_s"]
     click.echo(f"{summ['designs']} designs x {len(t)} samples: {summ['valid']} valid, "
                f"{summ['invalid']} invalid; {stats['chunks_computed']} chunks computed"
@@ -285,8 +285,8 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
                  f"# {res.objective} {verb}d by linkdyn optimize from {Path(model).name}"
                  + "".join(f", {c}" for c in res.constraints) + "\n"
                  + dumps_toml(res.data), encoding="utf-8"),
-             "optimize.json": lambda p: p.write_text(json.dumps(_json_safe(info), indent=2)),
-             "summary.json": lambda p: p.write_text(json.dumps(_json_safe(summ), indent=2,
+             "optimize.json": lambda p: p.write_text(json.dumps(json_safe(info), indent=2)),
+             "summary.json": lambda p: p.write_text(json.dumps(json_safe(summ), indent=2,
                                                                allow_nan=False))}
     if report:
         from .. import plots as plots_mod

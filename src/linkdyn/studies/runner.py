@@ -183,7 +183,7 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
     if builder is None:
         builder = vectorize.derive(task.space, np.min(values, axis=0), np.max(values, axis=0))
     if not builder.vectorized:
-        return _evaluate_models(task, values)
+        return evaluate_models(task, values)
     D = len(values)
     Z = builder.numbers(values)
     lay, guesses = builder.stacked(Z)
@@ -288,7 +288,7 @@ def _fill(task: Task, sol, idx, valid, reason, out) -> None:
         out[name][idx] = np.where(good, v, np.nan)
 
 
-def _evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
+def evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
     """:func:`evaluate` by the per-design path: a model per design, then their layouts."""
     D = len(values)
     models, errors = task.space.models(values)
