@@ -26,7 +26,7 @@ from linkdyn.kinematics import dyads, positions
 from test_compiled_dynamics import (KERNEL_EXAMPLES, KERNEL_MODELS, hoeken_design, same,
                                    slider_crank_design)
 from test_dynamics import MODELS, times
-from test_slot import _lever_models, slotted_levers
+from test_slot import lever_models, slotted_levers
 
 
 def around(model, n=73):
@@ -147,7 +147,7 @@ def test_slot_models(monkeypatch, name, block):
 def test_random_slotted_levers(case):
     """Random slotted levers (slot) and their equivalents with a massless block (revolute and
     prismatic joints)."""
-    for model in _lever_models(case):
+    for model in lever_models(case):
         check_kinematics(*solve_both(model, np.linspace(-0.2, 1.1, 13)))
 
 
@@ -157,7 +157,7 @@ def test_a_batch_of_slot_designs_equals_each_design_alone():
     cases = [(50.0, 120.0, 8.0, (0.5, 1.0), (0.0, -9.81), (5.0, 1.0), 1.0, 0.3),
              (70.0, 110.0, -6.0, (1.5, 0.3), (2.0, -3.0), (-9.0, 4.0), -2.0, -1.2),
              (30.0, 160.0, 0.0, (0.2, 0.7), (0.0, 0.0), (0.0, 0.0), 0.0, 2.5)]
-    designs = [_lever_models(case)[0] for case in cases]
+    designs = [lever_models(case)[0] for case in cases]
     t = np.linspace(-0.2, 1.1, 17)
     fast, ref = solve_both(designs, t)
     assert fast.shape == (3, 17) and np.all(fast.valid)

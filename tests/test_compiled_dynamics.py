@@ -33,7 +33,7 @@ from linkdyn.model import Model
 
 from builders import body, rev
 from test_dynamics import MODELS, scotch_yoke, times
-from test_slot import _lever_models, slotted_levers
+from test_slot import lever_models, slotted_levers
 
 RTOL = 1e-12
 
@@ -167,7 +167,7 @@ def test_cuts_of_different_row_counts():
 def test_random_slotted_levers(case):
     """Random slotted levers (geometry, masses, loads, gravity; tests/test_slot.py) and their
     massless-block equivalent (revolute and prismatic joints)."""
-    for model in _lever_models(case):
+    for model in lever_models(case):
         kin = numpy_kinematics(model, np.linspace(0.0, 1.0, 9))
         check_all(*both(model, kin))
 

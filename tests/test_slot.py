@@ -264,7 +264,7 @@ def slotted_levers(draw):
     return r, d, off, mass, g, load, torque, theta0
 
 
-def _lever_models(case):
+def lever_models(case):
     r, d, off, (m1, m2), g, load, torque, theta0 = case
     crank = body("crank", {"O2": (0, 0), "A": (r, 0)}, m1, (0.4 * r, 3), m1 * r**2 / 12)
     lever = body("lever", {"O4": (0, 0), "S": (0, off), "T": (2.5 * d, 0)}, m2, (d, 4),
@@ -291,7 +291,7 @@ def _lever_models(case):
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(slotted_levers())
 def test_random_slotted_levers_equal_their_massless_block_equivalent(case):
-    a_model, b_model = _lever_models(case)
+    a_model, b_model = lever_models(case)
     t = np.linspace(0.0, 1.0, 9)
     a, b = analyze(a_model, t), analyze(b_model, t)
     check(a.phi("lever"), b.phi("lever"), 1e-10, scale=np.pi, what="lever angle")
