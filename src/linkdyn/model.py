@@ -46,6 +46,9 @@ class Body:
         Mass centre in the body's frame, m.
     inertia : float
         Moment of inertia about the mass centre, kg m^2.
+    bars : tuple[Bar, ...]
+        The uniform bars the mass properties were composed of (:func:`bar_mass`), when the
+        model file gave them that way (``save`` writes them back); empty otherwise.
     """
 
     name: str
@@ -53,6 +56,37 @@ class Body:
     mass: float = 0.0
     com: np.ndarray = field(default_factory=lambda: np.zeros(2))
     inertia: float = 0.0
+    bars: tuple = ()
+
+
+@dataclass(frozen=True)
+class Bar:
+    """A uniform slender bar between two named points of a body: its ``mass`` (kg), or its
+    ``mass_per_length`` (kg/m) times its length (exactly one of the two, the other None)."""
+
+    start: str
+    end: str
+    mass: float | None = None
+    mass_per_length: float | None = None
+
+
+def bar_mass(points: dict, bars) -> tuple[float, np.ndarray, float]:
+    """Mass (kg), mass centre (2,) and centroidal inertia (kg m^2) of the uniform bars
+    ``bars`` between the named ``points`` (m, the body's frame), composed: ``m = sum m_k``,
+    ``c = sum m_k c_k / m`` with ``c_k`` each bar's midpoint, ``I_C = sum (m_k L_k^2 / 12 +
+    m_k |c_k - c|^2)``."""
+    ms, cs, ls = [], [], []
+    for b in bars:
+        p, q = np.asarray(points[b.start], float), np.asarray(points[b.end], float)
+        length = float(np.hypot(*(q - p)))
+        ms.append(b.mass if b.mass is not None else b.mass_per_length * length)
+        cs.append((p + q) / 2)
+        ls.append(length)
+    m = float(sum(ms))
+    c = sum(mk * ck for mk, ck in zip(ms, cs)) / m if m > 0 else np.mean(cs, axis=0)
+    inertia = sum(mk * (lk ** 2 / 12 + float(np.sum((ck - c) ** 2)))
+                  for mk, ck, lk in zip(ms, cs, ls))
+    return m, np.asarray(c, float), float(inertia)
 
 
 @dataclass(frozen=True, init=False)

@@ -14,7 +14,8 @@ from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
 
 SHORT_LINK = 1e-9  # a link shorter than this fraction of the mechanism's size has zero length
 
-BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about")
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars")
+BAR_KEYS = ("between", "mass", "mass_per_length")
 JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
     key for kind in jk.REGISTRY.values() for key in kind.keys))
 
@@ -40,11 +41,14 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
         points = {r.name(p, f"{f}.points"): r.vector(xy, f"{f}.points.{p}", Lu) * L
                   for p, xy in pts.items()}
         if name == GROUND:
-            for key in ("mass", "com", "inertia", "inertia_about"):
+            for key in ("mass", "com", "inertia", "inertia_about", "bars"):
                 if key in entry:
                     r.fail(f"{f}.{key}", "the ground is fixed and has no mass properties",
                            f"Remove '{key}' from the ground body")
             bodies[name] = Body(name, points)
+            continue
+        if "bars" in entry:
+            bodies[name] = _bars(r, f, name, points, entry)
             continue
         for key in ("mass", "inertia"):
             if key not in entry:
@@ -77,6 +81,42 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
             inertia = max(inertia - mass * d2, 0.0)
         bodies[name] = Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
     return bodies
+
+
+def _bars(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:
+    """A body whose mass, mass centre and inertia are composed of uniform bars between its
+    points (``bars = [{ between = ["A", "B"], mass = ... }]``; ``mass_per_length`` in kg per
+    the file's length unit instead of ``mass``)."""
+    from ..model import Bar, bar_mass
+    for key in ("mass", "com", "inertia", "inertia_about"):
+        if key in entry:
+            r.fail(f"{f}.{key}", f"a body given by bars takes its {key} from them",
+                   f"Remove '{key}', or remove bars and give mass, com and inertia")
+    items = r.entries(entry["bars"], f"{f}.bars")
+    if not items:
+        r.fail(f"{f}.bars", "no bars given",
+               'Give e.g. bars = [{ between = ["O2", "O3"], mass = 1.5 }]')
+    bars = []
+    for k, item in enumerate(items):
+        g = f"{f}.bars[{k}]"
+        r.table(item, g, BAR_KEYS, required=("between",))
+        ends = item["between"]
+        if not (isinstance(ends, list) and len(ends) == 2):
+            r.fail(f"{g}.between", "expected two point names",
+                   'Write between = ["A", "B"] with two of the body\'s points')
+        a, b = (r.point(name, points, p, f"{g}.between[{j}]") for j, p in enumerate(ends))
+        if ("mass" in item) == ("mass_per_length" in item):
+            r.fail(g, "give exactly one of mass and mass_per_length",
+                   f"Write mass = ... (kg) or mass_per_length = ... (kg/{r.length_name})")
+        if "mass" in item:
+            bars.append(Bar(a, b, mass=r.number(item["mass"], f"{g}.mass", "kg",
+                                                nonnegative=True)))
+        else:
+            lam = r.number(item["mass_per_length"], f"{g}.mass_per_length",
+                           f"kg/{r.length_name}", nonnegative=True)
+            bars.append(Bar(a, b, mass_per_length=lam / r.length))
+    mass, com, inertia = bar_mass(points, bars)
+    return Body(name, points, mass=mass, com=com, inertia=inertia, bars=tuple(bars))
 
 
 def _check_ground(r: _Reader, entries: list) -> None:

@@ -29,6 +29,18 @@ from .units import ANGLE_UNITS, LENGTH_UNITS
 __all__ = ["model_to_dict", "save", "dumps_toml"]
 
 
+def _from_bars(b) -> bool:
+    """Whether body ``b``'s mass properties are still those of its bars (a body changed in
+    Python after reading keeps its bars but not their numbers: then the numbers are written)."""
+    from ..model import bar_mass
+    if not b.bars:
+        return False
+    m, c, i = bar_mass(b.points, b.bars)
+    scale = max(abs(b.mass), 1e-300)
+    return (abs(m - b.mass) <= 1e-12 * scale and abs(i - b.inertia) <= 1e-12 * max(abs(i), 1e-300)
+            and bool(np.all(np.abs(c - b.com) <= 1e-12 * max(float(np.max(np.abs(c))), 1e-300))))
+
+
 def _num(x) -> float | int:
     x = float(x)
     return int(x) if x.is_integer() and abs(x) < 2 ** 53 else x
@@ -109,7 +121,11 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
     bodies = []
     for b in model.bodies:
         entry: dict = {"name": b.name, "points": {k: _vec(v, L) for k, v in b.points.items()}}
-        if b.name != GROUND:
+        if b.name != GROUND and _from_bars(b):   # the bars it was given by
+            entry["bars"] = [{"between": [x.start, x.end]} | (
+                {"mass": _num(x.mass)} if x.mass is not None else
+                {"mass_per_length": _num(x.mass_per_length * L)}) for x in b.bars]
+        elif b.name != GROUND:
             entry.update(mass=_num(b.mass), com=_vec(b.com, L), inertia=_num(b.inertia / L ** 2))
         bodies.append(entry)
     out["bodies"] = bodies
