@@ -373,9 +373,9 @@ def test_screenshot_is_not_blank(page):
 
 @pytest.mark.parametrize("example", ["slider_crank", "inverted_slider_crank", "stephenson",
                                      "fivebar", "scotch_yoke"])
-def test_other_mechanisms_render_and_play(browser, tmp_path, example):
-    out = _analyze(tmp_path, example, "--report")
-    pg = Page(browser, out / "report.html", width=1200, height=900)
+def test_other_mechanisms_render_and_play(browser, example_runs, example):
+    path, _ = example_runs(example)   # the page `analyze --report` writes, shared per worker
+    pg = Page(browser, path, width=1200, height=900)
     try:
         pg.page.click("#play")
         pg.page.wait_for_function("window.__linkdynFrame > 3", timeout=5000)
