@@ -561,7 +561,7 @@ def test_the_bundled_geared_fivebar_meshes_and_its_gears_turn_opposite():
 @pytest.mark.parametrize("internal", [0, 1])
 def test_gear_train_matches_mujoco_joint_equality(internal):
     mujoco = pytest.importorskip("mujoco")
-    from test_mujoco import _load_forces
+    from test_mujoco import load_forces
 
     def _xz(v):   # linkdyn (x, y) -> MuJoCo 'x 0 y'
         return f"{v[0]:.17g} 0 {v[1]:.17g}"
@@ -599,7 +599,7 @@ def test_gear_train_matches_mujoco_joint_equality(internal):
         mujoco.mj_fullM(m, d, M)
         J = np.array(d.efc_J[:2]).reshape(1, 2)
         qacc = np.array([sol.alpha("g1")[k], sol.alpha("g2")[k]])
-        rhs = M @ qacc + d.qfrc_bias - _load_forces(model, m, d, T[k])
+        rhs = M @ qacc + d.qfrc_bias - load_forces(model, m, d, T[k])
         A = np.hstack((np.array([[1.0], [0.0]]), J.T))
         x = np.linalg.solve(A, rhs)
         taus.append(x[0])

@@ -153,7 +153,7 @@ CASES = {
 # MuJoCo's equations at linkdyn's motion
 
 
-def _load_forces(model, m, d, time):
+def load_forces(model, m, d, time):
     """The model's loads MJCF does not hold (forces, torques) at ``time`` as MuJoCo
     generalized forces (nv,), at the state already in ``d`` (linkdyn's z moment is MuJoCo's -y
     torque). Springs and dampers are in the export (MuJoCo's ``qfrc_passive``)."""
@@ -241,7 +241,7 @@ def check_against_mujoco(model, sol, xml, case=""):
                 mujoco.mj_jacSite(m, d, jp, None, m.site(site).id)
                 jac.append(jp)
             np.testing.assert_allclose(J[3 * c:3 * c + 3], jac[0] - jac[1], atol=1e-14)
-        q_loads = _load_forces(model, m, d, sol.t[k])
+        q_loads = load_forces(model, m, d, sol.t[k])
         rhs = M @ qacc + d.qfrc_bias - d.qfrc_passive - q_loads
         A = np.hstack((S, J.T))
         x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
@@ -366,7 +366,7 @@ def test_slot_joint_matches_mujoco(case):
         row = np.array([n[0], 0.0, n[1]]) @ (jac[0] - jac[1])
         # linkdyn's rates keep the pin in the slot
         assert abs(row @ d.qvel) <= 1e-12 * np.linalg.norm(row) * np.linalg.norm(d.qvel)
-        q_loads = _load_forces(model, m, d, t[k])
+        q_loads = load_forces(model, m, d, t[k])
         rhs = M @ qacc + d.qfrc_bias - d.qfrc_passive - q_loads
         A = np.hstack((S, row[:, None]))
         x, *_ = np.linalg.lstsq(A, rhs, rcond=None)

@@ -383,7 +383,7 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
     if not lay.topo.dependent or not hi > lo:
         return Branch(q_start, modes)
-    return Branch(q_start, modes, *_follow(lay, q_start, lo, hi, modes, nodes))
+    return Branch(q_start, modes, *continuation(lay, q_start, lo, hi, modes, nodes))
 
 
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
@@ -409,7 +409,7 @@ def _at_node(x: np.ndarray, k: int, ndim: int) -> np.ndarray:
     return x.reshape(x.shape + (1,) * (ndim - x.ndim))
 
 
-def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes=None):
+def continuation(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes=None):
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
@@ -425,7 +425,7 @@ def _follow(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes
 
 
 def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float):
-    """:func:`_follow` by Newton continuation, node by node."""
+    """:func:`continuation` by Newton continuation, node by node."""
     nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
     for end in (hi, lo):
         if end == 0.0:
@@ -456,7 +456,7 @@ def unwrap_step(ok_a, ok_b, q_a, q_b):
 
 
 def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes, close=None):
-    """:func:`_follow` for mechanisms whose loops are all dyads: every node is solved at once
+    """:func:`continuation` for mechanisms whose loops are all dyads: every node is solved at once
     in closed form in the assembly ``modes`` (by ``close`` if given: :func:`follow`'s
     ``nodes``), and the dependent angles are unwrapped along the nodes (which the driver
     crosses in steps of at most ``STEP_ANGLE``)."""
