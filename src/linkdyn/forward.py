@@ -408,9 +408,10 @@ class System:
             g[self.dep] += S @ (q_ind - g[self.ind])
         return g
 
-    def reduced(self, t, q_f, qd_f, guess):
+    def reduced(self, t, q_f, qd_f, guess, drivers=None):
         """The free coordinates' equations of motion ``H qdd_f + h = 0`` at the states
-        ``(t, q_f, qd_f)``, each (nf, T) but t (T,), from a tree-coordinate ``guess`` (n, T).
+        ``(t, q_f, qd_f)``, each (nf, T) but t (T,), from a tree-coordinate ``guess`` (n, T);
+        ``drivers``: the drivers' ``(q, qd, qdd)`` (nd, T) at ``t`` when the caller has them.
 
         Returns ``H`` (nf, nf, T) (kg m^2, kg m or kg), ``h`` (nf, T) (N m or N: the effort
         an actuator in each free joint would need to hold ``qdd_f = 0``), the efforts ``tau``
@@ -419,7 +420,7 @@ class System:
         """
         nd, nf = self.nd, self.nf
         part, lay = self.part, self.lay
-        q_d, qd_d, qdd_d = driver_values(part.model, t)
+        q_d, qd_d, qdd_d = driver_values(part.model, t) if drivers is None else drivers
         q_ind = np.concatenate((q_d, q_f))[:, None]              # (k, 1, T)
         qd_ind = np.concatenate((qd_d, qd_f))[:, None]
         qdd_ind = np.concatenate((np.broadcast_to(qdd_d[:, None], (nd, 1 + nf, len(t))),
@@ -444,8 +445,9 @@ class System:
         and the power of drivers and non-conservative loads (T,).
         """
         nd, nf = self.nd, self.nf
-        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess)
-        q_d, qd_d, qdd_d = driver_values(self.part.model, t)
+        drivers = driver_values(self.part.model, t)
+        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess, drivers)
+        qd_d = drivers[1]
         # no actuator in a free joint: H qdd_f = -h                             (F6)
         if nf == 1:
             qdd_f = -h / H[0]

@@ -166,8 +166,9 @@ def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
             dqd[j, 1 + 4 * nf + 4 * j + k] = s * DELTA * scale[j]
     t = np.zeros(dq.shape[1])
     q = q_f[:, None] + dq
-    q_ind = np.concatenate((driver_values(system.part.model, t)[0], q))
-    H, h, tau, kin, _, dyn = system.reduced(t, q, dqd, system.guess(t, q_ind))
+    drivers = driver_values(system.part.model, t)
+    q_ind = np.concatenate((drivers[0], q))
+    H, h, tau, kin, _, dyn = system.reduced(t, q, dqd, system.guess(t, q_ind), drivers)
     ok = kin.valid[0] & (kin.pivot[0] > 1e-9) & (dyn.pivot[0] > 1e-9)
     if not np.all(ok):
         return None
