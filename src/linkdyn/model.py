@@ -217,6 +217,9 @@ class Model:
     cut : tuple[str, ...] or None
         Joints to cut; ``None`` chooses automatically.
     duration, cycles, samples : optional analysis defaults.
+    space : str
+        ``"planar"`` (this module's bodies and joints) or ``"spatial"`` (bodies and joints of
+        :mod:`linkdyn.spatial.model`, 3-vectors; solved by :mod:`linkdyn.spatial`).
     initial_q, initial_qd : dict[str, float]
         ``[initial]``: coordinates (rad or m) and rates (per s) of the free degrees of freedom at
         t = 0, by joint name (``simulate``; an empty ``initial_q`` takes them from the assembly).
@@ -251,6 +254,7 @@ class Model:
     angle_unit: str = "rad"
     initial_q: dict[str, float] = field(default_factory=dict)
     initial_qd: dict[str, float] = field(default_factory=dict)
+    space: str = "planar"
 
     def body(self, name: str) -> Body:
         return next(b for b in self.bodies if b.name == name)

@@ -93,30 +93,45 @@ class Topology:
         return out
 
 
-def _kinds(model: Model) -> list[jk.JointKind]:
+def registry(space: str):
+    """The joint kinds of a model's ``space``: the module :mod:`linkdyn.joints` (planar) or
+    :mod:`linkdyn.spatial.joints`, each with ``get``, ``names``, ``UnknownJointKind`` and
+    ``BODY_FREEDOMS`` (a free body's freedoms: 3 in the plane, 6 in space)."""
+    if space == "spatial":
+        from .spatial import joints as spatial_kinds
+        return spatial_kinds
+    return jk
+
+
+def _kinds(model: Model) -> list:
     """The kind of each joint of ``model``, in file order; an unknown kind is a model error."""
+    reg = registry(getattr(model, "space", "planar"))
     kinds = []
     for jt in model.joints:
         try:
-            kinds.append(jk.get(jt.kind))
-        except jk.UnknownJointKind as exc:
+            kinds.append(reg.get(jt.kind))
+        except reg.UnknownJointKind as exc:
             raise ModelError(str(exc), file=model.source, field=f"joints.{jt.name}.type",
-                             fix="Set type to one of " + ", ".join(jk.names())) from None
+                             fix="Set type to one of " + ", ".join(reg.names())) from None
     return kinds
 
 
 def mobility(model: Model) -> int:
-    """Grübler–Kutzbach mobility of ``model``: ``3 (n - 1)`` minus the rows every joint's kind
-    removes of the three planar freedoms (``JointKind.rows``: a revolute or prismatic joint 2,
-    a pin in a slot 1), n the bodies including the ground. The one count of the degrees of
-    freedom that :func:`build`, ``check``, the summary and ``simulate`` report.
+    """Grübler–Kutzbach mobility of ``model``: ``f (n - 1)`` minus the rows every joint's kind
+    removes (``JointKind.rows``: in the plane, f = 3, a revolute or prismatic joint 2, a pin
+    in a slot 1; in space, f = 6, a revolute joint 5, a spherical one 3), n the bodies
+    including the ground. The one count of the degrees of freedom that :func:`build`,
+    ``check``, the summary and ``simulate`` report (a spatial model's true mobility, which
+    redundant constraints raise above it, comes from the closure Jacobian's rank:
+    :mod:`linkdyn.spatial.kinematics`).
 
     Raises
     ------
     ModelError
         An unknown joint kind.
     """
-    return 3 * (len(model.bodies) - 1) - sum(k.rows for k in _kinds(model))
+    f = registry(getattr(model, "space", "planar")).BODY_FREEDOMS
+    return f * (len(model.bodies) - 1) - sum(k.rows for k in _kinds(model))
 
 
 def build(model: Model) -> Topology:
@@ -150,10 +165,11 @@ def build(model: Model) -> Topology:
             a = root[a]
         return a
 
-    # driven joints first (never cut), sliders last (a cut slider leaves loops that close in
-    # closed form, see kinematics.dyads), otherwise file order
+    # driven joints first (never cut), then by the kinds' cut rank (planar: sliders last, as a
+    # cut slider leaves loops that close in closed form, see kinematics.dyads; spatial:
+    # spherical joints last, then universal ones), otherwise file order
     order = sorted(range(len(joints)), key=lambda j: (joints[j].name not in driven_set,
-                                                      not kinds[j].angular, j))
+                                                      kinds[j].cut_rank, j))
     tree, cut = [], []
     for j in order:
         jt = joints[j]
@@ -222,7 +238,9 @@ def build(model: Model) -> Topology:
     n = len(bodies)
 
     mob = mobility(model)
-    if mob != len(model.drivers):
+    # spatial: redundant constraints make Grübler–Kutzbach too low; the closure Jacobian's
+    # rank checks the mobility there (linkdyn.spatial.kinematics.assemble)
+    if getattr(model, "space", "planar") == "planar" and mob != len(model.drivers):
         count = Counter(k.name for k in kinds)                  # kinds in order of first use
         terms = " - ".join(f"{k.rows}*{count[k.name]}" for k in {k.name: k for k in kinds}.values())
         need = "add" if mob > len(model.drivers) else "remove"

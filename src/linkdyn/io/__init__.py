@@ -119,8 +119,14 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     if not isinstance(data, dict):
         r.fail("", f"expected a table of sections, got {_type_name(data)}",
                "Give the model as a dict such as {'bodies': [...], 'joints': [...]}")
+    mech = r.table(data.get("mechanism", {}), "mechanism",
+                   ("name", "gravity", "description", "space"))
+    space = r.choice(mech.get("space", "planar"), "mechanism.space", ("planar", "spatial"),
+                     "space")
+    if space == "spatial":
+        from ..spatial.reader import read
+        return read(r, data, mech, source)
     r.table(data, "", SECTIONS, noun="section", what="sections")
-    mech = r.table(data.get("mechanism", {}), "mechanism", ("name", "gravity", "description"))
     name = r.string(mech["name"], "mechanism.name") if "name" in mech else (
         Path(source).stem if source else "mechanism")
     gravity = r.vector(mech.get("gravity", [0.0, 0.0]), "mechanism.gravity", "m/s^2")

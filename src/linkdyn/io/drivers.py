@@ -32,7 +32,7 @@ def _drivers(r: _Reader, entries: Any, joints: dict[str, Joint]) -> dict[str, tu
         if joint in drivers:
             r.fail(f"{f}.joint", f"joint '{joint}' is already driven by {drivers[joint][0]}",
                    "Give each joint at most one driver; remove one of them")
-        kind = jk.get(joints[joint].kind)
+        kind = r.kind(joints[joint].kind)
         if kind.effort is None:
             r.fail(f"{f}.joint", f"joint '{joint}' is a {kind.name} joint, which cannot be driven",
                    "Drive one of the mechanism's revolute or prismatic joints instead")

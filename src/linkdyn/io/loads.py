@@ -60,7 +60,10 @@ def _variables(r: _Reader, joints: dict[str, Joint]) -> dict[str, tuple]:
     """Joint variables a load formula may use: ``q_<joint>``, ``qd_<joint>`` -> (joint, k, unit)."""
     out = {}
     for index, (name, j) in enumerate(joints.items()):
-        unit = r.angle if jk.get(j.kind).angular else r.length
+        kind = r.kind(j.kind)
+        if kind.freedoms != 1:          # a joint of several coordinates: none by one name
+            continue
+        unit = r.angle if kind.angular else r.length
         out[f"q_{name}"], out[f"qd_{name}"] = (index, 0, unit), (index, 1, unit)
     return {k: v for k, v in out.items() if k.isidentifier()}
 
@@ -83,10 +86,13 @@ def _load_value(r: _Reader, value: Any, f: str, vector: bool, unit: str = "N m",
         return e
 
     if vector:
-        if not isinstance(value, list) or len(value) != 2:
+        if not isinstance(value, list) or len(value) != r.dim:
             got = _count(len(value)) if isinstance(value, list) else _type_name(value)
-            r.fail(f, f"expected [fx, fy] (2 numbers or formulas of t), got {got}",
-                   'Write value = [-20.0, 35.0] (N, global frame) or value = ["10*sin(t)", "0"]')
+            names = ", ".join("f" + c for c in "xyz"[:r.dim])
+            numbers = ", ".join(["-20.0", "35.0", "0.0"][:r.dim])
+            formulas = ", ".join(['"10*sin(t)"'] + ['"0"'] * (r.dim - 1))
+            r.fail(f, f"expected [{names}] ({r.dim} numbers or formulas of t), got {got}",
+                   f"Write value = [{numbers}] (N, global frame) or value = [{formulas}]")
         comps = tuple(component(c, f"{f}[{k}]", "N") for k, c in enumerate(value))
         return _TimeFunction(comps, True, tuple((k, *v) for k, v in sorted(used.items())))
     comp = component(value, f, unit)
@@ -114,13 +120,13 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             # an effort inside a joint: on its second body, minus that on the first
             joint = r.choice(entry["joint"], f"{f}.joint", joints or {}, "joint")
             jt = joints[joint]
-            if jk.get(jt.kind).freedoms != 1:
+            if r.kind(jt.kind).freedoms != 1:
                 r.fail(f"{f}.joint", f"joint '{joint}' is a {jt.kind} joint with "
-                       f"{jk.get(jt.kind).freedoms} freedoms: a {kind} acts along the one "
+                       f"{r.kind(jt.kind).freedoms} freedoms: a {kind} acts along the one "
                        "freedom of a revolute (joint_torque) or prismatic (joint_force) joint",
                        "Name a revolute or prismatic joint, or apply a force or torque to the "
                        "bodies (kind = \"force\" or \"torque\")")
-            want = "joint_torque" if jk.get(jt.kind).angular else "joint_force"
+            want = "joint_torque" if r.kind(jt.kind).angular else "joint_force"
             if kind != want:
                 r.fail(f"{f}.kind", f"joint '{joint}' is {jt.kind}: its load is a {want}",
                        f'Write kind = "{want}" (a torque in a revolute joint, a force along a '

@@ -21,7 +21,7 @@ def _assembly(r: _Reader, section: Any, bodies, joints) -> tuple[dict, dict]:
     q: dict[str, float] = {}
     for j, v in r.table(section.get("q", {}), "assembly.q", joints, noun="joint",
                         what="joints").items():
-        scale, unit = ((r.angle, r.angle_name) if jk.get(joints[j].kind).angular
+        scale, unit = ((r.angle, r.angle_name) if r.kind(joints[j].kind).angular
                        else (r.length, r.length_name))
         q[j] = r.number(v, f"assembly.q.{j}", unit) * scale
     return phi, q
@@ -41,7 +41,7 @@ def _initial(r: _Reader, section: Any, joints, drivers) -> tuple[dict, dict]:
                 r.fail(f"initial.{key}.{j}", f"joint '{j}' is driven ({drivers[j][0]}): its "
                        "motion is prescribed, not free",
                        "Name only the joints of the free degrees of freedom")
-            scale, unit = ((r.angle, r.angle_name) if jk.get(joints[j].kind).angular
+            scale, unit = ((r.angle, r.angle_name) if r.kind(joints[j].kind).angular
                            else (r.length, r.length_name))
             values[j] = r.number(v, f"initial.{key}.{j}", unit + per) * scale
         out.append(values)
@@ -101,9 +101,9 @@ def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
     if "path_range" in section:
         first = next(iter(drivers.values()), None)
         # without drivers the mobility check reports the real problem
-        revolute = first is None or jk.get(joints[first[1].joint].kind).angular
+        revolute = first is None or r.kind(joints[first[1].joint].kind).angular
         lo, hi = r.vector(section["path_range"], "analysis.path_range",
-                          "rad or deg" if revolute else "length unit")
+                          "rad or deg" if revolute else "length unit", n=2)
         scale = r.angle if revolute else r.length
         path_range = (float(lo * scale), float(hi * scale))
     return duration, cycles, samples, path_point, path_range

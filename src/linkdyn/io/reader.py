@@ -81,6 +81,15 @@ class _Reader:
     length_name: str = "m"
     angle_name: str = "rad"
     allow_outside: bool = False      # motion tables may lie outside base_dir
+    dim: int = 2                     # components of a vector: 2 planar, 3 spatial
+    kinds: Any = None                # the joint kinds' registry (None: linkdyn.joints)
+
+    def kind(self, name: str):
+        """The joint kind ``name`` of this file's space (planar or spatial)."""
+        if self.kinds is None:
+            from .. import joints
+            return joints.get(name)
+        return self.kinds.get(name)
 
     def fail(self, field: str, message: str, fix: str) -> NoReturn:
         raise ModelError(message, file=self.file, field=field, fix=fix)
@@ -135,12 +144,15 @@ class _Reader:
             self.fail(field, f"must not be negative, got {x:g}{u}", fix or f"Give a value >= 0{u}")
         return x
 
-    def vector(self, value: Any, field: str, unit: str = "") -> np.ndarray:
-        if not isinstance(value, list) or len(value) != 2:
+    def vector(self, value: Any, field: str, unit: str = "", n: int | None = None) -> np.ndarray:
+        """A vector of ``n`` numbers (default the file's :attr:`dim`)."""
+        n = n or self.dim
+        if not isinstance(value, list) or len(value) != n:
             got = _count(len(value)) if isinstance(value, list) else _type_name(value)
             u = f" in {unit}" if unit else ""
-            self.fail(field, f"expected a vector [x, y] of 2 numbers{u}, got {got}",
-                      f"Write e.g. {_key(field)} = [1.0, 0.0]")
+            self.fail(field, f"expected a vector [{', '.join('xyz'[:n])}] of {n} numbers{u}, "
+                      f"got {got}", f"Write e.g. {_key(field)} = "
+                      f"[{', '.join(['1.0'] + ['0.0'] * (n - 1))}]")
         return np.array([self.number(c, f"{field}[{i}]", unit) for i, c in enumerate(value)])
 
     def string(self, value: Any, field: str, *, empty=False) -> str:

@@ -14,6 +14,9 @@ from . import distance, gear, prismatic, rack, revolute, slot
 from ..steps import by_kind
 from .base import WIDTH, JointKind, Number, frame, line_motion
 
+#: A free body's freedoms in the plane (Grübler–Kutzbach's ``3 (n - 1)``).
+BODY_FREEDOMS = 3
+
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
                                                        slot.KIND,

@@ -142,6 +142,9 @@ class JointKind:
         If not, the assembly keeps the dependent angles Newton's method found (no whole
         turns moved to bring them near the guess) and ``simulate`` integrates the free
         angles with their whole turns (F12 off).
+    cut_rank : int
+        Which joints of a loop the topology cuts first: the highest rank (0 a revolute joint,
+        1 a sliding one, which leaves loops that close in closed form).
     """
 
     name = ""
@@ -155,6 +158,10 @@ class JointKind:
     effort: str | None = None
     dyad: str | None = None
     periodic = True
+
+    @property
+    def cut_rank(self) -> int:
+        return 0 if self.angular else 1
 
     @property
     def rows(self) -> int:

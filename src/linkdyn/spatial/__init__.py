@@ -1,0 +1,69 @@
+"""Spatial mechanisms (``[mechanism] space = "spatial"``): the seed's 6-D DeNOC method.
+
+:mod:`.algebra` (twists, wrenches, cross operators, spatial inertia about the global origin),
+:mod:`.joints` (one module per kind and its registry), :mod:`.reader` (the model file),
+:mod:`.kinematics` (tree poses and twists, closure by Newton's method with continuation,
+rates and accelerations by least squares), :mod:`.dynamics` (loads, DeNOC inverse dynamics,
+minimum-norm reactions), :mod:`.solution` (the result API and columns). The topology (tree
+and cut joints) is :func:`linkdyn.topology.build`, shared with planar models.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import dynamics as sd
+from . import kinematics as sk
+from .solution import Redundancy, SpatialSolution
+
+__all__ = ["analyze", "SpatialSolution", "Redundancy", "check"]
+
+
+def analyze(model, t) -> SpatialSolution:
+    """Kinematics, inverse dynamics and reactions of the spatial ``model`` at the times ``t``
+    (T,) s (numpy backend).
+
+    Raises
+    ------
+    AssemblyError
+        Where the loops cannot be closed or a singular position is passed (time and driver
+        values named).
+    ModelError
+        A mobility (from the closure Jacobian's rank) other than the number of drivers.
+    """
+    t = np.asarray(t, float)
+    p = sk.plan(model)
+    motion = sk.solve(model, p, t)
+    coords = sk.joint_coordinates(model, p, motion)
+    applied = sd.loads(model, p, motion, coords)
+    dyn = sd.solve(model, p, motion, applied)
+    return SpatialSolution(model, p, motion, coords, applied, dyn, redundant_rows(model, p,
+                                                                                  motion.J[0]))
+
+
+def redundant_rows(model, p: sk.Plan, J: np.ndarray) -> tuple:
+    """The closure rows (``<joint>.<row label>``) that are combinations of the rows before
+    them in the Jacobian ``J`` (rows, n_q) at one sample."""
+    labels = [f"{model.joints[j].name}.{lab}" for j in p.topo.cut for lab in p.kinds[j].row_labels]
+    kept, out = np.zeros((0, J.shape[1])), []
+    for label, row in zip(labels, J):
+        trial = np.vstack([kept, row])
+        if np.linalg.matrix_rank(trial, tol=sk.RANK * max(np.abs(J).max(), 1e-300)
+                                 * max(J.shape)) > len(kept):
+            kept = trial
+        else:
+            out.append(label)
+    return tuple(out)
+
+
+def check(model) -> dict:
+    """What ``linkdyn check`` reports of a spatial model: the topology, Grübler–Kutzbach's
+    count, the assembly at t = 0, the mobility from the closure Jacobian's rank and the
+    redundant rows."""
+    p = sk.plan(model)
+    qi, _, _ = sk.driver_motion(model, np.zeros(1))
+    q = sk.assemble(model, p, np.zeros(1), qi)
+    _, _, J = sk.closure(model, p, sk.poses(p, q))
+    rank = int(sk.rank_of(J)[0])
+    return {"plan": p, "gruebler": p.topo.mobility, "mobility": p.n_q - rank,
+            "rows": J.shape[1], "rank": rank, "redundant": redundant_rows(model, p, J[0])}

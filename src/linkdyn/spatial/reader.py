@@ -1,0 +1,192 @@
+"""The model file of a spatial mechanism (``[mechanism] space = "spatial"``): bodies posed at
+a design pose with 3-D points and inertia tensors, the spatial joint kinds with their axes,
+3-vector loads and gravity. Drivers, loads, ``[topology]`` and ``[analysis]`` are read by the
+planar reader's functions with a 3-component reader (``_Reader.dim = 3``) and the spatial
+joint registry; every message names the file, the field and the fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..io.drivers import _drivers
+from ..io.linkage import _check_ground, _reference
+from ..io.loads import _loads
+from ..io.options import _analysis, _topology
+from ..io.reader import _Reader, _entry_field
+from ..io.units import _units
+from ..model import GROUND, Model
+from . import algebra as sa
+from . import joints as sj
+from .model import Body, Joint
+
+SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "topology", "analysis")
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "origin", "rotation")
+JOINT_KEYS = ("name", "type", "connect", "axis", "axis2")
+PERPENDICULAR = 1e-6   # |axis . axis2| of a universal joint's unit axes at the design pose
+
+
+def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
+    """The spatial model of the parsed file ``data`` (its ``[mechanism]`` table ``mech``
+    already checked for its keys), SI."""
+    r.dim, r.kinds = 3, sj
+    for section in ("assembly", "initial"):
+        if section in data:
+            r.fail(section, f"[{section}] is not read for spatial models",
+                   "Remove it: the design pose (each body's origin and rotation) is the "
+                   "assembly guess" if section == "assembly" else
+                   "Remove it: simulate is not yet for spatial models")
+    r.table(data, "", SECTIONS, noun="section", what="sections of a spatial model")
+    name = r.string(mech["name"], "mechanism.name") if "name" in mech else (
+        Path(source).stem if source else "mechanism")
+    gravity = r.vector(mech.get("gravity", [0.0, 0.0, 0.0]), "mechanism.gravity", "m/s^2")
+    description = r.string(mech.get("description", ""), "mechanism.description", empty=True)
+    _units(r, data.get("units", {}))
+    bodies = _bodies(r, data.get("bodies"))
+    joints = _joints(r, data.get("joints", []), bodies)
+    drivers = _drivers(r, data.get("drivers", []), joints)
+    for entry in data.get("loads", []) if isinstance(data.get("loads"), list) else []:
+        if isinstance(entry, dict) and entry.get("kind") == "friction":
+            r.fail("loads", "friction is not yet for spatial models",
+                   "Remove the friction load, or model it as a joint_torque formula of qd_<joint>")
+    loads = _loads(r, data.get("loads", []), bodies, joints)
+    cut = _topology(r, data.get("topology", {}), joints, drivers)
+    duration, cycles, samples, path_point, path_range = _analysis(
+        r, data.get("analysis", {}), drivers, bodies, joints)
+    return Model(name=name, bodies=tuple(bodies.values()), joints=tuple(joints.values()),
+                 drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads),
+                 gravity=gravity, cut=cut, duration=duration, cycles=cycles, samples=samples,
+                 source=source, description=description, path_point=path_point,
+                 path_range=path_range, length_unit=r.length_name, angle_unit=r.angle_name,
+                 space="spatial")
+
+
+def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
+    if entries is None:
+        r.fail("bodies", "the model has no bodies",
+               'Add [[bodies]] tables, one of them with name = "ground"')
+    _check_ground(r, r.entries(entries, "bodies"))
+    L, Lu = r.length, r.length_name
+    bodies: dict[str, Body] = {}
+    for i, entry in enumerate(entries):
+        f = _entry_field("bodies", i, entry)
+        r.table(entry, f, BODY_KEYS, required=("name",))
+        name = r.name(entry["name"], f"{f}.name")
+        if name in bodies:
+            r.fail(f"bodies[{i}].name", f"duplicate body name '{name}'",
+                   "Give every body a different name")
+        pts = entry.get("points")
+        if not isinstance(pts, dict) or not pts:
+            r.fail(f"{f}.points", "a body needs at least one named point",
+                   "Add e.g. points = { A = [0, 0, 0], B = [0, 30, 0] } in the body's frame")
+        points = {r.name(p, f"{f}.points"): r.vector(xyz, f"{f}.points.{p}", Lu) * L
+                  for p, xyz in pts.items()}
+        if name == GROUND:
+            for key in ("mass", "com", "inertia", "origin", "rotation"):
+                if key in entry:
+                    r.fail(f"{f}.{key}", "the ground is fixed: its frame is the global frame "
+                           "and it has no mass properties", f"Remove '{key}' from the ground body")
+            bodies[name] = Body(name, points)
+            continue
+        for key in ("mass", "inertia"):
+            if key not in entry:
+                r.fail(f"{f}.{key}", f"a moving body needs a {key}",
+                       "Add mass = ... (kg)" if key == "mass" else
+                       f"Add inertia = [Ixx, Iyy, Izz] (kg {Lu}^2, about the mass centre, "
+                       "body frame) or the full tensor")
+        mass = r.number(entry["mass"], f"{f}.mass", "kg", nonnegative=True,
+                        fix="Give a mass in kg, 0 or more (0: a massless link)")
+        com = entry.get("com", [0.0, 0.0, 0.0])
+        com = (points[r.point(name, points, com, f"{f}.com")] if isinstance(com, str)
+               else r.vector(com, f"{f}.com", Lu) * L)
+        origin = r.vector(entry.get("origin", [0.0, 0.0, 0.0]), f"{f}.origin", Lu) * L
+        rot = r.vector(entry.get("rotation", [0.0, 0.0, 0.0]), f"{f}.rotation",
+                       r.angle_name) * r.angle
+        bodies[name] = Body(name, points, mass=mass, com=com,
+                            inertia=_inertia(r, entry["inertia"], f"{f}.inertia") * L**2,
+                            origin=origin, rotation=sa.rotation_vector(rot))
+    return bodies
+
+
+def _inertia(r: _Reader, value: Any, field: str) -> np.ndarray:
+    """The centroidal inertia tensor (3, 3) in the file's units: principal ``[Ixx, Iyy, Izz]``
+    or the full symmetric tensor; refused unless positive semi-definite with the triangle
+    inequalities of a rigid body (``Ixx + Iyy >= Izz``, ...)."""
+    unit = f"kg {r.length_name}^2"
+    fix = ("Give [Ixx, Iyy, Izz] (principal, body frame) or [[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], "
+           "[Ixz, Iyz, Izz]]")
+    if isinstance(value, list) and len(value) == 3 and all(isinstance(v, list) for v in value):
+        rows = []
+        for k, row in enumerate(value):
+            if len(row) != 3:
+                r.fail(f"{field}[{k}]", f"expected 3 numbers, got {len(row)}", fix)
+            rows.append([r.number(c, f"{field}[{k}][{j}]", unit) for j, c in enumerate(row)])
+        tensor = np.array(rows)
+        if not np.allclose(tensor, tensor.T, rtol=0, atol=1e-12 * max(np.abs(tensor).max(), 1e-300)):
+            r.fail(field, "the inertia tensor is not symmetric", "Give Ixy, Ixz, Iyz once each "
+                   "in both places (tensor entries, Ixy = -integral of x y dm)")
+    elif isinstance(value, list) and len(value) == 3:
+        tensor = np.diag([r.number(c, f"{field}[{k}]", unit, nonnegative=True)
+                          for k, c in enumerate(value)])
+    else:
+        r.fail(field, "expected 3 principal moments or a 3 x 3 tensor", fix)
+    w = np.linalg.eigvalsh(tensor)
+    scale = max(float(w.max()), 1e-300)
+    if w.min() < -1e-12 * scale or 2 * w.max() > w.sum() * (1 + 1e-9) + 1e-300:
+        r.fail(field, f"no rigid body has these moments (principal values "
+               f"{', '.join(f'{x:g}' for x in w)} {unit}): they must be >= 0 and each at most "
+               "the sum of the other two", "Check the moments and the products of inertia")
+    return tensor
+
+
+def _unit(r: _Reader, value: Any, field: str, body: str) -> np.ndarray:
+    v = r.vector(value, field)
+    n = float(np.linalg.norm(v))
+    if n == 0:
+        r.fail(field, "the axis is zero", f"Give a direction in the frame of body '{body}', "
+               "e.g. [0, 0, 1]")
+    return v / n
+
+
+def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Joint]:
+    joints: dict[str, Joint] = {}
+    for i, entry in enumerate(r.entries(entries, "joints")):
+        f = _entry_field("joints", i, entry)
+        r.table(entry, f, JOINT_KEYS, required=("name", "type", "connect"))
+        name = r.name(entry["name"], f"{f}.name")
+        if name in joints:
+            r.fail(f"joints[{i}].name", f"duplicate joint name '{name}'",
+                   "Give every joint a different name")
+        kind = sj.get(r.choice(entry["type"], f"{f}.type", sj.names(), "spatial joint type"))
+        conn = entry["connect"]
+        if not isinstance(conn, list) or len(conn) != 2:
+            r.fail(f"{f}.connect", "expected two \"body.point\" strings",
+                   'Write connect = ["ground.A", "crank.A"]')
+        a, pa = _reference(r, conn[0], f"{f}.connect[0]", bodies)
+        b, pb = _reference(r, conn[1], f"{f}.connect[1]", bodies)
+        if a == b:
+            r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
+                   "A joint joins two different bodies; check the body names in connect")
+        for key in ("axis", "axis2"):
+            if key in entry and key not in kind.keys:
+                takes = [k for k, x in sj.REGISTRY.items() if key in x.keys]
+                r.fail(f"{f}.{key}", f"a {kind.name} joint has no {key}",
+                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
+            if key not in entry and key in kind.keys:
+                r.fail(f"{f}.{key}", f"a {kind.name} joint needs its {key}",
+                       f"Add {key} = [x, y, z] (in the frame of body "
+                       f"'{a if key == 'axis' else b}')")
+        axis = _unit(r, entry["axis"], f"{f}.axis", a) if "axis" in entry else np.zeros(3)
+        axis2 = _unit(r, entry["axis2"], f"{f}.axis2", b) if "axis2" in entry else np.zeros(3)
+        if "axis2" in entry:
+            # both axes in global components at the design pose
+            ea, eb = bodies[a].rotation @ axis, bodies[b].rotation @ axis2
+            if abs(float(ea @ eb)) > PERPENDICULAR:
+                r.fail(f"{f}.axis2", f"axis2 is not perpendicular to axis at the design pose "
+                       f"(cosine {float(ea @ eb):.3g})",
+                       "Give a universal joint's two axes at right angles (axis in the first "
+                       "body's frame, axis2 in the second's)")
+        joints[name] = Joint(name, kind.name, a, pa, b, pb, axis=axis, axis2=axis2)
+    return joints
