@@ -661,6 +661,15 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
 
 
 @quiet
+def _spatial(model, t, backend):
+    """``analyze`` of a spatial model (:func:`linkdyn.spatial.analyze`, numpy only)."""
+    if backend == "compiled":
+        raise ModelError("the compiled backend is not yet for spatial models", field="backend",
+                         fix="Use backend='numpy' (or leave it unset)")
+    from . import spatial
+    return spatial.analyze(model, t)
+
+
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
 
@@ -699,7 +708,10 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     TypeError
         An argument of the wrong type (the message names it).
     """
+    asked = backend
     model, t, backend = _arguments(model, t, allow_singular, backend)
+    if isinstance(model, Model) and model.space == "spatial":
+        return _spatial(model, t, asked)
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     if not models:
