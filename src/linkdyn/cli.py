@@ -136,6 +136,10 @@ def check(model, allow_outside):
     from .units import Units
 
     mech = io.load_model(model, allow_outside=allow_outside)
+    if mech.space == "spatial":
+        from .spatial import cli as spatial_cli
+        spatial_cli.check(mech, model)
+        return
     u = Units.of(mech)
     topo, free = _check_topology(mech)
     click.echo(f"{mech.name}  ({model})")
@@ -181,6 +185,15 @@ def check(model, allow_outside):
     else:
         _check_run(mech, topo)
     click.echo("model OK")
+
+
+def not_yet(mech, what: str) -> None:
+    """Exit 2 for a command (or option) that does not take spatial models yet."""
+    if getattr(mech, "space", "planar") == "spatial":
+        raise ModelError(f"{what} is not yet for spatial models", file=mech.source,
+                         field="mechanism.space",
+                         fix="Use linkdyn check or linkdyn analyze (results.csv, summary.json) "
+                             "on spatial models")
 
 
 def _check_topology(mech):
@@ -609,6 +622,22 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
                          fix="Drop one of them")
     check_outdir(outdir)
     mech = io.load_model(model, allow_outside=allow_outside)
+    if mech.space == "spatial":
+        from .spatial import cli as spatial_cli
+        for given, what in ((report, "--report"), (plots_, "--plots"),
+                            (path_point or path_range, "--path-point and --path-range"),
+                            (table_units != "si", "--units model"),
+                            (allow_singular, "--allow-singular")):
+            if given:
+                not_yet(mech, f"analyze {what}")
+        if _backend(ctx, backend) == "compiled":
+            not_yet(mech, "the compiled backend")
+        t = sample_times(mech, samples, duration, cycles)
+        text, files = spatial_cli.analyze(mech, t)
+        written = _write_results(outdir, files)
+        click.echo(text)
+        click.echo(f"wrote {', '.join(map(str, written))}")
+        return
     q_range = _path_range(path_range, mech)   # SI, from the file's unit
     if path_point is not None:
         from .design.path import _parse_point
@@ -713,6 +742,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     # each design: (file, its name, its model, what the sweep row holds or None)
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
+    for _, _, mech, _ in designs:
+        not_yet(mech, "compare")
     if sweep_dir is not None:
         from .studies.files import need_parquet
         need_parquet("compare --sweep")   # designs.parquet: say how to install, no traceback
@@ -856,6 +887,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     check_outdir(outdir)
     rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
+    not_yet(mech, "simulate")
     d_field = "--duration" if duration is not None else "analysis.duration"
     duration = mech.duration if duration is None else duration
     if duration is None:
@@ -921,6 +953,7 @@ def _equilibrium(model, as_json, allow_outside, with_modes):
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
+    not_yet(mech, "modes" if with_modes else "equilibrium")
     eq = eq_mod.equilibrium(mech)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
@@ -1002,7 +1035,9 @@ def export(model, to, output, at, allow_outside):
 
     out = Path(output) if output else Path(Path(model).stem + FORMATS[to])
     check_file(out)
-    done = run(io.load_model(model, allow_outside=allow_outside), to, at=at)
+    mech = io.load_model(model, allow_outside=allow_outside)
+    not_yet(mech, "export")
+    done = run(mech, to, at=at)
     write_file(out, done.text)
     for note in done.notes:
         click.echo(note)

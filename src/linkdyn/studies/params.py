@@ -124,7 +124,11 @@ def space(model, paths, *, source: str | None = None) -> Space:
         src = os.fspath(model)
         data, base_dir = read_model_data(src), str(Path(src).parent)
     src = src if source is None else source
-    model_from_dict(data, source=src, base_dir=base_dir)  # the base model must be valid itself
+    base = model_from_dict(data, source=src, base_dir=base_dir)  # it must be valid itself
+    if base.space == "spatial":
+        raise ModelError("sweep and optimize are not yet for spatial models", file=src,
+                         field="mechanism.space",
+                         fix="Use linkdyn check or linkdyn analyze on spatial models")
     seen = set()
     params = []
     for p in paths:

@@ -1,0 +1,102 @@
+"""``linkdyn check`` and ``linkdyn analyze`` of a spatial model: the printed description, and
+the files ``results.csv`` and ``summary.json`` (mobility, redundancy, peak efforts and
+reactions)."""
+
+from __future__ import annotations
+
+import json
+from types import SimpleNamespace
+
+import click
+import numpy as np
+
+from ..model import GROUND
+from . import analyze as run, check as inspect
+
+
+def check(mech, path: str) -> None:
+    """Print the model, its tree and cut joints, Grübler–Kutzbach's count, the mobility from
+    the closure Jacobian's rank at the assembly and the redundant rows; exit 3 where it does
+    not assemble, exit 2 where the mobility is not the number of drivers."""
+    info = inspect(mech)
+    p = info["plan"]
+    topo = p.topo
+    click.echo(f"{mech.name}  ({path})  [spatial]")
+    if mech.description:
+        click.echo(f"  {mech.description}")
+    click.echo(f"bodies ({len(mech.bodies)}):")
+    for b in mech.bodies:
+        extra = "" if b.name == GROUND else f"  mass {b.mass:g} kg"
+        click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
+    click.echo(f"joints ({len(mech.joints)}):")
+    driven = [d.joint for d in mech.drivers]
+    for k, j in enumerate(mech.joints):
+        role = ("cut" if k in topo.cut else "tree") + (", driven" if j.name in driven else "")
+        click.echo(f"  {j.name:8s} {j.kind:11s} {j.body_a}.{j.point_a} -> {j.body_b}.{j.point_b}"
+                   f"  [{role}]")
+    click.echo("spanning tree (parent <- body via joint):")
+    for i in range(1, topo.n):
+        click.echo(f"  {topo.bodies[topo.parent[i]]} <- {topo.bodies[i]} via "
+                   f"{mech.joints[topo.tree_joint[i]].name}")
+    cuts = ", ".join(mech.joints[j].name for j in topo.cut) or "none"
+    click.echo(f"loops: {topo.n_loops}; cut joints: {cuts}")
+    click.echo(f"mobility (Grübler–Kutzbach, 6*({topo.n}-1) - sum(6 - f)): {info['gruebler']}")
+    click.echo(f"mobility (closure Jacobian's rank {info['rank']} of {info['rows']} rows): "
+               f"{info['mobility']}; drivers: {len(mech.drivers)}")
+    if info["redundant"]:
+        click.echo(f"redundant constraint rows ({len(info['redundant'])}): "
+                   + ", ".join(info["redundant"]))
+    for d in mech.drivers:
+        click.echo(f"  {d.joint}: {d.description}")
+    click.echo("model OK")
+
+
+def summary(sol) -> dict:
+    """``summary.json`` of a spatial run: mobility, redundancy, peak efforts and reactions."""
+    info = sol.plan
+    cols = sol.columns()
+    rank = int(np.linalg.matrix_rank(sol.motion.J[0])) if sol.motion.J.shape[1] else 0
+    peaks = {}
+    for j in sol.model.joints:
+        r = sol.reaction(j.name)
+        peaks[j.name] = {"force": float(np.max(np.linalg.norm(r[:, :3], axis=1))),
+                         "moment": float(np.max(np.linalg.norm(r[:, 3:], axis=1)))}
+    efforts = {name: float(np.max(np.abs(cols[name]))) for name in cols
+               if name.startswith(("tau_", "force_"))}
+    return {"model": sol.model.name, "space": "spatial", "samples": int(len(sol.t)),
+            "duration": float(sol.t[-1] - sol.t[0]),
+            "mobility_gruebler": int(info.topo.mobility), "mobility": int(info.n_q - rank),
+            "cut_joints": [sol.model.joints[j].name for j in info.topo.cut],
+            "redundancy": sol.redundancy.describe() if sol.redundancy else None,
+            "peak_effort": efforts, "peak_reaction": peaks,
+            "peak_kinetic_energy": float(np.max(sol.kinetic_energy()))}
+
+
+def text(s: dict) -> str:
+    lines = [f"{s['model']}: {s['samples']} samples over {s['duration']:.6g} s (spatial)",
+             f"mobility {s['mobility']} (Grübler–Kutzbach {s['mobility_gruebler']})"]
+    if s["redundancy"]:
+        r = s["redundancy"]
+        lines.append(f"redundant rows: {', '.join(r['redundant_rows']) or 'none'}; reactions "
+                     f"undetermined by statics: {r['undetermined_dimension']} combination(s) of "
+                     + ", ".join(r["undetermined_components"])
+                     + " (reported: the minimum-norm ones)")
+    for name, v in s["peak_effort"].items():
+        lines.append(f"peak |{name}|: {v:.6g} {'N m' if name.startswith('tau') else 'N'}")
+    for name, v in s["peak_reaction"].items():
+        lines.append(f"peak reaction {name}: |F| {v['force']:.6g} N, |M| {v['moment']:.6g} N m")
+    return "\n".join(lines)
+
+
+def analyze(mech, t):
+    """Solve ``mech`` at ``t``; the printed summary and the writers of ``results.csv`` and
+    ``summary.json`` (for the command line's all-or-nothing writer)."""
+    from ..cli import json_safe, write_csv
+    sol = run(mech, t)
+    s = summary(sol)
+    table = SimpleNamespace(columns=sol.columns())
+    files = {"results.csv": lambda path: write_csv(table, path),
+             "summary.json": lambda path: path.write_text(json.dumps(
+                 {**json_safe(s), "files": ["results.csv", "summary.json"]}, indent=2,
+                 allow_nan=False))}
+    return text(s), files
