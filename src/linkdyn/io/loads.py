@@ -88,12 +88,12 @@ def _load_value(r: _Reader, value: Any, f: str, vector: bool, unit: str = "N m",
     if vector:
         if not isinstance(value, list) or len(value) != r.dim:
             got = _count(len(value)) if isinstance(value, list) else _type_name(value)
-            names = ", ".join("f" + c for c in "xyz"[:r.dim])
+            names = ", ".join(("f" if unit == "N" else "t") + c for c in "xyz"[:r.dim])
             numbers = ", ".join(["-20.0", "35.0", "0.0"][:r.dim])
             formulas = ", ".join(['"10*sin(t)"'] + ['"0"'] * (r.dim - 1))
             r.fail(f, f"expected [{names}] ({r.dim} numbers or formulas of t), got {got}",
-                   f"Write value = [{numbers}] (N, global frame) or value = [{formulas}]")
-        comps = tuple(component(c, f"{f}[{k}]", "N") for k, c in enumerate(value))
+                   f"Write value = [{numbers}] ({unit}, global frame) or value = [{formulas}]")
+        comps = tuple(component(c, f"{f}[{k}]", unit) for k, c in enumerate(value))
         return _TimeFunction(comps, True, tuple((k, *v) for k, v in sorted(used.items())))
     comp = component(value, f, unit)
     return _TimeFunction((comp,), False, tuple((k, *v) for k, v in sorted(used.items())))
@@ -143,7 +143,9 @@ def _loads(r: _Reader, entries: Any, bodies: dict[str, Body],
             if body == GROUND:
                 r.fail(f"{f}.body", f"a {kind} on the ground has no effect",
                        "Apply it to a moving body")
-            value = _load_value(r, entry["value"], f"{f}.value", kind == "force", "N m", joints)
+            # a force's components; a torque's too in space (a number in the plane)
+            value = _load_value(r, entry["value"], f"{f}.value", kind == "force" or r.dim == 3,
+                                "N" if kind == "force" else "N m", joints)
             loads.append(Load(kind, body, point, value, name=name))
             continue
         body2 = r.choice(entry["body2"], f"{f}.body2", bodies, "body", "bodies")
