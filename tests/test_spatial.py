@@ -327,6 +327,10 @@ def test_rates_and_accelerations_are_the_derivatives_of_the_positions(solved, na
         q = sol.quaternion(b.name)
         assert np.allclose(np.linalg.norm(q, axis=1), 1.0) and q[0, 0] >= 0
         assert np.abs(np.diff(q, axis=0)).max() < 0.2            # continuous
+        w0, v = q[:, :1, None], q[:, 1:]                          # R = the quaternion's turn
+        K = np.stack([np.cross(v, np.eye(3)[k]) for k in range(3)], -1)
+        Rq = (np.eye(3) + 2 * w0 * K + 2 * K @ K)
+        assert np.abs(Rq - R).max() < 1e-12
         for p in b.points:
             x, v, acc = (sol.point(b.name, p), sol.point_velocity(b.name, p),
                          sol.point_acceleration(b.name, p))

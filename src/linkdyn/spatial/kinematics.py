@@ -357,14 +357,13 @@ def assemble(model, p: Plan, t: np.ndarray, qi: np.ndarray) -> np.ndarray:
                 ratio = _ratio(guess[p.driven] - here[p.driven], here[p.driven] - last[p.driven])
                 guess[p.dependent] += ratio * (here[p.dependent] - last[p.dependent])
             sol, err = newton(model, p, guess[None])
-            last, here = here, sol[0]
             if err[0] > CLOSED:
-                raise _fail(model, t[k] if previous is not None else t[0], guess[p.driven],
-                            "the loops stop closing" if previous is not None else
-                            "the mechanism cannot be assembled from its design pose",
-                            "Check the geometry and the driver's range: the mechanism cannot "
-                            "reach this driver value (or give a design pose nearer the "
-                            "first sample's)")
+                if previous is None:
+                    raise _fail(model, t[0], guess[p.driven], "the mechanism cannot be "
+                                "assembled from its design pose", "Check the geometry, or give "
+                                "a design pose nearer the first sample's")
+                _first_open(model, p, t, qi, previous, k, here)
+            last, here = here, sol[0]
         if previous is None:
             _check_mobility(model, p, here)
         q[k] = here
@@ -380,6 +379,23 @@ def assemble(model, p: Plan, t: np.ndarray, qi: np.ndarray) -> np.ndarray:
         raise _fail(model, t[k], qi[k], "the loops stop closing",
                     "Check the driver's range: the mechanism cannot reach this driver value")
     return q
+
+
+def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
+    """Raise the AssemblyError of the first sample after node ``previous`` (solved: ``here``)
+    up to node ``k`` where the loops stop closing, following them sample by sample."""
+    for m in range(previous + 1, k + 1):
+        guess = here.copy()
+        guess[p.driven] = qi[m]
+        sol, err = newton(model, p, guess[None])
+        if err[0] > CLOSED:
+            raise _fail(model, t[m], qi[m], "the loops stop closing",
+                        "Check the geometry and the driver's range: the mechanism cannot "
+                        "reach this driver value (a limit position lies before it)")
+        here = sol[0]
+    raise _fail(model, t[k], qi[k], "the loops stop closing",
+                "Check the geometry and the driver's range: the mechanism cannot reach this "
+                "driver value")
 
 
 def _ratio(new: np.ndarray, old: np.ndarray) -> float:
