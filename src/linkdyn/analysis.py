@@ -712,6 +712,9 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     model, t, backend = _arguments(model, t, allow_singular, backend)
     if isinstance(model, Model) and model.space == "spatial":
         return _spatial(model, t, asked)
+    if not isinstance(model, Model) and any(m.space == "spatial" for m in model):
+        raise ModelError("batches of designs are not yet for spatial models", field="model",
+                         fix="Analyze each spatial model alone")
     designs = not isinstance(model, Model)
     models = list(model) if designs else [model]
     if not models:

@@ -111,6 +111,10 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         Sections as :func:`linkdyn.model_from_dict` reads them; numbers in ``model.length_unit``
         and ``model.angle_unit`` (mass kg, inertia kg length^2).
     """
+    if getattr(model, "space", "planar") == "spatial":
+        raise ModelError("writing a model file is not yet for spatial models",
+                         file=model.source, field="mechanism.space",
+                         fix="Edit the spatial model file itself")
     L, A = LENGTH_UNITS[model.length_unit], ANGLE_UNITS[model.angle_unit]
     table_files = table_files or {}
     out: dict = {"mechanism": {"name": model.name}}
