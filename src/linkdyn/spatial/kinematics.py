@@ -22,6 +22,9 @@ from . import joints as sj
 
 RANK = 1e-9          # a singular value below this fraction of the largest counts as zero
 CLOSED = 1e-10       # closure: a residual row below this (times the size for a length) is closed
+SINGULAR = "the mechanism passes a singular position (the dependent joints' Jacobian loses rank)"
+SINGULAR_FIX = ("Limit the driver's range, or change the geometry so the loops do not reach a "
+                "dead-centre or locked position")
 ANGLE_STEP = 0.3     # rad, continuation step of an angular driver
 LENGTH_STEP = 0.1    # of the mechanism's size, continuation step of a sliding driver
 
@@ -368,9 +371,15 @@ def assemble(model, p: Plan, t: np.ndarray, qi: np.ndarray) -> np.ndarray:
             _check_mobility(model, p, here)
         q[k] = here
         start, previous = qi[k], k
-    # every sample from its node's solution (the last node at or before it)
-    node_of = np.searchsorted(nodes, np.arange(T), side="right") - 1
-    guess = q[np.asarray(nodes)[node_of]]
+    # every sample from its nodes' solutions: between the node at or before it and the next,
+    # in proportion to the drivers' travel
+    nodes = np.asarray(nodes)
+    a = nodes[np.searchsorted(nodes, np.arange(T), side="right") - 1]
+    b = nodes[np.minimum(np.searchsorted(nodes, np.arange(T), side="left"), len(nodes) - 1)]
+    span = qi[b] - qi[a]
+    u = np.sum((qi - qi[a]) * span, 1) / np.where(np.sum(span * span, 1) > 0,
+                                                  np.sum(span * span, 1), 1.0)
+    guess = q[a] + u[:, None] * (q[b] - q[a])
     guess[:, p.driven] = qi
     q, err = newton(model, p, guess)
     bad = np.flatnonzero(err > CLOSED)
@@ -389,6 +398,9 @@ def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
         guess[p.driven] = qi[m]
         sol, err = newton(model, p, guess[None])
         if err[0] > CLOSED:
+            jd = closure(model, p, poses(p, here[None]))[2][:, :, p.dependent]
+            if rank_of(jd)[0] < len(p.dependent):     # stuck at a singular position
+                raise _fail(model, t[m - 1], qi[m - 1], SINGULAR, SINGULAR_FIX)
             raise _fail(model, t[m], qi[m], "the loops stop closing",
                         "Check the geometry and the driver's range: the mechanism cannot "
                         "reach this driver value (a limit position lies before it)")
@@ -452,10 +464,7 @@ def solve(model, p: Plan, t: np.ndarray) -> Motion:
     singular = rank_of(J[:, :, dep]) < len(dep)
     if np.any(singular):
         k = int(np.argmax(singular))
-        raise _fail(model, t[k], qi[k], "the mechanism passes a singular position (the "
-                    "dependent joints' Jacobian loses rank)",
-                    "Limit the driver's range, or change the geometry so the loops do not "
-                    "reach a dead-centre or locked position")
+        raise _fail(model, t[k], qi[k], SINGULAR, SINGULAR_FIX)
     qd = np.zeros_like(q)
     qd[:, p.driven] = qdi
     qd[:, dep], _, _ = sa.lstsq(J[:, :, dep], -np.einsum("trk,tk->tr", J, qd), 1e-12)
