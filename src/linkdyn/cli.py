@@ -13,6 +13,7 @@ import threading
 import time
 from importlib import resources
 from pathlib import Path
+from types import SimpleNamespace
 
 import click
 import numpy as np
@@ -647,7 +648,8 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         if _backend(ctx, backend) == "compiled":
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
-        text, files = spatial_cli.analyze(mech, t)
+        text, summ, table = spatial_cli.analyze(mech, t)
+        files = _results(SimpleNamespace(columns=table), summ, "csv")
         written = _write_results(outdir, files)
         click.echo(text)
         click.echo(f"wrote {', '.join(map(str, written))}")

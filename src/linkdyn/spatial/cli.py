@@ -1,11 +1,8 @@
-"""``linkdyn check`` and ``linkdyn analyze`` of a spatial model: the printed description, and
-the files ``results.csv`` and ``summary.json`` (mobility, redundancy, peak efforts and
-reactions)."""
+"""What ``linkdyn check`` and ``linkdyn analyze`` print and write for a spatial model: the
+description, the summary (mobility, redundancy, peak efforts and reactions) and the table
+(the command line, :mod:`linkdyn.cli`, writes ``results.csv`` and ``summary.json``)."""
 
 from __future__ import annotations
-
-import json
-from types import SimpleNamespace
 
 import click
 import numpy as np
@@ -89,14 +86,8 @@ def text(s: dict) -> str:
 
 
 def analyze(mech, t):
-    """Solve ``mech`` at ``t``; the printed summary and the writers of ``results.csv`` and
-    ``summary.json`` (for the command line's all-or-nothing writer)."""
-    from ..cli import json_safe, write_csv
+    """Solve ``mech`` at ``t``: the printed summary, the summary (``summary.json``'s content)
+    and the results table (column -> (T,) array)."""
     sol = run(mech, t)
     s = summary(sol)
-    table = SimpleNamespace(columns=sol.columns())
-    files = {"results.csv": lambda path: write_csv(table, path),
-             "summary.json": lambda path: path.write_text(json.dumps(
-                 {**json_safe(s), "files": ["results.csv", "summary.json"]}, indent=2,
-                 allow_nan=False))}
-    return text(s), files
+    return text(s), s, sol.columns()
