@@ -263,22 +263,26 @@ def scaled(p: Plan, g: np.ndarray) -> np.ndarray:
 
 def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, np.ndarray]:
     """Close the loops from the guess ``q`` (T, n_q), moving the dependent coordinates by
-    Gauss-Newton steps (least squares, so redundant rows are fine). Returns ``(q, error)``,
-    error (T,) the largest scaled residual."""
+    Gauss-Newton steps (least squares, so redundant rows are fine); a sample stops when it is
+    closed exactly, or closed and its error no longer halves (rounding). Returns ``(q,
+    error)``, error (T,) the largest scaled residual."""
     q = q.copy()
     dep = p.dependent
-    err = np.zeros(len(q))
+    err = np.full(len(q), np.inf)
+    active = np.arange(len(q))
     for _ in range(iterations):
-        g, _, J = closure(model, p, poses(p, q))
-        err = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
-        if np.all(err < 1e-14):
+        g, _, J = closure(model, p, poses(p, q[active]))
+        before, err[active] = err[active], np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
+        at_rounding = (err[active] == 0) | ((err[active] < CLOSED)
+                                           & (err[active] > 0.5 * before))
+        active, g, J = active[~at_rounding], g[~at_rounding], J[~at_rounding]
+        if not len(active):
             break
         step, _, _ = sa.lstsq(J[:, :, dep], g, 1e-12)
-        q[:, dep] -= step
-        if np.max(np.abs(step), initial=0.0) < 1e-15 * (1 + np.max(np.abs(q), initial=0.0)):
-            g, _, _ = closure(model, p, poses(p, q))
-            err = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
-            break
+        q[np.ix_(active, dep)] -= step
+    else:
+        g, _, _ = closure(model, p, poses(p, q[active]))
+        err[active] = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
     return q, err
 
 
