@@ -263,10 +263,15 @@ def rscr() -> dict:
 
 @pytest.fixture(scope="module")
 def solved():
-    """The two spatial models solved on 81 samples over 0.8 s."""
+    """The two spatial models, each also cut at its two-freedom joint, solved on 81 samples
+    over 0.8 s."""
     t = np.linspace(0.0, 0.8, 81)
     out = {}
-    for name, data in (("slider_crank", slider_crank()), ("rscr", rscr())):
+    for name, data, cut in (("slider_crank", slider_crank(), None), ("rscr", rscr(), None),
+                            ("slider_crank_cut_universal", slider_crank(), ["J3"]),
+                            ("rscr_cut_cylindrical", rscr(), ["J3"])):
+        if cut:       # the spherical joint a tree joint (three Cardan angles), the other cut
+            data["topology"] = {"cut": cut}
         model = model_from_dict(data)
         out[name] = (model, linkdyn.analyze(model, t))
     return out
@@ -313,7 +318,8 @@ def test_planar_example_as_spatial_gives_the_planar_results(name):
 
 
 # ---------------------------------------------------------------- differences, energy
-@pytest.mark.parametrize("name", ["slider_crank", "rscr"])
+@pytest.mark.parametrize("name", ["slider_crank", "rscr", "slider_crank_cut_universal",
+                                  "rscr_cut_cylindrical"])
 def test_rates_and_accelerations_are_the_derivatives_of_the_positions(solved, name):
     model, sol = solved[name]
     t = sol.t
@@ -345,7 +351,8 @@ def test_rates_and_accelerations_are_the_derivatives_of_the_positions(solved, na
             assert np.abs(central(rate, t) - acc[1:-1]).max() <= 5e-3 * np.abs(acc).max(), k
 
 
-@pytest.mark.parametrize("name", ["slider_crank", "rscr"])
+@pytest.mark.parametrize("name", ["slider_crank", "rscr", "slider_crank_cut_universal",
+                                  "rscr_cut_cylindrical"])
 def test_power_balance(solved, name):
     """sum effort qd = dKE/dt + dPE/dt - power of the other loads, the energies from the
     outputs (mass centre velocities, angular velocities, rotations) recomputed here."""
@@ -384,7 +391,8 @@ def test_power_balance(solved, name):
 
 
 # ---------------------------------------------------------------- reactions
-@pytest.mark.parametrize("name", ["slider_crank", "rscr"])
+@pytest.mark.parametrize("name", ["slider_crank", "rscr", "slider_crank_cut_universal",
+                                  "rscr_cut_cylindrical"])
 def test_reactions_balance_every_body_in_the_constraint_spaces(solved, name):
     model, sol = solved[name]
     residuals, (fs, ms) = body_balances(model, sol)
@@ -578,3 +586,20 @@ def test_a_dead_centre_is_a_singular_position():
     with pytest.raises(AssemblyError, match="singular position") as err:
         linkdyn.analyze(model_from_dict(data), np.linspace(0.0, 0.2, 5))
     assert "at t = 0 s" in str(err.value) and "q_J4 = 0.4" in str(err.value)
+
+
+@pytest.mark.parametrize("name", ["slider_crank", "rscr"])
+def test_the_cut_joint_does_not_change_the_results(solved, name):
+    """Cut at the spherical joint or at the two-freedom joint (the spherical one then a tree
+    joint of three Cardan angles): other trees, other closure rows, the same mechanism."""
+    a = solved[name][1].columns()
+    b = solved[{"slider_crank": "slider_crank_cut_universal",
+                "rscr": "rscr_cut_cylindrical"}[name]][1].columns()
+    assert set(a) == set(b)
+    family = {}
+    for k, v in a.items():      # a column's kind: its name up to "_" (Mz, vx, quat, ...)
+        family[k.split("_")[0]] = max(family.get(k.split("_")[0], 0.0), np.abs(v).max())
+    for k in a:
+        peak, kind = np.abs(a[k]).max(), family[k.split("_")[0]]
+        scale = max(peak if peak > 1e-6 * kind else kind, 1e-300)     # a zero column: its kind's
+        assert np.abs(a[k] - b[k]).max() <= 1e-9 * scale, k
