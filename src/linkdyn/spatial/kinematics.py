@@ -16,7 +16,6 @@ import numpy as np
 
 from .. import topology as topology_mod
 from ..errors import AssemblyError, ModelError
-from ..model import GROUND
 from . import algebra as sa
 from . import joints as sj
 
@@ -113,8 +112,8 @@ def plan(model) -> Plan:
 class Tree:
     """Poses of every body at the samples: rotations ``R`` (T, n, 3, 3) (body to global),
     frame origins ``o`` (T, n, 3), each tree joint's point ``c`` (T, n, 3) (B's point q,
-    global) and signed screws ``S`` (list per body of (T, f, 6): ``V_i = V_parent + S_i qd_i``),
-    and the unsigned ones with the side of the child (``sign``)."""
+    global) and its screws signed for the child, ``S`` (list per body of (T, f, 6):
+    ``V_i = V_parent + S_i qd_i``; times ``Topology.sign[i]`` the joint's own, A to B)."""
 
     R: np.ndarray
     o: np.ndarray
@@ -495,6 +494,3 @@ def _relative(model, p: Plan, phi: np.ndarray, X: np.ndarray) -> np.ndarray:
         r += k
     return np.concatenate(out, 1) if out else np.zeros((X.shape[0], 0))
 
-
-def ground_index(p: Plan) -> int:
-    return p.topo.bodies.index(GROUND)
