@@ -52,6 +52,11 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
             r.fail("loads", "friction is not yet for spatial models",
                    "Remove the friction load, or model it as a joint_torque formula of qd_<joint>")
     loads = _loads(r, data.get("loads", []), bodies, joints)
+    analysis = data.get("analysis", {})
+    for key in ("path_point", "path_range"):
+        if isinstance(analysis, dict) and key in analysis:
+            r.fail(f"analysis.{key}", f"{key} is not yet for spatial models",
+                   f"Remove {key} (the summary of a spatial run has no path straightness)")
     cut = _topology(r, data.get("topology", {}), joints, drivers)
     duration, cycles, samples, path_point, path_range = _analysis(
         r, data.get("analysis", {}), drivers, bodies, joints)
