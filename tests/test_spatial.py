@@ -49,6 +49,8 @@ def spatial_of_planar(name: str) -> tuple[dict, object]:
     start = linkdyn.analyze(planar, np.zeros(1), backend="numpy").columns
     out = copy.deepcopy(data)
     out.pop("assembly", None)
+    for key in ("path_point", "path_range"):       # no path straightness in space (yet)
+        out.get("analysis", {}).pop(key, None)
     out["mechanism"]["space"] = "spatial"
     out["mechanism"]["gravity"] = list(data["mechanism"].get("gravity", [0, 0])) + [0.0]
     L = {"mm": 1e-3, "m": 1.0, "cm": 1e-2}[data.get("units", {}).get("length", "m")]
