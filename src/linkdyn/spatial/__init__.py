@@ -43,17 +43,23 @@ def analyze(model, t) -> SpatialSolution:
 
 def redundant_rows(model, p: sk.Plan, J: np.ndarray) -> tuple:
     """The closure rows (``<joint>.<row label>``) that are combinations of the rows before
-    them in the Jacobian ``J`` (rows, n_q) at one sample."""
+    them in the Jacobian ``J`` (rows, n_q) at one sample (rank as :func:`kinematics.rank_of`
+    counts it)."""
     labels = [f"{model.joints[j].name}.{lab}" for j in p.topo.cut for lab in p.kinds[j].row_labels]
-    kept, out = np.zeros((0, J.shape[1])), []
-    for label, row in zip(labels, J):
-        trial = np.vstack([kept, row])
-        if np.linalg.matrix_rank(trial, tol=sk.RANK * max(np.abs(J).max(), 1e-300)
-                                 * max(J.shape)) > len(kept):
+    kept, out = [], []
+    for r, label in enumerate(labels):
+        trial = kept + [r]
+        if int(sk.rank_of(_rows(p, trial), J[None, trial])[0]) > len(kept):
             kept = trial
         else:
             out.append(label)
     return tuple(out)
+
+
+def _rows(p: sk.Plan, rows: list) -> sk.Plan:
+    """``p`` seen through some of its closure rows (their length flags), for ranks."""
+    from dataclasses import replace
+    return replace(p, length_row=p.length_row[rows])
 
 
 def check(model) -> dict:
@@ -64,6 +70,6 @@ def check(model) -> dict:
     qi, _, _ = sk.driver_motion(model, np.zeros(1))
     q = sk.assemble(model, p, np.zeros(1), qi)
     _, _, J = sk.closure(model, p, sk.poses(p, q))
-    rank = int(sk.rank_of(J)[0])
+    rank = int(sk.rank_of(p, J)[0])
     return {"plan": p, "gruebler": p.topo.mobility, "mobility": p.n_q - rank,
             "rows": J.shape[1], "rank": rank, "redundant": redundant_rows(model, p, J[0])}

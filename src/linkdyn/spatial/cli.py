@@ -9,6 +9,7 @@ import numpy as np
 
 from ..model import GROUND
 from . import analyze as run, check as inspect
+from . import kinematics as sk
 
 
 def check(mech, path: str) -> None:
@@ -52,7 +53,7 @@ def summary(sol) -> dict:
     """``summary.json`` of a spatial run: mobility, redundancy, peak efforts and reactions."""
     info = sol.plan
     cols = sol.columns()
-    rank = int(np.linalg.matrix_rank(sol.motion.J[0])) if sol.motion.J.shape[1] else 0
+    rank = int(sk.rank_of(info, sol.motion.J[:1])[0])
     peaks = {}
     for j in sol.model.joints:
         r = sol.reaction(j.name)

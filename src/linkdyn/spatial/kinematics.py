@@ -55,6 +55,8 @@ class Plan:
         The mechanism's size (m), for tolerances.
     length_row : ndarray of bool (rows,)
         Closure rows that are lengths (else angles).
+    length_coordinate : ndarray of bool (n_q,)
+        Tree coordinates that are lengths (else angles).
     """
 
     topo: object
@@ -70,6 +72,7 @@ class Plan:
     inertia: np.ndarray
     size: float
     length_row: np.ndarray
+    length_coordinate: np.ndarray
 
 
 def plan(model) -> Plan:
@@ -87,11 +90,12 @@ def plan(model) -> Plan:
         # B's point from A's at the design pose, A's frame
         d0.append(a.rotation.T @ (b.origin + b.rotation @ b.points[j.point_b]
                                   - a.origin - a.rotation @ a.points[j.point_a]))
-    cols, q0, start = [slice(0, 0)], [], 0
+    cols, q0, start, lengths = [slice(0, 0)], [], 0, []
     for i in range(1, topo.n):
         j = topo.tree_joint[i]
         f = kinds[j].freedoms
         cols.append(slice(start, start + f))
+        lengths += [not angular for _, angular in kinds[j].coordinates_named]
         q0.append(kinds[j].design_coordinates(geometry[j], d0[j]))
         start += f
     driven = np.array([cols[i].start for i in topo.driven], dtype=int)
@@ -104,7 +108,8 @@ def plan(model) -> Plan:
     return Plan(topo, kinds, tuple(geometry), tuple(cols), start, driven, dependent,
                 np.concatenate(q0) if q0 else np.zeros(0),
                 np.array([b.mass for b in ordered]), np.array([b.com for b in ordered]),
-                np.array([b.inertia for b in ordered]), size if size > 0 else 1.0, length_row)
+                np.array([b.inertia for b in ordered]), size if size > 0 else 1.0, length_row,
+                np.array(lengths, dtype=bool))
 
 
 # ---------------------------------------------------------------- the tree
@@ -285,12 +290,18 @@ def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndar
     return q, err
 
 
-def rank_of(J: np.ndarray) -> np.ndarray:
-    """The numerical rank (T,) of each Jacobian (T, r, k)."""
+def rank_of(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
+    """The numerical rank (T,) of each closure Jacobian (T, rows, k) (its columns ``cols`` of
+    the tree coordinates, default all): of ``J`` made dimensionless (length rows over the
+    mechanism's size, length columns times it), counting singular values above ``RANK``
+    times the largest or 1, whichever is larger (a Jacobian of round-off alone, a wholly
+    redundant loop, has rank 0)."""
     if J.shape[1] == 0 or J.shape[2] == 0:
         return np.zeros(len(J), dtype=int)
-    s = np.linalg.svd(J, compute_uv=False)
-    return np.sum(s > RANK * np.maximum(s[:, :1], 1e-300), axis=1)
+    lengths = p.length_coordinate if cols is None else p.length_coordinate[cols]
+    Jn = (J / np.where(p.length_row, p.size, 1.0)[:, None]) * np.where(lengths, p.size, 1.0)
+    s = np.linalg.svd(Jn, compute_uv=False)
+    return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
 
 
 # ---------------------------------------------------------------- following the drivers
@@ -402,7 +413,7 @@ def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
         sol, err = newton(model, p, guess[None])
         if err[0] > CLOSED:
             jd = closure(model, p, poses(p, here[None]))[2][:, :, p.dependent]
-            if rank_of(jd)[0] < len(p.dependent):     # stuck at a singular position
+            if rank_of(p, jd, p.dependent)[0] < len(p.dependent):     # stuck at a singular position
                 raise _fail(model, t[m - 1], qi[m - 1], SINGULAR, SINGULAR_FIX)
             raise _fail(model, t[m], qi[m], "the loops stop closing",
                         "Check the geometry and the driver's range: the mechanism cannot "
@@ -423,7 +434,7 @@ def _check_mobility(model, p: Plan, q: np.ndarray) -> None:
     """At the assembly: the mobility from the closure Jacobian's rank, ``n_q - rank J``, must
     equal the number of drivers (exit 2 otherwise)."""
     _, _, J = closure(model, p, poses(p, q[None]))
-    mob = p.n_q - int(rank_of(J)[0])
+    mob = p.n_q - int(rank_of(p, J)[0])
     if mob != len(model.drivers):
         raise ModelError(
             f"the mechanism has mobility {mob} (from the closure Jacobian's rank at the "
@@ -464,7 +475,7 @@ def solve(model, p: Plan, t: np.ndarray) -> Motion:
     tree = poses(p, q)
     g, phi, J = closure(model, p, tree)
     dep = p.dependent
-    singular = rank_of(J[:, :, dep]) < len(dep)
+    singular = rank_of(p, J[:, :, dep], dep) < len(dep)
     if np.any(singular):
         k = int(np.argmax(singular))
         raise _fail(model, t[k], qi[k], SINGULAR, SINGULAR_FIX)
