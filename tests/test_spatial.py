@@ -642,3 +642,28 @@ def test_a_wholly_redundant_loop():
     stacked = np.stack([sol.reaction(j.name) for j in model.joints], 1).reshape(9, -1)
     basis = sol.redundancy.basis
     assert np.abs(np.einsum("tik,ti->tk", basis, stacked)).max() <= 1e-12 * np.abs(stacked).max()
+
+
+def test_a_driven_joint_written_the_other_way_round():
+    """The skew pendulum's joint written [arm, ground] (the tree then places its child from the
+    joint's second body) with the opposite motion: the same motion of the arm, the effort and
+    the reaction (now by the arm on the ground) reversed."""
+    e = (np.array([1.0, 2.0, 3.0]) / math.sqrt(14.0)).tolist()
+
+    def model(reverse):
+        return model_from_dict({
+            "mechanism": {"space": "spatial", "gravity": [0.0, 0.0, -9.81]},
+            "bodies": [{"name": "ground", "points": {"P": [0.1, 0.2, 0.3]}},
+                       {"name": "arm", "points": {"P": [0.1, 0.2, 0.3], "G": [0.5, -0.1, 0.2]},
+                        "mass": 2.0, "com": "G",
+                        "inertia": [[0.3, 0.02, -0.01], [0.02, 0.2, 0.03], [-0.01, 0.03, 0.25]]}],
+            "joints": [{"name": "J", "type": "revolute", "axis": e,
+                        "connect": ["arm.P", "ground.P"] if reverse else ["ground.P", "arm.P"]}],
+            "drivers": [{"joint": "J", "motion": {"kind": "expression", "q": (
+                "-(0.7*sin(2*t) + 0.4*t**2)" if reverse else "0.7*sin(2*t) + 0.4*t**2")}}]})
+
+    t = np.linspace(0.0, 2.0, 9)
+    a, b = linkdyn.analyze(model(False), t), linkdyn.analyze(model(True), t)
+    assert np.abs(a.point("arm", "G") - b.point("arm", "G")).max() < 1e-15
+    assert np.abs(a.effort("J") + b.effort("J")).max() <= 1e-12 * np.abs(a.effort("J")).max()
+    assert np.abs(a.reaction("J") + b.reaction("J")).max() <= 1e-12 * np.abs(a.reaction("J")).max()
