@@ -551,6 +551,7 @@ def test_cli_check_and_analyze_on_a_spatial_model(tmp_path):
     assert res.exit_code == 0, res.output
     assert "Grübler–Kutzbach" in res.output and ": -2" in res.output
     assert "rank 2 of 5 rows): 1" in res.output and "redundant constraint rows (3)" in res.output
+    assert "assembles at t = 0 and over the run (5 samples" in res.output
     res = run(main, ["analyze", str(path), "-o", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())

@@ -46,7 +46,23 @@ def check(mech, path: str) -> None:
                    + ", ".join(info["redundant"]))
     for d in mech.drivers:
         click.echo(f"  {d.joint}: {d.description}")
+    _over_run(mech, info["plan"])
     click.echo("model OK")
+
+
+def _over_run(mech, p) -> None:
+    """The kinematics over the model's run (``[analysis]`` or a driver's period): exit 3
+    naming the time and driver values where it stops closing or passes a singular position."""
+    from ..errors import ModelError
+    from ..sampling import times
+    try:
+        t = times(mech, None, None, None)
+    except ModelError as err:                  # no run defined: the start only
+        click.echo(f"assembles at t = 0 (no run to check over: {err.message})")
+        return
+    sk.solve(mech, p, t)
+    click.echo(f"assembles at t = 0 and over the run ({len(t)} samples, t = 0 .. "
+               f"{t[-1]:.4g} s), clear of singular positions")
 
 
 def summary(sol) -> dict:
