@@ -154,7 +154,9 @@ class SpatialKind:
     cut_rank : int
         Loops are cut at the joint of highest rank (spherical, then universal, ...).
     row_labels : tuple[str, ...]
-        A name for each closure row (``check`` names redundant rows by them).
+        A name for each closure row (``check`` names redundant rows by them): a force row's
+        starts with ``F`` (its residual is a length, scaled by the mechanism's size), a
+        couple row's with ``M`` (an angle).
     couple_free : bool
         Its reaction has no couple (spherical).
     """
