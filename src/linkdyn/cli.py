@@ -70,15 +70,23 @@ def simulation_example_names() -> list[str]:
     return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
 
 
+def spatial_example_names() -> list[str]:
+    """Names of the bundled spatial models (``examples/spatial/``)."""
+    files = resources.files("linkdyn").joinpath(EXAMPLES, "spatial").iterdir()
+    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+
+
 def example_text(name: str) -> str:
-    """TOML text of a bundled example (``analyze`` or ``simulate`` models)."""
+    """TOML text of a bundled example (``analyze``, ``simulate`` or spatial models)."""
     names = example_names()
-    if name not in names and name in simulation_example_names():
-        return resources.files("linkdyn").joinpath(EXAMPLES, "simulate",
-                                                   name + ".toml").read_text("utf-8")
+    for folder, others in (("simulate", simulation_example_names),
+                           ("spatial", spatial_example_names)):
+        if name not in names and name in others():
+            return resources.files("linkdyn").joinpath(EXAMPLES, folder,
+                                                       name + ".toml").read_text("utf-8")
     if name not in names:
         import difflib
-        names = names + simulation_example_names()
+        names = names + simulation_example_names() + spatial_example_names()
         close = difflib.get_close_matches(name, names, n=1)
         raise ModelError(f"no bundled example named '{name}'", field="NAME",
                          fix=(f"Did you mean '{close[0]}'? " if close else "")
@@ -99,6 +107,9 @@ def example(name, list_):
         for n in simulation_example_names():
             desc = tomllib.loads(example_text(n)).get("mechanism", {}).get("name", "")
             click.echo(f"{n:24s} {desc} (linkdyn simulate)")
+        for n in spatial_example_names():
+            desc = tomllib.loads(example_text(n)).get("mechanism", {}).get("name", "")
+            click.echo(f"{n:24s} {desc} (spatial)")
         return
     click.echo(example_text(name), nl=False)
 
