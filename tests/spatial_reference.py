@@ -38,8 +38,9 @@ ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
 
 def cross(a, b):
     """a x b of two 3-vectors (numpy's cross is slow on single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def skew(v):
@@ -445,8 +446,9 @@ def step(s, dx):
     return State(s.r + d[:, :3], np.array([rotvec_matrix(d[i, 3:]) @ s.R[i] for i in range(n)]))
 
 
-def newton(model, frames, s, targets, unwrap, tol=1e-13, iters=60):
-    """Close every constraint from pose s by minimum-norm Newton steps."""
+def newton(model, frames, s, targets, unwrap, tol=1e-12, iters=60):
+    """Close every constraint from pose s by minimum-norm Newton steps (converged when a step is
+    below tol, m or rad: the error left is of the order of its square)."""
     for _ in range(iters):
         phi, J, *_ = constraint_rows(model, frames, s, targets, unwrap)
         dx = lstsq(J, -phi)
@@ -467,8 +469,9 @@ def design_state(model):
 
 
 def solve_positions(model, t):
-    """Poses at every sample: Newton from the design pose (its driver values ramped to those at
-    t[0]), then continuation sample to sample. Returns the list of States and the frames."""
+    """Poses, rates and accelerations at every sample: Newton from the design pose (its driver
+    values ramped to those at t[0]), then continuation sample to sample, each guess predicted by
+    the previous sample's rates. Returns the list of States, the joint frames, the drivers' values."""
     frames = joint_frames(model)
     s = design_state(model)
     dv = driver_values(model, t)
@@ -481,14 +484,19 @@ def solve_positions(model, t):
             start.append((Q - P) @ (s.pose(j.a)[1] @ j.axis))
         else:
             start.append(0.0)
-    unwrap = list(start)
-    for lam in np.linspace(0.0, 1.0, 11)[1:]:
+    gap = max([abs(v[0][0] - a) for a, v in zip(start, dv)], default=0.0)
+    for lam in np.linspace(0.0, 1.0, 11)[1:] if gap > 1e-9 else [1.0]:
         tg = [(a + lam * (v[0][0] - a), 0.0, 0.0) for a, v in zip(start, dv)]
         s = newton(model, frames, s, tg, [x[0] for x in tg])
     states = []
     for k in range(len(t)):
         tg = [(v[0][k], v[1][k], v[2][k]) for v in dv]
-        s = newton(model, frames, s, tg, [x[0] for x in tg])
+        if k:                                   # predictor: x + xd h + xdd h^2 / 2
+            h = t[k] - t[k - 1]
+            prev = states[-1]
+            s = step(prev, (np.hstack([prev.v, prev.w]) * h
+                            + np.hstack([prev.a, prev.al]) * h * h / 2).ravel())
+        s = solve_rates(model, frames, newton(model, frames, s, tg, [x[0] for x in tg]), tg)
         states.append(s)
     return states, frames, dv
 
@@ -683,7 +691,6 @@ def analyze(model, t):
     prev, quat_prev = {}, [None] * len(model.bodies)
     for k, s in enumerate(states):
         tg = [(v[0][k], v[1][k], v[2][k]) for v in dv]
-        s = solve_rates(model, frames, s, tg)
         prev = joint_coordinates(model, frames, s, prev)
         for name, v in prev.items():
             put(name, v)
@@ -714,6 +721,13 @@ def analyze(model, t):
                 if c[0] == "M" and j.kind == "spherical":
                     continue
                 put(f"{c}_{j.name}", v)
+        # conditioning: the constraint Jacobian's (driver rows included) rank and its smallest
+        # kept singular value over its largest
+        _, J, *_ = constraint_rows(model, frames, s, tg, [x[0] for x in tg])
+        sv = np.linalg.svd(J, compute_uv=False)
+        kept = sv[sv > 1e-9 * sv[0]]
+        put("jacobian_rank", len(kept))
+        put("jacobian_conditioning", kept[-1] / sv[0])
         put("kinetic_energy", ke)
         put("load_power", power)
         put("ne_residual", resid)
