@@ -71,17 +71,20 @@ def simulation_example_names() -> list[str]:
 
 
 def spatial_example_names() -> list[str]:
-    """Names of the bundled spatial models (``examples/spatial/``)."""
-    files = resources.files("linkdyn").joinpath(EXAMPLES, "spatial").iterdir()
-    return sorted(f.name[:-5] for f in files if f.name.endswith(".toml"))
+    """Names of the bundled spatial models (``examples/spatial/``; none if the folder is
+    absent)."""
+    folder = resources.files("linkdyn").joinpath(EXAMPLES, "spatial")
+    if not folder.is_dir():
+        return []
+    return sorted(f.name[:-5] for f in folder.iterdir() if f.name.endswith(".toml"))
 
 
 def example_text(name: str) -> str:
     """TOML text of a bundled example (``analyze``, ``simulate`` or spatial models)."""
     names = example_names()
-    for folder, others in (("simulate", simulation_example_names),
-                           ("spatial", spatial_example_names)):
-        if name not in names and name in others():
+    for folder, listed in (("simulate", simulation_example_names()),
+                           ("spatial", spatial_example_names())):
+        if name not in names and name in listed:
             return resources.files("linkdyn").joinpath(EXAMPLES, folder,
                                                        name + ".toml").read_text("utf-8")
     if name not in names:
