@@ -17,9 +17,9 @@ reaction vector is the minimum-Euclidean-norm solution, efforts not in the norm 
 projected out first). This is the definition of the spatial contract.
 
 Supported: joints revolute, prismatic, cylindrical, universal, spherical; drivers constant_speed
-(speed or rpm) and expression (``+ - * / **``, ``sin cos tan exp sqrt``, ``pi``, ``t``; parsed
-with ``ast`` and evaluated with second-order jets, never executed); loads force and torque (constant
-3-vectors), spring; gravity.
+(speed or rpm) and expression (``+ - * /``, ``**`` with a constant exponent, ``sin cos tan exp
+sqrt``, ``pi``, ``e``, ``t``; parsed with ``ast`` and evaluated with second-order jets, never
+executed); loads force and torque (constant 3-vectors), spring; gravity.
 """
 from __future__ import annotations
 
@@ -118,12 +118,11 @@ class Jet:
         return Jet(f(self.v), f1(self.v) * self.d, f2(self.v) * self.d**2 + f1(self.v) * self.dd)
 
     def __pow__(self, o):
-        if np.ndim(o.v) == 0 and o.d == 0 and o.dd == 0:        # u**n, n constant
-            n = float(o.v)
-            return self.apply(lambda x: x**n, lambda x: n * x**(n - 1),
-                              lambda x: n * (n - 1) * x**(n - 2))
-        return (o * self.apply(np.log, lambda x: 1 / x, lambda x: -1 / x**2)).apply(
-            np.exp, np.exp, np.exp)
+        if not (np.ndim(o.v) == 0 and np.ndim(o.d) == 0 and o.d == 0 and o.dd == 0):
+            raise ValueError("the reference evaluates powers with constant exponents only")
+        n = float(o.v)                                            # u**n, n constant
+        return self.apply(lambda x: x**n, lambda x: n * x**(n - 1),
+                          lambda x: n * (n - 1) * x**(n - 2))
 
 
 FUNCS = {
@@ -516,7 +515,7 @@ def solve_rates(model, frames, s, tg):
 
 # ------------------------------------------------------------------------- dynamics
 
-def reaction_basis(model, frames, s, j, f):
+def reaction_basis(s, j):
     """Orthonormal basis (6, k) of joint j's constraint space, wrench [F, M] global."""
     E = s.pose(j.a)[1] @ j.axis if j.axis is not None else None
     I3, Z = np.eye(3), np.zeros((3, 3))
@@ -554,10 +553,13 @@ def wrench_columns(s, model, j, W):
 
 def applied_and_inertial(model, s):
     """Per body [m a_c - m g - F_ext; I al + w x I w - M_ext about c] (6n,): what the joints
-    must supply. Also the kinetic energy and the loads' power (W)."""
+    must supply. Also the kinetic energy, the potential energy (gravity -m g . c, springs
+    k (L - L0)^2 / 2; J) and the loads' and gravity's power (W)."""
     n = len(model.bodies)
     b = np.zeros(6 * n)
     ke = 0.0
+    pe = sum(-body.mass * model.gravity @ s.point(i, body.com)[0]
+             for i, body in enumerate(model.bodies))
     for i, body in enumerate(model.bodies):
         c, cd, cdd = s.point(i, body.com)
         Ig = s.R[i] @ body.inertia @ s.R[i].T
@@ -568,24 +570,18 @@ def applied_and_inertial(model, s):
     power = sum(body.mass * model.gravity @ s.point(i, body.com)[1]
                 for i, body in enumerate(model.bodies))
     for ld in model.loads:
+        if ld["kind"] == "spring":
+            L = np.linalg.norm(s.point(ld["b2"], ld["s2"])[0] - s.point(ld["b"], ld["s"])[0])
+            pe += 0.5 * ld["k"] * (L - ld["l0"]) ** 2
         for i, F, P, M in load_wrenches(ld, s):
             if i < 0:
                 continue
             c = s.r[i] + s.R[i] @ model.bodies[i].com
             b[6 * i:6 * i + 3] -= F
             b[6 * i + 3:6 * i + 6] -= M + cross(P - c, F)
-            power += F @ s.point_velocity_global(i, P) + M @ s.w[i]
-    return b, ke, power
-
-
-def _point_velocity_global(self, i, P):
-    """Velocity of body i's material point now at global P."""
-    r, _ = self.pose(i)
-    v, w, _, _ = self.rates(i)
-    return v + cross(w, P - r)
-
-
-State.point_velocity_global = _point_velocity_global
+            v = s.v[i] + cross(s.w[i], P - s.r[i])     # velocity of the body's point at P
+            power += F @ v + M @ s.w[i]
+    return b, ke, pe, power
 
 
 def load_wrenches(ld, s):
@@ -617,10 +613,10 @@ def effort_columns(model, s):
 
 def solve_dynamics(model, frames, s):
     """Efforts (m,) and reactions (n_joints, 6) [F, M about q] by the minimum-norm solve."""
-    bases = [reaction_basis(model, frames, s, j, f) for j, f in zip(model.joints, frames)]
+    bases = [reaction_basis(s, j) for j in model.joints]
     A_lam = np.hstack([wrench_columns(s, model, j, B) for j, B in zip(model.joints, bases)])
     A_tau = effort_columns(model, s)
-    b, ke, power = applied_and_inertial(model, s)
+    b, ke, pe, power = applied_and_inertial(model, s)
     # min |lam| s.t. A_lam lam + A_tau tau = b: project the efforts' range out, then tau
     P = np.eye(len(b)) - A_tau @ np.linalg.pinv(A_tau)
     lam = lstsq(P @ A_lam, P @ b, rcond=1e-9)
@@ -630,7 +626,7 @@ def solve_dynamics(model, frames, s):
     for B in bases:
         out.append(B @ lam[k:k + B.shape[1]])
         k += B.shape[1]
-    return tau, np.array(out), ke, power, resid
+    return tau, np.array(out), ke, pe, power, resid
 
 
 # ------------------------------------------------------------------------- columns
@@ -712,7 +708,7 @@ def analyze(model, t):
                     put(f"{'xyz'[c]}_{body.name}.{pn}", P[c])
                     put(f"v{'xyz'[c]}_{body.name}.{pn}", V[c])
                     put(f"a{'xyz'[c]}_{body.name}.{pn}", A[c])
-        tau, react, ke, power, resid = solve_dynamics(model, frames, s)
+        tau, react, ke, pe, power, resid = solve_dynamics(model, frames, s)
         for d, e in zip(model.drivers, tau):
             j = model.joints[d.joint]
             put(("tau_" if j.kind == "revolute" else "force_") + j.name, e)
@@ -729,6 +725,7 @@ def analyze(model, t):
         put("jacobian_rank", len(kept))
         put("jacobian_conditioning", kept[-1] / sv[0])
         put("kinetic_energy", ke)
+        put("potential_energy", pe)
         put("load_power", power)
         put("ne_residual", resid)
     return {k: np.array(v) for k, v in cols.items()}
