@@ -629,6 +629,28 @@ def solve_dynamics(model, frames, s):
     return tau, np.array(out), ke, pe, power, resid
 
 
+def undetermined_basis(model, t):
+    """Per sample, an orthonormal basis (6 n_joints, k) of the reaction sets that rigid-body
+    statics leaves free: stacked [F, M] of every joint (model order) with every body's equations
+    satisfied under no load and no effort (the null space of the projected system)."""
+    states, frames, dv = solve_positions(model, np.asarray(t, float))
+    out = []
+    for s in states:
+        bases = [reaction_basis(s, j) for j in model.joints]
+        A_lam = np.hstack([wrench_columns(s, model, j, B) for j, B in zip(model.joints, bases)])
+        A_tau = effort_columns(model, s)
+        P = np.eye(len(A_lam)) - A_tau @ np.linalg.pinv(A_tau)
+        _, sv, Vt = np.linalg.svd(P @ A_lam)
+        rank = int(np.sum(sv > 1e-9 * sv[0]))
+        stacked = np.zeros((6 * len(bases), A_lam.shape[1]))   # joint bases, block diagonal
+        k = 0
+        for i, B in enumerate(bases):
+            stacked[6 * i:6 * i + 6, k:k + B.shape[1]] = B
+            k += B.shape[1]
+        out.append(stacked @ Vt[rank:].T)
+    return out
+
+
 # ------------------------------------------------------------------------- columns
 
 def joint_coordinates(model, frames, s, prev):

@@ -433,3 +433,24 @@ def test_linkdyn_check_names_the_redundant_rows_of_hoeken_spatial():
     assert re.search(r"mobility[^\n]*rank[^\n]*:\s*1\b", out), out
     redundant = [line for line in out.splitlines() if "redundant" in line.lower()]
     assert redundant and re.search(r"\bJ[1-4]\b", " ".join(redundant)), out
+
+
+@needs_solver
+@pytest.mark.parametrize("name, dimension", [("hoeken_spatial", 3), ("spherical_fourbar", 3),
+                                             ("rsur", 0), ("rps3", 0)])
+def test_linkdyn_undetermined_reactions_span_the_references(name, dimension):
+    """The redundancy linkdyn reports: its basis of the reactions statics leaves free spans the
+    reference's null space (same orthogonal projector to 1e-9) at every sample; no redundancy
+    where the reference finds none."""
+    t = example_times(name, 7)
+    mine = ref.undetermined_basis(ref.load(linkdyn.example_path(name)), t)
+    assert {b.shape[1] for b in mine} == {dimension}
+    sol = linkdyn.analyze(linkdyn.load(linkdyn.example_path(name)), t)
+    if dimension == 0:
+        assert sol.redundancy is None
+        return
+    theirs = np.asarray(sol.redundancy.basis)          # (T, 6 n_joints, k)
+    for k, b in enumerate(mine):
+        q, _ = np.linalg.qr(theirs[k])
+        assert q.shape[1] == dimension
+        assert np.max(np.abs(q @ q.T - b @ b.T)) < 1e-9
