@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+ZERO = np.zeros(3)
 LENGTH = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "in": 0.0254}
 ANGLE = {"rad": 1.0, "deg": math.pi / 180.0}
 
@@ -289,6 +290,7 @@ class State:
         self.r, self.R = r, R
         n = len(r)
         self.v = self.w = self.a = self.al = np.zeros((n, 3))
+        self.moving = False                  # rates not set (zero): positions only
 
     # the ground is index -1: fixed, identity
     def pose(self, i):
@@ -301,16 +303,20 @@ class State:
     def point(self, i, s):
         """Global position, velocity, acceleration of body i's point s (body frame)."""
         r, R = self.pose(i)
-        v, w, a, al = self.rates(i)
         rs = R @ s
+        if not self.moving:
+            return r + rs, ZERO, ZERO
+        v, w, a, al = self.rates(i)
         return (r + rs, v + cross(w, rs),
                 a + cross(al, rs) + cross(w, cross(w, rs)))
 
     def direction(self, i, d):
         """Global direction, its rate and second rate, of body i's vector d (body frame)."""
         _, R = self.pose(i)
-        _, w, _, al = self.rates(i)
         e = R @ d
+        if not self.moving:
+            return e, ZERO, ZERO
+        _, w, _, al = self.rates(i)
         return e, cross(w, e), cross(al, e) + cross(w, cross(w, e))
 
 
@@ -340,7 +346,7 @@ def coincide(rows, s, j):
     sa, sb = s.pose(j.a)[1] @ j.p, s.pose(j.b)[1] @ j.q
     # d(Q - P) = dr_B + dth_B x sb - dr_A - dth_A x sa;  bias: w x (w x s)
     wa, wb = s.rates(j.a)[1], s.rates(j.b)[1]
-    bias = cross(wb, cross(wb, sb)) - cross(wa, cross(wa, sa))
+    bias = cross(wb, cross(wb, sb)) - cross(wa, cross(wa, sa)) if s.moving else ZERO
     for e in np.eye(3):
         rows.add((Q - P) @ e, [(j.b, e, cross(sb, e)), (j.a, -e, -cross(sa, e))], bias @ e)
 
@@ -362,7 +368,7 @@ def on_line(rows, s, j, n, value=None):
     sa, sb = s.pose(j.a)[1] @ j.p, s.pose(j.b)[1] @ j.q
     d, dd = Q - P, Qd - Pd
     wa, wb = s.rates(j.a)[1], s.rates(j.b)[1]
-    dbias = cross(wb, cross(wb, sb)) - cross(wa, cross(wa, sa))
+    dbias = cross(wb, cross(wb, sb)) - cross(wa, cross(wa, sa)) if s.moving else ZERO
     # Phi'' = d''.N + 2 d'.N' + d.N''   (d'' and N'' without accelerations in the bias)
     gamma = dbias @ N + 2 * dd @ Nd + d @ Nb
     parts = [(j.b, N, cross(sb, N)), (j.a, -N, -cross(sa, N) + cross(N, d))]
@@ -507,6 +513,7 @@ def solve_rates(model, frames, s, tg):
     xd = lstsq(J, nu)
     n = len(s.r)
     s.v, s.w = xd.reshape(n, 6)[:, :3], xd.reshape(n, 6)[:, 3:]
+    s.moving = True
     _, J, gamma, nu, eta = constraint_rows(model, frames, s, tg, unwrap)
     xdd = lstsq(J, eta - gamma)
     s.a, s.al = xdd.reshape(n, 6)[:, :3], xdd.reshape(n, 6)[:, 3:]
