@@ -219,7 +219,7 @@ def load(path) -> Model:
     ground, bodies = None, []
     for b in doc["bodies"]:
         pts = {k: vec(v) for k, v in b.get("points", {}).items()}
-        if "mass" not in b:
+        if b["name"] == "ground":                      # its frame is the global frame
             ground = Body(b["name"], pts)
             continue
         inertia = np.asarray(b.get("inertia", [0.0, 0.0, 0.0]), float) * L**2
