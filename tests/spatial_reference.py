@@ -324,7 +324,8 @@ class State:
 
 class Rows:
     """Constraint rows being assembled: value Phi, Jacobian J (m, 6n), bias gamma (the part of
-    Phi'' free of accelerations) and the driver right-hand sides nu (J xdot), eta (J xddot + gamma)."""
+    Phi'' free of accelerations) and the driver right-hand sides nu (J xdot), eta
+    (J xddot + gamma)."""
 
     def __init__(self, n):
         self.n, self.phi, self.J, self.gamma, self.nu, self.eta = n, [], [], [], [], []
@@ -428,7 +429,8 @@ def constraint_rows(model, frames, s, t_values=None, unwrap=None):
         if j.kind == "prismatic":
             on_line(rows, s, j, j.axis, (q, qd, qdd))
         else:
-            # revolute: q(x) - q(t); q' = (w_B - w_A).E, q'' = (al_B - al_A).E + (w_B - w_A).(w_A x E)
+            # revolute: q(x) - q(t); q' = (w_B - w_A).E,
+            # q'' = (al_B - al_A).E + (w_B - w_A).(w_A x E)
             ang, E = relative_angle(s, j, f)
             ang += 2 * math.pi * round((unwrap[k] - ang) / (2 * math.pi))
             wa, wb = s.rates(j.a)[1], s.rates(j.b)[1]
@@ -476,7 +478,8 @@ def design_state(model):
 def solve_positions(model, t):
     """Poses, rates and accelerations at every sample: Newton from the design pose (its driver
     values ramped to those at t[0]), then continuation sample to sample, each guess predicted by
-    the previous sample's rates. Returns the list of States, the joint frames, the drivers' values."""
+    the previous sample's rates. Returns the list of States, the joint frames and the drivers'
+    values."""
     frames = joint_frames(model)
     s = design_state(model)
     dv = driver_values(model, t)
@@ -538,7 +541,8 @@ def reaction_basis(s, j):
         return np.block([[P, np.zeros((3, 2))], [np.zeros((3, 2)), P]])
     if j.kind == "universal":
         c = cross(E, s.pose(j.b)[1] @ j.axis2)
-        return np.block([[I3, np.zeros((3, 1))], [np.zeros((3, 3)), (c / np.linalg.norm(c))[:, None]]])
+        return np.block([[I3, np.zeros((3, 1))],
+                         [np.zeros((3, 3)), (c / np.linalg.norm(c))[:, None]]])
     raise ValueError(j.kind)
 
 
@@ -672,7 +676,8 @@ def joint_coordinates(model, frames, s, prev):
             # q' = (w_B - w_A).E, q'' = (al_B - al_A).E + (w_B - w_A).E'
             if "q_" + q_name in prev:
                 ang += 2 * math.pi * round((prev["q_" + q_name] - ang) / (2 * math.pi))
-            out["q_" + q_name], out["qd_" + q_name], out["qdd_" + q_name] = ang, wr @ E, alr @ E + wr @ Ed
+            out["q_" + q_name] = ang
+            out["qd_" + q_name], out["qdd_" + q_name] = wr @ E, alr @ E + wr @ Ed
 
         def slide(q_name):
             P, Pd, Pdd = s.point(j.a, j.p)

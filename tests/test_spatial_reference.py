@@ -45,7 +45,7 @@ def reference(name: str, n: int = 25) -> dict:
 # ------------------------------------------------------------------------- tolerances
 
 def family(col: str) -> str:
-    """A column's quantity without its component: vx_crank.B -> v, Fz_J1 -> F, omega_x_a -> omega."""
+    """A column's quantity less its component: vx_crank.B -> v, Fz_J1 -> F, omega_x_c -> omega."""
     head = col.split("_")[0]
     if head in ("x", "y", "z"):
         return "pos"
@@ -101,9 +101,9 @@ def test_spatial_examples_are_bundled_and_listed():
 def test_reference_assembles_and_moves_each_example_smoothly(name):
     """Every example closes at every sample (Newton-Euler residual at round-off), its joint
     coordinates move smoothly (steps under 0.6 rad or 0.6 m, each within a tenth of the largest
-    step of its rates' trapezoid: no jump to another branch), the Jacobian with the drivers' rows keeps full
-    column rank (6 per moving body: the drivers fix the motion) and its smallest singular value
-    stays above 1e-3 of its largest (no singular position) over 25 samples."""
+    step of its rates' trapezoid: no jump to another branch), the Jacobian with the drivers' rows
+    keeps full column rank (6 per moving body: the drivers fix the motion) and its smallest
+    singular value stays above 1e-3 of its largest (no singular position) over 25 samples."""
     cols = reference(name)
     assert np.max(cols["ne_residual"]) < 1e-9 * max(1.0, family_peaks(cols)["F"])
     dt = np.diff(cols["t"])
@@ -179,7 +179,8 @@ def test_reference_hoeken_spatial_equals_linkdyn_planar():
     design = {"q_J1": 0.0, "q_J2": 77.12 * DEG, "q_J3": -154.24 * DEG, "q_J4": -77.12 * DEG}
     got = dict(cols)
     for body in ("crank", "coupler", "rocker"):
-        got["phi_" + body] = np.unwrap(2 * np.arctan2(cols["quat_z_" + body], cols["quat_w_" + body]))
+        got["phi_" + body] = np.unwrap(2 * np.arctan2(cols["quat_z_" + body],
+                                                      cols["quat_w_" + body]))
         got["omega_" + body] = cols["omega_z_" + body]
         got["alpha_" + body] = cols["alpha_z_" + body]
     names = [k for k in p if k != "t" and not k.startswith("power_")]
@@ -362,7 +363,7 @@ def test_reference_cylindrical_redundant_loop_closed_form(tmp_path):
         assert np.max(np.abs(along)) < 1e-12 * scale
 
 
-# ------------------------------------------------------------------------- linkdyn against the reference
+# -------------------------------------------------------------- linkdyn against the reference
 
 @functools.lru_cache(maxsize=None)
 def spatial_solver_ready() -> bool:
