@@ -479,3 +479,36 @@ def test_linkdyn_closed_form_models_equal_the_reference(tmp_path, text, duration
     got = sol.columns() if callable(sol.columns) else sol.columns
     assert not set(want) - set(got), f"missing columns: {sorted(set(want) - set(got))[:8]}"
     assert_close(got, want, 1e-9)
+
+
+@needs_solver
+def test_linkdyn_spatial_api_gives_the_reference_numbers():
+    """The Solution's arrays (the contract's Python API) against the reference's columns on rsur:
+    effort, reaction (spherical: zero couple), point and its rates, omega, alpha, quaternion,
+    rotation (the reference's quaternion turned into a matrix here), kinetic energy."""
+    name = "rsur"
+    want = reference(name)
+    sol = linkdyn.analyze(linkdyn.load(linkdyn.example_path(name)), example_times(name))
+    got = {"tau_J1": sol.effort("J1"), "kinetic_energy": sol.kinetic_energy()}
+    for j in ("J1", "J2", "J3", "J4"):
+        r = np.asarray(sol.reaction(j))
+        assert r.shape == (len(sol.t), 6)
+        for i, c in enumerate(("Fx", "Fy", "Fz", "Mx", "My", "Mz")):
+            if c[0] == "F" or j != "J2":
+                got[f"{c}_{j}"] = r[:, i]
+        if j == "J2":                                    # spherical: no couple
+            assert np.all(r[:, 3:] == 0.0)
+    for body in ("crank", "coupler", "rocker"):
+        for i, c in enumerate("xyz"):
+            got[f"omega_{c}_{body}"] = sol.omega(body)[:, i]
+            got[f"alpha_{c}_{body}"] = sol.alpha(body)[:, i]
+        for i, c in enumerate("wxyz"):
+            got[f"quat_{c}_{body}"] = sol.quaternion(body)[:, i]
+        q = np.stack([want[f"quat_{c}_{body}"] for c in "wxyz"], axis=1)
+        R = np.asarray(sol.rotation(body))
+        assert np.max(np.abs(R - np.array([quaternion_matrix(x) for x in q]))) < 1e-9
+    for i, c in enumerate("xyz"):
+        got[f"{c}_coupler.C"] = sol.point("coupler", "C")[:, i]
+        got[f"v{c}_coupler.C"] = sol.point_velocity("coupler", "C")[:, i]
+        got[f"a{c}_coupler.C"] = sol.point_acceleration("coupler", "C")[:, i]
+    assert_close(got, {k: v for k, v in want.items() if k not in EXTRA}, 1e-9, names=list(got))
