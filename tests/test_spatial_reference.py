@@ -438,7 +438,7 @@ def test_linkdyn_check_names_the_redundant_rows_of_hoeken_spatial():
 
 @needs_solver
 @pytest.mark.parametrize("name, dimension", [("hoeken_spatial", 3), ("spherical_fourbar", 3),
-                                             ("rsur", 0), ("rps3", 0)])
+                                             ("rsur", 0)])
 def test_linkdyn_undetermined_reactions_span_the_references(name, dimension):
     """The redundancy linkdyn reports: its basis of the reactions statics leaves free spans the
     reference's null space (same orthogonal projector to 1e-9) at every sample; no redundancy
@@ -516,18 +516,18 @@ def test_linkdyn_spatial_api_gives_the_reference_numbers():
 
 @needs_solver
 def test_linkdyn_analyze_writes_the_reference_columns(tmp_path):
-    """`linkdyn analyze rps3 --samples 9`: results.csv holds every column the reference computes,
-    equal to it at the file's own times (1e-9 of each column's peak)."""
+    """`linkdyn analyze spatial_slider_crank --samples 9`: results.csv holds every column the
+    reference computes, equal to it at the file's own times (1e-9 of each column's peak)."""
     import csv
     out = tmp_path / "out"
-    res = CliRunner().invoke(main, ["analyze", str(linkdyn.example_path("rps3")), "-o", str(out),
-                                    "--samples", "9"])
+    path = linkdyn.example_path("spatial_slider_crank")
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(out), "--samples", "9"])
     assert res.exit_code == 0, res.output
     with open(out / "results.csv", newline="") as f:
         rows = list(csv.reader(f))
     table = {name: np.array([float(r[i]) for r in rows[1:]]) for i, name in enumerate(rows[0])}
     assert len(table["t"]) == 9
-    want = {k: v for k, v in ref.run(linkdyn.example_path("rps3"), table["t"]).items()
+    want = {k: v for k, v in ref.run(path, table["t"]).items()
             if k not in EXTRA and k != "t"}
     assert not set(want) - set(table), sorted(set(want) - set(table))[:8]
     assert_close(table, want, 1e-9)
