@@ -424,16 +424,23 @@ def test_linkdyn_hoeken_spatial_equals_linkdyn_planar():
 
 
 @needs_solver
-def test_linkdyn_check_names_the_redundant_rows_of_hoeken_spatial():
-    """check: Gruebler-Kutzbach 6 x 3 - 4 x 5 = -2, mobility 1 from the Jacobian's rank, and the
-    redundant rows named by joint."""
-    res = CliRunner().invoke(main, ["check", str(linkdyn.example_path("hoeken_spatial"))])
+@pytest.mark.parametrize("name, gruebler, mobility", [
+    ("hoeken_spatial", -2, 1), ("rsur", 1, 1), ("spherical_fourbar", -2, 1),
+    ("spatial_slider_crank", 1, 1), ("rps3", 3, 3)])
+def test_linkdyn_check_counts_and_names_the_redundant_rows(name, gruebler, mobility):
+    """check: Gruebler-Kutzbach 6 (n - 1) - sum(6 - f) (hoeken_spatial: 6 x 3 - 4 x 5 = -2), the
+    mobility from the Jacobian's rank, and the redundant rows named by joint where there are
+    some (mobility - Gruebler-Kutzbach of them)."""
+    res = CliRunner().invoke(main, ["check", str(linkdyn.example_path(name))])
     assert res.exit_code == 0, res.output
     out = res.output
-    assert re.search(r"Gr(ü|ue)bler[^\n]*:\s*-2\b", out), out
-    assert re.search(r"mobility[^\n]*rank[^\n]*:\s*1\b", out), out
-    redundant = [line for line in out.splitlines() if "redundant" in line.lower()]
-    assert redundant and re.search(r"\bJ[1-4]\b", " ".join(redundant)), out
+    assert re.search(rf"Gr(ü|ue)bler[^\n]*:\s*{gruebler}\b", out), out
+    assert re.search(rf"mobility[^\n]*rank[^\n]*:\s*{mobility}\b", out), out
+    redundant = [ln for ln in out.splitlines() if ln.strip().lower().startswith("redundant")]
+    if mobility > gruebler:
+        assert redundant and re.search(r"\bJ[1-4]\b", " ".join(redundant)), out
+    else:
+        assert not redundant, out
 
 
 @needs_solver
