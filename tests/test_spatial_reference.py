@@ -465,16 +465,8 @@ def test_linkdyn_undetermined_reactions_span_the_references(name, dimension):
 
 
 @needs_solver
-@pytest.mark.parametrize("text, duration", [
-    (SKEW_PENDULUM, 1.5),
-    # known bug of the solver at the time of writing: its mobility check takes the rank of the
-    # cut joint's closure Jacobian relative to its largest singular value only, and here that
-    # Jacobian is all round-off (the loop is wholly redundant), so it counts rank 2, mobility 0,
-    # and refuses the model (exit 2). With an absolute floor every column agrees to 6e-12.
-    pytest.param(SCREW, 1.2, marks=pytest.mark.xfail(
-        raises=linkdyn.ModelError, strict=True,
-        reason="spatial mobility check: an all-round-off closure Jacobian counts as full rank"))],
-    ids=["skew_pendulum", "cylindrical_screw"])
+@pytest.mark.parametrize("text, duration", [(SKEW_PENDULUM, 1.5), (SCREW, 1.2)],
+                         ids=["skew_pendulum", "cylindrical_screw"])
 def test_linkdyn_closed_form_models_equal_the_reference(tmp_path, text, duration):
     """The closed-form models above (a body frame placed by origin and rotation; a redundant loop
     with a cylindrical joint and two expression drivers) through linkdyn: every column to 1e-9."""
