@@ -126,8 +126,9 @@ def test_example_list_names_every_bundled_model():
     files = sorted(p.name[:-5] for p in (Path(linkdyn.__file__).parent / "examples").iterdir()
                    if p.name.endswith(".toml"))
     # then the models for `linkdyn simulate` (examples/simulate)
-    from linkdyn.cli import simulation_example_names
-    assert names == files + simulation_example_names() and files == EXAMPLES
+    from linkdyn.cli import simulation_example_names, spatial_example_names
+    assert names == files + simulation_example_names() + spatial_example_names()
+    assert files == EXAMPLES
     assert len(files) >= 7 and "hoeken" in names
     # each line carries the model's [mechanism] name
     assert "Hoeken straight-line linkage" in res.stdout

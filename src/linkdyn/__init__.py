@@ -27,12 +27,14 @@ load = load_model
 
 def example_path(name: str):
     """Path of a bundled example model, e.g. ``example_path("hoeken")``; the models for
-    ``simulate`` live in ``examples/simulate`` (e.g. ``example_path("hoeken_motor")``)."""
+    ``simulate`` live in ``examples/simulate`` (e.g. ``example_path("hoeken_motor")``), the
+    spatial ones in ``examples/spatial`` (e.g. ``example_path("rsur")``)."""
     path = resources.files("linkdyn").joinpath("examples", f"{name}.toml")
     if not path.is_file():
-        other = resources.files("linkdyn").joinpath("examples", "simulate", f"{name}.toml")
-        if other.is_file():
-            return other
+        for folder in ("simulate", "spatial"):
+            other = resources.files("linkdyn").joinpath("examples", folder, f"{name}.toml")
+            if other.is_file():
+                return other
     return path
 
 
