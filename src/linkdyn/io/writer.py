@@ -23,6 +23,8 @@ from .. import joints as jk
 from .. import motion as _motion
 from ..errors import ModelError, wrong_type
 from ..model import GROUND, Model
+from ..spatial import writer as _spatial
+from ..topology import registry
 from .loads import _TimeFunction
 from .units import ANGLE_UNITS, LENGTH_UNITS
 
@@ -111,41 +113,25 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         Sections as :func:`linkdyn.model_from_dict` reads them; numbers in ``model.length_unit``
         and ``model.angle_unit`` (mass kg, inertia kg length^2).
     """
-    if getattr(model, "space", "planar") == "spatial":
-        raise ModelError("writing a model file is not yet for spatial models",
-                         file=model.source, field="mechanism.space",
-                         fix="Edit the spatial model file itself")
     L, A = LENGTH_UNITS[model.length_unit], ANGLE_UNITS[model.angle_unit]
+    spatial = getattr(model, "space", "planar") == "spatial"
+    kinds = registry(model.space)
     table_files = table_files or {}
     out: dict = {"mechanism": {"name": model.name}}
+    if spatial:
+        out["mechanism"]["space"] = "spatial"
     if model.description:
         out["mechanism"]["description"] = model.description
     out["mechanism"]["gravity"] = _vec(model.gravity)
     out["units"] = {"length": model.length_unit, "angle": model.angle_unit}
-    bodies = []
-    for b in model.bodies:
-        entry: dict = {"name": b.name, "points": {k: _vec(v, L) for k, v in b.points.items()}}
-        if b.name != GROUND and _from_bars(b):   # the bars it was given by
-            entry["bars"] = [{"between": [x.start, x.end]} | (
-                {"mass": _num(x.mass)} if x.mass is not None else
-                {"mass_per_length": _num(x.mass_per_length * L)}) for x in b.bars]
-        elif b.name != GROUND:
-            entry.update(mass=_num(b.mass), com=_vec(b.com, L), inertia=_num(b.inertia / L ** 2))
-        bodies.append(entry)
-    out["bodies"] = bodies
-    joints = []
-    for j in model.joints:
-        entry = {"name": j.name, "type": j.kind,
-                 "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
-        for x in jk.get(j.kind).numbers:   # the kind's numbers, in the file's units
-            scale = {"angle": A, "length": L}.get(x.unit, 1.0)
-            v = j.numbers[x.name]
-            entry[x.name] = _vec(v, scale) if x.shape else _num(v / scale)
-        joints.append(entry)
-    out["joints"] = joints
+    if spatial:   # design poses, 3-vectors, inertia tensors, axes
+        out["bodies"] = _spatial.bodies(model, L, A, _num, _vec)
+        out["joints"] = _spatial.joints(model, _num, _vec)
+    else:
+        out["bodies"], out["joints"] = _bodies(model, L), _joints(model, L, A)
 
     def scale_of(joint: str) -> float:
-        return A if jk.get(model.joint(joint).kind).angular else L
+        return A if kinds.get(model.joint(joint).kind).angular else L
 
     out["drivers"] = [{"joint": d.joint, "motion": _motion_dict(d.motion, scale_of(d.joint),
                                                                 table_files.get(d.joint))}
@@ -160,7 +146,7 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
             loads.append(entry)
             continue
         if ld.kind == "friction":   # in a joint, in the file's units
-            angular = jk.get(model.joint(ld.joint).kind).angular
+            angular = kinds.get(model.joint(ld.joint).kind).angular
             entry.update(joint=ld.joint, coefficient=_num(ld.coefficient))
             if angular:
                 entry["radius"] = _num(ld.radius / L)
@@ -180,7 +166,7 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         if ld.point is not None:
             entry["point"] = ld.point
         if ld.kind in ("force", "torque"):
-            entry["value"] = _load_value(ld.value, ld.kind == "force")
+            entry["value"] = _load_value(ld.value, ld.kind == "force" or spatial)
         elif ld.kind in ("spring", "damper"):
             entry.update(body2=ld.body2, point2=ld.point2)
             if ld.kind == "spring":  # N/m -> N/length unit; m -> length unit
@@ -222,6 +208,35 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
     if analysis:
         out["analysis"] = analysis
     return {k: v for k, v in out.items() if v != []}
+
+
+def _bodies(model: Model, L: float) -> list[dict]:
+    """``[[bodies]]`` of a planar model (length unit ``L`` m)."""
+    bodies = []
+    for b in model.bodies:
+        entry: dict = {"name": b.name, "points": {k: _vec(v, L) for k, v in b.points.items()}}
+        if b.name != GROUND and _from_bars(b):   # the bars it was given by
+            entry["bars"] = [{"between": [x.start, x.end]} | (
+                {"mass": _num(x.mass)} if x.mass is not None else
+                {"mass_per_length": _num(x.mass_per_length * L)}) for x in b.bars]
+        elif b.name != GROUND:
+            entry.update(mass=_num(b.mass), com=_vec(b.com, L), inertia=_num(b.inertia / L ** 2))
+        bodies.append(entry)
+    return bodies
+
+
+def _joints(model: Model, L: float, A: float) -> list[dict]:
+    """``[[joints]]`` of a planar model (the kinds' numbers in the file's units)."""
+    joints = []
+    for j in model.joints:
+        entry = {"name": j.name, "type": j.kind,
+                 "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
+        for x in jk.get(j.kind).numbers:   # the kind's numbers, in the file's units
+            scale = {"angle": A, "length": L}.get(x.unit, 1.0)
+            v = j.numbers[x.name]
+            entry[x.name] = _vec(v, scale) if x.shape else _num(v / scale)
+        joints.append(entry)
+    return joints
 
 
 # --- TOML -------------------------------------------------------------------------------------
@@ -298,7 +313,7 @@ def save(model: Model, path: str | os.PathLike) -> Path:
             else dumps_toml(data))
     files = {}
     for j, motion in tables.items():
-        unit = A if jk.get(model.joint(j).kind).angular else L
+        unit = A if registry(model.space).get(model.joint(j).kind).angular else L
         q = np.asarray(motion.q) * (motion.scale / unit)  # table units -> the file's unit
         rows = "\n".join(f"{ti!r},{qi!r}" for ti, qi in zip(motion.t.tolist(), q.tolist()))
         files[path.parent / names[j]] = "t,q\n" + rows + "\n"
