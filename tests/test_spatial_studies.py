@@ -60,3 +60,107 @@ def test_a_posed_body_is_written_in_the_files_units(tmp_path):
     for k in ("tau_J1", "Fx_J4", "Mz_J3", "x_coupler.C", "kinetic_energy"):
         scale = max(float(np.max(np.abs(a[k]))), 1e-12)
         np.testing.assert_allclose(b[k], a[k], rtol=0, atol=1e-9 * scale, err_msg=k)
+
+
+# --- design studies -----------------------------------------------------------------------
+
+def test_a_sweep_of_a_point_coordinate_gives_each_design_analyzed_alone(tmp_path):
+    """rsur's crank pin B moved out of the crank's plane (a 3-vector's component): each row's
+    peak and RMS driving torque and peak joint forces are those of that file analyzed alone."""
+    path = "bodies.crank.points.B[2]"
+    t = np.linspace(0.0, 1.0, 7)
+    values = np.array([-8.0, 8.0])
+    df = linkdyn.sweep(linkdyn.example_path("rsur"), {path: values}, t)
+    assert df["valid"].all() and list(df[path]) == list(values)
+    data = tomllib.loads(linkdyn.example_path("rsur").read_text())
+    for k, z in enumerate(values):
+        data["bodies"][1]["points"]["B"][2] = float(z)
+        src = tmp_path / f"d{k}.toml"
+        src.write_text(dumps_toml(data))
+        alone = linkdyn.analyze(linkdyn.load(src), t)
+        tau = alone.effort("J1")
+        assert df["peak_tau_J1"][k] == np.max(np.abs(tau))
+        assert df["rms_tau_J1"][k] == pytest.approx(np.sqrt(np.mean(tau ** 2)), rel=1e-14)
+        for j in ("J1", "J2", "J3", "J4"):
+            f = np.linalg.norm(alone.reaction(j)[:, :3], axis=1)
+            assert df[f"peak_F_{j}"][k] == np.max(f), j
+    assert df["peak_tau_J1"][0] != df["peak_tau_J1"][1]   # the parameter reached the model
+
+
+def test_peak_torque_metric_of_spatial_designs(tmp_path):
+    """A crank about +x under gravity with a load at its tip: tau = cos(phi) (m g c + F L), so
+    the sweep's peak_tau_J1 over the mass centre's coordinate c is |m g c + F L| (closed form),
+    and each row equals that design analyzed alone."""
+    src = tmp_path / "crank.toml"
+    src.write_text(CRANK)
+    t = np.linspace(0.0, 0.25, 3)   # phi = 0, 45, 90 deg: the peak at phi = 0
+    c = np.array([-40.0, -10.0, 25.0])
+    df = linkdyn.sweep(src, {"bodies.crank.com[1]": c}, t)
+    np.testing.assert_allclose(df["peak_tau_J1"], np.abs(1.0 * 9.81 * c * 1e-3 + 2.0 * 0.1),
+                               rtol=1e-12)
+    data = tomllib.loads(CRANK)
+    for k, ck in enumerate(c):
+        data["bodies"][1]["com"][1] = float(ck)
+        one = tmp_path / f"c{k}.toml"
+        one.write_text(dumps_toml(data))
+        sol = linkdyn.analyze(linkdyn.load(one), t)
+        assert df["peak_tau_J1"][k] == np.max(np.abs(sol.effort("J1")))
+        assert df["peak_F_J1"][k] == np.max(np.linalg.norm(sol.reaction("J1")[:, :3], axis=1))
+    with pytest.raises(linkdyn.ModelError, match="planar models only"):
+        linkdyn.sweep(src, {"bodies.crank.com[1]": c}, t, metrics=["path_deviation"])
+
+
+def test_optimize_a_spatial_crank_reaches_the_dense_scans_best(tmp_path):
+    """One parameter (the mass centre's y, mm): optimize reaches the best of a dense scan
+    (and the closed form's c = -F L / (m g))."""
+    src = tmp_path / "crank.toml"
+    src.write_text(CRANK)
+    t = np.linspace(0.0, 0.25, 3)   # a quarter turn: the peak at phi = 0
+    scan = np.linspace(-60.0, 60.0, 25)
+    df = linkdyn.sweep(src, {"bodies.crank.com[1]": scan}, t, metrics=["peak_tau_J1"])
+    k = int(np.argmin(df["peak_tau_J1"]))
+    res = linkdyn.optimize(src, {"bodies.crank.com[1]": (-60.0, 60.0)}, t, "peak_tau_J1",
+                           popsize=4, maxiter=4)
+    c = res.values["bodies.crank.com[1]"]
+    assert res.metrics["peak_tau_J1"] <= df["peak_tau_J1"][k]
+    assert abs(c - scan[k]) <= scan[1] - scan[0]
+    assert abs(c - (-2.0 * 100.0 / 9.81)) < 0.5   # mm
+
+
+CRANK = """
+[mechanism]
+name = "crank"
+space = "spatial"
+gravity = [0.0, 0.0, -9.81]
+
+[units]
+length = "mm"
+angle = "deg"
+
+[[bodies]]
+name = "ground"
+points = { O = [0.0, 0.0, 0.0] }
+
+[[bodies]]
+name = "crank"
+points = { O = [0.0, 0.0, 0.0], B = [0.0, 100.0, 0.0] }
+mass = 1.0
+com = [0.0, 30.0, 0.0]
+inertia = [2000.0, 500.0, 2000.0]
+
+[[joints]]
+name = "J1"
+type = "revolute"
+connect = ["ground.O", "crank.O"]
+axis = [1.0, 0.0, 0.0]
+
+[[drivers]]
+joint = "J1"
+motion = { kind = "constant_speed", rpm = 60.0, start = 0.0 }
+
+[[loads]]
+kind = "force"
+body = "crank"
+point = "B"
+value = [0.0, 0.0, -2.0]
+"""

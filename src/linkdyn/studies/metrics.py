@@ -51,6 +51,7 @@ from ..errors import ModelError
 from .. import joints as jk
 from ..model import GROUND, Model
 from ..motion import ConstantSpeed
+from ..topology import registry
 
 __all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost", "ranked",
            "unit", "quantity"]
@@ -107,7 +108,12 @@ def quantity(name: str) -> str | None:
 
 
 def _effort(model: Model, joint: str) -> str:
-    return f"{jk.get(model.joint(joint).kind).effort}_{joint}"
+    return f"{registry(model.space).get(model.joint(joint).kind).effort}_{joint}"
+
+
+#: Metrics of planar models only (a spatial model has the efforts' and the joint forces').
+PLANAR_ONLY = ("min_transmission_angle", "path_deviation", "peak_shaking_force",
+               "flywheel_inertia", "stroke_", "friction_loss", "efficiency")
 
 
 def _guides(model: Model) -> list[str]:
@@ -135,11 +141,14 @@ def path_spec(model: Model, path_point=None, path_range=None):
 
 
 def names(model: Model, *, path_point=None) -> list[str]:
-    """Every metric this model has, in table order."""
+    """Every metric this model has, in table order (a spatial model: the efforts' and the
+    joint forces' only)."""
     out = []
     for d in model.drivers:
         out += [f"peak_{_effort(model, d.joint)}", f"rms_{_effort(model, d.joint)}"]
     out += [f"peak_F_{j.name}" for j in model.joints]
+    if model.space == "spatial":
+        return out
     if four_bars(model):
         out.append("min_transmission_angle")
     if path_spec(model, path_point)[0]:
@@ -161,6 +170,10 @@ def check_names(model: Model, wanted, *, path_point=None) -> list[str]:
     if wanted is None:
         return have
     for w in wanted:
+        if w not in have and model.space == "spatial" and w.startswith(PLANAR_ONLY):
+            raise ModelError(f"the metric '{w}' is for planar models only, and this model is "
+                             "spatial", field="--metric",
+                             fix="Use a metric of spatial models: " + ", ".join(have))
         if w not in have:
             raise ModelError(f"no metric '{w}' for this model", field="--metric",
                              fix=_did_you_mean(w, have, "metrics"))
@@ -200,6 +213,8 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
     """
     m = sol.model
     wanted = check_names(m, wanted, path_point=path_point)
+    if m.space == "spatial":
+        return _spatial(sol, wanted)
     out: dict[str, np.ndarray] = {}
     want = set(wanted)
     for k, d in enumerate(m.drivers):
@@ -232,6 +247,18 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
         lost, work = friction.energies(sol)
         out["friction_loss"] = np.sum(lost, axis=0)
         out["efficiency"] = friction.efficiency(out["friction_loss"], work)
+    return {w: out[w] for w in wanted}
+
+
+def _spatial(sol, wanted) -> dict[str, float]:
+    """Metrics of one spatial run (:class:`linkdyn.spatial.SpatialSolution`): each driver's
+    peak and RMS effort, each joint's peak force magnitude ``|(Fx, Fy, Fz)|``."""
+    m, out = sol.model, {}
+    for d in m.drivers:
+        col = _effort(m, d.joint)
+        out[f"peak_{col}"], out[f"rms_{col}"] = peak(sol.effort(d.joint)), rms(sol.effort(d.joint))
+    for j in m.joints:
+        out[f"peak_F_{j.name}"] = peak(np.linalg.norm(sol.reaction(j.name)[:, :3], axis=-1))
     return {w: out[w] for w in wanted}
 
 

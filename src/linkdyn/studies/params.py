@@ -74,6 +74,13 @@ class Space:
     def paths(self) -> list[str]:
         return [p.path for p in self.params]
 
+    @property
+    def spatial(self) -> bool:
+        """A spatial model (``[mechanism] space = "spatial"``): its designs are solved one at
+        a time (:func:`linkdyn.studies.runner.evaluate_models`), not by the vectorized map."""
+        mech = self.data.get("mechanism", {})
+        return isinstance(mech, dict) and mech.get("space") == "spatial"
+
     def model(self, values=None) -> Model:
         """The model of one design (``values`` (P,) in the file's units; None: the base model).
 
@@ -125,10 +132,6 @@ def space(model, paths, *, source: str | None = None) -> Space:
         data, base_dir = read_model_data(src), str(Path(src).parent)
     src = src if source is None else source
     base = model_from_dict(data, source=src, base_dir=base_dir)  # it must be valid itself
-    if base.space == "spatial":
-        raise ModelError("sweep and optimize are not yet for spatial models", file=src,
-                         field="mechanism.space",
-                         fix="Use linkdyn check or linkdyn analyze on spatial models")
     seen = set()
     params = []
     for p in paths:
@@ -146,8 +149,12 @@ def _unit(data: dict, keys: tuple) -> str:
     L, A = units.get("length", "m"), units.get("angle", "rad")
     names = [k for k in keys if isinstance(k, str)]
     last = names[-1]
-    if "points" in names[:-1] or last in ("com", "free_length"):
+    if "points" in names[:-1] or last in ("com", "free_length", "origin"):
         return L
+    if last in ("axis", "axis2"):
+        return ""   # a direction (the loader makes it a unit vector)
+    if last == "rotation":
+        return A
     if last == "mass":
         return "kg"
     if last == "inertia":
@@ -301,6 +308,8 @@ def _check_links(sp: Space, lo: np.ndarray, hi: np.ndarray) -> None:
     from ..io.linkage import SHORT_LINK, link_pairs
     from .vectorize import derive
 
+    if sp.spatial:
+        return   # each design is checked by the loader, and kept invalid with its reason
     builder = derive(sp, lo, hi)
     if not builder.vectorized:
         return   # each design is then checked by the loader, and kept invalid with its reason

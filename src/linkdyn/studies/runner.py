@@ -140,7 +140,10 @@ class Task:
         object.__setattr__(self, "path_range", checks.path_range(self.path_range))
 
     def with_builder(self, lo, hi) -> Task:
-        """This task with the builder of designs ranging over ``lo``..``hi`` (P,), file units."""
+        """This task with the builder of designs ranging over ``lo``..``hi`` (P,), file units
+        (none for a spatial model, whose designs are solved one at a time)."""
+        if self.space.spatial:
+            return self
         return replace(self, builder=vectorize.derive(self.space, lo, hi))
 
 
@@ -179,6 +182,8 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
         ``valid`` (D,) bool, ``reason`` (D,) object (str, '' when valid) and each metric (D,).
     """
     values = np.asarray(values, float).reshape(-1, len(task.space.params))
+    if task.space.spatial:
+        return evaluate_models(task, values)
     builder = task.builder
     if builder is None:
         builder = vectorize.derive(task.space, np.min(values, axis=0), np.max(values, axis=0))
@@ -219,6 +224,8 @@ def _backend(task: Task, samples: int, layout=None, runs: bool = True) -> backen
     """The backend of ``task`` chosen (:func:`linkdyn.backend.choose`) for ``samples``
     design-samples of its model (``layout``: the study's, whose loads say whether the sweep
     kernel runs it), so that every batch of a sweep runs it."""
+    if task.space.spatial:   # the spatial solver runs on numpy
+        return backend_mod.choose("numpy", backend_mod.Work(samples, 1), [], runs=runs)
     base = task.space.model()
     reactions = metrics_mod.reads_reactions(task.metrics)
     stages = layout_stages(layout, reactions) if layout is not None else backend_mod.ANALYSIS
@@ -296,10 +303,28 @@ def evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
     reason = np.array([_reason(e) if e is not None else "" for e in errors], dtype=object)
     out = {name: np.full(D, np.nan) for name in task.metrics}
     ok = [k for k in range(D) if models[k] is not None]
-    if ok:
+    if ok and task.space.spatial:
+        _fill_each(task, models, ok, valid, reason, out)
+    elif ok:
         sol = analyze([models[k] for k in ok], task.t, backend=task.backend)
         _fill(task, sol, np.array(ok), valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
+
+
+def _fill_each(task: Task, models, idx, valid, reason, out) -> None:
+    """Validity, reasons and metrics of the designs ``idx`` of a spatial model, each solved
+    alone by :func:`linkdyn.spatial.analyze` (the message it raises is the design's reason)."""
+    from .. import spatial
+
+    for k in idx:
+        try:
+            sol = spatial.analyze(models[k], task.t)
+        except (AssemblyError, ModelError) as e:
+            reason[k] = _reason(e)
+            continue
+        valid[k] = True
+        for name, v in metrics_mod.evaluate(sol, task.metrics).items():
+            out[name][k] = v
 
 
 def _run_chunk(task: Task, k: int, values, outdir: str | None):
@@ -418,7 +443,8 @@ def run(task: Task, values, *, outdir=None, resume: bool = False, chunk: int | N
     if task.builder is None and D:   # the map from parameters to layouts, derived once
         task = task.with_builder(np.min(values, axis=0), np.max(values, axis=0))
     if D:   # one backend for every chunk and batch, by the size of the whole sweep
-        task = replace(task, backend=_backend(task, D * T, task.builder.layout))
+        task = replace(task, backend=_backend(task, D * T, getattr(task.builder, "layout",
+                                                                   None)))
     chunk = int(chunk or default_chunk(D, T, workers))
     starts = list(range(0, D, chunk))
     results: dict[int, dict] = {}
