@@ -23,7 +23,10 @@ import linkdyn
 import spatial_reference as ref
 from linkdyn.cli import main
 
-SPATIAL = ["hoeken_spatial", "rsur", "spherical_fourbar", "spatial_slider_crank", "rps3"]
+SPATIAL = ["hoeken_spatial", "rsur", "spherical_fourbar", "spatial_slider_crank", "rps3",
+           "stewart"]
+# fewer samples where the model is large (the Stewart platform: 13 moving bodies)
+SAMPLES = {"stewart": 17}
 HOEKEN_PERIOD = 60.0 / 45.0                  # s, 45 rpm
 DEG = math.pi / 180.0
 # the reference's own diagnostics, not contract columns
@@ -31,9 +34,9 @@ EXTRA = ("load_power", "ne_residual", "jacobian_rank", "jacobian_conditioning")
 
 
 def example_times(name: str, n: int = 25) -> np.ndarray:
-    """n samples over one crank turn (rps3: its 2 s run)."""
+    """n samples over one crank turn (rps3: its 2 s run; stewart: its 1 s run, 17 samples)."""
     duration = {"hoeken_spatial": HOEKEN_PERIOD, "rps3": 2.0}.get(name, 1.0)   # 60 rpm: 1 s
-    return np.linspace(0.0, duration, n)
+    return np.linspace(0.0, duration, min(n, SAMPLES.get(name, n)))
 
 
 @functools.lru_cache(maxsize=None)
@@ -103,7 +106,7 @@ def test_reference_assembles_and_moves_each_example_smoothly(name):
     coordinates move smoothly (steps under 0.6 rad or 0.6 m, each within a tenth of the largest
     step of its rates' trapezoid: no jump to another branch), the Jacobian with the drivers' rows
     keeps full column rank (6 per moving body: the drivers fix the motion) and its smallest
-    singular value stays above 1e-3 of its largest (no singular position) over 25 samples."""
+    singular value stays above 1e-3 of its largest (no singular position) over 25 samples (stewart: 17)."""
     cols = reference(name)
     assert np.max(cols["ne_residual"]) < 1e-9 * max(1.0, family_peaks(cols)["F"])
     dt = np.diff(cols["t"])
@@ -389,7 +392,7 @@ def linkdyn_columns(name: str, t) -> dict:
 def test_linkdyn_spatial_equals_the_reference(name):
     """Every column the contract names (joint coordinates and rates, quaternions, angular rates,
     points and their rates, efforts, every reaction component, kinetic and potential energy) to
-    1e-9 of each column's peak over 25 samples."""
+    1e-9 of each column's peak over 25 samples (stewart: 17)."""
     want = {k: v for k, v in reference(name).items() if k not in EXTRA and k != "t"}
     got = linkdyn_columns(name, example_times(name))
     assert not set(want) - set(got), f"missing columns: {sorted(set(want) - set(got))[:8]}"
@@ -426,7 +429,7 @@ def test_linkdyn_hoeken_spatial_equals_linkdyn_planar():
 @needs_solver
 @pytest.mark.parametrize("name, gruebler, mobility", [
     ("hoeken_spatial", -2, 1), ("rsur", 1, 1), ("spherical_fourbar", -2, 1),
-    ("spatial_slider_crank", 1, 1), ("rps3", 3, 3)])
+    ("spatial_slider_crank", 1, 1), ("rps3", 3, 3), ("stewart", 6, 6)])
 def test_linkdyn_check_counts_and_names_the_redundant_rows(name, gruebler, mobility):
     """check: Gruebler-Kutzbach 6 (n - 1) - sum(6 - f) (hoeken_spatial: 6 x 3 - 4 x 5 = -2), the
     mobility from the Jacobian's rank, and the redundant rows named by joint where there are

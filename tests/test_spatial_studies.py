@@ -164,3 +164,20 @@ body = "crank"
 point = "B"
 value = [0.0, 0.0, -2.0]
 """
+
+
+def test_the_stewart_platform_follows_its_trajectory():
+    """The bundled 6-UPS platform: its six leg lengths (drivers by formulas) are the closed-form
+    inverse kinematics of a heave 20 sin(pi t) mm and a roll 0.1 sin(2 pi t) rad about x, so the
+    platform's centre and rotation solved from them are that trajectory; mobility 6."""
+    m = linkdyn.load(linkdyn.example_path("stewart"))
+    t = np.linspace(0.0, 1.0, 5)
+    sol = linkdyn.analyze(m, t)
+    a, h = 0.1 * np.sin(2 * np.pi * t), 0.02 * np.sin(np.pi * t)
+    centre = np.stack([0 * t, 0 * t, 0.25 + h], axis=1)
+    np.testing.assert_allclose(sol.point("platform", "T"), centre, rtol=0, atol=1e-13)
+    c, s = np.cos(a), np.sin(a)
+    rx = np.stack([np.stack([1 + 0 * t, 0 * t, 0 * t], -1), np.stack([0 * t, c, -s], -1),
+                   np.stack([0 * t, s, c], -1)], axis=1)
+    np.testing.assert_allclose(sol.rotation("platform"), rx, rtol=0, atol=1e-13)
+    assert len(m.drivers) == 6 and linkdyn.spatial.check(m)["mobility"] == 6
