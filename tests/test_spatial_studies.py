@@ -181,3 +181,36 @@ def test_the_stewart_platform_follows_its_trajectory():
                    np.stack([0 * t, s, c], -1)], axis=1)
     np.testing.assert_allclose(sol.rotation("platform"), rx, rtol=0, atol=1e-13)
     assert len(m.drivers) == 6 and linkdyn.spatial.check(m)["mobility"] == 6
+
+
+def test_compare_two_spatial_models_writes_its_page(tmp_path):
+    """compare of rsur and rsur with its crank pin lifted: compare.json holds each design's
+    own summary (as linkdyn analyze writes it), compare.html its curves and key results; a
+    planar model beside them is refused (exit 2)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    data = tomllib.loads(linkdyn.example_path("rsur").read_text())
+    data["bodies"][1]["points"]["B"][2] = 8.0
+    lifted = tmp_path / "lifted.toml"
+    lifted.write_text(dumps_toml(data))
+    rsur = str(linkdyn.example_path("rsur"))
+    run = CliRunner().invoke
+    res = run(main, ["compare", rsur, str(lifted), "--samples", "7", "-o", str(tmp_path / "c")])
+    assert res.exit_code == 0, res.output
+    out = json.loads((tmp_path / "c" / "compare.json").read_text())
+    assert list(out) == ["rsur", "lifted"]
+    for name, path in (("rsur", rsur), ("lifted", str(lifted))):
+        res = run(main, ["analyze", path, "--samples", "7", "-o", str(tmp_path / name)])
+        assert res.exit_code == 0, res.output
+        alone = json.loads((tmp_path / name / "summary.json").read_text())
+        assert out[name]["summary"]["peak_effort"] == alone["peak_effort"]
+        assert out[name]["summary"]["peak_reaction"] == alone["peak_reaction"]
+    assert out["rsur"]["summary"]["peak_effort"] != out["lifted"]["summary"]["peak_effort"]
+    page = (tmp_path / "c" / "compare.html").read_text()
+    assert "Joint force |F| at J3" in page and "peak |tau_J1|" in page
+    res = run(main, ["compare", rsur, str(linkdyn.example_path("hoeken")), "-o",
+                     str(tmp_path / "mixed")])
+    assert res.exit_code == 2 and "not both" in res.output

@@ -758,8 +758,6 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
     # each design: (file, its name, its model, what the sweep row holds or None)
     designs = [(path, Path(path).stem, io.load_model(path, allow_outside=allow_outside), None)
                for path in models]
-    for _, _, mech, _ in designs:
-        not_yet(mech, "compare")
     if sweep_dir is not None:
         from .studies.files import need_parquet
         need_parquet("compare --sweep")   # designs.parquet: say how to install, no traceback
@@ -771,12 +769,19 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
         raise ModelError("compare needs at least two model files", field="MODELS",
                          fix="Give two or more model files, e.g. linkdyn compare a.toml b.toml, "
                              "or a sweep's designs with --sweep DIR --by METRIC")
+    spatial = _one_space(designs)
     check_outdir(outdir)
     runs, names = [], []
     for path, stem, mech, _ in designs:
-        sol = run(mech, sample_times(mech, samples, duration, cycles), backend=_backend(ctx, backend))
-        summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
-                              default_range=mech.path_range)
+        t = sample_times(mech, samples, duration, cycles)
+        if spatial:   # solved and summarized as linkdyn analyze does
+            from .spatial import analyze as run_spatial, cli as spatial_cli
+            sol = run_spatial(mech, t)
+            summ = spatial_cli.summary(sol)
+        else:
+            sol = run(mech, t, backend=_backend(ctx, backend))
+            summ = design.summary(sol, fluctuation=fluctuation, path_point=mech.path_point,
+                                  default_range=mech.path_range)
         name = stem if stem not in names else f"{stem} ({len(names) + 1})"
         names.append(name)
         runs.append((name, sol, summ))
@@ -788,10 +793,22 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
              "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
     written = write_outputs(outdir, files, owned=tuple(files))
     for name, sol, summ in runs:
-        peaks = ", ".join(f"{j} peak {d['effort']} {d['peak']:.6g} {d['unit']}"
-                          for j, d in summ["drivers"].items())
+        peaks = ", ".join(f"peak |{c}| {v:.6g}" for c, v in summ["peak_effort"].items()) if (
+            spatial) else ", ".join(f"{j} peak {d['effort']} {d['peak']:.6g} {d['unit']}"
+                                    for j, d in summ["drivers"].items())
         click.echo(f"{name}: {summ['model']}, {summ['samples']} samples; {peaks}")
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _one_space(designs) -> bool:
+    """Whether the designs compared are spatial (exit 2 when planar and spatial are mixed)."""
+    spaces = {mech.space for _, _, mech, _ in designs}
+    if len(spaces) > 1:
+        path = next(p for p, _, m, _ in designs if m.space == "spatial")
+        raise ModelError("compare takes planar or spatial models, not both on one page",
+                         file=str(path), field="mechanism.space",
+                         fix="Compare the spatial models and the planar ones separately")
+    return spaces == {"spatial"}
 
 
 # ---------------------------------------------------------------------------- simulate
