@@ -31,6 +31,10 @@ Each metric is computed by the same functions the summary of ``linkdyn analyze``
     of a slider-crank, m (:func:`linkdyn.design.path.travel`, as the summary's
     ``joint_travel``).
 
+A spatial model (``Model.space == "spatial"``) has the effort metrics, ``peak_F_<joint>``
+(``|(Fx, Fy, Fz)|``) and ``peak_shaking_force`` (:func:`linkdyn.spatial.shaking.shaking_force`);
+the others are for planar models only (:data:`PLANAR_ONLY`, refused by name).
+
 Senses: every metric is better smaller (:func:`sense` ``'min'``) except
 ``min_transmission_angle``, ``stroke_<joint>`` and ``efficiency``, better larger (``'max'``). Whatever ranks
 designs (the sweep's best designs and Pareto fronts, ``compare --sweep --by``, ``optimize``)
@@ -112,8 +116,8 @@ def _effort(model: Model, joint: str) -> str:
 
 
 #: Metrics of planar models only (a spatial model has the efforts' and the joint forces').
-PLANAR_ONLY = ("min_transmission_angle", "path_deviation", "peak_shaking_force",
-               "flywheel_inertia", "stroke_", "friction_loss", "efficiency")
+PLANAR_ONLY = ("min_transmission_angle", "path_deviation", "flywheel_inertia", "stroke_",
+               "friction_loss", "efficiency")
 
 
 def _guides(model: Model) -> list[str]:
@@ -148,7 +152,7 @@ def names(model: Model, *, path_point=None) -> list[str]:
         out += [f"peak_{_effort(model, d.joint)}", f"rms_{_effort(model, d.joint)}"]
     out += [f"peak_F_{j.name}" for j in model.joints]
     if model.space == "spatial":
-        return out
+        return out + ["peak_shaking_force"]
     if four_bars(model):
         out.append("min_transmission_angle")
     if path_spec(model, path_point)[0]:
@@ -252,13 +256,18 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
 
 def _spatial(sol, wanted) -> dict[str, float]:
     """Metrics of one spatial run (:class:`linkdyn.spatial.SpatialSolution`): each driver's
-    peak and RMS effort, each joint's peak force magnitude ``|(Fx, Fy, Fz)|``."""
+    peak and RMS effort, each joint's peak force magnitude ``|(Fx, Fy, Fz)|`` and the peak
+    shaking force (:func:`linkdyn.spatial.shaking.shaking_force`)."""
+    from ..spatial.shaking import shaking_force
+
     m, out = sol.model, {}
     for d in m.drivers:
         col = _effort(m, d.joint)
         out[f"peak_{col}"], out[f"rms_{col}"] = peak(sol.effort(d.joint)), rms(sol.effort(d.joint))
     for j in m.joints:
         out[f"peak_F_{j.name}"] = peak(np.linalg.norm(sol.reaction(j.name)[:, :3], axis=-1))
+    if "peak_shaking_force" in wanted:
+        out["peak_shaking_force"] = peak(np.linalg.norm(shaking_force(sol), axis=-1))
     return {w: out[w] for w in wanted}
 
 
