@@ -68,7 +68,7 @@ def test_a_sweep_of_a_point_coordinate_gives_each_design_analyzed_alone(tmp_path
     """rsur's crank pin B moved out of the crank's plane (a 3-vector's component): each row's
     peak and RMS driving torque and peak joint forces are those of that file analyzed alone."""
     path = "bodies.crank.points.B[2]"
-    t = np.linspace(0.0, 1.0, 7)
+    t = np.linspace(0.0, 0.3, 4)
     values = np.array([-8.0, 8.0])
     df = linkdyn.sweep(linkdyn.example_path("rsur"), {path: values}, t)
     assert df["valid"].all() and list(df[path]) == list(values)
@@ -120,7 +120,7 @@ def test_optimize_a_spatial_crank_reaches_the_dense_scans_best(tmp_path):
     df = linkdyn.sweep(src, {"bodies.crank.com[1]": scan}, t, metrics=["peak_tau_J1"])
     k = int(np.argmin(df["peak_tau_J1"]))
     res = linkdyn.optimize(src, {"bodies.crank.com[1]": (-60.0, 60.0)}, t, "peak_tau_J1",
-                           popsize=4, maxiter=4)
+                           popsize=3, maxiter=3)
     c = res.values["bodies.crank.com[1]"]
     assert res.metrics["peak_tau_J1"] <= df["peak_tau_J1"][k]
     assert abs(c - scan[k]) <= scan[1] - scan[0]
@@ -198,12 +198,13 @@ def test_compare_two_spatial_models_writes_its_page(tmp_path):
     lifted.write_text(dumps_toml(data))
     rsur = str(linkdyn.example_path("rsur"))
     run = CliRunner().invoke
-    res = run(main, ["compare", rsur, str(lifted), "--samples", "7", "-o", str(tmp_path / "c")])
+    short = ["--samples", "4", "--duration", "0.3"]
+    res = run(main, ["compare", rsur, str(lifted), *short, "-o", str(tmp_path / "c")])
     assert res.exit_code == 0, res.output
     out = json.loads((tmp_path / "c" / "compare.json").read_text())
     assert list(out) == ["rsur", "lifted"]
     for name, path in (("rsur", rsur), ("lifted", str(lifted))):
-        res = run(main, ["analyze", path, "--samples", "7", "-o", str(tmp_path / name)])
+        res = run(main, ["analyze", path, *short, "-o", str(tmp_path / name)])
         assert res.exit_code == 0, res.output
         alone = json.loads((tmp_path / name / "summary.json").read_text())
         assert out[name]["summary"]["peak_effort"] == alone["peak_effort"]
