@@ -108,6 +108,8 @@ def test_peak_torque_metric_of_spatial_designs(tmp_path):
         assert df["peak_F_J1"][k] == np.max(np.linalg.norm(sol.reaction("J1")[:, :3], axis=1))
     with pytest.raises(linkdyn.ModelError, match="planar models only"):
         linkdyn.sweep(src, {"bodies.crank.com[1]": c}, t, metrics=["path_deviation"])
+    with pytest.raises(linkdyn.ModelError, match="compiled backend is not yet for spatial"):
+        linkdyn.sweep(src, {"bodies.crank.com[1]": c}, t, backend="compiled")
 
 
 def test_optimize_a_spatial_crank_reaches_the_dense_scans_best(tmp_path):

@@ -2,7 +2,8 @@
 
 A sweep is a table of designs (one row of parameter values each, in the file's units), cut into
 chunks. A chunk builds its designs' models, solves them as one batch (``linkdyn.analyze`` over a
-design axis), keeps only the metrics (:mod:`.metrics`) and drops the time histories, so memory is
+design axis; a spatial model's designs one after another by ``linkdyn.spatial.analyze``, the
+per-design path :func:`evaluate_models`), keeps only the metrics (:mod:`.metrics`) and drops the time histories, so memory is
 bounded by the chunk whatever the number of designs. Chunks run in this process, in local worker
 processes, or on a Dask cluster, with the same results. With an output directory each finished
 chunk is written at once (``chunks/chunk-<k>.parquet``), so a killed sweep resumes without
@@ -225,6 +226,11 @@ def _backend(task: Task, samples: int, layout=None, runs: bool = True) -> backen
     design-samples of its model (``layout``: the study's, whose loads say whether the sweep
     kernel runs it), so that every batch of a sweep runs it."""
     if task.space.spatial:   # the spatial solver runs on numpy
+        name = getattr(task.backend, "name", task.backend)
+        if name == "compiled":
+            raise ModelError("the compiled backend is not yet for spatial models",
+                             file=task.space.source, field="--backend",
+                             fix="Drop --backend compiled (spatial models run on numpy)")
         return backend_mod.choose("numpy", backend_mod.Work(samples, 1), [], runs=runs)
     base = task.space.model()
     reactions = metrics_mod.reads_reactions(task.metrics)
