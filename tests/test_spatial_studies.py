@@ -118,7 +118,7 @@ def test_optimize_a_spatial_crank_reaches_the_dense_scans_best(tmp_path):
     src = tmp_path / "crank.toml"
     src.write_text(CRANK)
     t = np.linspace(0.0, 0.25, 3)   # a quarter turn: the peak at phi = 0
-    scan = np.linspace(-60.0, 60.0, 25)
+    scan = np.linspace(-60.0, 60.0, 13)
     df = linkdyn.sweep(src, {"bodies.crank.com[1]": scan}, t, metrics=["peak_tau_J1"])
     k = int(np.argmin(df["peak_tau_J1"]))
     res = linkdyn.optimize(src, {"bodies.crank.com[1]": (-60.0, 60.0)}, t, "peak_tau_J1",
@@ -264,3 +264,36 @@ def test_spatial_shaking_force_is_the_moving_bodies_momentum_balance(name, appli
     np.testing.assert_allclose(got, balance, rtol=0, atol=1e-12 * np.max(np.abs(balance)))
     metric = linkdyn.studies.evaluate_metrics(sol, ["peak_shaking_force"])
     assert metric["peak_shaking_force"] == np.max(np.linalg.norm(got, axis=1))
+
+
+def test_sweep_and_optimize_commands_on_a_spatial_model(tmp_path):
+    """The commands: sweep writes designs.parquet and summary.json; optimize writes best.toml
+    (a spatial model file at the best value) and the best design's spatial summary; --report
+    exits 2."""
+    import json
+
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    src = tmp_path / "crank.toml"
+    src.write_text(CRANK)
+    run = CliRunner().invoke
+    vary = ["--vary", "bodies.crank.com[1]=-60:60:3", "--samples", "3", "--duration", "0.25"]
+    res = run(main, ["sweep", str(src), *vary, "-o", str(tmp_path / "s")])
+    assert res.exit_code == 0, res.output
+    summ = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert summ["valid"] == 3 and summ["metrics"]["peak_tau_J1"]["best_design"] == 1
+    res = run(main, ["optimize", str(src), "--vary", "bodies.crank.com[1]=-60:60", "--samples",
+                     "3", "--duration", "0.25", "--minimize", "peak_tau_J1", "--popsize", "3",
+                     "--maxiter", "2", "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    best = linkdyn.load(tmp_path / "o" / "best.toml")
+    info = json.loads((tmp_path / "o" / "optimize.json").read_text())
+    assert best.space == "spatial"
+    assert best.body("crank").com[1] == pytest.approx(info["parameters"]["bodies.crank.com[1]"]
+                                                      * 1e-3, rel=1e-12)
+    alone = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert alone["peak_effort"]["tau_J1"] == pytest.approx(info["metrics"]["peak_tau_J1"],
+                                                           rel=1e-12)
+    res = run(main, ["sweep", str(src), *vary, "--report", "-o", str(tmp_path / "r")])
+    assert res.exit_code == 2 and "not yet for spatial models" in res.output
