@@ -85,6 +85,10 @@ def test_a_sweep_of_a_point_coordinate_gives_each_design_analyzed_alone(tmp_path
             f = np.linalg.norm(alone.reaction(j)[:, :3], axis=1)
             assert df[f"peak_F_{j}"][k] == np.max(f), j
     assert df["peak_tau_J1"][0] != df["peak_tau_J1"][1]   # the parameter reached the model
+    sp = linkdyn.studies.space(linkdyn.example_path("stewart"), [
+        "joints[0].axis[1]", "bodies.cylinder1.rotation[0]", "bodies.cylinder1.origin[2]",
+        "loads[0].value[2]"])
+    assert [p.unit for p in sp.params] == ["", "rad", "mm", "N"]
 
 
 def test_peak_torque_metric_of_spatial_designs(tmp_path):
