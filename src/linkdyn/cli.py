@@ -776,6 +776,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
         t = sample_times(mech, samples, duration, cycles)
         if spatial:   # solved and summarized as linkdyn analyze does
             from .spatial import analyze as run_spatial, cli as spatial_cli
+            if backend == "compiled":
+                not_yet(mech, "the compiled backend")
             sol = run_spatial(mech, t)
             summ = spatial_cli.summary(sol)
         else:
@@ -793,7 +795,8 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
              "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
     written = write_outputs(outdir, files, owned=tuple(files))
     for name, sol, summ in runs:
-        peaks = ", ".join(f"peak |{c}| {v:.6g}" for c, v in summ["peak_effort"].items()) if (
+        peaks = ", ".join(f"peak |{c}| {v:.6g} {'N m' if c.startswith('tau') else 'N'}"
+                          for c, v in summ["peak_effort"].items()) if (
             spatial) else ", ".join(f"{j} peak {d['effort']} {d['peak']:.6g} {d['unit']}"
                                     for j, d in summ["drivers"].items())
         click.echo(f"{name}: {summ['model']}, {summ['samples']} samples; {peaks}")
