@@ -41,7 +41,7 @@ def test_a_posed_body_is_written_in_the_files_units(tmp_path):
     data["bodies"][2]["points"] = {k: [x - o for x, o in zip(v, [5.0, -2.0, 1.0])]
                                    for k, v in data["bodies"][2]["points"].items()}
     data["bodies"][2]["com"] = [x - o for x, o in zip(data["bodies"][2]["com"], [5.0, -2.0, 1.0])]
-    data["analysis"] = {"duration": 0.5, "samples": 9}
+    data["analysis"] = {"duration": 0.25, "samples": 5}
     src = tmp_path / "posed.toml"
     src.write_text(dumps_toml(data))
     m = linkdyn.load(src)
@@ -52,7 +52,7 @@ def test_a_posed_body_is_written_in_the_files_units(tmp_path):
     assert written["bodies"][2]["origin"] == [5, -2, 1] and "rotation" not in written["bodies"][2]
     assert written["joints"][2]["axis2"] == [0, 1, 0]
     m2 = linkdyn.load(tmp_path / "again.toml")
-    t = np.linspace(0.0, 0.5, 9)
+    t = np.linspace(0.0, 0.25, 5)
     _same_columns(linkdyn.analyze(m, t).columns(), linkdyn.analyze(m2, t).columns())
     # and the unposed file's run: the pose is only a choice of body frames
     plain = linkdyn.load(linkdyn.example_path("rsur"))
@@ -116,21 +116,30 @@ def test_peak_torque_metric_of_spatial_designs(tmp_path):
         linkdyn.sweep(src, {"bodies.crank.com[1]": c}, t, backend="compiled")
 
 
-def test_optimize_a_spatial_crank_reaches_the_dense_scans_best(tmp_path):
-    """One parameter (the mass centre's y, mm): optimize reaches the best of a dense scan
-    (and the closed form's c = -F L / (m g))."""
-    src = tmp_path / "crank.toml"
-    src.write_text(CRANK)
-    t = np.linspace(0.0, 0.25, 3)   # a quarter turn: the peak at phi = 0
-    scan = np.linspace(-60.0, 60.0, 13)
-    df = linkdyn.sweep(src, {"bodies.crank.com[1]": scan}, t, metrics=["peak_tau_J1"])
-    k = int(np.argmin(df["peak_tau_J1"]))
-    res = linkdyn.optimize(src, {"bodies.crank.com[1]": (-60.0, 60.0)}, t, "peak_tau_J1",
-                           popsize=3, maxiter=3)
-    c = res.values["bodies.crank.com[1]"]
-    assert res.metrics["peak_tau_J1"] <= df["peak_tau_J1"][k]
-    assert abs(c - scan[k]) <= scan[1] - scan[0]
-    assert abs(c - (-2.0 * 100.0 / 9.81)) < 0.5   # mm
+def _draws_both_designs(path, panels: int) -> None:
+    """compare.html in Chromium: every panel holds both designs' curves, the hover reads both,
+    no script error (skipped where Chromium or playwright is missing, as test_report's)."""
+    from test_report import CHROMIUM_ARGS, _chromium, _unavailable
+    exe = _chromium()
+    if exe is None:
+        _unavailable("Chromium is not installed (apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install playwright)")
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1440, "height": 900})
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(path.as_uri())
+        page.wait_for_function("window.__linkdynCompare === true")
+        assert page.locator("#plots path.series").count() == 2 * panels
+        box = page.locator("#plots .panel svg").first.bounding_box()
+        page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
+        assert page.locator("#plots .tooltip b[data-design]").count() == 2
+        assert errors == []
+        browser.close()
 
 
 CRANK = """
@@ -218,6 +227,8 @@ def test_compare_two_spatial_models_writes_its_page(tmp_path):
     assert out["rsur"]["summary"]["peak_effort"] != out["lifted"]["summary"]["peak_effort"]
     page = (tmp_path / "c" / "compare.html").read_text()
     assert "Joint force |F| at J3" in page and "peak |tau_J1|" in page
+    # in Chromium: the panels tau_J1, |F| at J1 .. J4 and the kinetic energy, each with both
+    _draws_both_designs(tmp_path / "c" / "compare.html", panels=6)
     res = run(main, ["compare", rsur, str(linkdyn.example_path("hoeken")), "-o",
                      str(tmp_path / "mixed")])
     assert res.exit_code == 2 and "not both" in res.output
@@ -271,9 +282,9 @@ def test_spatial_shaking_force_is_the_moving_bodies_momentum_balance(name, appli
 
 
 def test_sweep_and_optimize_commands_on_a_spatial_model(tmp_path):
-    """The commands: sweep writes designs.parquet and summary.json; optimize writes best.toml
-    (a spatial model file at the best value) and the best design's spatial summary; --report
-    exits 2."""
+    """One parameter (the crank's mass centre y, mm): linkdyn optimize reaches the best of a
+    dense scan by linkdyn sweep, and the closed form's c = -F L / (m g); it writes best.toml (a
+    spatial model file at that value) and the best design's spatial summary; --report exits 2."""
     import json
 
     from click.testing import CliRunner
@@ -282,22 +293,242 @@ def test_sweep_and_optimize_commands_on_a_spatial_model(tmp_path):
     src = tmp_path / "crank.toml"
     src.write_text(CRANK)
     run = CliRunner().invoke
-    vary = ["--vary", "bodies.crank.com[1]=-60:60:3", "--samples", "3", "--duration", "0.25"]
-    res = run(main, ["sweep", str(src), *vary, "-o", str(tmp_path / "s")])
+    short = ["--samples", "3", "--duration", "0.25"]   # a quarter turn: the peak at phi = 0
+    res = run(main, ["sweep", str(src), "--vary", "bodies.crank.com[1]=-60:60:13", *short,
+                     "-o", str(tmp_path / "s")])
     assert res.exit_code == 0, res.output
-    summ = json.loads((tmp_path / "s" / "summary.json").read_text())
-    assert summ["valid"] == 3 and summ["metrics"]["peak_tau_J1"]["best_design"] == 1
-    res = run(main, ["optimize", str(src), "--vary", "bodies.crank.com[1]=-60:60", "--samples",
-                     "3", "--duration", "0.25", "--minimize", "peak_tau_J1", "--popsize", "3",
-                     "--maxiter", "2", "-o", str(tmp_path / "o")])
+    scan = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert scan["valid"] == 13
+    best_scan = scan["metrics"]["peak_tau_J1"]
+    res = run(main, ["optimize", str(src), "--vary", "bodies.crank.com[1]=-60:60", *short,
+                     "--minimize", "peak_tau_J1", "--popsize", "3", "--maxiter", "3",
+                     "-o", str(tmp_path / "o")])
     assert res.exit_code == 0, res.output
-    best = linkdyn.load(tmp_path / "o" / "best.toml")
     info = json.loads((tmp_path / "o" / "optimize.json").read_text())
-    assert best.space == "spatial"
-    assert best.body("crank").com[1] == pytest.approx(info["parameters"]["bodies.crank.com[1]"]
-                                                      * 1e-3, rel=1e-12)
+    c = info["parameters"]["bodies.crank.com[1]"]
+    assert info["metrics"]["peak_tau_J1"] <= best_scan["best"]
+    assert abs(c - (-60.0 + 10.0 * best_scan["best_design"])) <= 10.0   # within the scan's step
+    assert abs(c - (-2.0 * 100.0 / 9.81)) < 0.5
+    best = linkdyn.load(tmp_path / "o" / "best.toml")
+    assert best.space == "spatial" and best.body("crank").com[1] == pytest.approx(c * 1e-3,
+                                                                                 rel=1e-12)
     alone = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert alone["peak_effort"]["tau_J1"] == pytest.approx(info["metrics"]["peak_tau_J1"],
                                                            rel=1e-12)
-    res = run(main, ["sweep", str(src), *vary, "--report", "-o", str(tmp_path / "r")])
+    res = run(main, ["sweep", str(src), "--vary", "bodies.crank.com[1]=-60:60:3", *short,
+                     "--report", "-o", str(tmp_path / "r")])
     assert res.exit_code == 2 and "not yet for spatial models" in res.output
+
+
+CRANK = """
+[mechanism]
+name = "crank"
+space = "spatial"
+gravity = [0.0, 0.0, -9.81]
+
+[units]
+length = "mm"
+angle = "deg"
+
+[[bodies]]
+name = "ground"
+points = { O = [0.0, 0.0, 0.0] }
+
+[[bodies]]
+name = "crank"
+points = { O = [0.0, 0.0, 0.0], B = [0.0, 100.0, 0.0] }
+mass = 1.0
+com = [0.0, 30.0, 0.0]
+inertia = [2000.0, 500.0, 2000.0]
+
+[[joints]]
+name = "J1"
+type = "revolute"
+connect = ["ground.O", "crank.O"]
+axis = [1.0, 0.0, 0.0]
+
+[[drivers]]
+joint = "J1"
+motion = { kind = "constant_speed", rpm = 60.0, start = 0.0 }
+
+[[loads]]
+kind = "force"
+body = "crank"
+point = "B"
+value = [0.0, 0.0, -2.0]
+"""
+
+
+def test_the_stewart_platform_follows_its_trajectory():
+    """The bundled 6-UPS platform: its six leg lengths (drivers by formulas) are the closed-form
+    inverse kinematics of a heave 20 sin(pi t) mm and a roll 0.1 sin(2 pi t) rad about x, so the
+    platform's centre and rotation solved from them are that trajectory; mobility 6."""
+    m = linkdyn.load(linkdyn.example_path("stewart"))
+    t = np.linspace(0.0, 1.0, 5)
+    sol = linkdyn.analyze(m, t)
+    a, h = 0.1 * np.sin(2 * np.pi * t), 0.02 * np.sin(np.pi * t)
+    centre = np.stack([0 * t, 0 * t, 0.25 + h], axis=1)
+    np.testing.assert_allclose(sol.point("platform", "T"), centre, rtol=0, atol=1e-13)
+    c, s = np.cos(a), np.sin(a)
+    rx = np.stack([np.stack([1 + 0 * t, 0 * t, 0 * t], -1), np.stack([0 * t, c, -s], -1),
+                   np.stack([0 * t, s, c], -1)], axis=1)
+    np.testing.assert_allclose(sol.rotation("platform"), rx, rtol=0, atol=1e-13)
+    assert len(m.drivers) == 6 and linkdyn.spatial.check(m)["mobility"] == 6
+
+
+def test_compare_two_spatial_models_writes_its_page(tmp_path):
+    """compare of rsur and rsur with its crank pin lifted: compare.json holds each design's
+    own summary (as linkdyn analyze writes it), compare.html its curves and key results; a
+    planar model beside them is refused (exit 2)."""
+    import json
+
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    data = tomllib.loads(linkdyn.example_path("rsur").read_text())
+    data["bodies"][1]["points"]["B"][2] = 8.0
+    lifted = tmp_path / "lifted.toml"
+    lifted.write_text(dumps_toml(data))
+    rsur = str(linkdyn.example_path("rsur"))
+    run = CliRunner().invoke
+    short = ["--samples", "4", "--duration", "0.3"]
+    res = run(main, ["compare", rsur, str(lifted), *short, "-o", str(tmp_path / "c")])
+    assert res.exit_code == 0, res.output
+    out = json.loads((tmp_path / "c" / "compare.json").read_text())
+    assert list(out) == ["rsur", "lifted"]
+    for name, path in (("rsur", rsur), ("lifted", str(lifted))):
+        res = run(main, ["analyze", path, *short, "-o", str(tmp_path / name)])
+        assert res.exit_code == 0, res.output
+        alone = json.loads((tmp_path / name / "summary.json").read_text())
+        assert out[name]["summary"]["peak_effort"] == alone["peak_effort"]
+        assert out[name]["summary"]["peak_reaction"] == alone["peak_reaction"]
+    assert out["rsur"]["summary"]["peak_effort"] != out["lifted"]["summary"]["peak_effort"]
+    page = (tmp_path / "c" / "compare.html").read_text()
+    assert "Joint force |F| at J3" in page and "peak |tau_J1|" in page
+    # in Chromium: the panels tau_J1, |F| at J1 .. J4 and the kinetic energy, each with both
+    _draws_both_designs(tmp_path / "c" / "compare.html", panels=6)
+    res = run(main, ["compare", rsur, str(linkdyn.example_path("hoeken")), "-o",
+                     str(tmp_path / "mixed")])
+    assert res.exit_code == 2 and "not both" in res.output
+
+
+SLIDER = """
+[mechanism]
+space = "spatial"
+gravity = [0.0, -9.81, -3.0]
+[[bodies]]
+name = "ground"
+points = { O = [0.0, 0.0, 0.0] }
+[[bodies]]
+name = "slider"
+points = { O = [0.0, 0.0, 0.0] }
+mass = 2.0
+inertia = [0.01, 0.01, 0.01]
+[[joints]]
+name = "P"
+type = "prismatic"
+connect = ["ground.O", "slider.O"]
+axis = [0.6, 0.8, 0.0]
+[[drivers]]
+joint = "P"
+motion = { kind = "expression", q = "0.1*sin(3*t)" }
+"""
+
+
+@pytest.mark.parametrize("name, applied", [
+    ("spatial_slider_crank", [-40.0, 0.0, -30.0]), ("rps3", [0.0, 0.0, -30.0]),
+    ("slider", [0.0, 0.0, 0.0])])
+def test_spatial_shaking_force_is_the_moving_bodies_momentum_balance(name, applied, tmp_path):
+    """peak_shaking_force's force on the ground (joint reactions, a ground prismatic driver's
+    effort, the return spring anchored on the ground) equals sum(m g + F) - sum(m a_G), F the
+    loads not from the ground and a_G the mass centres' accelerations (kinematics alone)."""
+    from linkdyn.io import model_from_dict
+    from linkdyn.spatial.shaking import shaking_force
+    data = tomllib.loads(SLIDER if name == "slider" else linkdyn.example_path(name).read_text())
+    for b in data["bodies"][1:]:
+        b["points"]["G_"] = b.get("com", [0.0, 0.0, 0.0])
+    m = model_from_dict(data)
+    t = np.linspace(0.0, 0.5, 5)
+    sol = linkdyn.analyze(m, t)
+    balance = np.zeros((len(t), 3)) + applied
+    for b in m.bodies[1:]:
+        balance += b.mass * (np.asarray(m.gravity) - sol.point_acceleration(b.name, "G_"))
+    got = shaking_force(sol)
+    np.testing.assert_allclose(got, balance, rtol=0, atol=1e-12 * np.max(np.abs(balance)))
+    metric = linkdyn.studies.evaluate_metrics(sol, ["peak_shaking_force"])
+    assert metric["peak_shaking_force"] == np.max(np.linalg.norm(got, axis=1))
+
+
+def test_sweep_and_optimize_commands_on_a_spatial_model(tmp_path):
+    """One parameter (the crank's mass centre y, mm): linkdyn optimize reaches the best of a
+    dense scan by linkdyn sweep, and the closed form's c = -F L / (m g); it writes best.toml (a
+    spatial model file at that value) and the best design's spatial summary; --report exits 2."""
+    import json
+
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    src = tmp_path / "crank.toml"
+    src.write_text(CRANK)
+    run = CliRunner().invoke
+    short = ["--samples", "3", "--duration", "0.25"]   # a quarter turn: the peak at phi = 0
+    res = run(main, ["sweep", str(src), "--vary", "bodies.crank.com[1]=-60:60:13", *short,
+                     "-o", str(tmp_path / "s")])
+    assert res.exit_code == 0, res.output
+    scan = json.loads((tmp_path / "s" / "summary.json").read_text())
+    assert scan["valid"] == 13
+    best_scan = scan["metrics"]["peak_tau_J1"]
+    res = run(main, ["optimize", str(src), "--vary", "bodies.crank.com[1]=-60:60", *short,
+                     "--minimize", "peak_tau_J1", "--popsize", "3", "--maxiter", "3",
+                     "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    info = json.loads((tmp_path / "o" / "optimize.json").read_text())
+    c = info["parameters"]["bodies.crank.com[1]"]
+    assert info["metrics"]["peak_tau_J1"] <= best_scan["best"]
+    assert abs(c - (-60.0 + 10.0 * best_scan["best_design"])) <= 10.0   # within the scan's step
+    assert abs(c - (-2.0 * 100.0 / 9.81)) < 0.5
+    best = linkdyn.load(tmp_path / "o" / "best.toml")
+    assert best.space == "spatial" and best.body("crank").com[1] == pytest.approx(c * 1e-3,
+                                                                                 rel=1e-12)
+    alone = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert alone["peak_effort"]["tau_J1"] == pytest.approx(info["metrics"]["peak_tau_J1"],
+                                                           rel=1e-12)
+    res = run(main, ["sweep", str(src), "--vary", "bodies.crank.com[1]=-60:60:3", *short,
+                     "--report", "-o", str(tmp_path / "r")])
+    assert res.exit_code == 2 and "not yet for spatial models" in res.output
+
+
+def test_spatial_compare_page_draws_every_design_in_chromium(tmp_path):
+    """compare.html of two spatial models in Chromium: every panel holds both designs' curves,
+    the hover reads both, no script error."""
+    from click.testing import CliRunner
+    from test_report import CHROMIUM_ARGS, _chromium, _unavailable
+
+    from linkdyn.cli import main
+    exe = _chromium()
+    if exe is None:
+        _unavailable("Chromium is not installed (apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _unavailable("playwright is not installed (pip install playwright)")
+    src = tmp_path / "crank.toml"
+    src.write_text(CRANK)
+    res = CliRunner().invoke(main, ["compare", str(src), str(linkdyn.example_path("rsur")),
+                                    "--samples", "4", "--duration", "0.3", "-o",
+                                    str(tmp_path / "c")])
+    assert res.exit_code == 0, res.output
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=exe, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1440, "height": 900})
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto((tmp_path / "c" / "compare.html").as_uri())
+        page.wait_for_function("window.__linkdynCompare === true")
+        # the panels both designs have: tau_J1, |F| at J1, kinetic energy
+        assert page.locator("#plots path.series").count() == 2 * 3
+        box = page.locator("#plots .panel svg").first.bounding_box()
+        page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
+        assert page.locator("#plots .tooltip b[data-design]").count() == 2
+        assert errors == []
+        browser.close()
