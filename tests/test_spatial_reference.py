@@ -106,7 +106,8 @@ def test_reference_assembles_and_moves_each_example_smoothly(name):
     coordinates move smoothly (steps under 0.6 rad or 0.6 m, each within a tenth of the largest
     step of its rates' trapezoid: no jump to another branch), the Jacobian with the drivers' rows
     keeps full column rank (6 per moving body: the drivers fix the motion) and its smallest
-    singular value stays above 1e-3 of its largest (no singular position) over 25 samples (stewart: 17)."""
+    singular value stays above 1e-3 of its largest (no singular position) over 25 samples
+    (stewart: 17)."""
     cols = reference(name)
     assert np.max(cols["ne_residual"]) < 1e-9 * max(1.0, family_peaks(cols)["F"])
     dt = np.diff(cols["t"])

@@ -32,9 +32,10 @@ def bodies(model, L: float, A: float, num, vec) -> list[dict]:
         entry: dict = {"name": b.name, "points": {k: vec(v, L) for k, v in b.points.items()}}
         if b.name != GROUND:
             i = np.asarray(b.inertia)   # principal moments where the tensor is diagonal
+            diagonal = np.count_nonzero(i - np.diag(np.diag(i))) == 0
             entry.update(mass=num(b.mass), com=vec(b.com, L),
-                         inertia=vec(np.diag(i), L ** 2) if np.count_nonzero(i - np.diag(np.diag(i)))
-                         == 0 else [vec(row, L ** 2) for row in i])
+                         inertia=vec(np.diag(i), L ** 2) if diagonal else
+                         [vec(row, L ** 2) for row in i])
             if np.any(b.origin != 0):
                 entry["origin"] = vec(b.origin, L)
             if not np.array_equal(b.rotation, np.eye(3)):
