@@ -1,0 +1,1 @@
+LD.view3d = function () { throw new Error("todo"); };
