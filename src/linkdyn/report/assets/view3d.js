@@ -217,28 +217,28 @@ LD.view3d = function (D, anim, fmtS) {
   function drawHud() {
     var s = cam.fit * cam.zoom, target = VW / 5 / s, m0 = Math.pow(10, Math.floor(Math.log10(target)));
     var L = [1, 2, 5, 10].map(function (f) { return f * m0; }).filter(function (v) { return v <= target; }).pop() || m0;
-    var x0 = 70, y0 = VH - 12, w = L * s;
+    var x0 = 70 * textScale, y0 = VH - 12 * textScale, w = L * s;
     bar.setAttribute("d", "M" + x0 + "," + (y0 - 4) + "v8M" + x0 + "," + y0 + "h" + w.toFixed(1) + "M" + (x0 + w).toFixed(1) + "," + (y0 - 4) + "v8");
-    barText.setAttribute("x", (x0 + w + 6).toFixed(1)); barText.setAttribute("y", y0 + 4);
+    barText.setAttribute("x", (x0 + w + 6).toFixed(1)); barText.setAttribute("y", (y0 + 4 * textScale).toFixed(1));
     barText.textContent = L >= 1 ? fmt(L, 3) + " m" : fmt(L * 1000, 3) + " mm";
     gizmo.forEach(function (o) {   // the global axes' directions, bottom left, 22 px long
-      var gx = 34, gy = VH - 40, ex = 22 * dot(o.a[1], R), ey = -22 * dot(o.a[1], U);
+      var gx = 34 * textScale, gy = VH - 40 * textScale, ex = 22 * textScale * dot(o.a[1], R), ey = -22 * textScale * dot(o.a[1], U);
       o.line.setAttribute("x1", gx); o.line.setAttribute("y1", gy);
       o.line.setAttribute("x2", (gx + ex).toFixed(1)); o.line.setAttribute("y2", (gy + ey).toFixed(1));
       o.t.setAttribute("x", (gx + 1.35 * ex).toFixed(1)); o.t.setAttribute("y", (gy + 1.35 * ey + 4).toFixed(1));
     });
     if (fleg) {
-      var lw = fleg.Fr * wscale * s, lx1 = VW - 14, ly = VH - 12;
+      var lw = fleg.Fr * wscale * s, lx1 = VW - 14, ly = VH - 12 * textScale;
       fleg.line.setAttribute("x1", (lx1 - lw).toFixed(1)); fleg.line.setAttribute("x2", lx1);
       fleg.line.setAttribute("y1", ly); fleg.line.setAttribute("y2", ly);
-      fleg.t.setAttribute("x", (lx1 - lw - 6).toFixed(1)); fleg.t.setAttribute("y", ly + 4);
+      fleg.t.setAttribute("x", (lx1 - lw - 6).toFixed(1)); fleg.t.setAttribute("y", (ly + 4 * textScale).toFixed(1));
       fleg.g.setAttribute("data-length", lw.toFixed(4));
     }
   }
 
   // ------------------------------------------------------------------ drawing a frame
   function label(node, s, dx, dy) {
-    node.setAttribute("x", (s[0] + dx).toFixed(1)); node.setAttribute("y", (s[1] + dy).toFixed(1));
+    node.setAttribute("x", (s[0] + dx * textScale).toFixed(1)); node.setAttribute("y", (s[1] + dy * textScale).toFixed(1));
   }
   function seg(line, a, b) {
     line.setAttribute("x1", a[0].toFixed(1)); line.setAttribute("y1", a[1].toFixed(1));
@@ -395,6 +395,17 @@ LD.view3d = function (D, anim, fmtS) {
   });
   LD.h("span", "note", box, "drag to turn, wheel or pinch to zoom");
 
+  // texts keep about their size on the screen whatever the page's width (a phone shows the
+  // 640-unit view in ~360 px): font sizes and label offsets grow by textScale
+  var textScale = 1;
+  function resize() {
+    var w = anim.getBoundingClientRect().width;
+    textScale = w > 0 ? Math.max(1, Math.min(2.2, VW / w)) : 1;
+    Array.prototype.forEach.call(anim.querySelectorAll("text"), function (t) {
+      if (!t.hasAttribute("data-fs")) t.setAttribute("data-fs", t.getAttribute("font-size") || 12);
+      t.setAttribute("font-size", (parseFloat(t.getAttribute("data-fs")) * textScale).toFixed(1));
+    });
+  }
   function show(what, on) {
     var disp = on ? "" : "none";
     if (what === "labels") gLabels.style.display = disp;
@@ -402,5 +413,5 @@ LD.view3d = function (D, anim, fmtS) {
     else if (what === "forces") { showForces = on; gForces.style.display = gFLabels.style.display = disp; }
   }
   axes();
-  return {draw: draw, resize: function () {}, show: show, toggles: ["labels", "traces", "forces"]};
+  return {draw: draw, resize: resize, show: show, toggles: ["labels", "traces", "forces"]};
 };
