@@ -58,7 +58,7 @@ LD.view3d = function (D, anim, fmtS) {
       gForces = el("g", {"class": "forces"}, anim), gLabels = el("g", {"class": "labels"}, anim),
       gFLabels = el("g", {"class": "labels flabels"}, anim), gHud = el("g", {"class": "hud"}, anim);
   gForces.style.display = gFLabels.style.display = "none";
-  var showForces = false;
+  var showForces = false, showLabels = true, place = LD.placer(VW, VH);
 
   // the floor: a grid of round spacing in the plane z = lowest point, under the mechanism
   var zmin = Infinity;
@@ -278,7 +278,7 @@ LD.view3d = function (D, anim, fmtS) {
       cx /= sp.length; cy /= sp.length; o.depth = dz / sp.length;
       if (o.b.shape === "dot") { o.node.setAttribute("cx", sp[0][0].toFixed(1)); o.node.setAttribute("cy", sp[0][1].toFixed(1)); }
       else o.node.setAttribute("points", sp.map(xy).join(" "));
-      label(o.lab, [cx, cy], 0, -9);
+      o.ax = cx; o.ay = cy;
     });
     bodies.slice().sort(function (a, b) { return a.depth - b.depth; }).forEach(function (o) { gBodies.appendChild(o.node); });
     springs.forEach(function (o) {
@@ -291,7 +291,7 @@ LD.view3d = function (D, anim, fmtS) {
     joints.forEach(function (o, n) {
       var p = P(o.j.b, k), ok = ok3(p);
       o.g.style.display = o.lab.style.display = ok ? "" : "none";
-      if (!ok) { o.arrow.style.display = o.flab.style.display = "none"; return; }
+      if (!ok) { o.arrow.style.display = o.flab.style.display = "none"; o.s = o.tip = null; return; }
       var s = proj(p), pp = o.parts;
       o.s = s;
       o.c.setAttribute("cx", s[0].toFixed(2)); o.c.setAttribute("cy", s[1].toFixed(2));
@@ -303,14 +303,14 @@ LD.view3d = function (D, anim, fmtS) {
       if (e && pp.cross1) { var e2 = vec(o.j.axis2, k);
                             seg(pp.cross1, proj(add(p, e, -0.8 * Lpin)), proj(add(p, e, 0.8 * Lpin)));
                             seg(pp.cross2, proj(add(p, e2, -0.8 * Lpin)), proj(add(p, e2, 0.8 * Lpin))); }
-      label(o.lab, s, 8, -8);
+
       var f = S["F:" + o.j.name][k], F = vec(["Fx:" + o.j.name, "Fy:" + o.j.name, "Fz:" + o.j.name], k);
       if (fin(f) && f > bestF) { bestF = f; best = n; }
       var tip = arrow(o.arrow, p, F);
       o.arrow.setAttribute("data-f", fin(f) ? f : "");
       o.flab.style.display = tip ? "" : "none";
       o.flab.textContent = o.j.name + " " + fmtS("F:" + o.j.name, f) + " N";
-      if (tip) label(o.flab, tip, 4, -4);
+      o.tip = tip;
     });
     ring.style.display = best >= 0 ? "" : "none";
     if (best >= 0) { ring.setAttribute("cx", joints[best].s[0].toFixed(1)); ring.setAttribute("cy", joints[best].s[1].toFixed(1)); }
@@ -321,7 +321,7 @@ LD.view3d = function (D, anim, fmtS) {
       else tip = curl(o.a, p, v, 0.16 * G.radius);
       o.t.style.display = tip ? "" : "none";
       o.t.textContent = o.l.label + " " + fmt(Math.hypot(v[0], v[1], v[2]), 4) + (o.l.kind === "force" ? " N" : " N m");
-      if (tip) label(o.t, tip, 4, 12);
+      o.tip = tip;
     });
     drvArrows.forEach(function (o) {
       var v = S[o.d.key][k], tip = null;
@@ -333,9 +333,22 @@ LD.view3d = function (D, anim, fmtS) {
       if (!tip) o.a.style.display = "none";
       o.t.style.display = tip ? "" : "none";
       o.t.textContent = "driver " + o.d.joint + " " + fmtS(o.d.key, v) + " " + o.d.unit;
-      if (tip) label(o.t, tip, 4, -6);
+      o.tip = tip;
     });
     drawHud();
+    // labels clear of each other and of the joints (LD.placer, common.js): joint names first,
+    // then bodies, then the forces' values at their arrows' tips
+    var obst = [], rj = 7 * textScale, items = [];
+    joints.forEach(function (o) { if (o.g.style.display !== "none") obst.push([o.s[0] - rj, o.s[1] - rj, o.s[0] + rj, o.s[1] + rj]); });
+    if (showLabels) {
+      joints.forEach(function (o) { if (o.s) items.push({node: o.lab, x: o.s[0], y: o.s[1], fs: 11.5, r: 8}); });
+      bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6}); });
+    }
+    if (showForces) joints.concat(loadArrows, drvArrows).forEach(function (o) {
+      var node = o.flab || o.t;
+      if (o.tip) { node.style.display = ""; items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); }
+    });
+    place(items, obst, textScale);
     return best;
   }
 
@@ -408,7 +421,7 @@ LD.view3d = function (D, anim, fmtS) {
   }
   function show(what, on) {
     var disp = on ? "" : "none";
-    if (what === "labels") gLabels.style.display = disp;
+    if (what === "labels") { showLabels = on; gLabels.style.display = disp; }
     else if (what === "traces") gTraces.style.display = disp;
     else if (what === "forces") { showForces = on; gForces.style.display = gFLabels.style.display = disp; }
   }
