@@ -1089,3 +1089,21 @@ def test_spatial_report_draws_turns_and_zooms(browser, rsur_report_run, size):
         assert pg.errors == []
     finally:
         pg.close()
+
+
+def test_spatial_plots_are_the_pages_panels(rsur_report_run, tmp_path):
+    """``--plots`` on a spatial model: each section of the page's panels as one figure; here
+    the energy section alone (the others are drawn alike), its curve the csv's energy."""
+    from linkdyn.plots import panel_outputs
+    text = (rsur_report_run / "report.html").read_text("utf-8")
+    D = json.loads(text.split('type="application/json">', 1)[1].split("</script>")[0])
+    names = set(panel_outputs(D))
+    assert {"plot_joints.png", "plot_efforts.svg", "plot_energy.png"} <= names
+    D["plots"] = [p for p in D["plots"] if p["section"] == "Energy"]
+    cols = _csv_columns(rsur_report_run / "results.csv")
+    ke = next(s for s in D["plots"][0]["series"] if s["label"] == "kinetic")
+    np.testing.assert_allclose(D["series"][ke["key"]], cols["kinetic_energy"], rtol=1e-4)
+    out = panel_outputs(D, formats=("png",))
+    assert list(out) == ["plot_energy.png"]
+    out["plot_energy.png"](tmp_path / "e.png")
+    assert (tmp_path / "e.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
