@@ -1107,3 +1107,30 @@ def test_spatial_plots_are_the_pages_panels(rsur_report_run, tmp_path):
     assert list(out) == ["plot_energy.png"]
     out["plot_energy.png"](tmp_path / "e.png")
     assert (tmp_path / "e.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_spatial_page_of_a_planar_mechanism_shows_the_planar_pages_numbers():
+    """Hoeken's four-bar modelled in space: its page's joint rates, driver torque and
+    reaction magnitudes are the planar page's (two solvers that share no kinematics or
+    dynamics code), and its out-of-plane reactions are listed as zero, not plotted."""
+    from linkdyn.report import spatial as sp
+    t = np.linspace(0.0, 1.0, 13)
+    planar = report.page_data(linkdyn.analyze(linkdyn.load(linkdyn.example_path("hoeken")), t))
+    space = sp.page_data(linkdyn.analyze(linkdyn.load(linkdyn.example_path("hoeken_spatial")), t))
+    assert space["geom"]["dim"] == 3 and "dim" not in planar["geom"]
+    joints = [j["name"] for j in planar["geom"]["joints"]]
+    assert joints == [j["name"] for j in space["geom"]["joints"]]
+    fpeak = max(max(planar["series"][f"F:{j}"]) for j in joints)
+    for j in joints:
+        np.testing.assert_allclose(space["series"][f"F:{j}"], planar["series"][f"F:{j}"],
+                                   rtol=1e-4, atol=1e-9 * fpeak)
+        # rates (a spatial coordinate is 0 at the design pose, a planar one is not)
+        np.testing.assert_allclose(space["series"][f"qd:{j}"], planar["series"][f"qd:{j}"],
+                                   rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(space["series"]["tau:J1"], planar["series"]["tau:J1"],
+                               rtol=1e-4, atol=1e-9 * fpeak)
+    for j in joints:   # the plane's normal force and in-plane couples: zero to rounding
+        assert any(z.endswith(f"Fz") and j in z for z in space["zero"]), (j, space["zero"])
+    titles = {p["title"] for p in space["plots"]}
+    assert not any(s["label"] == "Fz" for p in space["plots"] for s in p["series"])
+    assert "Joint angles" in titles and "Driver torque" in titles
