@@ -1133,4 +1133,7 @@ def test_spatial_page_of_a_planar_mechanism_shows_the_planar_pages_numbers():
         assert any(z.endswith(f"Fz") and j in z for z in space["zero"]), (j, space["zero"])
     titles = {p["title"] for p in space["plots"]}
     assert not any(s["label"] == "Fz" for p in space["plots"] for s in p["series"])
+    # the key results say that statics leaves 3 reaction sets open (a planar loop in space)
+    open_sets = next(it for it in space["key"] if it["label"].startswith("reaction sets"))
+    assert open_sets["value"] == 3 and "Fz_J1" in open_sets["note"]
     assert "Joint angles" in titles and "Driver torque" in titles

@@ -49,7 +49,8 @@ def scales(sol) -> dict[str, float]:
 def key_results(sol, summary: dict | None = None) -> list[dict]:
     """The key results of a spatial run, in the items of :func:`.keys.key_results`: each
     driver's largest, smallest and RMS effort; each joint's peak reaction force and couple;
-    the largest and smallest kinetic energy."""
+    with redundant constraints, how many reaction sets statics leaves open and which
+    components they touch; the largest and smallest kinetic energy."""
     m, items, sc = sol.model, [], scales(sol)
 
     def add(group, label, x, k, unit, *, signed=False, scale=None, note=""):
@@ -78,6 +79,12 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
         if not _kind(sol, j.name).couple_free:
             add("Joint loads", f"peak |M| {j.name}", c, _k(c, np.nanargmax), "N m",
                 scale=sc["N m"], note=f"about {j.body_b}.{j.point_b}")
+    if sol.redundancy is not None and sol.redundancy.basis.shape[2]:
+        r = sol.redundancy   # redundant constraints: say which reactions statics leaves open
+        items.append({"group": "Joint loads", "label": "reaction sets statics leaves open",
+                      "value": int(r.basis.shape[2]), "unit": "", "signed": False, "k": None,
+                      "note": "reactions shown: the minimum-norm ones; undetermined: "
+                              + ", ".join(r.components)})
     ke = np.asarray(sol.kinetic_energy(), float)
     add("Energy", "max kinetic energy", ke, _k(ke, np.nanargmax), "J", scale=sc["J"])
     add("Energy", "min kinetic energy", ke, _k(ke, np.nanargmin), "J", scale=sc["J"])
