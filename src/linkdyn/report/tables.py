@@ -325,7 +325,11 @@ def model_html(sol) -> str:
            + (f" · <b>file</b> {_e(Path(m.source).name)}" if m.source else "") + "</p>",
            "<h3>Bodies</h3>", bodies, "<h3>Joints</h3>", joints,
            "<p class='note'>Reaction at a joint: the force by its first body on its second "
-           "(global components). Driver effort: what the actuator applies on the second body. "
+           "(global components)"
+           + (", and the couple about the second body's point; with redundant constraints "
+              "the minimum-norm reactions. " if getattr(sol, "space", "planar") == "spatial"
+              else ". ")
+           + "Driver effort: what the actuator applies on the second body. "
            "λ: the reaction at a cut joint, solved together with the driver efforts.</p>"]
     if drv:
         out += ["<h3>Drivers</h3>", f"<ul>{drv}</ul>"]
