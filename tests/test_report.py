@@ -1062,9 +1062,20 @@ def test_spatial_report_draws_turns_and_zooms(browser, rsur_report_run, size):
         p.wait_for_function("window.__linkdynFrame > 5", timeout=5000)
         p.click("#play")
         drawn_match_csv()
-        # the forces: each joint's reaction arrow
+        # the forces: each joint's reaction arrow from its point along the csv's force, at the
+        # page's one length per newton, projected by the camera
         p.check("#show-forces")
         assert p.locator("#anim line.farrow[data-joint]").count() == 4
+        k, cam = pg.frame(), p.evaluate("window.__linkdynCamera")
+        per_newton = p.evaluate("window.__linkdynForces.scale")
+        assert per_newton > 0
+        for name, pid in ends.items():
+            a = p.locator(f"#anim line.farrow[data-joint='{name}']")
+            drawn = [float(a.get_attribute(c)) for c in ("x1", "y1", "x2", "y2")]
+            xyz = np.array([cols[f"{c}_{pid}"][k] for c in "xyz"])
+            force = np.array([cols[f"F{c}_{name}"][k] for c in "xyz"])
+            want = _camera_projection(cam, np.array([xyz, xyz + per_newton * force])).ravel()
+            np.testing.assert_allclose(drawn, want, atol=0.05)
         # dragging turns the view: the camera and the pixels change, the drawing still matches
         box = p.locator("#anim").bounding_box()
         before = p.locator("#anim").screenshot()
