@@ -191,8 +191,10 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         if ser:
             plots.append({"section": section, "title": title, "unit": unit, "series": ser})
 
-    coords = [(j, suffix, ang) for j in joints if j.kind != "spherical"
-              for suffix, ang in _kind(sol, j.name).coordinates_named]
+    # each joint coordinate: the joint's colour, a second one of the same joint another
+    coords = [(j, suffix, ang, PALETTE[(joints.index(j) + 5 * c) % len(PALETTE)])
+              for j in joints if j.kind != "spherical"
+              for c, (suffix, ang) in enumerate(_kind(sol, j.name).coordinates_named)]
     motion = "Joint motion (relative joint coordinates q)"
     names = {True: ("Joint angles", "Joint angular rates", "Joint angular accelerations"),
              False: ("Joint travels", "Joint travel rates", "Joint travel accelerations")}
@@ -201,8 +203,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         for ang in (True, False):
             ser = [{"key": add(f"{kind}:{j.name}{sfx}", cols[f"{kind}_{j.name}{sfx}"]
                                * (DEG if kind == "q" and ang else 1.0)),
-                    "label": j.name + sfx, "color": jcolor[j.name]}
-                   for j, sfx, a in coords if a == ang]
+                    "label": j.name + sfx, "color": colour}
+                   for j, sfx, a, colour in coords if a == ang]
             panel(motion, names[ang][n], units[ang][n], ser)
     panel("Link motion", "Angular speed of the bodies |ω|", "rad/s",
           [{"key": add(f"w:{b.name}", np.linalg.norm(sol.omega(b.name), axis=1)),
