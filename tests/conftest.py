@@ -66,3 +66,15 @@ def hoeken_report_run(tmp_path_factory) -> Path:
     res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(folder / "out"), "--report"])
     assert res.exit_code == 0, res.output
     return folder / "out"
+
+
+@pytest.fixture(scope="session")
+def rsur_report_run(tmp_path_factory) -> Path:
+    """The output folder of ``linkdyn analyze rsur.toml -o out --report`` (the bundled spatial
+    RSUR four-bar, in process), run once per session: results.csv, summary.json, report.html."""
+    folder = tmp_path_factory.mktemp("rsur-report")
+    model = folder / "rsur.toml"
+    model.write_text(linkdyn.example_path("rsur").read_text("utf-8"), "utf-8")
+    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(folder / "out"), "--report"])
+    assert res.exit_code == 0, res.output
+    return folder / "out"

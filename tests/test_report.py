@@ -981,3 +981,170 @@ def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browse
     inner.wait_for_function("document.querySelectorAll('#anim *').length > 10")
     assert errors == []
     pg.close()
+
+
+# ---------------------------------------------------------------------------- spatial models
+
+def _csv_columns(path) -> dict[str, np.ndarray]:
+    head = path.read_text("utf-8").splitlines()[0].split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return {name: data[:, n] for n, name in enumerate(head)}
+
+
+def _camera_projection(cam: dict, p: np.ndarray) -> np.ndarray:
+    """Independent of the page: the orthographic view of points p (..., 3) by the camera the
+    page reports (azimuth, elevation about +z; docs/spatial.md "The report"), viewBox units."""
+    az, el = cam["az"], cam["el"]
+    right = np.array([-np.sin(az), np.cos(az), 0.0])
+    up = np.array([-np.sin(el) * np.cos(az), -np.sin(el) * np.sin(az), np.cos(el)])
+    q = np.asarray(p, float) - np.asarray(cam["centre"], float)
+    s = cam["fit"] * cam["zoom"]
+    return np.stack([cam["cx"] + s * q @ right, cam["cy"] - s * q @ up], axis=-1)
+
+
+def test_spatial_report_is_one_self_contained_file(rsur_report_run):
+    text = (rsur_report_run / "report.html").read_text("utf-8")
+    assert "http://" not in text and "https://" not in text
+    assert not re.search(r"<script[^>]*\bsrc\s*=|<link[^>]*\bhref\s*=|<(img|iframe)\b", text, re.I)
+    assert "fetch(" not in text and "XMLHttpRequest" not in text
+    blob = text.split('<script id="linkdyn-data" type="application/json">', 1)[1].split("</script>")[0]
+    D = json.loads(blob)
+    assert D["geom"]["dim"] == 3
+    # the drawn points are results.csv's, at every frame (all 121 samples are frames)
+    cols = _csv_columns(rsur_report_run / "results.csv")
+    assert len(D["t"]) == len(cols["t"])
+    for pid, p in D["geom"]["points"].items():
+        if p.get("static"):
+            continue
+        for c in "xyz":
+            np.testing.assert_allclose(p[c], cols[f"{c}_{pid}"], rtol=1e-5, atol=1e-9)
+    # each joint's reaction force at the frame is the csv's, the driver torque too
+    for j in D["geom"]["joints"]:
+        for c in ("Fx", "Fy", "Fz"):
+            np.testing.assert_allclose(D["series"][f"{c}:{j['name']}"], cols[f"{c}_{j['name']}"],
+                                       rtol=1e-4, atol=1e-9 * max(1.0, D["geom"]["fmax"]))
+    np.testing.assert_allclose(D["series"]["tau:J1"], cols["tau_J1"], rtol=1e-4, atol=1e-9)
+    # a revolute joint's axis at each frame: the ground's J1 stays +z; J4's axis (fixed in
+    # the ground) stays put while the rocker turns about it
+    ax = np.array([D["series"][k] for k in next(j for j in D["geom"]["joints"] if j["name"] == "J1")["axis"]])
+    np.testing.assert_allclose(ax.T, np.tile([0.0, 0.0, 1.0], (len(D["t"]), 1)), atol=1e-12)
+    key = {it["label"]: it for it in D["key"]}
+    assert key["max torque J1"]["value"] == pytest.approx(cols["tau_J1"].max(), rel=1e-9)
+    assert key["max torque J1"]["frame"] == int(np.argmax(cols["tau_J1"]))
+
+
+@pytest.mark.parametrize("size", [(1400, 1000), (390, 844)], ids=["desktop", "phone"])
+def test_spatial_report_draws_turns_and_zooms(browser, rsur_report_run, size):
+    pg = Page(browser, rsur_report_run / "report.html", width=size[0], height=size[1])
+    p = pg.page
+    try:
+        cols = _csv_columns(rsur_report_run / "results.csv")
+        D = json.loads(p.inner_text("#linkdyn-data"))
+        ends = {j["name"]: j["b"] for j in D["geom"]["joints"]}
+
+        def drawn_match_csv():
+            """Each joint's drawn point (circle.jc, viewBox units) is results.csv's point
+            column at the page's frame, projected by the page's own camera."""
+            k, cam = pg.frame(), p.evaluate("window.__linkdynCamera")
+            for name, pid in ends.items():
+                c = p.locator(f"#anim g.joint[data-joint='{name}'] circle.jc")
+                drawn = [float(c.get_attribute("cx")), float(c.get_attribute("cy"))]
+                xyz = np.array([cols[f"{a}_{pid}"][k] for a in "xyz"])
+                np.testing.assert_allclose(drawn, _camera_projection(cam, xyz), atol=0.02)
+            return cam
+
+        cam0 = drawn_match_csv()
+        assert p.locator("#plots .panel").count() >= 8
+        assert p.locator("#anim g.joint[data-kind='spherical']").count() == 1
+        assert p.locator("#anim g.joint[data-kind='universal'] line").count() == 2
+        # the animation advances, and the drawing follows it
+        p.click("#play")
+        p.wait_for_function("window.__linkdynFrame > 5", timeout=5000)
+        p.click("#play")
+        drawn_match_csv()
+        # the forces: each joint's reaction arrow from its point along the csv's force, at the
+        # page's one length per newton, projected by the camera
+        p.check("#show-forces")
+        assert p.locator("#anim line.farrow[data-joint]").count() == 4
+        k, cam = pg.frame(), p.evaluate("window.__linkdynCamera")
+        per_newton = p.evaluate("window.__linkdynForces.scale")
+        assert per_newton > 0
+        for name, pid in ends.items():
+            a = p.locator(f"#anim line.farrow[data-joint='{name}']")
+            drawn = [float(a.get_attribute(c)) for c in ("x1", "y1", "x2", "y2")]
+            xyz = np.array([cols[f"{c}_{pid}"][k] for c in "xyz"])
+            force = np.array([cols[f"F{c}_{name}"][k] for c in "xyz"])
+            want = _camera_projection(cam, np.array([xyz, xyz + per_newton * force])).ravel()
+            np.testing.assert_allclose(drawn, want, atol=0.05)
+        # dragging turns the view: the camera and the pixels change, the drawing still matches
+        box = p.locator("#anim").bounding_box()
+        before = p.locator("#anim").screenshot()
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        p.mouse.move(x, y)
+        p.mouse.down()
+        p.mouse.move(x + 60, y + 25, steps=4)
+        p.mouse.up()
+        cam1 = drawn_match_csv()
+        assert abs(cam1["az"] - cam0["az"]) > 0.1 and abs(cam1["el"] - cam0["el"]) > 0.02
+        assert p.locator("#anim").screenshot() != before
+        # the wheel zooms, the reset button returns to the starting view
+        p.mouse.wheel(0, -300)
+        p.wait_for_function(f"window.__linkdynCamera.zoom > 1.2")
+        drawn_match_csv()
+        p.click("#view-reset")
+        cam2 = p.evaluate("window.__linkdynCamera")
+        assert (cam2["az"], cam2["el"], cam2["zoom"]) == pytest.approx((cam0["az"], cam0["el"], 1.0))
+        # the page fits the screen, with no request leaving it and no error
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0] + 1
+        assert all(u.startswith("file:") for u in pg.requests), pg.requests
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def test_spatial_plots_are_the_pages_panels(rsur_report_run, tmp_path):
+    """``--plots`` on a spatial model: each section of the page's panels as one figure; here
+    the energy section alone (the others are drawn alike), its curve the csv's energy."""
+    from linkdyn.plots import panel_outputs
+    text = (rsur_report_run / "report.html").read_text("utf-8")
+    D = json.loads(text.split('type="application/json">', 1)[1].split("</script>")[0])
+    names = set(panel_outputs(D))
+    assert {"plot_joints.png", "plot_efforts.svg", "plot_energy.png"} <= names
+    D["plots"] = [p for p in D["plots"] if p["section"] == "Energy"]
+    cols = _csv_columns(rsur_report_run / "results.csv")
+    ke = next(s for s in D["plots"][0]["series"] if s["label"] == "kinetic")
+    np.testing.assert_allclose(D["series"][ke["key"]], cols["kinetic_energy"], rtol=1e-4)
+    out = panel_outputs(D, formats=("png",))
+    assert list(out) == ["plot_energy.png"]
+    out["plot_energy.png"](tmp_path / "e.png")
+    assert (tmp_path / "e.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_spatial_page_of_a_planar_mechanism_shows_the_planar_pages_numbers():
+    """Hoeken's four-bar modelled in space: its page's joint rates, driver torque and
+    reaction magnitudes are the planar page's (two solvers that share no kinematics or
+    dynamics code), and its out-of-plane reactions are listed as zero, not plotted."""
+    from linkdyn.report import spatial as sp
+    t = np.linspace(0.0, 1.0, 13)
+    planar = report.page_data(linkdyn.analyze(linkdyn.load(linkdyn.example_path("hoeken")), t))
+    space = sp.page_data(linkdyn.analyze(linkdyn.load(linkdyn.example_path("hoeken_spatial")), t))
+    assert space["geom"]["dim"] == 3 and "dim" not in planar["geom"]
+    joints = [j["name"] for j in planar["geom"]["joints"]]
+    assert joints == [j["name"] for j in space["geom"]["joints"]]
+    fpeak = max(max(planar["series"][f"F:{j}"]) for j in joints)
+    for j in joints:
+        np.testing.assert_allclose(space["series"][f"F:{j}"], planar["series"][f"F:{j}"],
+                                   rtol=1e-4, atol=1e-9 * fpeak)
+        # rates (a spatial coordinate is 0 at the design pose, a planar one is not)
+        np.testing.assert_allclose(space["series"][f"qd:{j}"], planar["series"][f"qd:{j}"],
+                                   rtol=1e-4, atol=1e-6)
+    np.testing.assert_allclose(space["series"]["tau:J1"], planar["series"]["tau:J1"],
+                               rtol=1e-4, atol=1e-9 * fpeak)
+    for j in joints:   # the plane's normal force and in-plane couples: zero to rounding
+        assert any(z.endswith(f"Fz") and j in z for z in space["zero"]), (j, space["zero"])
+    titles = {p["title"] for p in space["plots"]}
+    assert not any(s["label"] == "Fz" for p in space["plots"] for s in p["series"])
+    # the key results say that statics leaves 3 reaction sets open (a planar loop in space)
+    open_sets = next(it for it in space["key"] if it["label"].startswith("reaction sets"))
+    assert open_sets["value"] == 3 and "Fz_J1" in open_sets["note"]
+    assert "Joint angles" in titles and "Driver torque" in titles

@@ -639,8 +639,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
     mech = io.load_model(model, allow_outside=allow_outside)
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
-        for given, what in ((report, "--report"), (plots_, "--plots"),
-                            (path_point or path_range, "--path-point and --path-range"),
+        for given, what in ((path_point or path_range, "--path-point and --path-range"),
                             (table_units != "si", "--units model"),
                             (allow_singular, "--allow-singular")):
             if given:
@@ -648,8 +647,14 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         if _backend(ctx, backend) == "compiled":
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
-        text, summ, table = spatial_cli.analyze(mech, t)
-        files = _results(SimpleNamespace(columns=table), summ, "csv")
+        text, summ, sol = spatial_cli.analyze(mech, t)
+        files = _results(SimpleNamespace(columns=sol.columns()), summ, "csv")
+        if report:
+            from . import report as report_mod
+            files.update(report_mod.outputs(sol, summ))
+        if plots_:  # the page's panels as figures (costly: --report does not add them)
+            from .report import spatial as spatial_report
+            files.update(spatial_report.plot_outputs(sol, summ))
         written = _write_results(outdir, files)
         click.echo(text)
         click.echo(f"wrote {', '.join(map(str, written))}")

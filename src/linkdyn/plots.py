@@ -74,6 +74,52 @@ def outputs(sol, formats: tuple[str, ...] = ("png", "svg")) -> dict:
     return {f"plot_{name}.{ext}": writer(name, ext) for name in builders for ext in formats}
 
 
+# the figure each section of a report page's panels becomes (panel_outputs)
+SECTION_FIGURES = {"Joint motion (relative joint coordinates q)": "joints", "Link motion": "links",
+                   "Point motion": "points", "Driver efforts and joint reactions": "efforts",
+                   "Energy": "energy"}
+
+
+def panel_outputs(data: dict, formats: tuple[str, ...] = ("png", "svg")) -> dict:
+    """``{"plot_<name>.<ext>": writer(path)}``: each section of a report page's panels (the
+    ``plots`` of ``report.spatial.page_data``) as one figure of its panels against time,
+    named by :data:`SECTION_FIGURES`: what ``--plots`` writes for a spatial model."""
+    t = np.asarray(data["t"], float)
+    sections: dict[str, list] = {}
+    for spec in data["plots"]:
+        if spec.get("kind") != "polar" and "x" not in spec:
+            sections.setdefault(spec["section"], []).append(spec)
+
+    def build(title, specs):
+        ncol = min(3, len(specs))
+        nrow = math.ceil(len(specs) / ncol)
+        fig = _figure(4.2 * ncol, 2.6 * nrow + 0.5)
+        axes = np.asarray(fig.subplots(nrow, ncol, sharex=True, squeeze=False)).ravel()
+        for ax, spec in zip(axes, specs):
+            for ser in spec["series"]:
+                y = np.array([np.nan if v is None else v for v in data["series"][ser["key"]]])
+                ax.plot(t, y, lw=1.4, color=ser["color"], label=ser["label"])
+            _style(ax, "t (s)", spec["unit"], spec["title"])
+            ax.legend(fontsize=7, ncols=min(len(spec["series"]), 4), loc="best")
+        for ax in axes[len(specs):]:
+            ax.set_visible(False)
+        fig.suptitle(f"{data['name']}: {title.lower()}", fontsize=11)
+        return fig
+
+    cache: dict = {}
+
+    def writer(title, specs, ext):
+        def write(path: Path) -> None:   # each figure drawn once, saved in every format
+            fig = cache.pop(title, None) or build(title, specs)
+            fig.savefig(path, format=ext, dpi=DPI)
+            if ext != formats[-1]:
+                cache[title] = fig
+        return write
+
+    return {f"plot_{SECTION_FIGURES.get(sec, sec.split()[0].lower())}.{ext}": writer(sec, specs, ext)
+            for sec, specs in sections.items() for ext in formats}
+
+
 def figure_builders(sol) -> dict:
     """Names and builder functions ``f(sol) -> Figure`` of the figures for this solution."""
     b = {"joints": fig_joints, "efforts": fig_efforts, "reactions": fig_reactions}

@@ -11,9 +11,10 @@ Long runs are downsampled for the page (``max_frames``); ``results.csv`` keeps e
 
 Display units: angles in degrees, everything else SI (m, s, rad/s, N, N m).
 
-:mod:`.data` selects the frames and builds the JSON data the page's script draws from,
-:mod:`.tables` lays out the summary and the model as HTML tables, and :mod:`.page` assembles the
-document.
+:mod:`.data` selects the frames and builds the JSON data the page's script draws from
+(:mod:`.spatial` for spatial models: a 3-D view the user turns and zooms, ``assets/view3d.js``,
+in place of the plane's ``assets/view2d.js``), :mod:`.tables` lays out the summary and the model
+as HTML tables, and :mod:`.page` assembles the document.
 """
 
 from .data import (BODY_COLORS, DEG, M_COLOR, MAX_FRAMES, PALETTE, X_COLOR, Y_COLOR,

@@ -48,7 +48,8 @@ def _num(a, sig: int = 5) -> list:
 def joint_roles(sol) -> dict[str, str]:
     """``'cut'``, ``'tree'`` plus ``', driven'`` for every joint."""
     m = sol.model
-    cut = set(int(c) for c in sol.topology.cut)
+    topo = sol.plan.topo if getattr(sol, "space", "planar") == "spatial" else sol.topology
+    cut = set(int(c) for c in topo.cut)
     driven = {d.joint for d in m.drivers}
     return {j.name: ("cut" if k in cut else "tree") + (", driven" if j.name in driven else "")
             for k, j in enumerate(m.joints)}

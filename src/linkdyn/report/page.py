@@ -26,7 +26,13 @@ def outputs(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> dict:
 
 def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     """The whole page as a string."""
-    data = page_data(sol, max_frames=max_frames, summary=summary)
+    spatial = getattr(sol, "space", "planar") == "spatial"
+    if spatial:
+        from . import spatial as sp
+        data = sp.page_data(sol, max_frames=max_frames, summary=summary)
+        sc = sp.scales(sol)
+    else:
+        data, sc = page_data(sol, max_frames=max_frames, summary=summary), scales(sol)
     m = sol.model
     title = html.escape(m.name or "mechanism")
     n, total = len(data["t"]), int(len(sol.t))
@@ -35,18 +41,19 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
     body = _BODY.format(
         title=title, desc=desc, note=html.escape(note),
-        summary=summary_html(summary, scales(sol)), model=model_html(sol),
+        summary=summary_html(summary, sc), model=model_html(sol),
         key=key_results_html(data["key"]))
     return html_page(title=title, kind="linkdyn report", body=body, data=data,
-                     script="report.js",
+                     script=("view2d.js", "view3d.js", "report.js"),
                      footer="recursive DeNOC kinematics and inverse dynamics")
 
 
-def html_page(*, title: str, body: str, data: dict, script: str, kind: str = "linkdyn",
+def html_page(*, title: str, body: str, data: dict, script: str | tuple, kind: str = "linkdyn",
               css: str = "", footer: str = "") -> str:
     """One self-contained page: the shared head and ``report.css`` (plus the page's own
     ``css``), its ``body``, ``data`` as JSON in ``#linkdyn-data`` and the script
-    ``common.js`` + ``assets/<script>``. ``title`` is already HTML-escaped."""
+    ``common.js`` + ``assets/<script>`` (a tuple: those files in order). ``title`` is already
+    HTML-escaped."""
     blob = json.dumps(data, separators=(",", ":"), allow_nan=False)
     blob = blob.replace("</", "<\\/")  # never close the <script> early
     version = html.escape(_version())
@@ -60,10 +67,11 @@ def _asset(name: str) -> str:
     return resources.files("linkdyn.report").joinpath("assets", name).read_text("utf-8")
 
 
-def _script(name: str) -> str:
+def _script(name: str | tuple) -> str:
     """A page's script: the shared helpers of ``assets/common.js`` (the global ``LD``), then
-    the page's own ``assets/NAME``."""
-    return _asset("common.js") + "\n" + _asset(name)
+    the page's own ``assets/NAME`` (or each of the tuple ``NAME``, in order)."""
+    names = (name,) if isinstance(name, str) else tuple(name)
+    return "\n".join(_asset(n) for n in ("common.js",) + names)
 
 
 def _version() -> str:

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import joints as jk
 from ..model import GROUND
 from .data import joint_roles
 
@@ -272,6 +271,17 @@ def key_results_html(items: list) -> str:
             if cells else "")
 
 
+def _inertia(i) -> str:
+    """A planar body's moment of inertia, or a spatial body's tensor (its diagonal when the
+    products are zero)."""
+    i = np.asarray(i, float)
+    if i.ndim == 0:
+        return fmt(float(i))
+    if not np.any(i - np.diag(np.diag(i))):
+        return "diag(" + ", ".join(fmt(float(v)) for v in np.diag(i)) + ")"
+    return "[" + "; ".join(", ".join(fmt(float(v)) for v in row) for row in i) + "]"
+
+
 def model_html(sol) -> str:
     """Bodies, joints, drivers and loads of the model (lengths in mm)."""
     m = sol.model
@@ -288,7 +298,7 @@ def model_html(sol) -> str:
                     f"<td>{pts}</td></tr>"
         else:
             rows += (f"<tr><th>{_e(b.name)}</th><td class='num'>{fmt(float(b.mass))}</td>"
-                     f"<td class='num'>{mm(b.com)}</td><td class='num'>{fmt(float(b.inertia))}"
+                     f"<td class='num'>{mm(b.com)}</td><td class='num'>{_inertia(b.inertia)}"
                      f"</td><td>{pts}</td></tr>")
     bodies = ("<table class='grid'><thead><tr><th>body</th><th>mass (kg)</th><th>mass centre "
               "(mm, local)</th><th>I about mass centre (kg m²)</th><th>points (mm, local)</th>"
@@ -296,8 +306,10 @@ def model_html(sol) -> str:
     rows = ""
     for j in m.joints:
         extra = ""
-        if "axis" in jk.get(j.kind).keys:
-            extra = f"axis ({fmt(float(j.axis[0]))}, {fmt(float(j.axis[1]))}) in {_e(j.body_a)}"
+        if np.any(np.asarray(j.axis, float)):
+            extra = f"axis ({', '.join(fmt(float(v)) for v in j.axis)}) in {_e(j.body_a)}"
+        if np.any(np.asarray(getattr(j, "axis2", 0.0), float)):
+            extra += f"; axis2 ({', '.join(fmt(float(v)) for v in j.axis2)}) in {_e(j.body_b)}"
         rows += (f"<tr><th>{_e(j.name)}</th><td>{_e(j.kind)}</td><td>{_e(j.body_a)}."
                  f"{_e(j.point_a)} → {_e(j.body_b)}.{_e(j.point_b)}</td>"
                  f"<td>{_e(roles[j.name])}</td><td>{extra}</td></tr>")
@@ -309,11 +321,15 @@ def model_html(sol) -> str:
         f"{' – ' + _e(ld.body2) + '.' + _e(ld.point2) if ld.body2 else ''}"
         f"{' (' + _e(ld.name) + ')' if ld.name else ''}</li>" for ld in m.loads)
     g = np.asarray(m.gravity, float)
-    out = [f"<p><b>Gravity</b> ({fmt(float(g[0]))}, {fmt(float(g[1]))}) m/s²"
+    out = [f"<p><b>Gravity</b> ({', '.join(fmt(float(v)) for v in g)}) m/s²"
            + (f" · <b>file</b> {_e(Path(m.source).name)}" if m.source else "") + "</p>",
            "<h3>Bodies</h3>", bodies, "<h3>Joints</h3>", joints,
            "<p class='note'>Reaction at a joint: the force by its first body on its second "
-           "(global components). Driver effort: what the actuator applies on the second body. "
+           "(global components)"
+           + (", and the couple about the second body's point; with redundant constraints "
+              "the minimum-norm reactions. " if getattr(sol, "space", "planar") == "spatial"
+              else ". ")
+           + "Driver effort: what the actuator applies on the second body. "
            "λ: the reaction at a cut joint, solved together with the driver efforts.</p>"]
     if drv:
         out += ["<h3>Drivers</h3>", f"<ul>{drv}</ul>"]

@@ -104,7 +104,7 @@ def text(s: dict) -> str:
 
 def analyze(mech, t):
     """Solve ``mech`` at ``t``: the printed summary, the summary (``summary.json``'s content)
-    and the results table (column -> (T,) array)."""
+    and the solution (its ``columns()`` the results table; the report draws it)."""
     sol = run(mech, t)
     s = summary(sol)
-    return text(s), s, sol.columns()
+    return text(s), s, sol

@@ -74,6 +74,58 @@ var LD = (function () {
     if (left + tip.offsetWidth > pr.width) left = Math.max(0, e.clientX - pr.left - tip.offsetWidth - 14);
     tip.style.left = left + "px"; tip.style.top = Math.max(0, e.clientY - pr.top - tip.offsetHeight - 8) + "px";
   }
-  return {NS: NS, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
+  // labels placed clear of each other: each label goes to the first of a ring of positions
+  // around its anchor whose box overlaps no label placed before it and no obstacle, inside
+  // the W x H view, or is hidden this frame; sizes in screen pixels whatever the zoom
+  // (textScale: view units per screen pixel). Items: {node, x, y, fs, r, prefer}.
+  function placer(VW, VH) {
+    var widthCache = {};
+    function textBox(node, fs) {
+      // digits share one width: "J3 135.8 N" and "J3 121.4 N" are measured once
+      var key = node.textContent.replace(/[0-9]/g, "0") + "|" + fs + "|" + (node.getAttribute("font-weight") || "") + (node.getAttribute("font-style") || "");
+      if (!(key in widthCache)) {
+        node.setAttribute("font-size", fs);
+        var w = 0;
+        try { w = node.getComputedTextLength(); } catch (err) { w = 0; }
+        widthCache[key] = w > 0 ? w : 0.62 * fs * node.textContent.length;
+      }
+      return [widthCache[key], fs];
+    }
+    var DIRS = [[1, -1], [1, 1], [-1, -1], [-1, 1], [0, -1], [0, 1], [1, 0], [-1, 0]];
+    function overlaps(b, boxes) {
+      for (var i = 0; i < boxes.length; i++) {
+        var o = boxes[i];
+        if (b[0] < o[2] && o[0] < b[2] && b[1] < o[3] && o[1] < b[3]) return true;
+      }
+      return false;
+    }
+    return function place(items, obstacles, textScale) {
+      var placed = obstacles.slice();
+      items.forEach(function (it) {
+        if (it.node.style.display === "none" || !fin(it.x) || !fin(it.y)) return;
+        var fs = it.fs * textScale, wh = textBox(it.node, fs), w = wh[0] + 2, hgt = fs * 1.05;
+        var pad = 2 * textScale, best = null;
+        var dirs = it.prefer ? [it.prefer].concat(DIRS) : DIRS;
+        for (var ring = 0; ring < 4 && !best; ring++) {
+          var r = (it.r || 6) * textScale + ring * 10 * textScale;
+          for (var n = 0; n < dirs.length; n++) {
+            var dx = dirs[n][0], dy = dirs[n][1];
+            var x0 = it.x + dx * r - (dx < 0 ? w : dx === 0 ? w / 2 : 0);
+            var y0 = it.y + dy * r - (dy < 0 ? hgt : dy === 0 ? hgt / 2 : 0);
+            var b = [x0 - pad, y0 - pad, x0 + w + pad, y0 + hgt + pad];
+            if (b[0] < 0 || b[2] > VW || b[1] < 0 || b[3] > VH) continue;
+            if (!overlaps(b, placed)) { best = b; break; }
+          }
+        }
+        if (!best) { it.node.style.display = "none"; return; }  // no room: left out this frame
+        placed.push(best);
+        it.node.setAttribute("font-size", fs.toFixed(2));
+        it.node.setAttribute("text-anchor", "start");
+        it.node.setAttribute("x", (best[0] + pad).toFixed(1));
+        it.node.setAttribute("y", (best[1] + pad + 0.8 * hgt).toFixed(1));
+      });
+    };
+  }
+  return {NS: NS, placer: placer, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
           tickText: tickText, range: range, placeTip: placeTip};
 })();
