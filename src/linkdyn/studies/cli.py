@@ -186,7 +186,6 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
         sp, t, bounds, counts = _setup(model, vary, samples, duration, cycles)
         method = method or ("grid" if all(counts) else "sobol")
         designs = designs if designs is not None or method == "grid" else 1024
-    _no_report(sp, report, "sweep --report")
     q_range = _path_range(path_range, sp.model())   # SI, from the file's unit
     names = tuple(check_names(sp.model(), list(metrics) or None, path_point=path_point))
     task = sweep_mod.Task(sp, t, names, None if backend == "auto" else backend, path_point,
@@ -216,14 +215,6 @@ def sweep(model, vary, samples, duration, cycles, seed, path_point, path_range, 
     click.echo(f"wrote {', '.join(str(p) for p in written if p not in pages)}"
                + (f" and the reports of {len(pages)} best designs "
                   f"({', '.join(p.name for p in pages)})" if pages else ""))
-
-
-def _no_report(sp, report: bool, what: str) -> None:
-    """Exit 2 for ``--report`` on a spatial model (its report page is not yet written)."""
-    if report and sp.spatial:
-        raise ModelError(f"{what} is not yet for spatial models", file=sp.source,
-                         field="--report", fix="Drop --report: designs.parquet, summary.json "
-                         "(and optimize's best.toml) are written for spatial models")
 
 
 def _metric_line(name: str, m: dict, units: Units) -> str:
@@ -271,7 +262,6 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     check_outdir(outdir)
     paths, bounds, _ = parse_vary(vary)
     sp, t, bounds, _ = _setup(model, vary, samples, duration, cycles)
-    _no_report(sp, report, "optimize --report")
     q_range = _path_range(path_range, sp.model())   # SI, from the file's unit
     u = Units.of(sp.model())
     res = run(model, dict(zip(paths, bounds)), t, minimize, constraints, maximize=maximize,
@@ -283,7 +273,8 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     if sp.spatial:   # the best design's summary as linkdyn analyze writes it
         from ..spatial import analyze as spatial_analyze
         from ..spatial.cli import summary as spatial_summary
-        summ = spatial_summary(spatial_analyze(best, t))
+        sol = spatial_analyze(best, t)
+        summ = spatial_summary(sol)
     else:
         sol = analyze(best, t, allow_singular=True)
         summ = design.summary(sol, fluctuation=fluctuation,
@@ -308,7 +299,8 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
         from .. import plots as plots_mod
         from .. import report as report_mod
         files.update(report_mod.outputs(sol, summ))
-        files.update(plots_mod.outputs(sol))
+        if not sp.spatial:   # a spatial page's figures cost several runs: analyze --plots
+            files.update(plots_mod.outputs(sol))
     out = Path(outdir)
     # the files written, listed in optimize.json: a later run removes those it does not write
     info["files"] = list(files)

@@ -671,10 +671,16 @@ def preview_outputs(task: Task, df, rows) -> dict:
     files = {}
     for k in rows:
         model = task.space.model(df[params].iloc[k].to_numpy(float))
-        sol = analyze(model, task.t, allow_singular=True, backend=task.backend)
-        summ = design.summary(sol, fluctuation=task.fluctuation,
-                              path_point=task.path_point or model.path_point,
-                              path_range=task.path_range, default_range=model.path_range)
+        if task.space.spatial:   # as linkdyn analyze --report writes it
+            from ..spatial import analyze as spatial_analyze
+            from ..spatial.cli import summary as spatial_summary
+            sol = spatial_analyze(model, task.t)
+            summ = spatial_summary(sol)
+        else:
+            sol = analyze(model, task.t, allow_singular=True, backend=task.backend)
+            summ = design.summary(sol, fluctuation=task.fluctuation,
+                                  path_point=task.path_point or model.path_point,
+                                  path_range=task.path_range, default_range=model.path_range)
 
         def write(path, sol=sol, summ=summ):
             path.write_text(render(sol, summ), encoding="utf-8")
