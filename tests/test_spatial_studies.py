@@ -226,9 +226,15 @@ def test_compare_two_spatial_models_writes_its_page(tmp_path):
         assert out[name]["summary"]["peak_reaction"] == alone["peak_reaction"]
     assert out["rsur"]["summary"]["peak_effort"] != out["lifted"]["summary"]["peak_effort"]
     page = (tmp_path / "c" / "compare.html").read_text()
-    assert "Joint force |F| at J3" in page and "peak |tau_J1|" in page
-    # in Chromium: the panels tau_J1, |F| at J1 .. J4 and the kinetic energy, each with both
-    _draws_both_designs(tmp_path / "c" / "compare.html", panels=6)
+    blob = json.loads(page.split('type="application/json">', 1)[1].split("</script>", 1)[0])
+    for d in blob["designs"]:   # the key results of each design's own report page
+        key = {it["label"]: it["value"] for it in d["key"]}
+        peak = out[d["name"]]["summary"]["peak_effort"]["tau_J1"]
+        assert max(key["max torque J1"], -key["min torque J1"]) == pytest.approx(peak, rel=1e-12)
+    assert [p["key"] for p in blob["panels"]] == ["tau:J1", "F:J1", "F:J2", "F:J3", "F:J4",
+                                                  "M:J1", "M:J3", "M:J4"]
+    # in Chromium: every panel with both designs' curves
+    _draws_both_designs(tmp_path / "c" / "compare.html", panels=8)
     res = run(main, ["compare", rsur, str(linkdyn.example_path("hoeken")), "-o",
                      str(tmp_path / "mixed")])
     assert res.exit_code == 2 and "not both" in res.output

@@ -15,29 +15,34 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
-from .data import MAX_FRAMES, PALETTE, _num, page_data
+from .data import MAX_FRAMES, PALETTE, page_data
 from .page import html_page
 from .tables import fmt, key_value, key_where
 
-# panels overlaid: the sections and titles of page_data's plots worth comparing
+# panels overlaid: the sections and titles of page_data's plots worth comparing (not each
+# joint's reaction components: their magnitudes are compared)
 _SECTIONS = ("Driver efforts and joint reactions", "Point motion", "Design")
+_PER_JOINT = ("Reaction at", "Reaction force at", "Reaction couple at")
 
 
 def compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
-    """The page's data for ``runs``: a list of ``(name, solution, summary)`` (all planar, or
-    all spatial: :func:`spatial_compare_data`)."""
-    if getattr(runs[0][1], "space", "planar") == "spatial":
-        return spatial_compare_data(runs, max_frames=max_frames)
+    """The page's data for ``runs``: a list of ``(name, solution, summary)``, all planar or all
+    spatial (each design's data that of its own report page: :func:`.data.page_data` or
+    :func:`.spatial.page_data`)."""
     designs, per = [], []
     for n, (name, sol, summ) in enumerate(runs):
-        d = page_data(sol, max_frames=max_frames, summary=summ)
+        if getattr(sol, "space", "planar") == "spatial":
+            from .spatial import page_data as spatial_page_data
+            d = spatial_page_data(sol, max_frames=max_frames, summary=summ)
+        else:
+            d = page_data(sol, max_frames=max_frames, summary=summ)
         per.append(d)
         designs.append({"name": name, "model": sol.model.name, "color": PALETTE[n % len(PALETTE)],
                         "key": d["key"], "samples": d["total_samples"]})
     # panels: one per (plot, series) present in every design, in the first design's order
     panels = []
     for spec in per[0]["plots"]:
-        if spec["section"] not in _SECTIONS or spec["title"].startswith("Reaction at"):
+        if spec["section"] not in _SECTIONS or spec["title"].startswith(_PER_JOINT):
             continue
         for s in spec["series"]:
             if all(s["key"] in d["series"] for d in per):
@@ -51,46 +56,6 @@ def compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
         out["series"] = {k: v for k, v in d["series"].items()
                          if k in keys or k in {a["key"] for a in xaxes}}
     return {"designs": designs, "panels": panels, "xaxes": xaxes}
-
-
-def spatial_compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
-    """The page's data for spatial ``runs`` (``(name, SpatialSolution, summary)`` with the
-    summary of :func:`linkdyn.spatial.cli.summary`): the curves every design has (driver
-    efforts, joint force magnitudes ``|(Fx, Fy, Fz)|``, kinetic energy) against time, and the
-    summary's peaks as key results."""
-    designs, keys = [], None
-    for n, (name, sol, summ) in enumerate(runs):
-        idx = np.unique(np.linspace(0, len(sol.t) - 1, min(len(sol.t), max_frames)).astype(int))
-        curves = {"t": ("t", "s", sol.t)}
-        for d in sol.model.drivers:
-            k = sol.plan.kinds[[j.name for j in sol.model.joints].index(d.joint)].effort
-            curves[f"{k}_{d.joint}"] = (f"Driver {d.joint}: {k}", "N m" if k == "tau" else "N",
-                                        sol.effort(d.joint))
-        for j in sol.model.joints:
-            curves[f"F_{j.name}"] = (f"Joint force |F| at {j.name}", "N",
-                                     np.linalg.norm(sol.reaction(j.name)[:, :3], axis=1))
-        curves["kinetic_energy"] = ("Kinetic energy", "J", sol.kinetic_energy())
-        key = [{"group": "Drivers", "label": f"peak |{c}|", "value": v,
-                "unit": "N m" if c.startswith("tau") else "N"}
-               for c, v in summ["peak_effort"].items()]
-        for j, v in summ["peak_reaction"].items():
-            key += [{"group": "Joint reactions", "label": f"peak |F| at {j}", "value": v["force"],
-                     "unit": "N"},
-                    {"group": "Joint reactions", "label": f"peak |M| at {j}", "value": v["moment"],
-                     "unit": "N m"}]
-        key += [{"group": "Mechanism", "label": "mobility", "value": summ["mobility"]},
-                {"group": "Mechanism", "label": "peak kinetic energy",
-                 "value": summ["peak_kinetic_energy"], "unit": "J"}]
-        designs.append({"name": name, "model": sol.model.name, "color": PALETTE[n % len(PALETTE)],
-                        "key": key, "samples": int(len(sol.t)),
-                        "series": {k: _num(np.asarray(v[2])[idx], 6) for k, v in curves.items()},
-                        "curves": curves})
-        keys = [k for k in curves if k != "t" and (keys is None or k in keys)]
-    panels = [{"title": designs[0]["curves"][k][0], "unit": designs[0]["curves"][k][1], "key": k}
-              for k in keys or []]
-    for d in designs:
-        del d["curves"]
-    return {"designs": designs, "panels": panels, "xaxes": [{"key": "t", "label": "t (s)"}]}
 
 
 def sweep_best(sweep_dir, metric, n_best) -> list:
