@@ -36,7 +36,12 @@ from linkdyn.dynamics import dense
 from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-from builders import DEG, RPM, body, pri, rev, slot
+from linkdyn import laws
+from linkdyn.cams import Cam
+from linkdyn.joints.cam import laws_name
+from linkdyn.motion import Segment
+
+from builders import DEG, MM, RPM, body, pri, rev, slot
 
 RTOL = 1e-9
 
@@ -262,6 +267,27 @@ def hoeken_rod():
                                cut=None, assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG})
 
 
+def cam_follower(speed=300 * RPM):
+    """A disc cam turning on the ground (offset 5 mm, base circle 40 mm, roller 10 mm; a
+    cycloidal rise of 20 mm over 100 deg, dwell 80 deg, return over 100 deg) and a translating
+    roller follower on a vertical guide, pressed on the cam by a compression spring (2 kN/m,
+    preload 20 N at the bottom), gravity and a damper."""
+    e, rb, rf = 5.0, 40.0, 10.0
+    d0 = math.sqrt((rb + rf) ** 2 - e ** 2)
+    bodies = (body("ground", {"C": (0, 0), "G": (e, 0), "S": (e, 200)}),
+              body("cam", {"C": (0, 0)}, 2.0, (3, 1), 3000.0),
+              body("follower", {"F": (0, 0), "T": (0, 30)}, 0.5, (1, 15), 100.0))
+    joints = (rev("J1", "ground.C", "cam.C"), pri("J2", "ground.G", "follower.F", (0, 1)),
+              Joint("K", "cam", "cam", "C", "follower", "F", base_radius=rb * MM,
+                    roller_radius=rf * MM, offset=e * MM, lift=20 * MM, rise=100 * DEG,
+                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES["cycloidal"])))
+    loads = (spring("ground", "S", "follower", "F", 2000.0, (200 - d0) * MM + 0.01),
+             damper("follower", "T", "ground", "S", 1.5))
+    return Model("cam-follower", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "follower": 0.0},
+                 assembly_q={"J2": d0 * MM})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-rod": hoeken_rod,
@@ -279,6 +305,7 @@ MODELS = {
     "five-bar": five_bar,
     "scotch-yoke": scotch_yoke,
     "slotted-lever": slotted_lever,
+    "cam-follower": cam_follower,
 }
 
 
@@ -453,7 +480,48 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
-UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1}  # reaction unknowns per joint
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1, "cam": 1}  # per joint
+
+
+def cam_of(jt):
+    """The cam of ``linkdyn cam`` (:class:`linkdyn.cams.Cam`) a cam joint's numbers describe:
+    rise, dwell, return, dwell."""
+    x = jt.numbers
+    law = laws_name(x["law"])
+    rest = 2 * math.pi - x["rise"] - x["dwell"] - x["fall"]
+    segs = tuple(s for s in (Segment(law, x["lift"], x["rise"]), Segment("dwell", 0.0, x["dwell"]),
+                             Segment(law, 0.0, x["fall"]), Segment("dwell", 0.0, rest))
+                 if s.time > 0)
+    return Cam("joint", segs, x["base_radius"], "roller", x["roller_radius"], x["offset"])
+
+
+def cam_normal(sol, jt):
+    """The unit normal (T, 2) of a cam joint's pitch curve at its follower point, pointing away
+    from the cam's centre, found here: the contact's cam angle by bracketing the pitch point's
+    polar angle (C1 of linkdyn.cams, its lift by the cam's SegmentMotion), the normal across
+    the tangent C2, turned with the cam."""
+    from scipy.optimize import brentq
+
+    cam = cam_of(jt)
+    e, d0 = cam.offset, math.sqrt((cam.base_radius + cam.roller_radius) ** 2 - cam.offset ** 2)
+    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
+    r = sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a)
+    c, s = np.cos(phi), np.sin(phi)
+    psi = np.arctan2(-s * r[..., 0] + c * r[..., 1], c * r[..., 0] + s * r[..., 1])
+
+    def beta(th, p):   # the pitch point's polar angle minus psi, wrapped to (-pi, pi]
+        y = d0 + cam.motion.svaj(np.array([th]))[0][0]
+        return math.remainder(math.atan2(y, e) - th - p, 2 * math.pi)
+
+    out = np.zeros(psi.shape + (2,))
+    for k, p in enumerate(psi.ravel()):
+        th0 = math.atan2(d0, e) - p   # beta falls by about one turn over a turn of theta
+        th = brentq(beta, th0 - 1.0, th0 + 1.0, args=(p,), xtol=1e-15, rtol=1e-15)
+        s0, s1 = (x[0] for x in cam.motion.svaj(np.array([th % (2 * math.pi)]))[:2])
+        # C2: P' = R(-th) (d0 + s, s' - e); outward normal perp(P') turned back to the body
+        n = rot(phi.ravel()[k] - th, np.array([-(s1 - e), d0 + s0]))
+        out.reshape(-1, 2)[k] = n / np.linalg.norm(n)
+    return out
 
 
 def joint_columns(model):
@@ -501,6 +569,12 @@ def ne_system(sol):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
+        elif jt.kind == "cam":
+            # the contact force along the pitch curve's normal through the follower point
+            n = cam_normal(sol, jt)
+            normals[jt.name] = (n, n)
+            put(jt.body_b, c0, n, x)
+            put(jt.body_a, c0, -n, x)
         elif jt.kind == "distance":
             # a rod's force along the line of its two points (applied anywhere on that line)
             d = x - sol.point(jt.body_a, jt.point_a)
@@ -837,7 +911,7 @@ def test_body_wrench_balance_with_reported_reactions(name):
     for k, jt in enumerate(model.joints):
         if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        if jt.kind == "distance":  # a rod's reaction lies along the rod
+        if jt.kind in ("distance", "cam"):  # a rod's reaction along the rod, a cam's normal
             u = normals[jt.name][0]
             across = cross(u, sol.reactions.force[..., k, :])
             assert np.max(np.abs(across)) <= RTOL * fs

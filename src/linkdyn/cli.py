@@ -477,6 +477,13 @@ def summary_text(s: dict) -> str:
              f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
                 f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
+    for j, c in s.get("contact", {}).items():   # a cam's contact, which can only push
+        echo(f"  contact {j}: least force {shown(c['min_force_N'], 'force', 6)} at t = "
+             f"{num(c['min_time_s'], '.4g')} s" + (
+                 f"; LOSS OF CONTACT at {c['lost_samples']} samples, t = "
+                 f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
+                 "follower would leave the cam; stiffen its spring or raise the preload"
+                 if c["lost_samples"] else "; never lost"))
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))
