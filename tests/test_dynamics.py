@@ -495,33 +495,49 @@ def cam_of(jt):
     return Cam("joint", segs, x["base_radius"], "roller", x["roller_radius"], x["offset"])
 
 
-def cam_normal(sol, jt):
-    """The unit normal (T, 2) of a cam joint's pitch curve at its follower point, pointing away
-    from the cam's centre, found here: the contact's cam angle by bracketing the pitch point's
-    polar angle (C1 of linkdyn.cams, its lift by the cam's SegmentMotion), the normal across
-    the tangent C2, turned with the cam."""
+def cam_contact(cam, psi):
+    """The cam angles (shape of ``psi``) of the pitch points of ``cam`` (a linkdyn.cams.Cam) at
+    the polar angles ``psi`` in the cam's frame, found here by bracketing the pitch point's
+    polar angle ``atan2(d0 + s, e) - theta`` (C1 of linkdyn.cams, the lift by the cam's
+    SegmentMotion); and ``d0``."""
     from scipy.optimize import brentq
 
-    cam = cam_of(jt)
     e, d0 = cam.offset, math.sqrt((cam.base_radius + cam.roller_radius) ** 2 - cam.offset ** 2)
-    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
-    r = sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a)
-    c, s = np.cos(phi), np.sin(phi)
-    psi = np.arctan2(-s * r[..., 0] + c * r[..., 1], c * r[..., 0] + s * r[..., 1])
 
     def beta(th, p):   # the pitch point's polar angle minus psi, wrapped to (-pi, pi]
-        y = d0 + cam.motion.svaj(np.array([th]))[0][0]
+        y = d0 + cam.motion.svaj(np.array([th % (2 * math.pi)]))[0][0]
         return math.remainder(math.atan2(y, e) - th - p, 2 * math.pi)
 
-    out = np.zeros(psi.shape + (2,))
-    for k, p in enumerate(psi.ravel()):
+    out = np.zeros(np.shape(psi))
+    for k, p in enumerate(np.ravel(psi)):
         th0 = math.atan2(d0, e) - p   # beta falls by about one turn over a turn of theta
-        th = brentq(beta, th0 - 1.0, th0 + 1.0, args=(p,), xtol=1e-15, rtol=1e-15)
-        s0, s1 = (x[0] for x in cam.motion.svaj(np.array([th % (2 * math.pi)]))[:2])
-        # C2: P' = R(-th) (d0 + s, s' - e); outward normal perp(P') turned back to the body
-        n = rot(phi.ravel()[k] - th, np.array([-(s1 - e), d0 + s0]))
-        out.reshape(-1, 2)[k] = n / np.linalg.norm(n)
-    return out
+        out.reshape(-1)[k] = brentq(beta, th0 - 1.0, th0 + 1.0, args=(p,), xtol=1e-15,
+                                    rtol=1e-15) % (2 * math.pi)
+    return out, d0
+
+
+def cam_polar(phi, d):
+    """The polar angle (T,) and radius (T,) of ``d`` (T, 2, global) in the frame of a cam body
+    at the angle ``phi`` (T,)."""
+    c, s = np.cos(phi), np.sin(phi)
+    return (np.arctan2(-s * d[..., 0] + c * d[..., 1], c * d[..., 0] + s * d[..., 1]),
+            np.linalg.norm(d, axis=-1))
+
+
+def cam_normal(sol, jt):
+    """The unit normal (T, 2) of a cam joint's pitch curve at its follower point, pointing away
+    from the cam's centre: across the tangent C2 at the contact's cam angle (cam_contact),
+    turned with the cam."""
+    cam = cam_of(jt)
+    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
+    psi, _ = cam_polar(phi, sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a))
+    th, d0 = cam_contact(cam, psi)
+    s0, s1 = cam.motion.svaj(th)[:2]
+    # C2: P' = R(-th) (d0 + s, s' - e); the outward normal perp(P'), turned by the cam's angle
+    n = np.stack((-(s1 - cam.offset), d0 + s0), -1)
+    c, s = np.cos(phi - th), np.sin(phi - th)
+    n = np.stack((c * n[..., 0] - s * n[..., 1], s * n[..., 0] + c * n[..., 1]), -1)
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
 
 def joint_columns(model):
