@@ -146,13 +146,24 @@ def test_the_bundled_example_reads_writes_and_reports_its_contact(tmp_path):
     assert "contact K: least force" in res.output and "never lost" in res.output
 
 
-@pytest.mark.parametrize("edit, field", [('law = "cycloidal"', 'law = "dwell"'),
-                                         ("lift = 20.0", "lift = 0.0"),
-                                         ("fall = 90.0", "fall = 200.0"),
-                                         ('law = "cycloidal"', 'law = "cycloid"')])
-def test_a_cam_that_makes_no_cam_is_refused(tmp_path, edit, field):
-    text = linkdyn.example_path("cam_follower").read_text("utf-8").replace(edit, field)
+@pytest.mark.parametrize("edits, words", [
+    ({'law = "cycloidal"': 'law = "dwell"'}, "not dwell"),
+    ({"lift = 20.0": "lift = 0.0"}, "lift must be positive"),
+    ({"fall = 90.0": "fall = 200.0"}, "at most one turn"),
+    ({'law = "cycloidal"': 'law = "cycloid"'}, "Did you mean"),
+    # linkdyn cam's own checks: a pitch curve bending tighter than the roller (C4), and one
+    # whose polar angle turns back (the contact's cam angle would not be unique)
+    ({"base_radius = 40.0": "base_radius = 3.0", "roller_radius = 10.0": "roller_radius = 15.0"},
+     "undercut"),
+    ({"offset = 5.0": "offset = 45.0", "lift = 20.0": "lift = 100.0", "rise = 90.0": "rise = 30.0"},
+     "turns back")])
+def test_a_cam_that_makes_no_cam_is_refused(tmp_path, edits, words):
+    text = linkdyn.example_path("cam_follower").read_text("utf-8")
+    for old, new in edits.items():
+        assert old in text
+        text = text.replace(old, new)
     path = tmp_path / "bad.toml"
     path.write_text(text, "utf-8")
     res = CliRunner().invoke(main, ["check", str(path)])
-    assert res.exit_code == 2 and "joints" in res.output and "Traceback" not in res.output
+    assert res.exit_code == 2 and "joints" in res.output and words in res.output, res.output
+    assert "Traceback" not in res.output

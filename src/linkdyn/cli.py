@@ -948,9 +948,10 @@ def cam(camfile, outdir):
     radius of curvature and any undercutting, and writes cam.csv (SVAJ, pressure angle,
     curvature, the pitch curve and the profile's points, SI)."""
     from . import cams
+    from .io import camfile as cam_file
 
     check_outdir(outdir)
-    design, n = cams.read(camfile)
+    design, n = cam_file.read(camfile)
     prof = cams.profile(design, n)
     table = cams.columns(prof)
 
@@ -962,7 +963,7 @@ def cam(camfile, outdir):
             for row in zip(*(v.tolist() for v in table.values())):
                 w.writerow([repr(x) for x in row])
     written = write_outputs(outdir, {"cam.csv": write}, owned=("cam.csv",))
-    click.echo(cams.text(prof))
+    click.echo(cam_file.text(prof))
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 

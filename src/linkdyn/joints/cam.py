@@ -39,7 +39,8 @@ import math
 
 import numpy as np
 
-from .. import laws
+from .. import cams, laws
+from ..motion import Segment
 from ..steps import atan2, select, step
 from .base import JointKind, Number
 
@@ -214,12 +215,37 @@ class Cam(JointKind):
             return "rise + dwell + fall must be at most one turn"
         if laws_name(numbers["law"]) == "dwell":
             return "law must be a rise law (harmonic, cycloidal, poly345, ...), not dwell"
+        # the design's own checks (linkdyn cam's C3, C4), over a turn
+        p = cams.profile(design(numbers), 1441)
+        e, y = p.cam.offset, np.hypot(p.pitch[0], p.pitch[1])
+        if np.any(e * p.v / p.cam.speed >= y * y):
+            return ("the pitch curve turns back on itself (its polar angle must fall along it: "
+                    "e s' < rho^2); reduce the offset or enlarge base_radius")
+        if np.any(p.undercut):
+            at = np.degrees(p.theta[p.undercut])
+            return (f"the cam is undercut at cam angles {at[0]:.4g} .. {at[-1]:.4g} deg (the "
+                    "pitch curve bends tighter than the roller); enlarge base_radius or use a "
+                    "smaller roller")
         return None
 
 
 def laws_name(code) -> str:
     """The motion law's name of the code a cam joint holds."""
     return tuple(laws.LAWS)[int(code)]
+
+
+def design(numbers: dict) -> cams.Cam:
+    """The cam of ``linkdyn cam`` (:class:`linkdyn.cams.Cam`, a knife edge or a roller) whose
+    pitch curve a cam joint's numbers (name -> SI value) describe: rise, dwell, return, and
+    the bottom dwell for the rest of the turn."""
+    law, x = laws_name(numbers["law"]), numbers
+    rest = TWO_PI - x["rise"] - x["dwell"] - x["fall"]
+    segs = tuple(s for s in (Segment(law, x["lift"], x["rise"]),
+                             Segment("dwell", 0.0, x["dwell"]), Segment(law, 0.0, x["fall"]),
+                             Segment("dwell", 0.0, rest)) if s.time > TWO_PI * 1e-12)
+    rf = x["roller_radius"]
+    return cams.Cam("cam joint", segs, x["base_radius"], "roller" if rf > 0 else "knife", rf,
+                    x["offset"])
 
 
 KIND = Cam()
