@@ -1,7 +1,7 @@
 """The cam-follower joint (``type = "cam"``): the follower it drives sits exactly on the motion
 ``linkdyn cam`` designs (its lift by the cam's own SegmentMotion), the contact force of a
-translating roller follower with a spring is the closed form ``(m s'' w^2 + k (s + preload) +
-m g) / cos(pressure angle)`` along the common normal, the camshaft torque is the power balance
+translating roller follower with a spring is the closed form ``(m s'' w^2 + k (s + preload)) /
+cos(pressure angle)`` along the common normal, the camshaft torque is the power balance
 of that follower, the joint's coordinate has the rates of its finite differences, the summary
 finds where the follower would leave the cam, and both backends agree. (The dense reference,
 the simultaneous Newton-Euler solve, power balance and the body balances run on it in
