@@ -267,12 +267,12 @@ def hoeken_rod():
                                cut=None, assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG})
 
 
-def cam_follower(speed=300 * RPM):
+def cam_follower(speed=300 * RPM, offset=5.0, law="cycloidal"):
     """A disc cam turning on the ground (offset 5 mm, base circle 40 mm, roller 10 mm; a
     cycloidal rise of 20 mm over 100 deg, dwell 80 deg, return over 100 deg) and a translating
-    roller follower on a vertical guide, pressed on the cam by a compression spring (2 kN/m,
-    preload 20 N at the bottom), gravity and a damper."""
-    e, rb, rf = 5.0, 40.0, 10.0
+    roller follower on a vertical guide at the offset, pressed on the cam by a compression
+    spring (2 kN/m, preload 20 N at the bottom), gravity and a damper."""
+    e, rb, rf = offset, 40.0, 10.0
     d0 = math.sqrt((rb + rf) ** 2 - e ** 2)
     bodies = (body("ground", {"C": (0, 0), "G": (e, 0), "S": (e, 200)}),
               body("cam", {"C": (0, 0)}, 2.0, (3, 1), 3000.0),
@@ -280,7 +280,7 @@ def cam_follower(speed=300 * RPM):
     joints = (rev("J1", "ground.C", "cam.C"), pri("J2", "ground.G", "follower.F", (0, 1)),
               Joint("K", "cam", "cam", "C", "follower", "F", base_radius=rb * MM,
                     roller_radius=rf * MM, offset=e * MM, lift=20 * MM, rise=100 * DEG,
-                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES["cycloidal"])))
+                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES[law])))
     loads = (spring("ground", "S", "follower", "F", 2000.0, (200 - d0) * MM + 0.01),
              damper("follower", "T", "ground", "S", 1.5))
     return Model("cam-follower", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
