@@ -14,6 +14,7 @@ import pytest
 from click.testing import CliRunner
 
 from linkdyn import cams
+from linkdyn.io import camfile
 from linkdyn.cli import main
 from linkdyn.motion import Segment
 
@@ -121,7 +122,7 @@ def test_a_flat_face_has_the_closed_form_radius_and_warns_of_a_cusp():
     assert p.rho == pytest.approx(0.040 + p.s + p.a / W ** 2, abs=1e-15)
     assert not np.any(p.undercut)
     small = cams.profile(cam("flat", base=0.005), 3601)
-    assert np.any(small.undercut) and "cusp" in cams.text(small)
+    assert np.any(small.undercut) and "cusp" in camfile.text(small)
 
 
 def test_a_roller_too_big_for_the_profile_is_reported_undercut():
@@ -134,7 +135,7 @@ def test_a_roller_too_big_for_the_profile_is_reported_undercut():
     tight = (p.rho_pitch > 0) & (p.rho_pitch < 0.020)
     assert np.array_equal(p.undercut, tight) and np.any(tight)
     assert np.any(p.undercut)
-    assert "UNDERCUT" in cams.text(p) and "smaller roller" in cams.text(p)
+    assert "UNDERCUT" in camfile.text(p) and "smaller roller" in camfile.text(p)
 
 
 def doc_file() -> str:
@@ -147,7 +148,7 @@ def test_the_command_prints_in_the_files_units_and_writes_the_table(tmp_path):
     path.write_text(doc_file(), "utf-8")
     res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
-    design, n = cams.read(path)
+    design, n = camfile.read(path)
     p = cams.profile(design, n)
     k = np.argmax(np.abs(p.pressure_angle))
     assert f"max pressure angle {math.degrees(abs(p.pressure_angle[k])):.4g} deg" in res.output

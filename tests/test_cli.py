@@ -35,7 +35,8 @@ SUMMARY_KEYS = {"model", "file", "samples", "duration_s", "mobility", "loops", "
 TOPOLOGY = {"hoeken": (1, ["J4"]), "drag_link": (1, ["J4"]), "slider_crank": (1, ["J4"]),
             "inverted_slider_crank": (1, ["J3"]), "fivebar": (2, ["J4"]),
             "stephenson": (1, ["J4", "J7"]), "watt2": (1, ["J4", "J7"]),
-            "scotch_yoke": (1, ["J3"]), "geared_fivebar": (1, ["G", "J5"])}
+            "scotch_yoke": (1, ["J3"]), "geared_fivebar": (1, ["G", "J5"]),
+            "cam_follower": (1, ["K"])}
 
 
 def run(*args):

@@ -36,7 +36,12 @@ from linkdyn.dynamics import dense
 from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Joint, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-from builders import DEG, RPM, body, pri, rev, slot
+from linkdyn import laws
+from linkdyn.cams import Cam
+from linkdyn.joints.cam import laws_name
+from linkdyn.motion import Segment
+
+from builders import DEG, MM, RPM, body, pri, rev, slot
 
 RTOL = 1e-9
 
@@ -262,6 +267,27 @@ def hoeken_rod():
                                cut=None, assembly_phi={"crank": 0.0, "coupler": 77.12 * DEG})
 
 
+def cam_follower(speed=300 * RPM, offset=5.0, law="cycloidal"):
+    """A disc cam turning on the ground (offset 5 mm, base circle 40 mm, roller 10 mm; a
+    cycloidal rise of 20 mm over 100 deg, dwell 80 deg, return over 100 deg) and a translating
+    roller follower on a vertical guide at the offset, pressed on the cam by a compression
+    spring (2 kN/m, preload 20 N at the bottom), gravity and a damper."""
+    e, rb, rf = offset, 40.0, 10.0
+    d0 = math.sqrt((rb + rf) ** 2 - e ** 2)
+    bodies = (body("ground", {"C": (0, 0), "G": (e, 0), "S": (e, 200)}),
+              body("cam", {"C": (0, 0)}, 2.0, (3, 1), 3000.0),
+              body("follower", {"F": (0, 0), "T": (0, 30)}, 0.5, (1, 15), 100.0))
+    joints = (rev("J1", "ground.C", "cam.C"), pri("J2", "ground.G", "follower.F", (0, 1)),
+              Joint("K", "cam", "cam", "C", "follower", "F", base_radius=rb * MM,
+                    roller_radius=rf * MM, offset=e * MM, lift=20 * MM, rise=100 * DEG,
+                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES[law])))
+    loads = (spring("ground", "S", "follower", "F", 2000.0, (200 - d0) * MM + 0.01),
+             damper("follower", "T", "ground", "S", 1.5))
+    return Model("cam-follower", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "follower": 0.0},
+                 assembly_q={"J2": d0 * MM})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-rod": hoeken_rod,
@@ -279,6 +305,7 @@ MODELS = {
     "five-bar": five_bar,
     "scotch-yoke": scotch_yoke,
     "slotted-lever": slotted_lever,
+    "cam-follower": cam_follower,
 }
 
 
@@ -453,7 +480,64 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
-UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1}  # reaction unknowns per joint
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1, "cam": 1}  # per joint
+
+
+def cam_of(jt):
+    """The cam of ``linkdyn cam`` (:class:`linkdyn.cams.Cam`) a cam joint's numbers describe:
+    rise, dwell, return, dwell."""
+    x = jt.numbers
+    law = laws_name(x["law"])
+    rest = 2 * math.pi - x["rise"] - x["dwell"] - x["fall"]
+    segs = tuple(s for s in (Segment(law, x["lift"], x["rise"]), Segment("dwell", 0.0, x["dwell"]),
+                             Segment(law, 0.0, x["fall"]), Segment("dwell", 0.0, rest))
+                 if s.time > 0)
+    return Cam("joint", segs, x["base_radius"], "roller", x["roller_radius"], x["offset"])
+
+
+def cam_contact(cam, psi):
+    """The cam angles (shape of ``psi``) of the pitch points of ``cam`` (a linkdyn.cams.Cam) at
+    the polar angles ``psi`` in the cam's frame, found here by bracketing the pitch point's
+    polar angle ``atan2(d0 + s, e) - theta`` (C1 of linkdyn.cams, the lift by the cam's
+    SegmentMotion); and ``d0``."""
+    from scipy.optimize import brentq
+
+    e, d0 = cam.offset, math.sqrt((cam.base_radius + cam.roller_radius) ** 2 - cam.offset ** 2)
+
+    def beta(th, p):   # the pitch point's polar angle minus psi, wrapped to (-pi, pi]
+        y = d0 + cam.motion.svaj(np.array([th % (2 * math.pi)]))[0][0]
+        return math.remainder(math.atan2(y, e) - th - p, 2 * math.pi)
+
+    out = np.zeros(np.shape(psi))
+    for k, p in enumerate(np.ravel(psi)):
+        th0 = math.atan2(d0, e) - p   # beta falls by about one turn over a turn of theta
+        out.reshape(-1)[k] = brentq(beta, th0 - 1.0, th0 + 1.0, args=(p,), xtol=1e-15,
+                                    rtol=1e-15) % (2 * math.pi)
+    return out, d0
+
+
+def cam_polar(phi, d):
+    """The polar angle (T,) and radius (T,) of ``d`` (T, 2, global) in the frame of a cam body
+    at the angle ``phi`` (T,)."""
+    c, s = np.cos(phi), np.sin(phi)
+    return (np.arctan2(-s * d[..., 0] + c * d[..., 1], c * d[..., 0] + s * d[..., 1]),
+            np.linalg.norm(d, axis=-1))
+
+
+def cam_normal(sol, jt):
+    """The unit normal (T, 2) of a cam joint's pitch curve at its follower point, pointing away
+    from the cam's centre: across the tangent C2 at the contact's cam angle (cam_contact),
+    turned with the cam."""
+    cam = cam_of(jt)
+    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
+    psi, _ = cam_polar(phi, sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a))
+    th, d0 = cam_contact(cam, psi)
+    s0, s1 = cam.motion.svaj(th)[:2]
+    # C2: P' = R(-th) (d0 + s, s' - e); the outward normal perp(P'), turned by the cam's angle
+    n = np.stack((-(s1 - cam.offset), d0 + s0), -1)
+    c, s = np.cos(phi - th), np.sin(phi - th)
+    n = np.stack((c * n[..., 0] - s * n[..., 1], s * n[..., 0] + c * n[..., 1]), -1)
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
 
 
 def joint_columns(model):
@@ -501,6 +585,12 @@ def ne_system(sol):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
+        elif jt.kind == "cam":
+            # the contact force along the pitch curve's normal through the follower point
+            n = cam_normal(sol, jt)
+            normals[jt.name] = (n, n)
+            put(jt.body_b, c0, n, x)
+            put(jt.body_a, c0, -n, x)
         elif jt.kind == "distance":
             # a rod's force along the line of its two points (applied anywhere on that line)
             d = x - sol.point(jt.body_a, jt.point_a)
@@ -837,7 +927,7 @@ def test_body_wrench_balance_with_reported_reactions(name):
     for k, jt in enumerate(model.joints):
         if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        if jt.kind == "distance":  # a rod's reaction lies along the rod
+        if jt.kind in ("distance", "cam"):  # a rod's reaction along the rod, a cam's normal
             u = normals[jt.name][0]
             across = cross(u, sol.reactions.force[..., k, :])
             assert np.max(np.abs(across)) <= RTOL * fs

@@ -349,6 +349,17 @@ def test_loop_closure_residual_and_joint_geometry(name):
             assert np.max(np.abs(roll)) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], j.radius_a * (fa - alpha), rtol=0,
                                        atol=1e-12 * L)
+        elif j.kind == "cam":
+            # the follower's point on the pitch curve linkdyn cam draws (C1): at its polar angle
+            # in the cam's frame, the pitch point's radius; q the lift there
+            from test_dynamics import cam_contact, cam_of, cam_polar
+
+            cam = cam_of(j)
+            psi, r = cam_polar(fa, pb - pa)
+            th, d0 = cam_contact(cam, psi)
+            s = cam.motion.svaj(th)[0]
+            assert np.max(np.abs(r - np.hypot(cam.offset, d0 + s))) <= 1e-10 * L, j.name
+            np.testing.assert_allclose(kin.q[:, k], s, rtol=0, atol=1e-12 * L)
         else:
             # a slider's frames keep their relative angle (a slot's pin turns freely); the points
             # stay on the slide line through P_a
@@ -466,8 +477,9 @@ def _same(a, b, rtol, what):
 
 
 # loop sizes: 50 single-sample solves where a solve is cheap (closed-form dyads), fewer for
-# the prismatic examples, whose continuation costs ~0.1 s per solve
-N_LOOP = {"inverted_slider_crank": 10, "slider_crank": 10}
+# the prismatic examples, whose continuation costs ~0.1 s per solve, and the cam's (~0.3 s: its
+# steps solve the contact by Newton's method on top of the closure's)
+N_LOOP = {"inverted_slider_crank": 10, "slider_crank": 10, "cam_follower": 10}
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

@@ -171,7 +171,7 @@ def test_the_registry_lists_the_slot_and_the_reader_takes_it():
     kind = joints.get("slot")
     assert (kind.freedoms, kind.rows, kind.tree, kind.reaction) == (2, 1, False, ("Fx", "Fy"))
     with pytest.raises(joints.UnknownJointKind, match="known kinds: revolute, prismatic, slot"):
-        joints.get("cam")
+        joints.get("ball")
     model = yoke_example()
     assert model.joint("J3").kind == "slot"
     np.testing.assert_allclose(model.joint("J3").axis, [0.0, 1.0])
@@ -215,7 +215,7 @@ def test_topology_always_cuts_a_slot_and_counts_one_row():
 def test_an_unknown_kind_built_in_python_is_a_model_error():
     model = yoke_example()
     odd = dataclasses.replace(model, joints=model.joints[:2] + (
-        dataclasses.replace(model.joints[2], kind="cam"),))
+        dataclasses.replace(model.joints[2], kind="ball"),))
     with pytest.raises(ModelError) as err:
         topology.build(odd)
     assert err.value.field == "joints.J3.type" and "slot" in err.value.fix

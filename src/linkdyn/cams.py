@@ -25,7 +25,9 @@ Flat-faced follower (C5), its face normal to its line: contact at the distance `
 line, ``(s', R_b + s)`` in the fixed frame; the profile's radius ``rho = R_b + s + s''``, which
 must stay positive (a cusp otherwise); the pressure angle is 0.
 
-Everything is SI (m, rad, s); :func:`text` prints in the file's units.
+Everything is SI (m, rad, s); :func:`linkdyn.io.camfile.text` prints in the file's units, and
+:func:`linkdyn.io.camfile.read` reads a cam file (this module imports no reader: the cam joint,
+:mod:`linkdyn.joints.cam`, checks its design by :func:`profile`).
 """
 
 from __future__ import annotations
@@ -169,126 +171,3 @@ def columns(p: CamProfile) -> dict[str, np.ndarray]:
             "rho_m": p.rho, "pitch_x_m": p.pitch[0], "pitch_y_m": p.pitch[1],
             "profile_x_m": p.profile[0], "profile_y_m": p.profile[1],
             "undercut": p.undercut.astype(float)}
-
-
-def text(p: CamProfile) -> str:
-    """The design's key numbers as the command line prints them, in the file's units."""
-    from .io.units import ANGLE_UNITS, LENGTH_UNITS
-    cam = p.cam
-    L, Lu = LENGTH_UNITS[cam.length_unit], cam.length_unit
-    A, Au = ANGLE_UNITS[cam.angle_unit], cam.angle_unit
-    rpm = cam.speed * 60 / (2 * math.pi)
-    k = int(np.argmax(np.abs(p.pressure_angle)))
-    lines = [f"{cam.name}: {cam.follower} follower, base circle {cam.base_radius / L:.6g} {Lu}"
-             + (f", roller {cam.roller_radius / L:.6g} {Lu}" if cam.follower == "roller" else "")
-             + (f", offset {cam.offset / L:.6g} {Lu}" if cam.offset else "")
-             + f", at {rpm:.6g} rpm",
-             f"  lift {np.max(p.s) / L:.6g} {Lu}; peak velocity {np.max(np.abs(p.v)) / L:.6g} "
-             f"{Lu}/s, acceleration {np.max(np.abs(p.a)) / L:.6g} {Lu}/s^2, jerk "
-             f"{np.max(np.abs(p.j)) / L:.6g} {Lu}/s^3",
-             f"  max pressure angle {abs(p.pressure_angle[k]) / A:.4g} {Au} at cam angle "
-             f"{p.theta[k] / A:.4g} {Au}"]
-    convex = p.rho[p.rho > 0]
-    lines.append(f"  smallest radius of curvature of the profile "
-                 f"{(np.min(convex) if len(convex) else math.nan) / L:.6g} {Lu}"
-                 + (f" (pitch curve {np.min(p.rho_pitch[p.rho_pitch > 0]) / L:.6g} {Lu})"
-                    if cam.follower != "flat" else ""))
-    if np.any(p.undercut):
-        at = p.theta[p.undercut]
-        lines.append(f"  UNDERCUT at cam angles {at[0] / A:.4g} .. {at[-1] / A:.4g} {Au}: "
-                     + ("the profile's radius falls below the roller's" if cam.follower == "roller"
-                        else "the profile has a cusp (R_b + s + s'' <= 0)")
-                     + "; enlarge the base circle"
-                     + (" or use a smaller roller" if cam.follower == "roller" else ""))
-    else:
-        lines.append("  no undercutting")
-    return "\n".join(lines)
-
-
-# --- the cam file: [units] and [cam] with its [[cam.segments]] --------------------------------
-
-CAM_KEYS = ("name", "base_radius", "follower", "roller_radius", "offset", "rpm", "samples",
-            "segments")
-SEGMENT_KEYS = ("law", "to", "angle")
-
-
-def read(path) -> tuple[Cam, int]:
-    """The cam of the file ``path`` (TOML: ``[units]`` and ``[cam]``) and its sample count.
-
-    Raises
-    ------
-    ModelError
-        One message naming the file, the field and the fix.
-    """
-    import os
-    from pathlib import Path
-
-    from . import laws
-    from .io import read_model_data
-    from .io.reader import _Reader
-    from .io.units import _units
-
-    file = os.fspath(path)
-    data = read_model_data(file)
-    r = _Reader(file, Path(file).parent)
-    r.table(data, "", ("units", "cam"), required=("cam",), noun="section", what="sections")
-    if "units" in data:
-        _units(r, data["units"])
-    c = r.table(data["cam"], "cam", CAM_KEYS, required=("base_radius", "segments"))
-    L, A = r.length, r.angle
-    follower = r.choice(c.get("follower", "roller"), "cam.follower", FOLLOWERS, "follower")
-    rb = r.number(c["base_radius"], "cam.base_radius", r.length_name, positive=True) * L
-    rf = 0.0
-    if follower == "roller":
-        if "roller_radius" not in c:
-            r.fail("cam.roller_radius", "missing required key 'roller_radius'",
-                   f"Give the roller's radius in {r.length_name}, or follower = \"knife\"")
-        rf = r.number(c["roller_radius"], "cam.roller_radius", r.length_name,
-                      positive=True) * L
-    elif "roller_radius" in c:
-        r.fail("cam.roller_radius", f"a {follower} follower has no roller",
-               'Remove roller_radius, or set follower = "roller"')
-    e = r.number(c.get("offset", 0.0), "cam.offset", r.length_name) * L
-    if follower == "flat" and e:
-        r.fail("cam.offset", "a flat face normal to its line does not depend on the offset",
-               "Remove offset for a flat-faced follower")
-    if abs(e) >= rb + rf:
-        r.fail("cam.offset", f"the offset {e / L:g} {r.length_name} reaches the prime circle "
-               f"({(rb + rf) / L:g} {r.length_name})",
-               "Give an offset smaller than the base circle plus the roller")
-    rpm = r.number(c.get("rpm", 60.0), "cam.rpm", "rev/min", positive=True)
-    samples = int(r.number(c.get("samples", 721), "cam.samples", positive=True))
-    if samples < 3 or samples > 1_000_000:
-        r.fail("cam.samples", f"must be from 3 to 1,000,000, got {samples}",
-               "Give a number of cam angles, e.g. samples = 721")
-    items = r.entries(c["segments"], "cam.segments")
-    if not items:
-        r.fail("cam.segments", "no segments given", 'Add [[cam.segments]] tables')
-    segs, lift, total = [], 0.0, 0.0
-    for k, item in enumerate(items):
-        f = f"cam.segments[{k}]"
-        r.table(item, f, SEGMENT_KEYS, required=("law", "angle"))
-        law = r.choice(item["law"], f"{f}.law", tuple(laws.LAWS), "motion law")
-        span = r.number(item["angle"], f"{f}.angle", r.angle_name, positive=True) * A
-        if law == "dwell":
-            if "to" in item:
-                r.fail(f"{f}.to", "a dwell holds its lift: it takes no 'to'",
-                       "Remove to, or use a rise law")
-        elif "to" not in item:
-            r.fail(f"{f}.to", "missing required key 'to'",
-                   f"Give the lift at the segment's end in {r.length_name}")
-        else:
-            lift = r.number(item["to"], f"{f}.to", r.length_name, nonnegative=True) * L
-        segs.append(Segment(law, lift, span))
-        total += span
-    if not math.isclose(total, 2 * math.pi, rel_tol=1e-9):
-        r.fail("cam.segments", f"the segments span {total / A:.6g} {r.angle_name}, not one turn "
-               f"({2 * math.pi / A:.6g} {r.angle_name})",
-               "Make the segments' angles add up to one turn")
-    if lift != 0.0:
-        r.fail("cam.segments", f"the lift ends at {lift / L:g} {r.length_name}, not 0",
-               "End the last rise or return at to = 0")
-    cam = Cam(name=str(c.get("name", Path(file).stem)), segments=tuple(segs), base_radius=rb,
-              follower=follower, roller_radius=rf, offset=e, speed=rpm * 2 * math.pi / 60,
-              length_unit=r.length_name, angle_unit=r.angle_name)
-    return cam, samples

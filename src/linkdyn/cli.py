@@ -505,6 +505,13 @@ def summary_text(s: dict) -> str:
              f"{shown(ps['length_m'], 'length')}"
              + ("" if ps["range"] is None else
                 f" (driver range {u.span(ps['range'][0], ps['range'][1], q, 4)})"))
+    for j, c in s.get("contact", {}).items():   # a cam's contact, which can only push
+        echo(f"  contact {j}: least force {shown(c['min_force_N'], 'force', 6)} at t = "
+             f"{num(c['min_time_s'], '.4g')} s" + (
+                 f"; LOSS OF CONTACT at {c['lost_samples']} samples, t = "
+                 f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
+                 "follower would leave the cam; stiffen its spring or raise the preload"
+                 if c["lost_samples"] else "; never lost"))
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))
@@ -1015,9 +1022,10 @@ def cam(camfile, outdir):
     radius of curvature and any undercutting, and writes cam.csv (SVAJ, pressure angle,
     curvature, the pitch curve and the profile's points, SI)."""
     from . import cams
+    from .io import camfile as cam_file
 
     check_outdir(outdir)
-    design, n = cams.read(camfile)
+    design, n = cam_file.read(camfile)
     prof = cams.profile(design, n)
     table = cams.columns(prof)
 
@@ -1029,7 +1037,7 @@ def cam(camfile, outdir):
             for row in zip(*(v.tolist() for v in table.values())):
                 w.writerow([repr(x) for x in row])
     written = write_outputs(outdir, {"cam.csv": write}, owned=("cam.csv",))
-    click.echo(cams.text(prof))
+    click.echo(cam_file.text(prof))
     click.echo(f"wrote {', '.join(map(str, written))}")
 
 

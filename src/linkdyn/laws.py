@@ -25,34 +25,42 @@ from __future__ import annotations
 
 import numpy as np
 
+from .steps import by_kind, select, step
+
 PI = np.pi
 
+# Each law is a step (linkdyn.steps): u (an array, or one float in a compiled loop) -> the
+# tuple (s, s', s'', s'''), so that the cam joint's steps evaluate the same laws on both backends.
 
+
+@step
 def _harmonic(u):
     a = PI * u
     return ((1 - np.cos(a)) / 2, PI / 2 * np.sin(a), PI ** 2 / 2 * np.cos(a),
             -PI ** 3 / 2 * np.sin(a))
 
 
+@step
 def _cycloidal(u):
     a = 2 * PI * u
     return (u - np.sin(a) / (2 * PI), 1 - np.cos(a), 2 * PI * np.sin(a),
             4 * PI ** 2 * np.cos(a))
 
 
-def _poly(coeffs):
-    """The law ``sum c_k u^k`` and its derivatives, from ``{k: c_k}``."""
-    def law(u):
-        out = []
-        for d in range(4):
-            total = np.zeros_like(u)
-            for k, c in coeffs.items():
-                if k >= d:
-                    f = float(np.prod(np.arange(k - d + 1, k + 1))) if d else 1.0
-                    total = total + c * f * u ** (k - d)
-            out.append(total)
-        return tuple(out)
-    return law
+@step
+def _poly345(u):
+    # 10 u^3 - 15 u^4 + 6 u^5 and its derivatives
+    return (u ** 3 * (10.0 + u * (-15.0 + 6.0 * u)), u * u * (30.0 + u * (-60.0 + 30.0 * u)),
+            u * (60.0 + u * (-180.0 + 120.0 * u)), 60.0 + u * (-360.0 + 360.0 * u))
+
+
+@step
+def _poly4567(u):
+    # 35 u^4 - 84 u^5 + 70 u^6 - 20 u^7 and its derivatives
+    return (u ** 4 * (35.0 + u * (-84.0 + u * (70.0 - 20.0 * u))),
+            u ** 3 * (140.0 + u * (-420.0 + u * (420.0 - 140.0 * u))),
+            u * u * (420.0 + u * (-1680.0 + u * (2100.0 - 840.0 * u))),
+            u * (840.0 + u * (-5040.0 + u * (8400.0 - 4200.0 * u))))
 
 
 def _half(first):
@@ -60,24 +68,27 @@ def _half(first):
     ``first(u)``, u in [0, 1/2]: the rate and the jerk mirror, the acceleration changes sign."""
     def law(u):
         back = u > 0.5
-        s, s1, s2, s3 = first(np.where(back, 1.0 - u, u))
-        return (np.where(back, 1.0 - s, s), s1, np.where(back, -s2, s2), s3)
-    return law
+        s, s1, s2, s3 = first(select(back, 1.0 - u, u))
+        return (select(back, 1.0 - s, s), s1, select(back, -s2, s2), s3)
+    law.__name__ = law.__qualname__ = first.__name__[:-5]
+    return step(law)
 
 
+@step
 def _modified_sine_half(u):
     # a = A sin(4 pi u) to u = 1/8, then A cos(w (u - 1/8)), w = 4 pi / 3; A = 4 pi^2 / (pi + 4)
     A, k, w = 4 * PI ** 2 / (PI + 4), 4 * PI, 4 * PI / 3
     v1, s1 = A / k, A / k * (0.125 - 1 / k)
     x = u - 0.125
     first = u <= 0.125
-    return (np.where(first, A / k * (u - np.sin(k * u) / k),
-                     s1 + v1 * x + A / w ** 2 * (1 - np.cos(w * x))),
-            np.where(first, A / k * (1 - np.cos(k * u)), v1 + A / w * np.sin(w * x)),
-            np.where(first, A * np.sin(k * u), A * np.cos(w * x)),
-            np.where(first, A * k * np.cos(k * u), -A * w * np.sin(w * x)))
+    return (select(first, A / k * (u - np.sin(k * u) / k),
+                   s1 + v1 * x + A / w ** 2 * (1 - np.cos(w * x))),
+            select(first, A / k * (1 - np.cos(k * u)), v1 + A / w * np.sin(w * x)),
+            select(first, A * np.sin(k * u), A * np.cos(w * x)),
+            select(first, A * k * np.cos(k * u), -A * w * np.sin(w * x)))
 
 
+@step
 def _modified_trapezoid_half(u):
     # a = A sin(4 pi u) to u = 1/8, A to 3/8, then A cos(4 pi (u - 3/8)); A = 8 pi / (2 + pi)
     A, k = 8 * PI / (2 + PI), 4 * PI
@@ -85,18 +96,19 @@ def _modified_trapezoid_half(u):
     v2, s2 = v1 + A / 4, s1 + v1 / 4 + A / 32
     x, y = u - 0.125, u - 0.375
     rise, flat = u <= 0.125, u <= 0.375
-    s = np.where(rise, A / k * (u - np.sin(k * u) / k),
-                 np.where(flat, s1 + v1 * x + A / 2 * x * x,
-                          s2 + v2 * y + A / k ** 2 * (1 - np.cos(k * y))))
-    v = np.where(rise, A / k * (1 - np.cos(k * u)),
-                 np.where(flat, v1 + A * x, v2 + A / k * np.sin(k * y)))
-    a = np.where(rise, A * np.sin(k * u), np.where(flat, A, A * np.cos(k * y)))
-    j = np.where(rise, A * k * np.cos(k * u), np.where(flat, 0.0, -A * k * np.sin(k * y)))
+    s = select(rise, A / k * (u - np.sin(k * u) / k),
+               select(flat, s1 + v1 * x + A / 2 * x * x,
+                      s2 + v2 * y + A / k ** 2 * (1 - np.cos(k * y))))
+    v = select(rise, A / k * (1 - np.cos(k * u)),
+               select(flat, v1 + A * x, v2 + A / k * np.sin(k * y)))
+    a = select(rise, A * np.sin(k * u), select(flat, A + 0.0 * u, A * np.cos(k * y)))
+    j = select(rise, A * k * np.cos(k * u), select(flat, 0.0 * u, -A * k * np.sin(k * y)))
     return s, v, a, j
 
 
+@step
 def _dwell(u):
-    z = np.zeros_like(u)
+    z = 0.0 * u
     return z, z, z, z
 
 
@@ -105,14 +117,20 @@ LAWS = {
     "dwell": _dwell,
     "harmonic": _harmonic,
     "cycloidal": _cycloidal,
-    "poly345": _poly({3: 10.0, 4: -15.0, 5: 6.0}),
-    "poly4567": _poly({4: 35.0, 5: -84.0, 6: 70.0, 7: -20.0}),
+    "poly345": _poly345,
+    "poly4567": _poly4567,
     "modified_sine": _half(_modified_sine_half),
     "modified_trapezoid": _half(_modified_trapezoid_half),
 }
+
+#: Each law's integer code (its place in :data:`LAWS`), as a joint's numbers carry it.
+CODES = {name: k for k, name in enumerate(LAWS)}
+
+#: The step ``law(code, u) -> (s, s', s'', s''')`` of the law with that code.
+law = by_kind([(CODES[name], fn) for name, fn in LAWS.items()])
 
 
 def rise(law: str, u) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(s, s', s'', s''')`` of ``law`` at ``u`` (any shape, clipped to [0, 1]); shape of ``u``."""
     u = np.clip(np.asarray(u, np.float64), 0.0, 1.0)
-    return LAWS[law](u)
+    return tuple(np.broadcast_to(x, u.shape) * 1.0 for x in LAWS[law](u))

@@ -177,9 +177,34 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
         ps["range_shown"] = units.span(*ps["range"], "angle" if ps["range_unit"] == "rad"
                                        else "length")
     out["health"] = health(sol)
+    if any(jk.get(m.joints[j].kind).one_sided for j in topo.cut):
+        out["contact"] = contact(sol)
     if getattr(sol, "friction", None) is not None:   # energy lost per joint, efficiency
         from .. import friction
         out["friction"] = friction.summary(sol)
+    return out
+
+
+def contact(sol) -> dict:
+    """The contact force of every joint that can only push (a cam's, ``one_sided``), by joint
+    name: its signed magnitude ``|R|`` (N; negative where the multiplier is: the cam would
+    pull), its least value and time, and the samples where it is below zero (``lost_samples``,
+    the first and last of their times): where the follower would leave the cam at the run's
+    speed, and a stronger spring or preload is needed."""
+    m, topo, t = sol.model, sol.topology, sol.t
+    out = {}
+    for k, j in enumerate(topo.cut):
+        if not jk.get(m.joints[j].kind).one_sided:
+            continue
+        lam = sol.dyn.lam[..., topo.row_slice(k)][..., 0]
+        f = np.sign(lam) * np.linalg.norm(sol.reactions.force[..., j, :], axis=-1)
+        lost = np.isfinite(f) & (f < 0)
+        kmin = int(np.nanargmin(f)) if np.any(np.isfinite(f)) else 0
+        out[m.joints[j].name] = {
+            "min_force_N": float(f[kmin]), "min_time_s": float(t[kmin]),
+            "lost_samples": int(np.sum(lost)),
+            "lost_from_s": float(t[lost][0]) if np.any(lost) else None,
+            "lost_to_s": float(t[lost][-1]) if np.any(lost) else None}
     return out
 
 

@@ -187,6 +187,8 @@ def _number(r: _Reader, x: jk.Number, value: Any, field: str, body_a: str):
                    "length": (r.length, r.length_name)}.get(x.unit, (1.0, ""))
     if value is None:
         return x.value()
+    if x.choices:   # given by name: its place in the choices
+        return float(x.choices.index(r.choice(value, field, x.choices, x.doc or x.name)))
     if not x.shape:
         return r.number(value, field, unit) * scale
     v = r.vector(value, field, unit) * scale

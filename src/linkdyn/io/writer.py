@@ -234,7 +234,8 @@ def _joints(model: Model, L: float, A: float) -> list[dict]:
         for x in jk.get(j.kind).numbers:   # the kind's numbers, in the file's units
             scale = {"angle": A, "length": L}.get(x.unit, 1.0)
             v = j.numbers[x.name]
-            entry[x.name] = _vec(v, scale) if x.shape else _num(v / scale)
+            entry[x.name] = (x.choices[int(v)] if x.choices else
+                             _vec(v, scale) if x.shape else _num(v / scale))
         joints.append(entry)
     return joints
 

@@ -10,7 +10,7 @@ defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
 
 from __future__ import annotations
 
-from . import distance, gear, prismatic, rack, revolute, slot
+from . import cam, distance, gear, prismatic, rack, revolute, slot
 from ..steps import by_kind
 from .base import WIDTH, JointKind, Number, frame, line_motion
 
@@ -20,7 +20,8 @@ BODY_FREEDOMS = 3
 #: Every joint kind by its model-file ``type``, in the order the docs list them.
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
                                                        slot.KIND,
-                                                       gear.KIND, rack.KIND, distance.KIND)}
+                                                       gear.KIND, rack.KIND, distance.KIND,
+                                                       cam.KIND)}
 
 
 def _numbers() -> dict[str, Number]:

@@ -68,6 +68,9 @@ class Number:
         design of a batch must share it.
     doc : str
         What it is, for messages and the model format's reference.
+    choices : tuple[str, ...]
+        For a number the file gives by name (a cam's motion law): the names of the values 0,
+        1, 2, ...; the reader takes a name and the writer writes it back. Empty: a number.
     """
 
     name: str
@@ -77,6 +80,7 @@ class Number:
     direction: bool = False
     design: bool = True
     doc: str = ""
+    choices: tuple = ()
 
     def value(self, x=None) -> np.ndarray | float:
         """``x`` (SI) as this number's value, the default where None: a float, or a float
@@ -86,8 +90,8 @@ class Number:
 
 
 #: the length of a cut's numbers tuple ``nums``, as every cut step takes it (the kind's scalar
-#: numbers, padded with zeros)
-WIDTH = 5
+#: numbers, padded with zeros; a cam's eight the most)
+WIDTH = 8
 
 
 @step
@@ -145,6 +149,9 @@ class JointKind:
     cut_rank : int
         Which joints of a loop the topology cuts first: the highest rank (0 a revolute joint,
         1 a sliding one, which leaves loops that close in closed form).
+    one_sided : bool
+        Whether its contact can only push (a cam's): a multiplier below zero is where the
+        bodies would part, which the run's summary reports (``contact`` in ``summary.json``).
     """
 
     name = ""
@@ -158,6 +165,7 @@ class JointKind:
     effort: str | None = None
     dyad: str | None = None
     periodic = True
+    one_sided = False
 
     @property
     def cut_rank(self) -> int:

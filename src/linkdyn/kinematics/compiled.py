@@ -147,10 +147,11 @@ def cut_numbers(L, ci, d):
     """Cut ci's numbers as its kind's cut steps take them (``nums``, ``L.cut_own``), design d:
     a tuple of :data:`linkdyn.joints.WIDTH` floats."""
     x = L.cut_own
-    return (x[ci, 0, d], x[ci, 1, d], x[ci, 2, d], x[ci, 3, d], x[ci, 4, d])
+    return (x[ci, 0, d], x[ci, 1, d], x[ci, 2, d], x[ci, 3, d], x[ci, 4, d], x[ci, 5, d],
+            x[ci, 6, d], x[ci, 7, d])
 
 
-assert jk.WIDTH == 5, "cut_numbers gathers WIDTH numbers"
+assert jk.WIDTH == 8, "cut_numbers gathers WIDTH numbers"
 
 
 @inline

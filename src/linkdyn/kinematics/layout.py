@@ -40,8 +40,12 @@ class Cut:
     @property
     def own(self) -> tuple:
         """Its numbers as its kind's cut steps take them (``nums``,
-        :meth:`~linkdyn.joints.JointKind.own`)."""
-        return jk.get(self.kind).own(self.numbers)
+        :meth:`~linkdyn.joints.JointKind.own`); a number no design may vary (a cam's law, a
+        gear's ``internal``) as one float, which a step may branch on."""
+        kind = jk.get(self.kind)
+        fixed = {x.name for x in kind.numbers if not x.design}
+        return kind.own({k: float(np.ravel(v)[0]) if k in fixed else v
+                         for k, v in self.numbers.items()})
 
     def __getattr__(self, name: str):
         numbers = self.__dict__.get("numbers")

@@ -1,0 +1,172 @@
+"""The cam-follower joint (``type = "cam"``): the follower it drives sits exactly on the motion
+``linkdyn cam`` designs (its lift by the cam's own SegmentMotion), the contact force of a
+translating roller follower with a spring is the closed form ``(m s'' w^2 + k (s + preload)) /
+cos(pressure angle)`` along the common normal, the camshaft torque is the power balance
+of that follower, the joint's coordinate has the rates of its finite differences, the summary
+finds where the follower would leave the cam, and both backends agree. (The dense reference,
+the simultaneous Newton-Euler solve, power balance and the body balances run on it in
+``tests/test_dynamics.py``: ``cam-follower``.)"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+from linkdyn import cams
+from linkdyn.cli import main
+from linkdyn.design.overview import contact
+from linkdyn.motion import ConstantSpeed
+
+from builders import MM, RPM
+from test_dynamics import cam_follower, cam_of
+
+W = 300 * RPM
+
+
+def still(model):
+    """``model`` with no gravity and no damper: the follower's closed form is then its inertia
+    and its spring only."""
+    return dataclasses.replace(model, gravity=np.zeros(2),
+                               loads=tuple(x for x in model.loads if x.kind == "spring"))
+
+
+def design(model, theta):
+    """The cam's design quantities at the cam angles ``theta`` by ``linkdyn cam``'s model:
+    the lift and its derivatives by the cam's SegmentMotion, the pressure angle (C3)."""
+    cam = cam_of(model.joint("K"))
+    s, s1, s2, _ = cam.motion.svaj(np.mod(theta, 2 * math.pi))
+    d0 = math.sqrt((cam.base_radius + cam.roller_radius) ** 2 - cam.offset ** 2)
+    return cam, d0, s, s1, s2, np.arctan2(s1 - cam.offset, d0 + s)
+
+
+@pytest.mark.parametrize("offset, law", [(5.0, "cycloidal"), (30.0, "harmonic"),
+                                         (-20.0, "modified_trapezoid")])
+def test_the_follower_sits_on_its_prescribed_motion(offset, law):
+    # a small offset, and large ones either side (|e s'| up to 0.31 rho^2) with other laws
+    model = cam_follower(offset=offset, law=law)
+    t = np.linspace(0.0, 2 * math.pi / W, 41)[:-1] + 1e-3
+    sol = linkdyn.analyze(model, t)
+    cam, d0, s, s1, s2, _ = design(model, W * t)
+    lift = model.joint("K").numbers["lift"]
+    # the follower's guide coordinate is d0 + s(theta) to 1e-12 of the lift, its rates w s',
+    # w^2 s'' (the joint's own q is the same lift)
+    assert np.max(np.abs(sol.columns["q_J2"] - d0 - s)) <= 1e-12 * lift
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * lift
+    assert np.max(np.abs(sol.columns["qd_J2"] - W * s1)) <= 1e-10 * W * np.max(np.abs(s1))
+    assert np.max(np.abs(sol.columns["qdd_J2"] - W * W * s2)) <= 1e-9 * W * W * np.max(
+        np.abs(s2))
+    # the roller's centre is on the pitch curve linkdyn cam draws (C1): at the cam angle
+    # theta it is R(-theta) (e, d0 + s) in the cam's frame, so at (e, d0 + s) on the ground
+    F = sol.point("follower", "F")
+    assert np.max(np.abs(F - np.stack((np.full_like(s, cam.offset), d0 + s), -1))) <= 1e-12 * lift
+    # and the profile's points of linkdyn cam lie on that same pitch curve (C1 vs the joint)
+    p = cams.profile(cam, 73)
+    assert np.max(np.abs(np.hypot(*p.pitch) - np.hypot(cam.offset, d0 + p.s))) <= 1e-15
+
+
+def test_contact_force_and_camshaft_torque_of_a_spring_loaded_roller_follower():
+    model = still(cam_follower())
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    _, d0, s, s1, s2, phi = design(model, W * t)
+    m = model.body("follower").mass
+    spring = model.loads[0]
+    k, preload = spring.stiffness, spring.free_length - (0.2 - d0)
+    # the follower's y equation: F cos(phi) = m w^2 s'' + k (s + preload)
+    y_force = m * W * W * s2 + k * (s + preload)
+    closed = y_force / np.cos(phi)
+    f = np.linalg.norm(np.stack((sol.columns["Fx_K"], sol.columns["Fy_K"])), axis=0)
+    assert np.max(np.abs(f - closed)) <= 1e-9 * np.max(closed)
+    # along the common normal: at the pressure angle to the follower's line, pushing it up
+    assert np.max(np.abs(np.arctan2(-np.asarray(sol.columns["Fx_K"]),
+                                    sol.columns["Fy_K"]) - phi)) <= 1e-9
+    # the camshaft's power (no inertia torque at a constant speed) is the follower's:
+    # tau w = (m y'' + k (s + preload)) y' with y' = w s'
+    tau = y_force * s1
+    assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
+    # the summary's contact: never lost, its least force the closed form's
+    c = contact(sol)["K"]
+    assert c["lost_samples"] == 0 and c["min_force_N"] == pytest.approx(np.min(closed), rel=1e-9)
+
+
+def test_the_summary_finds_where_the_follower_would_leave_the_cam():
+    fast = still(cam_follower(1200 * RPM))
+    w = 1200 * RPM
+    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    sol = linkdyn.analyze(fast, t)
+    _, d0, s, s1, s2, phi = design(fast, w * t)
+    spring = fast.loads[0]
+    need = fast.body("follower").mass * w * w * s2 + spring.stiffness * (
+        s + spring.free_length - (0.2 - d0))
+    c = contact(sol)["K"]
+    # the samples where the closed form's force is below zero (none near zero here)
+    assert np.min(np.abs(need)) > 1.0
+    assert c["lost_samples"] == int(np.sum(need < 0)) > 0
+    assert c["lost_from_s"] == t[need < 0][0] and c["lost_to_s"] == t[need < 0][-1]
+
+
+def test_the_joint_coordinate_has_the_rates_of_its_finite_differences():
+    model = cam_follower()
+    h = 1e-4
+    centres = np.array([0.013, 0.031, 0.12, 0.16])
+    t = (centres[:, None] + np.arange(-2, 3) * h).reshape(-1)
+    sol = linkdyn.analyze(model, t)
+    q, qd, qdd = (np.asarray(sol.columns[f"{x}_K"]).reshape(-1, 5) for x in ("q", "qd", "qdd"))
+    five = lambda f: (f[:, 0] - 8 * f[:, 1] + 8 * f[:, 3] - f[:, 4]) / (12 * h)
+    assert np.max(np.abs(five(q) - qd[:, 2])) <= 1e-7 * np.max(np.abs(qd))
+    assert np.max(np.abs(five(qd) - qdd[:, 2])) <= 1e-6 * np.max(np.abs(qdd))
+
+
+def test_both_backends_run_the_cam_follower():
+    pytest.importorskip("numba")
+    model = cam_follower()
+    t = np.linspace(0.0, 2 * math.pi / W, 13)
+    a = linkdyn.analyze(model, t, backend="numpy")
+    b = linkdyn.analyze(model, t, backend="compiled")
+    for name in ("tau_J1", "Fx_K", "Fy_K", "q_K", "qd_K", "qdd_K", "q_J2", "Fx_J1", "M_J2"):
+        x, y = np.asarray(a.columns[name]), np.asarray(b.columns[name])
+        assert np.max(np.abs(x - y)) <= 1e-11 * max(np.max(np.abs(x)), 1e-3), name
+
+
+def test_the_bundled_example_reads_writes_and_reports_its_contact(tmp_path):
+    path = linkdyn.example_path("cam_follower")
+    model = linkdyn.load(path)
+    jt = model.joint("K")
+    assert (jt.numbers["lift"], jt.numbers["rise"]) == pytest.approx((0.02, math.radians(90)))
+    # written back with its law by name, and read again the same
+    out = tmp_path / "cam.toml"
+    linkdyn.save(model, out)
+    assert 'law = "cycloidal"' in out.read_text("utf-8")
+    assert linkdyn.load(out).joint("K").numbers == pytest.approx(jt.numbers)
+    res = CliRunner().invoke(main, ["analyze", str(path), "--samples", "37", "-o",
+                                    str(tmp_path / "run")])
+    assert res.exit_code == 0, res.output
+    assert "contact K: least force" in res.output and "never lost" in res.output
+
+
+@pytest.mark.parametrize("edits, words", [
+    ({'law = "cycloidal"': 'law = "dwell"'}, "not dwell"),
+    ({"lift = 20.0": "lift = 0.0"}, "lift must be positive"),
+    ({"fall = 90.0": "fall = 200.0"}, "at most one turn"),
+    ({'law = "cycloidal"': 'law = "cycloid"'}, "Did you mean"),
+    # linkdyn cam's own checks: a pitch curve bending tighter than the roller (C4), and one
+    # whose polar angle falls too unevenly for the contact's Newton iterations
+    ({"base_radius = 40.0": "base_radius = 3.0", "roller_radius = 10.0": "roller_radius = 15.0"},
+     "undercut"),
+    ({"offset = 5.0": "offset = 45.0", "lift = 20.0": "lift = 100.0", "rise = 90.0": "rise = 30.0"},
+     "polar angle")])
+def test_a_cam_that_makes_no_cam_is_refused(tmp_path, edits, words):
+    text = linkdyn.example_path("cam_follower").read_text("utf-8")
+    for old, new in edits.items():
+        assert old in text
+        text = text.replace(old, new)
+    path = tmp_path / "bad.toml"
+    path.write_text(text, "utf-8")
+    res = CliRunner().invoke(main, ["check", str(path)])
+    assert res.exit_code == 2 and "joints" in res.output and words in res.output, res.output
+    assert "Traceback" not in res.output
