@@ -660,8 +660,9 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
         if plots_:  # the page's panels as figures (costly: --report does not add them)
+            from . import plots as plots_mod
             from .report import spatial as spatial_report
-            files.update(spatial_report.plot_outputs(sol, summ))
+            files.update(plots_mod.panel_outputs(spatial_report.page_data(sol, summary=summ)))
         written = _write_results(outdir, files)
         click.echo(text)
         click.echo(f"wrote {', '.join(map(str, written))}")

@@ -299,10 +299,3 @@ def _home_view(P: np.ndarray) -> dict:
         return {"az": -90.0, "el": 60.0}
     return {"az": math.degrees(math.atan2(n[1], n[0])) - 30.0,
             "el": math.degrees(math.asin(float(np.clip(n[2], -1.0, 1.0))))}
-
-
-def plot_outputs(sol, summary: dict | None = None) -> dict:
-    """The static figures of ``linkdyn analyze --plots`` for a spatial solution: the page's
-    panels, a figure per section (:func:`linkdyn.plots.panel_outputs`)."""
-    from ..plots import panel_outputs
-    return panel_outputs(page_data(sol, summary=summary))
