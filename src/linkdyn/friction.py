@@ -156,22 +156,35 @@ def rows(models, topo) -> tuple[Row, ...]:
 @step
 def coulomb(arm, arm_static, stiction, speed, viscous, preload, fx, fy, qd):
     """Friction effort in a joint whose reaction force is ``F = (fx, fy)`` and rate ``qd``,
-    and its derivative ``(df/dfx, df/dfy)``:
+    and its derivative ``(df/dfx, df/dfy)``: :func:`dry` with the SPEC's smooth sense
+    ``tanh(qd / speed)`` (``speed`` the transition speed, rad/s or m/s)."""
+    return dry(arm, arm_static, stiction, viscous, preload, fx, fy, qd, np.tanh(qd / speed))
 
-        f = -a(qd) (|F| + preload) tanh(qd / speed) - viscous qd,
+
+@step
+def dry(arm, arm_static, stiction, viscous, preload, fx, fy, qd, sense):
+    """Friction effort in a joint whose reaction force is ``F = (fx, fy)``, rate ``qd`` and
+    sense of sliding ``sense`` (in [-1, 1]), and its derivative ``(df/dfx, df/dfy)``:
+
+        f = -a(qd) (|F| + preload) sense - viscous qd,
         a(qd) = arm + (arm_static - arm) exp(-(qd / stiction)^2),
 
     ``arm``, ``arm_static`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding
     one (f a force, N), dynamic and at rest. At ``F = 0`` the derivative is taken as 0 (|F| has
     no derivative there)."""
-    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) tanh(qd / v) F / |F|
+    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) sense F / |F|
     size = np.sqrt(fx * fx + fy * fy)
     x = qd / stiction
     a = arm + (arm_static - arm) * np.exp(-x * x)
-    s = np.tanh(qd / speed)
     safe = select(size > 0, size, 1.0)
-    k = select(size > 0, -a * s / safe, 0.0)
-    return -a * (size + preload) * s - viscous * qd, (k * fx, k * fy)
+    k = select(size > 0, -a * sense / safe, 0.0)
+    return -a * (size + preload) * sense - viscous * qd, (k * fx, k * fy)
+
+
+def capacity(row: Row, F):
+    """What the static friction of ``row`` can hold at rest under the joint force ``F``
+    (2, ...), N m or N: ``arm_static (|F| + preload)``."""
+    return row.arm_static * (np.sqrt(F[0] * F[0] + F[1] * F[1]) + row.preload)
 
 
 # --- the solution ------------------------------------------------------------------------------
@@ -286,16 +299,88 @@ def _forces(react, friction_rows) -> np.ndarray:
     return np.stack([np.asarray(react.on_second[r.joint])[1:3] for r in friction_rows])
 
 
-def _equations(friction_rows, F, qd):
+def _equations(friction_rows, F, qd, sense=None):
     """``g(F)`` (k, ...) and ``dg/dF`` (k, 2, ...) of every friction load at the forces F
-    (k, 2, ...) and rates qd (k, ...)."""
+    (k, 2, ...) and rates qd (k, ...); ``sense`` (k, ...): the sense of sliding of each, where
+    not NaN (default: the SPEC's ``tanh(qd / v)``)."""
     g, dg = [], []
     for k, r in enumerate(friction_rows):
-        gk, (gx, gy) = coulomb(r.arm, r.arm_static, r.stiction, r.speed, r.viscous,
-                               r.preload, F[k, 0], F[k, 1], qd[k])
+        s = np.tanh(qd[k] / r.speed)
+        if sense is not None:
+            s = np.where(np.isnan(sense[k]), s, sense[k])
+        gk, (gx, gy) = dry(r.arm, r.arm_static, r.stiction, r.viscous, r.preload,
+                           F[k, 0], F[k, 1], qd[k], s)
         g.append(gk)
         dg.append(np.stack([gx, gy]))
+    if not g:
+        return np.zeros((0,) + np.shape(qd)[1:]), np.zeros((0, 2) + np.shape(qd)[1:])
     return np.stack(g), np.stack(dg)
+
+
+def newton(friction_rows, F0, A, qd, sense=None):
+    """The friction efforts ``f`` (k, ...) that solve ``f = g(F0 + A f)`` (T9)-(T10), by
+    Newton's method from the frictionless solution ``f = 0``, every sample at once.
+
+    Parameters
+    ----------
+    friction_rows : sequence of Row
+        The k friction loads.
+    F0 : ndarray (k, 2, ...)
+        Their joints' reaction forces at ``f = 0``, N; the last axis the samples.
+    A : ndarray (k, k, 2, ...)
+        ``A[j, l]``: the change of joint j's force under a unit effort in friction load l.
+    qd : ndarray (k, ...)
+        Their joints' rates, rad/s or m/s.
+    sense : ndarray (k, ...), optional
+        The sense of sliding where it is known (not NaN); elsewhere ``tanh(qd / v)``.
+
+    Returns
+    -------
+    (f, iterations, locked, lock_joint, scale)
+        ``f`` (NaN where locked), each sample's iteration count, the locked samples (no
+        solution reached from ``f = 0``: Newton's method does not converge, or ends where
+        ``det J <= 0``), the load with the largest residual there (-1 elsewhere), and the scale
+        of the residuals (..., 1): the largest friction effort of the run, per design.
+    """
+    k, shape = len(friction_rows), qd.shape[1:]
+    T = shape[-1]
+    f = np.zeros((k,) + shape)
+    g0, _ = _equations(friction_rows, F0, qd, sense)
+    scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
+                      initial=0.0)[..., None]                    # (..., 1) per design
+    iterations = np.zeros(shape, int)
+    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
+    eye = np.eye(k)
+    for _ in range(MAX_ITERATIONS + 1):
+        # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (..., k, k)
+        F = F0 + np.einsum("jlc...,l...->jc...", A, f)
+        g, dg = _equations(friction_rows, F, qd, sense)
+        r = f - g
+        big_r = np.max(np.abs(r), axis=0)
+        scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
+                                            axis=(0, -1), initial=0.0)[..., None])
+        J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
+        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
+        if np.all(done):
+            break
+        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
+        try:
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
+        except np.linalg.LinAlgError:
+            # a singular J (a fold of the friction equations) ends that sample's iterations
+            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
+            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
+                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
+        f = f - np.moveaxis(step_, -1, 0)
+        iterations = iterations + ~done
+    det = np.linalg.det(J)
+    converged = np.all(np.isfinite(f), axis=0) & (
+        np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
+    # a solution not reached from the frictionless one (J no longer positive) locks too
+    finite_state = np.all(np.isfinite(F0), axis=(0, 1))
+    locked = finite_state & (~converged | ~(det > 0))
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0), -1)
+    return np.where(locked, np.nan, f), iterations, locked, lock_joint, scale
 
 
 def solve(models, kin, applied: Loads, dynamics, reactions_stage):
@@ -339,44 +424,7 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     Fc = _forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
     F0 = Fc[..., 0, :]                                           # (k, 2, ...)
     A = np.moveaxis(Fc[..., 1:, :] - F0[..., None, :], -2, 1)    # (k, l, 2, ...)
-    # Newton's method on r(f) = f - g(F0 + A f) from f = 0, every sample at once
-    f = np.zeros((k,) + shape)
-    g0, _ = _equations(fr, F0, qd)
-    scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
-                      initial=0.0)[..., None]                    # (..., 1) per design
-    iterations = np.zeros(shape, int)
-    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
-    eye = np.eye(k)
-    for _ in range(MAX_ITERATIONS + 1):
-        F = F0 + np.einsum("jlc...,l...->jc...", A, f)
-        g, dg = _equations(fr, F, qd)
-        r = f - g
-        big_r = np.max(np.abs(r), axis=0)
-        scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
-                                            axis=(0, -1), initial=0.0)[..., None])
-        # J = I - dg/dF . A, per sample (..., k, k)
-        J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
-        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
-        if np.all(done):
-            break
-        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
-        try:
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
-        except np.linalg.LinAlgError:
-            # a singular J (a fold of the friction equations) ends that sample's iterations
-            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
-                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
-        f = f - np.moveaxis(step_, -1, 0)
-        iterations = iterations + ~done
-    det = np.linalg.det(J)
-    converged = np.all(np.isfinite(f), axis=0) & (
-        np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
-    # a solution not reached from the frictionless one (J no longer positive) locks too
-    finite_state = np.all(np.isfinite(F0), axis=(0, 1))
-    locked = finite_state & (~converged | ~(det > 0))
-    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0), -1)
-    f = np.where(locked, np.nan, f)
+    f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
     final = _with_efforts(applied, kin, fr, f)
     dyn = dynamics(kin, final)
