@@ -270,7 +270,7 @@ def cases(kin, C: int):
 _ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
 
 
-def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
+def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
     """``applied`` plus the friction efforts ``efforts`` (k, ...) inside their joints: the
     wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
     ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
@@ -293,13 +293,13 @@ def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
                    values=tuple(values), powers=tuple(powers))
 
 
-def _forces(react, friction_rows) -> np.ndarray:
+def forces(react, friction_rows) -> np.ndarray:
     """The reaction forces (k, 2, ...) of the friction joints, by the first body on the
     second, N."""
     return np.stack([np.asarray(react.on_second[r.joint])[1:3] for r in friction_rows])
 
 
-def _equations(friction_rows, F, qd, sense=None):
+def equations(friction_rows, F, qd, sense=None):
     """``g(F)`` (k, ...) and ``dg/dF`` (k, 2, ...) of every friction load at the forces F
     (k, 2, ...) and rates qd (k, ...); ``sense`` (k, ...): the sense of sliding of each, where
     not NaN (default: the SPEC's ``tanh(qd / v)``)."""
@@ -345,7 +345,7 @@ def newton(friction_rows, F0, A, qd, sense=None):
     k, shape = len(friction_rows), qd.shape[1:]
     T = shape[-1]
     f = np.zeros((k,) + shape)
-    g0, _ = _equations(friction_rows, F0, qd, sense)
+    g0, _ = equations(friction_rows, F0, qd, sense)
     scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
                       initial=0.0)[..., None]                    # (..., 1) per design
     iterations = np.zeros(shape, int)
@@ -354,7 +354,7 @@ def newton(friction_rows, F0, A, qd, sense=None):
     for _ in range(MAX_ITERATIONS + 1):
         # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (..., k, k)
         F = F0 + np.einsum("jlc...,l...->jc...", A, f)
-        g, dg = _equations(friction_rows, F, qd, sense)
+        g, dg = equations(friction_rows, F, qd, sense)
         r = f - g
         big_r = np.max(np.abs(r), axis=0)
         scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
@@ -418,18 +418,18 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
                     power=_tile(np.broadcast_to(applied.power, shape), C, T),
                     on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T),
                     values=(), powers=())
-    loaded = _with_efforts(tiled, big, fr, units)
+    loaded = with_efforts(tiled, big, fr, units)
     dyn_c = dynamics(big, loaded)
     react_c = reactions_stage(model, big, loaded, dyn_c)
-    Fc = _forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
+    Fc = forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
     F0 = Fc[..., 0, :]                                           # (k, 2, ...)
     A = np.moveaxis(Fc[..., 1:, :] - F0[..., None, :], -2, 1)    # (k, l, 2, ...)
     f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
-    final = _with_efforts(applied, kin, fr, f)
+    final = with_efforts(applied, kin, fr, f)
     dyn = dynamics(kin, final)
     react = reactions_stage(model, kin, final, dyn)
-    g, _ = _equations(fr, _forces(react, fr), qd)
+    g, _ = equations(fr, forces(react, fr), qd)
     res = np.abs(f - g) / np.maximum(scale, 1e-300)
     residual = float(np.nanmax(res, initial=0.0)) if res.size else 0.0
     out = Friction(tuple(model.joints[r.joint].name for r in fr),
