@@ -819,7 +819,7 @@ def speed_text(s: dict, mech) -> str:
             f"loads {a['load_work'] + 0.0:+.4g} J - dampers {a['damper_dissipation'] + 0.0:.4g} J"
             + (f" - friction {a['friction_dissipation'] + 0.0:.4g} J"
                if a.get("friction_dissipation") else "")
-            f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
+            + f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
     return "".join(line + "\n" for line in lines)
 
 

@@ -987,9 +987,11 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     fix="Check the loads and [initial]; a stiff spring needs "
                         f"{_implicit(method)}; or shorten --duration to the time given")
             # a change of the stick-slip state within the step ends it there        (F13)
-            event = None
+            event, dense = None, None
             if rubbing and solver.status != "failed":
-                event = _transition(system, solver.dense_output(), t_old, solver.t, solver.y)
+                # (DOP853's dense output evaluates the right-hand side: before any change)
+                dense = solver.dense_output()
+                event = _transition(system, dense, t_old, solver.t, solver.y)
             t_step = solver.t
             if event is not None:
                 t_step, y_event, change = event
@@ -1011,7 +1013,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             inside = (t > t_old) & (t <= t_step)
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
-                Y[:, inside] = solver.dense_output()(t[inside])
+                Y[:, inside] = (dense or solver.dense_output())(t[inside])
                 Y[:nf, inside] += turns[:, None]
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
