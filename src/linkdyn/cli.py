@@ -762,6 +762,10 @@ def simulation_summary(sol, summ: dict) -> dict:
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
                                      "energy_projections")},
+        # where a free joint with friction stuck, slipped or reversed (F13)
+        **({"stick_slip": [{"t_s": ts, "joint": j, "event": what}
+                           for ts, j, what in sol.stats["stick_slip"]]}
+           if sol.friction is not None else {}),
         # where the free coordinates changed near a dead point of theirs (time s, joints)
         "coordinate_switches": [{"t_s": ts, "free_joints": fr}
                                 for ts, fr in sol.stats.get("switches", [])],
