@@ -194,3 +194,34 @@ def test_pendulum_with_pin_friction_against_its_own_equation():
     assert np.ptp(phi[t > sol.stats["stick_slip"][-1][0]]) == 0.0
     assert abs(math.cos(phi[-1])) * L <= MU * R
     assert sol.energy_drift < 1e-8
+
+
+def test_cli_simulate_reports_the_friction(tmp_path):
+    """``linkdyn simulate`` of a block that slips under a growing push: the friction's
+    columns, its dissipation in the printed energy account, and the stick-slip events."""
+    import json
+
+    import pandas as pd
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    m = block(0.5, 0.5, lambda t: 4.0 * np.asarray(t))
+    p = tmp_path / "block.toml"
+    linkdyn.save(dataclasses.replace(m, loads=m.loads[:1]), p)   # a formula push, written below
+    text = p.read_text() + '\n[[loads]]\nkind = "force"\nbody = "block"\npoint = "B"\n' \
+        f'value = ["-4*t*{math.cos(ALPHA)!r}", "-4*t*{math.sin(ALPHA)!r}"]\n'
+    p.write_text(text)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["simulate", str(p), "-o", str(out), "--duration", "1.2",
+                                    "--samples", "7"])
+    assert res.exit_code == 0, res.output
+    assert " - friction " in res.output
+    df = pd.read_csv(out / "results.csv")
+    assert {"friction_J1", "friction_power_J1"} <= set(df.columns)
+    s = json.loads((out / "summary.json").read_text())
+    assert [e["event"] for e in s["simulation"]["stick_slip"]] == ["sticks", "slips"]
+    t_slip = MASS * G * (0.5 * math.cos(ALPHA) - math.sin(ALPHA)) / 4.0
+    assert s["simulation"]["stick_slip"][1]["t_s"] == pytest.approx(t_slip, abs=1e-9)
+    # the dissipation: mu_d N times the distance slid (the trapezoid rule's, on 7 samples)
+    lost = -np.trapezoid(df["friction_power_J1"], df["t"])
+    assert s["energy_account_J"]["friction_dissipation"] == pytest.approx(lost, rel=1e-12)
