@@ -41,6 +41,7 @@ import numpy as np
 from . import joints as jk
 from .loads import Loads, add_joint_effort
 from .model import Load, Model, default_transition_speed
+from .planar import solve_small
 from .steps import select, step
 
 #: Newton's method stops when every equation's residual is at most TOL of their scale (the
@@ -350,30 +351,27 @@ def newton(friction_rows, F0, A, qd, sense=None):
                       initial=0.0)[..., None]                    # (..., 1) per design
     iterations = np.zeros(shape, int)
     done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
-    eye = np.eye(k)
+    eye = np.eye(k).reshape((k, k) + (1,) * len(shape))
     for _ in range(MAX_ITERATIONS + 1):
-        # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (..., k, k)
+        # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (k, k, ...)
         F = F0 + np.einsum("jlc...,l...->jc...", A, f)
         g, dg = equations(friction_rows, F, qd, sense)
         r = f - g
         big_r = np.max(np.abs(r), axis=0)
         scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
                                             axis=(0, -1), initial=0.0)[..., None])
-        J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
+        J = eye - np.einsum("jc...,jlc...->jl...", dg, A)
         done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
         if np.all(done):
             break
-        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
-        try:
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
-        except np.linalg.LinAlgError:
-            # a singular J (a fold of the friction equations) ends that sample's iterations
-            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
-                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
-        f = f - np.moveaxis(step_, -1, 0)
+        # J^-1 r by elimination over the (few) rows, every sample at once; a singular J (a
+        # fold of the friction equations) ends that sample's iterations
+        step_, _ = solve_small(np.where(done, eye, J), np.where(done, 0.0, r))
+        fold = ~np.all(np.isfinite(step_), axis=0)
+        done = done | fold
+        f = f - np.where(fold, 0.0, step_)
         iterations = iterations + ~done
-    det = np.linalg.det(J)
+    det = np.linalg.det(np.moveaxis(J, (0, 1), (-2, -1))) if k else np.ones(shape)
     converged = np.all(np.isfinite(f), axis=0) & (
         np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
     # a solution not reached from the frictionless one (J no longer positive) locks too
