@@ -17,10 +17,10 @@ linear in the applied wrenches, so every reaction force is affine in the k frict
     F_j(f) = F0_j + sum_l A_jl f_l,
 
 ``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
-in friction joint l. Both come from one run of the backend's own dynamics and reactions stages
-(:func:`linkdyn.analysis.stage_functions`) on 1 + k cases of the samples laid end to end along
-the sample axis (case 0 the applied loads, case l those plus a unit effort in friction joint l),
-so the numpy and the compiled backends solve friction alike. The friction equations
+in friction joint l. Both come from 1 + k runs of the backend's own dynamics and reactions
+stages (:func:`linkdyn.analysis.stage_functions`) on the same kinematics (run 0 the applied
+loads, run l those plus a unit effort in friction joint l), so the numpy and the compiled
+backends solve friction alike. The friction equations
 ``f = g(F(f))`` are then a k x k system per sample, solved by a vectorized Newton's method from
 the frictionless solution ``f = 0``; a last run of the stages with the converged efforts gives
 the efforts, multipliers and reactions (which exclude the friction, as they exclude a driver's
@@ -236,47 +236,13 @@ class Friction:
                        locked=self.locked[k], lock_joint=self.lock_joint[k])
 
 
-def _tile(x, C: int, T: int):
-    """``x`` with its sample axis (the last, length T) repeated C times; a broadcast length 1
-    there (a constant) stays; None stays None."""
-    if x is None:
-        return None
-    if isinstance(x, (list, tuple)):
-        return type(x)(_tile(y, C, T) for y in x)
-    x = np.asarray(x)
-    if x.ndim == 0 or x.shape[-1] != T:
-        return x
-    return np.concatenate([x] * C, axis=-1)
-
-
-def cases(kin, C: int):
-    """The kinematics ``kin`` (batch shape (T,) or (D, T)) repeated C times along its sample
-    axis, (C T,) or (D, C T): C cases of the same states, for C sets of applied loads."""
-    T = kin.shape[-1]
-    pose = kin.pose
-    return replace(kin, t=_tile(kin.t, C, T),
-                   joint_motion=tuple(_tile(list(x), C, T) for x in kin.joint_motion),
-                   pose=type(pose)(*(_tile(list(x), C, T)
-                                     for x in (pose.phi, pose.c, pose.s, pose.r, pose.e))),
-                   motion=_tile(list(kin.motion), C, T), twists=_tile(list(kin.twists), C, T),
-                   rates=_tile(list(kin.rates), C, T), jacobian=_tile(kin.jacobian, C, T),
-                   pivot=_tile(kin.pivot, C, T), residual=_tile(kin.residual, C, T),
-                   valid=_tile(kin.valid, C, T),
-                   # the compiled kernels' contiguous inputs (n, ..., D, T), if there are
-                   arrays=None if kin.arrays is None else
-                   {key: _tile(kin.arrays[key], C, T) for key in _ARRAYS})
-
-
-#: the arrays of a compiled kinematics the dynamics and reactions kernels read
-_ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
-
-
 def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
     """``applied`` plus the friction efforts ``efforts`` (k, ...) inside their joints: the
     wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
     ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
     effort and its power)."""
-    w = [np.array(np.broadcast_to(x, (3,) + kin.shape)) for x in applied.wrenches]
+    # (add_joint_effort makes new arrays of the bodies it loads: the others are not copied)
+    w = [np.broadcast_to(x, (3,) + kin.shape) for x in applied.wrenches]
     w[0] = np.zeros((3,) + kin.shape)
     power = applied.power
     qd = kin.joint_motion[1]
@@ -300,17 +266,22 @@ def forces(react, friction_rows) -> np.ndarray:
     return np.stack([np.asarray(react.on_second[r.joint])[1:3] for r in friction_rows])
 
 
+def _sense(row: Row, qd, sense):
+    """The sense of sliding of a friction load: ``sense`` where given (not NaN), else the
+    SPEC's ``tanh(qd / v)``."""
+    s = np.tanh(qd / row.speed)
+    return s if sense is None else np.where(np.isnan(sense), s, sense)
+
+
 def equations(friction_rows, F, qd, sense=None):
     """``g(F)`` (k, ...) and ``dg/dF`` (k, 2, ...) of every friction load at the forces F
     (k, 2, ...) and rates qd (k, ...); ``sense`` (k, ...): the sense of sliding of each, where
     not NaN (default: the SPEC's ``tanh(qd / v)``)."""
     g, dg = [], []
     for k, r in enumerate(friction_rows):
-        s = np.tanh(qd[k] / r.speed)
-        if sense is not None:
-            s = np.where(np.isnan(sense[k]), s, sense[k])
         gk, (gx, gy) = dry(r.arm, r.arm_static, r.stiction, r.viscous, r.preload,
-                           F[k, 0], F[k, 1], qd[k], s)
+                           F[k, 0], F[k, 1], qd[k],
+                           _sense(r, qd[k], None if sense is None else sense[k]))
         g.append(gk)
         dg.append(np.stack([gx, gy]))
     if not g:
@@ -344,40 +315,54 @@ def newton(friction_rows, F0, A, qd, sense=None):
         of the residuals (..., 1): the largest friction effort of the run, per design.
     """
     k, shape = len(friction_rows), qd.shape[1:]
-    T = shape[-1]
-    f = np.zeros((k,) + shape)
-    g0, _ = equations(friction_rows, F0, qd, sense)
-    scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
-                      initial=0.0)[..., None]                    # (..., 1) per design
+    # components as lists of sample arrays: the loops run over the (few) loads, never samples
+    F0 = [[F0[j, c] for c in range(2)] for j in range(k)]
+    A = [[[A[j, n, c] for c in range(2)] for n in range(k)] for j in range(k)]
+
+    def at(f):
+        # g(F0 + A f), dg/dF per load and the scale: the largest |g| per design (..., 1)
+        F = [[F0[j][c] + sum(A[j][n][c] * f[n] for n in range(k)) for c in range(2)]
+             for j in range(k)]
+        out = [dry(r.arm, r.arm_static, r.stiction, r.viscous, r.preload, F[j][0], F[j][1],
+                   qd[j], _sense(r, qd[j], None if sense is None else sense[j]))
+               for j, r in enumerate(friction_rows)]
+        big = np.max([np.nanmax(np.abs(g), axis=-1, initial=0.0) for g, _ in out], axis=0)
+        return [g for g, _ in out], [d for _, d in out], np.asarray(big)[..., None]
+
+    f = [np.zeros(shape) for _ in range(k)]
+    _, _, scale = at(f)
     iterations = np.zeros(shape, int)
-    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
-    eye = np.eye(k).reshape((k, k) + (1,) * len(shape))
+    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2, 3))
     for _ in range(MAX_ITERATIONS + 1):
         # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (k, k, ...)
-        F = F0 + np.einsum("jlc...,l...->jc...", A, f)
-        g, dg = equations(friction_rows, F, qd, sense)
-        r = f - g
+        g, dg, big = at(f)
+        scale = np.maximum(scale, big)
+        r = [f[j] - g[j] for j in range(k)]
         big_r = np.max(np.abs(r), axis=0)
-        scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
-                                            axis=(0, -1), initial=0.0)[..., None])
-        J = eye - np.einsum("jc...,jlc...->jl...", dg, A)
+        J = [[float(j == n) - (dg[j][0] * A[j][n][0] + dg[j][1] * A[j][n][1])
+              for n in range(k)] for j in range(k)]
         done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
         if np.all(done):
             break
         # J^-1 r by elimination over the (few) rows, every sample at once; a singular J (a
         # fold of the friction equations) ends that sample's iterations
-        step_, _ = solve_small(np.where(done, eye, J), np.where(done, 0.0, r))
+        step_, _ = solve_small([[np.where(done, float(j == n), J[j][n]) for n in range(k)]
+                                for j in range(k)], [np.where(done, 0.0, x) for x in r])
         fold = ~np.all(np.isfinite(step_), axis=0)
         done = done | fold
-        f = f - np.where(fold, 0.0, step_)
+        f = [f[j] - np.where(fold, 0.0, step_[j]) for j in range(k)]
         iterations = iterations + ~done
+    f, r = np.array(f).reshape((k,) + shape), np.array(r).reshape((k,) + shape)
+    J = np.array([[np.broadcast_to(x, shape) for x in row] for row in J]).reshape(
+        (k, k) + shape)
     det = np.linalg.det(np.moveaxis(J, (0, 1), (-2, -1))) if k else np.ones(shape)
     converged = np.all(np.isfinite(f), axis=0) & (
-        np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
+        np.max(np.abs(r), axis=0, initial=0.0) <= TOL * np.maximum(scale, 1e-300))
     # a solution not reached from the frictionless one (J no longer positive) locks too
     finite_state = np.all(np.isfinite(F0), axis=(0, 1))
     locked = finite_state & (~converged | ~(det > 0))
-    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0), -1)
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0)
+                          if k else 0, -1)
     return np.where(locked, np.nan, f), iterations, locked, lock_joint, scale
 
 
@@ -406,22 +391,14 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     k, shape = len(fr), kin.shape
     T = shape[-1]
     qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], shape) for r in fr])
-    # 1 + k cases along the sample axis: the loads, then a unit effort in each friction joint
-    C = 1 + k
-    big = cases(kin, C)
-    block = np.repeat(np.arange(C), T)                           # (C T,) case of each sample
-    units = [np.broadcast_to((block == c + 1).astype(float), big.shape) for c in range(k)]
-    tiled = replace(applied, wrenches=[_tile(np.broadcast_to(w, (3,) + shape), C, T)
-                                       for w in applied.wrenches],
-                    power=_tile(np.broadcast_to(applied.power, shape), C, T),
-                    on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T),
-                    values=(), powers=())
-    loaded = with_efforts(tiled, big, fr, units)
-    dyn_c = dynamics(big, loaded)
-    react_c = reactions_stage(model, big, loaded, dyn_c)
-    Fc = forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
-    F0 = Fc[..., 0, :]                                           # (k, 2, ...)
-    A = np.moveaxis(Fc[..., 1:, :] - F0[..., None, :], -2, 1)    # (k, l, 2, ...)
+    # F0: the reactions under the applied loads; A[:, l]: their change under a unit effort in
+    # friction load l. Each a run of the stages on the same kinematics (no copy of it)
+    def reaction_forces(loads):
+        return forces(reactions_stage(model, kin, loads, dynamics(kin, loads)), fr)
+    F0 = reaction_forces(applied)
+    one = np.ones(shape)
+    A = np.stack([reaction_forces(with_efforts(applied, kin, (r,), (one,))) - F0 for r in fr],
+                 axis=1)                                         # (k, l, 2, ...)
     f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
     final = with_efforts(applied, kin, fr, f)
