@@ -173,13 +173,26 @@ def dry(arm, arm_static, stiction, viscous, preload, fx, fy, qd, sense):
     ``arm``, ``arm_static`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding
     one (f a force, N), dynamic and at rest. At ``F = 0`` the derivative is taken as 0 (|F| has
     no derivative there)."""
-    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) sense F / |F|
-    size = np.sqrt(fx * fx + fy * fy)
+    return dry_at(sliding_arm(arm, arm_static, stiction, qd, sense), viscous * qd, preload,
+                  fx, fy)
+
+
+@step
+def sliding_arm(arm, arm_static, stiction, qd, sense):
+    """``a(qd) sense`` of :func:`dry`: what multiplies the joint's load, m or 1."""
     x = qd / stiction
-    a = arm + (arm_static - arm) * np.exp(-x * x)
+    return (arm + (arm_static - arm) * np.exp(-x * x)) * sense
+
+
+@step
+def dry_at(c, v, preload, fx, fy):
+    """:func:`dry` at one rate: ``f = -c (|F| + preload) - v`` and ``df/dF = -c F / |F|``
+    (0 at ``F = 0``), ``c`` its :func:`sliding_arm`, ``v`` its viscous effort ``viscous qd``."""
+    # |F| = sqrt(fx^2 + fy^2)
+    size = np.sqrt(fx * fx + fy * fy)
     safe = select(size > 0, size, 1.0)
-    k = select(size > 0, -a * sense / safe, 0.0)
-    return -a * (size + preload) * sense - viscous * qd, (k * fx, k * fy)
+    k = select(size > 0, -c / safe, 0.0)
+    return -c * (size + preload) - v, (k * fx, k * fy)
 
 
 def capacity(row: Row, F):
@@ -319,18 +332,23 @@ def newton(friction_rows, F0, A, qd, sense=None):
     F0 = [[F0[j, c] for c in range(2)] for j in range(k)]
     A = [[[A[j, n, c] for c in range(2)] for n in range(k)] for j in range(k)]
 
+    # what does not change with the forces: each load's a(qd) sense and viscous effort
+    c = [sliding_arm(r.arm, r.arm_static, r.stiction, qd[j],
+                     _sense(r, qd[j], None if sense is None else sense[j]))
+         for j, r in enumerate(friction_rows)]
+    v = [r.viscous * qd[j] for j, r in enumerate(friction_rows)]
+
     def at(f):
-        # g(F0 + A f), dg/dF per load and the scale: the largest |g| per design (..., 1)
-        F = [[F0[j][c] + sum(A[j][n][c] * f[n] for n in range(k)) for c in range(2)]
+        # g(F0 + A f), dg/dF per load and the largest |g| per design (..., 1)
+        F = [[F0[j][i] + sum(A[j][n][i] * f[n] for n in range(k)) for i in range(2)]
              for j in range(k)]
-        out = [dry(r.arm, r.arm_static, r.stiction, r.viscous, r.preload, F[j][0], F[j][1],
-                   qd[j], _sense(r, qd[j], None if sense is None else sense[j]))
+        out = [dry_at(c[j], v[j], r.preload, F[j][0], F[j][1])
                for j, r in enumerate(friction_rows)]
         big = np.max([np.nanmax(np.abs(g), axis=-1, initial=0.0) for g, _ in out], axis=0)
         return [g for g, _ in out], [d for _, d in out], np.asarray(big)[..., None]
 
     f = [np.zeros(shape) for _ in range(k)]
-    _, _, scale = at(f)
+    scale = 0.0
     iterations = np.zeros(shape, int)
     done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2, 3))
     for _ in range(MAX_ITERATIONS + 1):
