@@ -225,3 +225,16 @@ def test_cli_simulate_reports_the_friction(tmp_path):
     # the dissipation: mu_d N times the distance slid (the trapezoid rule's, on 7 samples)
     lost = -np.trapezoid(df["friction_power_J1"], df["t"])
     assert s["energy_account_J"]["friction_dissipation"] == pytest.approx(lost, rel=1e-12)
+
+
+def test_friction_determinant_matches_lapack():
+    """The per-sample determinant friction's lock test uses (elimination over the rows of
+    sample arrays) against numpy.linalg.det, pivoting and a singular sample included."""
+    from linkdyn.friction import determinant
+    rng = np.random.default_rng(7)
+    K = rng.normal(size=(4, 4, 50))
+    K[0, 0, :5] = 0.0                        # needs a row swap
+    K[:, 1, 7] = K[:, 2, 7]                  # singular
+    det = determinant([[K[i, j] for j in range(4)] for i in range(4)], (50,))
+    ref = np.linalg.det(np.moveaxis(K, -1, 0))
+    np.testing.assert_allclose(det, ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref)))

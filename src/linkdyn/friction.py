@@ -195,6 +195,38 @@ def dry_at(c, v, preload, fx, fy):
     return -c * (size + preload) - v, (k * fx, k * fy)
 
 
+def _largest(xs):
+    """The largest magnitude among the sample arrays ``xs``, per sample (NaN if one is)."""
+    out = np.abs(xs[0])
+    for x in xs[1:]:
+        out = np.maximum(out, np.abs(x))
+    return out
+
+
+def determinant(K, shape):
+    """``det K`` per sample of the small matrix ``K`` (n x n lists of sample arrays, batch
+    ``shape``), by Gaussian elimination with partial pivoting over its rows, every sample at
+    once (a LAPACK call per sample costs more than the compiled analysis)."""
+    n = len(K)
+    M = [[np.array(np.broadcast_to(x, shape), float) for x in row] for row in K]
+    det = np.ones(shape)
+    for c in range(n):
+        for i in range(c + 1, n):
+            # partial pivoting: the row with the largest |M[i][c]| into row c (det changes sign)
+            swap = np.abs(M[i][c]) > np.abs(M[c][c])
+            if np.any(swap):
+                M[c], M[i] = ([np.where(swap, x, y) for x, y in zip(M[i], M[c])],
+                              [np.where(swap, y, x) for x, y in zip(M[i], M[c])])
+                det = np.where(swap, -det, det)
+        p = M[c][c]
+        det = det * p
+        safe = np.where(p != 0, p, 1.0)
+        for i in range(c + 1, n):
+            m = M[i][c] / safe
+            M[i] = [M[i][j] - m * M[c][j] for j in range(n)]
+    return det
+
+
 def capacity(row: Row, F):
     """What the static friction of ``row`` can hold at rest under the joint force ``F``
     (2, ...), N m or N: ``arm_static (|F| + preload)``."""
@@ -350,13 +382,20 @@ def newton(friction_rows, F0, A, qd, sense=None):
     f = [np.zeros(shape) for _ in range(k)]
     scale = 0.0
     iterations = np.zeros(shape, int)
-    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2, 3))
+    # a state whose forces are not finite is not iterated (nor locked)
+    open_ = np.ones(shape, bool)
+    for x in [x for row in F0 for x in row]:
+        open_ &= np.isfinite(x)
+    finite_state = open_.copy()
+    for x in [x for row in A for col in row for x in col]:
+        open_ &= np.isfinite(x)
+    done = ~open_
     for _ in range(MAX_ITERATIONS + 1):
         # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (k, k, ...)
         g, dg, big = at(f)
         scale = np.maximum(scale, big)
         r = [f[j] - g[j] for j in range(k)]
-        big_r = np.max(np.abs(r), axis=0)
+        big_r = _largest(r)
         J = [[float(j == n) - (dg[j][0] * A[j][n][0] + dg[j][1] * A[j][n][1])
               for n in range(k)] for j in range(k)]
         done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
@@ -366,19 +405,14 @@ def newton(friction_rows, F0, A, qd, sense=None):
         # fold of the friction equations) ends that sample's iterations
         step_, _ = solve_small([[np.where(done, float(j == n), J[j][n]) for n in range(k)]
                                 for j in range(k)], [np.where(done, 0.0, x) for x in r])
-        fold = ~np.all(np.isfinite(step_), axis=0)
+        fold = ~np.isfinite(_largest(step_))
         done = done | fold
         f = [f[j] - np.where(fold, 0.0, step_[j]) for j in range(k)]
         iterations = iterations + ~done
+    converged = np.isfinite(_largest(f)) & (_largest(r) <= TOL * np.maximum(scale, 1e-300))
     f, r = np.array(f).reshape((k,) + shape), np.array(r).reshape((k,) + shape)
-    J = np.array([[np.broadcast_to(x, shape) for x in row] for row in J]).reshape(
-        (k, k) + shape)
-    det = np.linalg.det(np.moveaxis(J, (0, 1), (-2, -1))) if k else np.ones(shape)
-    converged = np.all(np.isfinite(f), axis=0) & (
-        np.max(np.abs(r), axis=0, initial=0.0) <= TOL * np.maximum(scale, 1e-300))
     # a solution not reached from the frictionless one (J no longer positive) locks too
-    finite_state = np.all(np.isfinite(F0), axis=(0, 1))
-    locked = finite_state & (~converged | ~(det > 0))
+    locked = finite_state & (~converged | ~(determinant(J, shape) > 0))
     lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0)
                           if k else 0, -1)
     return np.where(locked, np.nan, f), iterations, locked, lock_joint, scale
