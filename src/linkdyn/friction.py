@@ -305,6 +305,17 @@ def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
                    values=tuple(values), powers=tuple(powers))
 
 
+def _constant(loads: Loads) -> Loads:
+    """``loads`` with each wrench that is the same at every sample kept as one sample,
+    broadcast along the samples."""
+    def one(w):
+        w = np.asarray(w)
+        if w.ndim and w.strides[-1] != 0 and np.all(w == w[..., :1]):
+            return np.broadcast_to(w[..., :1], w.shape)
+        return w
+    return replace(loads, wrenches=[one(w) for w in loads.wrenches])
+
+
 def forces(react, friction_rows) -> np.ndarray:
     """The reaction forces (k, 2, ...) of the friction joints, by the first body on the
     second, N."""
@@ -443,14 +454,21 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     k, shape = len(fr), kin.shape
     T = shape[-1]
     qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], shape) for r in fr])
-    # F0: the reactions under the applied loads; A[:, l]: their change under a unit effort in
-    # friction load l. Each a run of the stages on the same kinematics (no copy of it)
+    # F0: the reactions under the applied loads; A[:, l]: their response to a unit effort in
+    # friction load l, the stages under it alone less the stages under no load (linear in the
+    # loads: the motion's share cancels). Each a run of the stages on the same kinematics (no
+    # copy of it); a unit effort's wrenches the same at every sample (a revolute joint's
+    # couple) are kept as one sample, which the compiled kernels read once
     def reaction_forces(loads):
         return forces(reactions_stage(model, kin, loads, dynamics(kin, loads)), fr)
     F0 = reaction_forces(applied)
+    zero = np.broadcast_to(np.zeros((3,) + (1,) * len(shape)), (3,) + shape)
+    none = replace(applied, wrenches=[zero] * len(applied.wrenches), values=(), powers=(),
+                   power=np.zeros(shape), on_ground=zero)
+    R0 = reaction_forces(none)
     one = np.ones(shape)
-    A = np.stack([reaction_forces(with_efforts(applied, kin, (r,), (one,))) - F0 for r in fr],
-                 axis=1)                                         # (k, l, 2, ...)
+    A = np.stack([reaction_forces(_constant(with_efforts(none, kin, (r,), (one,)))) - R0
+                  for r in fr], axis=1)                          # (k, l, 2, ...)
     f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
     final = with_efforts(applied, kin, fr, f)
