@@ -26,6 +26,11 @@ cut-joint constraints (coordinate partitioning, F1).
   energy balance by scaling the free rates (F11); with those and BDF free angles are
   integrated less their whole turns (F12); the solver's history moves with its state
   (:func:`restate`).
+- Friction (F13): the free accelerations and the friction efforts solved together at each
+  evaluation (reactions affine in both; :func:`linkdyn.friction.newton` on the friction law),
+  and a stick-slip state per free coordinate with friction in its own joint: a stuck one has
+  rate and acceleration exactly zero while its static capacity holds it; the changes are
+  located on each step's dense output (:func:`_transition`) and the integration restarts there.
 - The right-hand side runs numpy's stages, or one compiled function per evaluation
   (:mod:`linkdyn.forward_compiled`, ``backend=``, chosen by :mod:`linkdyn.backend`); the
   outputs of a compiled run are computed by the compiled kernels of ``analyze``'s stages.
