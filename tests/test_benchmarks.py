@@ -61,3 +61,8 @@ def test_bench_simulate():
     assert out.count("  linkdyn compiled DOP853 rtol 0.0001") == 2
     assert "one right-hand side of Hoeken" in out and "  compiled: " in out
     assert "Hoeken spinning freely (with the flywheel of hoeken_motor), 1 crank turns" in out
+
+
+def test_bench_friction():
+    out = run("bench_friction.py", "--samples", "2000", "--repeat", "1")
+    assert "ratio" in out

@@ -446,13 +446,6 @@ def test_locking_mechanism_is_exit_3(tmp_path):
     assert "Traceback" not in res.output and not out.exists()
 
 
-def test_simulate_refuses_friction_naming_the_load():
-    m = FRICTION_MODELS["hoeken-loaded"]()
-    with pytest.raises(ModelError, match="friction") as err:
-        linkdyn.simulate(dataclasses.replace(m, drivers=()), np.linspace(0, 0.1, 3))
-    assert err.value.field.startswith("loads[")
-
-
 def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
     """A sweep's friction metrics are each design's own run's energy lost and efficiency."""
     p = tmp_path / "m.toml"

@@ -842,6 +842,10 @@ def simulation_summary(sol, summ: dict) -> dict:
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
                                      "energy_projections")},
+        # where a free joint with friction stuck, slipped or reversed (F13)
+        **({"stick_slip": [{"t_s": ts, "joint": j, "event": what}
+                           for ts, j, what in sol.stats["stick_slip"]]}
+           if sol.friction is not None else {}),
         # where the free coordinates changed near a dead point of theirs (time s, joints)
         "coordinate_switches": [{"t_s": ts, "free_joints": fr}
                                 for ts, fr in sol.stats.get("switches", [])],
@@ -897,7 +901,9 @@ def speed_text(s: dict, mech) -> str:
             f"  energy: kinetic {a['kinetic_change'] + 0.0:+.4g} J, potential "
             f"{a['potential_change'] + 0.0:+.4g} J = drivers {a['driver_work'] + 0.0:+.4g} J + "
             f"loads {a['load_work'] + 0.0:+.4g} J - dampers {a['damper_dissipation'] + 0.0:.4g} J"
-            f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
+            + (f" - friction {a['friction_dissipation'] + 0.0:.4g} J"
+               if a.get("friction_dissipation") else "")
+            + f" (residual {a['residual'] + 0.0:+.3g} J, trapezoid rule over the samples)")
     return "".join(line + "\n" for line in lines)
 
 

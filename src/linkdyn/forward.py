@@ -26,6 +26,11 @@ cut-joint constraints (coordinate partitioning, F1).
   energy balance by scaling the free rates (F11); with those and BDF free angles are
   integrated less their whole turns (F12); the solver's history moves with its state
   (:func:`restate`).
+- Friction (F13): the free accelerations and the friction efforts solved together at each
+  evaluation (reactions affine in both; :func:`linkdyn.friction.newton` on the friction law),
+  and a stick-slip state per free coordinate with friction in its own joint: a stuck one has
+  rate and acceleration exactly zero while its static capacity holds it; the changes are
+  located on each step's dense output (:func:`_transition`) and the integration restarts there.
 - The right-hand side runs numpy's stages, or one compiled function per evaluation
   (:mod:`linkdyn.forward_compiled`, ``backend=``, chosen by :mod:`linkdyn.backend`); the
   outputs of a compiled run are computed by the compiled kernels of ``analyze``'s stages.
@@ -43,7 +48,8 @@ import numpy as np
 
 from .brief import brief_repr
 
-from . import backend as backend_mod, joints as jk, loads as loads_mod
+from . import backend as backend_mod, friction as friction_mod, joints as jk, loads as loads_mod
+from . import reactions as reactions_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
 from .dynamics import denoc
 from .errors import ArgumentError, AssemblyError, ModelError, quiet, wrong_type
@@ -77,6 +83,7 @@ PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
 # moves with a constant shift of the state (:func:`restate`; not LSODA, ODEPACK's)
 UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
+MAX_EVENTS = 10_000  # changes of the stick-slip state in a run (F13)
 
 
 class _Free:
@@ -370,13 +377,33 @@ class System:
         self.ind, self.dep = np.array(topo.driven, int), np.array(topo.dependent, int)
         # each tree body's joint (model order): the tree coordinates out of the joints'
         self.tree_joint = topo.tree_joint[1:]
+        # the friction loads (F13): per free coordinate the one in its joint, which sticks
+        self.rows = friction_mod.rows(part.model, topo)
+        k = len(self.rows)
+        joint_of = [j.name for j in part.model.joints]
+        self.sticky = np.array([next((n for n, r in enumerate(self.rows)
+                                      if joint_of[r.joint] == j), -1) for j in part.free], int)
+        self.held = np.zeros(self.nf, bool)      # the free coordinates stuck
+        self.sense = np.ones(self.nf)            # the sense of sliding of the others
+        self.efforts = self.ratio = None
+        self.iterations = 0
         # sample 0: qdd_f = 0; sample 1 + j: qdd_f = e_j (unit acceleration)          (F5)
-        self.unit = np.zeros((self.nf, 1 + self.nf, 1))
+        # sample 1 + nf + l: qdd_f = 0 and a unit effort in friction load l           (F13)
+        self.unit = np.zeros((self.nf, 1 + self.nf + k, 1))
         for j in range(self.nf):
             self.unit[j, 1 + j] = 1.0
+        self.unit_efforts = np.zeros((k, 1 + self.nf + k, 1))
+        for n in range(k):
+            self.unit_efforts[n, 1 + self.nf + n] = 1.0
         self.set_reference(0.0, q0, qd0)
         self.last = self.bad = None
         self.nfev = 0
+
+    def modes(self, held, sense) -> None:
+        """Set which free coordinates are stuck (``held``, nf bools) and the sense of sliding
+        of the others (``sense``, +-1) (F13); the last evaluation no longer stands."""
+        self.held, self.sense = np.array(held, bool), np.array(sense, float)
+        self.last = None
 
     def use_compiled(self):
         """Evaluate the right-hand side by the compiled kernel from now on (the numpy path stays
@@ -414,20 +441,25 @@ class System:
         ``drivers``: the drivers' ``(q, qd, qdd)`` (nd, T) at ``t`` when the caller has them.
 
         Returns ``H`` (nf, nf, T) (kg m^2, kg m or kg), ``h`` (nf, T) (N m or N: the effort
-        an actuator in each free joint would need to hold ``qdd_f = 0``), the efforts ``tau``
-        of every independent joint (k, 1 + nf, T) of the batch, and its kinematics, loads and
-        dynamics (1 + nf, T) (sample 0: ``qdd_f = 0``; 1 + j: ``qdd_f = e_j``).
+        an actuator in each free joint would need to hold ``qdd_f = 0``, without friction),
+        the efforts ``tau`` of every independent joint (k, C, T) of the batch, and its
+        kinematics, loads and dynamics (C, T), ``C = 1 + nf + k`` (sample 0: ``qdd_f = 0``;
+        1 + j: ``qdd_f = e_j``; 1 + nf + l: a unit effort in friction load l, F13).
         """
-        nd, nf = self.nd, self.nf
+        nd, nf, k = self.nd, self.nf, len(self.rows)
         part, lay = self.part, self.lay
+        C = 1 + nf + k
         q_d, qd_d, qdd_d = driver_values(part.model, t) if drivers is None else drivers
         q_ind = np.concatenate((q_d, q_f))[:, None]              # (k, 1, T)
         qd_ind = np.concatenate((qd_d, qd_f))[:, None]
-        qdd_ind = np.concatenate((np.broadcast_to(qdd_d[:, None], (nd, 1 + nf, len(t))),
-                                  np.broadcast_to(self.unit, (nf, 1 + nf, len(t)))))
+        qdd_ind = np.concatenate((np.broadcast_to(qdd_d[:, None], (nd, C, len(t))),
+                                  np.broadcast_to(self.unit, (nf, C, len(t)))))
         kin = at_state(part.inner, lay, t, q_ind, qd_ind, qdd_ind, guess[:, None])
         # the layout holds the model's gravity and load rows (not rebuilt at every call)
         applied = loads_mod.wrenches(None, kin)
+        if k:   # the unit friction efforts of the cases 1 + nf + l                    (F13)
+            applied = friction_mod.with_efforts(
+                applied, kin, self.rows, np.broadcast_to(self.unit_efforts, (k, C, len(t))))
         dyn = denoc.solve(kin, applied)
         # the energies of the first state (the accelerations do not enter them)
         self.energy = (float(dyn.kinetic_energy[0, 0]),
@@ -435,30 +467,106 @@ class System:
         tau = np.moveaxis(dyn.tau, -1, 0)                        # (k, 1 + nf, T)
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
-        H = tau[nd:, 1:] - h[:, None]                            # (row, column, T)
+        H = tau[nd:, 1:1 + nf] - h[:, None]                      # (row, column, T)
         return H, h, tau, kin, applied, dyn
 
     def evaluate(self, t, q_f, qd_f, guess):
         """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
 
-        Returns ``qdd_f`` (nf, T), the kinematics of the batch (1 + nf, T) (sample 0: qdd_f = 0)
-        and the power of drivers and non-conservative loads (T,).
+        Returns ``qdd_f`` (nf, T), the kinematics of the batch (C, T) (sample 0: qdd_f = 0)
+        and the power of drivers and non-conservative loads, friction's included (T,). With
+        friction loads, their efforts (k, T) are kept in :attr:`efforts` and, for each stuck
+        free coordinate, its friction's share of its static capacity in :attr:`ratio`
+        (nf, T; 0 for the others).
         """
         nd, nf = self.nd, self.nf
         drivers = driver_values(self.part.model, t)
         H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess, drivers)
         qd_d = drivers[1]
-        # no actuator in a free joint: H qdd_f = -h                             (F6)
-        if nf == 1:
-            qdd_f = -h / H[0]
+        if self.rows:
+            qdd_f, f, tau_d = self._friction(tau, kin, dyn)
+            # friction's power f qd_joint joins the loads'                          (F13)
+            power = applied.power[0] + np.sum(tau_d * qd_d, axis=0) + np.sum(
+                f * np.stack([kin.joint_motion[1][r.joint][0] for r in self.rows]), axis=0)
         else:
-            qdd_f = solve_small(H, -h)[0] if nf else np.zeros((0, len(t)))
-        # drivers' efforts at the solution (affine in qdd_f) and the power balance   (F8)
-        tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", tau[:nd, 1:] - tau[:nd, :1], qdd_f)
-        power = applied.power[0] + np.sum(tau_d * qd_d, axis=0)
+            # no actuator in a free joint: H qdd_f = -h                         (F6)
+            if nf == 1:
+                qdd_f = -h / H[0]
+            else:
+                qdd_f = solve_small(H, -h)[0] if nf else np.zeros((0, len(t)))
+            # drivers' efforts at the solution (affine in qdd_f) and the power balance   (F8)
+            tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", tau[:nd, 1:] - tau[:nd, :1], qdd_f)
+            power = applied.power[0] + np.sum(tau_d * qd_d, axis=0)
         ok = kin.valid[0] & (kin.pivot[0] > SINGULAR) & (dyn.pivot[0] > SINGULAR)
         qdd_f = np.where(ok, qdd_f, np.nan)
         return qdd_f, kin, power
+
+    def _friction(self, tau, kin, dyn):
+        """The free accelerations (nf, T), friction efforts (k, T) and drivers' efforts
+        (nd, T) of the batch of :meth:`reduced`, solved together (F13).
+
+        Efforts and reaction forces are affine in the free accelerations and the friction
+        efforts (columns 1 .. nf and 1 + nf .. of the batch). A stuck coordinate has
+        ``qdd_f = 0`` and its friction load's effort is unknown (what holds it); the other
+        friction loads follow their law. With those ``f_L`` given, the free coordinates'
+        equations ``h + H qdd_f + B f = 0`` are linear in the other unknowns ``x``
+        (the sliding accelerations and the holding efforts), so the forces are affine in
+        ``f_L`` alone, ``F = F0' + A' f_L``, and friction's Newton's method solves it."""
+        nd, nf, k = self.nd, self.nf, len(self.rows)
+        n1 = 1 + nf
+
+        def split(x):
+            # (..., C, T) -> value at case 0, unit-acceleration and unit-effort responses
+            x0 = x[..., 0, :]
+            return x0, x[..., 1:n1, :] - x0[..., None, :], x[..., n1:, :] - x0[..., None, :]
+        react = reactions_mod.solve(self.part.inner, kin, dyn)
+        F0, Fq, Ff = split(friction_mod.forces(react, self.rows))   # (k, 2, [nf | k], T)
+        h, H, B = split(tau[nd:])                                    # (nf, [nf | k], T)
+        d0, Dq, Df = split(tau[:nd])
+        held = self.held
+        hold = self.sticky[held]                    # the friction loads holding
+        law = np.ones(k, bool)
+        law[hold] = False
+        slip = np.flatnonzero(~held)
+        # x = [qdd_f(sliding), f(holding)] = x0 + X f_L from M x = -h - B_L f_L
+        M = np.concatenate((H[:, slip], B[:, hold]), axis=1)
+        x0 = _solve(M, -h[:, None])[:, 0]
+        X = _solve(M, -B[:, law])
+        # F = F0' + A' f_L
+        G = np.concatenate((Fq[:, :, slip], Ff[:, :, hold]), axis=2)
+        F0p = F0 + np.einsum("jcnt,nt->jct", G, x0)
+        Ap = Ff[:, :, law] + np.einsum("jcnt,nmt->jcmt", G, X)
+        rows = [r for r, use in zip(self.rows, law) if use]
+        T = tau.shape[-1]
+        qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint][0], (T,)) for r in rows]
+                      ) if rows else np.zeros((0, T))
+        # the sense of sliding of a sliding coordinate's own friction: its state's (F13)
+        sense = np.full((len(rows), T), np.nan)
+        index = np.cumsum(law) - 1
+        for i in slip:
+            if self.sticky[i] >= 0:
+                sense[index[self.sticky[i]]] = self.sense[i]
+        if rows:
+            f_L, its, _, _, _ = friction_mod.newton(rows, F0p[law], np.moveaxis(Ap[law], 2, 1),
+                                                    qd, sense)
+            self.iterations = max(self.iterations, int(np.max(its, initial=0)))
+        else:
+            f_L = np.zeros((0, T))
+        x = x0 + np.einsum("nmt,mt->nt", X, f_L)
+        qdd_f = np.zeros((nf, T))
+        qdd_f[slip] = x[:len(slip)]
+        f = np.zeros((k, T))
+        f[law], f[hold] = f_L, x[len(slip):]
+        # what holds a stuck coordinate, against its static capacity
+        F = F0p + np.einsum("jcmt,mt->jct", Ap, f_L)
+        self.ratio = np.zeros((nf, T))
+        for i in np.flatnonzero(held):
+            n = self.sticky[i]
+            cap = friction_mod.capacity(self.rows[n], F[n])
+            self.ratio[i] = np.abs(f[n]) / np.where(cap > 0, cap, 1e-300)
+        self.efforts = f
+        tau_d = d0 + np.einsum("jkt,kt->jt", Dq, qdd_f) + np.einsum("jkt,kt->jt", Df, f)
+        return qdd_f, f, tau_d
 
     def tree(self, kin, qdd_f) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Tree coordinates, rates and accelerations (n, T) at the solution of an
@@ -469,7 +577,9 @@ class System:
                          for x in (q, qd, qdd))
         if len(qdd_f):
             # column k of the unit responses: qdd(qdd_f = e_k) - qdd(0)
-            du = np.stack([np.zeros_like(qdd[tj[0]][1:])] + [qdd[j][1:] - qdd[j][:1] for j in tj])
+            n1 = 1 + len(qdd_f)
+            du = np.stack([np.zeros_like(qdd[tj[0]][1:n1])]
+                          + [qdd[j][1:n1] - qdd[j][:1] for j in tj])
             qddt = qddt + np.einsum("kt,nkt->nt", qdd_f, du)
         return qt, qdt, qddt
 
@@ -559,6 +669,92 @@ class System:
         return None
 
 
+def _solve(M, R):
+    """``M^-1 R`` per sample: M (n, n, T), R (n, m, T) -> (n, m, T) (NaN where M is
+    singular)."""
+    M, R = np.moveaxis(M, -1, 0), np.moveaxis(R, -1, 0)
+    with np.errstate(all="ignore"):
+        try:
+            return np.moveaxis(np.linalg.solve(M, R), 0, -1)
+        except np.linalg.LinAlgError:
+            ok = np.abs(np.linalg.det(M)) > 0
+            out = np.linalg.solve(np.where(ok[:, None, None], M, np.eye(M.shape[-1])), R)
+            return np.moveaxis(np.where(ok[:, None, None], out, np.nan), 0, -1)
+
+
+def _settle(system: System, t: float, y: np.ndarray, candidates) -> None:
+    """Hold the free coordinates ``candidates`` (sticky ones, at rest in the state ``(t, y)``)
+    where their static friction can (F13): all held at first; while a held one's friction
+    exceeds its static capacity, the one that exceeds it most is released, sliding the way the
+    load pushes it (against its holding effort)."""
+    held = system.held.copy()
+    held[candidates] = True
+    system.modes(held, system.sense)
+    while np.any(system.held):
+        system(t, y)
+        ratio = system.ratio[:, 0]
+        over = np.flatnonzero(system.held & ~(ratio <= 1.0))
+        if not len(over):
+            return
+        i = over[np.argmax(np.nan_to_num(ratio[over], nan=np.inf))]
+        held, sense = system.held.copy(), system.sense.copy()
+        held[i] = False
+        sense[i] = -1.0 if system.efforts[system.sticky[i], 0] > 0 else 1.0
+        system.modes(held, sense)
+
+
+def _transition(system: System, dense, t0: float, t1: float, y1: np.ndarray):
+    """The first change of the stick-slip state within the step ``(t0, t1]`` (state ``y1`` at
+    its end, ``dense`` its dense output), F13: a sliding sticky coordinate whose rate passes
+    zero (against its sense of sliding), or a stuck one whose holding effort passes its static
+    capacity. Returns ``(t, y, (coordinate, "sticks" | "slips"))`` with the system put in the
+    new state at ``(t, y)``, or None."""
+    from scipy.optimize import brentq
+
+    nf = system.nf
+    held = system.held.copy()
+    first = None
+    xtol = 4 * np.finfo(float).eps * max(abs(t1), 1.0)
+
+    def ratio(i, tt):
+        system(tt, dense(tt))
+        return float(system.ratio[i, 0]) - 1.0
+
+    for i in np.flatnonzero(system.sticky >= 0):
+        if held[i]:
+            # the holding effort passes the static capacity
+            if not ratio(i, t1) > 0:
+                continue
+            tc = t0 if not ratio(i, t0) < 0 else brentq(lambda tt: ratio(i, tt), t0, t1,
+                                                        xtol=xtol)
+        else:
+            # the rate passes zero against the sense it slides in
+            def rate(tt):
+                return float(dense(tt)[nf + i]) * system.sense[i]
+            if not (rate(t1) < 0 < rate(t0)):
+                continue
+            tc = brentq(rate, t0, t1, xtol=xtol)
+        if first is None or tc < first[0]:
+            first = (tc, i)
+    if first is None:
+        return None
+    tc, i = first
+    y = dense(tc)
+    y[nf:2 * nf][held] = 0.0
+    if held[i]:
+        # it slips the way the load pushes it, against the effort that held it
+        system.modes(held, system.sense)
+        system(tc, y)
+        sense = system.sense.copy()
+        sense[i] = -1.0 if system.efforts[system.sticky[i], 0] > 0 else 1.0
+        held[i] = False
+        system.modes(held, sense)
+        return tc, y, (i, "slips")
+    y[nf + i] = 0.0
+    _settle(system, tc, y, [i])
+    return tc, y, (i, "sticks" if system.held[i] else "reverses")
+
+
 def tolerances(rtol, atol, names=("rtol", "atol")) -> tuple[float, float]:
     """The tolerances an integration uses for the ``rtol`` and ``atol`` asked for: ``rtol``
     raised to :data:`RTOL_MIN` (scipy's own floor, which it applies with a warning), both
@@ -612,20 +808,7 @@ def _arguments(model, t, rtol, atol, method, max_steps, backend, project):
         raise wrong_type("simulate", "backend", backend, "a str")
     if not isinstance(project, (bool, np.bool_)):
         raise wrong_type("simulate", "project", project, "True or False")
-    _no_friction(model)
     return (model, t, *tolerances(rtol, atol))
-
-
-def _no_friction(model: Model) -> None:
-    """Refuse a model with friction loads: ``simulate`` does not integrate them yet (issue 25
-    item 4); ``analyze`` solves them."""
-    for k, ld in enumerate(model.loads):
-        if ld.kind == "friction":
-            raise ModelError("simulate does not integrate joint friction yet (analyze solves it)",
-                             file=model.source,
-                             field=f"loads.{ld.name}" if ld.name else f"loads[{k}]",
-                             fix="Remove the friction load to simulate, or prescribe the motion "
-                                 "with drivers and run linkdyn analyze")
 
 
 @quiet
@@ -689,7 +872,11 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # the work of a right-hand side: the 1 + f inverse dynamics of F5 over the moving bodies
     work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
     be = backend_mod.choose(backend, work, kinds)
-    pays = be.pays_after(work)
+    rubbing = friction_mod.present(model)
+    if rubbing:
+        # the compiled right-hand side knows no friction: numpy's stages throughout (F13)
+        be = backend_mod.choose("numpy", work, kinds)
+    pays = be.pays_after(work) if not rubbing else np.inf
     fast = be.compiled
     compiled_after = 0 if fast else None
     q0 = start_state(part)
@@ -699,6 +886,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     system = System(part, q0, np.zeros(topo.n), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
     check_inertia(part, system, q0)
+    events = []                    # (t, joint, "sticks" | "slips") of the stick-slip state
+    if rubbing:
+        # a sticky coordinate at rest starts stuck where its static friction holds it (F13)
+        system.modes(system.held, np.where(qd_free0 < 0, -1.0, 1.0))
+        _settle(system, 0.0, y, np.flatnonzero((system.sticky >= 0) & (qd_free0 == 0)))
+        events += [(0.0, part.free[i], "sticks") for i in np.flatnonzero(system.held)]
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
@@ -711,9 +904,12 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     Y = np.full((2 * nf + 1, len(t)), np.nan)
     guesses = np.full((topo.n, len(t)), np.nan)
     segment = np.zeros(len(t), int)          # the partition each output sample was computed in
+    # the stick-slip state each output sample was computed in (F13)
+    held_at, sense_at = np.zeros((nf, len(t)), bool), np.ones((nf, len(t)))
     at0 = t <= 0.0
     Y[:, at0] = y[:, None]
     guesses[:, at0] = q0[:, None]
+    held_at[:, at0], sense_at[:, at0] = system.held[:, None], system.sense[:, None]
     parts, switches = [part], []
     steps, nfev, t_now, projections = 0, 0, 0.0, 0
     # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
@@ -738,16 +934,23 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             turns = np.zeros(nf)
             angular = np.array([jk.get(part.layout.kind[i]).angular for i in best], bool)
             nfev += system.nfev
+            held, sense = dict(zip(parts[-1].free, system.held)), dict(zip(parts[-1].free,
+                                                                             system.sense))
             system = System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
+            # the stick-slip state carries over by joint (F13)
+            system.modes([held.get(j, False) for j in part.free],
+                         [sense.get(j, 1.0) for j in part.free])
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
             switches.append((t_now, part.free))
         solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
         recent = [solver.t]      # the times of the last steps
         walls, wall = 0, np.inf   # such steps, and the earliest time not finite
+        restart = False
         while solver.status == "running":
             t_old, before, bad = solver.t, system.ref, system.bad
+            modes = (system.held.copy(), system.sense.copy())
             message = solver.step()
             steps += 1
             # a motion approaching a position it cannot pass (a singular position of the
@@ -788,13 +991,43 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     units=joint_units(part.model),
                     fix="Check the loads and [initial]; a stiff spring needs "
                         f"{_implicit(method)}; or shorten --duration to the time given")
-            inside = (t > t_old) & (t <= solver.t)
+            # a change of the stick-slip state within the step ends it there        (F13)
+            event, dense = None, None
+            if rubbing and solver.status != "failed":
+                # (DOP853's dense output evaluates the right-hand side: before any change)
+                dense = solver.dense_output()
+                event = _transition(system, dense, t_old, solver.t, solver.y)
+            t_step = solver.t
+            if event is not None:
+                t_step, y_event, change = event
+                J = system.accept(t_step, y_event)
+                events.append((t_step, part.free[change[0]], change[1]))
+                if len(events) > MAX_EVENTS:
+                    raise AssemblyError(
+                        f"the free joints stick and slip more than {MAX_EVENTS} times",
+                        file=src, time=float(t_step), drivers=_values(part, system.ref[1]),
+                        units=joint_units(part.model),
+                        fix="Shorten --duration to the time given, or give the friction a "
+                            "dynamic coefficient closer to its static one")
+                if J is None:
+                    raise AssemblyError(f"the mechanism cannot go on where joint "
+                                        f"{part.free[change[0]]} {change[1]}", file=src, time=float(t_step),
+                                        drivers=_values(part, system.ref[1]),
+                                        units=joint_units(part.model),
+                                        fix="Check the loads and [initial]")
+            inside = (t > t_old) & (t <= t_step)
             if np.any(inside):
                 # outputs from the step's dense output; their guesses from the step's start
-                Y[:, inside] = solver.dense_output()(t[inside])
+                Y[:, inside] = (dense or solver.dense_output())(t[inside])
                 Y[:nf, inside] += turns[:, None]
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
+                held_at[:, inside] = modes[0][:, None]
+                sense_at[:, inside] = modes[1][:, None]
+            if event is not None:
+                # the integration restarts from the event's state, in its new state
+                y, t_now, restart = y_event, t_step, True
+                break
             if project and method in PROJECTED and solver.status != "failed":
                 # back onto the energy balance: the next step starts there         (F11)
                 y_p = system.project(solver.t, solver.y, e0)
@@ -833,14 +1066,19 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     system.use_compiled()
             if _better(part, J) is not None:
                 break
+        if restart:
+            continue
     nfev += system.nfev
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections, backend=be.name,
-                 compiled_after=compiled_after)
+                 compiled_after=compiled_after, friction_iterations=system.iterations,
+                 stick_slip=[(float(ts), j, what)
+                                                            for ts, j, what in events])
     if fast:
         backend_mod.mark_cached("rhs")
-    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
+    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be,
+                    (held_at, sense_at))
 
 
 def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
@@ -985,28 +1223,43 @@ def _hermite(a, b, t):
 
 
 def _outputs(parts: list[Partition], segment, t, Y, guesses, stats, kernel,
-             backend) -> Simulation:
+             backend, modes) -> Simulation:
     """Every ``analyze`` quantity at the output states, each sample in the partition it was
     integrated in (``parts[segment[k]]``, all on one tree): the free accelerations (F6), then
     the kinematics, loads, DeNOC inverse dynamics and reactions of the same stages as
     ``analyze``; the segments' results joined along the samples. With ``kernel`` (the run's
     compiled right-hand side) the free accelerations and closed positions come from it, and
-    ``backend`` (the run's) gives the stages after it."""
+    ``backend`` (the run's) gives the stages after it. ``modes``: the stick-slip state
+    ``(held, sense)`` (nf, T) each sample was integrated in (F13)."""
     groups = [np.flatnonzero(segment == k) for k in range(len(parts))]
     groups = [(parts[k], g) for k, g in enumerate(groups) if len(g)]
-    done = [_stages(p, t[g], Y[:, g], guesses[:, g], kernel, backend) for p, g in groups]
+    done = [_stages(p, t[g], Y[:, g], guesses[:, g], kernel, backend,
+                    tuple(m[:, g] for m in modes)) for p, g in groups]
     stats["free_effort_residual"] = max(d[-2] for d in done)
     stats["closure_residual"] = max(d[-1] for d in done)
+    order = np.argsort(np.concatenate([g for _, g in groups]), kind="stable")
     if len(done) == 1:
         kin, applied, dyn, react, valid = done[0][:5]
     else:
-        order = np.argsort(np.concatenate([g for _, g in groups]), kind="stable")
         kin, applied, dyn, react, valid = _join([d[:5] for d in done], order)
-    return Simulation(parts[0].model, kin, applied, dyn, react, valid, work=Y[-1],
+    model, fr = parts[0].model, None
+    if friction_mod.present(model):
+        # each friction load's effort and power at the outputs (F13)
+        rows = friction_mod.rows(model, parts[0].layout.topo)
+        f = np.concatenate([d[5][0] for d in done], axis=1)[:, order]
+        qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], t.shape) for r in rows])
+        stats["friction_residual"] = max(d[5][1] for d in done)
+        fr = friction_mod.Friction(tuple(model.joints[r.joint].name for r in rows),
+                                   tuple(r.label for r in rows),
+                                   tuple(r.axis is None for r in rows), f, f * qd,
+                                   stats.get("friction_iterations", 0),
+                                   stats["friction_residual"], np.zeros(t.shape, bool),
+                                   np.full(t.shape, -1))
+    return Simulation(model, kin, applied, dyn, react, valid, friction=fr, work=Y[-1],
                       free=parts[0].free, stats=stats)
 
 
-def _stages(part: Partition, t, Y, guesses, kernel, backend):
+def _stages(part: Partition, t, Y, guesses, kernel, backend, modes):
     """``(kin, loads, dyn, reactions, valid, free effort residual, closure residual)`` at the
     output states ``Y`` (2 nf + 1, T) of one partition, ``guesses`` (n, T) their tree
     coordinates; ``kernel``: the run's compiled right-hand side (:class:`.forward_compiled.Kernel`,
@@ -1014,7 +1267,10 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend):
     (numpy's stages where its Newton's method does not close the loops), and the stages after
     it are the compiled kernels (the kinematics kernel at the closed positions, the dynamics
     and reactions kernels) of ``backend``, the run's, as ``analyze`` maps a backend to them
-    (:func:`.analysis.stage_functions`)."""
+    (:func:`.analysis.stage_functions`). With friction loads (numpy's right-hand side, F13),
+    ``modes`` ``(held, sense)`` (nf, T) is the stick-slip state of each sample, and the result
+    has one more entry before the residuals: the friction efforts (k, T) and the largest
+    residual of their law relative to the largest effort, where they follow it."""
     model, lay = part.model, part.layout
     nd, nf = part.n_drivers, len(part.free)
     q_f, qd_f = Y[:nf], Y[nf:2 * nf]
@@ -1030,11 +1286,20 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend):
             out = kernel(t[k], Y[:, k], (t[k], guesses[:, k], zero, zero, None))
             if out is not None:
                 qdd_f[:, k], guesses[:, k], open_[k] = out[nf:2 * nf], kernel.state[0], False
-    if np.any(open_):
+    system = System(part, guesses[:, 0], np.zeros(lay.topo.n))
+    efforts = np.zeros((len(system.rows), len(t)))
+    # one evaluation per stick-slip state met (none without friction: one state)
+    state = np.concatenate(modes) if system.rows else np.zeros((1, len(t)))
+    for mode in np.unique(state, axis=1).T:
+        at = open_ & np.all(state == mode[:, None], axis=0)
+        if not np.any(at):
+            continue
         # numpy's stages (and their damped restart) where the compiled Newton did not close
-        system = System(part, guesses[:, 0], np.zeros(lay.topo.n))
-        qdd_f[:, open_] = system.evaluate(t[open_], q_f[:, open_], qd_f[:, open_],
-                                          guesses[:, open_])[0]
+        if system.rows:
+            system.modes(mode[:nf] > 0.5, mode[nf:])
+        qdd_f[:, at] = system.evaluate(t[at], q_f[:, at], qd_f[:, at], guesses[:, at])[0]
+        if system.rows:
+            efforts[:, at] = system.efforts
     q_d, qd_d, qdd_d = driver_values(model, t)
     q_ind, qd_ind, qdd_ind = (np.concatenate(x) for x in ((q_d, q_f), (qd_d, qd_f),
                                                            (qdd_d, qdd_f)))
@@ -1047,6 +1312,8 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend):
             guesses[:, open_] = close(lay, q_ind[:, open_], guesses[:, open_])[0]
         kin = at_closed(part.inner, lay, t, guesses, qd_ind, qdd_ind)
     applied = loads_mod.wrenches(model, kin)
+    if system.rows:   # the friction efforts of the right-hand side, applied           (F13)
+        applied = friction_mod.with_efforts(applied, kin, system.rows, efforts)
     dynamics, reactions_stage = stage_functions(backend)
     dyn = dynamics(kin, applied)
     react = reactions_stage(part.inner, kin, applied, dyn)
@@ -1059,7 +1326,20 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend):
     closure = float(np.nanmax(kin.residual)) if len(t) else 0.0
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
     dyn = replace(dyn, tau=dyn.tau[..., :nd])
-    return kin, applied, dyn, react, valid, residual, closure
+    if not system.rows:
+        return kin, applied, dyn, react, valid, residual, closure
+    # the law (T9) at the final reactions, where a friction load follows it (not holding)
+    held = np.zeros(efforts.shape, bool)
+    sense = np.full(efforts.shape, np.nan)
+    for i in np.flatnonzero(system.sticky >= 0):
+        held[system.sticky[i]] = modes[0][i]
+        sense[system.sticky[i]] = modes[1][i]
+    qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], t.shape) for r in system.rows])
+    g, _ = friction_mod.equations(system.rows, friction_mod.forces(react, system.rows), qd,
+                                  sense)
+    scale = max(float(np.nanmax(np.abs(efforts), initial=0.0)), 1e-300)
+    law = float(np.nanmax(np.where(held, 0.0, np.abs(efforts - g)), initial=0.0)) / scale
+    return kin, applied, dyn, react, valid, (efforts, law), residual, closure
 
 
 def _join(results: list[tuple], order: np.ndarray) -> tuple:

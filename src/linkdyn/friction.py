@@ -17,10 +17,10 @@ linear in the applied wrenches, so every reaction force is affine in the k frict
     F_j(f) = F0_j + sum_l A_jl f_l,
 
 ``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
-in friction joint l. Both come from one run of the backend's own dynamics and reactions stages
-(:func:`linkdyn.analysis.stage_functions`) on 1 + k cases of the samples laid end to end along
-the sample axis (case 0 the applied loads, case l those plus a unit effort in friction joint l),
-so the numpy and the compiled backends solve friction alike. The friction equations
+in friction joint l. Both come from 1 + k runs of the backend's own dynamics and reactions
+stages (:func:`linkdyn.analysis.stage_functions`) on the same kinematics (run 0 the applied
+loads, run l those plus a unit effort in friction joint l), so the numpy and the compiled
+backends solve friction alike. The friction equations
 ``f = g(F(f))`` are then a k x k system per sample, solved by a vectorized Newton's method from
 the frictionless solution ``f = 0``; a last run of the stages with the converged efforts gives
 the efforts, multipliers and reactions (which exclude the friction, as they exclude a driver's
@@ -41,6 +41,7 @@ import numpy as np
 from . import joints as jk
 from .loads import Loads, add_joint_effort
 from .model import Load, Model, default_transition_speed
+from .planar import solve_small
 from .steps import select, step
 
 #: Newton's method stops when every equation's residual is at most TOL of their scale (the
@@ -156,22 +157,80 @@ def rows(models, topo) -> tuple[Row, ...]:
 @step
 def coulomb(arm, arm_static, stiction, speed, viscous, preload, fx, fy, qd):
     """Friction effort in a joint whose reaction force is ``F = (fx, fy)`` and rate ``qd``,
-    and its derivative ``(df/dfx, df/dfy)``:
+    and its derivative ``(df/dfx, df/dfy)``: :func:`dry` with the SPEC's smooth sense
+    ``tanh(qd / speed)`` (``speed`` the transition speed, rad/s or m/s)."""
+    return dry(arm, arm_static, stiction, viscous, preload, fx, fy, qd, np.tanh(qd / speed))
 
-        f = -a(qd) (|F| + preload) tanh(qd / speed) - viscous qd,
+
+@step
+def dry(arm, arm_static, stiction, viscous, preload, fx, fy, qd, sense):
+    """Friction effort in a joint whose reaction force is ``F = (fx, fy)``, rate ``qd`` and
+    sense of sliding ``sense`` (in [-1, 1]), and its derivative ``(df/dfx, df/dfy)``:
+
+        f = -a(qd) (|F| + preload) sense - viscous qd,
         a(qd) = arm + (arm_static - arm) exp(-(qd / stiction)^2),
 
     ``arm``, ``arm_static`` mu r (m) for a revolute joint (f a couple, N m) or mu for a sliding
     one (f a force, N), dynamic and at rest. At ``F = 0`` the derivative is taken as 0 (|F| has
     no derivative there)."""
-    # |F| = sqrt(fx^2 + fy^2); df/dF = -a(qd) tanh(qd / v) F / |F|
-    size = np.sqrt(fx * fx + fy * fy)
+    return dry_at(sliding_arm(arm, arm_static, stiction, qd, sense), viscous * qd, preload,
+                  fx, fy)
+
+
+@step
+def sliding_arm(arm, arm_static, stiction, qd, sense):
+    """``a(qd) sense`` of :func:`dry`: what multiplies the joint's load, m or 1."""
     x = qd / stiction
-    a = arm + (arm_static - arm) * np.exp(-x * x)
-    s = np.tanh(qd / speed)
+    return (arm + (arm_static - arm) * np.exp(-x * x)) * sense
+
+
+@step
+def dry_at(c, v, preload, fx, fy):
+    """:func:`dry` at one rate: ``f = -c (|F| + preload) - v`` and ``df/dF = -c F / |F|``
+    (0 at ``F = 0``), ``c`` its :func:`sliding_arm`, ``v`` its viscous effort ``viscous qd``."""
+    # |F| = sqrt(fx^2 + fy^2)
+    size = np.sqrt(fx * fx + fy * fy)
     safe = select(size > 0, size, 1.0)
-    k = select(size > 0, -a * s / safe, 0.0)
-    return -a * (size + preload) * s - viscous * qd, (k * fx, k * fy)
+    k = select(size > 0, -c / safe, 0.0)
+    return -c * (size + preload) - v, (k * fx, k * fy)
+
+
+def _largest(xs):
+    """The largest magnitude among the sample arrays ``xs``, per sample (NaN if one is)."""
+    out = np.abs(xs[0])
+    for x in xs[1:]:
+        out = np.maximum(out, np.abs(x))
+    return out
+
+
+def determinant(K, shape):
+    """``det K`` per sample of the small matrix ``K`` (n x n lists of sample arrays, batch
+    ``shape``), by Gaussian elimination with partial pivoting over its rows, every sample at
+    once (a LAPACK call per sample costs more than the compiled analysis)."""
+    n = len(K)
+    M = [[np.array(np.broadcast_to(x, shape), float) for x in row] for row in K]
+    det = np.ones(shape)
+    for c in range(n):
+        for i in range(c + 1, n):
+            # partial pivoting: the row with the largest |M[i][c]| into row c (det changes sign)
+            swap = np.abs(M[i][c]) > np.abs(M[c][c])
+            if np.any(swap):
+                M[c], M[i] = ([np.where(swap, x, y) for x, y in zip(M[i], M[c])],
+                              [np.where(swap, y, x) for x, y in zip(M[i], M[c])])
+                det = np.where(swap, -det, det)
+        p = M[c][c]
+        det = det * p
+        safe = np.where(p != 0, p, 1.0)
+        for i in range(c + 1, n):
+            m = M[i][c] / safe
+            M[i] = [M[i][j] - m * M[c][j] for j in range(n)]
+    return det
+
+
+def capacity(row: Row, F):
+    """What the static friction of ``row`` can hold at rest under the joint force ``F``
+    (2, ...), N m or N: ``arm_static (|F| + preload)``."""
+    return row.arm_static * (np.sqrt(F[0] * F[0] + F[1] * F[1]) + row.preload)
 
 
 # --- the solution ------------------------------------------------------------------------------
@@ -222,47 +281,13 @@ class Friction:
                        locked=self.locked[k], lock_joint=self.lock_joint[k])
 
 
-def _tile(x, C: int, T: int):
-    """``x`` with its sample axis (the last, length T) repeated C times; a broadcast length 1
-    there (a constant) stays; None stays None."""
-    if x is None:
-        return None
-    if isinstance(x, (list, tuple)):
-        return type(x)(_tile(y, C, T) for y in x)
-    x = np.asarray(x)
-    if x.ndim == 0 or x.shape[-1] != T:
-        return x
-    return np.concatenate([x] * C, axis=-1)
-
-
-def cases(kin, C: int):
-    """The kinematics ``kin`` (batch shape (T,) or (D, T)) repeated C times along its sample
-    axis, (C T,) or (D, C T): C cases of the same states, for C sets of applied loads."""
-    T = kin.shape[-1]
-    pose = kin.pose
-    return replace(kin, t=_tile(kin.t, C, T),
-                   joint_motion=tuple(_tile(list(x), C, T) for x in kin.joint_motion),
-                   pose=type(pose)(*(_tile(list(x), C, T)
-                                     for x in (pose.phi, pose.c, pose.s, pose.r, pose.e))),
-                   motion=_tile(list(kin.motion), C, T), twists=_tile(list(kin.twists), C, T),
-                   rates=_tile(list(kin.rates), C, T), jacobian=_tile(kin.jacobian, C, T),
-                   pivot=_tile(kin.pivot, C, T), residual=_tile(kin.residual, C, T),
-                   valid=_tile(kin.valid, C, T),
-                   # the compiled kernels' contiguous inputs (n, ..., D, T), if there are
-                   arrays=None if kin.arrays is None else
-                   {key: _tile(kin.arrays[key], C, T) for key in _ARRAYS})
-
-
-#: the arrays of a compiled kinematics the dynamics and reactions kernels read
-_ARRAYS = ("c", "s", "r", "e", "tw", "twd", "J")
-
-
-def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
+def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
     """``applied`` plus the friction efforts ``efforts`` (k, ...) inside their joints: the
     wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
     ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
     effort and its power)."""
-    w = [np.array(np.broadcast_to(x, (3,) + kin.shape)) for x in applied.wrenches]
+    # (add_joint_effort makes new arrays of the bodies it loads: the others are not copied)
+    w = [np.broadcast_to(x, (3,) + kin.shape) for x in applied.wrenches]
     w[0] = np.zeros((3,) + kin.shape)
     power = applied.power
     qd = kin.joint_motion[1]
@@ -280,22 +305,128 @@ def _with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
                    values=tuple(values), powers=tuple(powers))
 
 
-def _forces(react, friction_rows) -> np.ndarray:
+def _constant(loads: Loads) -> Loads:
+    """``loads`` with each wrench that is the same at every sample kept as one sample,
+    broadcast along the samples."""
+    def one(w):
+        w = np.asarray(w)
+        if w.ndim and w.strides[-1] != 0 and np.all(w == w[..., :1]):
+            return np.broadcast_to(w[..., :1], w.shape)
+        return w
+    return replace(loads, wrenches=[one(w) for w in loads.wrenches])
+
+
+def forces(react, friction_rows) -> np.ndarray:
     """The reaction forces (k, 2, ...) of the friction joints, by the first body on the
     second, N."""
     return np.stack([np.asarray(react.on_second[r.joint])[1:3] for r in friction_rows])
 
 
-def _equations(friction_rows, F, qd):
+def _sense(row: Row, qd, sense):
+    """The sense of sliding of a friction load: ``sense`` where given (not NaN), else the
+    SPEC's ``tanh(qd / v)``."""
+    s = np.tanh(qd / row.speed)
+    return s if sense is None else np.where(np.isnan(sense), s, sense)
+
+
+def equations(friction_rows, F, qd, sense=None):
     """``g(F)`` (k, ...) and ``dg/dF`` (k, 2, ...) of every friction load at the forces F
-    (k, 2, ...) and rates qd (k, ...)."""
+    (k, 2, ...) and rates qd (k, ...); ``sense`` (k, ...): the sense of sliding of each, where
+    not NaN (default: the SPEC's ``tanh(qd / v)``)."""
     g, dg = [], []
     for k, r in enumerate(friction_rows):
-        gk, (gx, gy) = coulomb(r.arm, r.arm_static, r.stiction, r.speed, r.viscous,
-                               r.preload, F[k, 0], F[k, 1], qd[k])
+        gk, (gx, gy) = dry(r.arm, r.arm_static, r.stiction, r.viscous, r.preload,
+                           F[k, 0], F[k, 1], qd[k],
+                           _sense(r, qd[k], None if sense is None else sense[k]))
         g.append(gk)
         dg.append(np.stack([gx, gy]))
+    if not g:
+        return np.zeros((0,) + np.shape(qd)[1:]), np.zeros((0, 2) + np.shape(qd)[1:])
     return np.stack(g), np.stack(dg)
+
+
+def newton(friction_rows, F0, A, qd, sense=None):
+    """The friction efforts ``f`` (k, ...) that solve ``f = g(F0 + A f)`` (T9)-(T10), by
+    Newton's method from the frictionless solution ``f = 0``, every sample at once.
+
+    Parameters
+    ----------
+    friction_rows : sequence of Row
+        The k friction loads.
+    F0 : ndarray (k, 2, ...)
+        Their joints' reaction forces at ``f = 0``, N; the last axis the samples.
+    A : ndarray (k, k, 2, ...)
+        ``A[j, l]``: the change of joint j's force under a unit effort in friction load l.
+    qd : ndarray (k, ...)
+        Their joints' rates, rad/s or m/s.
+    sense : ndarray (k, ...), optional
+        The sense of sliding where it is known (not NaN); elsewhere ``tanh(qd / v)``.
+
+    Returns
+    -------
+    (f, iterations, locked, lock_joint, scale)
+        ``f`` (NaN where locked), each sample's iteration count, the locked samples (no
+        solution reached from ``f = 0``: Newton's method does not converge, or ends where
+        ``det J <= 0``), the load with the largest residual there (-1 elsewhere), and the scale
+        of the residuals (..., 1): the largest friction effort of the run, per design.
+    """
+    k, shape = len(friction_rows), qd.shape[1:]
+    # components as lists of sample arrays: the loops run over the (few) loads, never samples
+    F0 = [[F0[j, c] for c in range(2)] for j in range(k)]
+    A = [[[A[j, n, c] for c in range(2)] for n in range(k)] for j in range(k)]
+
+    # what does not change with the forces: each load's a(qd) sense and viscous effort
+    c = [sliding_arm(r.arm, r.arm_static, r.stiction, qd[j],
+                     _sense(r, qd[j], None if sense is None else sense[j]))
+         for j, r in enumerate(friction_rows)]
+    v = [r.viscous * qd[j] for j, r in enumerate(friction_rows)]
+
+    def at(f):
+        # g(F0 + A f), dg/dF per load and the largest |g| per design (..., 1)
+        F = [[F0[j][i] + sum(A[j][n][i] * f[n] for n in range(k)) for i in range(2)]
+             for j in range(k)]
+        out = [dry_at(c[j], v[j], r.preload, F[j][0], F[j][1])
+               for j, r in enumerate(friction_rows)]
+        big = np.max([np.nanmax(np.abs(g), axis=-1, initial=0.0) for g, _ in out], axis=0)
+        return [g for g, _ in out], [d for _, d in out], np.asarray(big)[..., None]
+
+    f = [np.zeros(shape) for _ in range(k)]
+    scale = 0.0
+    iterations = np.zeros(shape, int)
+    # a state whose forces are not finite is not iterated (nor locked)
+    open_ = np.ones(shape, bool)
+    for x in [x for row in F0 for x in row]:
+        open_ &= np.isfinite(x)
+    finite_state = open_.copy()
+    for x in [x for row in A for col in row for x in col]:
+        open_ &= np.isfinite(x)
+    done = ~open_
+    for _ in range(MAX_ITERATIONS + 1):
+        # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (k, k, ...)
+        g, dg, big = at(f)
+        scale = np.maximum(scale, big)
+        r = [f[j] - g[j] for j in range(k)]
+        big_r = _largest(r)
+        J = [[float(j == n) - (dg[j][0] * A[j][n][0] + dg[j][1] * A[j][n][1])
+              for n in range(k)] for j in range(k)]
+        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
+        if np.all(done):
+            break
+        # J^-1 r by elimination over the (few) rows, every sample at once; a singular J (a
+        # fold of the friction equations) ends that sample's iterations
+        step_, _ = solve_small([[np.where(done, float(j == n), J[j][n]) for n in range(k)]
+                                for j in range(k)], [np.where(done, 0.0, x) for x in r])
+        fold = ~np.isfinite(_largest(step_))
+        done = done | fold
+        f = [f[j] - np.where(fold, 0.0, step_[j]) for j in range(k)]
+        iterations = iterations + ~done
+    converged = np.isfinite(_largest(f)) & (_largest(r) <= TOL * np.maximum(scale, 1e-300))
+    f, r = np.array(f).reshape((k,) + shape), np.array(r).reshape((k,) + shape)
+    # a solution not reached from the frictionless one (J no longer positive) locks too
+    locked = finite_state & (~converged | ~(determinant(J, shape) > 0))
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0)
+                          if k else 0, -1)
+    return np.where(locked, np.nan, f), iterations, locked, lock_joint, scale
 
 
 def solve(models, kin, applied: Loads, dynamics, reactions_stage):
@@ -323,65 +454,27 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     k, shape = len(fr), kin.shape
     T = shape[-1]
     qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], shape) for r in fr])
-    # 1 + k cases along the sample axis: the loads, then a unit effort in each friction joint
-    C = 1 + k
-    big = cases(kin, C)
-    block = np.repeat(np.arange(C), T)                           # (C T,) case of each sample
-    units = [np.broadcast_to((block == c + 1).astype(float), big.shape) for c in range(k)]
-    tiled = replace(applied, wrenches=[_tile(np.broadcast_to(w, (3,) + shape), C, T)
-                                       for w in applied.wrenches],
-                    power=_tile(np.broadcast_to(applied.power, shape), C, T),
-                    on_ground=_tile(np.broadcast_to(applied.on_ground, (3,) + shape), C, T),
-                    values=(), powers=())
-    loaded = _with_efforts(tiled, big, fr, units)
-    dyn_c = dynamics(big, loaded)
-    react_c = reactions_stage(model, big, loaded, dyn_c)
-    Fc = _forces(react_c, fr).reshape((k, 2) + shape[:-1] + (C, T))
-    F0 = Fc[..., 0, :]                                           # (k, 2, ...)
-    A = np.moveaxis(Fc[..., 1:, :] - F0[..., None, :], -2, 1)    # (k, l, 2, ...)
-    # Newton's method on r(f) = f - g(F0 + A f) from f = 0, every sample at once
-    f = np.zeros((k,) + shape)
-    g0, _ = _equations(fr, F0, qd)
-    scale = np.nanmax(np.abs(g0).reshape((k,) + shape[:-1] + (T,)), axis=(0, -1),
-                      initial=0.0)[..., None]                    # (..., 1) per design
-    iterations = np.zeros(shape, int)
-    done = ~np.all(np.isfinite(F0), axis=(0, 1)) | ~np.all(np.isfinite(A), axis=(0, 1, 2))
-    eye = np.eye(k)
-    for _ in range(MAX_ITERATIONS + 1):
-        F = F0 + np.einsum("jlc...,l...->jc...", A, f)
-        g, dg = _equations(fr, F, qd)
-        r = f - g
-        big_r = np.max(np.abs(r), axis=0)
-        scale = np.maximum(scale, np.nanmax(np.abs(g).reshape(g.shape[:1] + shape[:-1] + (T,)),
-                                            axis=(0, -1), initial=0.0)[..., None])
-        # J = I - dg/dF . A, per sample (..., k, k)
-        J = eye - np.moveaxis(np.einsum("jc...,jlc...->jl...", dg, A), (0, 1), (-2, -1))
-        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
-        if np.all(done):
-            break
-        rhs = np.moveaxis(np.where(done, 0.0, r), 0, -1)[..., None]
-        try:
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J), rhs)[..., 0]
-        except np.linalg.LinAlgError:
-            # a singular J (a fold of the friction equations) ends that sample's iterations
-            done = done | ~(np.abs(np.linalg.det(J)) > 1e-14)
-            step_ = np.linalg.solve(np.where(done[..., None, None], eye, J),
-                                    np.where(done[..., None, None], 0.0, rhs))[..., 0]
-        f = f - np.moveaxis(step_, -1, 0)
-        iterations = iterations + ~done
-    det = np.linalg.det(J)
-    converged = np.all(np.isfinite(f), axis=0) & (
-        np.max(np.abs(r), axis=0) <= TOL * np.maximum(scale, 1e-300))
-    # a solution not reached from the frictionless one (J no longer positive) locks too
-    finite_state = np.all(np.isfinite(F0), axis=(0, 1))
-    locked = finite_state & (~converged | ~(det > 0))
-    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0), -1)
-    f = np.where(locked, np.nan, f)
+    # F0: the reactions under the applied loads; A[:, l]: their response to a unit effort in
+    # friction load l, the stages under it alone less the stages under no load (linear in the
+    # loads: the motion's share cancels). Each a run of the stages on the same kinematics (no
+    # copy of it); a unit effort's wrenches the same at every sample (a revolute joint's
+    # couple) are kept as one sample, which the compiled kernels read once
+    def reaction_forces(loads):
+        return forces(reactions_stage(model, kin, loads, dynamics(kin, loads)), fr)
+    F0 = reaction_forces(applied)
+    zero = np.broadcast_to(np.zeros((3,) + (1,) * len(shape)), (3,) + shape)
+    none = replace(applied, wrenches=[zero] * len(applied.wrenches), values=(), powers=(),
+                   power=np.zeros(shape), on_ground=zero)
+    R0 = reaction_forces(none)
+    one = np.ones(shape)
+    A = np.stack([reaction_forces(_constant(with_efforts(none, kin, (r,), (one,)))) - R0
+                  for r in fr], axis=1)                          # (k, l, 2, ...)
+    f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
-    final = _with_efforts(applied, kin, fr, f)
+    final = with_efforts(applied, kin, fr, f)
     dyn = dynamics(kin, final)
     react = reactions_stage(model, kin, final, dyn)
-    g, _ = _equations(fr, _forces(react, fr), qd)
+    g, _ = equations(fr, forces(react, fr), qd)
     res = np.abs(f - g) / np.maximum(scale, 1e-300)
     residual = float(np.nanmax(res, initial=0.0)) if res.size else 0.0
     out = Friction(tuple(model.joints[r.joint].name for r in fr),

@@ -161,24 +161,28 @@ def energy_account(sol) -> dict:
     """Where the energy of the run went, J, each work by the trapezoid rule over the samples:
     ``kinetic_change`` and ``potential_change`` (last sample minus first), ``driver_work``
     (the drivers', :func:`driver_power`), ``load_work`` (of the loads but springs, whose work
-    is in the potential energy, and dampers), ``damper_dissipation`` (minus the dampers'
-    work) and ``residual`` = kinetic + potential change - (driver work + load work - damper
-    dissipation): zero but for the trapezoid rule's error and the solution's. Samples that are
-    not finite are left out; None without two finite samples."""
+    is in the potential energy, dampers and friction), ``damper_dissipation`` (minus the
+    dampers' work), ``friction_dissipation`` (minus the friction loads' work) and ``residual``
+    = kinetic + potential change - (driver work + load work - damper dissipation - friction
+    dissipation): zero but for the trapezoid rule's error and the solution's. Samples that
+    are not finite are left out; None without two finite samples."""
     t = np.asarray(sol.t, float)
     kin_e = np.asarray(sol.kinetic_energy, float)
     pot = np.broadcast_to(np.asarray(sol.potential_energy, float), t.shape)
     drv = np.sum(driver_power(sol), axis=-1) if sol.model.drivers else np.zeros(t.shape)
     loads = [np.broadcast_to(np.asarray(p, float), t.shape)
              for ld, p in zip(sol.model.loads, sol.loads.powers)
-             if ld.kind not in ("spring", "damper")]
+             if ld.kind not in ("spring", "damper", "friction")]
     damp = [np.broadcast_to(np.asarray(p, float), t.shape)
             for ld, p in zip(sol.model.loads, sol.loads.powers) if ld.kind == "damper"]
+    rub = [np.broadcast_to(np.asarray(p, float), t.shape)
+           for ld, p in zip(sol.model.loads, sol.loads.powers) if ld.kind == "friction"]
     p_loads, p_damp = sum(loads, np.zeros(t.shape)), sum(damp, np.zeros(t.shape))
+    p_rub = sum(rub, np.zeros(t.shape))
     ok = np.isfinite(kin_e) & np.isfinite(pot) & np.isfinite(drv) & np.isfinite(p_loads) \
-        & np.isfinite(p_damp)
+        & np.isfinite(p_damp) & np.isfinite(p_rub)
     keys = ("kinetic_change", "potential_change", "driver_work", "load_work",
-            "damper_dissipation", "residual")
+            "damper_dissipation", "friction_dissipation", "residual")
     if np.sum(ok) < 2:
         return dict.fromkeys(keys)
     tk = t[ok]
@@ -186,8 +190,10 @@ def energy_account(sol) -> dict:
            "potential_change": float(pot[ok][-1] - pot[ok][0]),
            "driver_work": float(_cumtrapz(tk, drv[ok])[-1]),
            "load_work": float(_cumtrapz(tk, p_loads[ok])[-1]),
-           "damper_dissipation": 0.0 - float(_cumtrapz(tk, p_damp[ok])[-1])}
-    # dKE + dPE = W_drivers + W_loads - D_dampers
+           "damper_dissipation": 0.0 - float(_cumtrapz(tk, p_damp[ok])[-1]),
+           "friction_dissipation": 0.0 - float(_cumtrapz(tk, p_rub[ok])[-1])}
+    # dKE + dPE = W_drivers + W_loads - D_dampers - D_friction
     out["residual"] = (out["kinetic_change"] + out["potential_change"]
-                       - (out["driver_work"] + out["load_work"] - out["damper_dissipation"]))
+                       - (out["driver_work"] + out["load_work"] - out["damper_dissipation"]
+                          - out["friction_dissipation"]))
     return out

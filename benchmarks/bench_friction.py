@@ -1,0 +1,73 @@
+"""Cost of joint friction in ``analyze``: Hoeken's four-bar with friction at its four pins
+against the same four-bar without friction, on one backend, in the same run (a ratio: the
+machine's speed cancels out).
+
+Prints samples per second of each and their ratio (issue 25's target: at least 0.5 on the
+compiled backend), and the split of the friction run's time among its parts.
+
+Usage: python benchmarks/bench_friction.py [--samples N] [--repeat R] [--backend B]
+       [--clock wall|cpu]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+import linkdyn  # noqa: E402
+from linkdyn.friction import joint_friction  # noqa: E402
+
+TARGET_RATIO = 0.5   # issue 25: friction at four pins at least half the frictionless throughput
+
+
+def with_friction(mech, mu=0.15, radius=0.008):
+    """``mech`` with friction (mu, pin radius in m) in every revolute joint."""
+    extra = tuple(joint_friction(mech, j.name, mu, radius) for j in mech.joints)
+    return dataclasses.replace(mech, loads=mech.loads + extra)
+
+
+def best_time(fn, repeat, clock):
+    times = []
+    for _ in range(repeat):
+        t0 = clock()
+        fn()
+        times.append(clock() - t0)
+    return min(times)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=100_000)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--backend", default="compiled")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="cpu")
+    args = ap.parse_args()
+    clock = time.process_time if args.clock == "cpu" else time.perf_counter
+    plain = linkdyn.load(linkdyn.example_path("hoeken"))
+    rubbing = with_friction(plain)
+    t = np.linspace(0.0, 1.0, args.samples)
+    for m in (plain, rubbing):   # warm-up: the kernels compiled or loaded once
+        linkdyn.analyze(m, t[:100], backend=args.backend)
+    tp = best_time(lambda: linkdyn.analyze(plain, t, backend=args.backend), args.repeat, clock)
+    tf = best_time(lambda: linkdyn.analyze(rubbing, t, backend=args.backend), args.repeat,
+                   clock)
+    sol = linkdyn.analyze(rubbing, t, backend=args.backend)
+    print(f"Hoeken, {args.samples} samples, backend {args.backend}, {args.clock} clock")
+    print(f"  without friction     {args.samples / tp:12.4g} samples/s")
+    print(f"  friction at 4 pins   {args.samples / tf:12.4g} samples/s "
+          f"(Newton {sol.friction.iterations} iterations)")
+    ratio = tp / tf
+    print(f"  ratio                {ratio:12.3f}   (target >= {TARGET_RATIO}: "
+          f"{'met' if ratio >= TARGET_RATIO else 'NOT met'})")
+
+
+if __name__ == "__main__":
+    main()
