@@ -28,8 +28,9 @@ NUMBA_GROUP = "numba"
 NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel", "test_backend")
 # a parametrized test whose id has the "compiled" backend among its parameters
 COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
-# a test whose name says it runs the compiled backend, or both backends
-COMPILED_NAME = re.compile(r"compiled|both_backends")
+# a test whose name says it runs the compiled backend, or compares the backends ("both_backends",
+# "backends_agree": a test left out compiles the kernels on another worker, at the same time)
+COMPILED_NAME = re.compile(r"compiled|backends")
 
 
 def uses_numba(nodeid: str) -> bool:
