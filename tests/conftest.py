@@ -31,6 +31,9 @@ COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
 # a test whose name says it runs the compiled backend, or compares the backends ("both_backends",
 # "backends_agree": a test left out compiles the kernels on another worker, at the same time)
 COMPILED_NAME = re.compile(r"compiled|backends")
+# files whose tests share a costly module-scoped fixture: all on one worker, so that it runs once
+# (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU)
+SHARED_FIXTURE_FILES = ("test_simstats",)
 
 
 def uses_numba(nodeid: str) -> bool:
@@ -43,15 +46,19 @@ def uses_numba(nodeid: str) -> bool:
 
 @pytest.hookimpl(tryfirst=True, optionalhook=True)   # before xdist's own choice of scheduler
 def pytest_xdist_make_scheduler(config, log):
-    """Under ``--dist loadgroup``: the numba tests as one unit of work, every other test a unit
-    of its own (xdist hands out the largest unit first)."""
+    """Under ``--dist loadgroup``: the numba tests as one unit of work, each file of
+    :data:`SHARED_FIXTURE_FILES` one unit, every other test a unit of its own (xdist hands out
+    the largest unit first)."""
     if config.getvalue("dist") != "loadgroup":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
     class NumbaOnOneWorker(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            return NUMBA_GROUP if uses_numba(nodeid) else nodeid
+            if uses_numba(nodeid):
+                return NUMBA_GROUP
+            path = nodeid.partition("::")[0]
+            return path if Path(path).stem in SHARED_FIXTURE_FILES else nodeid
 
     return NumbaOnOneWorker(config, log)
 
