@@ -12,7 +12,9 @@ compile the same kernels at the same time. The grouping is a scheduler of its ow
 
 from __future__ import annotations
 
+import os
 import re
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import pytest
@@ -63,14 +65,41 @@ def pytest_xdist_make_scheduler(config, log):
     return NumbaOnOneWorker(config, log)
 
 
+@contextmanager
+def _one_at_a_time(lock: Path):
+    """Hold an exclusive lock on the file ``lock`` (POSIX ``flock``; without ``fcntl``, no lock:
+    then each worker computes for itself)."""
+    try:
+        import fcntl
+    except ImportError:
+        yield False
+        return
+    with open(lock, "w") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield True
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
 @pytest.fixture(scope="session")
 def hoeken_report_run(tmp_path_factory) -> Path:
     """The output folder of ``linkdyn analyze hoeken.toml -o out --report`` (in process), run
     once per session for the files that read it: results.csv, summary.json, report.html and
-    the plots. Read it; a test that writes copies it first."""
-    folder = tmp_path_factory.mktemp("hoeken-report")
-    model = folder / "hoeken.toml"
-    model.write_text(linkdyn.example_path("hoeken").read_text("utf-8"), "utf-8")
-    res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(folder / "out"), "--report"])
-    assert res.exit_code == 0, res.output
+    the plots. Read it; a test that writes copies it first. Under xdist the workers share it
+    (it is written once, in the session's temporary folder that holds each worker's own)."""
+    session = tmp_path_factory.getbasetemp().parent      # under xdist: every worker's base
+    shared = os.environ.get("PYTEST_XDIST_WORKER") is not None
+    lock = _one_at_a_time(session / "hoeken-report.lock") if shared else nullcontext(False)
+    with lock as locked:
+        folder = session / "hoeken-report" if locked else tmp_path_factory.mktemp("hoeken-report")
+        done = folder / "done"
+        if not done.exists():
+            folder.mkdir(exist_ok=True)
+            model = folder / "hoeken.toml"
+            model.write_text(linkdyn.example_path("hoeken").read_text("utf-8"), "utf-8")
+            res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(folder / "out"),
+                                            "--report"])
+            assert res.exit_code == 0, res.output
+            done.touch()
     return folder / "out"
