@@ -34,8 +34,9 @@ COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
 # "backends_agree": a test left out compiles the kernels on another worker, at the same time)
 COMPILED_NAME = re.compile(r"compiled|backends")
 # files whose tests share a costly module-scoped fixture: all on one worker, so that it runs once
-# (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU)
-SHARED_FIXTURE_FILES = ("test_simstats",)
+# (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU; test_report:
+# its Chromium and each example's page, made again on each worker that runs its tests)
+SHARED_FIXTURE_FILES = ("test_simstats", "test_report")
 
 
 def uses_numba(nodeid: str) -> bool:
