@@ -330,19 +330,27 @@ def test_report_plots_each_load_and_the_powers_against_time():
     assert set(drawn) == {"spring", "damper"}
 
 
+def simulated_page(name, folder, duration, samples, **options):
+    """The page ``linkdyn simulate NAME --duration D --samples N --report`` writes (its
+    report.html, without the static figures beside it, which cost more than the run) and the
+    run's columns, as the command computes them."""
+    from linkdyn import design, report
+    from linkdyn.cli import simulation_summary
+
+    mech = linkdyn.load(linkdyn.example_path(name))
+    sol = linkdyn.simulate(mech, np.linspace(0.0, duration, samples), **options)
+    folder.mkdir(parents=True, exist_ok=True)
+    report.outputs(sol, simulation_summary(sol, design.summary(sol)))["report.html"](
+        folder / "report.html")
+    return folder / "report.html", sol.columns
+
+
 def test_report_draws_the_motor_springs_and_dampers(browser, tmp_path):
     # the motor's torque is a formula of the crank's speed: the drawing takes its simulated value
-    runner = CliRunner()
-    for name, extra in (("hoeken_motor", ["--duration", "1", "--samples", "31"]),
-                        ("toggle_spring", ["--duration", "0.05", "--samples", "21",
-                                           "--method", "Radau", "--rtol", "1e-5", "--atol", "1e-7"])):
-        model = tmp_path / f"{name}.toml"
-        model.write_text(linkdyn.example_path(name).read_text("utf-8"), "utf-8")
-        res = runner.invoke(main, ["simulate", str(model), "-o", str(tmp_path / name), "--report",
-                                   *extra])
-        assert res.exit_code == 0, res.output
-    cols = read_csv(tmp_path / "toggle_spring" / "results.csv")
-    pg = Page(browser, tmp_path / "toggle_spring" / "report.html")
+    motor, _ = simulated_page("hoeken_motor", tmp_path / "hoeken_motor", 1.0, 31)
+    page, cols = simulated_page("toggle_spring", tmp_path / "toggle_spring", 0.05, 21,
+                                method="Radau", rtol=1e-5, atol=1e-7)
+    pg = Page(browser, page)
     try:
         p = pg.page
         shapes = p.eval_on_selector_all(".fspring, .fdamper", """es => es.map(e => [
@@ -356,7 +364,7 @@ def test_report_draws_the_motor_springs_and_dampers(browser, tmp_path):
         assert not pg.errors, pg.errors
     finally:
         pg.close()
-    pg = Page(browser, tmp_path / "hoeken_motor" / "report.html")
+    pg = Page(browser, motor)
     try:
         pg.page.check("#show-forces")
         arcs = pg.page.eval_on_selector_all(".ftorque", "es => es.map(e => e.style.display !== 'none')")
@@ -371,16 +379,11 @@ def test_report_draws_the_motor_springs_and_dampers(browser, tmp_path):
 def test_force_arrows_stay_visible_after_a_brief_peak(browser, tmp_path):
     # the released four-bar's joint forces are ~80 N most of the run and 890 N for a moment:
     # scaled to that peak, every other frame's arrows were a tenth of their size
-    model = tmp_path / "fourbar_release.toml"
-    model.write_text(linkdyn.example_path("fourbar_release").read_text("utf-8"), "utf-8")
-    res = CliRunner().invoke(main, ["simulate", str(model), "-o", str(tmp_path / "o"), "--report",
-                                    "--duration", "2", "--samples", "241"])
-    assert res.exit_code == 0, res.output
-    cols = read_csv(tmp_path / "o" / "results.csv")
+    page, cols = simulated_page("fourbar_release", tmp_path / "o", 2.0, 241)
     joints = [c[3:] for c in cols if c.startswith("Fx_")]
     frame_max = np.max([np.hypot(cols[f"Fx_{j}"], cols[f"Fy_{j}"]) for j in joints], axis=0)
     assert np.max(frame_max) > 5 * np.median(frame_max)       # a brief peak
-    pg = Page(browser, tmp_path / "o" / "report.html")
+    pg = Page(browser, page)
     try:
         p = pg.page
         p.check("#show-forces")
