@@ -681,35 +681,32 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     model, t, rtol, atol = _arguments(model, t, rtol, atol, method, max_steps, backend,
                                       project)
     src = model.source
-    kinds = [j.kind for j in model.joints]
-    backend_mod.choose(backend, None, kinds)
-    part = partition(model, free)
-    topo = part.layout.topo
+    sp = stages(model)
+    sp.backend(model, backend)
+    part = sp.partition(model, free)
     nd, nf = part.n_drivers, len(part.free)
-    # the work of a right-hand side: the 1 + f inverse dynamics of F5 over the moving bodies
-    work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
-    be = backend_mod.choose(backend, work, kinds)
+    be, work = sp.backend(model, backend, nf)
     pays = be.pays_after(work)
     fast = be.compiled
     compiled_after = 0 if fast else None
-    q0 = start_state(part)
+    q0 = sp.start_state(part)
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
-    q_f0 = q0[list(topo.driven[nd:])]
-    system = System(part, q0, np.zeros(topo.n), fast)
+    q_f0 = q0[sp.free_rows(part)]
+    system = sp.System(part, q0, np.zeros(len(q0)), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
-    check_inertia(part, system, q0)
+    sp.check_inertia(part, system, q0)
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
-        _blame_loads(system, system.bad)
+        sp.blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q0), units=joint_units(model),
+                            drivers=sp.values(part, q0), units=sp.units(model),
                             fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
     Y = np.full((2 * nf + 1, len(t)), np.nan)
-    guesses = np.full((topo.n, len(t)), np.nan)
+    guesses = np.full((len(q0), len(t)), np.nan)
     segment = np.zeros(len(t), int)          # the partition each output sample was computed in
     at0 = t <= 0.0
     Y[:, at0] = y[:, None]
@@ -722,21 +719,20 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # coordinate: a whole turn less would change that load; nor with a cut whose rows are not
     # periodic in the angles (a gear's: a whole turn of one gear turns the other by the ratio)
     turns = np.zeros(nf)
-    angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
-    unwound = (method in UNWOUND and not reads_coordinates(model)
-               and all(jk.get(k).periodic for k in part.layout.cut_kind))
+    angular = sp.angular(part)
+    unwound = method in UNWOUND and not reads_coordinates(model) and sp.periodic(part)
     pace = early = np.inf      # the step size at the last check of the pace (of each kind)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
-        best = _better(part, J)
+        best = sp.better(part, J)
         if best is not None:
             part = _variant(part, best)
             _, q, qd, qdd, _ = system.ref
             q = q.copy()
-            q[list(parts[-1].layout.topo.driven[nd:])] += turns     # the whole turns back
+            q[sp.free_rows(parts[-1])] += turns     # the whole turns back
             turns = np.zeros(nf)
-            angular = np.array([jk.get(part.layout.kind[i]).angular for i in best], bool)
+            angular = sp.angular(part)
             nfev += system.nfev
             system = System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
@@ -761,31 +757,32 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                      and recent[-1] - recent[0] < MIN_STEP * max(abs(solver.t), 1.0))
             failed = J is None or not np.all(np.isfinite(solver.y)) or stuck
             if failed:
-                _blame_loads(system, system.bad)     # a load that is not finite, by its field
-                _blame_loads(system, system.last)
+                sp.blame_loads(system, system.bad)   # a load that is not finite, by its field
+                sp.blame_loads(system, system.last)
             # a load not finite just beyond the steps, which shorten towards it: name it
             if system.bad is not bad:
                 walls, wall = walls + 1, min(wall, system.bad[0])
             if solver.t > wall:
                 walls, wall = 0, np.inf
             if walls >= WALL:
-                _blame_loads(system, system.bad)
+                sp.blame_loads(system, system.bad)
                 walls = 0
             # the pace: after EARLY and 2 EARLY steps against FAR (each check against the
             # one before of its kind), then every PACE steps against HOPELESS * max_steps
             if solver.status == "running" and steps in (EARLY, 2 * EARLY):
-                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1])
+                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1],
+                              sp)
             if solver.status == "running" and steps % PACE == 0:
                 pace = _pace(pace, solver, t_end, max_steps, HOPELESS * max_steps, src, part,
-                             system.ref[1])
+                             system.ref[1], sp)
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
                     "the mechanism locks or reaches a position it cannot pass (a singular "
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
-                    file=src, time=float(t_old), drivers=_values(part, before[1]),
-                    units=joint_units(part.model),
+                    file=src, time=float(t_old), drivers=sp.values(part, before[1]),
+                    units=sp.units(part.model),
                     fix="Check the loads and [initial]; a stiff spring needs "
                         f"{_implicit(method)}; or shorten --duration to the time given")
             inside = (t > t_old) & (t <= solver.t)
@@ -812,7 +809,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 # whole turns of the free angles moved out of the integrated state   (F12)
                 y_w = solver.y.copy()
                 y_w[:nf] -= whole
-                system.shift(list(topo_free(part)), -whole)
+                system.shift(sp.free_rows(part), -whole)
                 f_w = system(solver.t, y_w)
                 J_w = system.accept(solver.t, y_w)
                 if J_w is not None and np.all(np.isfinite(f_w)):
@@ -820,7 +817,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     J = J_w
                     turns += whole
                 else:   # (not expected: the same poses) keep the state as it was
-                    system.shift(list(topo_free(part)), whole)
+                    system.shift(sp.free_rows(part), whole)
                     system.accept(solver.t, solver.y)
             y, t_now = solver.y, solver.t
             if nfev + system.nfev >= pays:
@@ -831,7 +828,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 if be.compiled:
                     fast, compiled_after = True, nfev + system.nfev
                     system.use_compiled()
-            if _better(part, J) is not None:
+            if sp.better(part, J) is not None:
                 break
     nfev += system.nfev
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
@@ -840,11 +837,11 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                  compiled_after=compiled_after)
     if fast:
         backend_mod.mark_cached("rhs")
-    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
+    return sp.outputs(parts, segment, t, Y, guesses, stats, system.kernel, be)
 
 
 def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
-          q: np.ndarray) -> float:
+          q: np.ndarray, sp) -> float:
     """The step size now; raise an AssemblyError naming the time when, at a step size that
     did not grow tenfold since the last check (``last``), the run would need more than
     ``limit`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there, for the
@@ -856,7 +853,7 @@ def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: 
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
-            time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
+            time=float(solver.t), drivers=sp.values(part, q), units=sp.units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
                 f"{max_steps * h:.3g} s or less; for a stiff spring, "
                 + _implicit(type(solver).__name__))
@@ -1103,3 +1100,71 @@ def _join(results: list[tuple], order: np.ndarray) -> tuple:
     react = replace(reacts[0], on_second=cat([r.on_second for r in reacts]),
                     internals=cat([r.tree for r in reacts]))
     return kin, applied, dyn, react, cat(list(valids))
+
+
+class Planar:
+    """The stages :func:`simulate`'s driver calls for a planar model (a spatial model's:
+    :mod:`linkdyn.spatial.forward`, through :class:`Spatial`): the partition, the start, the
+    ODE system, the outputs, the messages' values."""
+
+    partition = staticmethod(partition)
+    start_state = staticmethod(start_state)
+    System = System
+    check_inertia = staticmethod(check_inertia)
+    better = staticmethod(_better)
+    outputs = staticmethod(_outputs)
+    blame_loads = staticmethod(_blame_loads)
+    values = staticmethod(_values)
+    units = staticmethod(joint_units)
+
+    @staticmethod
+    def backend(model: Model, backend, nf: int | None = None):
+        """The backend asked for checked (``nf`` None), else the one chosen for the right-hand
+        side and its work (the 1 + nf inverse dynamics of F5 over the moving bodies)."""
+        kinds = [j.kind for j in model.joints]
+        if nf is None:
+            return backend_mod.choose(backend, None, kinds), None
+        work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
+        return backend_mod.choose(backend, work, kinds), work
+
+    @staticmethod
+    def free_rows(part: Partition) -> list[int]:
+        """The free coordinates' rows in the tree coordinates."""
+        return list(topo_free(part))
+
+    @staticmethod
+    def angular(part: Partition) -> np.ndarray:
+        return np.array([jk.get(part.layout.kind[i]).angular for i in topo_free(part)], bool)
+
+    @staticmethod
+    def periodic(part: Partition) -> bool:
+        """Whether the cut rows are periodic in the angles (F12; not a gear's)."""
+        return all(jk.get(k).periodic for k in part.layout.cut_kind)
+
+
+class Spatial:
+    """The stages of a spatial model (:mod:`linkdyn.spatial.forward`), numpy only, one
+    partition over the run (no switch of the free coordinates, F10)."""
+
+    def __getattr__(self, name):
+        from .spatial import forward as sf
+        return getattr(sf, name)
+
+    @staticmethod
+    def backend(model, backend, nf: int | None = None):
+        be = backend_mod.choose(backend, None, ())
+        if be.compiled and backend is not None:
+            raise ModelError("the compiled backend is not yet for spatial models",
+                             field="backend", fix="Use backend='numpy' (or 'auto')")
+        return backend_mod.choose("numpy", None, ()), None
+
+    free_rows = staticmethod(lambda part: part.free_rows)
+    angular = staticmethod(lambda part: part.angular)
+    periodic = staticmethod(lambda part: True)      # rotation coordinates enter by rotations
+    better = staticmethod(lambda part, J: None)
+    blame_loads = staticmethod(lambda system, last: None)
+
+
+def stages(model: Model):
+    """The driver's stages for ``model``'s space: :class:`Planar` or :class:`Spatial`."""
+    return Spatial() if model.space == "spatial" else Planar
