@@ -1,0 +1,136 @@
+"""Forward dynamics of spatial models (``linkdyn simulate``, issue 24) against means that share
+no code with it:
+
+- the released RSUR four-bar (bundled ``rsur_release``), through the command line: its loops
+  closed, read from results.csv's own points and quaternions; its energy recomputed here from
+  the bodies' masses, inertias, points and rates (no projection onto the energy balance, so
+  the balance is the integrator's alone); the independent Cartesian reference
+  (tests/spatial_reference.py) driving the crank along the simulated motion's Taylor
+  expansion needs no effort (the free acceleration solves the equations of motion);
+- Hoeken's four-bar released in its plane (``fourbar_release``) written as a spatial model
+  against the planar simulation;
+- bad ``[initial]`` entries: exit 2 naming the field.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+import spatial_reference as ref
+from linkdyn.cli import main
+from linkdyn.errors import ModelError
+from linkdyn.io import model_from_dict
+from test_spatial import spatial_of_planar
+
+
+def rotation(quat):
+    """Rotation matrices (T, 3, 3) of unit quaternions (T, 4) [w, x, y, z]."""
+    w, x, y, z = quat.T
+    return np.stack([np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+                     np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+                     np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)],
+                    -2)
+
+
+def table(cols, body, name):
+    return np.stack([cols[f"{c}_{body}.{name}"] for c in "xyz"], -1)
+
+
+def energies(model, cols):
+    """Kinetic and potential energy (T,) each, from the bodies' points, quaternions and angular
+    velocities of a results table and the model's masses and inertias."""
+    ke = pe = 0.0
+    g = np.asarray(model.gravity)
+    for b in model.bodies[1:]:
+        R = rotation(np.stack([cols[f"quat_{c}_{b.name}"] for c in "wxyz"], -1))
+        name, local = next(iter(b.points.items()))
+        r, v = table(cols, b.name, name), np.stack([cols[f"v{c}_{b.name}.{name}"]
+                                                     for c in "xyz"], -1)
+        w = np.stack([cols[f"omega_{c}_{b.name}"] for c in "xyz"], -1)
+        c = r + np.einsum("tij,j->ti", R, b.com - local)
+        vc = v + np.cross(w, c - r)
+        Iw = np.einsum("tij,jk,tlk,tl->ti", R, b.inertia, R, w)
+        ke = ke + 0.5 * b.mass * np.sum(vc * vc, -1) + 0.5 * np.sum(w * Iw, -1)
+        pe = pe - b.mass * (c @ g)
+    return ke, pe
+
+
+def test_rsur_release_closes_conserves_energy_and_needs_no_effort(tmp_path):
+    path = linkdyn.example_path("rsur_release")
+    res = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path), "--duration",
+                                    "0.2", "--samples", "3", "--rtol", "1e-10", "--atol",
+                                    "1e-12", "--no-project"])
+    assert res.exit_code == 0, res.output
+    assert "energy balance drift" in res.output
+    names = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
+    cols = dict(zip(names, np.loadtxt(tmp_path / "results.csv", delimiter=",", skiprows=1).T))
+    model = linkdyn.load(path)
+    size = 0.2
+    # the loops closed: J2 (spherical) and J3 (universal) points coincide, J3's axes square
+    assert np.max(np.abs(table(cols, "crank", "B") - table(cols, "coupler", "B"))) < 1e-12 * size
+    assert np.max(np.abs(table(cols, "rocker", "C") - table(cols, "coupler", "C"))) < 1e-12 * size
+    j3 = model.joints[2]
+    Rr = rotation(np.stack([cols[f"quat_{c}_rocker"] for c in "wxyz"], -1))
+    Rc = rotation(np.stack([cols[f"quat_{c}_coupler"] for c in "wxyz"], -1))
+    assert np.max(np.abs(np.einsum("tij,j,tik,k->t", Rr, j3.axis, Rc, j3.axis2))) < 1e-12
+    # energy: constant to the integrator's tolerance, recomputed here
+    ke, pe = energies(model, cols)
+    assert np.max(ke) > 1e-3                                    # it moves
+    assert np.allclose(ke, cols["kinetic_energy"], rtol=1e-12, atol=1e-15)
+    assert np.max(np.abs(ke + pe - ke[0] - pe[0])) < 1e-8 * np.max(ke)
+    assert np.all(cols["work"] == 0.0)
+    # the reference drives J1 along the simulated motion's Taylor expansion at the last sample:
+    # the effort vanishes against the gravity torque h (the same with no acceleration)
+    t1 = float(cols["t"][-1])
+    q, qd, qdd = (math.degrees(cols[f"{k}_J1"][-1]) for k in ("q", "qd", "qdd"))
+    text = "\n".join(line for line in path.read_text().splitlines()
+                     if not line.startswith(("[initial]", "q = { J1")))
+
+    def effort(acc):
+        file = tmp_path / "driven.toml"
+        file.write_text(text + f"""
+[[drivers]]
+joint = "J1"
+motion = {{ kind = "expression", q = "{q!r} + {qd!r}*(t - {t1!r}) + {acc / 2!r}*(t - {t1!r})**2" }}
+""")
+        return ref.run(file, [t1])["tau_J1"][0]
+    assert abs(effort(qdd)) < 1e-8 * abs(effort(0.0))
+
+
+def test_planar_fourbar_released_in_space_moves_as_the_planar_simulation():
+    planar = linkdyn.load(linkdyn.example_path("fourbar_release"))
+    start = linkdyn.simulate(planar, np.zeros(1)).columns
+    data, _ = spatial_of_planar("simulate/fourbar_release", start)
+    data["initial"] = {"q": {"J1": 0.0}}                 # the design pose is the start
+    model = model_from_dict(data)
+    t = np.linspace(0.0, 0.06, 3)
+    opts = dict(rtol=1e-12, atol=1e-14, backend="numpy")
+    flat, space = linkdyn.simulate(planar, t, **opts).columns, linkdyn.simulate(model, t, **opts)
+    cols = space.columns()
+    for name in ("x_coupler.P", "y_coupler.P", "vx_coupler.P", "vy_coupler.P", "ax_rocker.O3",
+                 "kinetic_energy", "qd_J1", "qdd_J3"):
+        peak = np.max(np.abs(flat[name]))
+        assert np.max(np.abs(cols[name] - flat[name])) < 1e-9 * peak, name
+    assert np.max(np.abs(cols["z_coupler.P"])) < 1e-15
+    assert np.max(np.abs(cols["q_J1"] + math.radians(30.0) - flat["q_J1"])) < 1e-9
+    assert space.stats["closure_residual"] < 1e-12
+
+
+@pytest.mark.parametrize("initial, field", [
+    ({"q": {"J9": 1.0}}, "initial.q.J9"),
+    ({"q": {"J2": 1.0}}, "initial.q.J2"),                   # spherical: no coordinates
+    ({"q": {"J3": {"x": 1.0}}}, "initial.q.J3.x"),
+    ({"q": {"J1": 1.0, "J4": 1.0}}, "initial.q"),           # one free freedom only
+])
+def test_bad_initial_names_the_field(initial, field):
+    data = tomllib.loads(linkdyn.example_path("rsur_release").read_text())
+    data["initial"] = initial
+    with pytest.raises(ModelError) as err:
+        linkdyn.simulate(model_from_dict(data), np.zeros(1))
+    assert err.value.field == field
