@@ -134,3 +134,62 @@ def test_bad_initial_names_the_field(initial, field):
     with pytest.raises(ModelError) as err:
         linkdyn.simulate(model_from_dict(data), np.zeros(1))
     assert err.value.field == field
+
+
+def spring_energy(model, cols):
+    """The springs' potential (T,) and each damper's ``c (dl/dt)^2`` (T,), from the points'
+    positions and velocities of a results table."""
+    pe, dissipation = 0.0, 0.0
+    for ld in model.loads:
+        ends = []
+        for body, point in ((ld.body, ld.point), (ld.body2, ld.point2)):
+            if body == "ground":
+                x = np.broadcast_to(model.body("ground").points[point], (len(cols["t"]), 3))
+                ends.append((x, np.zeros_like(x)))
+            else:
+                ends.append((table(cols, body, point), np.stack(
+                    [cols[f"v{c}_{body}.{point}"] for c in "xyz"], -1)))
+        d, v = ends[1][0] - ends[0][0], ends[1][1] - ends[0][1]
+        length = np.linalg.norm(d, axis=-1)
+        if ld.kind == "spring":
+            pe = pe + 0.5 * ld.stiffness * (length - ld.free_length) ** 2
+        else:
+            dissipation = dissipation + ld.damping * (np.sum(d * v, -1) / length) ** 2
+    return pe, dissipation
+
+
+def test_quarter_car_settles_at_its_static_equilibrium_with_the_damper_dissipating(tmp_path):
+    path = linkdyn.example_path("quarter_car")
+    model = linkdyn.load(path)
+    t = np.linspace(0.0, 0.4, 161)
+    sol = linkdyn.simulate(model, t, rtol=1e-6, backend="numpy")
+    cols = sol.columns()
+    assert sol.stats["closure_residual"] < 1e-12
+    # the energy recomputed here: kinetic + gravity + springs changes by the work, which is
+    # the damper's dissipation integrated here (Simpson's rule over the samples)
+    ke, pe = energies(model, cols)
+    pe_s, loss = spring_energy(model, cols)
+    e = ke + pe + pe_s
+    dt = t[1] - t[0]
+    lost = np.concatenate(([0.0], np.cumsum((loss[:-2:2] + 4 * loss[1:-1:2] + loss[2::2]) * dt / 3)))
+    assert -cols["work"][-1] > 0.5 * (e[0] - e[-1]) > 0          # the drop's energy is dissipated
+    assert np.max(np.abs(e - e[0] - cols["work"])) < 1e-6 * abs(cols["work"][-1])
+    assert np.max(np.abs(cols["work"][::2] + lost)) < 1e-4 * abs(cols["work"][-1])
+    # the settled angle against the static equilibrium by the Cartesian reference: its effort
+    # holding JL at rest vanishes there (secant iterations), the damper idle at rest
+    text = path.read_text()
+    text = text[:text.index("[[loads]]\nkind = \"damper\"")] + text[text.index("[[loads]]\nkind = \"spring\"\nname = \"tyre\""):]
+    text = "\n".join(line for line in text.splitlines() if not line.startswith(("[initial]", "q = { JL")))
+
+    def effort(deg):
+        file = tmp_path / "held.toml"
+        file.write_text(text + f'\n[[drivers]]\njoint = "JL"\nmotion = {{ kind = "expression", q = "{deg!r} + 0*t" }}\n')
+        return ref.run(file, [0.0])["tau_JL"][0]
+    a, b = 0.0, -0.1
+    fa, fb = effort(a), effort(b)
+    for _ in range(6):
+        a, b, fa = b, float(b - fb * (b - a) / (fb - fa)), fb
+        fb = effort(b)
+    settled = math.degrees(cols["q_JL"][-1])
+    drop = math.degrees(cols["q_JL"][0]) - b
+    assert abs(settled - b) < 1e-4 * drop, (settled, b)
