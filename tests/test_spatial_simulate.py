@@ -193,3 +193,15 @@ def test_quarter_car_settles_at_its_static_equilibrium_with_the_damper_dissipati
     settled = math.degrees(cols["q_JL"][-1])
     drop = math.degrees(cols["q_JL"][0]) - b
     assert abs(settled - b) < 1e-4 * drop, (settled, b)
+
+
+def test_a_universal_joints_coordinate_as_the_free_one_and_compiled_refused():
+    data = tomllib.loads(linkdyn.example_path("rsur_release").read_text())
+    data["initial"] = {"q": {"J3": {"1": 0.0}}}             # "J3.1", the rocker's design pose
+    model = model_from_dict(data)
+    assert model.initial_q == {"J3.1": 0.0}
+    sol = linkdyn.simulate(model, np.zeros(1))
+    assert sol.free == ("J3.1",) and abs(sol.columns()["q_J3.1"][0]) < 1e-12
+    with pytest.raises(ModelError) as err:
+        linkdyn.simulate(model, np.zeros(1), backend="compiled")
+    assert err.value.field == "backend"

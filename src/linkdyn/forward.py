@@ -1152,10 +1152,10 @@ class Spatial:
 
     @staticmethod
     def backend(model, backend, nf: int | None = None):
-        be = backend_mod.choose(backend, None, ())
-        if be.compiled and backend is not None:
+        """numpy's backend (``backend`` "compiled" refused, as ``analyze`` refuses it)."""
+        if backend == "compiled":
             raise ModelError("the compiled backend is not yet for spatial models",
-                             field="backend", fix="Use backend='numpy' (or 'auto')")
+                             field="backend", fix="Use backend='numpy' (or leave it unset)")
         return backend_mod.choose("numpy", None, ()), None
 
     free_rows = staticmethod(lambda part: part.free_rows)

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..brief import brief_repr
 from ..errors import AssemblyError, ModelError
-from ..model import Driver
+from ..model import GROUND, Driver
 from ..planar import solve_small
 from . import dynamics as sd
 from . import kinematics as sk
@@ -341,10 +341,10 @@ def check_inertia(part: Partition, system: System, q: np.ndarray) -> None:
     w = np.linalg.eigvalsh(0.5 * (H + H.T)) if np.all(np.isfinite(H)) else np.array([np.nan])
     if np.min(w) > 1e-12 * max(float(np.max(np.abs(w))), 1e-300):
         return
-    massless = [b.name for b in part.model.bodies[1:] if b.mass == 0] or ["none"]
+    massless = [b.name for b in part.model.bodies if b.name != GROUND and b.mass == 0]
     raise ModelError(
         f"the free coordinates ({', '.join(part.free)}) move no mass: their mass matrix is "
-        f"singular (massless bodies: {', '.join(massless)})", file=part.model.source,
+        f"singular (massless bodies: {', '.join(massless) or 'none'})", file=part.model.source,
         field="bodies", fix="Give the bodies the free coordinates move a mass and an inertia, "
                             "or drive those joints")
 
