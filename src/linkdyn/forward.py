@@ -640,6 +640,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     ----------
     model : Model
         Drivers, where present, still prescribe their joints (their efforts are reported).
+        A spatial model (``space = "spatial"``) runs on :mod:`linkdyn.spatial.forward`'s
+        stages (numpy; its free coordinates named as results.csv's, ``J1``, ``J3.s``).
     t : array_like (T,)
         Output times, s, ascending, ``t[0] >= 0``; the state at t = 0 is ``[initial]``.
     rtol, atol : float
@@ -666,7 +668,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     Returns
     -------
     Simulation
-        A :class:`~linkdyn.analysis.Solution` with ``work``, ``energy_drift`` and ``stats``.
+        A :class:`~linkdyn.analysis.Solution` with ``work``, ``energy_drift`` and ``stats``
+        (for a spatial model a :class:`~linkdyn.spatial.forward.SpatialSimulation`).
 
     Raises
     ------
