@@ -283,6 +283,9 @@ class System:
     def __call__(self, t, y):
         nf = self.nf
         self.nfev += 1
+        if not np.all(np.isfinite(y)):      # a stage built on a right-hand side not finite
+            self.last = (t, y.copy(), None, np.full((nf, 1), np.nan))
+            return np.full_like(y, np.nan)
         tt = np.array([t])
         q_ind = np.concatenate((sk.driver_motion(self.part.model, tt)[0][0], y[:nf]))[:, None]
         qdd, m, power, ok = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],

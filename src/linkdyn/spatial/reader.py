@@ -199,10 +199,11 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
 
 def coordinate_names(joints) -> dict:
     """Every joint coordinate's name, ``<joint><suffix>`` as in results.csv's ``q_`` columns
-    (``J1``, ``J3.s``, ``J2.1``), -> ``(joint, index in its kind's coordinates, angular)``."""
+    (``J1``, ``J3.s``, ``J2.1``), -> ``(joint, index in its kind's coordinates, angular)``; a
+    spherical joint has no such columns (its Cardan angles depend on the tree)."""
     return {f"{j.name}{suffix}": (j.name, k, angular) for j in joints
             for k, (suffix, angular) in enumerate(sj.get(j.kind).coordinates_named)
-            if sj.get(j.kind).tree}
+            if sj.get(j.kind).tree and j.kind != "spherical"}
 
 
 def _initial(r: _Reader, section: Any, joints: dict, drivers: dict) -> tuple[dict, dict]:
@@ -231,8 +232,8 @@ def _initial(r: _Reader, section: Any, joints: dict, drivers: dict) -> tuple[dic
             if name not in names:
                 joint = name.split(".")[0]
                 why = (f"joint '{joint}' is a {joints[joint].kind} joint, which has no "
-                       "coordinates (it is always cut)" if joint in joints
-                       and not sj.get(joints[joint].kind).tree else
+                       "coordinates in results.csv" if joint in joints
+                       and joints[joint].kind == "spherical" else
                        f"unknown joint coordinate '{name}'")
                 r.fail(f, why, "Name a coordinate of a revolute, prismatic, cylindrical or "
                        f"universal joint: {', '.join(names) or 'none'}")
