@@ -82,6 +82,16 @@ class Partition:
         return ~self.plan.length_coordinate[self.free_rows]
 
 
+def coordinate_rows(model, p: sk.Plan, names) -> dict:
+    """The column in the tree coordinates of each coordinate of ``names`` (``J1``, ``J3.s``)
+    whose joint is a tree joint of ``p``, by name."""
+    coords = coordinate_names(model.joints)
+    body = {p.topo.tree_joint[i]: i for i in range(1, p.topo.n)}
+    index = [j.name for j in model.joints].index
+    return {c: p.cols[body[index(coords[c][0])]].start + coords[c][1] for c in names
+            if index(coords[c][0]) in body}
+
+
 def _partition(model, free: tuple) -> Partition:
     names = coordinate_names(model.joints)
     joints = [names[c][0] for c in free]
@@ -90,9 +100,7 @@ def _partition(model, free: tuple) -> Partition:
     inner = replace(model, cut=cut, drivers=model.drivers + tuple(
         Driver(j, _Free(), "free (integrated)") for j in joints))
     p = sk.plan(inner)
-    body = {p.topo.tree_joint[i]: i for i in range(1, p.topo.n)}
-    index = [j.name for j in model.joints].index
-    rows = [p.cols[body[index(names[c][0])]].start + names[c][1] for c in free]
+    rows = list(coordinate_rows(model, p, free).values())
     driven = np.array(list(p.driven[:len(model.drivers)]) + rows, dtype=int)
     dependent = np.array([k for k in range(p.n_q) if k not in set(driven.tolist())], dtype=int)
     return Partition(model, inner, replace(p, driven=driven, dependent=dependent), tuple(free))
@@ -147,7 +155,9 @@ def partition(model, free: tuple | None = None) -> Partition:
     driven = {d.joint for d in model.drivers}
     candidates = [c for c, (j, _, _) in coordinate_names(model.joints).items()
                   if j not in driven]
-    for combo in itertools.islice(itertools.combinations(candidates, nf), 200):
+    best = _best_conditioned(model, p, q, J[0], candidates, nf)
+    for combo in itertools.chain([best], itertools.islice(
+            itertools.combinations(candidates, nf), 200)):
         try:
             part = _partition(model, combo)
         except ModelError:
@@ -157,6 +167,24 @@ def partition(model, free: tuple | None = None) -> Partition:
     raise ModelError("no choice of free joint coordinates describes the mechanism at its "
                      "design pose", file=src, field="initial",
                      fix='Name the free coordinates in [initial] q = { J1 = value }')
+
+
+def _best_conditioned(model, p: sk.Plan, q: np.ndarray, J: np.ndarray, candidates: list,
+                      nf: int) -> tuple:
+    """The ``nf`` candidate coordinates (names) that best describe the motion at the closed
+    pose ``q`` (n_q,) of closure Jacobian ``J`` (rows, n_q) (F10's choice): QR with column
+    pivoting of the candidates' rows of the closure's null space (lengths times the size)."""
+    import scipy.linalg as sl
+    rows = coordinate_rows(model, p, candidates)
+    free = np.setdiff1d(np.arange(p.n_q), p.driven)
+    A = J[:, free] * np.where(p.length_coordinate[free], p.size, 1.0)
+    V = np.linalg.svd(A)[2][len(free) - nf:].T if len(A) else np.eye(len(free))[:, :nf]
+    names = [c for c in candidates if c in rows]
+    if len(names) < nf:
+        return tuple(candidates[:nf])
+    Vc = V[np.searchsorted(free, [rows[c] for c in names])]
+    piv = sl.qr(Vc.T, pivoting=True, mode="r")[1][:nf]
+    return tuple(names[k] for k in sorted(piv))
 
 
 def _closed_design(model, p: sk.Plan) -> np.ndarray:
