@@ -205,3 +205,26 @@ def test_a_universal_joints_coordinate_as_the_free_one_and_compiled_refused():
     with pytest.raises(ModelError) as err:
         linkdyn.simulate(model, np.zeros(1), backend="compiled")
     assert err.value.field == "backend"
+
+
+def test_a_dead_point_of_the_free_coordinate_is_passed_by_switching_as_in_the_plane():
+    """Hoeken's four-bar in space, pushed by a couple on the rocker from rest, integrated in
+    the rocker's angle, which cannot describe the motion at the rocker's limits: the run
+    switches to better-conditioned coordinates there (F10) and moves as the planar simulation
+    integrated in the crank's angle throughout."""
+    from test_simulate import pushed_rocker
+    t = np.linspace(0.0, 0.26, 6)                       # the rocker's first limit at 0.243 s
+    flat = linkdyn.simulate(pushed_rocker(q={"J1": 0.0}), t, rtol=1e-8, atol=1e-10).columns
+    data, _ = spatial_of_planar("hoeken", {k: v[:1] for k, v in flat.items()})
+    for key in ("drivers", "analysis"):
+        data.pop(key, None)
+    data["mechanism"]["gravity"] = [0.0, 0.0, 0.0]
+    data["loads"] = [{"kind": "torque", "body": "rocker", "value": [0.0, 0.0, 2.0]}]
+    data["initial"] = {"q": {"J4": 0.0}}
+    sol = linkdyn.simulate(model_from_dict(data), t, rtol=1e-8, atol=1e-10, backend="numpy")
+    assert sol.free == ("J4",) and len(sol.stats["switches"]) >= 1
+    cols = sol.columns()
+    for name in ("x_coupler.P", "vy_coupler.P", "qd_J1", "qd_J4", "work", "kinetic_energy"):
+        peak = np.max(np.abs(flat[name]))
+        assert np.max(np.abs(cols[name] - flat[name])) < 1e-7 * peak, name
+    assert sol.stats["closure_residual"] < 1e-12 and sol.energy_drift < 1e-8

@@ -730,14 +730,14 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         # restart in the best-conditioned ones, from the same state          (F10)
         best = sp.better(part, J)
         if best is not None:
-            part = _variant(part, best)
+            part = sp.variant(part, best)
             _, q, qd, qdd, _ = system.ref
             q = q.copy()
             q[sp.free_rows(parts[-1])] += turns     # the whole turns back
             turns = np.zeros(nf)
             angular = sp.angular(part)
             nfev += system.nfev
-            system = System(part, q, qd, fast)
+            system = sp.System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
@@ -1115,6 +1115,7 @@ class Planar:
     System = System
     check_inertia = staticmethod(check_inertia)
     better = staticmethod(_better)
+    variant = staticmethod(_variant)
     outputs = staticmethod(_outputs)
     blame_loads = staticmethod(_blame_loads)
     values = staticmethod(_values)
@@ -1146,8 +1147,7 @@ class Planar:
 
 
 class Spatial:
-    """The stages of a spatial model (:mod:`linkdyn.spatial.forward`), numpy only, one
-    partition over the run (no switch of the free coordinates, F10)."""
+    """The stages of a spatial model (:mod:`linkdyn.spatial.forward`), numpy only."""
 
     def __getattr__(self, name):
         from .spatial import forward as sf
@@ -1164,7 +1164,6 @@ class Spatial:
     free_rows = staticmethod(lambda part: part.free_rows)
     angular = staticmethod(lambda part: part.angular)
     periodic = staticmethod(lambda part: True)      # rotation coordinates enter by rotations
-    better = staticmethod(lambda part, J: None)
     blame_loads = staticmethod(lambda system, last: None)
 
 

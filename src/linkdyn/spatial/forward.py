@@ -350,12 +350,62 @@ class System:
         _, _, m, qdd_f = self.last
         if m is None or not np.all(np.isfinite(qdd_f)):
             return None
-        # case 0 (qdd_f = 0) plus the unit responses times qdd_f                   (F5)
-        T = 1
-        qdd = m.qdd[:T] + np.einsum("kt,ktn->tn", qdd_f,
-                                    m.qdd[T:].reshape(self.nf, T, -1) - m.qdd[None, :T])
-        self.set_reference(t, m.q[0], m.qd[0], qdd[0], m.J[0])
+        self.set_reference(t, m.q[0], m.qd[0], accelerations(m, qdd_f)[0], m.J[0])
         return m.J[0]
+
+
+def accelerations(m: sk.Motion, qdd_f: np.ndarray) -> np.ndarray:
+    """The tree coordinates' accelerations (T, n_q) at the solution ``qdd_f`` (nf, T) of a
+    batch ``m`` of :meth:`System.reduced`: case 0 (``qdd_f = 0``) plus the unit responses
+    times ``qdd_f`` (F5)."""
+    T = qdd_f.shape[1]
+    return m.qdd[:T] + np.einsum("kt,ktn->tn", qdd_f,
+                                 m.qdd[T:].reshape(len(qdd_f), T, -1) - m.qdd[None, :T])
+
+
+def better(part: Partition, J: np.ndarray) -> tuple | None:
+    """The tree coordinates (rows of q) of better free coordinates where those of ``part``
+    describe the motion badly at the state of closure Jacobian ``J`` (rows, n_q): their
+    growth ``max |V V_f^-1|`` (V the closure's null space over the coordinates not driven,
+    lengths times the size) past ``forward.SWITCH`` and twice the best's; else None (F10)."""
+    import scipy.linalg as sl
+    from ..forward import SWITCH
+    p, nd = part.plan, part.n_drivers
+    moving = np.setdiff1d(np.arange(p.n_q), p.driven[:nd])
+    A = J[:, moving] * np.where(p.length_coordinate[moving], p.size, 1.0)
+    nf = len(part.free)
+    if not np.all(np.isfinite(A)):
+        return None
+    V = np.linalg.svd(A)[2][len(moving) - nf:].T if len(A) else np.eye(len(moving))[:, :nf]
+
+    def growth(rows):
+        with np.errstate(all="ignore"):
+            try:
+                G = np.linalg.solve(V[np.searchsorted(moving, rows)].T, V.T)
+            except np.linalg.LinAlgError:
+                return np.inf
+        return float(np.max(np.abs(G))) if np.all(np.isfinite(G)) else np.inf
+    now = growth(part.free_rows)
+    if now <= SWITCH:
+        return None
+    named = np.array(sorted(coordinate_rows(part.model, p, coordinate_names(
+        part.model.joints)).values()), dtype=int)
+    named = named[np.isin(named, moving)]
+    piv = sl.qr(V[np.searchsorted(moving, named)].T, pivoting=True, mode="r")[1][:nf]
+    best = tuple(int(r) for r in np.sort(named[piv]))
+    return best if growth(list(best)) < now / 2 else None
+
+
+def variant(part: Partition, rows: tuple) -> Partition:
+    """``part`` with the tree coordinates ``rows`` as the free ones: the same tree and cut
+    joints (every state keeps its coordinates), other independent and dependent sets (F10)."""
+    p, nd = part.plan, part.n_drivers
+    name = {r: c for c, r in coordinate_rows(part.model, p, coordinate_names(
+        part.model.joints)).items()}
+    driven = np.concatenate((p.driven[:nd], np.asarray(rows, int)))
+    dependent = np.setdiff1d(np.arange(p.n_q), driven)
+    return Partition(part.model, part.inner, replace(p, driven=driven, dependent=dependent),
+                     tuple(name[r] for r in rows))
 
 
 def check_inertia(part: Partition, system: System, q: np.ndarray) -> None:
@@ -425,17 +475,22 @@ class SpatialSimulation(SpatialSolution):
 
 def outputs(parts, segment, t, Y, guesses, stats, kernel, backend) -> SpatialSimulation:
     """Every ``analyze`` quantity at the output states ``Y`` (2 nf + 1, T), ``guesses``
-    (n_q, T) their coordinates: the free accelerations (F6), then the kinematics, loads,
-    inverse dynamics and reactions of ``analyze``'s stages (one partition: no switches)."""
+    (n_q, T) their coordinates, each sample in the partition it was integrated in
+    (``parts[segment[k]]``, all on one tree): the closed positions, rates and free
+    accelerations (F6) of each, then the kinematics, loads, inverse dynamics and reactions of
+    ``analyze``'s stages in the first partition."""
     from . import redundant_rows
     part = parts[0]
     nd, nf = part.n_drivers, len(part.free)
-    system = System(part, guesses[:, 0], np.zeros(part.n))
-    qdd_f, m, _, _ = system.evaluate(t, Y[:nf], Y[nf:2 * nf], guesses)
     T, p, model = len(t), part.plan, part.inner
-    qdi = np.concatenate((sk.driver_motion(model, t)[1][:, :nd], Y[nf:2 * nf].T), 1)
-    qddi = np.concatenate((sk.driver_motion(model, t)[2][:, :nd], qdd_f.T), 1)
-    motion = sk.motion_at(model, p, t, m.q[:T], qdi, qddi)
+    q, qd, qdd = (np.zeros((T, p.n_q)) for _ in range(3))
+    for k, other in enumerate(parts):
+        g = np.flatnonzero(segment == k)
+        if len(g):
+            system = System(other, guesses[:, g[0]], np.zeros(part.n))
+            qdd_f, m, _, _ = system.evaluate(t[g], Y[:nf, g], Y[nf:2 * nf, g], guesses[:, g])
+            q[g], qd[g], qdd[g] = m.q[:len(g)], m.qd[:len(g)], accelerations(m, qdd_f)
+    motion = sk.motion_at(model, p, t, q, qd[:, p.driven], qdd[:, p.driven])
     coords = sk.joint_coordinates(model, p, motion)
     applied = sd.loads(model, p, motion, coords)
     dyn = sd.solve(model, p, motion, applied)
