@@ -162,7 +162,7 @@ def test_quarter_car_settles_at_its_static_equilibrium_with_the_damper_dissipati
     path = linkdyn.example_path("quarter_car")
     model = linkdyn.load(path)
     t = np.linspace(0.0, 0.4, 161)
-    sol = linkdyn.simulate(model, t, rtol=1e-6, backend="numpy")
+    sol = linkdyn.simulate(model, t, rtol=1e-5, backend="numpy")
     cols = sol.columns()
     assert sol.stats["closure_residual"] < 1e-12
     # the energy recomputed here: kinetic + gravity + springs changes by the work, which is
@@ -173,7 +173,7 @@ def test_quarter_car_settles_at_its_static_equilibrium_with_the_damper_dissipati
     dt = t[1] - t[0]
     lost = np.concatenate(([0.0], np.cumsum((loss[:-2:2] + 4 * loss[1:-1:2] + loss[2::2]) * dt / 3)))
     assert -cols["work"][-1] > 0.5 * (e[0] - e[-1]) > 0          # the drop's energy is dissipated
-    assert np.max(np.abs(e - e[0] - cols["work"])) < 1e-6 * abs(cols["work"][-1])
+    assert np.max(np.abs(e - e[0] - cols["work"])) < 1e-5 * abs(cols["work"][-1])
     assert np.max(np.abs(cols["work"][::2] + lost)) < 1e-4 * abs(cols["work"][-1])
     # the settled angle against the static equilibrium by the Cartesian reference: its effort
     # holding JL at rest vanishes there (secant iterations), the damper idle at rest
