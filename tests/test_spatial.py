@@ -40,13 +40,14 @@ def rot_z(a):
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def spatial_of_planar(name: str) -> tuple[dict, object]:
+def spatial_of_planar(name: str, start: dict | None = None) -> tuple[dict, object]:
     """A planar example written as a spatial model: points and mass centres with z = 0,
     revolute axes +z, prismatic axes in the plane, inertia [I/2, I/2, I] about the mass
-    centre, the design pose the planar assembly at t = 0; and the planar model."""
+    centre, the design pose the planar assembly at t = 0 (or the columns ``start``); and the
+    planar model."""
     data = tomllib.loads((EXAMPLES / f"{name}.toml").read_text())
     planar = linkdyn.load(EXAMPLES / f"{name}.toml")
-    start = linkdyn.analyze(planar, np.zeros(1), backend="numpy").columns
+    start = start or linkdyn.analyze(planar, np.zeros(1), backend="numpy").columns
     out = copy.deepcopy(data)
     out.pop("assembly", None)
     for key in ("path_point", "path_range"):       # no path straightness in space (yet)
@@ -562,7 +563,7 @@ def test_cli_check_and_analyze_on_a_spatial_model(tmp_path):
     model = linkdyn.load(path)
     with pytest.raises(ModelError, match="not yet for spatial models"):
         linkdyn.analyze([model, model], [0.0])
-    for command in (["simulate", str(path)], ["export", str(path), "--to", "svg", "-o", str(tmp_path / "h.svg")],
+    for command in (["simulate", str(path), "--report"], ["export", str(path), "--to", "svg", "-o", str(tmp_path / "h.svg")],
                     ["analyze", str(path), "--allow-singular"]):
         res = run(main, command)
         assert res.exit_code == 2 and "not yet for spatial models" in res.output, command

@@ -838,7 +838,15 @@ def simulation_summary(sol, summ: dict) -> dict:
     s = dict(summ)
     s["speed"] = design.speed_statistics(sol)
     s["energy_account_J"] = design.energy_account(sol)
-    s["simulation"] = {
+    s["simulation"] = integration(sol)
+    return s
+
+
+def integration(sol) -> dict:
+    """The integration's figures of a simulation (planar or spatial) for its summary."""
+    ke, pe = (np.asarray(x() if callable(x) else x) for x in (sol.kinetic_energy,
+                                                               sol.potential_energy))
+    return {
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
                                      "energy_projections")},
@@ -852,13 +860,10 @@ def simulation_summary(sol, summ: dict) -> dict:
         "energy_balance_drift_rel": sol.energy_drift,
         "closure_residual_max_rel": sol.stats["closure_residual"],
         "free_effort_residual_rel": sol.stats["free_effort_residual"],
-        "energy_J": {"kinetic_start": float(sol.kinetic_energy[0]),
-                     "kinetic_end": float(sol.kinetic_energy[-1]),
-                     "potential_start": float(sol.potential_energy[0]),
-                     "potential_end": float(sol.potential_energy[-1]),
+        "energy_J": {"kinetic_start": float(ke[0]), "kinetic_end": float(ke[-1]),
+                     "potential_start": float(pe[0]), "potential_end": float(pe[-1]),
                      "work": float(sol.work[-1])},
     }
-    return s
 
 
 def speed_text(s: dict, mech) -> str:
@@ -942,7 +947,11 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     check_outdir(outdir)
     rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
-    not_yet(mech, "simulate")
+    for given, what in ((report, "--report"), (fmt != "csv", "--format parquet"),
+                        (table_units != "si", "--units model"),
+                        (_backend(ctx, backend) == "compiled", "--backend compiled")):
+        if given:
+            not_yet(mech, f"simulate {what}")
     d_field = "--duration" if duration is not None else "analysis.duration"
     duration = mech.duration if duration is None else duration
     if duration is None:
@@ -961,9 +970,15 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     # everything is computed (solution, summary, its text) before any file is written
     sol = run(mech, t, rtol=rtol, atol=atol, method=method, backend=_backend(ctx, backend),
               project=not no_project)
-    summ = simulation_summary(sol, design.summary(sol))
+    if mech.space == "spatial":
+        from .spatial import cli as spatial_cli
+        summ, text = spatial_cli.simulation(sol, integration(sol))
+        sol = SimpleNamespace(columns=sol.columns())
+    else:
+        summ = simulation_summary(sol, design.summary(sol))
+        text = summary_text(summ) + "\n" + speed_text(summ, mech)
     sim = summ["simulation"]
-    text = summary_text(summ) + "\n" + speed_text(summ, mech) + (
+    text = text + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
         f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
         f"{sim['rhs_evaluations']} evaluations; energy balance drift "

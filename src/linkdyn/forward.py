@@ -823,6 +823,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     ----------
     model : Model
         Drivers, where present, still prescribe their joints (their efforts are reported).
+        A spatial model (``space = "spatial"``) runs on :mod:`linkdyn.spatial.forward`'s
+        stages (numpy; its free coordinates named as results.csv's, ``J1``, ``J3.s``).
     t : array_like (T,)
         Output times, s, ascending, ``t[0] >= 0``; the state at t = 0 is ``[initial]``.
     rtol, atol : float
@@ -849,7 +851,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     Returns
     -------
     Simulation
-        A :class:`~linkdyn.analysis.Solution` with ``work``, ``energy_drift`` and ``stats``.
+        A :class:`~linkdyn.analysis.Solution` with ``work``, ``energy_drift`` and ``stats``
+        (for a spatial model a :class:`~linkdyn.spatial.forward.SpatialSimulation`).
 
     Raises
     ------
@@ -864,28 +867,25 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     model, t, rtol, atol = _arguments(model, t, rtol, atol, method, max_steps, backend,
                                       project)
     src = model.source
-    kinds = [j.kind for j in model.joints]
-    backend_mod.choose(backend, None, kinds)
-    part = partition(model, free)
-    topo = part.layout.topo
+    sp = stages(model)
+    sp.backend(model, backend)
+    part = sp.partition(model, free)
     nd, nf = part.n_drivers, len(part.free)
-    # the work of a right-hand side: the 1 + f inverse dynamics of F5 over the moving bodies
-    work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
-    be = backend_mod.choose(backend, work, kinds)
+    be, work = sp.backend(model, backend, nf)
     rubbing = friction_mod.present(model)
     if rubbing:
         # the compiled right-hand side knows no friction: numpy's stages throughout (F13)
-        be = backend_mod.choose("numpy", work, kinds)
+        be, work = sp.backend(model, "numpy", nf)
     pays = be.pays_after(work) if not rubbing else np.inf
     fast = be.compiled
     compiled_after = 0 if fast else None
-    q0 = start_state(part)
+    q0 = sp.start_state(part)
     # initial rates: the drivers' and [initial] qd; the dependent ones close J qd = 0   (F2)
     qd_free0 = np.array([model.initial_qd.get(j, 0.0) for j in part.free])
-    q_f0 = q0[list(topo.driven[nd:])]
-    system = System(part, q0, np.zeros(topo.n), fast)
+    q_f0 = q0[sp.free_rows(part)]
+    system = sp.System(part, q0, np.zeros(len(q0)), fast)
     y = np.concatenate((q_f0, qd_free0, [0.0]))
-    check_inertia(part, system, q0)
+    sp.check_inertia(part, system, q0)
     events = []                    # (t, joint, "sticks" | "slips") of the stick-slip state
     if rubbing:
         # a sticky coordinate at rest starts stuck where its static friction holds it (F13)
@@ -895,21 +895,22 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     J = system.accept(0.0, y)
     e0 = sum(system.energies(0.0, y)) if J is not None else 0.0
     if J is None:
-        _blame_loads(system, system.bad)
+        sp.blame_loads(system, system.bad)
         raise AssemblyError("the mechanism starts at a singular position", file=src, time=0.0,
-                            drivers=_values(part, q0), units=joint_units(model),
+                            drivers=sp.values(part, q0), units=sp.units(model),
                             fix="Start the free joints ([initial] q) away from the toggle")
 
     t_end = float(t[-1])
     Y = np.full((2 * nf + 1, len(t)), np.nan)
-    guesses = np.full((topo.n, len(t)), np.nan)
+    guesses = np.full((len(q0), len(t)), np.nan)
     segment = np.zeros(len(t), int)          # the partition each output sample was computed in
     # the stick-slip state each output sample was computed in (F13)
     held_at, sense_at = np.zeros((nf, len(t)), bool), np.ones((nf, len(t)))
     at0 = t <= 0.0
     Y[:, at0] = y[:, None]
     guesses[:, at0] = q0[:, None]
-    held_at[:, at0], sense_at[:, at0] = system.held[:, None], system.sense[:, None]
+    if rubbing:
+        held_at[:, at0], sense_at[:, at0] = system.held[:, None], system.sense[:, None]
     parts, switches = [part], []
     steps, nfev, t_now, projections = 0, 0, 0.0, 0
     # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
@@ -918,29 +919,29 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     # coordinate: a whole turn less would change that load; nor with a cut whose rows are not
     # periodic in the angles (a gear's: a whole turn of one gear turns the other by the ratio)
     turns = np.zeros(nf)
-    angular = np.array([jk.get(part.layout.kind[i]).angular for i in topo.driven[nd:]], bool)
-    unwound = (method in UNWOUND and not reads_coordinates(model)
-               and all(jk.get(k).periodic for k in part.layout.cut_kind))
+    angular = sp.angular(part)
+    unwound = method in UNWOUND and not reads_coordinates(model) and sp.periodic(part)
     pace = early = np.inf      # the step size at the last check of the pace (of each kind)
     while t_now < t_end:
         # the free coordinates describe the motion badly here (near a dead point of theirs):
         # restart in the best-conditioned ones, from the same state          (F10)
-        best = _better(part, J)
+        best = sp.better(part, J)
         if best is not None:
-            part = _variant(part, best)
+            part = sp.variant(part, best)
             _, q, qd, qdd, _ = system.ref
             q = q.copy()
-            q[list(parts[-1].layout.topo.driven[nd:])] += turns     # the whole turns back
+            q[sp.free_rows(parts[-1])] += turns     # the whole turns back
             turns = np.zeros(nf)
-            angular = np.array([jk.get(part.layout.kind[i]).angular for i in best], bool)
+            angular = sp.angular(part)
             nfev += system.nfev
-            held, sense = dict(zip(parts[-1].free, system.held)), dict(zip(parts[-1].free,
-                                                                             system.sense))
-            system = System(part, q, qd, fast)
+            if rubbing:
+                held = dict(zip(parts[-1].free, system.held))
+                sense = dict(zip(parts[-1].free, system.sense))
+            system = sp.System(part, q, qd, fast)
             system.set_reference(t_now, q, qd, qdd, J)
-            # the stick-slip state carries over by joint (F13)
-            system.modes([held.get(j, False) for j in part.free],
-                         [sense.get(j, 1.0) for j in part.free])
+            if rubbing:   # the stick-slip state carries over by joint (F13)
+                system.modes([held.get(j, False) for j in part.free],
+                             [sense.get(j, 1.0) for j in part.free])
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
             switches.append((t_now, part.free))
@@ -950,7 +951,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         restart = False
         while solver.status == "running":
             t_old, before, bad = solver.t, system.ref, system.bad
-            modes = (system.held.copy(), system.sense.copy())
+            modes = (system.held.copy(), system.sense.copy()) if rubbing else None
             message = solver.step()
             steps += 1
             # a motion approaching a position it cannot pass (a singular position of the
@@ -964,31 +965,32 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                      and recent[-1] - recent[0] < MIN_STEP * max(abs(solver.t), 1.0))
             failed = J is None or not np.all(np.isfinite(solver.y)) or stuck
             if failed:
-                _blame_loads(system, system.bad)     # a load that is not finite, by its field
-                _blame_loads(system, system.last)
+                sp.blame_loads(system, system.bad)   # a load that is not finite, by its field
+                sp.blame_loads(system, system.last)
             # a load not finite just beyond the steps, which shorten towards it: name it
             if system.bad is not bad:
                 walls, wall = walls + 1, min(wall, system.bad[0])
             if solver.t > wall:
                 walls, wall = 0, np.inf
             if walls >= WALL:
-                _blame_loads(system, system.bad)
+                sp.blame_loads(system, system.bad)
                 walls = 0
             # the pace: after EARLY and 2 EARLY steps against FAR (each check against the
             # one before of its kind), then every PACE steps against HOPELESS * max_steps
             if solver.status == "running" and steps in (EARLY, 2 * EARLY):
-                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1])
+                early = _pace(early, solver, t_end, max_steps, FAR, src, part, system.ref[1],
+                              sp)
             if solver.status == "running" and steps % PACE == 0:
                 pace = _pace(pace, solver, t_end, max_steps, HOPELESS * max_steps, src, part,
-                             system.ref[1])
+                             system.ref[1], sp)
             if failed or steps > max_steps:
                 raise AssemblyError(
                     f"the integration needs more than {max_steps} steps" if not failed else
                     "the mechanism locks or reaches a position it cannot pass (a singular "
                     "position of the mechanism, or loops that stop closing)"
                     + (f"; the solver says: {message}" if message else ""),
-                    file=src, time=float(t_old), drivers=_values(part, before[1]),
-                    units=joint_units(part.model),
+                    file=src, time=float(t_old), drivers=sp.values(part, before[1]),
+                    units=sp.units(part.model),
                     fix="Check the loads and [initial]; a stiff spring needs "
                         f"{_implicit(method)}; or shorten --duration to the time given")
             # a change of the stick-slip state within the step ends it there        (F13)
@@ -1005,15 +1007,15 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 if len(events) > MAX_EVENTS:
                     raise AssemblyError(
                         f"the free joints stick and slip more than {MAX_EVENTS} times",
-                        file=src, time=float(t_step), drivers=_values(part, system.ref[1]),
-                        units=joint_units(part.model),
+                        file=src, time=float(t_step), drivers=sp.values(part, system.ref[1]),
+                        units=sp.units(part.model),
                         fix="Shorten --duration to the time given, or give the friction a "
                             "dynamic coefficient closer to its static one")
                 if J is None:
                     raise AssemblyError(f"the mechanism cannot go on where joint "
                                         f"{part.free[change[0]]} {change[1]}", file=src, time=float(t_step),
-                                        drivers=_values(part, system.ref[1]),
-                                        units=joint_units(part.model),
+                                        drivers=sp.values(part, system.ref[1]),
+                                        units=sp.units(part.model),
                                         fix="Check the loads and [initial]")
             inside = (t > t_old) & (t <= t_step)
             if np.any(inside):
@@ -1022,8 +1024,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 Y[:nf, inside] += turns[:, None]
                 guesses[:, inside] = _hermite(before[:3], system.ref[:3], t[inside])
                 segment[inside] = len(parts) - 1
-                held_at[:, inside] = modes[0][:, None]
-                sense_at[:, inside] = modes[1][:, None]
+                if rubbing:
+                    held_at[:, inside] = modes[0][:, None]
+                    sense_at[:, inside] = modes[1][:, None]
             if event is not None:
                 # the integration restarts from the event's state, in its new state
                 y, t_now, restart = y_event, t_step, True
@@ -1045,7 +1048,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 # whole turns of the free angles moved out of the integrated state   (F12)
                 y_w = solver.y.copy()
                 y_w[:nf] -= whole
-                system.shift(list(topo_free(part)), -whole)
+                system.shift(sp.free_rows(part), -whole)
                 f_w = system(solver.t, y_w)
                 J_w = system.accept(solver.t, y_w)
                 if J_w is not None and np.all(np.isfinite(f_w)):
@@ -1053,7 +1056,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     J = J_w
                     turns += whole
                 else:   # (not expected: the same poses) keep the state as it was
-                    system.shift(list(topo_free(part)), whole)
+                    system.shift(sp.free_rows(part), whole)
                     system.accept(solver.t, solver.y)
             y, t_now = solver.y, solver.t
             if nfev + system.nfev >= pays:
@@ -1064,7 +1067,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 if be.compiled:
                     fast, compiled_after = True, nfev + system.nfev
                     system.use_compiled()
-            if _better(part, J) is not None:
+            if sp.better(part, J) is not None:
                 break
         if restart:
             continue
@@ -1072,17 +1075,17 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
     stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections, backend=be.name,
-                 compiled_after=compiled_after, friction_iterations=system.iterations,
-                 stick_slip=[(float(ts), j, what)
-                                                            for ts, j, what in events])
+                 compiled_after=compiled_after,
+                 friction_iterations=system.iterations if rubbing else 0,
+                 stick_slip=[(float(ts), j, what) for ts, j, what in events])
     if fast:
         backend_mod.mark_cached("rhs")
-    return _outputs(parts, segment, t, Y, guesses, stats, system.kernel, be,
-                    (held_at, sense_at))
+    return sp.outputs(parts, segment, t, Y, guesses, stats, system.kernel, be,
+                      (held_at, sense_at))
 
 
 def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: str, part,
-          q: np.ndarray) -> float:
+          q: np.ndarray, sp) -> float:
     """The step size now; raise an AssemblyError naming the time when, at a step size that
     did not grow tenfold since the last check (``last``), the run would need more than
     ``limit`` steps to reach ``t_end``; ``q`` (n,): the tree coordinates there, for the
@@ -1094,7 +1097,7 @@ def _pace(last: float, solver, t_end: float, max_steps: int, limit: float, src: 
         raise AssemblyError(
             f"the integration would need about {need:.3g} more steps of {h:.3g} s to reach "
             f"t = {t_end:.6g} s (at most {max_steps} are taken)", file=src,
-            time=float(solver.t), drivers=_values(part, q), units=joint_units(part.model),
+            time=float(solver.t), drivers=sp.values(part, q), units=sp.units(part.model),
             fix="Give a --duration within reach of the motion's time scale, e.g. "
                 f"{max_steps * h:.3g} s or less; for a stiff spring, "
                 + _implicit(type(solver).__name__))
@@ -1383,3 +1386,77 @@ def _join(results: list[tuple], order: np.ndarray) -> tuple:
     react = replace(reacts[0], on_second=cat([r.on_second for r in reacts]),
                     internals=cat([r.tree for r in reacts]))
     return kin, applied, dyn, react, cat(list(valids))
+
+
+class Planar:
+    """The stages :func:`simulate`'s driver calls for a planar model (a spatial model's:
+    :mod:`linkdyn.spatial.forward`, through :class:`Spatial`): the partition, the start, the
+    ODE system, the outputs, the messages' values."""
+
+    partition = staticmethod(partition)
+    start_state = staticmethod(start_state)
+    System = System
+    check_inertia = staticmethod(check_inertia)
+    better = staticmethod(_better)
+    variant = staticmethod(_variant)
+    outputs = staticmethod(_outputs)
+    blame_loads = staticmethod(_blame_loads)
+    values = staticmethod(_values)
+    units = staticmethod(joint_units)
+
+    @staticmethod
+    def backend(model: Model, backend, nf: int | None = None):
+        """The backend asked for checked (``nf`` None), else the one chosen for the right-hand
+        side and its work (the 1 + nf inverse dynamics of F5 over the moving bodies)."""
+        kinds = [j.kind for j in model.joints]
+        if nf is None:
+            return backend_mod.choose(backend, None, kinds), None
+        work = backend_mod.Work(1 + nf, len(model.bodies) - 1, 0, backend_mod.SIMULATION)
+        return backend_mod.choose(backend, work, kinds), work
+
+    @staticmethod
+    def free_rows(part: Partition) -> list[int]:
+        """The free coordinates' rows in the tree coordinates."""
+        return list(topo_free(part))
+
+    @staticmethod
+    def angular(part: Partition) -> np.ndarray:
+        return np.array([jk.get(part.layout.kind[i]).angular for i in topo_free(part)], bool)
+
+    @staticmethod
+    def periodic(part: Partition) -> bool:
+        """Whether the cut rows are periodic in the angles (F12; not a gear's)."""
+        return all(jk.get(k).periodic for k in part.layout.cut_kind)
+
+
+class Spatial:
+    """The stages of a spatial model (:mod:`linkdyn.spatial.forward`), numpy only."""
+
+    def __getattr__(self, name):
+        from .spatial import forward as sf
+        return getattr(sf, name)
+
+    @staticmethod
+    def backend(model, backend, nf: int | None = None):
+        """numpy's backend (``backend`` "compiled" refused, as ``analyze`` refuses it)."""
+        if backend == "compiled":
+            raise ModelError("the compiled backend is not yet for spatial models",
+                             field="backend", fix="Use backend='numpy' (or leave it unset)")
+        return backend_mod.choose("numpy", None, ()), None
+
+    @staticmethod
+    def outputs(parts, segment, t, Y, guesses, stats, kernel, backend, modes):
+        """The spatial outputs (:func:`linkdyn.spatial.forward.outputs`); ``modes``, the
+        stick-slip state, is all sliding: spatial models have no friction loads."""
+        from .spatial import forward as sf
+        return sf.outputs(parts, segment, t, Y, guesses, stats, kernel, backend)
+
+    free_rows = staticmethod(lambda part: part.free_rows)
+    angular = staticmethod(lambda part: part.angular)
+    periodic = staticmethod(lambda part: True)      # rotation coordinates enter by rotations
+    blame_loads = staticmethod(lambda system, last: None)
+
+
+def stages(model: Model):
+    """The driver's stages for ``model``'s space: :class:`Planar` or :class:`Spatial`."""
+    return Spatial() if model.space == "spatial" else Planar

@@ -66,10 +66,19 @@ def check(model) -> dict:
     """What ``linkdyn check`` reports of a spatial model: the topology, Grübler–Kutzbach's
     count, the assembly at t = 0, the mobility from the closure Jacobian's rank and the
     redundant rows."""
+    from . import forward
     p = sk.plan(model)
-    qi, _, _ = sk.driver_motion(model, np.zeros(1))
-    q = sk.assemble(model, p, np.zeros(1), qi)
+    free = ()
+    _, _, J = sk.closure(model, p, sk.poses(p, forward._closed_design(model, p)[None]))
+    if p.n_q - int(sk.rank_of(p, J)[0]) > len(model.drivers):
+        # free degrees of freedom (a model for simulate): closed at [initial]'s start
+        part = forward.partition(model)
+        free, q = part.free, forward.start_state(part)[None]
+    else:
+        qi, _, _ = sk.driver_motion(model, np.zeros(1))
+        q = sk.assemble(model, p, np.zeros(1), qi)
     _, _, J = sk.closure(model, p, sk.poses(p, q))
     rank = int(sk.rank_of(p, J)[0])
     return {"plan": p, "gruebler": p.topo.mobility, "mobility": p.n_q - rank,
-            "rows": J.shape[1], "rank": rank, "redundant": redundant_rows(model, p, J[0])}
+            "rows": J.shape[1], "rank": rank, "redundant": redundant_rows(model, p, J[0]),
+            "free": free}

@@ -46,7 +46,11 @@ def check(mech, path: str) -> None:
                    + ", ".join(info["redundant"]))
     for d in mech.drivers:
         click.echo(f"  {d.joint}: {d.description}")
-    _over_run(mech, info["plan"])
+    if info["free"]:
+        click.echo(f"free coordinates (linkdyn simulate): {', '.join(info['free'])}; "
+                   "assembles at t = 0")
+    else:
+        _over_run(mech, info["plan"])
     click.echo("model OK")
 
 
@@ -108,3 +112,11 @@ def analyze(mech, t):
     sol = run(mech, t)
     s = summary(sol)
     return text(s), s, sol
+
+
+def simulation(sol, integration: dict) -> tuple[dict, str]:
+    """``summary.json`` and the printed summary of ``linkdyn simulate`` on a spatial model:
+    :func:`summary` with the integration's figures (``integration``, as the planar run's)."""
+    s = summary(sol)
+    s["simulation"] = integration
+    return s, text(s) + "\n"

@@ -29,6 +29,9 @@ class Loads:
     w_ext: np.ndarray
     potential_energy: np.ndarray
     power: np.ndarray
+    #: the power (T,) of the loads that are not gravity or springs (forces, torques, dampers,
+    #: loads inside joints): the rate of the work of simulate's energy balance, W
+    work_power: np.ndarray = None
 
 
 def mass_frames(model, p: Plan, m: Motion):
@@ -57,8 +60,11 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
     w += sa.force_wrench(p.mass[None, :, None] * g, c)
     pe = -np.einsum("n,tni,i->t", p.mass, c, g)
     names = [jt.name for jt in model.joints]
-    motion = ([coords[x][0][:, 0] if coords[x][0].shape[1] == 1 else None for x in names],
-              [coords[x][1][:, 0] if coords[x][1].shape[1] == 1 else None for x in names])
+    # the joints' coordinates and rates, for formulas in q_/qd_ (when a load has one)
+    motion = (([coords[x][0][:, 0] if coords[x][0].shape[1] == 1 else None for x in names],
+               [coords[x][1][:, 0] if coords[x][1].shape[1] == 1 else None for x in names])
+              if any(getattr(ld.value, "state_variables", ()) for ld in model.loads) else None)
+    conservative = w.copy()            # gravity's and the springs' wrenches
     idx = p.topo.bodies.index
     for load in model.loads:
         value = (load.value(m.t, motion) if load.value is not None
@@ -83,6 +89,9 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
                 tension = load.damping * np.sum(u * (v2 - v1), -1)
             w[:, b] += sa.force_wrench(tension[:, None] * u, r1)
             w[:, idx(load.body2)] -= sa.force_wrench(tension[:, None] * u, r2)
+            if load.kind == "spring":
+                conservative[:, b] += sa.force_wrench(tension[:, None] * u, r1)
+                conservative[:, idx(load.body2)] -= sa.force_wrench(tension[:, None] * u, r2)
         else:                              # joint_torque / joint_force: on B, minus on A
             j = names.index(load.joint)
             jt = model.joints[j]
@@ -93,7 +102,8 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
             w[:, idx(jt.body_b)] += value[:, None] * unit
             w[:, idx(jt.body_a)] -= value[:, None] * unit
     power = np.einsum("tns,tns->t", w[:, 1:], m.V[:, 1:])
-    return Loads(w, pe, power)
+    work = power - np.einsum("tns,tns->t", conservative[:, 1:], m.V[:, 1:])
+    return Loads(w, pe, power, work)
 
 
 @dataclass(frozen=True)
@@ -116,22 +126,10 @@ class Dynamics:
 
 def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
     """DeNOC inverse dynamics and the minimum-norm reactions (module docstring)."""
-    T, n = m.q.shape[0], p.topo.n
-    _, I = mass_frames(model, p, m)
-    IV = np.einsum("tnij,tnj->tni", I, m.V)
-    # w* = I_O A + crf(V) I_O V - w_ext
-    w_star = np.einsum("tnij,tnj->tni", I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
-    w_star[:, 0] = 0.0
-    w_tilde = composite(p, w_star)
-    # Q = S^T w~ for every tree coordinate
-    Q = np.zeros((T, p.n_q))
-    for i in range(1, n):
-        Q[:, p.cols[i]] = np.einsum("tks,ts->tk", m.tree.S[i], w_tilde[:, i])
-    # [E_d, J^T] x = Q
+    T = m.q.shape[0]
+    w_star, w_tilde, Q, ke = generalized(model, p, m, applied)
     nd = len(p.driven)
-    M = np.concatenate([np.broadcast_to(np.eye(p.n_q)[:, p.driven], (T, p.n_q, nd)),
-                        np.swapaxes(m.J, 1, 2)], 2)
-    x, rank, _ = sa.lstsq(M, Q, 1e-10)
+    M, x, rank = efforts(p, m, Q)
     r = int(np.max(rank))
     N = sa.null_space(M, r)                          # (T, nd + rows, k)
     R0 = reactions(model, p, m, w_tilde, x[:, :nd], x[:, nd:])
@@ -147,8 +145,35 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
         basis = _range(G)
     else:
         basis = np.zeros((T, R0.shape[1] * 6, 0))
-    ke = 0.5 * np.einsum("tni,tni->t", m.V, IV)
     return Dynamics(w_star, w_tilde, Q, x[:, :nd], x[:, nd:], R0, ke, basis)
+
+
+def generalized(model, p: Plan, m: Motion, applied: Loads):
+    """Every body's wrench ``w*`` and composite ``w~`` (T, n, 6), the generalized forces ``Q``
+    (T, n_q) of the tree coordinates and the kinetic energy (T,), J."""
+    T, n = m.q.shape[0], p.topo.n
+    _, I = mass_frames(model, p, m)
+    IV = np.einsum("tnij,tnj->tni", I, m.V)
+    # w* = I_O A + crf(V) I_O V - w_ext
+    w_star = np.einsum("tnij,tnj->tni", I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
+    w_star[:, 0] = 0.0
+    w_tilde = composite(p, w_star)
+    # Q = S^T w~ for every tree coordinate
+    Q = np.zeros((T, p.n_q))
+    for i in range(1, n):
+        Q[:, p.cols[i]] = np.einsum("tks,ts->tk", m.tree.S[i], w_tilde[:, i])
+    return w_star, w_tilde, Q, 0.5 * np.einsum("tni,tni->t", m.V, IV)
+
+
+def efforts(p: Plan, m: Motion, Q: np.ndarray):
+    """``[E_d, J^T] x = Q`` (T, n_q, n_d + rows) by least squares: returns that matrix, ``x``
+    (T, n_d + rows) (the independent coordinates' efforts ``tau`` first, unique where the
+    mobility is the number of independent coordinates, then the multipliers) and the rank."""
+    T, nd = m.q.shape[0], len(p.driven)
+    M = np.concatenate([np.broadcast_to(np.eye(p.n_q)[:, p.driven], (T, p.n_q, nd)),
+                        np.swapaxes(m.J, 1, 2)], 2)
+    x, rank, _ = sa.lstsq(M, Q, 1e-10)
+    return M, x, rank
 
 
 def composite(p: Plan, w_star: np.ndarray) -> np.ndarray:

@@ -466,19 +466,28 @@ class Motion:
 
 def solve(model, p: Plan, t: np.ndarray) -> Motion:
     """Positions, rates and accelerations at the times ``t`` (T,): the drivers' motion gives
-    the independent coordinates; the dependent ones close the loops (:func:`assemble`), and
-    their rates and accelerations solve ``J_dep qd_dep = -J_ind qd_ind`` and
-    ``J_dep qdd_dep = -(phi . (A_B - A_A) + gamma)`` with ``qdd_dep = 0`` in ``A``, least
-    squares; exit 3 where ``J_dep`` loses rank."""
+    the independent coordinates; the dependent ones close the loops (:func:`assemble`), then
+    :func:`motion_at`; exit 3 where ``J_dep`` loses rank."""
     qi, qdi, qddi = driver_motion(model, t)
     q = assemble(model, p, t, qi)
-    tree = poses(p, q)
-    g, phi, J = closure(model, p, tree)
+    m = motion_at(model, p, t, q, qdi, qddi)
     dep = p.dependent
-    singular = rank_of(p, J[:, :, dep], dep) < len(dep)
+    singular = rank_of(p, m.J[:, :, dep], dep) < len(dep)
     if np.any(singular):
         k = int(np.argmax(singular))
         raise _fail(model, t[k], qi[k], SINGULAR, SINGULAR_FIX)
+    return m
+
+
+def motion_at(model, p: Plan, t: np.ndarray, q: np.ndarray, qdi: np.ndarray,
+              qddi: np.ndarray) -> Motion:
+    """The kinematics at closed coordinates ``q`` (T, n_q) with the independent coordinates'
+    (``Plan.driven``) rates ``qdi`` and accelerations ``qddi`` (T, n_driven): the dependent
+    rates and accelerations solve ``J_dep qd_dep = -J_ind qd_ind`` and ``J_dep qdd_dep =
+    -(phi . (A_B - A_A) + gamma)`` with ``qdd_dep = 0`` in ``A``, least squares."""
+    tree = poses(p, q)
+    g, phi, J = closure(model, p, tree)
+    dep = p.dependent
     qd = np.zeros_like(q)
     qd[:, p.driven] = qdi
     qd[:, dep], _, _ = sa.lstsq(J[:, :, dep], -np.einsum("trk,tk->tr", J, qd), 1e-12)

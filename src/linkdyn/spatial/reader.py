@@ -22,7 +22,8 @@ from . import algebra as sa
 from . import joints as sj
 from .model import Body, Joint
 
-SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "topology", "analysis")
+SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "topology", "analysis",
+            "initial")
 BODY_KEYS = ("name", "points", "mass", "com", "inertia", "origin", "rotation")
 JOINT_KEYS = ("name", "type", "connect", "axis", "axis2")
 PERPENDICULAR = 1e-6   # |axis . axis2| of a universal joint's unit axes at the design pose
@@ -32,12 +33,10 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
     """The spatial model of the parsed file ``data`` (its ``[mechanism]`` table ``mech``
     already checked for its keys), SI."""
     r.dim, r.kinds = 3, sj
-    for section in ("assembly", "initial"):
-        if section in data:
-            r.fail(section, f"[{section}] is not read for spatial models",
-                   "Remove it: the design pose (each body's origin and rotation) is the "
-                   "assembly guess" if section == "assembly" else
-                   "Remove it: simulate is not yet for spatial models")
+    if "assembly" in data:
+        r.fail("assembly", "[assembly] is not read for spatial models",
+               "Remove it: the design pose (each body's origin and rotation) is the "
+               "assembly guess")
     r.table(data, "", SECTIONS, noun="section", what="sections of a spatial model")
     name = r.string(mech["name"], "mechanism.name") if "name" in mech else (
         Path(source).stem if source else "mechanism")
@@ -57,6 +56,7 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
         if isinstance(analysis, dict) and key in analysis:
             r.fail(f"analysis.{key}", f"{key} is not yet for spatial models",
                    f"Remove {key} (the summary of a spatial run has no path straightness)")
+    initial_q, initial_qd = _initial(r, data.get("initial", {}), joints, drivers)
     cut = _topology(r, data.get("topology", {}), joints, drivers)
     duration, cycles, samples, path_point, path_range = _analysis(
         r, data.get("analysis", {}), drivers, bodies, joints)
@@ -65,7 +65,7 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
                  gravity=gravity, cut=cut, duration=duration, cycles=cycles, samples=samples,
                  source=source, description=description, path_point=path_point,
                  path_range=path_range, length_unit=r.length_name, angle_unit=r.angle_name,
-                 space="spatial")
+                 initial_q=initial_q, initial_qd=initial_qd, space="spatial")
 
 
 def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
@@ -195,3 +195,53 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
                        "body's frame, axis2 in the second's)")
         joints[name] = Joint(name, kind.name, a, pa, b, pb, axis=axis, axis2=axis2)
     return joints
+
+
+def coordinate_names(joints) -> dict:
+    """Every joint coordinate's name, ``<joint><suffix>`` as in results.csv's ``q_`` columns
+    (``J1``, ``J3.s``, ``J2.1``), -> ``(joint, index in its kind's coordinates, angular)``; a
+    spherical joint has no such columns (its Cardan angles depend on the tree)."""
+    return {f"{j.name}{suffix}": (j.name, k, angular) for j in joints
+            for k, (suffix, angular) in enumerate(sj.get(j.kind).coordinates_named)
+            if sj.get(j.kind).tree and j.kind != "spherical"}
+
+
+def _initial(r: _Reader, section: Any, joints: dict, drivers: dict) -> tuple[dict, dict]:
+    """``[initial]`` of a spatial model: ``q`` (angle or length unit) and ``qd`` (per s) of the
+    free joint coordinates at t = 0 by their results.csv names (``J1``; ``"J3.s"``, ``"J2.1"``
+    quoted, or ``J3 = { s = ... }``), SI. Rotations count from the design pose; a prismatic
+    travel is ``(r_Bq - r_Ap) . e``. Their number is checked against the mobility by
+    :func:`linkdyn.spatial.forward.partition`."""
+    names = coordinate_names(joints.values())
+    section = r.table(section, "initial", ("q", "qd"))
+    out: list[dict] = []
+    for key, per in (("q", ""), ("qd", "/s")):
+        given = section.get(key, {})
+        if not isinstance(given, dict):
+            r.fail(f"initial.{key}", "expected a table of joint coordinates",
+                   f'Write {key} = {{ J1 = 10.0, "J3.s" = 5.0 }}')
+        flat = {}
+        for name, v in given.items():     # J3 = { s = ... } is "J3.s"
+            if isinstance(v, dict):
+                flat.update({f"{name}.{sub}": x for sub, x in v.items()})
+            else:
+                flat[name] = v
+        values: dict[str, float] = {}
+        for name, v in flat.items():
+            f = f"initial.{key}.{name}"
+            if name not in names:
+                joint = name.split(".")[0]
+                why = (f"joint '{joint}' is a {joints[joint].kind} joint, which has no "
+                       "coordinates in results.csv" if joint in joints
+                       and joints[joint].kind == "spherical" else
+                       f"unknown joint coordinate '{name}'")
+                r.fail(f, why, "Name a coordinate of a revolute, prismatic, cylindrical or "
+                       f"universal joint: {', '.join(names) or 'none'}")
+            joint, _, angular = names[name]
+            if joint in drivers:
+                r.fail(f, f"joint '{joint}' is driven ({drivers[joint][0]}): its motion is "
+                       "prescribed, not free", "Name only the free degrees of freedom")
+            scale, unit = (r.angle, r.angle_name) if angular else (r.length, r.length_name)
+            values[name] = r.number(v, f, unit + per) * scale
+        out.append(values)
+    return out[0], out[1]

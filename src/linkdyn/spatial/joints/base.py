@@ -70,9 +70,9 @@ class Rates:
 def perpendiculars(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors ``t1, t2`` with ``(e, t1, t2)`` orthonormal and right-handed."""
     k = int(np.argmin(np.abs(e)))
-    t1 = np.cross(e, np.eye(3)[k])
+    t1 = sa.cross(e, np.eye(3)[k])
     t1 /= np.linalg.norm(t1)
-    return t1, np.cross(e, t1)
+    return t1, sa.cross(e, t1)
 
 
 def turned(R: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -91,7 +91,7 @@ def coincident(pose: Pose):
 def coincident_rate(pose: Pose, m: Rates):
     """Rate of :func:`coincident`'s rows: ``[v_c x x_k; 0]``."""
     axes = np.broadcast_to(np.eye(3), pose.rq.shape[:-1] + (3, 3))
-    return sa.free_vector(np.cross(m.vq[..., None, :], axes), True)
+    return sa.free_vector(sa.cross(m.vq[..., None, :], axes), True)
 
 
 def sliding(pose: Pose, t: np.ndarray):
@@ -103,20 +103,20 @@ def sliding(pose: Pose, t: np.ndarray):
 
 def sliding_rate(pose: Pose, m: Rates, t: np.ndarray):
     """Rate of :func:`sliding`'s rows: ``[v_c x t + c x (w_A x t); w_A x t]``."""
-    td = np.cross(m.VA[..., None, :3], t)
-    return np.concatenate([np.cross(m.vq[..., None, :], t) + np.cross(pose.rq[..., None, :], td),
+    td = sa.cross(m.VA[..., None, :3], t)
+    return np.concatenate([sa.cross(m.vq[..., None, :], t) + sa.cross(pose.rq[..., None, :], td),
                            td], -1)
 
 
 def aligned(eA: np.ndarray, eB: np.ndarray, t: np.ndarray):
     """Couples along ``t`` (..., k, 3) fixed in A, perpendicular to A's axis ``eA``, that keep
     B's copy of the axis ``eB`` on it: residual ``t . (e_A x e_B)``, rows ``[t; 0]``."""
-    return np.sum(t * np.cross(eA, eB)[..., None, :], -1), sa.free_vector(t, True)
+    return np.sum(t * sa.cross(eA, eB)[..., None, :], -1), sa.free_vector(t, True)
 
 
 def aligned_rate(m: Rates, t: np.ndarray):
     """Rate of :func:`aligned`'s rows: ``[w_A x t; 0]``."""
-    return sa.free_vector(np.cross(m.VA[..., None, :3], t), True)
+    return sa.free_vector(sa.cross(m.VA[..., None, :3], t), True)
 
 
 def locked(pose: Pose, R0: np.ndarray):

@@ -29,7 +29,7 @@ class Universal(base.SpatialKind):
         # R_rel R0^T = Rot(e, q1) Rot(e2a, q2) with e2a = R0 e2: in the frame (e, e2a, e x e2a)
         # it is Rx(q1) Ry(q2) = [[c2, 0, s2], [s1 s2, c1, -s1 c2], [-c1 s2, s1, c1 c2]]
         e2a = g.R0 @ g.e2
-        F = np.stack([g.e, e2a, np.cross(g.e, e2a)], -1)
+        F = np.stack([g.e, e2a, sa.cross(g.e, e2a)], -1)
         n = F.T @ R_rel @ g.R0.T @ F
         return np.stack([np.arctan2(n[..., 2, 1], n[..., 1, 1]),
                          np.arctan2(n[..., 0, 2], n[..., 0, 0])], -1)
@@ -38,14 +38,14 @@ class Universal(base.SpatialKind):
         # coincident points; e_A . e2_B = 0 held by the couple e2_B x e_A
         r1, p1 = base.coincident(pose)
         eA, e2 = pose.RA @ g.e, pose.RB @ g.e2
-        u = np.cross(e2, eA)
+        u = sa.cross(e2, eA)
         return (np.concatenate([r1, np.sum(eA * e2, -1)[..., None]], -1),
                 np.concatenate([p1, sa.free_vector(u, True)[..., None, :]], -2))
 
     def closure_rate(self, g, pose, m):
         eA, e2 = pose.RA @ g.e, pose.RB @ g.e2
-        ud = (np.cross(np.cross(m.VB[..., :3], e2), eA)
-              + np.cross(e2, np.cross(m.VA[..., :3], eA)))
+        ud = (sa.cross(sa.cross(m.VB[..., :3], e2), eA)
+              + sa.cross(e2, sa.cross(m.VA[..., :3], eA)))
         return np.concatenate([base.coincident_rate(pose, m),
                                sa.free_vector(ud, True)[..., None, :]], -2)
 
