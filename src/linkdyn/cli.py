@@ -850,10 +850,11 @@ def integration(sol) -> dict:
         "free_joints": list(sol.free),
         **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
                                      "energy_projections")},
-        # where a free joint with friction stuck, slipped or reversed (F13)
+        # where a free joint with friction stuck, slipped or reversed (F13; planar models:
+        # spatial ones have no friction loads)
         **({"stick_slip": [{"t_s": ts, "joint": j, "event": what}
                            for ts, j, what in sol.stats["stick_slip"]]}
-           if sol.friction is not None else {}),
+           if sol.model.space == "planar" and sol.friction is not None else {}),
         # where the free coordinates changed near a dead point of theirs (time s, joints)
         "coordinate_switches": [{"t_s": ts, "free_joints": fr}
                                 for ts, fr in sol.stats.get("switches", [])],

@@ -625,32 +625,6 @@ class System:
             return float(self.kernel.energy[0]), float(self.kernel.energy[1])
         return self.energy
 
-    def project(self, t, y, e0) -> np.ndarray | None:
-        """``y`` with the free rates scaled by the factor that puts it on the energy balance
-        ``T + V - W = E0`` (F11), else None (no such factor within ``PROJECT_MAX`` of 1).
-
-        ``T`` is quadratic in the factor ``a`` (the drivers' rates fixed): ``T(a) = T_2 a^2 +
-        T_1 a + T_0``, from ``T`` at ``a = 1`` (and, with drivers, at 0 and -1)."""
-        nf = self.nf
-        if not nf:
-            return None
-        ke1, pe = self.energies(t, y)
-        target = e0 + y[-1] - pe
-        if self.nd:
-            ke0 = self.energies(t, np.concatenate((y[:nf], 0.0 * y[nf:2 * nf], y[-1:])))[0]
-            kem = self.energies(t, np.concatenate((y[:nf], -y[nf:2 * nf], y[-1:])))[0]
-            t2, t1, t0 = 0.5 * (ke1 + kem) - ke0, 0.5 * (ke1 - kem), ke0
-        else:
-            t2, t1, t0 = ke1, 0.0, 0.0
-        disc = t1 * t1 - 4.0 * t2 * (t0 - target)
-        if not (t2 > 0 and disc >= 0):
-            return None
-        roots = ((-t1 + np.sqrt(disc)) / (2 * t2), (-t1 - np.sqrt(disc)) / (2 * t2))
-        a = min(roots, key=lambda x: abs(x - 1.0))
-        if not abs(a - 1.0) <= PROJECT_MAX:
-            return None
-        return np.concatenate((y[:nf], a * y[nf:2 * nf], y[-1:]))
-
     def accept(self, t, y):
         """Move the reference to an accepted step's end ``(t, y)``; the closure Jacobian there
         (n_rows, n - 1), or None where the state does not close."""
@@ -1033,7 +1007,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 break
             if project and method in PROJECTED and solver.status != "failed":
                 # back onto the energy balance: the next step starts there         (F11)
-                y_p = system.project(solver.t, solver.y, e0)
+                y_p = energy_projection(system, solver.t, solver.y, e0)
                 if y_p is not None:
                     f_p = system(solver.t, y_p)
                     J_p = system.accept(solver.t, y_p)
@@ -1129,6 +1103,34 @@ def _blame_loads(system: System, last) -> None:
                                           drivers=dict(zip((d.joint for d in part.inner.drivers),
                                                            q_ind[:, 0].tolist())),
                                           units=joint_units(part.model)))
+
+
+def energy_projection(system, t, y, e0) -> np.ndarray | None:
+    """``y`` with the free rates of ``system`` (either space's :class:`System`: its ``nf``,
+    ``nd`` and ``energies``) scaled by the factor that puts it on the energy balance
+    ``T + V - W = E0`` (F11), else None (no such factor within ``PROJECT_MAX`` of 1).
+
+    ``T`` is quadratic in the factor ``a`` (the drivers' rates fixed): ``T(a) = T_2 a^2 +
+    T_1 a + T_0``, from ``T`` at ``a = 1`` (and, with drivers, at 0 and -1)."""
+    nf = system.nf
+    if not nf:
+        return None
+    ke1, pe = system.energies(t, y)
+    target = e0 + y[-1] - pe
+    if system.nd:
+        ke0 = system.energies(t, np.concatenate((y[:nf], 0.0 * y[nf:2 * nf], y[-1:])))[0]
+        kem = system.energies(t, np.concatenate((y[:nf], -y[nf:2 * nf], y[-1:])))[0]
+        t2, t1, t0 = 0.5 * (ke1 + kem) - ke0, 0.5 * (ke1 - kem), ke0
+    else:
+        t2, t1, t0 = ke1, 0.0, 0.0
+    disc = t1 * t1 - 4.0 * t2 * (t0 - target)
+    if not (t2 > 0 and disc >= 0):
+        return None
+    roots = ((-t1 + np.sqrt(disc)) / (2 * t2), (-t1 - np.sqrt(disc)) / (2 * t2))
+    a = min(roots, key=lambda x: abs(x - 1.0))
+    if not abs(a - 1.0) <= PROJECT_MAX:
+        return None
+    return np.concatenate((y[:nf], a * y[nf:2 * nf], y[-1:]))
 
 
 def restate(solver, y: np.ndarray, f: np.ndarray) -> None:
@@ -1450,6 +1452,12 @@ class Spatial:
         stick-slip state, is all sliding: spatial models have no friction loads."""
         from .spatial import forward as sf
         return sf.outputs(parts, segment, t, Y, guesses, stats, kernel, backend)
+
+    @staticmethod
+    def better(part, J):
+        """Better free coordinates past ``SWITCH`` (F10): :func:`linkdyn.spatial.forward.better`."""
+        from .spatial import forward as sf
+        return sf.better(part, J, SWITCH)
 
     free_rows = staticmethod(lambda part: part.free_rows)
     angular = staticmethod(lambda part: part.angular)

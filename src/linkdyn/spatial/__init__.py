@@ -37,29 +37,8 @@ def analyze(model, t) -> SpatialSolution:
     coords = sk.joint_coordinates(model, p, motion)
     applied = sd.loads(model, p, motion, coords)
     dyn = sd.solve(model, p, motion, applied)
-    return SpatialSolution(model, p, motion, coords, applied, dyn, redundant_rows(model, p,
+    return SpatialSolution(model, p, motion, coords, applied, dyn, sk.redundant_rows(model, p,
                                                                                   motion.J[0]))
-
-
-def redundant_rows(model, p: sk.Plan, J: np.ndarray) -> tuple:
-    """The closure rows (``<joint>.<row label>``) that are combinations of the rows before
-    them in the Jacobian ``J`` (rows, n_q) at one sample (rank as :func:`kinematics.rank_of`
-    counts it)."""
-    labels = [f"{model.joints[j].name}.{lab}" for j in p.topo.cut for lab in p.kinds[j].row_labels]
-    kept, out = [], []
-    for r, label in enumerate(labels):
-        trial = kept + [r]
-        if int(sk.rank_of(_rows(p, trial), J[None, trial])[0]) > len(kept):
-            kept = trial
-        else:
-            out.append(label)
-    return tuple(out)
-
-
-def _rows(p: sk.Plan, rows: list) -> sk.Plan:
-    """``p`` seen through some of its closure rows (their length flags), for ranks."""
-    from dataclasses import replace
-    return replace(p, length_row=p.length_row[rows])
 
 
 def check(model) -> dict:
@@ -80,5 +59,5 @@ def check(model) -> dict:
     _, _, J = sk.closure(model, p, sk.poses(p, q))
     rank = int(sk.rank_of(p, J)[0])
     return {"plan": p, "gruebler": p.topo.mobility, "mobility": p.n_q - rank,
-            "rows": J.shape[1], "rank": rank, "redundant": redundant_rows(model, p, J[0]),
+            "rows": J.shape[1], "rank": rank, "redundant": sk.redundant_rows(model, p, J[0]),
             "free": free}

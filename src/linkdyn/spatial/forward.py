@@ -337,11 +337,6 @@ class System:
             self(t, y)
         return self.energy
 
-    def project(self, t, y, e0):
-        """``y`` on the energy balance (F11): :meth:`linkdyn.forward.System.project`."""
-        from ..forward import System as Planar
-        return Planar.project(self, t, y, e0)
-
     def accept(self, t, y):
         """Move the reference to an accepted step's end ``(t, y)``; the closure Jacobian there
         (rows, n_q), or None where the state does not close or is singular."""
@@ -363,13 +358,12 @@ def accelerations(m: sk.Motion, qdd_f: np.ndarray) -> np.ndarray:
                                  m.qdd[T:].reshape(len(qdd_f), T, -1) - m.qdd[None, :T])
 
 
-def better(part: Partition, J: np.ndarray) -> tuple | None:
+def better(part: Partition, J: np.ndarray, switch: float) -> tuple | None:
     """The tree coordinates (rows of q) of better free coordinates where those of ``part``
     describe the motion badly at the state of closure Jacobian ``J`` (rows, n_q): their
     growth ``max |V V_f^-1|`` (V the closure's null space over the coordinates not driven,
-    lengths times the size) past ``forward.SWITCH`` and twice the best's; else None (F10)."""
+    lengths times the size) past ``switch`` (``forward.SWITCH``) and twice the best's; else None (F10)."""
     import scipy.linalg as sl
-    from ..forward import SWITCH
     p, nd = part.plan, part.n_drivers
     moving = np.setdiff1d(np.arange(p.n_q), p.driven[:nd])
     A = J[:, moving] * np.where(p.length_coordinate[moving], p.size, 1.0)
@@ -386,7 +380,7 @@ def better(part: Partition, J: np.ndarray) -> tuple | None:
                 return np.inf
         return float(np.max(np.abs(G))) if np.all(np.isfinite(G)) else np.inf
     now = growth(part.free_rows)
-    if now <= SWITCH:
+    if now <= switch:
         return None
     named = np.array(sorted(coordinate_rows(part.model, p, coordinate_names(
         part.model.joints)).values()), dtype=int)
@@ -479,7 +473,6 @@ def outputs(parts, segment, t, Y, guesses, stats, kernel, backend) -> SpatialSim
     (``parts[segment[k]]``, all on one tree): the closed positions, rates and free
     accelerations (F6) of each, then the kinematics, loads, inverse dynamics and reactions of
     ``analyze``'s stages in the first partition."""
-    from . import redundant_rows
     part = parts[0]
     nd, nf = part.n_drivers, len(part.free)
     T, p, model = len(t), part.plan, part.inner
@@ -502,5 +495,5 @@ def outputs(parts, segment, t, Y, guesses, stats, kernel, backend) -> SpatialSim
     stats["closure_residual"] = float(np.max(motion.residual))
     dyn = replace(dyn, tau=dyn.tau[:, :nd])
     return SpatialSimulation(part.model, p, motion, coords, applied, dyn,
-                             redundant_rows(model, p, motion.J[0]), work=Y[-1],
+                             sk.redundant_rows(model, p, motion.J[0]), work=Y[-1],
                              free=part.free, stats=stats)

@@ -514,3 +514,23 @@ def _relative(model, p: Plan, phi: np.ndarray, X: np.ndarray) -> np.ndarray:
         r += k
     return np.concatenate(out, 1) if out else np.zeros((X.shape[0], 0))
 
+
+def redundant_rows(model, p: Plan, J: np.ndarray) -> tuple:
+    """The closure rows (``<joint>.<row label>``) that are combinations of the rows before
+    them in the Jacobian ``J`` (rows, n_q) at one sample (rank as :func:`rank_of`
+    counts it)."""
+    labels = [f"{model.joints[j].name}.{lab}" for j in p.topo.cut for lab in p.kinds[j].row_labels]
+    kept, out = [], []
+    for r, label in enumerate(labels):
+        trial = kept + [r]
+        if int(rank_of(_rows(p, trial), J[None, trial])[0]) > len(kept):
+            kept = trial
+        else:
+            out.append(label)
+    return tuple(out)
+
+
+def _rows(p: Plan, rows: list) -> sk.Plan:
+    """``p`` seen through some of its closure rows (their length flags), for ranks."""
+    from dataclasses import replace
+    return replace(p, length_row=p.length_row[rows])
