@@ -165,18 +165,18 @@ def test_compiled_run_outputs_equal_numpy_stages_at_the_same_states(monkeypatch)
             return None if Half.calls % 2 else super().__call__(*args)
 
     seen = []
-    original = forward._outputs
-    monkeypatch.setattr(forward, "_outputs",
-                        lambda *args: seen.append(args) or original(*args))
+    original = forward.Planar.outputs      # the planar stages' outputs, which simulate calls
+    monkeypatch.setattr(forward.Planar, "outputs",
+                        staticmethod(lambda *args: seen.append(args) or original(*args)))
     t = np.linspace(0.0, 0.3, 7)
     for model in (hoeken_motor(), slider_crank(), fivebar(1)):
         fast = simulate(model, t, rtol=1e-6, atol=1e-8, backend="compiled")
-        parts, segment, tt, Y, guesses, stats, kernel = seen.pop()[:7]
+        parts, segment, tt, Y, guesses, stats, kernel, _, modes = seen.pop()
         assert kernel is not None
         slow = original(parts, segment, tt, Y, guesses, dict(stats), None,
-                        backend.choose("numpy"))
+                        backend.choose("numpy"), modes)
         half = original(parts, segment, tt, Y, guesses, dict(stats), Half(parts[0]),
-                        backend.choose("compiled"))
+                        backend.choose("compiled"), modes)
         assert Half.calls >= len(tt)
         assert "Fx_J2" in slow.columns                       # the reactions are compared
         # scale: the peak of the columns of the same unit (some columns are zero throughout)
