@@ -670,6 +670,7 @@ def _spatial(model, t, backend):
     return spatial.analyze(model, t)
 
 
+@quiet
 def analyze(model, t, *, allow_singular: bool = False, backend: str | None = None) -> Solution:
     """Kinematics and inverse dynamics of ``model`` at the times ``t`` (T,) s.
 
