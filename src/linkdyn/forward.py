@@ -58,6 +58,7 @@ from .kinematics.positions import assembly_guess, assemble, driver_values
 from .kinematics.solution import at_closed
 from .kinematics.state import at_state, close
 from .model import Driver, Model
+from .motion import Free
 from .planar import solve_small
 from .topology import build, mobility
 from .units import joint_units
@@ -84,14 +85,6 @@ PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
 UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
 MAX_EVENTS = 10_000  # changes of the stick-slip state in a run (F13)
-
-
-class _Free:
-    """Motion placeholder of a free coordinate: the integrator supplies its values."""
-
-    def evaluate(self, t):
-        z = np.zeros(np.shape(t))
-        return z, z, z
 
 
 @dataclass(frozen=True)
@@ -197,7 +190,7 @@ def _partition(model: Model, free) -> Partition:
     # a free joint stays in the tree: a [topology] cut naming one gives way to the automatic
     cut = None if model.cut and set(model.cut) & set(free) else model.cut
     inner = replace(model, cut=cut, drivers=model.drivers + tuple(
-        Driver(j, _Free(), "free (integrated)") for j in free))
+        Driver(j, Free(), "free (integrated)") for j in free))
     return Partition(model, inner, compile_layout(inner, build(inner)), tuple(free))
 
 
@@ -210,7 +203,7 @@ def _variant(part: Partition, free_bodies: tuple[int, ...]) -> Partition:
     free = tuple(part.model.joints[topo.tree_joint[i]].name for i in free_bodies)
     cut = tuple(part.model.joints[j].name for j in topo.cut)
     inner = replace(part.model, cut=cut, drivers=part.model.drivers + tuple(
-        Driver(j, _Free(), "free (integrated)") for j in free))
+        Driver(j, Free(), "free (integrated)") for j in free))
     tree = replace(topo, driven=driven,
                    dependent=tuple(i for i in range(1, topo.n) if i not in driven))
     # Newton's method closes the loops (the closed-form plan is the first partition's)

@@ -244,6 +244,15 @@ class SegmentMotion:
         return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
 
 
+class Free:
+    """The motion placeholder of a free coordinate in forward dynamics (planar or spatial):
+    its driver slot holds no motion, the integrator supplies the coordinate's values."""
+
+    def evaluate(self, t):
+        z = np.zeros(np.shape(t))
+        return z, z, z
+
+
 @dataclass(frozen=True, eq=False)
 class TableMotion:
     """q(t) interpolated through a table by a cubic spline (not-a-knot ends).

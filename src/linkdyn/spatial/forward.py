@@ -23,19 +23,12 @@ import numpy as np
 from ..brief import brief_repr
 from ..errors import AssemblyError, ModelError
 from ..model import GROUND, Driver
+from ..motion import Free
 from ..planar import solve_small
 from . import dynamics as sd
 from . import kinematics as sk
 from .reader import coordinate_names
 from .solution import SpatialSolution
-
-
-class _Free:
-    """Motion placeholder of a free coordinate: the integrator supplies its values."""
-
-    def evaluate(self, t):
-        z = np.zeros(np.shape(t))
-        return z, z, z
 
 
 @dataclass(frozen=True)
@@ -98,7 +91,7 @@ def _partition(model, free: tuple) -> Partition:
     # a free joint stays in the tree: a [topology] cut naming one gives way to the automatic
     cut = None if model.cut and set(model.cut) & set(joints) else model.cut
     inner = replace(model, cut=cut, drivers=model.drivers + tuple(
-        Driver(j, _Free(), "free (integrated)") for j in joints))
+        Driver(j, Free(), "free (integrated)") for j in joints))
     p = sk.plan(inner)
     rows = list(coordinate_rows(model, p, free).values())
     driven = np.array(list(p.driven[:len(model.drivers)]) + rows, dtype=int)
