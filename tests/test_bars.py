@@ -81,7 +81,7 @@ def test_bars_are_written_back_as_bars(tmp_path):
 
 
 def test_a_sweep_moves_the_mass_with_the_points(tmp_path):
-    pytest.importorskip("pandas")
+    pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     text = with_bars(HOEKEN.read_text("utf-8"), "coupler",
                      '[{ between = ["O2", "P"], mass_per_length = 0.0217 }]')
     m, path = load(tmp_path, text)

@@ -123,7 +123,7 @@ def test_the_joint_coordinate_has_the_rates_of_its_finite_differences():
 
 
 def test_both_backends_run_the_cam_follower():
-    pytest.importorskip("numba")
+    pytest.importorskip("numba", reason="the compiled backend needs numba (the fast extra)")
     model = cam_follower()
     t = np.linspace(0.0, 2 * math.pi / W, 13)
     a = linkdyn.analyze(model, t, backend="numpy")

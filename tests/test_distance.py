@@ -37,7 +37,7 @@ def test_a_rod_is_a_massless_rocker_on_two_pins():
 
 
 def test_both_backends_run_the_rod():
-    pytest.importorskip("numba")
+    pytest.importorskip("numba", reason="the compiled backend needs numba (the fast extra)")
     rod = hoeken_rod()
     t = times(rod, 19)
     a = linkdyn.analyze(rod, t, backend="numpy")

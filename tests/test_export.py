@@ -176,7 +176,7 @@ def test_svg_and_dxf_joints_and_paths_are_linkdyns(name, at, traced, tmp_path):
 
 
 def test_the_mjcf_written_by_the_command_reproduces_linkdyn_in_mujoco(tmp_path):
-    pytest.importorskip("mujoco")
+    pytest.importorskip("mujoco", reason="the MuJoCo check needs mujoco (the mujoco extra)")
     from test_mujoco import check_against_mujoco
 
     path = linkdyn.example_path("slider_crank")

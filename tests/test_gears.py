@@ -560,7 +560,7 @@ def test_the_bundled_geared_fivebar_meshes_and_its_gears_turn_opposite():
 
 @pytest.mark.parametrize("internal", [0, 1])
 def test_gear_train_matches_mujoco_joint_equality(internal):
-    mujoco = pytest.importorskip("mujoco")
+    mujoco = pytest.importorskip("mujoco", reason="the MuJoCo check needs mujoco (the mujoco extra)")
     from test_mujoco import load_forces
 
     def _xz(v):   # linkdyn (x, y) -> MuJoCo 'x 0 y'

@@ -38,7 +38,7 @@ def run(*args):
 def pylinkage_positions(file: Path, steps: int = 360):
     """pylinkage's joint positions (steps, joints, 2) over ``steps`` steps of 1 degree of crank
     turn, the joint ids, and the time step (s: one pylinkage step is 1 s in the import)."""
-    ser = pytest.importorskip("pylinkage.mechanism.serialization")
+    ser = pytest.importorskip("pylinkage.mechanism.serialization", reason="the import check needs pylinkage (the test extra)")
     mech = ser.mechanism_from_json(file)
     w = next(lk for lk in json.loads(file.read_text())["links"]
              if lk["type"] == "driver")["angular_velocity"]
@@ -72,7 +72,7 @@ def test_pylinkage_examples_reproduce_pylinkage_positions(name, suffix, unit, tm
 def builder_fourbar(tmp_path: Path, **tracker) -> Path:
     """pylinkage's four-bar example (its API example list) built by pylinkage's builder, with a
     coupler tracker, saved by ``mechanism_to_json``."""
-    pytest.importorskip("pylinkage")
+    pytest.importorskip("pylinkage", reason="the import check needs pylinkage (the test extra)")
     from pylinkage.mechanism import MechanismBuilder
     from pylinkage.mechanism.serialization import mechanism_to_json
 
@@ -229,7 +229,7 @@ def test_fourbar_example_saved_at_its_change_point(tmp_path):
 
 def test_the_example_list_fixtures_are_pylinkages(tmp_path):
     """The fixtures are what pylinkage writes: loading and saving one again gives it back."""
-    ser = pytest.importorskip("pylinkage.mechanism.serialization")
+    ser = pytest.importorskip("pylinkage.mechanism.serialization", reason="the import check needs pylinkage (the test extra)")
     for file in sorted(DATA.glob("*.json")):
         data = json.loads(file.read_text())
         again = ser.mechanism_to_dict(ser.mechanism_from_dict(copy.deepcopy(data)))

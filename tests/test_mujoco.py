@@ -38,7 +38,7 @@ from linkdyn.io.mjcf import mjcf
 from linkdyn.model import Driver, Load, Model
 from linkdyn.motion import ConstantSpeed, ExpressionMotion
 
-mujoco = pytest.importorskip("mujoco")  # the extra linkdyn[mujoco]; the export itself needs none
+mujoco = pytest.importorskip("mujoco", reason="the MuJoCo check needs mujoco (the mujoco extra)")  # the extra linkdyn[mujoco]; the export itself needs none
 
 from builders import DEG, RPM, body, pri, rev
 

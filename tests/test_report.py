@@ -251,7 +251,7 @@ def test_reaction_carries_the_prismatic_moment_and_units_follow_the_columns():
 
 
 def test_notebook_display_is_short_and_dataframe_is_indexed_by_time():
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     sol = _solution("hoeken", np.linspace(0.0, 4 / 3, 361))
     text = repr(sol)
     assert len(text) < 600 and "Hoeken" in text and "361 samples" in text
@@ -884,7 +884,7 @@ def test_a_translating_body_has_no_instant_centre():
 
 
 def test_compare_takes_a_sweeps_best_designs(tmp_path, monkeypatch):
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     monkeypatch.chdir(tmp_path)  # the sweep names its model file relative to where it ran
     (tmp_path / "hoeken.toml").write_text(linkdyn.example_path("hoeken").read_text("utf-8"))
     runner = CliRunner()
@@ -916,7 +916,7 @@ def test_compare_takes_a_sweeps_best_designs(tmp_path, monkeypatch):
 
 
 def test_sweep_page_draws_each_valid_design_and_highlights_the_pareto_set(browser, tmp_path):
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     from linkdyn.report.sweep import pareto_front
     model = tmp_path / "hoeken.toml"
     model.write_text(linkdyn.example_path("hoeken").read_text("utf-8"), "utf-8")

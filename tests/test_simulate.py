@@ -350,7 +350,7 @@ def test_parallelogram_chain_falls_flat_and_through():
 def test_released_four_bar_matches_mujoco():
     """Hoeken's four-bar released from rest under gravity, against MuJoCo simulating the same
     open tree closed by a stiff ``connect`` (RK4, small steps) over a short horizon."""
-    mujoco = pytest.importorskip("mujoco")
+    mujoco = pytest.importorskip("mujoco", reason="the MuJoCo check needs mujoco (the mujoco extra)")
     import xml.etree.ElementTree as ET
     from linkdyn.io.mjcf import mjcf
     from test_mujoco import hoeken

@@ -164,7 +164,7 @@ def test_worker_processes_give_the_same_table():
 
 
 def test_a_dask_cluster_gives_the_same_table():
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason="the scheduler test needs dask.distributed (the dask extra)")
     values = sample(list(BOX.values()), "sobol", 8, seed=4)
     local, _ = run(_task(), values, chunk=3)
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,

@@ -173,7 +173,7 @@ def test_results_csv_in_the_model_units_names_each_unit(hoeken, tmp_path):
 def test_a_sweeps_path_range_is_in_the_files_unit(hoeken, tmp_path):
     """``--path-range 110:250`` on a sweep was taken as radians (deviation 0.026 m against the
     3.7e-5 m of analyze): now it is the file's degrees, as for analyze."""
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     res = run("analyze", hoeken, "-o", tmp_path / "a", "--path-range", "110:250")
     want = json.loads((tmp_path / "a" / "summary.json").read_text())["path_straightness"]
     assert want["range"] == pytest.approx(RANGE, rel=1e-15)
@@ -189,7 +189,7 @@ def test_a_sweeps_path_range_is_in_the_files_unit(hoeken, tmp_path):
 
 
 def test_vary_bounds_may_carry_a_unit(hoeken, tmp_path):
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     tables = []
     for k, vary in enumerate(["bodies.ground.points.O4[0]=80:100:3", "bodies.ground.points.O4[0]=8cm:0.1m:3"]):
         res = run("sweep", hoeken, "--vary", vary, "-o", tmp_path / f"v{k}")
