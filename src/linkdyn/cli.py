@@ -147,7 +147,7 @@ def check(model, allow_outside):
     Exit 3 where it cannot be assembled or locks (naming the loop and the driver values); a
     model with free coordinates (for simulate) is assembled at t = 0 with its [initial] values.
     """
-    from . import design, io
+    from . import design, io, topology
     from .units import Units
 
     mech = io.load_model(model, allow_outside=allow_outside)
@@ -165,21 +165,7 @@ def check(model, allow_outside):
         extra = "" if b.name == "ground" else (f"  mass {u.show(b.mass, 'mass')}, I_c "
                                                f"{u.show(b.inertia, 'inertia')}")
         click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
-    click.echo(f"joints ({len(mech.joints)}):")
-    for k, j in enumerate(mech.joints):
-        role = "cut" if k in topo.cut else "tree"
-        if j.name in [d.joint for d in mech.drivers]:
-            role += ", driven"
-        if free and j.name in free[0].free:
-            role += ", free"
-        click.echo(f"  {j.name:8s} {j.kind:9s} {j.body_a}.{j.point_a} -> {j.body_b}.{j.point_b}"
-                   f"  [{role}]")
-    click.echo("spanning tree (parent <- body via joint):")
-    for i in range(1, topo.n):
-        click.echo(f"  {topo.bodies[topo.parent[i]]} <- {topo.bodies[i]} via "
-                   f"{mech.joints[topo.tree_joint[i]].name}")
-    cuts = ", ".join(mech.joints[j].name for j in topo.cut) or "none"
-    click.echo(f"loops: {topo.n_loops}; cut joints: {cuts}")
+    click.echo("\n".join(topology.joint_lines(mech, topo, free[0].free if free else ())))
     click.echo(f"mobility (Grübler–Kutzbach): {topo.mobility}; drivers: {len(mech.drivers)}")
     for d in mech.drivers:
         click.echo(f"  {d.joint}: {d.description}")

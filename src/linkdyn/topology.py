@@ -263,3 +263,23 @@ def build(model: Model) -> Topology:
     cut = tuple(sorted(cut))
     return Topology(tuple(bodies), tuple(parent), tuple(tree_joint), tuple(sign), cut,
                     tuple(kinds[j].rows for j in cut), driven, dependent, mob)
+
+
+def joint_lines(model: Model, topo: Topology, free: tuple[str, ...] = ()) -> list[str]:
+    """What ``linkdyn check`` says of the joints and the loops of either space: each joint's kind,
+    the points it joins and its role (tree or cut, driven, free), the spanning tree, the cut
+    joints."""
+    driven = {d.joint for d in model.drivers}
+    width = max(9, *(len(j.kind) for j in model.joints))
+    lines = [f"joints ({len(model.joints)}):"]
+    for k, j in enumerate(model.joints):
+        role = (("cut" if k in topo.cut else "tree") + (", driven" if j.name in driven else "")
+                + (", free" if j.name in free else ""))
+        lines.append(f"  {j.name:8s} {j.kind:{width}s} {j.body_a}.{j.point_a} -> "
+                     f"{j.body_b}.{j.point_b}  [{role}]")
+    lines.append("spanning tree (parent <- body via joint):")
+    lines += [f"  {topo.bodies[topo.parent[i]]} <- {topo.bodies[i]} via "
+              f"{model.joints[topo.tree_joint[i]].name}" for i in range(1, topo.n)]
+    cuts = ", ".join(model.joints[j].name for j in topo.cut) or "none"
+    lines.append(f"loops: {topo.n_loops}; cut joints: {cuts}")
+    return lines

@@ -4,7 +4,8 @@ the joints that connect two body points."""
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -20,16 +21,34 @@ JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
     key for kind in jk.REGISTRY.values() for key in kind.keys))
 
 
-def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
+@dataclass(frozen=True)
+class BodyForm:
+    """What a ``[[bodies]]`` entry holds in one space, beyond what every space shares (the
+    name, the named points, a ground without mass properties, a moving body's mass and mass
+    centre): read by :func:`read_bodies`."""
+
+    keys: tuple[str, ...]            # the keys an entry may have
+    example: str                     # a points table to show in a message
+    ground_keys: tuple[str, ...]     # keys the ground may not have
+    ground_why: str                  # why not
+    inertia_fix: str                 # how to give the inertia ({unit}: kg length^2)
+    body: Callable[..., Any]         # the space's Body class
+    moving: Callable[..., Any]       # (r, field, name, points, entry) -> Body of a moving body
+
+
+def read_bodies(r: _Reader, entries: Any, form: BodyForm) -> dict:
+    """The bodies of ``[[bodies]]`` by name, SI: every entry's keys, a unique name and its
+    points (``r.dim`` components, the file's length unit) checked here, a moving body's mass
+    properties by ``form.moving``."""
     if entries is None:
         r.fail("bodies", "the model has no bodies",
                'Add [[bodies]] tables, one of them with name = "ground"')
     _check_ground(r, r.entries(entries, "bodies"))
     L, Lu = r.length, r.length_name
-    bodies: dict[str, Body] = {}
+    bodies: dict = {}
     for i, entry in enumerate(entries):
         f = _entry_field("bodies", i, entry)
-        r.table(entry, f, BODY_KEYS, required=("name",))
+        r.table(entry, f, form.keys, required=("name",))
         name = r.name(entry["name"], f"{f}.name")
         if name in bodies:
             r.fail(f"bodies[{i}].name", f"duplicate body name '{name}'",
@@ -37,50 +56,74 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
         pts = entry.get("points")
         if not isinstance(pts, dict) or not pts:
             r.fail(f"{f}.points", "a body needs at least one named point",
-                   "Add e.g. points = { O1 = [0, 0], O2 = [38.1, 0] } in the body's frame")
+                   f"Add e.g. points = {form.example} in the body's frame")
         points = {r.name(p, f"{f}.points"): r.vector(xy, f"{f}.points.{p}", Lu) * L
                   for p, xy in pts.items()}
         if name == GROUND:
-            for key in ("mass", "com", "inertia", "inertia_about", "bars"):
+            for key in form.ground_keys:
                 if key in entry:
-                    r.fail(f"{f}.{key}", "the ground is fixed and has no mass properties",
-                           f"Remove '{key}' from the ground body")
-            bodies[name] = Body(name, points)
-            continue
-        if "bars" in entry:
-            bodies[name] = _bars(r, f, name, points, entry)
-            continue
-        for key in ("mass", "inertia"):
-            if key not in entry:
-                r.fail(f"{f}.{key}", f"a moving body needs a {key}",
-                       "Add mass = ... (kg)" if key == "mass"
-                       else f"Add inertia = ... (kg {Lu}^2, about the mass centre)")
-        mass = r.number(entry["mass"], f"{f}.mass", "kg", nonnegative=True,
-                        fix="Give a mass in kg, 0 or more (0: a massless link)")
-        com = entry.get("com", [0.0, 0.0])
-        if isinstance(com, str):  # the name of one of the body's points
-            com = points[r.point(name, points, com, f"{f}.com")]
+                    r.fail(f"{f}.{key}", form.ground_why, f"Remove '{key}' from the ground body")
+            bodies[name] = form.body(name, points)
         else:
-            com = r.vector(com, f"{f}.com", Lu) * L
-        inertia = r.number(entry["inertia"], f"{f}.inertia", f"kg {Lu}^2", nonnegative=True,
-                           fix=f"Give a moment of inertia in kg {Lu}^2, 0 or more (0: a point "
-                               "mass, or a massless link)")
-        if "inertia_about" in entry:
-            about = r.point(name, points, entry["inertia_about"], f"{f}.inertia_about")
-            d2 = float(np.sum((points[about] - com) ** 2)) / L**2  # |P - C|^2 in length unit^2
-            # a point mass has exactly m d^2 about P: the rounding of a typed m d^2 is not
-            # an error
-            if inertia - mass * d2 < -1e-9 * mass * d2:
-                r.fail(f"{f}.inertia",
-                       f"inertia {inertia:g} kg {Lu}^2 about point '{about}' is less than "
-                       f"m d^2 = {mass * d2:g} kg {Lu}^2 (mass centre {math.sqrt(d2):g} {Lu} away), "
-                       f"so the inertia about the mass centre would be {inertia - mass * d2:g}",
-                       "Check inertia, inertia_about, com and mass: by the parallel-axis theorem "
-                       "the inertia about a point is the centroidal one plus m d^2")
-            # parallel-axis theorem: I_C = I_P - m |P - C|^2
-            inertia = max(inertia - mass * d2, 0.0)
-        bodies[name] = Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
+            bodies[name] = form.moving(r, f, name, points, entry)
     return bodies
+
+
+def mass_and_com(r: _Reader, f: str, name: str, points: dict, entry: dict,
+                 form: BodyForm) -> tuple[float, np.ndarray]:
+    """A moving body's mass (kg) and mass centre (body frame, m: a vector, or the name of one
+    of its points), once its ``mass`` and ``inertia`` are known to be given."""
+    Lu = r.length_name
+    for key in ("mass", "inertia"):
+        if key not in entry:
+            r.fail(f"{f}.{key}", f"a moving body needs a {key}",
+                   "Add mass = ... (kg)" if key == "mass"
+                   else form.inertia_fix.format(unit=f"kg {Lu}^2"))
+    mass = r.number(entry["mass"], f"{f}.mass", "kg", nonnegative=True,
+                    fix="Give a mass in kg, 0 or more (0: a massless link)")
+    com = entry.get("com", [0.0] * r.dim)
+    if isinstance(com, str):  # the name of one of the body's points
+        return mass, points[r.point(name, points, com, f"{f}.com")]
+    return mass, r.vector(com, f"{f}.com", Lu) * r.length
+
+
+def _moving(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:
+    """A moving planar body: its bars, or its mass, mass centre and inertia (about the mass
+    centre, or about a named point by ``inertia_about``)."""
+    if "bars" in entry:
+        return _bars(r, f, name, points, entry)
+    L, Lu = r.length, r.length_name
+    mass, com = mass_and_com(r, f, name, points, entry, PLANAR)
+    inertia = r.number(entry["inertia"], f"{f}.inertia", f"kg {Lu}^2", nonnegative=True,
+                       fix=f"Give a moment of inertia in kg {Lu}^2, 0 or more (0: a point "
+                           "mass, or a massless link)")
+    if "inertia_about" in entry:
+        about = r.point(name, points, entry["inertia_about"], f"{f}.inertia_about")
+        d2 = float(np.sum((points[about] - com) ** 2)) / L**2  # |P - C|^2 in length unit^2
+        # a point mass has exactly m d^2 about P: the rounding of a typed m d^2 is not
+        # an error
+        if inertia - mass * d2 < -1e-9 * mass * d2:
+            r.fail(f"{f}.inertia",
+                   f"inertia {inertia:g} kg {Lu}^2 about point '{about}' is less than "
+                   f"m d^2 = {mass * d2:g} kg {Lu}^2 (mass centre {math.sqrt(d2):g} {Lu} away), "
+                   f"so the inertia about the mass centre would be {inertia - mass * d2:g}",
+                   "Check inertia, inertia_about, com and mass: by the parallel-axis theorem "
+                   "the inertia about a point is the centroidal one plus m d^2")
+        # parallel-axis theorem: I_C = I_P - m |P - C|^2
+        inertia = max(inertia - mass * d2, 0.0)
+    return Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
+
+
+PLANAR = BodyForm(
+    keys=BODY_KEYS, example="{ O1 = [0, 0], O2 = [38.1, 0] }",
+    ground_keys=("mass", "com", "inertia", "inertia_about", "bars"),
+    ground_why="the ground is fixed and has no mass properties",
+    inertia_fix="Add inertia = ... ({unit}, about the mass centre)", body=Body, moving=_moving)
+
+
+def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
+    """The planar bodies of ``[[bodies]]``."""
+    return read_bodies(r, entries, PLANAR)
 
 
 def _bars(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:

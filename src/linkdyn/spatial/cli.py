@@ -7,6 +7,7 @@ from __future__ import annotations
 import click
 import numpy as np
 
+from .. import topology
 from ..model import GROUND
 from . import analyze as run, check as inspect
 from . import kinematics as sk
@@ -26,18 +27,7 @@ def check(mech, path: str) -> None:
     for b in mech.bodies:
         extra = "" if b.name == GROUND else f"  mass {b.mass:g} kg"
         click.echo(f"  {b.name:14s} points: {', '.join(b.points)}{extra}")
-    click.echo(f"joints ({len(mech.joints)}):")
-    driven = [d.joint for d in mech.drivers]
-    for k, j in enumerate(mech.joints):
-        role = ("cut" if k in topo.cut else "tree") + (", driven" if j.name in driven else "")
-        click.echo(f"  {j.name:8s} {j.kind:11s} {j.body_a}.{j.point_a} -> {j.body_b}.{j.point_b}"
-                   f"  [{role}]")
-    click.echo("spanning tree (parent <- body via joint):")
-    for i in range(1, topo.n):
-        click.echo(f"  {topo.bodies[topo.parent[i]]} <- {topo.bodies[i]} via "
-                   f"{mech.joints[topo.tree_joint[i]].name}")
-    cuts = ", ".join(mech.joints[j].name for j in topo.cut) or "none"
-    click.echo(f"loops: {topo.n_loops}; cut joints: {cuts}")
+    click.echo("\n".join(topology.joint_lines(mech, topo)))
     click.echo(f"mobility (Grübler–Kutzbach, 6*({topo.n}-1) - sum(6 - f)): {info['gruebler']}")
     click.echo(f"mobility (closure Jacobian's rank {info['rank']} of {info['rows']} rows): "
                f"{info['mobility']}; drivers: {len(mech.drivers)}")

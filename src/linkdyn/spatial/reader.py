@@ -12,12 +12,12 @@ from typing import Any
 import numpy as np
 
 from ..io.drivers import _drivers
-from ..io.linkage import _check_ground, _reference
+from ..io.linkage import BodyForm, _reference, mass_and_com, read_bodies
 from ..io.loads import _loads
 from ..io.options import _analysis, _topology
 from ..io.reader import _Reader, _entry_field
 from ..io.units import _units
-from ..model import GROUND, Model
+from ..model import Model
 from . import algebra as sa
 from . import joints as sj
 from .model import Body, Joint
@@ -43,7 +43,7 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
     gravity = r.vector(mech.get("gravity", [0.0, 0.0, 0.0]), "mechanism.gravity", "m/s^2")
     description = r.string(mech.get("description", ""), "mechanism.description", empty=True)
     _units(r, data.get("units", {}))
-    bodies = _bodies(r, data.get("bodies"))
+    bodies = read_bodies(r, data.get("bodies"), FORM)
     joints = _joints(r, data.get("joints", []), bodies)
     drivers = _drivers(r, data.get("drivers", []), joints)
     for entry in data.get("loads", []) if isinstance(data.get("loads"), list) else []:
@@ -68,51 +68,26 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
                  initial_q=initial_q, initial_qd=initial_qd, space="spatial")
 
 
-def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
-    if entries is None:
-        r.fail("bodies", "the model has no bodies",
-               'Add [[bodies]] tables, one of them with name = "ground"')
-    _check_ground(r, r.entries(entries, "bodies"))
-    L, Lu = r.length, r.length_name
-    bodies: dict[str, Body] = {}
-    for i, entry in enumerate(entries):
-        f = _entry_field("bodies", i, entry)
-        r.table(entry, f, BODY_KEYS, required=("name",))
-        name = r.name(entry["name"], f"{f}.name")
-        if name in bodies:
-            r.fail(f"bodies[{i}].name", f"duplicate body name '{name}'",
-                   "Give every body a different name")
-        pts = entry.get("points")
-        if not isinstance(pts, dict) or not pts:
-            r.fail(f"{f}.points", "a body needs at least one named point",
-                   "Add e.g. points = { A = [0, 0, 0], B = [0, 30, 0] } in the body's frame")
-        points = {r.name(p, f"{f}.points"): r.vector(xyz, f"{f}.points.{p}", Lu) * L
-                  for p, xyz in pts.items()}
-        if name == GROUND:
-            for key in ("mass", "com", "inertia", "origin", "rotation"):
-                if key in entry:
-                    r.fail(f"{f}.{key}", "the ground is fixed: its frame is the global frame "
-                           "and it has no mass properties", f"Remove '{key}' from the ground body")
-            bodies[name] = Body(name, points)
-            continue
-        for key in ("mass", "inertia"):
-            if key not in entry:
-                r.fail(f"{f}.{key}", f"a moving body needs a {key}",
-                       "Add mass = ... (kg)" if key == "mass" else
-                       f"Add inertia = [Ixx, Iyy, Izz] (kg {Lu}^2, about the mass centre, "
-                       "body frame) or the full tensor")
-        mass = r.number(entry["mass"], f"{f}.mass", "kg", nonnegative=True,
-                        fix="Give a mass in kg, 0 or more (0: a massless link)")
-        com = entry.get("com", [0.0, 0.0, 0.0])
-        com = (points[r.point(name, points, com, f"{f}.com")] if isinstance(com, str)
-               else r.vector(com, f"{f}.com", Lu) * L)
-        origin = r.vector(entry.get("origin", [0.0, 0.0, 0.0]), f"{f}.origin", Lu) * L
-        rot = r.vector(entry.get("rotation", [0.0, 0.0, 0.0]), f"{f}.rotation",
-                       r.angle_name) * r.angle
-        bodies[name] = Body(name, points, mass=mass, com=com,
-                            inertia=_inertia(r, entry["inertia"], f"{f}.inertia") * L**2,
-                            origin=origin, rotation=sa.rotation_vector(rot))
-    return bodies
+def _moving(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:
+    """A moving spatial body: mass, mass centre, its frame's origin and rotation at the design
+    pose, and the inertia tensor about the mass centre in the body frame."""
+    mass, com = mass_and_com(r, f, name, points, entry, FORM)
+    origin = r.vector(entry.get("origin", [0.0, 0.0, 0.0]), f"{f}.origin", r.length_name)
+    rot = r.vector(entry.get("rotation", [0.0, 0.0, 0.0]), f"{f}.rotation",
+                   r.angle_name) * r.angle
+    return Body(name, points, mass=mass, com=com,
+                inertia=_inertia(r, entry["inertia"], f"{f}.inertia") * r.length**2,
+                origin=origin * r.length, rotation=sa.rotation_vector(rot))
+
+
+FORM = BodyForm(
+    keys=BODY_KEYS, example="{ A = [0, 0, 0], B = [0, 30, 0] }",
+    ground_keys=("mass", "com", "inertia", "origin", "rotation"),
+    ground_why="the ground is fixed: its frame is the global frame and it has no mass "
+               "properties",
+    inertia_fix="Add inertia = [Ixx, Iyy, Izz] ({unit}, about the mass centre, body frame) "
+                "or the full tensor",
+    body=Body, moving=_moving)
 
 
 def _inertia(r: _Reader, value: Any, field: str) -> np.ndarray:
