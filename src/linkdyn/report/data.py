@@ -135,6 +135,37 @@ def traced_points(model) -> list[str]:
             if f"{b.name}.{p}" not in used or f"{b.name}.{p}" in floating]
 
 
+def point_tracks(sol, idx, axes: str) -> tuple[dict, np.ndarray]:
+    """Every named point at the page's frames ``idx``, m, global (``axes``: ``"xy"`` or
+    ``"xyz"``): a ground point once (``static``), a moving body's point per frame; and every
+    finite position of the run (k, len(axes)), for the view's bounds."""
+    m = sol.model
+    points, seen = {}, []
+    for name, p in m.body(GROUND).points.items():
+        p = np.asarray(p, float)
+        points[f"{GROUND}.{name}"] = {**{c: float(p[n]) for n, c in enumerate(axes)},
+                                      "static": True}
+        seen.append(p[None, :])
+    for b in m.moving_bodies:
+        for name in b.points:
+            p = np.asarray(sol.point(b.name, name))
+            seen.append(p[np.all(np.isfinite(p), axis=1)])
+            points[f"{b.name}.{name}"] = {c: _num(p[idx, n], 6) for n, c in enumerate(axes)}
+    return points, np.concatenate(seen)
+
+
+def body_entries(model, shape) -> list[dict]:
+    """Each moving body as the page draws it: its colour, its outline by ``shape`` (a body's
+    points -> (shape name, outline point names)) and its points."""
+    bodies = []
+    for k, b in enumerate(model.moving_bodies):
+        kind, outline = shape(b.points)
+        bodies.append({"name": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)],
+                       "shape": kind, "outline": [f"{b.name}.{p}" for p in outline],
+                       "points": [f"{b.name}.{p}" for p in b.points]})
+    return bodies
+
+
 def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
     """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI).
 
@@ -165,27 +196,12 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         return key
 
     # ---- geometry of the animation (m, global frame)
-    points, bounds = {}, []
     ground = m.body(GROUND)
-    for name, xy in ground.points.items():
-        xy = np.asarray(xy, float)
-        points[f"{GROUND}.{name}"] = {"x": float(xy[0]), "y": float(xy[1]), "static": True}
-        bounds.append(xy[None, :])
-    for b in m.moving_bodies:
-        for name in b.points:
-            xy = np.asarray(sol.point(b.name, name))
-            bounds.append(xy[np.all(np.isfinite(xy), axis=1)])
-            points[f"{b.name}.{name}"] = {"x": _num(xy[idx, 0], 6), "y": _num(xy[idx, 1], 6)}
-    allxy = np.concatenate(bounds) if bounds else np.zeros((1, 2))
+    points, allxy = point_tracks(sol, idx, "xy")
+    bounds = [allxy]
     lo, hi = allxy.min(0), allxy.max(0)
     size = float(max(np.max(hi - lo), 1e-9))
-
-    bodies = []
-    for k, b in enumerate(m.moving_bodies):
-        shape, outline = body_shape(b.points)
-        bodies.append({"name": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)], "shape": shape,
-                       "outline": [f"{b.name}.{p}" for p in outline],
-                       "points": [f"{b.name}.{p}" for p in b.points]})
+    bodies = body_entries(m, body_shape)
 
     used = set()
     jlist = []

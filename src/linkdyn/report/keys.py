@@ -57,6 +57,17 @@ def _k(x, pick) -> int | None:
     return int(pick(x))
 
 
+def key_item(group: str, label: str, x, k, unit: str, *, signed: bool = False,
+             scale: float | None = None, note: str = "") -> dict:
+    """One key result: the value of the series ``x`` at sample ``k`` (NaN without one), shown
+    as 0 when within :data:`NOISE` of ``scale``; ``signed`` keeps its sign on the page."""
+    v = float(x[k]) if k is not None else float("nan")
+    if scale is not None and abs(v) <= NOISE * scale:
+        v = 0.0
+    return {"group": group, "label": label, "value": v, "unit": unit, "signed": signed,
+            "k": k, "note": note}
+
+
 def key_results(sol, summary: dict | None = None) -> list[dict]:
     """The key results, in reading order.
 
@@ -69,12 +80,8 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     items: list[dict] = []
     sc = scales(sol)
 
-    def add(group, label, x, k, unit, *, signed=False, scale=None, note=""):
-        v = float(x[k]) if k is not None else float("nan")
-        if scale is not None and abs(v) <= NOISE * scale:
-            v = 0.0
-        items.append({"group": group, "label": label, "value": v, "unit": unit,
-                      "signed": signed, "k": k, "note": note})
+    def add(*args, **kw):
+        items.append(key_item(*args, **kw))
 
     # driver efforts: the largest and the smallest (signed), the RMS
     for k, d in enumerate(m.drivers):

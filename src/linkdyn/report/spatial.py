@@ -14,8 +14,8 @@ import numpy as np
 
 from ..model import GROUND
 from .data import (BODY_COLORS, DEG, MAX_FRAMES, PALETTE, X_COLOR, Y_COLOR, M_COLOR, _num,
-                   body_shape, frame_indices, traced_points)
-from .keys import NOISE, _k, is_noise
+                   body_entries, body_shape, frame_indices, point_tracks, traced_points)
+from .keys import NOISE, _k, is_noise, key_item
 
 Z_COLOR = M_COLOR
 
@@ -53,12 +53,8 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     components they touch; the largest and smallest kinetic energy."""
     m, items, sc = sol.model, [], scales(sol)
 
-    def add(group, label, x, k, unit, *, signed=False, scale=None, note=""):
-        v = float(x[k]) if k is not None else float("nan")
-        if scale is not None and abs(v) <= NOISE * scale:
-            v = 0.0
-        items.append({"group": group, "label": label, "value": v, "unit": unit,
-                      "signed": signed, "k": k, "note": note})
+    def add(*args, **kw):
+        items.append(key_item(*args, **kw))
 
     for d in m.drivers:
         kind = _kind(sol, d.joint)
@@ -125,28 +121,11 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         return key
 
     # ---- geometry (m, global): points, bodies, joints with their axes at each frame
-    points, allp = {}, []
-    ground = m.body(GROUND)
-    for name, p in ground.points.items():
-        p = np.asarray(p, float)
-        points[f"{GROUND}.{name}"] = {"x": float(p[0]), "y": float(p[1]), "z": float(p[2]),
-                                      "static": True}
-        allp.append(p[None])
-    for b in m.moving_bodies:
-        for name in b.points:
-            p = np.asarray(sol.point(b.name, name))
-            allp.append(p[np.all(np.isfinite(p), axis=1)])
-            points[f"{b.name}.{name}"] = {c: _num(p[idx, n], 6) for n, c in enumerate("xyz")}
-    allp = np.concatenate(allp)
+    points, allp = point_tracks(sol, idx, "xyz")
     lo, hi = allp.min(0), allp.max(0)
     centre = 0.5 * (lo + hi)
     radius = float(max(np.max(np.linalg.norm(allp - centre, axis=1)), 1e-9))
-    bodies = []
-    for n, b in enumerate(m.moving_bodies):
-        shape, outline = _outline(b.points)
-        bodies.append({"name": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
-                       "shape": shape, "outline": [f"{b.name}.{p}" for p in outline],
-                       "points": [f"{b.name}.{p}" for p in b.points]})
+    bodies = body_entries(m, _outline)
 
     def axis_series(key, body, e):
         """A body-fixed unit vector ``e`` (3,) turned into global at each frame."""
