@@ -149,6 +149,90 @@ def mujoco_cut(model: Model, leave_out: tuple[str, ...] = ()):
     raise AssertionError("unreachable: each pass cuts one revolute joint more")  # pragma: no cover
 
 
+
+# ---------------------------------------------------------------- shared with spatial models
+def light_bounds(compiler: ET.Element, moving, inertia: list[float], size: float) -> list[str]:
+    """Give a massless link or a point mass MuJoCo's lower bounds (``<compiler boundmass
+    boundinertia>``, :data:`BOUND` times the largest mass and inertia, at least 1e-14).
+
+    Parameters
+    ----------
+    moving : list of Body
+        The moving bodies (their ``mass``, kg, and ``name``).
+    inertia : list of float
+        Each body's smallest inertia, kg m^2 (planar: its one; spatial: the tensor's smallest
+        principal value).
+    size : float
+        The mechanism's size, m.
+
+    Returns
+    -------
+    list of str
+        The note for :attr:`Mjcf.omitted` (empty when every body has mass and inertia).
+    """
+    if not any(b.mass <= 0 or i <= 0 for b, i in zip(moving, inertia)):
+        return []
+    # MuJoCo needs a positive mass and inertia on every moving body: a massless link or a
+    # point mass gets its lower bound, BOUND times the largest
+    big_m = max([b.mass for b in moving] + [0.0]) or 1.0
+    big_i = max(list(inertia) + [big_m * size ** 2])
+    # above MuJoCo's mjMINVAL (1e-15) whatever the units
+    bound_m, bound_i = max(BOUND * big_m, 1e-14), max(BOUND * big_i, 1e-14)
+    compiler.set("boundmass", _num(bound_m))
+    compiler.set("boundinertia", _num(bound_i))
+    light = [b.name for b, i in zip(moving, inertia) if b.mass <= 0 or i <= 0]
+    return [f"a zero mass or inertia ({', '.join(light)}: MuJoCo's lower "
+            f"bounds boundmass {bound_m:.3g} kg, boundinertia {bound_i:.3g} kg m^2)"]
+
+
+def loads(root: ET.Element, model: Model) -> list[str]:
+    """Write the springs and dampers as spatial tendons between their two points' sites
+    (``stiffness``, ``springlength``, ``damping``); return the loads MJCF cannot hold (forces,
+    torques, joint torques and forces: ``"kind 'name'"``, the load's name or else its body)."""
+    omitted, tendons = [], []
+    for ld in model.loads:
+        if ld.kind in ("spring", "damper"):
+            tendons.append(ld)
+        else:
+            omitted.append(f"{ld.kind} '{ld.name or ld.body}'")
+    if tendons:
+        tel = ET.SubElement(root, "tendon")
+        for n, ld in enumerate(tendons):
+            # a spring k (L - L0) or damper c dL/dt along the line between the two points
+            attrs = ({"stiffness": _num(ld.stiffness), "springlength": _num(ld.free_length)}
+                     if ld.kind == "spring" else {"damping": _num(ld.damping)})
+            sp = ET.SubElement(tel, "spatial", name=ld.name or f"{ld.kind}{n}", **attrs)
+            ET.SubElement(sp, "site", site=f"{ld.body}.{ld.point}")
+            ET.SubElement(sp, "site", site=f"{ld.body2}.{ld.point2}")
+    return omitted
+
+
+def drivers(root: ET.Element, model: Model, *, gear: dict, q: dict, angular: dict,
+            moving_mass: float, size: float, kp: float | None) -> list[float]:
+    """Write each driver as a ``<position>`` actuator on its joint (``gear`` by joint name,
+    so that its length is ``q`` and its force the driver's effort) and its motion as a
+    ``<custom><text>``; return the targets ``ctrl`` (``q`` at the export's time).
+
+    ``angular`` says by joint name whether the coordinate is an angle; ``kp`` (N m/rad or
+    N/m) defaults to ``KP_RATE`` times ``moving_mass`` (kg) times ``size`` squared (m^2; a
+    sliding driver: times 1)."""
+    ctrl = []
+    if model.drivers:
+        act = ET.SubElement(root, "actuator")
+        custom = ET.SubElement(root, "custom")
+        for d in model.drivers:
+            turns = angular[d.joint]
+            gain = kp if kp is not None else KP_RATE * moving_mass * (size ** 2 if turns else 1)
+            # length = gear qpos = q; force on the dof = gear * effort
+            ET.SubElement(act, "position", name=f"drive_{d.joint}", joint=d.joint,
+                          gear=f"{gear[d.joint]} 0 0 0 0 0", kp=_num(gain), dampratio="1")
+            ET.SubElement(custom, "text", name=f"motion_{d.joint}",
+                          data=(d.description or type(d.motion).__name__)
+                          + f" (q_{d.joint} in {'rad' if turns else 'm'}; set ctrl to it)")
+            ctrl.append(q[d.joint])
+    return ctrl
+
+
 def _free(model: Model) -> bool:
     """Whether ``model`` has free degrees of freedom (``linkdyn simulate``'s models)."""
     from ..topology import mobility
@@ -250,22 +334,8 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
         " linkdyn export: the plane (x, y) of the mechanism is MuJoCo's (x, z); SI units; "
         f"bodies at their pose at t = {at!r} s "))
     compiler = ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
-    # MuJoCo needs a positive mass and inertia on every moving body: a massless link or a
-    # point mass gets its lower bound, BOUND times the largest (omitted: the bound named)
     moving = model.moving_bodies
-    if any(b.mass <= 0 or b.inertia <= 0 for b in moving):
-        big_m = max([b.mass for b in moving] + [0.0]) or 1.0
-        big_i = max([b.inertia for b in moving] + [big_m * size ** 2])
-        # above MuJoCo's mjMINVAL (1e-15) whatever the units
-        bound_m, bound_i = max(BOUND * big_m, 1e-14), max(BOUND * big_i, 1e-14)
-        compiler.set("boundmass", _num(bound_m))
-        compiler.set("boundinertia", _num(bound_i))
-        light = [b.name for b in moving if b.mass <= 0 or b.inertia <= 0]
-        omitted_bounds = [f"a zero mass or inertia ({', '.join(light)}: MuJoCo's lower "
-                          f"bounds boundmass {bound_m:.3g} kg, boundinertia "
-                          f"{bound_i:.3g} kg m^2)"]
-    else:
-        omitted_bounds = []
+    omitted_bounds = light_bounds(compiler, moving, [b.inertia for b in moving], size)
     g = np.asarray(model.gravity, float)
     opt = ET.SubElement(root, "option", gravity=_xz(g))
     ET.SubElement(opt, "flag", contact="disable")
@@ -317,40 +387,12 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
                           site2=f"{jt.body_a}.{jt.point_a}")
 
     omitted = [f"joint '{name}'" for name in leave_out] + omitted_bounds
-    tendons = []
-    for ld in model.loads:
-        label = f"{ld.kind} '{ld.name or ld.body}'"
-        if ld.kind in ("spring", "damper"):
-            tendons.append(ld)
-        else:
-            omitted.append(label)
-    if tendons:
-        tel = ET.SubElement(root, "tendon")
-        for n, ld in enumerate(tendons):
-            # a spring k (L - L0) or damper c dL/dt along the line between the two points
-            attrs = ({"stiffness": _num(ld.stiffness), "springlength": _num(ld.free_length)}
-                     if ld.kind == "spring" else {"damping": _num(ld.damping)})
-            sp = ET.SubElement(tel, "spatial", name=ld.name or f"{ld.kind}{n}", **attrs)
-            ET.SubElement(sp, "site", site=f"{ld.body}.{ld.point}")
-            ET.SubElement(sp, "site", site=f"{ld.body2}.{ld.point2}")
+    omitted += loads(root, model)
     if omitted:
         root.append(ET.Comment(" left out (MJCF cannot hold them): " + ", ".join(omitted) + " "))
-
-    ctrl = []
-    if model.drivers:
-        act = ET.SubElement(root, "actuator")
-        custom = ET.SubElement(root, "custom")
-        for d in model.drivers:
-            jt = model.joint(d.joint)
-            angular = jk.get(jt.kind).angular
-            gain = kp if kp is not None else KP_RATE * moving_mass * (size ** 2 if angular else 1)
-            # length = gear qpos = q; force on the dof = gear * effort
-            ET.SubElement(act, "position", name=f"drive_{d.joint}", joint=d.joint,
-                          gear=f"{sign[d.joint]} 0 0 0 0 0", kp=_num(gain), dampratio="1")
-            ET.SubElement(custom, "text", name=f"motion_{d.joint}",
-                          data=(d.description or type(d.motion).__name__)
-                          + f" (q_{d.joint} in {'rad' if angular else 'm'}; set ctrl to it)")
-            ctrl.append(q[d.joint])
+    angular = {jt.name: jk.get(jt.kind).angular for jt in model.joints}
+    ctrl = drivers(root, model, gear=sign, q=q, angular=angular, moving_mass=moving_mass,
+                   size=size, kp=kp)
     order = [el.get("name") for el in world.iter("joint")]     # MuJoCo's order: the document's
     key = ET.SubElement(ET.SubElement(root, "keyframe"), "key", name="linkdyn", time=_num(at),
                         qpos=" ".join(_num(sign[n] * q[n]) for n in order),
