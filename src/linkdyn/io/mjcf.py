@@ -267,7 +267,8 @@ def _size(points: list[np.ndarray]) -> float:
 
 def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
          leave_out: tuple[str, ...] = ()) -> Mjcf:
-    """The MJCF model of ``model``, placed at its pose at the time ``at``.
+    """The MJCF model of ``model``, placed at its pose at the time ``at`` (a spatial model's
+    by :func:`linkdyn.spatial.mjcf.mjcf`).
 
     Parameters
     ----------
@@ -298,6 +299,12 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
     AssemblyError
         The mechanism cannot be assembled at ``at`` (or the simulation to ``at`` fails).
     """
+    if model.space == "spatial":
+        if leave_out:
+            raise ModelError("leave_out is for planar models", field="leave_out",
+                             fix="Leave it empty for a spatial model")
+        from ..spatial.mjcf import mjcf as spatial_mjcf
+        return spatial_mjcf(model, at=at, sol=sol, kp=kp)
     if sol is None:
         sol = _solve(model, float(at))
     topo = mujoco_cut(model, leave_out)
