@@ -79,9 +79,11 @@ def build(model, cut):
             pj = pm.addJoint(pj, pin.JointModelRevoluteUnaligned(*(s * axis)), place, name)
             po = origin
             coords.append(name)
+        # the body's inertia about its mass centre, turned into the joint's (global) axes
         b = bodies[child]
-        pm.appendBodyToJoint(pj, pin.Inertia(b.mass, glob(child, b.com) - origin,
-                                             b.rotation @ b.inertia @ b.rotation.T), pin.SE3.Identity())
+        inertia = pin.Inertia(b.mass, glob(child, b.com) - origin,
+                              b.rotation @ b.inertia @ b.rotation.T)
+        pm.appendBodyToJoint(pj, inertia, pin.SE3.Identity())
         frame_of[child] = (pj, origin)
     for b in model.bodies:
         pj, po = frame_of[b.name]

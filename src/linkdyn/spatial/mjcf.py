@@ -41,6 +41,7 @@ from ..errors import ModelError
 from ..io import mjcf as planar
 from ..model import GROUND
 from . import algebra as sa
+from . import joints as sj
 
 #: The cut joint kinds MuJoCo closes, with the ``connect`` equalities each takes.
 CONNECTS = {"spherical": 1, "revolute": 2}
@@ -173,7 +174,6 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar
     omitted += planar.loads(root, model)
     if omitted:
         root.append(ET.Comment(" left out (MJCF cannot hold them): " + ", ".join(omitted) + " "))
-    from . import joints as sj
     ctrl = planar.drivers(root, model, gear={d.joint: 1 for d in model.drivers}, q=q,
                           angular={jt.name: sj.get(jt.kind).angular for jt in model.joints},
                           moving_mass=sum(b.mass for b in moving), size=size, kp=kp)
