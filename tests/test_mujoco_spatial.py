@@ -206,6 +206,7 @@ def check_against_mujoco(sol, xml, reactions=True):
 # constrained spherical four-bar's reactions are not unique (linkdyn reports the minimum-norm
 # one and the undetermined part): its efforts only
 CASES = {"rsur": (1.0, True), "spherical_fourbar": (1.0, False), "rps3": (2.0, True),
+         "spatial_slider_crank": (1.0, True),
          "stewart": (1.0, True)}
 
 
@@ -247,13 +248,14 @@ def test_the_spatial_export_loads_assembled_at_its_time():
         np.testing.assert_allclose(vel[:3], sol.omega(b.name)[0], atol=1e-12)
 
 
-@pytest.mark.parametrize("name", ["rsur_release", "bricard"])
+@pytest.mark.parametrize("name", ["quarter_car", "bricard"])
 def test_a_simulated_spatial_motion_satisfies_mujocos_equations(name):
     """A released mechanism (no driver; its free joint in the tree as ``simulate`` keeps it):
     MuJoCo's equations of the export hold with linkdyn's accelerations (the least squares of
-    ``mujoco_efforts`` leaves no residual), the cut force being linkdyn's reaction where statics
-    determines it (the RSUR's spherical joint; Bricard's over-constrained loop, IFToMM A04, has a
-    redundant row: its motion only)."""
+    ``mujoco_efforts`` leaves no residual), the cut forces being linkdyn's reactions where
+    statics determines them (the quarter car: a ball joint in the tree, springs and a damper as
+    tendons, two spherical cuts; Bricard's over-constrained loop, IFToMM A04, has a redundant
+    row: its motion only)."""
     from linkdyn import simulate
 
     model = load(example_path(name))
