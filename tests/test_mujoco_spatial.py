@@ -280,6 +280,14 @@ def test_the_command_exports_a_spatial_model_and_refuses_a_cut_mujoco_cannot_clo
     assert "closed by connect: J2" in res.output and "torque 'rocker'" in res.output
     m = mujoco.MjModel.from_xml_string(out.read_text())
     assert m.njnt == 4 and m.neq == 1 and m.nu == 1         # J1, J3.1, J3.2, J4; J2; J1
+    # an over-constrained loop without drivers (Grübler-Kutzbach 0, mobility 1) is simulated
+    bricard = tmp_path / "bricard.toml"
+    bricard.write_text(example_path("bricard").read_text())
+    res = CliRunner().invoke(main, ["export", str(bricard), "--to", "mjcf", "--at", "0.01",
+                                    "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    m = mujoco.MjModel.from_xml_string(out.read_text())
+    assert m.njnt == 5 and m.neq == 2 and m.nu == 0         # J1..J5; J6 and J6.axis
     path.write_text(text + '\n[topology]\ncut = ["J3"]\n')
     res = CliRunner().invoke(main, ["export", str(path), "--to", "mjcf", "-o", str(out)])
     assert res.exit_code == 2 and "joint 'J3' is a cut universal joint" in res.output

@@ -38,7 +38,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import ModelError
-from ..io import mjcf as planar
+from ..io import mjcf_common as common
 from ..model import GROUND
 from . import algebra as sa
 from . import joints as sj
@@ -53,9 +53,11 @@ def _vec(v) -> str:
 
 
 def _solve(model, at: float):
-    """The solution at ``[at]``: spatial ``analyze``, or ``simulate`` from ``[initial]``."""
-    if not planar._free(model):
-        from . import analyze
+    """The solution at ``[at]``: spatial ``analyze``, or ``simulate`` from ``[initial]`` when
+    the mobility (the closure Jacobian's rank, not Grübler–Kutzbach's count, which an
+    over-constrained loop undercuts) exceeds the drivers."""
+    from . import analyze, check
+    if check(model)["mobility"] <= len(model.drivers):
         return analyze(model, np.array([at]))
     from ..forward import simulate
     return simulate(model, np.array([0.0, at]) if at > 0 else np.array([0.0]))
@@ -74,7 +76,7 @@ def _refuse_cuts(model, topo) -> None:
                     "joints ([topology] cut = [...])")
 
 
-def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar.Mjcf:
+def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> common.Mjcf:
     """The MJCF model of the spatial ``model``, placed at its pose at the time ``at``.
 
     Parameters
@@ -111,7 +113,7 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar
     body_of = {b.name: b for b in model.bodies}
     points = [o[i] + R[i] @ x for i, name in enumerate(topo.bodies)
               for x in body_of[name].points.values()]
-    size = planar._size(points)
+    size = common.size_of(points)
     radius = 0.01 * size
 
     root = ET.Element("mujoco", model=model.name)
@@ -120,7 +122,7 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar
         f"t = {at!r} s "))
     compiler = ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
     moving = model.moving_bodies
-    omitted = planar.light_bounds(compiler, moving, [float(np.min(np.linalg.eigvalsh(b.inertia)))
+    omitted = common.light_bounds(compiler, moving, [float(np.min(np.linalg.eigvalsh(b.inertia)))
                                                      for b in moving], size)
     opt = ET.SubElement(root, "option", gravity=_vec(model.gravity))
     ET.SubElement(opt, "flag", contact="disable")
@@ -171,10 +173,10 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar
     cut = tuple(model.joints[j].name for j in topo.cut)
     if cut:
         _connects(root, model, topo, elements, R, size, radius)
-    omitted += planar.loads(root, model)
+    omitted += common.loads(root, model)
     if omitted:
         root.append(ET.Comment(" left out (MJCF cannot hold them): " + ", ".join(omitted) + " "))
-    ctrl = planar.drivers(root, model, gear={d.joint: 1 for d in model.drivers}, q=q,
+    ctrl = common.drivers(root, model, gear={d.joint: 1 for d in model.drivers}, q=q,
                           angular={jt.name: sj.get(jt.kind).angular for jt in model.joints},
                           moving_mass=sum(b.mass for b in moving), size=size, kp=kp)
     order = [el.get("name") for el in world.iter("joint")]     # MuJoCo's order: the document's
@@ -184,7 +186,7 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> planar
     if ctrl:
         key.set("ctrl", _vec(ctrl))
     ET.indent(root)
-    return planar.Mjcf(ET.tostring(root, encoding="unicode") + "\n", cut, tuple(omitted))
+    return common.Mjcf(ET.tostring(root, encoding="unicode") + "\n", cut, tuple(omitted))
 
 
 def _connects(root, model, topo, elements, R, size: float, radius: float) -> None:
