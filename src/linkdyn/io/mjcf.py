@@ -1,5 +1,8 @@
 """A MuJoCo model (MJCF) of a linkdyn mechanism: ``linkdyn export MODEL --to mjcf``.
 
+This module writes planar models; :func:`mjcf` hands a spatial one (``space = "spatial"``) to
+:func:`linkdyn.spatial.mjcf.mjcf`. What both share is :mod:`linkdyn.io.mjcf_common`.
+
 The mechanism's plane (x, y) is MuJoCo's (x, z) plane: a point ``(x, y)`` is ``x 0 y``, and a
 counter-clockwise rotation in linkdyn (about +z, out of the plane) is a rotation about MuJoCo's
 -y, so every hinge has ``axis="0 -1 0"`` and a moment about linkdyn's z is a torque along
