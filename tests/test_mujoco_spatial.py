@@ -265,9 +265,11 @@ def test_a_simulated_spatial_motion_satisfies_mujocos_equations(name):
     assert check_against_mujoco(sol, export.text, reactions=sol.redundancy is None) <= RTOL
 
 
-def test_the_command_exports_a_spatial_model_and_refuses_a_cut_mujoco_cannot_close(tmp_path):
-    """``linkdyn export --to mjcf`` writes a spatial model MuJoCo loads; a loop cut at a
-    universal joint (``[topology] cut``), which no MuJoCo equality closes, exits 2 naming it."""
+def test_the_command_exports_a_spatial_model_and_refuses_a_loop_mujoco_cannot_close(tmp_path):
+    """``linkdyn export --to mjcf`` writes a spatial model MuJoCo loads; a loop whose only
+    revolute joint is driven and which has no spherical joint (the spatial slider-crank with a
+    universal joint for its ball joint and a cylindrical one for its slide), which no MuJoCo
+    equality closes, exits 2 naming the joint."""
     from click.testing import CliRunner
 
     from linkdyn.cli import main
@@ -288,9 +290,24 @@ def test_the_command_exports_a_spatial_model_and_refuses_a_cut_mujoco_cannot_clo
     assert res.exit_code == 0, res.output
     m = mujoco.MjModel.from_xml_string(out.read_text())
     assert m.njnt == 5 and m.neq == 2 and m.nu == 0         # J1..J5; J6 and J6.axis
-    path.write_text(text + '\n[topology]\ncut = ["J3"]\n')
+    # R (driven), U, U, C: mobility 1, no joint MuJoCo can close that is not driven
+    text = example_path("spatial_slider_crank").read_text()
+    assert 'type = "spherical"' in text and 'type = "prismatic"' in text
+    path.write_text(text.replace('type = "spherical"', 'type = "universal"\naxis = [1.0, 0.0, 0.0]'
+                                 '\naxis2 = [0.0, 1.0, 0.0]').replace('type = "prismatic"',
+                                                                      'type = "cylindrical"'))
     res = CliRunner().invoke(main, ["export", str(path), "--to", "mjcf", "-o", str(out)])
-    assert res.exit_code == 2 and "joint 'J3' is a cut universal joint" in res.output
-    assert "Traceback" not in res.output
-    with pytest.raises(ModelError, match="joint 'J3' is a cut universal joint"):
-        mjcf(dataclasses.replace(load(example_path("rsur")), cut=("J3",)))
+    assert res.exit_code == 2 and "which MuJoCo has no equality constraint" in res.output
+    assert "joints.J" in res.output and "Traceback" not in res.output
+
+
+def test_a_loop_cut_where_mujoco_cannot_close_it_is_cut_at_a_joint_it_can():
+    """The RSUR cut at its universal joint (``[topology] cut``): MuJoCo's tree cuts the
+    spherical joint of the loop instead, and MuJoCo's equations still give linkdyn's effort and
+    the spherical joint's reaction (a tree joint's in linkdyn's solution)."""
+    model = dataclasses.replace(load(example_path("rsur")), cut=("J3",))
+    sol = analyze(model, np.linspace(0.0, 1.0, 3) + 0.013)
+    assert [model.joints[j].name for j in sol.plan.topo.cut] == ["J3"]
+    export = mjcf(model, at=0.3, sol=sol)
+    assert export.cut == ("J2",)
+    assert check_against_mujoco(sol, export.text) <= RTOL

@@ -19,9 +19,11 @@ MuJoCo's axes are the model's (x, y, z); numbers are SI. What is written:
   joint two, the second between copies of the axis's point one mechanism size along the axis
   (sites ``BODY.JOINT.axis``, equality ``JOINT.axis``): six rows of which five are
   independent, the joint's reaction their resultant (the force ``lam_1 + lam_2``, the couple
-  ``l e x lam_2`` about B's point, ``l e`` the second pair's offset on B). A cut prismatic,
-  cylindrical or universal joint has no MuJoCo equality: it is refused, naming the joint
-  (cut the loop at a spherical or revolute joint, ``[topology] cut``).
+  ``l e x lam_2`` about B's point, ``l e`` the second pair's offset on B). A loop linkdyn cuts
+  at a prismatic, cylindrical or universal joint, which no MuJoCo equality closes, is cut at a
+  spherical (else revolute) joint of the loop instead (:func:`mujoco_cut`; MuJoCo's tree need
+  not be linkdyn's); a loop without one that is neither driven nor free is refused, naming the
+  joint.
 - a model with free degrees of freedom keeps them in the tree as ``linkdyn simulate`` does,
   placed at its simulated pose at ``at``;
 - drivers, loads, masses and bounds as the planar exporter (:mod:`linkdyn.io.mjcf`): each
@@ -52,28 +54,65 @@ def _vec(v) -> str:
     return " ".join(repr(float(x)) for x in v)
 
 
+def _free(model) -> bool:
+    """Whether ``model`` has free degrees of freedom: its mobility (the closure Jacobian's rank,
+    not Grübler–Kutzbach's count, which an over-constrained loop undercuts) exceeds its
+    drivers."""
+    from . import check
+    return check(model)["mobility"] > len(model.drivers)
+
+
 def _solve(model, at: float):
-    """The solution at ``[at]``: spatial ``analyze``, or ``simulate`` from ``[initial]`` when
-    the mobility (the closure Jacobian's rank, not Grübler–Kutzbach's count, which an
-    over-constrained loop undercuts) exceeds the drivers."""
-    from . import analyze, check
-    if check(model)["mobility"] <= len(model.drivers):
+    """The solution at ``[at]``: spatial ``analyze``, or ``simulate`` from ``[initial]``."""
+    if not _free(model):
+        from . import analyze
         return analyze(model, np.array([at]))
     from ..forward import simulate
     return simulate(model, np.array([0.0, at]) if at > 0 else np.array([0.0]))
 
 
-def _refuse_cuts(model, topo) -> None:
-    """Exit 2 naming a cut joint that MuJoCo has no equality for."""
-    for j in topo.cut:
-        jt = model.joints[j]
-        if jt.kind not in CONNECTS:
+def mujoco_cut(model):
+    """``model`` with cut joints MuJoCo can close: itself when every cut joint is spherical or
+    revolute, else with ``cut`` naming, for each other cut joint, a spherical (else revolute)
+    joint of its loop instead, the one farthest from the ground that is neither driven nor a
+    free joint of ``[initial]``.
+
+    Raises
+    ------
+    ModelError
+        A loop with no such joint (naming the cut joint MuJoCo cannot close).
+    """
+    import dataclasses
+
+    from .. import topology
+    from .forward import partition
+
+    # a simulation's free joints stay in the tree (placeholder drivers), as simulate keeps them
+    inner = partition(model).inner if _free(model) else model
+    keep = {d.joint for d in inner.drivers}
+    for _ in range(len(model.joints)):
+        topo = topology.build(dataclasses.replace(inner, cut=model.cut))
+        bad = [j for j in topo.cut if model.joints[j].kind not in CONNECTS]
+        if not bad:
+            return model
+        jt = model.joints[bad[0]]
+        # the loop jt closes: the tree joints on the path between its two bodies
+        ia, ib = topo.bodies.index(jt.body_a), topo.bodies.index(jt.body_b)
+        path = [model.joints[topo.tree_joint[i]]
+                for i in sorted(np.flatnonzero(topo.ancestors[ia] ^ topo.ancestors[ib]),
+                                reverse=True)]
+        swap = sorted((x for x in path if x.kind in CONNECTS and x.name not in keep),
+                      key=lambda x: x.kind != "spherical")
+        if not swap:
             raise ModelError(
                 f"joint '{jt.name}' is a cut {jt.kind} joint, which MuJoCo has no equality "
-                "constraint for (it closes spherical and revolute joints only)",
-                file=model.source, field="topology.cut",
-                fix=f"Cut the loop through '{jt.name}' at one of its spherical or revolute "
-                    "joints ([topology] cut = [...])")
+                "constraint for (it closes spherical and revolute joints only), and its loop "
+                "has no spherical or revolute joint that is neither driven nor free to cut "
+                "instead", file=model.source, field=f"joints.{jt.name}.type",
+                fix="Model the loop with a spherical or revolute joint MuJoCo can cut")
+        cut = [model.joints[j].name for j in topo.cut if j != bad[0]] + [swap[0].name]
+        model = dataclasses.replace(model, cut=tuple(cut))
+    raise AssertionError("unreachable: each pass cuts one joint MuJoCo closes")  # pragma: no cover
 
 
 def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> common.Mjcf:
@@ -87,7 +126,8 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> common
         Time (s) whose pose places the bodies and fills the keyframe.
     sol : SpatialSolution, optional
         The motion already solved (``analyze``, or ``simulate`` for a model with free degrees
-        of freedom), its sample nearest ``at`` used; solved here if not given.
+        of freedom), its sample nearest ``at`` used; solved here if not given, or if its loops
+        are cut where MuJoCo cannot close them (:func:`mujoco_cut`).
     kp : float, optional
         Stiffness of every driver's position servo (N m/rad or N/m), as the planar exporter's.
 
@@ -98,15 +138,18 @@ def mjcf(model, *, at: float = 0.0, sol=None, kp: float | None = None) -> common
     Raises
     ------
     ModelError
-        A cut joint MuJoCo cannot close (prismatic, cylindrical, universal).
+        A loop MuJoCo cannot close (no spherical or revolute joint that is neither driven nor
+        free).
     AssemblyError
         The mechanism cannot be assembled at ``at`` (or the simulation to ``at`` fails).
     """
-    if sol is None:
-        sol = _solve(model, float(at))
+    cut_here = mujoco_cut(model)
+    if sol is None or cut_here is not model:
+        # solved on MuJoCo's tree: the same motion, the tree's coordinates and poses
+        sol = _solve(cut_here, float(at))
     p, tree, motion = sol.plan, sol.motion.tree, sol.motion
     topo = p.topo
-    _refuse_cuts(model, topo)
+    assert all(model.joints[j].kind in CONNECTS for j in topo.cut), "MuJoCo's cuts"
     k = int(np.argmin(np.abs(np.asarray(sol.t) - at)))      # the sample at ``at``
     at = float(sol.t[k])
     R, o, V = tree.R[k], tree.o[k], motion.V[k]               # (n, 3, 3), (n, 3), (n, 6)
