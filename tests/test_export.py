@@ -326,7 +326,8 @@ def test_a_failed_export_keeps_the_earlier_file(tmp_path):
 
 
 def test_the_documented_export_commands_run(tmp_path, monkeypatch):
-    """The commands of docs/cli.md's export section, on the bundled Hoeken model."""
+    """The commands of docs/cli.md's export section, on the bundled models they name (Hoeken's
+    four-bar, the spatial RSUR)."""
     text = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text("utf-8")
     section = text[text.index("## `linkdyn export`"):]
     block = section[section.index("```sh") + 5:]
@@ -334,7 +335,8 @@ def test_the_documented_export_commands_run(tmp_path, monkeypatch):
     commands = [ln.split() for ln in block.strip().splitlines()]
     assert commands and all(c[:2] == ["linkdyn", "export"] for c in commands)
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "hoeken.toml").write_text(linkdyn.example_path("hoeken").read_text("utf-8"))
+    for name in {c[2] for c in commands}:
+        (tmp_path / name).write_text(linkdyn.example_path(Path(name).stem).read_text("utf-8"))
     for c in commands:
         res = run(*c[1:])
         assert res.exit_code == 0, (c, res.output)

@@ -57,8 +57,10 @@ def export(model: Model, to: str, *, at: float = 0.0) -> Exported:
         from .mjcf import mjcf
         out = mjcf(model, at=at)
         notes = tuple(f"left out of the MJCF (MuJoCo cannot hold it): {x}" for x in out.omitted)
+        frame = ("the model's axes (x, y, z)" if model.space == "spatial"
+                 else "the mechanism's plane (x, y) is MuJoCo's (x, z)")
         return Exported(out.text, notes + (
-            "MJCF in SI units; the mechanism's plane (x, y) is MuJoCo's (x, z); "
+            f"MJCF in SI units; {frame}; "
             "cut joints closed by connect: " + (", ".join(out.cut) or "none"),))
     from . import drawing
     d = drawing.drawing(model, at=at)

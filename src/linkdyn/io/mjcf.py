@@ -1,5 +1,8 @@
 """A MuJoCo model (MJCF) of a linkdyn mechanism: ``linkdyn export MODEL --to mjcf``.
 
+This module writes planar models; :func:`mjcf` hands a spatial one (``space = "spatial"``) to
+:func:`linkdyn.spatial.mjcf.mjcf`. What both share is :mod:`linkdyn.io.mjcf_common`.
+
 The mechanism's plane (x, y) is MuJoCo's (x, z) plane: a point ``(x, y)`` is ``x 0 y``, and a
 counter-clockwise rotation in linkdyn (about +z, out of the plane) is a rotation about MuJoCo's
 -y, so every hinge has ``axis="0 -1 0"`` and a moment about linkdyn's z is a torque along
@@ -45,50 +48,21 @@ from __future__ import annotations
 import dataclasses
 import math
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 
 import numpy as np
 
 from .. import joints as jk
 from ..errors import ModelError
 from ..model import GROUND, Model
+from .mjcf_common import (BOUND, KP_RATE, Mjcf, drivers, free as _free, light_bounds, loads,
+                          num as _num, size_of as _size)
 
-#: Stiffness of the drivers' servos: the mechanism's moving mass at its size (or, for a
-#: slider, its moving mass) responds at about sqrt(KP_RATE) = 100 rad/s.
-KP_RATE = 1e4  # 1/s^2
-#: A massless link's or point mass's mass and inertia in MuJoCo (which needs them positive):
-#: this fraction of the largest moving body's (``<compiler boundmass boundinertia>``).
-BOUND = 1e-12
-
-
-@dataclass(frozen=True)
-class Mjcf:
-    """An MJCF document and what it says about the mechanism.
-
-    Attributes
-    ----------
-    text : str
-        The MJCF XML.
-    cut : tuple[str, ...]
-        The joints closed by ``connect`` constraints (the cut joints of MuJoCo's tree).
-    omitted : tuple[str, ...]
-        What is left out or changed: the joints of ``leave_out`` (``"joint 'name'"``), zero
-        masses and inertias (the bodies and MuJoCo's bounds) and the loads MJCF cannot hold
-        (``"kind 'name'"``, the load's name or else its body).
-    """
-
-    text: str
-    cut: tuple[str, ...]
-    omitted: tuple[str, ...]
+__all__ = ["BOUND", "KP_RATE", "Mjcf", "mjcf", "mujoco_cut"]
 
 
 def _xz(v) -> str:
     """linkdyn (x, y) -> MuJoCo 'x 0 y' (round-trip precision)."""
     return f"{float(v[0])!r} 0 {float(v[1])!r}"
-
-
-def _num(x) -> str:
-    return repr(float(x))
 
 
 def _rotate(angle: float, v) -> np.ndarray:
@@ -149,11 +123,6 @@ def mujoco_cut(model: Model, leave_out: tuple[str, ...] = ()):
     raise AssertionError("unreachable: each pass cuts one revolute joint more")  # pragma: no cover
 
 
-def _free(model: Model) -> bool:
-    """Whether ``model`` has free degrees of freedom (``linkdyn simulate``'s models)."""
-    from ..topology import mobility
-    return mobility(model) > len(model.drivers)
-
 
 def _tree_model(model: Model) -> Model:
     """``model`` itself, or for a model with free degrees of freedom the same with a
@@ -175,15 +144,10 @@ def _solve(model: Model, at: float):
     return simulate(model, np.array([0.0, at]) if at > 0 else np.array([0.0]))
 
 
-def _size(points: list[np.ndarray]) -> float:
-    """Largest distance between two points (m), at least 1e-9."""
-    P = np.array(points)
-    return float(max(np.max(np.ptp(P, axis=0)), 1e-9)) if len(P) else 1.0
-
-
 def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
          leave_out: tuple[str, ...] = ()) -> Mjcf:
-    """The MJCF model of ``model``, placed at its pose at the time ``at``.
+    """The MJCF model of ``model``, placed at its pose at the time ``at`` (a spatial model's
+    by :func:`linkdyn.spatial.mjcf.mjcf`).
 
     Parameters
     ----------
@@ -214,6 +178,12 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
     AssemblyError
         The mechanism cannot be assembled at ``at`` (or the simulation to ``at`` fails).
     """
+    if model.space == "spatial":
+        if leave_out:
+            raise ModelError("leave_out is for planar models", field="leave_out",
+                             fix="Leave it empty for a spatial model")
+        from ..spatial.mjcf import mjcf as spatial_mjcf
+        return spatial_mjcf(model, at=at, sol=sol, kp=kp)
     if sol is None:
         sol = _solve(model, float(at))
     topo = mujoco_cut(model, leave_out)
@@ -250,22 +220,8 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
         " linkdyn export: the plane (x, y) of the mechanism is MuJoCo's (x, z); SI units; "
         f"bodies at their pose at t = {at!r} s "))
     compiler = ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false")
-    # MuJoCo needs a positive mass and inertia on every moving body: a massless link or a
-    # point mass gets its lower bound, BOUND times the largest (omitted: the bound named)
     moving = model.moving_bodies
-    if any(b.mass <= 0 or b.inertia <= 0 for b in moving):
-        big_m = max([b.mass for b in moving] + [0.0]) or 1.0
-        big_i = max([b.inertia for b in moving] + [big_m * size ** 2])
-        # above MuJoCo's mjMINVAL (1e-15) whatever the units
-        bound_m, bound_i = max(BOUND * big_m, 1e-14), max(BOUND * big_i, 1e-14)
-        compiler.set("boundmass", _num(bound_m))
-        compiler.set("boundinertia", _num(bound_i))
-        light = [b.name for b in moving if b.mass <= 0 or b.inertia <= 0]
-        omitted_bounds = [f"a zero mass or inertia ({', '.join(light)}: MuJoCo's lower "
-                          f"bounds boundmass {bound_m:.3g} kg, boundinertia "
-                          f"{bound_i:.3g} kg m^2)"]
-    else:
-        omitted_bounds = []
+    omitted_bounds = light_bounds(compiler, moving, [b.inertia for b in moving], size)
     g = np.asarray(model.gravity, float)
     opt = ET.SubElement(root, "option", gravity=_xz(g))
     ET.SubElement(opt, "flag", contact="disable")
@@ -317,40 +273,12 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
                           site2=f"{jt.body_a}.{jt.point_a}")
 
     omitted = [f"joint '{name}'" for name in leave_out] + omitted_bounds
-    tendons = []
-    for ld in model.loads:
-        label = f"{ld.kind} '{ld.name or ld.body}'"
-        if ld.kind in ("spring", "damper"):
-            tendons.append(ld)
-        else:
-            omitted.append(label)
-    if tendons:
-        tel = ET.SubElement(root, "tendon")
-        for n, ld in enumerate(tendons):
-            # a spring k (L - L0) or damper c dL/dt along the line between the two points
-            attrs = ({"stiffness": _num(ld.stiffness), "springlength": _num(ld.free_length)}
-                     if ld.kind == "spring" else {"damping": _num(ld.damping)})
-            sp = ET.SubElement(tel, "spatial", name=ld.name or f"{ld.kind}{n}", **attrs)
-            ET.SubElement(sp, "site", site=f"{ld.body}.{ld.point}")
-            ET.SubElement(sp, "site", site=f"{ld.body2}.{ld.point2}")
+    omitted += loads(root, model)
     if omitted:
         root.append(ET.Comment(" left out (MJCF cannot hold them): " + ", ".join(omitted) + " "))
-
-    ctrl = []
-    if model.drivers:
-        act = ET.SubElement(root, "actuator")
-        custom = ET.SubElement(root, "custom")
-        for d in model.drivers:
-            jt = model.joint(d.joint)
-            angular = jk.get(jt.kind).angular
-            gain = kp if kp is not None else KP_RATE * moving_mass * (size ** 2 if angular else 1)
-            # length = gear qpos = q; force on the dof = gear * effort
-            ET.SubElement(act, "position", name=f"drive_{d.joint}", joint=d.joint,
-                          gear=f"{sign[d.joint]} 0 0 0 0 0", kp=_num(gain), dampratio="1")
-            ET.SubElement(custom, "text", name=f"motion_{d.joint}",
-                          data=(d.description or type(d.motion).__name__)
-                          + f" (q_{d.joint} in {'rad' if angular else 'm'}; set ctrl to it)")
-            ctrl.append(q[d.joint])
+    angular = {jt.name: jk.get(jt.kind).angular for jt in model.joints}
+    ctrl = drivers(root, model, gear=sign, q=q, angular=angular, moving_mass=moving_mass,
+                   size=size, kp=kp)
     order = [el.get("name") for el in world.iter("joint")]     # MuJoCo's order: the document's
     key = ET.SubElement(ET.SubElement(root, "keyframe"), "key", name="linkdyn", time=_num(at),
                         qpos=" ".join(_num(sign[n] * q[n]) for n in order),
