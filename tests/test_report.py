@@ -444,11 +444,16 @@ def test_singular_samples_are_gaps_not_errors(browser, tmp_path):
 
 EXAMPLES = sorted(p.stem for p in linkdyn.example_path("hoeken").parent.glob("*.toml"))
 SIZES = [(1440, 900), (390, 844)]
-# on a phone, the examples that span what the page's layout depends on: one driver and four
-# bodies (hoeken), two drivers (fivebar), the most bodies and joints (stephenson), a slot
-# (scotch_yoke) and higher pairs (geared_fivebar); every example runs at desktop size
+# in the browser, the examples that span what the page's layout depends on: one driver and
+# four bodies (hoeken), two drivers (fivebar), the most bodies and joints (stephenson), a slot
+# (scotch_yoke) and higher pairs (geared_fivebar), at both sizes; a cam and a slider
+# (cam_follower) at desktop size. The other examples' pages draw nothing these do not (four
+# revolute joints, a six-bar of revolutes, a slider: test_other_mechanisms_render_and_play
+# plays those in the browser), and every example's page data is checked against its
+# results.csv without a browser (test_report_data_of_every_example_is_its_results_csv)
 PHONE = ("fivebar", "geared_fivebar", "hoeken", "scotch_yoke", "stephenson")
-CASES = [(e, s) for e in EXAMPLES for s in SIZES if s[0] >= 500 or e in PHONE]
+DESKTOP = PHONE + ("cam_follower",)
+CASES = [(e, s) for e in EXAMPLES for s in SIZES if e in (DESKTOP if s[0] >= 500 else PHONE)]
 
 
 @pytest.fixture(scope="module")
@@ -483,6 +488,83 @@ def _column_of(key: str) -> tuple[str, float] | None:
     if kind not in table or table[kind] is None:
         return None
     return next(((p + name, 1.0) for p in table[kind]), None)
+
+
+def _page_data(path) -> dict:
+    """The data block report.html carries (what its script reads), parsed by Python."""
+    text = path.read_text("utf-8")
+    blob = text.split('<script id="linkdyn-data" type="application/json">', 1)[1]
+    return json.loads(blob.split("</script>", 1)[0])
+
+
+@pytest.mark.parametrize("example", EXAMPLES)
+def test_report_data_of_every_example_is_its_results_csv(example_runs, example):
+    # every example's page, without a browser: each plotted series, each peak the page jumps
+    # to, the link-frame forces, the link angles and the instant centres are results.csv's
+    # numbers (recomputed from its columns here) at every frame
+    path, csv = example_runs(example)
+    D = _page_data(path)
+    n = len(D["t"])
+    assert n == len(csv["t"])  # the default runs are short: one frame per sample
+    np.testing.assert_allclose(D["t"], csv["t"], rtol=1e-6, atol=1e-9 * csv["t"][-1])
+    fscale = max(np.max(np.abs(v)) for c, v in csv.items() if c.startswith(("Fx_", "Fy_")))
+    checked = 0
+    for spec in D["plots"]:
+        factor = np.degrees(1) if spec["unit"] == "deg" else 1.0
+        for s in spec["series"]:
+            col = _column_of(s["key"])
+            if not col or spec.get("kind") == "polar":
+                continue
+            want = csv[col[0]] * factor
+            if col[0].startswith(("Fx_", "Fy_")):  # no series of pure rounding noise is drawn
+                assert np.max(np.abs(want)) > 1e-12 * fscale, s["key"]
+            got = np.array(D["series"][s["key"]], float)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-4 * np.max(np.abs(want)) + 1e-12,
+                                       err_msg=s["key"])
+            checked += 1
+    assert checked >= 6
+    # each driver's max and min effort: the frame where results.csv has it, and its value
+    peaks = 0
+    for item in D["key"]:
+        words = item["label"].split()
+        if item["frame"] is None or words[0] not in ("max", "min") or words[1] not in (
+                "torque", "force"):
+            continue
+        col = ("tau_" if words[1] == "torque" else "force_") + words[-1]
+        pick = np.argmax if words[0] == "max" else np.argmin
+        k = item["frame"]
+        assert csv[col][k] == csv[col][pick(csv[col])], (item, k)
+        assert item["value"] == pytest.approx(csv[col][k], rel=1e-12)
+        peaks += 1
+    assert peaks == 2 * len([c for c in csv if c.startswith(("tau_", "force_"))])
+    # the link-frame forces: results.csv's joint force turned by -phi of the second body
+    joints = {j["name"]: j for j in D["geom"]["joints"]}
+    for j, e in joints.items():
+        phi = csv[f"phi_{e['second']}"] if f"phi_{e['second']}" in csv else 0.0
+        fx, fy = csv[f"Fx_{j}"], csv[f"Fy_{j}"]
+        for c, want in (("a", np.cos(phi) * fx + np.sin(phi) * fy),
+                        ("c", -np.sin(phi) * fx + np.cos(phi) * fy)):
+            np.testing.assert_allclose(np.array(D["series"][f"F{c}:{j}"], float), want, rtol=0,
+                                       atol=1e-4 * fscale, err_msg=f"F{c}:{j}")
+    # output versus input: each link's angle in degrees is its phi_ column (to whole turns)
+    for spec in [s for s in D["plots"] if s["title"].startswith("Output versus input")]:
+        for s in spec["series"]:
+            d = np.array(D["series"][s["key"]], float) - np.degrees(csv[f"phi_{s['label']}"])
+            np.testing.assert_allclose((d + 180) % 360 - 180, 0, atol=0.05, err_msg=s["key"])
+    # instant centres: r_P + perp(v_P)/omega of any point P of the body, where it turns
+    B = D["geom"]["bounds"]
+    size = max(B[2] - B[0], B[3] - B[1])
+    for ic in D["geom"]["ics"]:
+        body = ic["body"]
+        pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
+        w = csv[f"omega_{body}"]
+        turns = np.abs(w) > 1e-3 * np.max(np.abs(w))
+        assert turns.any(), body
+        x = csv[f"x_{body}.{pt}"][turns] - csv[f"vy_{body}.{pt}"][turns] / w[turns]
+        y = csv[f"y_{body}.{pt}"][turns] + csv[f"vx_{body}.{pt}"][turns] / w[turns]
+        for got, want in ((ic["x"], x), (ic["y"], y)):
+            got = np.array(D["series"][got], float)[turns]
+            np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6 * size, err_msg=body)
 
 
 @pytest.mark.parametrize("example, size", CASES, ids=[f"{e}-{s[0]}x{s[1]}" for e, s in CASES])
