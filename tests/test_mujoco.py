@@ -395,15 +395,15 @@ def test_a_simulated_motion_satisfies_mujocos_equations(name):
     from linkdyn import simulate
 
     model = load(example_path(name))
-    t = np.linspace(0.0, 0.1, 5)       # five states, the last where the export is placed
+    t = np.linspace(0.0, 0.03, 5)      # five states, the last where the export is placed
     sol = simulate(model, t, rtol=1e-9, atol=1e-11)
-    export = mjcf(model, at=0.1)
+    export = mjcf(model, at=0.03)
     m = mujoco.MjModel.from_xml_string(export.text)
     assert m.nu == len(model.drivers)
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, 0)
     mujoco.mj_forward(m, d)
-    for b in model.moving_bodies:           # placed where the simulation is at 0.1 s
+    for b in model.moving_bodies:           # placed where the simulation is at 0.03 s
         for p in b.points:
             np.testing.assert_allclose(d.site_xpos[m.site(f"{b.name}.{p}").id][[0, 2]],
                                        sol.point(b.name, p)[-1], atol=1e-9)
