@@ -114,8 +114,9 @@ def test_compiled_rhs_equals_numpy_at_random_states(name):
 
 
 def test_op_code_program_equals_expr_evaluate():
-    """Every operator and function of the formulas, inside and outside its domain."""
-    from linkdyn.forward_compiled import run_program
+    """Every operator and function of the formulas, inside and outside its domain, a block of
+    points at once."""
+    from linkdyn.compiled.loads import run_program
 
     names = ("a", "b", "c")
     texts = ["a + b - c*a/b", "a**b", "-a", "abs(a) + sign(b)", "min(a, b)", "max(a, c)",
@@ -128,11 +129,14 @@ def test_op_code_program_equals_expr_evaluate():
     rng = np.random.default_rng(3)
     points = np.concatenate([rng.uniform(-3, 3, (40, 3)), [[0.0, 0.0, 0.0], [1.0, -1.0, 2.0],
                                                            [math.nan, 1.0, 0.5]]])
-    reg = np.empty(len(code))
-    for x in points:
-        run_program(code, value, x, reg)
-        want = [f.evaluate(a=x[0], b=x[1] / 2.0, c=x[2] / 0.5) for f in forms] + [2.5]
-        assert np.allclose(reg[roots], want, rtol=1e-14, atol=1e-14, equal_nan=True), x
+    x = np.ascontiguousarray(points.T)
+    reg = np.empty((len(code), len(points) + 2))   # a block larger than the samples
+    with np.errstate(all="ignore"):
+        run_program(code, value, x, reg, len(points))
+        want = [f.evaluate(a=x[0], b=x[1] / 2.0, c=x[2] / 0.5) for f in forms]
+    want = [np.broadcast_to(w, len(points)) for w in want] + [np.full(len(points), 2.5)]
+    got = reg[roots, :len(points)]
+    assert np.allclose(got, want, rtol=1e-14, atol=1e-14, equal_nan=True)
 
 
 def test_simulate_compiled_equals_numpy():

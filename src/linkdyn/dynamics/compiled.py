@@ -35,8 +35,9 @@ from .. import joints as jk
 from ..compiled import eliminate, inline, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
-from ..loads import Loads, force_at, weight
-from ..planar import last, turned
+from ..compiled.loads import weights
+from ..loads import Loads
+from ..planar import last
 from ..kinematics.compiled import cut_numbers
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
@@ -332,33 +333,15 @@ def _keep(x, out, d, k0, nb):
 
 
 @njit
-def _weights(L, g, dp, nb, c, s, r, w):
-    """Every body's weight ``m_i g`` at its mass centre as a wrench about O_i
-    (:func:`~linkdyn.loads.weight`, :func:`~linkdyn.loads.force_at`, as
-    :func:`linkdyn.loads.wrenches` applies gravity) over one block, from the block's poses
-    ``c``, ``s`` (n, 1, block), ``r`` (n, 2, 1, block) into ``w`` (n, 3, 1, block); design
-    ``dp`` of the mass centres and masses, the gravity ``g`` (2,)."""
-    ks = slice(0, nb)
-    for i in range(1, L.mass.shape[0]):
-        mi, com_i = L.mass[i, dp], (L.com[i, 0, dp], L.com[i, 1, dp])
-        c_i, s_i, (rx_i, ry_i) = c[i, 0, ks], s[i, 0, ks], vector_views(r, i, 0, ks)
-        w_i = screw_views(w, i, 0, ks)
-        for k in range(nb):
-            a = turned(c_i[k], s_i[k], com_i)   # r_C = r_i + R com_i
-            r_c = (rx_i[k] + a[0], ry_i[k] + a[1])
-            f, _ = weight(mi, g, r_c)
-            w_i[0][k], w_i[1][k], w_i[2][k] = force_at(f, (rx_i[k], ry_i[k]), r_c)
-
-
-@njit
 def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke,
            o_pivot, block):
     """The kinematics of every sample (:func:`linkdyn.kinematics.compiled.block` on one
     block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block,
-    under the weights of :func:`_weights`): only ``KEPT`` of the kinematics (``e``: the rows
-    ``axes``) and the dynamics' ``lam``, ``tau``, kinetic energy and pivot reach the outputs
-    (component-first, batch ``(D, T)`` last; written in place). ``L``: the layout's view,
-    ``X`` the kinematics kernel's inputs (:func:`linkdyn.kinematics.compiled.inputs`).
+    under the weights of :func:`linkdyn.compiled.loads.weights`): only ``KEPT`` of the
+    kinematics (``e``: the rows ``axes``) and the dynamics' ``lam``, ``tau``, kinetic energy
+    and pivot reach the outputs (component-first, batch ``(D, T)`` last; written in place).
+    ``L``: the layout's view, ``X`` the kinematics kernel's inputs
+    (:func:`linkdyn.kinematics.compiled.inputs`).
     """
     n, nc, m, nv, n_rows = len(L.parent), len(L.cut_a), len(L.dependent), len(L.driven), \
         o_lam.shape[0]
@@ -379,7 +362,7 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
     # the dynamics of one block (as _dynamics without its internals), its applied wrenches
     w_b = np.zeros((n, 3, 1, B))
     A = np.zeros((m, m + 1, B))
-    lam, ke, piv = np.zeros((max(m, 1), B)), np.zeros(B), np.zeros(B)
+    lam, ke, piv, pe_b = np.zeros((max(m, 1), B)), np.zeros(B), np.zeros(B), np.zeros(B)
     wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
     lam_b, tau_b, pivot_b = np.zeros((n_rows, 1, B)), np.zeros((nv, 1, B)), np.zeros((1, B))
     for d in range(D):
@@ -401,7 +384,7 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
                 _keep(cut_w[ci], cut[ci], d, k0, nb)
             # the dynamics of the block (the ground's w_tilde only accumulates)
             if g[0] != 0.0 or g[1] != 0.0:   # else no applied wrench: w_b stays zero
-                _weights(L, g, dp, nb, c_w, s_w, r_w, w_b)
+                weights(L, g, dp, nb, c_w, s_w, r_w, w_b, pe_b)
             wtilde[0, :, 0, :nb] = 0.0
             _newton_euler(L, z, dp, z, nb, z, z, c_w, s_w, tw_w, td_w, w_b, w_b, ke, wstar,
                           wtilde)

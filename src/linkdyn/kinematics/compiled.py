@@ -41,6 +41,7 @@ from ..planar import turned
 from . import dyads as dy
 from .layout import DYAD_SHAPES, Layout, fixed
 from .positions import nearest_node, scaled_error
+from .state import MAXITER, STEP_TOL
 from .recursion import (child_pose, child_twist, child_twist_rate, cut_bias, cut_coordinate,
                         cut_frame, jacobian_column)
 
@@ -247,24 +248,34 @@ def _frame(P_c, k):
 
 
 @njit
-def _residual(L, d, k0, w, kw, nb, phi, P, err):
-    """Loop-closure residual (the kinds' ``residual`` steps), its rows in metres relative to
-    the layout's size, max over the cut rows (:func:`.positions.scaled_error`), into ``err`` (D, T) at
-    design d, samples from ``k0``; the angles ``phi`` at ``w``, ``kw``."""
+def _residual(L, d, k0, w, kw, nb, phi, P, err, g):
+    """Loop-closure residual (the kinds' ``residual`` steps) into ``g`` (n_rows, block), and
+    its rows in metres relative to the layout's size, max over the cut rows
+    (:func:`.positions.scaled_error`), into ``err`` (D, T) at design d, samples from ``k0``;
+    the angles ``phi`` at ``w``, ``kw``."""
     err_d = err[d, k0:k0 + nb]
     err_d[:] = 0.0
     size = L.size
+    last = g.shape[0] - 1
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
         a, b, code, nums = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci], cut_numbers(L, ci, d)
+        row, rows = L.cut_row[ci], L.cut_rows[ci]
         m0, m1, m2 = L.cut_metres[ci, 0], L.cut_metres[ci, 1], L.cut_metres[ci, 2]
         phi_a, phi_b = phi[a, w, kw:kw + nb], phi[b, w, kw:kw + nb]
+        # cut ci's rows (a view of a row past the cut's is never written)
+        G0, G1, G2 = g[row], g[min(row + 1, last)], g[min(row + 2, last)]
         for k in range(nb):   # the padded rows are zero
             r_pa, r_pb, e_a = _frame(P_c, k)
-            g = jk.residual(code, nums, jk.frame(r_pa, r_pb, e_a), phi_a[k], phi_b[k])
-            e = scaled_error(err_d[k], g[0], m0, size[d])
-            e = scaled_error(e, g[1], m1, size[d])
-            err_d[k] = scaled_error(e, g[2], m2, size[d])
+            x = jk.residual(code, nums, jk.frame(r_pa, r_pb, e_a), phi_a[k], phi_b[k])
+            e = scaled_error(err_d[k], x[0], m0, size[d])
+            e = scaled_error(e, x[1], m1, size[d])
+            err_d[k] = scaled_error(e, x[2], m2, size[d])
+            G0[k] = x[0]
+            if rows > 1:
+                G1[k] = x[1]
+            if rows > 2:
+                G2[k] = x[2]
 
 
 @njit
@@ -441,6 +452,51 @@ def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
             cq_i[k], sq_i[k] = math.cos(x), math.sin(x)
 
 
+@njit
+def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
+    """Close the loops of the samples ``k0`` .. ``k0 + nb`` of design d by Newton's method on
+    the dependent coordinates from the guess in ``q`` (n, D, T) (its independent rows already
+    the state's, ``cq``, ``sq`` (n, block) the cosines and sines of ``s q`` of its angular
+    joints), as :func:`.state.close`'s Newton stage: until no sample's step is above
+    ``STEP_TOL`` (radians, or metres over the size), at most ``MAXITER`` steps; a step of a
+    radian or the size is not taken (no correction of a nearby guess). On return the poses
+    (``phi`` ... ``e``), the cut frames ``P`` and the residual ``g`` (n_rows, block) are those
+    of ``q``, the scaled residual in ``err`` (D, T); ``J`` the Jacobian of the last step.
+    ``A``, ``perm``, ``col``: the LU of ``J_dep`` (:func:`scratch`); ``dx`` (n_dep, block)."""
+    dep = L.dependent
+    m, ks = len(dep), slice(k0, k0 + nb)
+    _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
+    _cut_frames(L, d, d, k0, nb, c, s, r, P)
+    _residual(L, d, k0, d, k0, nb, phi, P, err, g)
+    for _ in range(MAXITER if m else 0):
+        # J_dep dx = -g                                                          (F1-F2)
+        _jacobian(L, d, k0, nb, r, e, P, J)
+        _factor_dep(dep, J, d, k0, nb, A, perm, col)
+        for a in range(m):
+            for k in range(nb):
+                g[a, k] = -g[a, k]
+        substitute(A, perm, col, m, nb, g, dx, 0.0)
+        more = False
+        for k in range(nb):
+            # the step, in rad or in m relative to the size (NaN: singular)
+            step = 0.0
+            for a in range(m):
+                u = abs(dx[a, k]) * (1.0 if L.angular[dep[a]] else 1.0 / L.size[d])
+                step = math.nan if u != u or step != step else max(step, u)
+            more = more or step > STEP_TOL   # NaN (singular) stops too
+            for a in range(m):
+                if math.isfinite(dx[a, k]) and step < 1.0:
+                    q[dep[a], d, k0 + k] += dx[a, k]
+        for a in range(m):
+            i = dep[a]
+            _coordinates(L, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
+        _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
+        _cut_frames(L, d, d, k0, nb, c, s, r, P)
+        _residual(L, d, k0, d, k0, nb, phi, P, err, g)
+        if not more:
+            break
+
+
 # --- the kernel ----------------------------------------------------------------------------------
 
 @njit
@@ -515,7 +571,7 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     if nodes.shape[0] > 0:
         _close(L, X.modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
     _cut_frames(L, d, w, kw, nb, c, s, r, P)
-    _residual(L, d, k0, w, kw, nb, phi, P, err)
+    _residual(L, d, k0, w, kw, nb, phi, P, err, rhs)
     _jacobian(L, w, kw, nb, r, e, P, J)
     # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
     for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
