@@ -227,14 +227,28 @@ def test_cli_simulate_reports_the_friction(tmp_path):
     assert s["energy_account_J"]["friction_dissipation"] == pytest.approx(lost, rel=1e-12)
 
 
-def test_friction_determinant_matches_lapack():
-    """The per-sample determinant friction's lock test uses (elimination over the rows of
-    sample arrays) against numpy.linalg.det, pivoting and a singular sample included."""
-    from linkdyn.friction import determinant
+def test_friction_newton_step_matches_lapack():
+    """One step of friction's Newton's method (the elimination both backends run per sample):
+    its residual, step and determinant against the friction law written out here and
+    numpy.linalg (random J: row swaps at most samples)."""
+    from linkdyn.friction import newton_update
     rng = np.random.default_rng(7)
-    K = rng.normal(size=(4, 4, 50))
-    K[0, 0, :5] = 0.0                        # needs a row swap
-    K[:, 1, 7] = K[:, 2, 7]                  # singular
-    det = determinant([[K[i, j] for j in range(4)] for i in range(4)], (50,))
-    ref = np.linalg.det(np.moveaxis(K, -1, 0))
+    k, n = 4, 50
+    F0, A = rng.normal(size=(k, 2, n)), rng.normal(size=(k, k, 2, n))
+    c, v, pre, f = (rng.normal(size=(k, n)) for _ in range(4))
+    # J = I - dg/dF A, g_j = -c_j (|F_j| + pre_j) - v_j, dg_j/dF_j = -c_j F_j / |F_j|
+    F = F0 + np.einsum("jlcn,ln->jcn", A, f)
+    size = np.hypot(F[:, 0], F[:, 1])
+    g = -c * (size + pre) - v
+    J = np.eye(k)[..., None] + np.einsum("jn,jcn,jlcn->jln", c / size, F, A)
+    r = f - g
+    new = f.copy()
+    big_r, big_g, det = newton_update(F0, A, c, v, pre, new, np.zeros((k, n)),
+                                      np.zeros((k, k + 1, n)), np.zeros((k, n)))
+    Jn = np.moveaxis(J, -1, 0)
+    ref = np.linalg.det(Jn)
     np.testing.assert_allclose(det, ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref)))
+    np.testing.assert_allclose(big_r, np.max(np.abs(r), 0), rtol=1e-14)
+    np.testing.assert_allclose(big_g, np.max(np.abs(g), 0), rtol=1e-14)
+    step = np.linalg.solve(Jn, r.T[..., None])[..., 0].T
+    np.testing.assert_allclose(new, f - step, rtol=1e-10, atol=1e-10 * np.max(np.abs(step)))
