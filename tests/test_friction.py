@@ -323,6 +323,21 @@ def test_backends_agree_with_friction(name):
     check(b.friction.effort, a.friction.effort, 1e-12, what="friction")
 
 
+def test_backends_agree_where_friction_locks():
+    """The wedge pushed up its incline on both backends: the same pushes below the lock, and
+    beyond mu = tan(alpha) the same samples locked at the same joint."""
+    alpha, t = 35 * DEG, np.linspace(0, 0.5, 6)
+    for mu in (0.3, 1.05 * math.tan(alpha)):
+        m = pushed_up_an_incline(alpha, mu)
+        a, b = (analyze(m, t, backend=k, allow_singular=True) for k in ("numpy", "compiled"))
+        np.testing.assert_array_equal(b.friction.locked, a.friction.locked)
+        np.testing.assert_array_equal(b.friction.lock_joint, a.friction.lock_joint)
+        if mu < math.tan(alpha):
+            check(b.dyn.tau, a.dyn.tau, 1e-12, what=f"tau at mu = {mu}")
+        np.testing.assert_array_equal(np.isnan(b.dyn.tau), np.isnan(a.dyn.tau))
+    assert np.all(a.friction.locked)
+
+
 def test_batch_of_designs_with_friction():
     base = MODELS["hoeken-loaded"]()
     t = times(base, 17)
