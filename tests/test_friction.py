@@ -27,10 +27,11 @@ from linkdyn.analysis import analyze
 from linkdyn.cli import main
 from linkdyn.errors import AssemblyError, ModelError
 from linkdyn.friction import joint_friction
-from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Model
+from linkdyn.design import summary
+from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Load, Model
 from linkdyn.motion import ConstantSpeed
 
-from builders import DEG, MM, pri, rev, slot
+from builders import DEG, MM, body, pri, rev, slot
 from test_dynamics import (MODELS, applied, body_states, check, cross, five_point_derivative,
                            joint_columns, kinetic_energy, ne_system, rot, times)
 
@@ -297,6 +298,47 @@ def test_journal_friction_circle():
     check(rho, np.full_like(rho, mu * r), 1e-12)
 
 
+def massless_slider_crank(mu, c=40.0, w=5.0):
+    """A slider-crank of massless links (crank 50 mm, rod 180 mm, the slider's guide through the
+    crank pivot) turning at ``w`` rad/s against a damper ``c`` N s/m on the slider (its output
+    load, ``press``), friction ``mu`` in the slider's guide only."""
+    bodies = (body("ground", {"O": (0, 0), "F": (-2000, 0)}),
+              body("crank", {"O": (0, 0), "A": (50, 0)}), body("rod", {"A": (0, 0), "B": (180, 0)}),
+              body("slider", {"B": (0, 0)}))
+    joints = (rev("J1", "ground.O", "crank.O"), rev("J2", "crank.A", "rod.A"),
+              rev("J3", "rod.B", "slider.B"), pri("J4", "ground.O", "slider.B"))
+    press = Load("damper", "slider", "B", body2="ground", point2="F", damping=c, name="press")
+    m = Model("press", bodies, joints, (Driver("J1", ConstantSpeed(w)),), (press,),
+              assembly_phi={"crank": 0.0, "rod": 0.0, "slider": 0.0}, assembly_q={"J4": 0.23},
+              output=("press",))
+    return with_friction(m, mu, joints=["J4"], speed=1e-9)
+
+
+def test_slider_crank_instantaneous_efficiency():
+    """Massless links, friction in the guide only: the rod is a two-force member at angle beta,
+    the guide's normal force |s sin beta| and the slider's balance s cos beta (1 - mu |tan beta|)
+    = c v give eta = c v^2 / (s cos beta v) = 1 - mu |tan beta| at every sample (closed form of
+    the crank angle); over the run the work into the damper over the drivers' work."""
+    a, b, c, w, mu = 0.05, 0.18, 40.0, 5.0, 0.3
+    t = np.linspace(0.01, 2 * math.pi / w - 0.01, 23)   # clear of the dead centres
+    sol = analyze(massless_slider_crank(mu, c, w), t)
+    phi = w * t
+    root = np.sqrt(b ** 2 - (a * np.sin(phi)) ** 2)
+    eta = 1.0 - mu * np.abs(a * np.sin(phi)) / root
+    p_out, eta_sol = (sol.columns[k] for k in ("output_power", "efficiency"))
+    check(eta_sol, eta, 1e-10, what="eta(t)")
+    v = -a * w * np.sin(phi) * (1.0 + a * np.cos(phi) / root)   # the slider's dx/dt
+    check(p_out, c * v ** 2, 1e-10, what="power into the damper")
+    s = summary(sol)["output"]
+    w_out = np.trapezoid(c * v ** 2, t)
+    assert s["output_work_J"] == pytest.approx(w_out, rel=1e-10)
+    assert s["efficiency"] == pytest.approx(w_out / np.trapezoid(c * v ** 2 / eta, t), rel=1e-10)
+    assert s["efficiency_least"] == pytest.approx(np.min(eta), rel=1e-10)
+    # no friction: every watt put in reaches the damper
+    bare = analyze(massless_slider_crank(0.0, c, w), t)
+    check(bare.columns["efficiency"], np.ones_like(t), 1e-12, what="eta at mu = 0")
+
+
 def test_hoeken_with_friction_at_four_pins():
     bare = MODELS["hoeken"]()
     t = times(bare, 361)
@@ -449,6 +491,46 @@ def test_cli_reports_friction(tmp_path):
     # no load takes work out over the turn (gravity's is zero): all the input is lost
     assert s["efficiency"] == pytest.approx(0.0, abs=1e-9)
     assert s["newton_iterations"] >= 1 and s["residual_rel"] <= 1e-12
+
+
+BRAKE = '[[loads]]\nkind = "torque"\nname = "brake"\nbody = "crank"\nvalue = -0.5'
+
+
+def test_output_load_efficiency_from_the_model_file(tmp_path):
+    """``[analysis] output`` names the brake on the crank: at 1 rev/s it takes 0.5 N m x 2 pi
+    rad/s = pi W, so over the turn (gravity's work and the kinetic energy's change are zero)
+    the efficiency is pi / (pi + the pin's friction loss); the file writes it back."""
+    p = tmp_path / "m.toml"
+    p.write_text(TOML.replace("{extra}", BRAKE) + 'output = ["brake"]\n')
+    m = linkdyn.load(p)
+    assert m.output == ("brake",)
+    linkdyn.save(m, tmp_path / "back.toml")
+    assert linkdyn.load(tmp_path / "back.toml").output == ("brake",)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(p), "-o", str(out), "--units", "model"])
+    assert res.exit_code == 0, res.output
+    assert "output (brake)" in res.output
+    import pandas as pd
+    df = pd.read_csv(out / "results.csv")
+    col = next(k for k in df.columns if k.startswith("output_power"))
+    np.testing.assert_allclose(df[col], math.pi, rtol=1e-12)
+    summ = json.loads((out / "summary.json").read_text())
+    s, lost = summ["output"], summ["friction"]["energy_lost_J"]
+    assert s["output_work_J"] == pytest.approx(math.pi, rel=1e-12)
+    assert s["efficiency"] == pytest.approx(math.pi / (math.pi + lost), rel=1e-9)
+    # instantaneously gravity lends and takes back power: eta(t) spans the cycle's value
+    assert 0 < s["efficiency_least"] < s["efficiency"] < s["efficiency_largest"]
+
+
+@pytest.mark.parametrize("names", ['["pin"]', '["nope"]', '"brake"', '["brake", "brake"]'])
+def test_bad_output_is_exit_2_naming_the_field(tmp_path, names):
+    p = tmp_path / "m.toml"
+    p.write_text(TOML.replace("{extra}", BRAKE) + f"output = {names}\n")
+    with pytest.raises(ModelError) as err:
+        linkdyn.load(p)
+    assert err.value.field.startswith("analysis.output")
+    res = CliRunner().invoke(main, ["analyze", str(p), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "analysis.output" in res.output
 
 
 def test_locking_mechanism_is_exit_3(tmp_path):

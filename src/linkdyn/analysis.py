@@ -278,6 +278,10 @@ class Solution:
         if self.friction is not None:   # each friction load's effort and power
             for name, values, unit in friction_mod.columns(self.friction, m):
                 put(name, values, unit)
+        if m.output:   # the power into the output loads and the instantaneous efficiency
+            p_out, eta = friction_mod.output_power(self)
+            put("output_power", p_out, "W")
+            put("efficiency", eta, "1")
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols, units

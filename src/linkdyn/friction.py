@@ -525,6 +525,52 @@ def columns(fr: Friction, model: Model):
         yield f"friction_power_{j}", fr.power[k], "W"
 
 
+def output_power(sol) -> tuple[np.ndarray, np.ndarray]:
+    """The power the mechanism delivers to its output loads (``model.output``, ``[analysis]
+    output``), ``P_out = -sum P_load`` (a load the mechanism works against takes power: its
+    own power is negative), and the instantaneous efficiency ``eta = P_out / P_in``, ``P_in``
+    the drivers' power, NaN where the drivers put no power in (``P_in <= 0``), both (...), W
+    and 1. With inertia ``eta`` also counts the power stored in motion (``P_in = P_out +
+    dKE/dt + dPE/dt + friction's loss``); over whole cycles that share returns."""
+    m = sol.model
+    names = [ld.name for ld in m.loads]
+    p_out = -sum((sol.loads.powers[names.index(n)] for n in m.output), np.zeros(sol.kin.shape))
+    p_in = sol.driver_power
+    ok = p_in > 0
+    return p_out, np.where(ok, p_out / np.where(ok, p_in, 1.0), np.nan)
+
+
+def output_summary(sol) -> dict:
+    """The output loads' figures over the run, SI: their names, the work done on them
+    (``output_work_J``, the integral of :func:`output_power`'s ``P_out`` over the valid
+    samples), the drivers' net work and the efficiency over the run, their ratio (None when the
+    drivers do no positive net work), and the least and the largest instantaneous efficiency
+    (None where the drivers never put power in)."""
+    t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
+    p_out, eta = output_power(sol)
+
+    def integral(p):
+        p = np.where(valid, p, 0.0)
+        return float(np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1))
+
+    w_out, w_in = integral(p_out), integral(sol.driver_power)
+    eta = eta[valid & np.isfinite(eta)]
+    return {"loads": list(sol.model.output), "output_work_J": w_out, "driver_work_J": w_in,
+            "efficiency": w_out / w_in if w_in > 0 else None,
+            "efficiency_least": float(np.min(eta)) if eta.size else None,
+            "efficiency_largest": float(np.max(eta)) if eta.size else None}
+
+
+def output_lines(s: dict) -> list[str]:
+    """The printed line of :func:`output_summary`'s dict."""
+    def pct(x):
+        return "n/a" if x is None else f"{100 * x:.2f}%"
+
+    return [f"  output ({', '.join(s['loads'])}): {s['output_work_J']:.6g} J of the drivers' "
+            f"{s['driver_work_J']:.6g} J, efficiency {pct(s['efficiency'])} over the run; "
+            f"instantaneous {pct(s['efficiency_least'])} .. {pct(s['efficiency_largest'])}"]
+
+
 def energies(sol) -> tuple[np.ndarray, np.ndarray]:
     """The energy each friction load dissipates over the run (k, ...) and the drivers' net
     work over it (...), J: trapezoidal integrals over the valid samples of ``-power`` and of
