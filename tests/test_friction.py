@@ -520,6 +520,16 @@ def test_output_load_efficiency_from_the_model_file(tmp_path):
     assert s["efficiency"] == pytest.approx(math.pi / (math.pi + lost), rel=1e-9)
     # instantaneously gravity lends and takes back power: eta(t) spans the cycle's value
     assert 0 < s["efficiency_least"] < s["efficiency"] < s["efficiency_largest"]
+    # the report's key results carry them
+    from linkdyn import report
+    sol = analyze(m, np.linspace(0, 1, 73))
+    html = report.render(sol, summ)
+    assert "efficiency to brake" in html and "Instantaneous efficiency" in html
+    items = {it["label"]: it for it in report.key_results(sol, summ)}
+    assert items["efficiency to brake"]["value"] == pytest.approx(100 * s["efficiency"])
+    assert items["least instantaneous efficiency"]["value"] == pytest.approx(
+        100 * s["efficiency_least"], rel=1e-12)
+    assert items["energy lost in friction"]["value"] == lost
 
 
 @pytest.mark.parametrize("names", ['["pin"]', '["nope"]', '"brake"', '["brake", "brake"]'])
