@@ -557,12 +557,12 @@ def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
     """A sweep's friction metrics are each design's own run's energy lost and efficiency."""
     p = tmp_path / "m.toml"
     # a brake torque on the crank makes the efficiency a real fraction
-    p.write_text(TOML.replace("{extra}", '[[loads]]\nkind = "torque"\nbody = "crank"\n'
-                                         'value = -0.5'))
+    p.write_text(TOML.replace("{extra}", BRAKE) + 'output = ["brake"]\n')
     m = linkdyn.load(p)
     t = np.linspace(0, 1, 73)
     masses = [0.6, 1.2, 2.4]
-    df = linkdyn.sweep(m, {"bodies.crank.mass": masses}, t, metrics=["friction_loss", "efficiency"])
+    df = linkdyn.sweep(m, {"bodies.crank.mass": masses}, t,
+                       metrics=["friction_loss", "efficiency", "output_efficiency"])
     for k, mass in enumerate(masses):
         one = dataclasses.replace(m, bodies=tuple(
             dataclasses.replace(b, mass=mass) if b.name == "crank" else b for b in m.bodies))
@@ -574,8 +574,10 @@ def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
         # the brake takes 0.5 N m x 2 pi out over the turn: the rest of the work is lost
         assert work == pytest.approx(lost + 0.5 * 2 * math.pi, rel=1e-6)
         assert 0.5 < df["efficiency"][k] < 1
+        # the work into the named output, the brake, over the drivers' work
+        assert df["output_efficiency"][k] == pytest.approx(math.pi / work, rel=1e-9)
     from linkdyn.studies import metrics
-    assert metrics.sense("efficiency") == "max"
+    assert metrics.sense("efficiency") == metrics.sense("output_efficiency") == "max"
 
 
 @pytest.mark.parametrize("stiction, mu_eff", [(1e-3, 0.2), (1e6, 0.45)])

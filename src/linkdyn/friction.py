@@ -546,17 +546,11 @@ def output_summary(sol) -> dict:
     samples), the drivers' net work and the efficiency over the run, their ratio (None when the
     drivers do no positive net work), and the least and the largest instantaneous efficiency
     (None where the drivers never put power in)."""
-    t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
-    p_out, eta = output_power(sol)
-
-    def integral(p):
-        p = np.where(valid, p, 0.0)
-        return float(np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1))
-
-    w_out, w_in = integral(p_out), integral(sol.driver_power)
-    eta = eta[valid & np.isfinite(eta)]
+    w_out, w_in, ratio = (float(x) for x in output_efficiency(sol))
+    eta = output_power(sol)[1]
+    eta = eta[np.asarray(sol.valid, bool) & np.isfinite(eta)]
     return {"loads": list(sol.model.output), "output_work_J": w_out, "driver_work_J": w_in,
-            "efficiency": w_out / w_in if w_in > 0 else None,
+            "efficiency": ratio if np.isfinite(ratio) else None,
             "efficiency_least": float(np.min(eta)) if eta.size else None,
             "efficiency_largest": float(np.max(eta)) if eta.size else None}
 
@@ -575,13 +569,24 @@ def energies(sol) -> tuple[np.ndarray, np.ndarray]:
     """The energy each friction load dissipates over the run (k, ...) and the drivers' net
     work over it (...), J: trapezoidal integrals over the valid samples of ``-power`` and of
     the drivers' power, over the last (time) axis (a batch: one per design)."""
+    return -over_run(sol, sol.friction.power), over_run(sol, sol.driver_power)
+
+
+def over_run(sol, p) -> np.ndarray:
+    """The integral of the power ``p`` (..., T) over the run, J: the trapezoidal rule over
+    ``sol``'s valid samples (an invalid one counts as zero power), along the last axis."""
     t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
+    p = np.where(valid, p, 0.0)
+    return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
 
-    def integral(p):
-        p = np.where(valid, p, 0.0)
-        return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
 
-    return -integral(sol.friction.power), integral(sol.driver_power)
+def output_efficiency(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The work done on the output loads over the run (:func:`output_power`), the drivers' net
+    work and the efficiency over the run, their ratio (NaN where the drivers do no positive
+    net work), J, J and 1 (...: one per design of a batch)."""
+    w_out, w_in = over_run(sol, output_power(sol)[0]), over_run(sol, sol.driver_power)
+    ok = w_in > 0
+    return w_out, w_in, np.where(ok, w_out / np.where(ok, w_in, 1.0), np.nan)
 
 
 def efficiency(lost, work):
