@@ -27,10 +27,11 @@ from linkdyn.analysis import analyze
 from linkdyn.cli import main
 from linkdyn.errors import AssemblyError, ModelError
 from linkdyn.friction import joint_friction
-from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Model
+from linkdyn.design import summary
+from linkdyn.model import PRISMATIC, REVOLUTE, Body, Driver, Load, Model
 from linkdyn.motion import ConstantSpeed
 
-from builders import DEG, MM, pri, rev, slot
+from builders import DEG, MM, body, pri, rev, slot
 from test_dynamics import (MODELS, applied, body_states, check, cross, five_point_derivative,
                            joint_columns, kinetic_energy, ne_system, rot, times)
 
@@ -297,6 +298,47 @@ def test_journal_friction_circle():
     check(rho, np.full_like(rho, mu * r), 1e-12)
 
 
+def massless_slider_crank(mu, c=40.0, w=5.0):
+    """A slider-crank of massless links (crank 50 mm, rod 180 mm, the slider's guide through the
+    crank pivot) turning at ``w`` rad/s against a damper ``c`` N s/m on the slider (its output
+    load, ``press``), friction ``mu`` in the slider's guide only."""
+    bodies = (body("ground", {"O": (0, 0), "F": (-2000, 0)}),
+              body("crank", {"O": (0, 0), "A": (50, 0)}), body("rod", {"A": (0, 0), "B": (180, 0)}),
+              body("slider", {"B": (0, 0)}))
+    joints = (rev("J1", "ground.O", "crank.O"), rev("J2", "crank.A", "rod.A"),
+              rev("J3", "rod.B", "slider.B"), pri("J4", "ground.O", "slider.B"))
+    press = Load("damper", "slider", "B", body2="ground", point2="F", damping=c, name="press")
+    m = Model("press", bodies, joints, (Driver("J1", ConstantSpeed(w)),), (press,),
+              assembly_phi={"crank": 0.0, "rod": 0.0, "slider": 0.0}, assembly_q={"J4": 0.23},
+              output=("press",))
+    return with_friction(m, mu, joints=["J4"], speed=1e-9)
+
+
+def test_slider_crank_instantaneous_efficiency():
+    """Massless links, friction in the guide only: the rod is a two-force member at angle beta,
+    the guide's normal force |s sin beta| and the slider's balance s cos beta (1 - mu |tan beta|)
+    = c v give eta = c v^2 / (s cos beta v) = 1 - mu |tan beta| at every sample (closed form of
+    the crank angle); over the run the work into the damper over the drivers' work."""
+    a, b, c, w, mu = 0.05, 0.18, 40.0, 5.0, 0.3
+    t = np.linspace(0.01, 2 * math.pi / w - 0.01, 23)   # clear of the dead centres
+    sol = analyze(massless_slider_crank(mu, c, w), t)
+    phi = w * t
+    root = np.sqrt(b ** 2 - (a * np.sin(phi)) ** 2)
+    eta = 1.0 - mu * np.abs(a * np.sin(phi)) / root
+    p_out, eta_sol = (sol.columns[k] for k in ("output_power", "efficiency"))
+    check(eta_sol, eta, 1e-10, what="eta(t)")
+    v = -a * w * np.sin(phi) * (1.0 + a * np.cos(phi) / root)   # the slider's dx/dt
+    check(p_out, c * v ** 2, 1e-10, what="power into the damper")
+    s = summary(sol)["output"]
+    w_out = np.trapezoid(c * v ** 2, t)
+    assert s["output_work_J"] == pytest.approx(w_out, rel=1e-10)
+    assert s["efficiency"] == pytest.approx(w_out / np.trapezoid(c * v ** 2 / eta, t), rel=1e-10)
+    assert s["efficiency_least"] == pytest.approx(np.min(eta), rel=1e-10)
+    # no friction: every watt put in reaches the damper
+    bare = analyze(massless_slider_crank(0.0, c, w), t)
+    check(bare.columns["efficiency"], np.ones_like(t), 1e-12, what="eta at mu = 0")
+
+
 def test_hoeken_with_friction_at_four_pins():
     bare = MODELS["hoeken"]()
     t = times(bare, 361)
@@ -321,6 +363,21 @@ def test_backends_agree_with_friction(name):
     check(b.dyn.tau, a.dyn.tau, 1e-12, what="tau")
     check(b.reactions.force, a.reactions.force, 1e-12, what="reactions")
     check(b.friction.effort, a.friction.effort, 1e-12, what="friction")
+
+
+def test_backends_agree_where_friction_locks():
+    """The wedge pushed up its incline on both backends: the same pushes below the lock, and
+    beyond mu = tan(alpha) the same samples locked at the same joint."""
+    alpha, t = 35 * DEG, np.linspace(0, 0.5, 6)
+    for mu in (0.3, 1.05 * math.tan(alpha)):
+        m = pushed_up_an_incline(alpha, mu)
+        a, b = (analyze(m, t, backend=k, allow_singular=True) for k in ("numpy", "compiled"))
+        np.testing.assert_array_equal(b.friction.locked, a.friction.locked)
+        np.testing.assert_array_equal(b.friction.lock_joint, a.friction.lock_joint)
+        if mu < math.tan(alpha):
+            check(b.dyn.tau, a.dyn.tau, 1e-12, what=f"tau at mu = {mu}")
+        np.testing.assert_array_equal(np.isnan(b.dyn.tau), np.isnan(a.dyn.tau))
+    assert np.all(a.friction.locked)
 
 
 def test_batch_of_designs_with_friction():
@@ -436,6 +493,56 @@ def test_cli_reports_friction(tmp_path):
     assert s["newton_iterations"] >= 1 and s["residual_rel"] <= 1e-12
 
 
+BRAKE = '[[loads]]\nkind = "torque"\nname = "brake"\nbody = "crank"\nvalue = -0.5'
+
+
+def test_output_load_efficiency_from_the_model_file(tmp_path):
+    """``[analysis] output`` names the brake on the crank: at 1 rev/s it takes 0.5 N m x 2 pi
+    rad/s = pi W, so over the turn (gravity's work and the kinetic energy's change are zero)
+    the efficiency is pi / (pi + the pin's friction loss); the file writes it back."""
+    p = tmp_path / "m.toml"
+    p.write_text(TOML.replace("{extra}", BRAKE) + 'output = ["brake"]\n')
+    m = linkdyn.load(p)
+    assert m.output == ("brake",)
+    linkdyn.save(m, tmp_path / "back.toml")
+    assert linkdyn.load(tmp_path / "back.toml").output == ("brake",)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(p), "-o", str(out), "--units", "model"])
+    assert res.exit_code == 0, res.output
+    assert "output (brake)" in res.output
+    import pandas as pd
+    df = pd.read_csv(out / "results.csv")
+    col = next(k for k in df.columns if k.startswith("output_power"))
+    np.testing.assert_allclose(df[col], math.pi, rtol=1e-12)
+    summ = json.loads((out / "summary.json").read_text())
+    s, lost = summ["output"], summ["friction"]["energy_lost_J"]
+    assert s["output_work_J"] == pytest.approx(math.pi, rel=1e-12)
+    assert s["efficiency"] == pytest.approx(math.pi / (math.pi + lost), rel=1e-9)
+    # instantaneously gravity lends and takes back power: eta(t) spans the cycle's value
+    assert 0 < s["efficiency_least"] < s["efficiency"] < s["efficiency_largest"]
+    # the report's key results carry them
+    from linkdyn import report
+    sol = analyze(m, np.linspace(0, 1, 73))
+    html = report.render(sol, summ)
+    assert "efficiency to brake" in html and "Instantaneous efficiency" in html
+    items = {it["label"]: it for it in report.key_results(sol, summ)}
+    assert items["efficiency to brake"]["value"] == pytest.approx(100 * s["efficiency"])
+    assert items["least instantaneous efficiency"]["value"] == pytest.approx(
+        100 * s["efficiency_least"], rel=1e-12)
+    assert items["energy lost in friction"]["value"] == lost
+
+
+@pytest.mark.parametrize("names", ['["pin"]', '["nope"]', '"brake"', '["brake", "brake"]'])
+def test_bad_output_is_exit_2_naming_the_field(tmp_path, names):
+    p = tmp_path / "m.toml"
+    p.write_text(TOML.replace("{extra}", BRAKE) + f"output = {names}\n")
+    with pytest.raises(ModelError) as err:
+        linkdyn.load(p)
+    assert err.value.field.startswith("analysis.output")
+    res = CliRunner().invoke(main, ["analyze", str(p), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "analysis.output" in res.output
+
+
 def test_locking_mechanism_is_exit_3(tmp_path):
     m = pushed_up_an_incline(35 * DEG, 1.05 * math.tan(35 * DEG))
     p = tmp_path / "wedge.toml"
@@ -450,12 +557,12 @@ def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
     """A sweep's friction metrics are each design's own run's energy lost and efficiency."""
     p = tmp_path / "m.toml"
     # a brake torque on the crank makes the efficiency a real fraction
-    p.write_text(TOML.replace("{extra}", '[[loads]]\nkind = "torque"\nbody = "crank"\n'
-                                         'value = -0.5'))
+    p.write_text(TOML.replace("{extra}", BRAKE) + 'output = ["brake"]\n')
     m = linkdyn.load(p)
     t = np.linspace(0, 1, 73)
     masses = [0.6, 1.2, 2.4]
-    df = linkdyn.sweep(m, {"bodies.crank.mass": masses}, t, metrics=["friction_loss", "efficiency"])
+    df = linkdyn.sweep(m, {"bodies.crank.mass": masses}, t,
+                       metrics=["friction_loss", "efficiency", "output_efficiency"])
     for k, mass in enumerate(masses):
         one = dataclasses.replace(m, bodies=tuple(
             dataclasses.replace(b, mass=mass) if b.name == "crank" else b for b in m.bodies))
@@ -467,8 +574,10 @@ def test_sweep_metrics_friction_loss_and_efficiency(tmp_path):
         # the brake takes 0.5 N m x 2 pi out over the turn: the rest of the work is lost
         assert work == pytest.approx(lost + 0.5 * 2 * math.pi, rel=1e-6)
         assert 0.5 < df["efficiency"][k] < 1
+        # the work into the named output, the brake, over the drivers' work
+        assert df["output_efficiency"][k] == pytest.approx(math.pi / work, rel=1e-9)
     from linkdyn.studies import metrics
-    assert metrics.sense("efficiency") == "max"
+    assert metrics.sense("efficiency") == metrics.sense("output_efficiency") == "max"
 
 
 @pytest.mark.parametrize("stiction, mu_eff", [(1e-3, 0.2), (1e6, 0.45)])

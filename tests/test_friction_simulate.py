@@ -8,7 +8,9 @@ b. the energy balance counts the dissipation: mu_d N times the distance slid, an
    integrated balance KE + PE - W to the integrator's tolerance;
 c. a pendulum with pin friction decays, sticks and stays, against an independent
    ``solve_ivp`` of its own equation written here (the pin force from Newton's law, the
-   couple mu r |F| against the swing, a stop where mu r |F| holds the weight's moment).
+   couple mu r |F| against the swing, a stop where mu r |F| holds the weight's moment);
+d. friction in a joint that is not a free coordinate creeps at v artanh(Q / C), the holding
+   effort Q and the capacity C of the incline's closed form.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import linkdyn
 from linkdyn.friction import joint_friction
 from linkdyn.model import Body, Joint, Load, Model, REVOLUTE
 
-from builders import pri
+from builders import pri, slot
 
 G = 9.81
 ALPHA, MASS = 0.3, 2.0          # tan(0.3) = 0.309
@@ -227,14 +229,67 @@ def test_cli_simulate_reports_the_friction(tmp_path):
     assert s["energy_account_J"]["friction_dissipation"] == pytest.approx(lost, rel=1e-12)
 
 
-def test_friction_determinant_matches_lapack():
-    """The per-sample determinant friction's lock test uses (elimination over the rows of
-    sample arrays) against numpy.linalg.det, pivoting and a singular sample included."""
-    from linkdyn.friction import determinant
+def test_friction_newton_step_matches_lapack():
+    """One step of friction's Newton's method (the elimination both backends run per sample):
+    its residual, step and determinant against the friction law written out here and
+    numpy.linalg (random J: row swaps at most samples)."""
+    from linkdyn.friction import newton_update
     rng = np.random.default_rng(7)
-    K = rng.normal(size=(4, 4, 50))
-    K[0, 0, :5] = 0.0                        # needs a row swap
-    K[:, 1, 7] = K[:, 2, 7]                  # singular
-    det = determinant([[K[i, j] for j in range(4)] for i in range(4)], (50,))
-    ref = np.linalg.det(np.moveaxis(K, -1, 0))
+    k, n = 4, 50
+    F0, A = rng.normal(size=(k, 2, n)), rng.normal(size=(k, k, 2, n))
+    c, v, pre, f = (rng.normal(size=(k, n)) for _ in range(4))
+    # J = I - dg/dF A, g_j = -c_j (|F_j| + pre_j) - v_j, dg_j/dF_j = -c_j F_j / |F_j|
+    F = F0 + np.einsum("jlcn,ln->jcn", A, f)
+    size = np.hypot(F[:, 0], F[:, 1])
+    g = -c * (size + pre) - v
+    J = np.eye(k)[..., None] + np.einsum("jn,jcn,jlcn->jln", c / size, F, A)
+    r = f - g
+    new = f.copy()
+    big_r, big_g, det = newton_update(F0, A, c, v, pre, new, np.zeros((k, n)),
+                                      np.zeros((k, k + 1, n)), np.zeros((k, n)))
+    Jn = np.moveaxis(J, -1, 0)
+    ref = np.linalg.det(Jn)
     np.testing.assert_allclose(det, ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref)))
+    np.testing.assert_allclose(big_r, np.max(np.abs(r), 0), rtol=1e-14)
+    np.testing.assert_allclose(big_g, np.max(np.abs(g), 0), rtol=1e-14)
+    step = np.linalg.solve(Jn, r.T[..., None])[..., 0].T
+    np.testing.assert_allclose(new, f - step, rtol=1e-10, atol=1e-10 * np.max(np.abs(step)))
+
+
+def block_held_by_an_arm(mu):
+    """The block of :func:`block` (friction ``mu`` in its guide J2, one coefficient), its pin
+    riding in the slot J3 of a light arm pivoted at 0.3 m below the guide's start (J1, the free
+    coordinate): the guide's friction is in a dependent joint. The arm's mass centre is its
+    pivot, so at rest no load turns it and the slot carries no force: the block alone rests on
+    the incline."""
+    q0, pivot = 0.2, np.array([0.0, -0.3])
+    b0 = q0 * np.array([math.cos(ALPHA), math.sin(ALPHA)])
+    phi = math.atan2(*(b0 - pivot)[::-1])
+    bodies = (Body("ground", {"O": pivot, "G": np.zeros(2)}),
+              Body("arm", {"O": np.zeros(2)}, 0.05, np.zeros(2), 1e-4),
+              Body("block", {"B": np.zeros(2)}, MASS, np.zeros(2), 0.01))
+    joints = (Joint("J1", REVOLUTE, "ground", "O", "arm", "O"),
+              pri("J2", "ground.G", "block.B", (math.cos(ALPHA), math.sin(ALPHA))),
+              slot("J3", "arm.O", "block.B"))
+    m = Model("arm", bodies, joints, (), gravity=np.array([0.0, -G]),
+              assembly_phi={"arm": phi, "block": 0.0},
+              assembly_q={"J2": q0, "J3": float(np.linalg.norm(b0 - pivot))},
+              initial_q={"J1": phi})
+    return dataclasses.replace(m, loads=(joint_friction(m, "J2", mu),))
+
+
+def test_friction_in_a_dependent_joint_creeps_at_the_documented_rate():
+    """theory.md F13: friction in a joint that is not a free coordinate follows tanh(qd / v)
+    and cannot hold the block: it creeps down at qd = v artanh(Q / C), Q = m g sin(alpha) the
+    holding effort and C = mu m g cos(alpha) the capacity (closed forms of the incline), once
+    the transient (time constant v / (mu g cos(alpha) (1 - (Q / C)^2)) ~ 0.35 ms) has died out."""
+    mu = 0.5
+    m = block_held_by_an_arm(mu)
+    v = m.loads[0].transition_speed
+    sol = linkdyn.simulate(m, np.array([0.0, 0.012, 0.016]), backend="numpy")
+    j2 = [j.name for j in m.joints].index("J2")
+    qd = sol.kin.joint_motion[1][j2]
+    creep = -v * math.atanh(math.tan(ALPHA) / mu)
+    np.testing.assert_allclose(qd[1:], creep, rtol=1e-6)   # the integrator's atol 1e-10 on qd
+    np.testing.assert_allclose(sol.friction.effort[0][1:], MASS * G * math.sin(ALPHA),
+                               rtol=1e-6)

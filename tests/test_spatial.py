@@ -525,6 +525,8 @@ def test_bad_spatial_input_names_field_and_fix():
     _bad(lambda d: d["mechanism"].update(space="3d"), "mechanism.space", "unknown space")
     _bad(lambda d: d.update(analysis={"path_point": "rod.G"}), "analysis.path_point",
          "not yet for spatial models")
+    _bad(lambda d: d.update(analysis={"output": ["x"]}), "analysis.output",
+         "not yet for spatial models")
     _bad(lambda d: d["loads"].append({"kind": "friction", "joint": "J1", "coefficient": 0.1,
                                       "radius": 5.0}), "loads", "not yet for spatial models")
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import backend as backend_mod
 from . import batch, kinematics, loads as loads_mod, reactions as reactions_mod
-from . import friction as friction_mod
+from . import friction as friction_mod, friction_compiled
 from .dynamics import compiled as compiled_dynamics
 from .dynamics import denoc
 from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numerics,  # noqa: F401
@@ -278,6 +278,10 @@ class Solution:
         if self.friction is not None:   # each friction load's effort and power
             for name, values, unit in friction_mod.columns(self.friction, m):
                 put(name, values, unit)
+        if m.output:   # the power into the output loads and the instantaneous efficiency
+            p_out, eta = friction_mod.output_power(self)
+            put("output_power", p_out, "W")
+            put("efficiency", eta, "1")
         if not np.all(self.valid):  # samples kept with allow_singular are NaN rows
             cols = {k: v if k == "t" else np.where(self.valid, v, np.nan) for k, v in cols.items()}
         return cols, units
@@ -599,7 +603,8 @@ def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool
     if friction_mod.present(models[0]):
         # friction grows with the reactions: efforts, reactions and friction solved together
         applied, dyn, react, fr = friction_mod.solve(models, kin, applied, dynamics,
-                                                     reactions_stage)
+                                                     reactions_stage, friction_compiled.solve
+                                                     if backend.compiled else None)
         valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR) & ~fr.locked
         return kin, applied, dyn, react, valid, fr
     dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)

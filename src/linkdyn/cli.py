@@ -501,6 +501,9 @@ def summary_text(s: dict) -> str:
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))
+    if s.get("output"):
+        from .friction import output_lines
+        lines.extend(output_lines(s["output"]))
     echo("  peak reactions:")
     for j, r in s["reactions"].items():
         m = r.get("peak_moment_Nm")

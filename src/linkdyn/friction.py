@@ -17,14 +17,14 @@ linear in the applied wrenches, so every reaction force is affine in the k frict
     F_j(f) = F0_j + sum_l A_jl f_l,
 
 ``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
-in friction joint l. Both come from 1 + k runs of the backend's own dynamics and reactions
-stages (:func:`linkdyn.analysis.stage_functions`) on the same kinematics (run 0 the applied
-loads, run l those plus a unit effort in friction joint l), so the numpy and the compiled
-backends solve friction alike. The friction equations
-``f = g(F(f))`` are then a k x k system per sample, solved by a vectorized Newton's method from
-the frictionless solution ``f = 0``; a last run of the stages with the converged efforts gives
-the efforts, multipliers and reactions (which exclude the friction, as they exclude a driver's
-effort: the friction is an applied load).
+in friction joint l. The friction equations ``f = g(F(f))`` are then a k x k system per sample,
+solved by Newton's method from the frictionless solution ``f = 0`` (:func:`newton_update`, one
+step written once for both backends). On numpy (:func:`solve`) ``F0`` and ``A`` come from runs
+of the dynamics and reactions stages on the same kinematics, Newton's method steps every
+sample at once, and a last run of the stages with the converged efforts gives the efforts,
+multipliers and reactions; on the compiled backend :func:`linkdyn.friction_compiled.solve`
+does the same in one kernel, a block of samples at a time. The reactions exclude the friction,
+as they exclude a driver's effort: the friction is an applied load.
 
 A load that depends on the reactions answers one question (the interface the load registry
 should carry, :data:`linkdyn.loads.REACTION_KINDS`): given the joint's reaction force and the
@@ -39,9 +39,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import joints as jk
-from .loads import Loads, add_joint_effort
+from .loads import Loads, add_joint_effort, joint_effort_units
 from .model import Load, Model, default_transition_speed
-from .planar import solve_small
 from .steps import select, step
 
 #: Newton's method stops when every equation's residual is at most TOL of their scale (the
@@ -195,36 +194,77 @@ def dry_at(c, v, preload, fx, fy):
     return -c * (size + preload) - v, (k * fx, k * fy)
 
 
-def _largest(xs):
-    """The largest magnitude among the sample arrays ``xs``, per sample (NaN if one is)."""
-    out = np.abs(xs[0])
-    for x in xs[1:]:
-        out = np.maximum(out, np.abs(x))
-    return out
+@step
+def bigger(a, b):
+    """The larger of ``a`` and ``b``, NaN if ``a`` or ``b`` is (``np.maximum``, on scalars too)."""
+    return select(a != a, a, select(a > b, a, b))
 
 
-def determinant(K, shape):
-    """``det K`` per sample of the small matrix ``K`` (n x n lists of sample arrays, batch
-    ``shape``), by Gaussian elimination with partial pivoting over its rows, every sample at
-    once (a LAPACK call per sample costs more than the compiled analysis)."""
-    n = len(K)
-    M = [[np.array(np.broadcast_to(x, shape), float) for x in row] for row in K]
-    det = np.ones(shape)
-    for c in range(n):
-        for i in range(c + 1, n):
-            # partial pivoting: the row with the largest |M[i][c]| into row c (det changes sign)
-            swap = np.abs(M[i][c]) > np.abs(M[c][c])
-            if np.any(swap):
-                M[c], M[i] = ([np.where(swap, x, y) for x, y in zip(M[i], M[c])],
-                              [np.where(swap, y, x) for x, y in zip(M[i], M[c])])
-                det = np.where(swap, -det, det)
-        p = M[c][c]
+@step(inline=True)
+def newton_update(F0, A, c, v, preload, f, r, K, x):
+    """One step of Newton's method on the friction equations ``f = g(F0 + A f)`` (T9)-(T10)
+    at the efforts ``f``, in place: ``f <- f - J^-1 r``, ``r = f - g``, ``J = I - (dg/dF) A``.
+
+    Every entry is a float (one sample, in a compiled sample loop) or an array over the
+    samples (numpy), so the same lines serve both backends.
+
+    Parameters
+    ----------
+    F0 : (k, 2)
+        The friction joints' reaction forces at ``f = 0``, N.
+    A : (k, k, 2)
+        ``A[j, l]``: the change of joint j's force under a unit effort in friction load l.
+    c, v, preload : (k,)
+        Each load's :func:`sliding_arm`, viscous effort (N m or N) and preload (N).
+    f : (k,)
+        The efforts, N m or N; updated.
+    r, K, x : (k,), (k, k + 1), (k,)
+        Work: ``r`` receives the residuals at the given ``f``.
+
+    Returns
+    -------
+    (big_r, big_g, det)
+        The largest ``|r|`` and ``|g|`` and ``det J``, at the given ``f``.
+    """
+    k = len(f)
+    big_r, big_g, det = 0.0, 0.0, 1.0
+    # F_j = F0_j + sum_l A_jl f_l;  r_j = f_j - g_j(F_j);  J_jl = delta_jl - dg_j/dF_j . A_jl
+    for j in range(k):
+        fx, fy = F0[j, 0], F0[j, 1]
+        for n in range(k):
+            fx = fx + A[j, n, 0] * f[n]
+            fy = fy + A[j, n, 1] * f[n]
+        g, (gx, gy) = dry_at(c[j], v[j], preload[j], fx, fy)
+        r[j] = f[j] - g
+        K[j, k] = f[j] - g
+        big_r = bigger(np.abs(f[j] - g), big_r)
+        big_g = bigger(np.abs(g), big_g)
+        for n in range(k):
+            K[j, n] = (1.0 if j == n else 0.0) - (gx * A[j, n, 0] + gy * A[j, n, 1])
+    # J x = r by elimination with partial pivoting (each swap changes det's sign)
+    for col in range(k):
+        for i in range(col + 1, k):
+            swap = np.abs(K[i, col]) > np.abs(K[col, col])
+            for n in range(col, k + 1):
+                upper, lower = select(swap, K[i, n], K[col, n]), select(swap, K[col, n], K[i, n])
+                K[col, n] = upper
+                K[i, n] = lower
+            det = select(swap, -det, det)
+        p = K[col, col]
         det = det * p
-        safe = np.where(p != 0, p, 1.0)
-        for i in range(c + 1, n):
-            m = M[i][c] / safe
-            M[i] = [M[i][j] - m * M[c][j] for j in range(n)]
-    return det
+        safe = select(p != 0, p, 1.0)
+        for i in range(col + 1, k):
+            m = K[i, col] / safe
+            for n in range(col, k + 1):
+                K[i, n] = K[i, n] - m * K[col, n]
+    for j in range(k - 1, -1, -1):
+        acc = K[j, k]
+        for n in range(j + 1, k):
+            acc = acc - K[j, n] * x[n]
+        x[j] = acc / K[j, j]
+    for j in range(k):
+        f[j] = f[j] - x[j]
+    return big_r, big_g, det
 
 
 def capacity(row: Row, F):
@@ -305,15 +345,17 @@ def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
                    values=tuple(values), powers=tuple(powers))
 
 
-def _constant(loads: Loads) -> Loads:
-    """``loads`` with each wrench that is the same at every sample kept as one sample,
-    broadcast along the samples."""
-    def one(w):
-        w = np.asarray(w)
-        if w.ndim and w.strides[-1] != 0 and np.all(w == w[..., :1]):
-            return np.broadcast_to(w[..., :1], w.shape)
-        return w
-    return replace(loads, wrenches=[one(w) for w in loads.wrenches])
+def unit(none: Loads, kin, row: Row) -> Loads:
+    """``none`` (no load) with a unit effort in the friction load ``row``'s joint
+    (:func:`linkdyn.loads.joint_effort_units`): a revolute joint's couple is the same at every
+    sample, kept as one sample broadcast along them (the compiled kernels then read it once)."""
+    w = list(none.wrenches)
+    shape = (3,) + kin.shape
+    on_b, on_a = joint_effort_units(kin, row.body, row.body2, row.point, row.axis)
+    w[row.body2] = np.broadcast_to(on_a, shape)
+    w[row.body] = np.broadcast_to(on_b, shape)
+    w[0] = none.wrenches[0]   # the ground's share is no wrench on a moving body
+    return replace(none, wrenches=w)
 
 
 def forces(react, friction_rows) -> np.ndarray:
@@ -347,7 +389,8 @@ def equations(friction_rows, F, qd, sense=None):
 
 def newton(friction_rows, F0, A, qd, sense=None):
     """The friction efforts ``f`` (k, ...) that solve ``f = g(F0 + A f)`` (T9)-(T10), by
-    Newton's method from the frictionless solution ``f = 0``, every sample at once.
+    Newton's method (:func:`newton_update`) from the frictionless solution ``f = 0``, every
+    sample at once.
 
     Parameters
     ----------
@@ -371,65 +414,44 @@ def newton(friction_rows, F0, A, qd, sense=None):
         of the residuals (..., 1): the largest friction effort of the run, per design.
     """
     k, shape = len(friction_rows), qd.shape[1:]
-    # components as lists of sample arrays: the loops run over the (few) loads, never samples
-    F0 = [[F0[j, c] for c in range(2)] for j in range(k)]
-    A = [[[A[j, n, c] for c in range(2)] for n in range(k)] for j in range(k)]
-
-    # what does not change with the forces: each load's a(qd) sense and viscous effort
-    c = [sliding_arm(r.arm, r.arm_static, r.stiction, qd[j],
-                     _sense(r, qd[j], None if sense is None else sense[j]))
-         for j, r in enumerate(friction_rows)]
-    v = [r.viscous * qd[j] for j, r in enumerate(friction_rows)]
-
-    def at(f):
-        # g(F0 + A f), dg/dF per load and the largest |g| per design (..., 1)
-        F = [[F0[j][i] + sum(A[j][n][i] * f[n] for n in range(k)) for i in range(2)]
-             for j in range(k)]
-        out = [dry_at(c[j], v[j], r.preload, F[j][0], F[j][1])
-               for j, r in enumerate(friction_rows)]
-        big = np.max([np.nanmax(np.abs(g), axis=-1, initial=0.0) for g, _ in out], axis=0)
-        return [g for g, _ in out], [d for _, d in out], np.asarray(big)[..., None]
-
-    f = [np.zeros(shape) for _ in range(k)]
-    scale = 0.0
-    iterations = np.zeros(shape, int)
+    F0, A = np.asarray(F0, float), np.asarray(A, float)
+    # what does not change with the forces: each load's a(qd) sense, viscous effort, preload
+    c = np.zeros((k,) + shape)
+    v, pre = np.zeros((k,) + shape), np.zeros((k,) + shape)
+    for j, r in enumerate(friction_rows):
+        c[j] = sliding_arm(r.arm, r.arm_static, r.stiction, qd[j],
+                           _sense(r, qd[j], None if sense is None else sense[j]))
+        v[j], pre[j] = r.viscous * qd[j], r.preload
+    f, res = np.zeros((k,) + shape), np.zeros((k,) + shape)
+    K, x = np.zeros((k, k + 1) + shape), np.zeros((k,) + shape)
     # a state whose forces are not finite is not iterated (nor locked)
-    open_ = np.ones(shape, bool)
-    for x in [x for row in F0 for x in row]:
-        open_ &= np.isfinite(x)
-    finite_state = open_.copy()
-    for x in [x for row in A for col in row for x in col]:
-        open_ &= np.isfinite(x)
-    done = ~open_
+    finite_state = np.all(np.isfinite(F0), axis=(0, 1)) if k else np.ones(shape, bool)
+    done = ~(finite_state & (np.all(np.isfinite(A), axis=(0, 1, 2)) if k else True))
+    converged, det = np.zeros(shape, bool), np.ones(shape)
+    iterations, scale = np.zeros(shape, int), 0.0
     for _ in range(MAX_ITERATIONS + 1):
-        # r(f) = f - g(F0 + A f), J = I - dg/dF . A per sample (k, k, ...)
-        g, dg, big = at(f)
-        scale = np.maximum(scale, big)
-        r = [f[j] - g[j] for j in range(k)]
-        big_r = _largest(r)
-        J = [[float(j == n) - (dg[j][0] * A[j][n][0] + dg[j][1] * A[j][n][1])
-              for n in range(k)] for j in range(k)]
-        done = done | (big_r <= TOL * np.maximum(scale, 1e-300))
+        new = f.copy()
+        with np.errstate(divide="ignore", invalid="ignore"):   # a singular J: not finite
+            big_r, big_g, d = newton_update(F0, A, c, v, pre, new, res, K, x)
+        scale = np.maximum(scale, np.nanmax(big_g, axis=-1, keepdims=True, initial=0.0))
+        # converged: every residual at most TOL of the sample's largest friction effort
+        now = ~done & (big_r <= TOL * np.maximum(big_g, 1e-300))
+        converged, det = converged | now, np.where(now, d, det)
+        done = done | now
         if np.all(done):
             break
-        # J^-1 r by elimination over the (few) rows, every sample at once; a singular J (a
-        # fold of the friction equations) ends that sample's iterations
-        step_, _ = solve_small([[np.where(done, float(j == n), J[j][n]) for n in range(k)]
-                                for j in range(k)], [np.where(done, 0.0, x) for x in r])
-        fold = ~np.isfinite(_largest(step_))
-        done = done | fold
-        f = [f[j] - np.where(fold, 0.0, step_[j]) for j in range(k)]
+        # a singular J (a fold of the friction equations) ends that sample's iterations
+        done = done | ~np.all(np.isfinite(new), axis=0)
+        f = np.where(done, f, new)
         iterations = iterations + ~done
-    converged = np.isfinite(_largest(f)) & (_largest(r) <= TOL * np.maximum(scale, 1e-300))
-    f, r = np.array(f).reshape((k,) + shape), np.array(r).reshape((k,) + shape)
     # a solution not reached from the frictionless one (J no longer positive) locks too
-    locked = finite_state & (~converged | ~(determinant(J, shape) > 0))
-    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(r), nan=np.inf), axis=0)
+    locked = finite_state & ~(converged & (det > 0))
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(res), nan=np.inf), axis=0)
                           if k else 0, -1)
     return np.where(locked, np.nan, f), iterations, locked, lock_joint, scale
 
 
-def solve(models, kin, applied: Loads, dynamics, reactions_stage):
+def solve(models, kin, applied: Loads, dynamics, reactions_stage, kernel=None):
     """Efforts, reactions and friction of a model with friction loads, solved together.
 
     Parameters
@@ -442,6 +464,10 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
         The other applied loads (:func:`linkdyn.loads.wrenches`, which leaves friction out).
     dynamics, reactions_stage : callable
         The backend's stages (:func:`linkdyn.analysis.stage_functions`).
+    kernel : callable, optional
+        On the compiled backend :func:`linkdyn.friction_compiled.solve`, which runs the 1 + k
+        cases and Newton's method in one kernel (the same steps), given ``(model, kin,
+        applied, units, rows, qd)`` as prepared here.
 
     Returns
     -------
@@ -452,23 +478,23 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     model = models if isinstance(models, Model) else list(models)[0]
     fr = rows(models, kin.layout.topo)
     k, shape = len(fr), kin.shape
-    T = shape[-1]
     qd = np.stack([np.broadcast_to(kin.joint_motion[1][r.joint], shape) for r in fr])
-    # F0: the reactions under the applied loads; A[:, l]: their response to a unit effort in
-    # friction load l, the stages under it alone less the stages under no load (linear in the
-    # loads: the motion's share cancels). Each a run of the stages on the same kinematics (no
-    # copy of it); a unit effort's wrenches the same at every sample (a revolute joint's
-    # couple) are kept as one sample, which the compiled kernels read once
-    def reaction_forces(loads):
-        return forces(reactions_stage(model, kin, loads, dynamics(kin, loads)), fr)
-    F0 = reaction_forces(applied)
+    # each friction load's wrenches under a unit effort alone; those the same at every sample
+    # (a revolute joint's couple) kept as one sample, which the compiled kernels read once
     zero = np.broadcast_to(np.zeros((3,) + (1,) * len(shape)), (3,) + shape)
     none = replace(applied, wrenches=[zero] * len(applied.wrenches), values=(), powers=(),
                    power=np.zeros(shape), on_ground=zero)
+    units = [unit(none, kin, r) for r in fr]
+    if kernel is not None:
+        return kernel(model, kin, applied, units, fr, qd)
+    # F0: the reactions under the applied loads; A[:, l]: their response to a unit effort in
+    # friction load l, the stages under it alone less the stages under no load (linear in the
+    # loads: the motion's share cancels); each a run of the stages on the same kinematics
+    def reaction_forces(loads):
+        return forces(reactions_stage(model, kin, loads, dynamics(kin, loads)), fr)
+    F0 = reaction_forces(applied)
     R0 = reaction_forces(none)
-    one = np.ones(shape)
-    A = np.stack([reaction_forces(_constant(with_efforts(none, kin, (r,), (one,)))) - R0
-                  for r in fr], axis=1)                          # (k, l, 2, ...)
+    A = np.stack([reaction_forces(u) - R0 for u in units], axis=1)   # (k, l, 2, ...)
     f, iterations, locked, lock_joint, scale = newton(fr, F0, A, qd)
     # the stages once more with the converged friction
     final = with_efforts(applied, kin, fr, f)
@@ -477,10 +503,15 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage):
     g, _ = equations(fr, forces(react, fr), qd)
     res = np.abs(f - g) / np.maximum(scale, 1e-300)
     residual = float(np.nanmax(res, initial=0.0)) if res.size else 0.0
-    out = Friction(tuple(model.joints[r.joint].name for r in fr),
-                   tuple(r.label for r in fr), tuple(r.axis is None for r in fr),
-                   f, f * qd, int(np.max(iterations, initial=0)), residual, locked, lock_joint)
-    return final, dyn, react, out
+    return final, dyn, react, friction_of(model, fr, f, qd, iterations, residual, locked,
+                                          lock_joint)
+
+
+def friction_of(model, fr, f, qd, iterations, residual, locked, lock_joint) -> Friction:
+    """The :class:`Friction` of the efforts ``f`` (k, ...) at the rates ``qd``."""
+    return Friction(tuple(model.joints[r.joint].name for r in fr),
+                    tuple(r.label for r in fr), tuple(r.axis is None for r in fr),
+                    f, f * qd, int(np.max(iterations, initial=0)), residual, locked, lock_joint)
 
 
 # --- what a person reads -----------------------------------------------------------------------
@@ -494,17 +525,68 @@ def columns(fr: Friction, model: Model):
         yield f"friction_power_{j}", fr.power[k], "W"
 
 
+def output_power(sol) -> tuple[np.ndarray, np.ndarray]:
+    """The power the mechanism delivers to its output loads (``model.output``, ``[analysis]
+    output``), ``P_out = -sum P_load`` (a load the mechanism works against takes power: its
+    own power is negative), and the instantaneous efficiency ``eta = P_out / P_in``, ``P_in``
+    the drivers' power, NaN where the drivers put no power in (``P_in <= 0``), both (...), W
+    and 1. With inertia ``eta`` also counts the power stored in motion (``P_in = P_out +
+    dKE/dt + dPE/dt + friction's loss``); over whole cycles that share returns."""
+    m = sol.model
+    names = [ld.name for ld in m.loads]
+    p_out = -sum((sol.loads.powers[names.index(n)] for n in m.output), np.zeros(sol.kin.shape))
+    p_in = sol.driver_power
+    ok = p_in > 0
+    return p_out, np.where(ok, p_out / np.where(ok, p_in, 1.0), np.nan)
+
+
+def output_summary(sol) -> dict:
+    """The output loads' figures over the run, SI: their names, the work done on them
+    (``output_work_J``, the integral of :func:`output_power`'s ``P_out`` over the valid
+    samples), the drivers' net work and the efficiency over the run, their ratio (None when the
+    drivers do no positive net work), and the least and the largest instantaneous efficiency
+    (None where the drivers never put power in)."""
+    w_out, w_in, ratio = (float(x) for x in output_efficiency(sol))
+    eta = output_power(sol)[1]
+    eta = eta[np.asarray(sol.valid, bool) & np.isfinite(eta)]
+    return {"loads": list(sol.model.output), "output_work_J": w_out, "driver_work_J": w_in,
+            "efficiency": ratio if np.isfinite(ratio) else None,
+            "efficiency_least": float(np.min(eta)) if eta.size else None,
+            "efficiency_largest": float(np.max(eta)) if eta.size else None}
+
+
+def output_lines(s: dict) -> list[str]:
+    """The printed line of :func:`output_summary`'s dict."""
+    def pct(x):
+        return "n/a" if x is None else f"{100 * x:.2f}%"
+
+    return [f"  output ({', '.join(s['loads'])}): {s['output_work_J']:.6g} J of the drivers' "
+            f"{s['driver_work_J']:.6g} J, efficiency {pct(s['efficiency'])} over the run; "
+            f"instantaneous {pct(s['efficiency_least'])} .. {pct(s['efficiency_largest'])}"]
+
+
 def energies(sol) -> tuple[np.ndarray, np.ndarray]:
     """The energy each friction load dissipates over the run (k, ...) and the drivers' net
     work over it (...), J: trapezoidal integrals over the valid samples of ``-power`` and of
     the drivers' power, over the last (time) axis (a batch: one per design)."""
+    return -over_run(sol, sol.friction.power), over_run(sol, sol.driver_power)
+
+
+def over_run(sol, p) -> np.ndarray:
+    """The integral of the power ``p`` (..., T) over the run, J: the trapezoidal rule over
+    ``sol``'s valid samples (an invalid one counts as zero power), along the last axis."""
     t, valid = np.asarray(sol.t), np.asarray(sol.valid, bool)
+    p = np.where(valid, p, 0.0)
+    return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
 
-    def integral(p):
-        p = np.where(valid, p, 0.0)
-        return np.sum(0.5 * (p[..., 1:] + p[..., :-1]) * np.diff(t), axis=-1)
 
-    return -integral(sol.friction.power), integral(sol.driver_power)
+def output_efficiency(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The work done on the output loads over the run (:func:`output_power`), the drivers' net
+    work and the efficiency over the run, their ratio (NaN where the drivers do no positive
+    net work), J, J and 1 (...: one per design of a batch)."""
+    w_out, w_in = over_run(sol, output_power(sol)[0]), over_run(sol, sol.driver_power)
+    ok = w_in > 0
+    return w_out, w_in, np.where(ok, w_out / np.where(ok, w_in, 1.0), np.nan)
 
 
 def efficiency(lost, work):

@@ -166,24 +166,32 @@ def _add_force(w, kin, i, r, f):
 REACTION_KINDS = ("friction",)
 
 
+def joint_effort_units(kin: KinematicSolution, body: int, body2: int, point: str, axis):
+    """The wrenches (3, ...) about ``O_body`` and ``O_body2`` of a unit effort inside a joint
+    whose second body is ``body`` (joint point ``point``) and first ``body2`` (tree indices): a
+    unit torque on the second body and minus it on the first for ``axis`` None (the same at
+    every sample: shape (3, 1, ...)), else a unit force along ``axis`` (2,) (or (2, D, 1)),
+    fixed in the first body's frame, at the second body's point, and minus it on the first
+    body at the same place."""
+    if axis is None:
+        unit = np.zeros((3,) + (1,) * len(kin.shape))
+        unit[0] = 1.0
+        return unit, -unit
+    r_b, _ = _point(kin, body, point)
+    e = kin.pose.rotate(body2, axis)
+    return (_stack(force_at(e, kin.pose.r[body], r_b)),
+            _stack(force_at(-e, kin.pose.r[body2], r_b)))
+
+
 def add_joint_effort(w, kin: KinematicSolution, body: int, body2: int, point: str, axis,
                      x) -> None:
     """Accumulate into ``w`` (per-body wrenches, tree order) the effort ``x`` (batch shape)
-    inside a joint whose second body is ``body`` (joint point ``point``) and first ``body2``
-    (tree indices): a torque x (N m) for ``axis`` None, else a force x (N) along ``axis``
-    (2,) (or (2, D, 1)), fixed in the first body's frame."""
-    shape = kin.shape
-    if axis is None:
-        # a torque x on the joint's second body and -x on its first
-        w[body] = w[body] + twist(x, np.zeros((2,) + shape))
-        w[body2] = w[body2] - twist(x, np.zeros((2,) + shape))
-    else:
-        # a force x e along the axis (fixed in the first body) at the second body's
-        # point, and -x e on the first body at the same place
-        r_b, _ = _point(kin, body, point)
-        e = kin.pose.rotate(body2, axis)
-        _add_force(w, kin, body, r_b, x * e)
-        _add_force(w, kin, body2, r_b, -x * e)
+    inside a joint (:func:`joint_effort_units`, arguments as there): a torque x (N m) for
+    ``axis`` None, else a force x (N) along ``axis``."""
+    # x times the unit effort's wrenches on the second and the first body
+    on_b, on_a = joint_effort_units(kin, body, body2, point, axis)
+    w[body] = w[body] + on_b * x
+    w[body2] = w[body2] + on_a * x
 
 
 def values(lay, load, kin: KinematicSolution) -> np.ndarray:

@@ -227,6 +227,10 @@ class Model:
         ``BODY.POINT`` whose path straightness the summary reports.
     path_range : (float, float) or None
         Range of the first driver's coordinate for ``path_point``, rad or m.
+    output : tuple[str, ...]
+        ``[analysis] output``: the names of the loads the mechanism works against (its output),
+        whose power the instantaneous efficiency divides by the drivers' power
+        (:func:`linkdyn.friction.output_power`).
     source : str
         File the model came from ('' if built in Python).
     length_unit, angle_unit : str
@@ -250,6 +254,7 @@ class Model:
     description: str = ""
     path_point: str | None = None
     path_range: tuple[float, float] | None = None
+    output: tuple[str, ...] = ()
     length_unit: str = "m"
     angle_unit: str = "rad"
     initial_q: dict[str, float] = field(default_factory=dict)

@@ -182,6 +182,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
     if getattr(sol, "friction", None) is not None:   # energy lost per joint, efficiency
         from .. import friction
         out["friction"] = friction.summary(sol)
+    if getattr(sol.model, "output", ()):   # the work on the output loads, the efficiency
+        from .. import friction
+        out["output"] = friction.output_summary(sol)
     return out
 
 

@@ -140,11 +140,12 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     phi, q = _assembly(r, data.get("assembly", {}), bodies, joints)
     initial_q, initial_qd = _initial(r, data.get("initial", {}), joints, drivers)
     cut = _topology(r, data.get("topology", {}), joints, drivers)
-    duration, cycles, samples, path_point, path_range = _analysis(
-        r, data.get("analysis", {}), drivers, bodies, joints)
+    duration, cycles, samples, path_point, path_range, output = _analysis(
+        r, data.get("analysis", {}), drivers, bodies, joints, loads)
     return Model(name=name, bodies=tuple(bodies.values()), joints=tuple(joints.values()),
                  drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads), gravity=gravity,
                  assembly_phi=phi, assembly_q=q, cut=cut, duration=duration, cycles=cycles,
                  samples=samples, source=source, description=description,
-                 path_point=path_point, path_range=path_range, length_unit=r.length_name,
+                 path_point=path_point, path_range=path_range, output=output,
+                 length_unit=r.length_name,
                  angle_unit=r.angle_name, initial_q=initial_q, initial_qd=initial_qd)

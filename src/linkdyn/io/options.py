@@ -68,11 +68,13 @@ def _topology(r: _Reader, section: Any, joints, drivers) -> tuple[str, ...] | No
     return tuple(cut)
 
 
-def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
-    """Optional CLI defaults: ``(duration s, cycles, samples, path_point, path_range)``, each
-    None when absent; ``path_range`` is a range of the first driver's coordinate, SI."""
+def _analysis(r: _Reader, section: Any, drivers, bodies, joints, loads=()) -> tuple:
+    """Optional CLI defaults: ``(duration s, cycles, samples, path_point, path_range,
+    output)``, each None when absent (``output`` empty); ``path_range`` is a range of the first
+    driver's coordinate, SI; ``output`` the names of the loads (of ``loads``) the mechanism
+    works against."""
     section = r.table(section, "analysis", ("duration", "cycles", "samples", "path_point",
-                                            "path_range"))
+                                            "path_range", "output"))
     if "duration" in section and "cycles" in section:
         r.fail("analysis", "give either duration or cycles, not both", "Remove one of them")
     duration = (r.number(section["duration"], "analysis.duration", "s", positive=True)
@@ -106,4 +108,31 @@ def _analysis(r: _Reader, section: Any, drivers, bodies, joints) -> tuple:
                           "rad or deg" if revolute else "length unit", n=2)
         scale = r.angle if revolute else r.length
         path_range = (float(lo * scale), float(hi * scale))
-    return duration, cycles, samples, path_point, path_range
+    return duration, cycles, samples, path_point, path_range, _output(r, section, loads)
+
+
+def _output(r: _Reader, section: dict, loads) -> tuple[str, ...]:
+    """``[analysis] output``: a list of names of loads that are not friction (whose power
+    is the mechanism's output), each once."""
+    if "output" not in section:
+        return ()
+    names = {ld.name: ld.kind for ld in loads if ld.name}
+    value = section["output"]
+    if not isinstance(value, list) or not value:
+        r.fail("analysis.output", f"expected a list of load names, got {_type_name(value)}",
+               "Write e.g. output = [\"press\"], naming [[loads]] by their name")
+    out = []
+    for k, x in enumerate(value):
+        name = r.string(x, f"analysis.output[{k}]")
+        if name not in names:
+            r.fail(f"analysis.output[{k}]", f"'{name}' is not the name of a load",
+                   "Name a [[loads]] entry (give it name = \"...\")"
+                   + (f"; loads named: {', '.join(sorted(names))}" if names else ""))
+        if names[name] == "friction":
+            r.fail(f"analysis.output[{k}]", f"'{name}' is a friction load, which is a loss",
+                   "Name the load the mechanism works against (a force, torque or damper)")
+        if name in out:
+            r.fail(f"analysis.output[{k}]", f"load '{name}' is listed twice",
+                   "List each output load once")
+        out.append(name)
+    return tuple(out)

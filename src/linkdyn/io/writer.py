@@ -205,6 +205,8 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
     if model.path_range is not None:
         s = scale_of(model.drivers[0].joint) if model.drivers else A
         analysis["path_range"] = [_num(x / s) for x in model.path_range]
+    if model.output:
+        analysis["output"] = list(model.output)
     if analysis:
         out["analysis"] = analysis
     return {k: v for k, v in out.items() if v != []}

@@ -72,9 +72,9 @@ def multiplier_labels(sol) -> list[tuple[str, str, str]]:
 
 def _known_column(name: str) -> bool:
     prefixes = ("q_", "qd_", "qdd_", "phi_", "omega_", "alpha_", "tau_", "force_", "Fx_", "Fy_",
-                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_", "power_", "value_")
-    return name == "t" or name.startswith(prefixes) or name in ("kinetic_energy",
-                                                               "potential_energy")
+                "M_", "x_", "y_", "vx_", "vy_", "ax_", "ay_", "power_", "value_", "friction_")
+    return name == "t" or name.startswith(prefixes) or name in (
+        "kinetic_energy", "potential_energy", "output_power", "efficiency")
 
 
 def body_shape(points: dict) -> tuple[str, list[str]]:
@@ -378,6 +378,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
     # each load's value against time, and the power of every driver and load
     from ..loads import VALUE_COLUMNS, VALUE_UNITS, labels
     for n, (ld, label) in enumerate(zip(m.loads, labels(m))):
+        if ld.kind not in VALUE_COLUMNS:   # friction: its friction_<joint> columns, below
+            continue
         names = VALUE_COLUMNS[ld.kind]
         if not all(f"{c}_{label}" in cols for c in names):
             continue
@@ -391,6 +393,24 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         panel("Loads and power", "Power of the drivers and loads", "W",
               [{"key": add(f"col:{c}", cols[c]), "label": c[len("power_"):],
                 "color": PALETTE[n % len(PALETTE)]} for n, c in enumerate(powers)])
+    # friction: each joint's couple or force and its power; the instantaneous efficiency
+    fr = getattr(sol, "friction", None)
+    if fr is not None:
+        for angular, title, unit in ((True, "Friction couples", "N m"),
+                                     (False, "Friction forces", "N")):
+            panel("Friction and efficiency", title, unit,
+                  [{"key": add(f"col:friction_{j}", cols[f"friction_{j}"]), "label": j,
+                    "color": jcolor[j]} for j, a in zip(fr.joints, fr.angular) if a == angular])
+        panel("Friction and efficiency", "Friction power (minus the power it dissipates)", "W",
+              [{"key": add(f"col:friction_power_{j}", cols[f"friction_power_{j}"]), "label": j,
+                "color": jcolor[j]} for j in fr.joints])
+    if "efficiency" in cols:
+        panel("Friction and efficiency", "Instantaneous efficiency (output power / drivers' power)",
+              "%", [{"key": add("col:efficiency", 100 * np.asarray(cols["efficiency"], float)),
+                     "label": "η", "color": PALETTE[0]}])
+        panel("Friction and efficiency", "Power into the output loads", "W",
+              [{"key": add("col:output_power", cols["output_power"]), "label": "output",
+                "color": PALETTE[1]}])
     for n, name in enumerate(c for c in cols if not _known_column(c)):
         vals = np.asarray(cols[name], float)
         if vals.shape != np.shape(sol.t):

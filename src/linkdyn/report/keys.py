@@ -155,6 +155,27 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
             items.append({"group": "Energy", "label": f"flywheel on {j}",
                           "value": float(fw["inertia_kg_m2"]), "unit": "kg m²", "signed": False,
                           "k": None, "note": f"for C_s = {fw.get('speed_fluctuation')}"})
+    # friction: the energy it takes over the run (and per cycle), the efficiency over the run
+    fr, out = summary.get("friction"), summary.get("output")
+    if isinstance(fr, dict):
+        per = fr.get("energy_lost_per_cycle_J")
+        items.append({"group": "Friction and efficiency", "label": "energy lost in friction",
+                      "value": float(fr["energy_lost_J"]), "unit": "J", "signed": False,
+                      "k": None, "note": "over the run" + (f", {per:.4g} J per cycle"
+                                                          if per is not None else "")})
+        if fr.get("efficiency") is not None:
+            items.append({"group": "Friction and efficiency", "label": "efficiency (friction)",
+                          "value": 100 * float(fr["efficiency"]), "unit": "%",
+                          "signed": False, "k": None,
+                          "note": "1 - friction loss / drivers' net work"})
+    if isinstance(out, dict) and out.get("efficiency") is not None:
+        eta = np.asarray(sol.columns["efficiency"], float)
+        items.append({"group": "Friction and efficiency",
+                      "label": f"efficiency to {', '.join(out['loads'])}",
+                      "value": 100 * float(out["efficiency"]), "unit": "%", "signed": False,
+                      "k": None, "note": "output work / drivers' net work over the run"})
+        add("Friction and efficiency", "least instantaneous efficiency", 100 * eta,
+            _k(eta, np.nanargmin), "%", note="output power / drivers' power")
     ps = summary.get("path_straightness")
     if isinstance(ps, dict) and ps.get("max_deviation_m") is not None:
         items.append({"group": "Path", "label": f"straightness of {ps.get('point', 'path')}",

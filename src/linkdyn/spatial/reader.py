@@ -52,13 +52,14 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
                    "Remove the friction load, or model it as a joint_torque formula of qd_<joint>")
     loads = _loads(r, data.get("loads", []), bodies, joints)
     analysis = data.get("analysis", {})
-    for key in ("path_point", "path_range"):
+    for key in ("path_point", "path_range", "output"):
         if isinstance(analysis, dict) and key in analysis:
             r.fail(f"analysis.{key}", f"{key} is not yet for spatial models",
-                   f"Remove {key} (the summary of a spatial run has no path straightness)")
+                   f"Remove {key} (the summary of a spatial run has no "
+                   + ("efficiency curve)" if key == "output" else "path straightness)"))
     initial_q, initial_qd = _initial(r, data.get("initial", {}), joints, drivers)
     cut = _topology(r, data.get("topology", {}), joints, drivers)
-    duration, cycles, samples, path_point, path_range = _analysis(
+    duration, cycles, samples, path_point, path_range, _ = _analysis(
         r, data.get("analysis", {}), drivers, bodies, joints)
     return Model(name=name, bodies=tuple(bodies.values()), joints=tuple(joints.values()),
                  drivers=tuple(d for _, d in drivers.values()), loads=tuple(loads),

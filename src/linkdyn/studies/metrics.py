@@ -26,6 +26,10 @@ Each metric is computed by the same functions the summary of ``linkdyn analyze``
     With friction loads: the energy all of them dissipate over the run, J, and the mechanical
     efficiency over the run, ``1 - friction_loss / drivers' net work`` (NaN when the drivers do
     no positive net work), better larger (:func:`linkdyn.friction.energies`, ``efficiency``).
+``output_efficiency``
+    With ``[analysis] output``: the work done on the output loads over the drivers' net work
+    over the run (NaN when the drivers do no positive net work), better larger
+    (:func:`linkdyn.friction.output_efficiency`, the summary's ``output.efficiency``).
 ``stroke_<joint>``
     Travel (largest minus smallest coordinate) of each undriven guide on the ground, the slider
     of a slider-crank, m (:func:`linkdyn.design.path.travel`, as the summary's
@@ -61,7 +65,7 @@ __all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost",
            "unit", "quantity"]
 
 # metrics a designer wants large; every other metric is better small
-_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency")
+_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency", "output_efficiency")
 
 
 def sense(name: str) -> str:
@@ -117,7 +121,7 @@ def _effort(model: Model, joint: str) -> str:
 
 #: Metrics of planar models only (a spatial model has the efforts' and the joint forces').
 PLANAR_ONLY = ("min_transmission_angle", "path_deviation", "flywheel_inertia", "stroke_",
-               "friction_loss", "efficiency")
+               "friction_loss", "efficiency", "output_efficiency")
 
 
 def _guides(model: Model) -> list[str]:
@@ -163,6 +167,8 @@ def names(model: Model, *, path_point=None) -> list[str]:
     out += [f"stroke_{j}" for j in _guides(model)]
     if any(ld.kind == "friction" for ld in model.loads):
         out += ["friction_loss", "efficiency"]
+    if model.output:
+        out.append("output_efficiency")
     return out
 
 
@@ -251,6 +257,9 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
         lost, work = friction.energies(sol)
         out["friction_loss"] = np.sum(lost, axis=0)
         out["efficiency"] = friction.efficiency(out["friction_loss"], work)
+    if "output_efficiency" in want:
+        from .. import friction
+        out["output_efficiency"] = friction.output_efficiency(sol)[2]
     return {w: out[w] for w in wanted}
 
 

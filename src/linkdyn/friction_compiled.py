@@ -1,0 +1,280 @@
+"""Compiled friction solve: the k + 1 right-hand sides of the stages on one block's kinematics,
+and friction's Newton's method per sample, in one kernel.
+
+The method is :func:`linkdyn.friction.solve`'s (docs/theory.md, "Friction that grows with the
+joint load"): at a fixed state every reaction, multiplier and effort is affine in the k friction
+efforts, ``R = R0 + sum_l (R_l - R0) f_l``, ``R0`` under the applied loads and ``R_l`` under
+those plus a unit effort in friction load l. For each block of samples, :func:`_kernel` copies
+the block's kinematics once into block-local scratch and runs the stages of
+:mod:`linkdyn.dynamics.compiled` on it for the ``1 + k`` cases (its Newton–Euler, backward
+recursion, multipliers and reactions steps, unchanged: only the applied wrenches differ), then
+solves each sample's friction equations by :func:`linkdyn.friction.newton_update` (the step the
+numpy path iterates) and writes ``R0 + sum_l (R_l - R0) f_l`` for every joint, multiplier and
+effort: no kinematics is copied per case and no stage runs again with the converged efforts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .compiled import inline, njit
+from .dynamics import compiled as cd
+from .dynamics.denoc import DynamicSolution
+from .friction import (MAX_ITERATIONS, TOL, friction_of, newton_update, sliding_arm,
+                       with_efforts)
+from .reactions import Reactions
+
+
+@inline
+def _copy(x, d, k0, nb, out):
+    """Rows ``x[..., d, k0:k0 + nb]`` (any leading axes, flattened to ``rows``) into the block
+    scratch ``out`` (rows, block)."""
+    for a in range(x.shape[0]):
+        for k in range(nb):
+            out[a, k] = x[a, d, k0 + k]
+
+
+@inline
+def _wrenches(w, d, k0, nb, out, add):
+    """The block's wrenches of ``w`` (n, 3, D, Tw) (one sample when Tw = 1: the same at every
+    sample) into ``out`` (n, 3, 1, block), added to it if ``add``."""
+    one = w.shape[3] == 1
+    for i in range(w.shape[0]):
+        for j in range(3):
+            for k in range(nb):
+                x = w[i, j, d, 0 if one else k0 + k]
+                out[i, j, 0, k] = out[i, j, 0, k] + x if add else x
+
+
+@njit
+def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_tau, o_ke,
+            o_pivot, o_f, o_its, o_state, o_res, o_big, block):
+    """Every sample's reactions, multipliers, efforts and friction efforts (written in place,
+    batch ``(D, T)`` last). Inputs as :func:`linkdyn.dynamics.compiled.solve`'s; ``units``
+    (k, n, 3, D, Tu) the unit efforts' wrenches; ``fj`` (k,) each friction load's joint; ``fp``
+    (k, 6, Dp) its arm, static arm, stiction speed, transition speed, viscous coefficient and
+    preload per design; ``qd`` (k, D, T) its joint's rate. Outputs: ``o_f`` (k, D, T) the
+    efforts (NaN where locked), ``o_its`` the iterations, ``o_state`` (:func:`_solved`),
+    ``o_res`` (k, D, T) the residuals and ``o_big`` the largest friction effort at the
+    solution."""
+    n, nr, nv, nj, kf = L.parent.shape[0], J.shape[0], L.driven.shape[0], o_on.shape[0], \
+        fj.shape[0]
+    m = L.dependent.shape[0]
+    D, T = c.shape[1], c.shape[2]
+    B = block
+    z = np.int64(0)
+    # one block's kinematics, shared by the 1 + k cases
+    cb, sb = np.zeros((n, 1, B)), np.zeros((n, 1, B))
+    rb, eb = np.zeros((n, 2, 1, B)), np.zeros((n, 2, 1, B))
+    twb, tdb = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B))
+    Jb = np.zeros((nr, max(n - 1, 1), 1, B))
+    # each case's stages over the block
+    wb, dummy = np.zeros((n, 3, 1, B)), np.zeros((1, 1, 1, 1))
+    wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
+    Am, lam, piv, ke = np.zeros((m, m + 1, B)), np.zeros((max(m, 1), B)), np.zeros(B), \
+        np.zeros(B)
+    lam_c, tau_c = np.zeros((kf + 1, max(nr, 1), 1, B)), np.zeros((kf + 1, max(nv, 1), 1, B))
+    piv_c, tau_b = np.zeros((1, B)), np.zeros((max(nv, 1), B))
+    on_c, tree = np.zeros((kf + 1, nj, 3, 1, B)), np.zeros((n, 3, 1, B))
+    wc, zero = np.zeros((n, 3, B)), np.zeros(B)
+    # the reactions' rows flat: joint j's component a is row 3 j + a
+    on_rows, o_rows = on_c.reshape((kf + 1, nj * 3, 1, B)), o_on.reshape((nj * 3, D, T))
+    # one sample's friction equations
+    F0, A = np.zeros((kf, 2)), np.zeros((kf, kf, 2))
+    cs, vs, ps = np.zeros(kf), np.zeros(kf), np.zeros(kf)
+    f, old, res, K, x = np.zeros(kf), np.zeros(kf), np.zeros(kf), np.zeros((kf, kf + 1)), \
+        np.zeros(kf)
+    for d in range(D):
+        dp = d if L.mass.shape[1] > 1 else 0
+        dq = d if fp.shape[2] > 1 else 0
+        for k0 in range(0, T, B):
+            nb = min(B, T - k0)
+            _copy(c, d, k0, nb, cb[:, 0])
+            _copy(s, d, k0, nb, sb[:, 0])
+            for i in range(n):
+                _copy(r[i], d, k0, nb, rb[i, :, 0])
+                _copy(e[i], d, k0, nb, eb[i, :, 0])
+                _copy(tw[i], d, k0, nb, twb[i, :, 0])
+                _copy(twd[i], d, k0, nb, tdb[i, :, 0])
+            for a in range(nr):
+                _copy(J[a], d, k0, nb, Jb[a, :, 0])
+            # case 0 the applied loads, case 1 + l those and a unit effort in friction load l:
+            # the dynamics (w_star, w_tilde, Q, lam, tau), then the reactions
+            for case in range(kf + 1):
+                _wrenches(w_ext, d, k0, nb, wb, False)
+                if case > 0:
+                    _wrenches(units[case - 1], d, k0, nb, wb, True)
+                wtilde[0, :, 0, :nb] = 0.0
+                cd._newton_euler(L, z, dp, z, nb, z, z, cb, sb, twb, tdb, dummy, wb, ke,
+                                 wstar, wtilde)
+                cd._composite(L, rb, z, z, nb, z, z, wtilde)
+                cd._generalized(L, z, z, nb, z, z, eb, wtilde, Q)
+                cd._multipliers(L, z, z, nb, Jb, Q[:, 0, 0:nb], Am, lam, piv, lam_c[case],
+                                tau_c[case], piv_c)
+                if case == 0:
+                    o_ke[d, k0:k0 + nb] = ke[:nb]
+                    o_pivot[d, k0:k0 + nb] = piv_c[0, :nb]
+                for a in range(nv):
+                    tau_b[a, :nb] = tau_c[case, a, 0, :nb]
+                cd._cut_wrenches(L, z, dp, z, nb, cb, sb, rb, lam, zero, wc, on_c[case])
+                cd._tree_reactions(L, z, dp, z, nb, z, z, False, cb, sb, rb, eb, tau_b, wc,
+                                   wstar, tree, on_c[case])
+            for k in range(nb):
+                _sample(on_c, k, fj, fp, dq, qd, d, k0 + k, F0, A, cs, vs, ps)
+                kk = k0 + k
+                _solved(f, old, F0, A, cs, vs, ps, res, K, x, o_its, o_state, o_res, o_big,
+                        d, kk)
+                # R = R0 + sum_l (R_l - R0) f_l, for every joint, multiplier and effort
+                for j in range(kf):
+                    o_f[j, d, kk] = f[j]
+                _combine(on_rows, k, f, o_rows, d, kk)
+                _combine(lam_c, k, f, o_lam, d, kk)
+                _combine(tau_c, k, f, o_tau, d, kk)
+
+
+@inline
+def _combine(cases, k, f, out, d, kk):
+    """``y = y0 + sum_l (y_l - y0) f_l`` (T10) of every row of ``cases`` (1 + k, rows, 1,
+    block) at block sample k, the values under the 1 + k cases, into ``out`` (rows, D, T) at
+    sample ``kk`` of design d."""
+    for a in range(out.shape[0]):
+        y0 = cases[0, a, 0, k]
+        y = y0
+        for n in range(f.shape[0]):
+            y += (cases[1 + n, a, 0, k] - y0) * f[n]
+        out[a, d, kk] = y
+
+
+@inline
+def _sample(on_c, k, fj, fp, dq, qd, d, kk, F0, A, cs, vs, ps):
+    """Sample k's friction equations from the block's cases: ``F0``, ``A`` (T10), each load's
+    sliding arm, viscous effort and preload at its rate ``qd[:, d, kk]``."""
+    for j in range(fj.shape[0]):
+        jj = fj[j]
+        F0[j, 0], F0[j, 1] = on_c[0, jj, 1, 0, k], on_c[0, jj, 2, 0, k]
+        for n in range(fj.shape[0]):
+            A[j, n, 0] = on_c[1 + n, jj, 1, 0, k] - F0[j, 0]
+            A[j, n, 1] = on_c[1 + n, jj, 2, 0, k] - F0[j, 1]
+        q = qd[j, d, kk]
+        cs[j] = sliding_arm(fp[j, 0, dq], fp[j, 1, dq], fp[j, 2, dq], q, np.tanh(q / fp[j, 3, dq]))
+        vs[j], ps[j] = fp[j, 4, dq] * q, fp[j, 5, dq]
+
+
+#: :func:`_solved`'s outcome of a sample: not iterated (its forces are not finite), solved, locked
+NOT_ITERATED, SOLVED, LOCKED = 0, 1, 2
+
+
+@inline
+def _solved(f, old, F0, A, cs, vs, ps, res, K, x, o_its, o_state, o_res, o_big, d, kk):
+    """Newton's method on one sample's friction equations from ``f = 0``, as
+    :func:`linkdyn.friction.newton` drives it (the same step, stop and lock rules); ``f`` NaN
+    where it locks. A state whose forces are not finite is not iterated."""
+    kf = f.shape[0]
+    finite, open_ = True, True
+    for j in range(kf):
+        f[j], res[j] = 0.0, np.nan
+        finite = finite and np.isfinite(F0[j, 0]) and np.isfinite(F0[j, 1])
+        for n in range(kf):
+            open_ = open_ and np.isfinite(A[j, n, 0]) and np.isfinite(A[j, n, 1])
+    its, ok, det, big_g = 0, False, 1.0, np.nan
+    if finite and open_:
+        for _ in range(MAX_ITERATIONS + 1):
+            old[:] = f
+            big_r, big_g, det = newton_update(F0, A, cs, vs, ps, f, res, K, x)
+            if big_r <= TOL * max(big_g, 1e-300):   # converged at the efforts before the step
+                f[:] = old
+                ok = True
+                break
+            f_ok = True
+            for j in range(kf):
+                f_ok = f_ok and np.isfinite(f[j])
+            if not f_ok:                               # a singular J: a fold, it ends here
+                f[:] = old
+                break
+            its += 1
+    state = NOT_ITERATED
+    if finite:   # locked: no solution reached from f = 0 (J no longer positive there)
+        state = SOLVED if ok and det > 0 else LOCKED
+    if state == LOCKED:
+        f[:] = np.nan
+    o_its[d, kk], o_state[d, kk], o_big[d, kk] = its, state, big_g
+    for j in range(kf):
+        o_res[j, d, kk] = res[j]
+
+
+def solve(model, kin, applied, units, friction_rows, qd):
+    """:func:`linkdyn.friction.solve` on the compiled backend, after its inputs: ``units`` the
+    unit efforts' Loads (one per friction load), ``qd`` (k, ...) their joints' rates.
+
+    Returns
+    -------
+    (Loads, DynamicSolution, Reactions, Friction)
+        As :func:`linkdyn.friction.solve`; the dynamics' and reactions' internals computed by
+        the compiled stages under the applied loads with the friction in when first read.
+    """
+    dyn, react, f, iterations, state, res, big_g = _run(kin, applied, units, friction_rows, qd)
+    locked = state == LOCKED
+    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(res), nan=np.inf), axis=0),
+                          -1)
+    # the residual at the solution, relative to the largest friction effort of the run
+    scale = np.nanmax(big_g, axis=-1, keepdims=True, initial=0.0)
+    big_r = np.where(locked, np.nan, np.max(np.abs(res), axis=0, initial=0.0))
+    rel = big_r / np.maximum(scale, 1e-300)
+    residual = float(np.nanmax(rel, initial=0.0)) if rel.size else 0.0
+    final = with_efforts(applied, kin, friction_rows, f)
+    dyn, react = lazy(kin, final, dyn, react)
+    return final, dyn, react, friction_of(model, friction_rows, f, qd, iterations, residual,
+                                          locked, lock_joint)
+
+
+def _run(kin, applied, units, friction_rows, qd):
+    """The kernel over the batch: ``units`` the unit efforts' Loads (one per friction load),
+    ``qd`` (k, ...) their joints' rates.
+
+    Returns
+    -------
+    (DynamicSolution, Reactions, f, iterations, state, res, big_g)
+        The dynamics and reactions under the applied loads and the friction (without their
+        internals: :func:`lazy`), and per sample the efforts (k, ...), Newton's iterations, its
+        outcome (:data:`SOLVED`, :data:`LOCKED`, :data:`NOT_ITERATED`), the residuals (k, ...)
+        and the largest friction effort at the solution.
+    """
+    shape = kin.shape
+    D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
+    x = cd._inputs(kin)
+    L, topo = kin.layout.view, kin.layout.topo
+    k = len(friction_rows)
+    w_ext = cd._applied(applied, shape)
+    us = [cd._applied(u, shape) for u in units]
+    Tu = max(u.shape[3] for u in us)
+    units_ = cd._plain(np.stack([np.broadcast_to(u, u.shape[:3] + (Tu,)) for u in us]))
+    fj = np.array([row.joint for row in friction_rows], np.int64)
+    params = [[row.arm, row.arm_static, row.stiction, row.speed, row.viscous, row.preload]
+              for row in friction_rows]
+    Dp = max([np.size(p) for row in params for p in row] + [1])
+    fp = cd._plain(np.array([[np.broadcast_to(np.asarray(p, float).reshape(-1), (Dp,))
+                              for p in row] for row in params]))
+    qd_ = cd._flat(qd, shape, (k,))
+    on = np.zeros((kin.layout.n_joints, 3, D, T))
+    lam, tau = np.zeros((topo.n_rows, D, T)), np.zeros((len(L.driven), D, T))
+    ke, pivot, f = np.zeros((D, T)), np.zeros((D, T)), np.zeros((k, D, T))
+    its, state = np.zeros((D, T), np.int64), np.zeros((D, T), np.int8)
+    res, big_g = np.zeros((k, D, T)), np.zeros((D, T))
+    _kernel(L, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"], w_ext, units_, fj,
+            fp, qd_, on, lam, tau, ke, pivot, f, its, state, res, big_g, min(cd.BLOCK, T))
+    if not topo.n_rows:   # no multiplier: the pivot is one
+        pivot = np.ones((D, T))
+    dyn = DynamicSolution(cd._comps(lam, shape), cd._comps(tau, shape), ke.reshape(shape),
+                          pivot.reshape(shape), None)
+    react = Reactions(cd._per(on, shape), None)
+    return (dyn, react, f.reshape((k,) + shape), its.reshape(shape), state.reshape(shape),
+            res.reshape((k,) + shape), big_g.reshape(shape))
+
+
+def lazy(kin, loads, dyn, react):
+    """``dyn`` and ``react`` with their internals computed by the compiled stages under
+    ``loads`` (the applied loads with the friction in) when first read."""
+    dyn = replace(dyn, internals=cd._Again(cd.solve, kin, loads).dynamics)
+    return dyn, replace(react, internals=cd._Again(cd.reactions, kin, loads, dyn).tree)
