@@ -23,7 +23,7 @@ from linkdyn.design.overview import contact
 from linkdyn.motion import ConstantSpeed
 
 from builders import MM, RPM
-from test_dynamics import cam_follower, cam_of
+from test_dynamics import cam_follower, cam_of, follower_point, pitch_normal, rocker_cam
 
 W = 300 * RPM
 
@@ -94,6 +94,49 @@ def test_contact_force_and_camshaft_torque_of_a_spring_loaded_roller_follower():
     assert c["lost_samples"] == 0 and c["min_force_N"] == pytest.approx(np.min(closed), rel=1e-9)
 
 
+def rocker_closed_form(model, t):
+    """An oscillating roller follower at the times ``t`` by its cam angle ``theta = W t`` alone:
+    the arm's angle ``g0 - s``, the unit normal n of the pitch curve (C2), the contact force's
+    magnitude along n by the arm's moment balance about its pivot A, ``I_A g'' = (F - A) x
+    (f n) + (F - A) x F_spring`` (no gravity, no damper), and the camshaft torque by power
+    balance, ``tau W = I_A g' g'' + k (l - l0) l'``."""
+    jt = model.joint("K")
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    F, Ft = follower_point(jt, s, s1)
+    n = pitch_normal(jt, W * t)
+    arm, spring = model.body("arm"), model.loads[0]
+    A, S = np.array([jt.numbers["pivot"], 0.0]), model.body("ground").points["S"]
+    I_A = arm.inertia + arm.mass * np.sum(np.asarray(arm.com) ** 2)
+    gd, gdd = -W * s1, -W * W * s2
+    r = F - S
+    l = np.linalg.norm(r, axis=-1)
+    tension = spring.stiffness * (l - spring.free_length)
+    f_spring = -tension[:, None] * r / l[:, None]
+    lever = lambda x: (F[:, 0] - A[0]) * x[:, 1] - (F[:, 1] - A[1]) * x[:, 0]
+    f = (I_A * gdd - lever(f_spring)) / lever(n)
+    tau = (I_A * gd * gdd + tension * np.sum(r * Ft * W, -1) / l) / W
+    return s, F, n, f, tau
+
+
+def test_an_oscillating_follower_sits_on_its_swing_and_pushes_along_the_normal():
+    model = still(rocker_cam())
+    lift = model.joint("K").numbers["swing"]
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, F, n, f, tau = rocker_closed_form(model, t)
+    g0 = model.assembly_phi["arm"]
+    # the arm's angle is g0 - s(theta) to 1e-12 of the swing; the joint's q the swing itself
+    assert np.max(np.abs(sol.columns["q_J2"] - (g0 - s))) <= 1e-12 * lift
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * lift
+    assert np.max(np.abs(sol.point("arm", "F") - F)) <= 1e-12 * lift * 0.09
+    # the contact force: along the normal, of the arm's moment balance's magnitude
+    force = np.stack((sol.columns["Fx_K"], sol.columns["Fy_K"]), -1)
+    assert np.max(np.abs(force - f[:, None] * n)) <= 1e-9 * np.max(np.abs(f))
+    assert np.min(f) > 0   # a case that pushes throughout, so the direction is tested
+    # the camshaft's torque by power balance
+    assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
+
+
 def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     fast = still(cam_follower(1200 * RPM))
     w = 1200 * RPM
@@ -110,8 +153,9 @@ def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     assert c["lost_from_s"] == t[need < 0][0] and c["lost_to_s"] == t[need < 0][-1]
 
 
-def test_the_joint_coordinate_has_the_rates_of_its_finite_differences():
-    model = cam_follower()
+@pytest.mark.parametrize("build", [cam_follower, rocker_cam])
+def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
+    model = build()
     h = 1e-4
     centres = np.array([0.013, 0.031, 0.12, 0.16])
     t = (centres[:, None] + np.arange(-2, 3) * h).reshape(-1)

@@ -349,16 +349,15 @@ def test_loop_closure_residual_and_joint_geometry(name):
             assert np.max(np.abs(roll)) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], j.radius_a * (fa - alpha), rtol=0,
                                        atol=1e-12 * L)
-        elif j.kind == "cam":
+        elif j.kind in ("cam", "rocker_cam"):
             # the follower's point on the pitch curve linkdyn cam draws (C1): at its polar angle
             # in the cam's frame, the pitch point's radius; q the lift there
-            from test_dynamics import cam_contact, cam_of, cam_polar
+            from test_dynamics import cam_contact, cam_of, cam_polar, follower_point
 
-            cam = cam_of(j)
             psi, r = cam_polar(fa, pb - pa)
-            th, d0 = cam_contact(cam, psi)
-            s = cam.motion.svaj(th)[0]
-            assert np.max(np.abs(r - np.hypot(cam.offset, d0 + s))) <= 1e-10 * L, j.name
+            s = cam_of(j).motion.svaj(cam_contact(j, psi))[0]
+            F = follower_point(j, s)[0]
+            assert np.max(np.abs(r - np.hypot(F[..., 0], F[..., 1]))) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], s, rtol=0, atol=1e-12 * L)
         else:
             # a slider's frames keep their relative angle (a slot's pin turns freely); the points

@@ -90,8 +90,8 @@ class Number:
 
 
 #: the length of a cut's numbers tuple ``nums``, as every cut step takes it (the kind's scalar
-#: numbers, padded with zeros; a cam's eight the most)
-WIDTH = 8
+#: numbers, padded with zeros, or the numbers a kind derives from them: a cam's nine the most)
+WIDTH = 9
 
 
 @step
@@ -191,7 +191,9 @@ class JointKind:
     def own(self, numbers: dict, zero=0.0) -> tuple:
         """The tuple ``nums`` of its cut steps from a joint's ``numbers`` (name -> value; a
         value may be an array with a design axis): its :attr:`scalars`, padded with ``zero``
-        to :data:`WIDTH`."""
+        to :data:`WIDTH`. A kind may override it to give its steps numbers derived from its
+        own (WIDTH of them, each ``zero`` plus a number where constant; a number no design
+        may vary stays a float under numpy, so a step may branch on it)."""
         own = tuple(numbers[k] for k in self.scalars)
         return own + (zero,) * (WIDTH - len(own))
 

@@ -148,10 +148,10 @@ def cut_numbers(L, ci, d):
     a tuple of :data:`linkdyn.joints.WIDTH` floats."""
     x = L.cut_own
     return (x[ci, 0, d], x[ci, 1, d], x[ci, 2, d], x[ci, 3, d], x[ci, 4, d], x[ci, 5, d],
-            x[ci, 6, d], x[ci, 7, d])
+            x[ci, 6, d], x[ci, 7, d], x[ci, 8, d])
 
 
-assert jk.WIDTH == 8, "cut_numbers gathers WIDTH numbers"
+assert jk.WIDTH == 9, "cut_numbers gathers WIDTH numbers"
 
 
 @inline
