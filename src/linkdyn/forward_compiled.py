@@ -27,7 +27,7 @@ import numpy as np
 from . import expr
 from . import joints as jk
 from .analysis import SINGULAR
-from .compiled import factor, njit, substitute
+from .compiled import factor, inline, njit, substitute
 from .dynamics.denoc import generalized_force, less_cut, newton_euler_wrench, plus_child
 from .kinematics.compiled import PIVOT_TOL, cut_numbers
 from .kinematics.positions import ACCEPT, scaled_error
@@ -143,7 +143,7 @@ def _place(L, q, phi, c, s, r, e):
 @njit
 def _frames(L, c, s, r, P):
     """Every cut's points on its bodies and its axis, global (:func:`cut_frame`): ``P``
-    (nc, 6) rows ``[r_Pa, r_Pb, e_a]``."""
+    (nc, 8) rows ``[r_Pa, r_Pb, e_a, e_b]``."""
     for k in range(L.cut_a.shape[0]):
         a, b = L.cut_a[k], L.cut_b[k]
         r_pa, r_pb, e_a = cut_frame(c[a], s[a], (r[a, 0], r[a, 1]), c[b], s[b],
@@ -152,6 +152,13 @@ def _frames(L, c, s, r, P):
                                     (L.cut_axis[k, 0, 0], L.cut_axis[k, 1, 0]))
         P[k, 0], P[k, 1], P[k, 2], P[k, 3], P[k, 4], P[k, 5] = (r_pa[0], r_pa[1], r_pb[0],
                                                                  r_pb[1], e_a[0], e_a[1])
+        P[k, 6], P[k, 7] = e_a[2], e_a[3]
+
+
+@inline
+def _axes(P, k):
+    """Cut k's axes ``(e_a, e_b)`` from its rows of ``P`` (:func:`_frames`)."""
+    return (P[k, 4], P[k, 5], P[k, 6], P[k, 7])
 
 
 @njit
@@ -162,7 +169,7 @@ def _residual(L, phi, P, g):
     for k in range(L.cut_a.shape[0]):
         a, b, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
         x = jk.residual(L.cut_kind[k], cut_numbers(L, k, 0),
-                        jk.frame((P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]), (P[k, 4], P[k, 5])),
+                        jk.frame((P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]), _axes(P, k)),
                         phi[a], phi[b])
         for j in range(rows):
             g[row + j] = x[j]
@@ -182,7 +189,7 @@ def _jacobian(L, r, e, P, J):
             x = jacobian_column(L.cut_kind[k], cut_numbers(L, k, 0), L.kind[j],
                                 float(L.sign[j]), L.side[k, j], (e[j, 0], e[j, 1]),
                                 (r[j, 0], r[j, 1]), (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]),
-                                (P[k, 4], P[k, 5]))
+                                _axes(P, k))
             for m in range(rows):
                 J[row + m, j - 1] = x[m]
 
@@ -214,7 +221,7 @@ def _bias(L, r, tw, td, P, b):
     """Minus the rate of the cut rows, ``-d/dt (S x)`` (:func:`cut_bias`), into ``b``."""
     for k in range(L.cut_a.shape[0]):
         a, bb, row, rows = L.cut_a[k], L.cut_b[k], L.cut_row[k], L.cut_rows[k]
-        x = cut_bias(L.cut_kind[k], cut_numbers(L, k, 0), (P[k, 4], P[k, 5]),
+        x = cut_bias(L.cut_kind[k], cut_numbers(L, k, 0), _axes(P, k),
                      (tw[a, 0], tw[a, 1], tw[a, 2]), (td[a, 0], td[a, 1], td[a, 2]),
                      (r[a, 0], r[a, 1]), (tw[bb, 0], tw[bb, 1], tw[bb, 2]),
                      (td[bb, 0], td[bb, 1], td[bb, 2]), (r[bb, 0], r[bb, 1]),
@@ -229,7 +236,7 @@ def _joint_motion(L, phi, r, tw, P, jq, jqd):
     (already in ``jq``, ``jqd`` by the caller), a cut joint's by :func:`cut_coordinate`."""
     for k in range(L.cut_a.shape[0]):
         a, b = L.cut_a[k], L.cut_b[k]
-        x = cut_coordinate(L.cut_kind[k], cut_numbers(L, k, 0), (P[k, 4], P[k, 5]), phi[a],
+        x = cut_coordinate(L.cut_kind[k], cut_numbers(L, k, 0), _axes(P, k), phi[a],
                            (tw[a, 0], tw[a, 1], tw[a, 2]), (0.0, 0.0, 0.0), (r[a, 0], r[a, 1]),
                            phi[b], (tw[b, 0], tw[b, 1], tw[b, 2]), (0.0, 0.0, 0.0),
                            (r[b, 0], r[b, 1]), (P[k, 0], P[k, 1]), (P[k, 2], P[k, 3]))
@@ -392,7 +399,7 @@ def rhs_kernel(held, loads, lnum, roots, code, value, t0, t, y, drv, ext, ref, S
     # positions: Newton's method on the dependent coordinates until a step is below STEP_TOL
     phi, c, s = np.zeros(n), np.ones(n), np.zeros(n)
     r, e = np.zeros((n, 2)), np.zeros((n, 2))
-    P = np.zeros((nc, 6))
+    P = np.zeros((nc, 8))
     g = np.zeros(m)
     J = o_J
     A = np.empty((m, m, 1))
