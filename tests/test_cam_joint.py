@@ -23,7 +23,8 @@ from linkdyn.design.overview import contact
 from linkdyn.motion import ConstantSpeed
 
 from builders import MM, RPM
-from test_dynamics import cam_follower, cam_of, follower_point, pitch_normal, rocker_cam
+from test_dynamics import (cam_follower, cam_of, flat_follower, follower_point, pitch_normal,
+                           rocker_cam, rocker_flat)
 
 W = 300 * RPM
 
@@ -137,6 +138,65 @@ def test_an_oscillating_follower_sits_on_its_swing_and_pushes_along_the_normal()
     assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
 
 
+def test_a_flat_face_rides_the_cam_and_takes_the_force_where_C5_puts_the_contact():
+    model = still(flat_follower())
+    jt = model.joint("K")
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    rb, h = jt.numbers["base_radius"], jt.numbers["lift"]
+    # the face (through F) at R_b + s, q the lift
+    assert np.max(np.abs(sol.columns["q_J2"] - rb - s)) <= 1e-12 * h
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * h
+    # the follower's y equation: F = m w^2 s'' + k (s + preload), normal to the face (no
+    # pressure angle); C5: the contact at x = s' on the ground, the moment about F (x = e)
+    # (s' - e) F; the camshaft's torque by power balance, tau w = F w s'
+    spring, e = model.loads[0], model.body("ground").points["G"][0]
+    f = model.body("follower").mass * W * W * s2 + spring.stiffness * (
+        s + spring.free_length - (0.2 - rb))
+    for name, want in (("Fy_K", f), ("M_K", (s1 - e) * f), ("tau_J1", s1 * f)):
+        assert np.max(np.abs(sol.columns[name] - want)) <= 1e-9 * np.max(np.abs(want)), name
+    assert np.max(np.abs(sol.columns["Fx_K"])) <= 1e-12 * np.max(f)
+
+
+def test_an_oscillating_flat_face_swings_on_its_design_and_balances_the_arm():
+    model = still(rocker_flat())
+    jt = model.joint("K")
+    x = jt.numbers
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    # the face's normal at alpha = alpha0 - s, h = a cos(alpha) - f from C; the arm's frame
+    # (its +y the normal) at alpha - pi/2
+    a, off = x["pivot"], x["offset"]
+    al = math.acos((x["base_radius"] + off) / a) - s
+    assert np.max(np.abs(sol.columns["q_J2"] - (al - math.pi / 2))) <= 1e-12 * x["swing"]
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * x["swing"]
+    # the envelope's point of tangency: H n + H_nu perp(n), H_nu = h_theta / nu_theta =
+    # a sin(alpha) s' / (-s' - 1); the arm's moment balance about its pivot A gives the force
+    n = np.stack((np.cos(al), np.sin(al)), -1)
+    Hn = a * np.sin(al) * s1 / (-s1 - 1.0)
+    X = (a * np.cos(al) - off)[:, None] * n + Hn[:, None] * np.stack((-n[:, 1], n[:, 0]), -1)
+    arm, spring = model.body("arm"), model.loads[0]
+    A, S = np.array([a, 0.0]), model.body("ground").points["S"]
+    I_A = arm.inertia + arm.mass * np.sum(np.asarray(arm.com) ** 2)
+    F = sol.point("arm", "F")
+    r = F - S
+    l = np.linalg.norm(r, axis=-1)
+    tension = spring.stiffness * (l - spring.free_length)
+    fs = -tension[:, None] * r / l[:, None]
+    cross = lambda p, v: p[:, 0] * v[:, 1] - p[:, 1] * v[:, 0]
+    gd, gdd = -W * s1, -W * W * s2
+    f = (I_A * gdd - cross(F - A, fs)) / cross(X - A, n)
+    force = np.stack((sol.columns["Fx_K"], sol.columns["Fy_K"]), -1)
+    assert np.min(f) > 0 and np.max(np.abs(force - f[:, None] * n)) <= 1e-9 * np.max(f)
+    assert np.max(np.abs(sol.columns["M_K"] - cross(X - F, force))) <= 1e-9 * np.max(f) * a
+    # the camshaft's torque by power balance: tau W = I_A g' g'' + k (l - l0) l'
+    ld = np.sum(r * np.stack((-F[:, 1] + A[1], F[:, 0] - A[0]), -1) * gd[:, None], -1) / l
+    tau = (I_A * gd * gdd + tension * ld) / W
+    assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
+
+
 def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     fast = still(cam_follower(1200 * RPM))
     w = 1200 * RPM
@@ -153,7 +213,7 @@ def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     assert c["lost_from_s"] == t[need < 0][0] and c["lost_to_s"] == t[need < 0][-1]
 
 
-@pytest.mark.parametrize("build", [cam_follower, rocker_cam])
+@pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
 def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
     model = build()
     h = 1e-4

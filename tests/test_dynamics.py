@@ -309,6 +309,47 @@ def rocker_cam(speed=300 * RPM, law="cycloidal"):
                  GRAVITY, assembly_phi={"cam": 0.0, "arm": g0})
 
 
+def flat_follower(speed=300 * RPM):
+    """A disc cam turning on the ground (base circle 40 mm; a cycloidal rise of 20 mm over 100
+    deg, dwell 80 deg, return over 100 deg) and a translating flat-faced follower on a vertical
+    guide 5 mm right of the cam's centre (its face normal to the guide, through F), pressed on
+    the cam by a compression spring, with gravity and a damper."""
+    e, rb = 5.0, 40.0
+    bodies = (body("ground", {"C": (0, 0), "G": (e, 0), "S": (e, 200)}),
+              body("cam", {"C": (0, 0)}, 2.0, (3, 1), 3000.0),
+              body("follower", {"F": (0, 0), "T": (0, 30)}, 0.5, (1, 15), 100.0))
+    joints = (rev("J1", "ground.C", "cam.C"), pri("J2", "ground.G", "follower.F", (0, 1)),
+              Joint("K", "flat_cam", "cam", "C", "follower", "F", base_radius=rb * MM,
+                    lift=20 * MM, rise=100 * DEG, dwell=80 * DEG, fall=100 * DEG,
+                    law=float(laws.CODES["cycloidal"])))
+    loads = (spring("ground", "S", "follower", "F", 2000.0, (200 - rb) * MM + 0.01),
+             damper("follower", "T", "ground", "S", 1.5))
+    return Model("flat-follower", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "follower": 0.0},
+                 assembly_q={"J2": rb * MM})
+
+
+def rocker_flat(speed=300 * RPM):
+    """A disc cam turning on the ground (base circle 40 mm) and an oscillating flat-faced
+    follower: an arm pivoted on the ground at A = (100, 0) mm, its face 10 mm from the pivot
+    towards the cam (the arm's frame: origin at the pivot, the face y = -10 mm, its normal +y),
+    swung 10 deg by a cycloidal rise over 100 deg, a dwell of 80 deg and a return over 100 deg;
+    a tension spring pulls the face on the cam, with gravity and a damper."""
+    a, f, rb = 100.0, 10.0, 40.0
+    alpha0 = math.acos((rb + f) / a)
+    bodies = (body("ground", {"C": (0, 0), "A": (a, 0), "S": (-20, -35)}),
+              body("cam", {"C": (0, 0)}, 2.0, (2, -1), 3000.0),
+              body("arm", {"A": (0, 0), "F": (-87, -f), "T": (-40, -f)}, 0.4, (-50, -4), 900.0))
+    joints = (rev("J1", "ground.C", "cam.C"), rev("J2", "ground.A", "arm.A"),
+              Joint("K", "rocker_flat_cam", "cam", "C", "arm", "F", base_radius=rb * MM,
+                    pivot=a * MM, offset=f * MM, swing=10 * DEG, rise=100 * DEG,
+                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES["cycloidal"])))
+    loads = (spring("ground", "S", "arm", "F", 1000.0, 0.04),
+             damper("arm", "T", "ground", "S", 1.5))
+    return Model("rocker-flat", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "arm": alpha0 - math.pi / 2})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-rod": hoeken_rod,
@@ -328,6 +369,8 @@ MODELS = {
     "slotted-lever": slotted_lever,
     "cam-follower": cam_follower,
     "rocker-cam": rocker_cam,
+    "flat-follower": flat_follower,
+    "rocker-flat": rocker_flat,
 }
 
 
@@ -502,9 +545,10 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
-UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1, "cam": 1,
-            "rocker_cam": 1}  # per joint
-CAMS = ("cam", "rocker_cam")
+FACES = ("flat_cam", "rocker_flat_cam")
+CAMS = ("cam", "rocker_cam") + FACES
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1,
+            **{k: 1 for k in CAMS}}  # per joint
 
 
 def cam_of(jt):
@@ -512,12 +556,12 @@ def cam_of(jt):
     rise, dwell, return, dwell (a rocker cam's lift is its arm's swing, rad)."""
     x = jt.numbers
     law = laws_name(x["law"])
-    h = x["swing"] if jt.kind == "rocker_cam" else x["lift"]
+    h = x["swing"] if "swing" in x else x["lift"]
     rest = 2 * math.pi - x["rise"] - x["dwell"] - x["fall"]
     segs = tuple(s for s in (Segment(law, h, x["rise"]), Segment("dwell", 0.0, x["dwell"]),
                              Segment(law, 0.0, x["fall"]), Segment("dwell", 0.0, rest))
                  if s.time > 0)
-    return Cam("joint", segs, x["base_radius"], "roller", x["roller_radius"],
+    return Cam("joint", segs, x["base_radius"], "roller", x.get("roller_radius", 0.0),
                x.get("offset", 0.0))
 
 
@@ -589,6 +633,56 @@ def cam_normal(sol, jt):
     return np.stack((c * n[..., 0] - s * n[..., 1], s * n[..., 0] + c * n[..., 1]), -1)
 
 
+def face_line(jt, s):
+    """A flat face's normal angle ``alpha`` and distance ``h`` from the cam's centre at the lift
+    ``s``, in the cam's frame at cam angle 0: ``pi/2`` and ``R_b + s`` translating (C5 of
+    linkdyn.cams); ``alpha0 - s`` and ``a cos(alpha) - f`` oscillating (pivot (a, 0), the face
+    f from it), ``cos alpha0 = (R_b + f) / a``."""
+    x = jt.numbers
+    if jt.kind == "flat_cam":
+        return math.pi / 2 + 0.0 * s, x["base_radius"] + s
+    al = math.acos((x["base_radius"] + x["offset"]) / x["pivot"]) - s
+    return al, x["pivot"] * np.cos(al) - x["offset"]
+
+
+def support(jt, nu):
+    """The cam's support function ``H(nu)`` (float), the distance from its centre of the face
+    whose normal is at the angle ``nu`` in the cam's frame: the face's ``h`` at the cam angle
+    where ``alpha(s(theta)) - theta = nu``, found by bracketing."""
+    from scipy.optimize import brentq
+
+    motion = cam_of(jt).motion
+
+    def s_of(th):
+        return motion.svaj(np.array([th % (2 * math.pi)]))[0][0]
+
+    def miss(th):
+        return math.remainder(face_line(jt, s_of(th))[0] - th - nu, 2 * math.pi)
+
+    th0 = face_line(jt, 0.0)[0] - nu
+    th = brentq(miss, th0 - 1.0, th0 + 1.0, xtol=1e-15, rtol=1e-15)
+    return float(face_line(jt, s_of(th))[1])
+
+
+def face_contact(sol, jt):
+    """The face's normal n (T, 2, global: the follower's +y axis) and the contact point (T, 2,
+    global) of a flat-faced cam joint: ``C + R(phi_cam) (H u + H_nu perp(u))``, u at the
+    normal's angle nu in the cam's frame, ``H_nu`` by a five-point difference of
+    :func:`support` (the envelope's point of tangency)."""
+    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
+    pb = sol.phi(jt.body_b)
+    n = np.stack((-np.sin(pb), np.cos(pb)), -1)
+    nu = pb + math.pi / 2 - phi
+    h = 1e-3
+    X = np.zeros(sol.t.shape + (2,))
+    for k, v in enumerate(nu):
+        H = [support(jt, v + j * h) for j in (-2, -1, 0, 1, 2)]
+        Hn = (H[0] - 8 * H[1] + 8 * H[3] - H[4]) / (12 * h)
+        u, w = np.array([math.cos(v), math.sin(v)]), np.array([-math.sin(v), math.cos(v)])
+        X[k] = rot(phi[k], H[2] * u + Hn * w)
+    return n, X + sol.point(jt.body_a, jt.point_a)
+
+
 def joint_columns(model):
     """First column of each joint's reaction unknowns, and the number of them all."""
     start = np.cumsum([0] + [UNKNOWNS[j.kind] for j in model.joints])
@@ -634,6 +728,12 @@ def ne_system(sol):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
+        elif jt.kind in FACES:
+            # the contact force along the face's normal through the point of tangency
+            n, X = face_contact(sol, jt)
+            normals[jt.name] = (n, n, X)
+            put(jt.body_b, c0, n, X)
+            put(jt.body_a, c0, -n, X)
         elif jt.kind in CAMS:
             # the contact force along the pitch curve's normal through the follower point
             n = cam_normal(sol, jt)
@@ -694,6 +794,9 @@ def ne_solve(sol):
             force[..., k, :] = x[..., c, None] * normals[jt.name][1]
             if jt.kind == PRISMATIC:
                 moment[..., k] = x[..., c + 1]
+            if jt.kind in FACES:   # about the follower's point: the contact's offset from it
+                moment[..., k] = cross(normals[jt.name][2] - sol.point(jt.body_b, jt.point_b),
+                                       force[..., k, :])
     return force, moment, x[..., n_unknowns:]
 
 
@@ -974,7 +1077,11 @@ def test_body_wrench_balance_with_reported_reactions(name):
     assert np.max(rel) <= RTOL, f"wrench balance residual {np.max(rel):.3e}"
     fs = force_scale(sol.reactions.force)
     for k, jt in enumerate(model.joints):
-        if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
+        if jt.kind in FACES:  # a face's: the contact force's about the follower's point
+            X = normals[jt.name][2] - sol.point(jt.body_b, jt.point_b)
+            assert np.max(np.abs(sol.reactions.moment[..., k] - cross(
+                X, sol.reactions.force[..., k, :]))) <= RTOL * fs * size_of(model)
+        elif jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
         if jt.kind in ("distance",) + CAMS:  # a rod's reaction along the rod, a cam's normal
             u = normals[jt.name][0]
