@@ -213,6 +213,49 @@ def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     assert c["lost_from_s"] == t[need < 0][0] and c["lost_to_s"] == t[need < 0][-1]
 
 
+def test_the_summary_gives_the_spring_that_keeps_the_follower_on_the_cam():
+    # the translating follower's closed form: the contact force's vertical part is m w^2 s''
+    # + k (s + c0) (c0 the spring's compression at s = 0), so the least added compression P
+    # is max(-need) (the free length longer by P / k), and the least stiffness r k (same free
+    # length) is k max(-m w^2 s'' / (k (s + c0))) over the lost samples
+    w = 1200 * RPM
+    fast = still(cam_follower(w))
+    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    _, d0, s, s1, s2, phi = design(fast, w * t)
+    spring, m = fast.loads[0], fast.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+    need = m * w * w * s2 + spring.stiffness * (s + c0)
+    fix = contact(linkdyn.analyze(fast, t))["K"]["springs"]["loads[0]"]
+    P = np.max(-need)
+    assert P > 1.0
+    assert fix["tension_change_N"] == pytest.approx(-P, rel=1e-9)
+    assert fix["free_length_m"] == pytest.approx(spring.free_length + P / spring.stiffness,
+                                                 rel=1e-9)
+    lost = need < 0
+    r = np.max(-m * w * w * s2[lost] / (spring.stiffness * (s[lost] + c0)))
+    assert fix["stiffness_N_m"] == pytest.approx(r * spring.stiffness, rel=1e-9)
+
+
+def test_the_spring_the_summary_gives_keeps_an_oscillating_face_on_the_cam():
+    # no closed form here: the arm run again with each fix loses no sample, and its least
+    # contact force is zero (the fix is the least one, exact at the worst sample)
+    w = 900 * RPM
+    fast = rocker_flat(w)
+    t = np.linspace(0.0, 2 * math.pi / w, 49)[:-1]
+    sol = linkdyn.analyze(fast, t)
+    c = contact(sol)["K"]
+    assert c["lost_samples"] > 0
+    (label, fix), = c["springs"].items()
+    k = [i for i, x in enumerate(fast.loads) if x.kind == "spring"][0]
+    scale = np.max(np.abs(sol.reactions.force[:, [j.name for j in fast.joints].index("K")]))
+    for change in ({"free_length": fix["free_length_m"]}, {"stiffness": fix["stiffness_N_m"]}):
+        loads = tuple(dataclasses.replace(x, **change) if i == k else x
+                      for i, x in enumerate(fast.loads))
+        again = contact(linkdyn.analyze(dataclasses.replace(fast, loads=loads), t))["K"]
+        assert again["min_force_N"] == pytest.approx(0.0, abs=1e-9 * scale), change
+        assert "springs" not in again or again["lost_samples"] == 0
+
+
 @pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
 def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
     model = build()
@@ -251,6 +294,14 @@ def test_the_bundled_example_reads_writes_and_reports_its_contact(tmp_path):
                                     str(tmp_path / "run")])
     assert res.exit_code == 0, res.output
     assert "contact K: least force" in res.output and "never lost" in res.output
+    # at 1000 rpm the follower leaves the cam, and the summary says which spring holds it
+    fast = tmp_path / "fast.toml"
+    fast.write_text(path.read_text("utf-8").replace("rpm = 300.0", "rpm = 1000.0"), "utf-8")
+    res = CliRunner().invoke(main, ["analyze", str(fast), "--samples", "37", "-o",
+                                    str(tmp_path / "fast")])
+    assert res.exit_code == 0, res.output
+    assert "LOSS OF CONTACT" in res.output
+    assert "loads.spring keeps it on at this speed with free length" in res.output
 
 
 @pytest.mark.parametrize("edits, words", [

@@ -512,6 +512,15 @@ def summary_text(s: dict) -> str:
                  f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
                  "follower would leave the cam; stiffen its spring or raise the preload"
                  if c["lost_samples"] else "; never lost"))
+        for label, fix in c.get("springs", {}).items():   # the least spring that holds it
+            ways = ([f"free length {shown(fix['free_length_m'], 'length', 6)} (its force "
+                     f"{shown(abs(fix['tension_change_N']), 'force', 4)} more in "
+                     f"{'tension' if fix['tension_change_N'] >= 0 else 'compression'})"]
+                    if fix["free_length_m"] is not None else []) + (
+                [f"stiffness {shown(fix['stiffness_N_m'], 'stiffness', 6)} (same free length)"]
+                if fix["stiffness_N_m"] is not None else [])
+            echo(f"    {label} keeps it on at this speed with " + (
+                " or ".join(ways) if ways else "no change of its own"))
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))

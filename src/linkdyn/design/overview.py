@@ -191,21 +191,93 @@ def contact(sol) -> dict:
     pull), its least value and time, and the samples where it is below zero (``lost_samples``,
     the first and last of their times): where the follower would leave the cam at the run's
     speed, and a stronger spring or preload is needed."""
-    m, topo, t = sol.model, sol.topology, sol.t
+    m, t = sol.model, sol.t
+    forces = contact_forces(sol, sol.dyn, sol.reactions)
     out = {}
-    for k, j in enumerate(topo.cut):
-        if not jk.get(m.joints[j].kind).one_sided:
-            continue
-        lam = sol.dyn.lam[..., topo.row_slice(k)][..., 0]
-        f = np.sign(lam) * np.linalg.norm(sol.reactions.force[..., j, :], axis=-1)
+    for name, f in forces.items():
         lost = np.isfinite(f) & (f < 0)
         kmin = int(np.nanargmin(f)) if np.any(np.isfinite(f)) else 0
-        out[m.joints[j].name] = {
+        out[name] = {
             "min_force_N": float(f[kmin]), "min_time_s": float(t[kmin]),
             "lost_samples": int(np.sum(lost)),
             "lost_from_s": float(t[lost][0]) if np.any(lost) else None,
             "lost_to_s": float(t[lost][-1]) if np.any(lost) else None}
+    if any(c["lost_samples"] for c in out.values()) and not getattr(sol, "friction", None):
+        for name, fix in spring_fixes(sol, forces).items():
+            out[name]["springs"] = fix
     return out
+
+
+def contact_forces(sol, dyn, react) -> dict:
+    """The signed contact force (T,) N of every one-sided cut joint, by name, out of the
+    multipliers ``dyn.lam`` and reactions ``react``: ``sign(lam) |R|`` (negative: the cam
+    would pull)."""
+    m, topo = sol.model, sol.topology
+    out = {}
+    for k, j in enumerate(topo.cut):
+        if jk.get(m.joints[j].kind).one_sided:
+            lam = dyn.lam[..., topo.row_slice(k)][..., 0]
+            out[m.joints[j].name] = np.sign(lam) * np.linalg.norm(react.force[..., j, :],
+                                                                 axis=-1)
+    return out
+
+
+def least_shift(f0, b):
+    """The ``x`` nearest 0 with ``f0 + x b >= 0`` at every finite sample (f0, b (T,)), or
+    None if none does: the interval ``[max -f0/b (b > 0), min -f0/b (b < 0)]``."""
+    ok = np.isfinite(f0) & np.isfinite(b)
+    f0, b = f0[ok], b[ok]
+    scale = np.max(np.abs(b), initial=0.0)
+    if np.any((np.abs(b) <= 1e-12 * scale) & (f0 < 0)):
+        return None   # a lost sample this load does not reach
+    up, down = b > 1e-12 * scale, b < -1e-12 * scale
+    lo = np.max(-f0[up] / b[up], initial=-np.inf)
+    hi = np.min(-f0[down] / b[down], initial=np.inf)
+    if lo > hi:
+        return None
+    return float(min(max(0.0, lo), hi))
+
+
+def spring_fixes(sol, forces) -> dict:
+    """For every one-sided joint that loses contact, each spring's change that keeps every
+    contact force at or above zero (the least one, exact at the worst sample), by joint name
+    then spring label: ``free_length_m`` (the stiffness kept: the spring's force changed by
+    ``tension_change_N``, positive pulling) and ``stiffness_N_m`` (the free length kept);
+    None where that change cannot. The motion is prescribed, so each contact force is affine
+    in a spring's force: ``f = f0 + c dT`` with ``c`` from one more inverse dynamics at a
+    changed free length, and ``dT = (r - 1) T0`` for the stiffness ``r k``."""
+    from dataclasses import replace
+
+    from .. import loads as loads_mod, reactions as reactions_mod
+    from ..dynamics import denoc
+
+    m, kin = sol.model, sol.kin
+
+    def forces_with(k, **change):   # the contact forces with load k changed
+        model = replace(m, loads=tuple(replace(x, **change) if i == k else x
+                                       for i, x in enumerate(m.loads)))
+        dyn = denoc.solve(kin, loads_mod.wrenches(model, kin))
+        return contact_forces(sol, dyn, reactions_mod.solve(model, kin, dyn))
+
+    scale = max(float(np.nanmax(np.abs(f), initial=1.0)) for f in forces.values())
+    fixes: dict = {name: {} for name, f in forces.items() if np.nanmin(f) < 0}
+    for k, (load, label) in enumerate(zip(m.loads, loads_mod.labels(m))):
+        if load.kind != "spring" or not load.stiffness > 0:
+            continue
+        # c: the contact force per newton of added tension (the free length shorter by dT/k)
+        dT = scale
+        per_N = forces_with(k, free_length=load.free_length - dT / load.stiffness)
+        # b: the contact force's change as the stiffness doubles at the same free length
+        doubled = forces_with(k, stiffness=2 * load.stiffness)
+        for name in fixes:
+            f0 = forces[name]
+            x = least_shift(f0, (per_N[name] - f0) / dT)
+            r = least_shift(f0, doubled[name] - f0)
+            fixes[name][label] = {
+                "tension_change_N": x,
+                "free_length_m": None if x is None else load.free_length - x / load.stiffness,
+                "stiffness_N_m": None if r is None or r <= -1 else (1 + r) * load.stiffness}
+    return fixes
 
 
 def assembly(sol) -> dict:
