@@ -162,6 +162,28 @@ def test_the_command_prints_in_the_files_units_and_writes_the_table(tmp_path):
         res.output.strip().splitlines()[:-1]
 
 
+def test_the_joins_jump_by_the_laws_closed_forms(tmp_path):
+    # a harmonic rise h over beta after and before a dwell: the acceleration jumps by
+    # h pi^2 / (2 beta^2) w^2 at both its ends; a 3-4-5 return: continuous acceleration, the
+    # jerk jumps by 60 h / beta^3 w^3 (its third derivative at either end); lift and velocity
+    # never jump
+    harmonic = cam(rise="harmonic")
+    theta, jump = cams.joins(harmonic)
+    assert np.degrees(theta) == pytest.approx([60.0, 160.0, 260.0, 0.0])
+    a = H * math.pi ** 2 / (2 * RISE ** 2) * W ** 2
+    j = 60 * H / RISE ** 3 * W ** 3
+    assert np.max(np.abs(jump[:2])) <= 1e-15
+    assert jump[2] == pytest.approx([a, a, 0.0, 0.0], abs=1e-12 * a)
+    assert jump[3] == pytest.approx([0.0, 0.0, -j, j], abs=1e-12 * j)
+    # the command says so, in the file's units
+    path = tmp_path / "cam.toml"
+    path.write_text(doc_file().replace('law = "cycloidal"', 'law = "harmonic"'), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert (f"ACCELERATION JUMPS at cam angles 60, 160 deg (by up to {a * 1000:.6g} mm/s^2)"
+            in res.output)
+
+
 @pytest.mark.parametrize("edit, field, words", [
     (("follower = \"roller\"", "follower = \"mushroom\""), "cam.follower", "unknown follower"),
     (("roller_radius = 10.0\n", ""), "cam.roller_radius", "missing required key"),

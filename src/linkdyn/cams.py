@@ -164,6 +164,15 @@ def profile(cam: Cam, n: int = 721) -> CamProfile:
                       pitch, prof, (rho_p > 0) & (rho_p < rf))
 
 
+def joins(cam: Cam) -> tuple[np.ndarray, np.ndarray]:
+    """The cam angles (J,) rad of the joins between its segments (the cycle's own at 0) and
+    the jumps (4, J) of the follower's lift (m), velocity (m/s), acceleration (m/s^2) and
+    jerk (m/s^3) across each, at the cam's speed: the n-th derivative's jump in the cam angle
+    times ``w^n``."""
+    theta, jump = cam.motion.jumps()
+    return theta, jump * cam.speed ** np.arange(4)[:, None]
+
+
 def columns(p: CamProfile) -> dict[str, np.ndarray]:
     """The profile's table: its header (SI units in it) -> values (n,)."""
     return {"theta_rad": p.theta, "s_m": p.s, "v_m_s": p.v, "a_m_s2": p.a, "j_m_s3": p.j,

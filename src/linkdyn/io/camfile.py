@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..cams import FOLLOWERS, Cam, CamProfile
+from ..cams import FOLLOWERS, Cam, CamProfile, joins
 from ..motion import Segment
 
 
@@ -43,7 +43,38 @@ def text(p: CamProfile) -> str:
                      + (" or use a smaller roller" if cam.follower == "roller" else ""))
     else:
         lines.append("  no undercutting")
+    lines.append(continuity(p))
     return "\n".join(lines)
+
+
+ORDERS = ("displacement", "velocity", "acceleration", "jerk")
+
+
+def continuity(p: CamProfile) -> str:
+    """The line that says which of the follower's lift, velocity and acceleration are
+    continuous at every join of the cam's segments, and where the first that is not jumps
+    (a jump counts above 1e-9 of that quantity's peak over the turn)."""
+    from .units import ANGLE_UNITS, LENGTH_UNITS
+    cam = p.cam
+    L, Lu = LENGTH_UNITS[cam.length_unit], cam.length_unit
+    A, Au = ANGLE_UNITS[cam.angle_unit], cam.angle_unit
+    theta, jump = joins(cam)
+    peaks = [np.max(np.abs(x)) for x in (p.s, p.v, p.a, p.j)]
+    jumps = [np.abs(jump[n]) > 1e-9 * max(peaks[n], 1e-300) for n in range(4)]
+
+    def at(n):   # the cam angles where derivative n jumps, in order
+        return ", ".join(f"{x / A:.4g}" for x in np.sort(theta[jumps[n]])) + f" {Au}"
+
+    first = next((n for n in range(3) if np.any(jumps[n])), None)
+    if first is None:
+        return ("  displacement, velocity and acceleration continuous at every join"
+                + (f" (the jerk jumps at cam angles {at(3)})" if np.any(jumps[3]) else ""))
+    unit = f"{Lu}" + ("", "/s", "/s^2")[first]
+    return (f"  {ORDERS[first].upper()} JUMPS at cam angles {at(first)} (by up to "
+            f"{np.max(np.abs(jump[first])) / L:.6g} {unit}): "
+            + ("infinite jerk there, a shock at speed; next to a dwell use a law that starts "
+               "and ends at zero acceleration (cycloidal, poly345, poly4567, modified_sine, "
+               "modified_trapezoid)" if first == 2 else "the follower would be struck"))
 
 
 # --- the cam file: [units] and [cam] with its [[cam.segments]] --------------------------------
