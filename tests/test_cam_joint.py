@@ -256,6 +256,62 @@ def test_the_spring_the_summary_gives_keeps_an_oscillating_face_on_the_cam():
         assert "springs" not in again or again["lost_samples"] == 0
 
 
+def test_the_jump_speed_is_the_translating_followers_closed_form():
+    # without damper and gravity the force's vertical part is m w^2 s'' + k (s + c0): it first
+    # reaches zero at w^2 = min k (s + c0) / (-m s'') over the samples where s'' < 0
+    w = 300 * RPM
+    model = still(cam_follower(w))
+    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    _, d0, s, s1, s2, phi = design(model, w * t)
+    spring, m = model.loads[0], model.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+    falling = s2 < 0
+    ratio = np.full_like(s, np.inf)
+    ratio[falling] = spring.stiffness * (s[falling] + c0) / (-m * s2[falling])
+    c = contact(linkdyn.analyze(model, t))["K"]
+    assert c["lost_samples"] == 0
+    assert c["jump_speed_rad_s"] == pytest.approx(math.sqrt(np.min(ratio)), rel=1e-9)
+    assert c["jump_time_s"] == t[np.argmin(ratio)]
+
+
+def test_at_the_jump_speed_the_least_contact_force_is_zero():
+    # with gravity and a damper (the force then A + B w + C w^2): run again at the speed
+    # found, the least contact force is zero; 1 % slower no sample is lost, 1 % faster some are
+    from linkdyn.design.overview import contact_forces
+
+    model = cam_follower(300 * RPM)
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1]
+    sol = linkdyn.analyze(model, t)
+    c = contact(sol)["K"]
+    scale = np.max(np.abs(contact_forces(sol, sol.dyn, sol.reactions)["K"]))
+    least = []
+    for r in (0.99, 1.0, 1.01):
+        wj = r * c["jump_speed_rad_s"]
+        fast = dataclasses.replace(model, drivers=(
+            dataclasses.replace(model.drivers[0], motion=ConstantSpeed(wj)),))
+        run = linkdyn.analyze(fast, t * W / wj)
+        least.append(np.min(contact_forces(run, run.dyn, run.reactions)["K"]))
+    assert least[0] > 0 > least[2]
+    assert least[1] == pytest.approx(0.0, abs=1e-9 * scale)
+
+
+def test_no_jump_speed_when_a_load_depends_on_time():
+    # a force along the guide that varies in time does not scale with the cam's speed: no
+    # speed is claimed (a constant one keeps it)
+    from linkdyn.model import Load
+
+    def push(amplitude):
+        return Load("force", "follower", "F", value=lambda t: np.stack(np.broadcast_arrays(
+            0.0, -5.0 * (1.0 + amplitude * np.sin(40.0 * np.asarray(t)))), -1))
+
+    model = cam_follower(300 * RPM)
+    t = np.linspace(0.0, 2 * math.pi / W, 25)[:-1]
+    steady = dataclasses.replace(model, loads=model.loads + (push(0.0),))
+    assert contact(linkdyn.analyze(steady, t))["K"]["jump_speed_rad_s"] > 0
+    pulsed = dataclasses.replace(model, loads=model.loads + (push(0.5),))
+    assert "jump_speed_rad_s" not in contact(linkdyn.analyze(pulsed, t))["K"]
+
+
 @pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
 def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
     model = build()

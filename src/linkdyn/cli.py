@@ -512,6 +512,10 @@ def summary_text(s: dict) -> str:
                  f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
                  "follower would leave the cam; stiffen its spring or raise the preload"
                  if c["lost_samples"] else "; never lost"))
+        if c.get("jump_speed_rad_s") is not None:   # the constant speed where it is first lost
+            echo(f"    at constant speed the follower would leave the cam from "
+                 f"{num(c['jump_speed_rad_s'], '.6g', 30 / np.pi)} rpm (first at t = "
+                 f"{num(c['jump_time_s'], '.4g')} s of this run)")
         for label, fix in c.get("springs", {}).items():   # the least spring that holds it
             ways = ([f"free length {shown(fix['free_length_m'], 'length', 6)} (its force "
                      f"{shown(abs(fix['tension_change_N']), 'force', 4)} more in "
