@@ -259,6 +259,51 @@ class SegmentMotion:
         return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
 
 
+@dataclass(frozen=True, eq=False)
+class PeriodicTable:
+    """A periodic motion through a table of points: the periodic cubic spline (C2: the value,
+    rate and acceleration continuous everywhere, the first point's too after a period) through
+    ``(t_k, q_k)``, repeated every ``period``.
+
+    Attributes
+    ----------
+    t : ndarray (n,)
+        Times (or cam angles), strictly increasing, within one period of ``t[0]``; n >= 3.
+    q : ndarray (n,)
+    period : float
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    period: float
+
+    def __post_init__(self):
+        from scipy.interpolate import CubicSpline
+        t, q = np.asarray(self.t, float), np.asarray(self.q, float)
+        # the first point again one period later closes the curve
+        spline = CubicSpline(np.append(t, t[0] + self.period), np.append(q, q[0]),
+                             bc_type="periodic")
+        object.__setattr__(self, "_spline", spline)
+
+    def svaj(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd, qddd)`` at ``t`` (any shape); qddd is the spline's piecewise
+        constant third derivative (the right one at a point of the table)."""
+        x = self.t[0] + np.mod(_time(t) - self.t[0], self.period)
+        return tuple(self._spline(x, n) for n in range(4))
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.svaj(t)[:3]
+
+    def jumps(self) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`SegmentMotion.jumps`: the table's points (n,) and the jumps (4, n) across
+        them, only the third derivative's not zero (``6 (c_k - c_(k-1))``, ``c`` the cubic
+        coefficients of the intervals on either side)."""
+        c3 = 6 * self._spline.c[0]
+        jump = np.zeros((4, len(self.t)))
+        jump[3] = c3 - np.roll(c3, 1)
+        return np.array(self.t, float), jump
+
+
 class Free:
     """The motion placeholder of a free coordinate in forward dynamics (planar or spatial):
     its driver slot holds no motion, the integrator supplies the coordinate's values."""
