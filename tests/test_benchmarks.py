@@ -66,3 +66,9 @@ def test_bench_simulate():
 def test_bench_friction():
     out = run("bench_friction.py", "--samples", "2000", "--repeat", "1")
     assert "ratio" in out
+
+
+def test_bench_cam():
+    # its check: the plain four-bar's input follows the cam's arm (1e-9 rad) before timing
+    out = run("bench_cam.py", "--samples", "2000", "--repeat", "1")
+    assert "cam-driven four-bar" in out and "ratio" in out

@@ -23,7 +23,8 @@ from linkdyn.design.overview import contact
 from linkdyn.motion import ConstantSpeed
 
 from builders import MM, RPM
-from test_dynamics import cam_follower, cam_of
+from test_dynamics import (cam_follower, cam_of, flat_follower, follower_point, pitch_normal,
+                           rocker_cam, rocker_flat)
 
 W = 300 * RPM
 
@@ -94,6 +95,108 @@ def test_contact_force_and_camshaft_torque_of_a_spring_loaded_roller_follower():
     assert c["lost_samples"] == 0 and c["min_force_N"] == pytest.approx(np.min(closed), rel=1e-9)
 
 
+def rocker_closed_form(model, t):
+    """An oscillating roller follower at the times ``t`` by its cam angle ``theta = W t`` alone:
+    the arm's angle ``g0 - s``, the unit normal n of the pitch curve (C2), the contact force's
+    magnitude along n by the arm's moment balance about its pivot A, ``I_A g'' = (F - A) x
+    (f n) + (F - A) x F_spring`` (no gravity, no damper), and the camshaft torque by power
+    balance, ``tau W = I_A g' g'' + k (l - l0) l'``."""
+    jt = model.joint("K")
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    F, Ft = follower_point(jt, s, s1)
+    n = pitch_normal(jt, W * t)
+    arm, spring = model.body("arm"), model.loads[0]
+    A, S = np.array([jt.numbers["pivot"], 0.0]), model.body("ground").points["S"]
+    I_A = arm.inertia + arm.mass * np.sum(np.asarray(arm.com) ** 2)
+    gd, gdd = -W * s1, -W * W * s2
+    r = F - S
+    l = np.linalg.norm(r, axis=-1)
+    tension = spring.stiffness * (l - spring.free_length)
+    f_spring = -tension[:, None] * r / l[:, None]
+    lever = lambda x: (F[:, 0] - A[0]) * x[:, 1] - (F[:, 1] - A[1]) * x[:, 0]
+    f = (I_A * gdd - lever(f_spring)) / lever(n)
+    tau = (I_A * gd * gdd + tension * np.sum(r * Ft * W, -1) / l) / W
+    return s, F, n, f, tau
+
+
+def test_an_oscillating_follower_sits_on_its_swing_and_pushes_along_the_normal():
+    model = still(rocker_cam())
+    lift = model.joint("K").numbers["swing"]
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, F, n, f, tau = rocker_closed_form(model, t)
+    g0 = model.assembly_phi["arm"]
+    # the arm's angle is g0 - s(theta) to 1e-12 of the swing; the joint's q the swing itself
+    assert np.max(np.abs(sol.columns["q_J2"] - (g0 - s))) <= 1e-12 * lift
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * lift
+    assert np.max(np.abs(sol.point("arm", "F") - F)) <= 1e-12 * lift * 0.09
+    # the contact force: along the normal, of the arm's moment balance's magnitude
+    force = np.stack((sol.columns["Fx_K"], sol.columns["Fy_K"]), -1)
+    assert np.max(np.abs(force - f[:, None] * n)) <= 1e-9 * np.max(np.abs(f))
+    assert np.min(f) > 0   # a case that pushes throughout, so the direction is tested
+    # the camshaft's torque by power balance
+    assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
+
+
+def test_a_flat_face_rides_the_cam_and_takes_the_force_where_C5_puts_the_contact():
+    model = still(flat_follower())
+    jt = model.joint("K")
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    rb, h = jt.numbers["base_radius"], jt.numbers["lift"]
+    # the face (through F) at R_b + s, q the lift
+    assert np.max(np.abs(sol.columns["q_J2"] - rb - s)) <= 1e-12 * h
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * h
+    # the follower's y equation: F = m w^2 s'' + k (s + preload), normal to the face (no
+    # pressure angle); C5: the contact at x = s' on the ground, the moment about F (x = e)
+    # (s' - e) F; the camshaft's torque by power balance, tau w = F w s'
+    spring, e = model.loads[0], model.body("ground").points["G"][0]
+    f = model.body("follower").mass * W * W * s2 + spring.stiffness * (
+        s + spring.free_length - (0.2 - rb))
+    for name, want in (("Fy_K", f), ("M_K", (s1 - e) * f), ("tau_J1", s1 * f)):
+        assert np.max(np.abs(sol.columns[name] - want)) <= 1e-9 * np.max(np.abs(want)), name
+    assert np.max(np.abs(sol.columns["Fx_K"])) <= 1e-12 * np.max(f)
+
+
+def test_an_oscillating_flat_face_swings_on_its_design_and_balances_the_arm():
+    model = still(rocker_flat())
+    jt = model.joint("K")
+    x = jt.numbers
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    s, s1, s2, _ = cam_of(jt).motion.svaj(np.mod(W * t, 2 * math.pi))
+    # the face's normal at alpha = alpha0 - s, h = a cos(alpha) - f from C; the arm's frame
+    # (its +y the normal) at alpha - pi/2
+    a, off = x["pivot"], x["offset"]
+    al = math.acos((x["base_radius"] + off) / a) - s
+    assert np.max(np.abs(sol.columns["q_J2"] - (al - math.pi / 2))) <= 1e-12 * x["swing"]
+    assert np.max(np.abs(sol.columns["q_K"] - s)) <= 1e-12 * x["swing"]
+    # the envelope's point of tangency: H n + H_nu perp(n), H_nu = h_theta / nu_theta =
+    # a sin(alpha) s' / (-s' - 1); the arm's moment balance about its pivot A gives the force
+    n = np.stack((np.cos(al), np.sin(al)), -1)
+    Hn = a * np.sin(al) * s1 / (-s1 - 1.0)
+    X = (a * np.cos(al) - off)[:, None] * n + Hn[:, None] * np.stack((-n[:, 1], n[:, 0]), -1)
+    arm, spring = model.body("arm"), model.loads[0]
+    A, S = np.array([a, 0.0]), model.body("ground").points["S"]
+    I_A = arm.inertia + arm.mass * np.sum(np.asarray(arm.com) ** 2)
+    F = sol.point("arm", "F")
+    r = F - S
+    l = np.linalg.norm(r, axis=-1)
+    tension = spring.stiffness * (l - spring.free_length)
+    fs = -tension[:, None] * r / l[:, None]
+    cross = lambda p, v: p[:, 0] * v[:, 1] - p[:, 1] * v[:, 0]
+    gd, gdd = -W * s1, -W * W * s2
+    f = (I_A * gdd - cross(F - A, fs)) / cross(X - A, n)
+    force = np.stack((sol.columns["Fx_K"], sol.columns["Fy_K"]), -1)
+    assert np.min(f) > 0 and np.max(np.abs(force - f[:, None] * n)) <= 1e-9 * np.max(f)
+    assert np.max(np.abs(sol.columns["M_K"] - cross(X - F, force))) <= 1e-9 * np.max(f) * a
+    # the camshaft's torque by power balance: tau W = I_A g' g'' + k (l - l0) l'
+    ld = np.sum(r * np.stack((-F[:, 1] + A[1], F[:, 0] - A[0]), -1) * gd[:, None], -1) / l
+    tau = (I_A * gd * gdd + tension * ld) / W
+    assert np.max(np.abs(sol.columns["tau_J1"] - tau)) <= 1e-9 * np.max(np.abs(tau))
+
+
 def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     fast = still(cam_follower(1200 * RPM))
     w = 1200 * RPM
@@ -110,8 +213,108 @@ def test_the_summary_finds_where_the_follower_would_leave_the_cam():
     assert c["lost_from_s"] == t[need < 0][0] and c["lost_to_s"] == t[need < 0][-1]
 
 
-def test_the_joint_coordinate_has_the_rates_of_its_finite_differences():
-    model = cam_follower()
+def test_the_summary_gives_the_spring_that_keeps_the_follower_on_the_cam():
+    # the translating follower's closed form: the contact force's vertical part is m w^2 s''
+    # + k (s + c0) (c0 the spring's compression at s = 0), so the least added compression P
+    # is max(-need) (the free length longer by P / k), and the least stiffness r k (same free
+    # length) is k max(-m w^2 s'' / (k (s + c0))) over the lost samples
+    w = 1200 * RPM
+    fast = still(cam_follower(w))
+    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    _, d0, s, s1, s2, phi = design(fast, w * t)
+    spring, m = fast.loads[0], fast.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+    need = m * w * w * s2 + spring.stiffness * (s + c0)
+    fix = contact(linkdyn.analyze(fast, t))["K"]["springs"]["loads[0]"]
+    P = np.max(-need)
+    assert P > 1.0
+    assert fix["tension_change_N"] == pytest.approx(-P, rel=1e-9)
+    assert fix["free_length_m"] == pytest.approx(spring.free_length + P / spring.stiffness,
+                                                 rel=1e-9)
+    lost = need < 0
+    r = np.max(-m * w * w * s2[lost] / (spring.stiffness * (s[lost] + c0)))
+    assert fix["stiffness_N_m"] == pytest.approx(r * spring.stiffness, rel=1e-9)
+
+
+def test_the_spring_the_summary_gives_keeps_an_oscillating_face_on_the_cam():
+    # no closed form here: the arm run again with each fix loses no sample, and its least
+    # contact force is zero (the fix is the least one, exact at the worst sample)
+    w = 900 * RPM
+    fast = rocker_flat(w)
+    t = np.linspace(0.0, 2 * math.pi / w, 49)[:-1]
+    sol = linkdyn.analyze(fast, t)
+    c = contact(sol)["K"]
+    assert c["lost_samples"] > 0
+    (label, fix), = c["springs"].items()
+    k = [i for i, x in enumerate(fast.loads) if x.kind == "spring"][0]
+    scale = np.max(np.abs(sol.reactions.force[:, [j.name for j in fast.joints].index("K")]))
+    for change in ({"free_length": fix["free_length_m"]}, {"stiffness": fix["stiffness_N_m"]}):
+        loads = tuple(dataclasses.replace(x, **change) if i == k else x
+                      for i, x in enumerate(fast.loads))
+        again = contact(linkdyn.analyze(dataclasses.replace(fast, loads=loads), t))["K"]
+        assert again["min_force_N"] == pytest.approx(0.0, abs=1e-9 * scale), change
+        assert "springs" not in again or again["lost_samples"] == 0
+
+
+def test_the_jump_speed_is_the_translating_followers_closed_form():
+    # without damper and gravity the force's vertical part is m w^2 s'' + k (s + c0): it first
+    # reaches zero at w^2 = min k (s + c0) / (-m s'') over the samples where s'' < 0
+    w = 300 * RPM
+    model = still(cam_follower(w))
+    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    _, d0, s, s1, s2, phi = design(model, w * t)
+    spring, m = model.loads[0], model.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+    falling = s2 < 0
+    ratio = np.full_like(s, np.inf)
+    ratio[falling] = spring.stiffness * (s[falling] + c0) / (-m * s2[falling])
+    c = contact(linkdyn.analyze(model, t))["K"]
+    assert c["lost_samples"] == 0
+    assert c["jump_speed_rad_s"] == pytest.approx(math.sqrt(np.min(ratio)), rel=1e-9)
+    assert c["jump_time_s"] == t[np.argmin(ratio)]
+
+
+def test_at_the_jump_speed_the_least_contact_force_is_zero():
+    # with gravity and a damper (the force then A + B w + C w^2): run again at the speed
+    # found, the least contact force is zero; 1 % slower no sample is lost, 1 % faster some are
+    from linkdyn.design.overview import contact_forces
+
+    model = cam_follower(300 * RPM)
+    t = np.linspace(0.0, 2 * math.pi / W, 37)[:-1]
+    sol = linkdyn.analyze(model, t)
+    c = contact(sol)["K"]
+    scale = np.max(np.abs(contact_forces(sol, sol.dyn, sol.reactions)["K"]))
+    least = []
+    for r in (0.99, 1.0, 1.01):
+        wj = r * c["jump_speed_rad_s"]
+        fast = dataclasses.replace(model, drivers=(
+            dataclasses.replace(model.drivers[0], motion=ConstantSpeed(wj)),))
+        run = linkdyn.analyze(fast, t * W / wj)
+        least.append(np.min(contact_forces(run, run.dyn, run.reactions)["K"]))
+    assert least[0] > 0 > least[2]
+    assert least[1] == pytest.approx(0.0, abs=1e-9 * scale)
+
+
+def test_no_jump_speed_when_a_load_depends_on_time():
+    # a force along the guide that varies in time does not scale with the cam's speed: no
+    # speed is claimed (a constant one keeps it)
+    from linkdyn.model import Load
+
+    def push(amplitude):
+        return Load("force", "follower", "F", value=lambda t: np.stack(np.broadcast_arrays(
+            0.0, -5.0 * (1.0 + amplitude * np.sin(40.0 * np.asarray(t)))), -1))
+
+    model = cam_follower(300 * RPM)
+    t = np.linspace(0.0, 2 * math.pi / W, 25)[:-1]
+    steady = dataclasses.replace(model, loads=model.loads + (push(0.0),))
+    assert contact(linkdyn.analyze(steady, t))["K"]["jump_speed_rad_s"] > 0
+    pulsed = dataclasses.replace(model, loads=model.loads + (push(0.5),))
+    assert "jump_speed_rad_s" not in contact(linkdyn.analyze(pulsed, t))["K"]
+
+
+@pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
+def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
+    model = build()
     h = 1e-4
     centres = np.array([0.013, 0.031, 0.12, 0.16])
     t = (centres[:, None] + np.arange(-2, 3) * h).reshape(-1)
@@ -147,6 +350,14 @@ def test_the_bundled_example_reads_writes_and_reports_its_contact(tmp_path):
                                     str(tmp_path / "run")])
     assert res.exit_code == 0, res.output
     assert "contact K: least force" in res.output and "never lost" in res.output
+    # at 1000 rpm the follower leaves the cam, and the summary says which spring holds it
+    fast = tmp_path / "fast.toml"
+    fast.write_text(path.read_text("utf-8").replace("rpm = 300.0", "rpm = 1000.0"), "utf-8")
+    res = CliRunner().invoke(main, ["analyze", str(fast), "--samples", "37", "-o",
+                                    str(tmp_path / "fast")])
+    assert res.exit_code == 0, res.output
+    assert "LOSS OF CONTACT" in res.output
+    assert "loads.spring keeps it on at this speed with free length" in res.output
 
 
 @pytest.mark.parametrize("edits, words", [

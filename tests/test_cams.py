@@ -162,6 +162,28 @@ def test_the_command_prints_in_the_files_units_and_writes_the_table(tmp_path):
         res.output.strip().splitlines()[:-1]
 
 
+def test_the_joins_jump_by_the_laws_closed_forms(tmp_path):
+    # a harmonic rise h over beta after and before a dwell: the acceleration jumps by
+    # h pi^2 / (2 beta^2) w^2 at both its ends; a 3-4-5 return: continuous acceleration, the
+    # jerk jumps by 60 h / beta^3 w^3 (its third derivative at either end); lift and velocity
+    # never jump
+    harmonic = cam(rise="harmonic")
+    theta, jump = cams.joins(harmonic)
+    assert np.degrees(theta) == pytest.approx([60.0, 160.0, 260.0, 0.0])
+    a = H * math.pi ** 2 / (2 * RISE ** 2) * W ** 2
+    j = 60 * H / RISE ** 3 * W ** 3
+    assert np.max(np.abs(jump[:2])) <= 1e-15
+    assert jump[2] == pytest.approx([a, a, 0.0, 0.0], abs=1e-12 * a)
+    assert jump[3] == pytest.approx([0.0, 0.0, -j, j], abs=1e-12 * j)
+    # the command says so, in the file's units
+    path = tmp_path / "cam.toml"
+    path.write_text(doc_file().replace('law = "cycloidal"', 'law = "harmonic"'), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert (f"ACCELERATION JUMPS at cam angles 60, 160 deg (by up to {a * 1000:.6g} mm/s^2)"
+            in res.output)
+
+
 @pytest.mark.parametrize("edit, field, words", [
     (("follower = \"roller\"", "follower = \"mushroom\""), "cam.follower", "unknown follower"),
     (("roller_radius = 10.0\n", ""), "cam.roller_radius", "missing required key"),
@@ -177,3 +199,69 @@ def test_a_bad_cam_file_is_named_with_its_fix(tmp_path, edit, field, words):
     assert res.exit_code == 2 and "Traceback" not in res.output
     assert field in res.output and words in res.output
     assert not (tmp_path / "out").exists()
+
+
+TABLE = """[units]
+length = "mm"
+angle = "deg"
+
+[cam]
+name = "measured"
+base_radius = 40.0
+roller_radius = 10.0
+rpm = 300.0
+table = { angle = [ANGLES], lift = [LIFTS] }
+"""
+
+
+def table_file(path, angles, lifts):
+    path.write_text(TABLE.replace("ANGLES", ", ".join(repr(float(a)) for a in angles))
+                    .replace("LIFTS", ", ".join(repr(float(x)) for x in lifts)), "utf-8")
+    return path
+
+
+def test_a_table_of_points_gives_the_periodic_spline_through_them(tmp_path):
+    # the lift h (1 - cos theta) / 2 given every 5 deg: the spline passes through every
+    # point, is C2 (no join jumps below the jerk), and converges on the closed form (its
+    # error O(d^4) in the lift, O(d^3) in the velocity, O(d^2) in the acceleration)
+    deg = np.arange(0.0, 360.0, 5.0)
+    path = table_file(tmp_path / "cam.toml", deg, 10.0 * (1 - np.cos(np.radians(deg))))
+    design, n = camfile.read(path)
+    p = cams.profile(design, 721)    # every 0.5 deg: the table's points among them
+    at = np.isin(np.round(np.degrees(p.theta), 9), deg)
+    assert np.sum(at) == len(deg)
+    assert p.s[at] == pytest.approx(H / 2 * (1 - np.cos(p.theta[at])), abs=1e-15)
+    th = p.theta
+    assert p.s == pytest.approx(H / 2 * (1 - np.cos(th)), abs=3e-7 * H)
+    assert p.v == pytest.approx(H / 2 * np.sin(th) * W, abs=2e-5 * H / 2 * W)
+    assert p.a == pytest.approx(H / 2 * np.cos(th) * W ** 2, abs=2e-3 * H / 2 * W ** 2)
+    # C3 with the closed form's lift and rate
+    d = design.base_radius + design.roller_radius
+    exact = np.arctan2(H / 2 * np.sin(th), d + H / 2 * (1 - np.cos(th)))
+    assert p.pressure_angle == pytest.approx(exact, abs=5e-6)
+    # continuity: nothing jumps but the jerk, by the spline's own third derivative either side
+    knots, jump = cams.joins(design)
+    assert np.max(np.abs(jump[:3])) <= 1e-12 * np.max(np.abs(p.a))
+    eps = 1e-7
+    left, right = (design.motion.svaj(knots + x)[3] * W ** 3 for x in (-eps, eps))
+    assert jump[3] == pytest.approx(right - left, abs=1e-9 * np.max(np.abs(p.j)))
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "displacement, velocity and acceleration continuous at every join" in res.output
+
+
+@pytest.mark.parametrize("angles, lifts, field, words", [
+    ([0, 90, 180, 270], [0, 1, 2], "cam.table", "same number of points"),
+    ([0, 180, 90, 270], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
+    ([0, 90, 180, 360], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
+    (None, None, "cam.segments", "either by segments or by a table")])
+def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words):
+    path = tmp_path / "cam.toml"
+    if angles is None:   # segments and a table both
+        path.write_text(doc_file().replace("[[cam.segments]]", "table = { angle = [0, 90, "
+                        "180, 270], lift = [0, 1, 2, 1] }\n\n[[cam.segments]]", 1), "utf-8")
+    else:
+        table_file(path, angles, lifts)
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    assert field in res.output and words in res.output

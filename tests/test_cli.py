@@ -36,7 +36,8 @@ TOPOLOGY = {"hoeken": (1, ["J4"]), "drag_link": (1, ["J4"]), "slider_crank": (1,
             "inverted_slider_crank": (1, ["J3"]), "fivebar": (2, ["J4"]),
             "stephenson": (1, ["J4", "J7"]), "watt2": (1, ["J4", "J7"]),
             "scotch_yoke": (1, ["J3"]), "geared_fivebar": (1, ["G", "J5"]),
-            "cam_follower": (1, ["K"])}
+            "cam_follower": (1, ["K"]), "cam_fourbar": (1, ["J5", "K"]),
+            "cam_flat_rocker": (1, ["K"])}
 
 
 def run(*args):
@@ -84,7 +85,9 @@ def spec_columns(mech) -> list[str]:
         kind = next(j.kind for j in mech.joints if j.name == d.joint)
         cols.append(f"{'force' if kind == PRISMATIC else 'tau'}_{d.joint}")
     for j in mech.joints:
-        cols += [f"Fx_{j.name}", f"Fy_{j.name}"] + ([f"M_{j.name}"] if j.kind == PRISMATIC else [])
+        # a moment for a prismatic joint, and for a flat face (its contact off the joint's point)
+        moment = j.kind in (PRISMATIC, "flat_cam", "rocker_flat_cam")
+        cols += [f"Fx_{j.name}", f"Fy_{j.name}"] + ([f"M_{j.name}"] if moment else [])
     for b in moving:
         for p in b.points:
             cols += [f"x_{b.name}.{p}", f"y_{b.name}.{p}"]

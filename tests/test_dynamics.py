@@ -288,6 +288,68 @@ def cam_follower(speed=300 * RPM, offset=5.0, law="cycloidal"):
                  assembly_q={"J2": d0 * MM})
 
 
+def rocker_cam(speed=300 * RPM, law="cycloidal"):
+    """A disc cam turning on the ground (base circle 40 mm, roller 10 mm) and an oscillating
+    roller follower: an arm pivoted on the ground at A = (120, 0) mm, its roller's centre F
+    90 mm from A, swung 15 deg by a cycloidal rise over 100 deg, a dwell of 80 deg and a
+    return over 100 deg; a tension spring from the ground pulls the roller on the cam, with
+    gravity and a damper."""
+    a, arm = 120.0, 90.0
+    g0 = math.acos((50.0 ** 2 - a ** 2 - arm ** 2) / (2 * a * arm))
+    bodies = (body("ground", {"C": (0, 0), "A": (a, 0), "S": (-10, -60)}),
+              body("cam", {"C": (0, 0)}, 2.0, (2, -1), 3000.0),
+              body("arm", {"A": (0, 0), "F": (arm, 0), "T": (40, 0)}, 0.4, (50, 6), 900.0))
+    joints = (rev("J1", "ground.C", "cam.C"), rev("J2", "ground.A", "arm.A"),
+              Joint("K", "rocker_cam", "cam", "C", "arm", "F", base_radius=40 * MM,
+                    roller_radius=10 * MM, pivot=a * MM, arm=arm * MM, swing=15 * DEG,
+                    rise=100 * DEG, dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES[law])))
+    loads = (spring("ground", "S", "arm", "F", 1000.0, 0.06),
+             damper("arm", "T", "ground", "S", 1.5))
+    return Model("rocker-cam", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "arm": g0})
+
+
+def flat_follower(speed=300 * RPM):
+    """A disc cam turning on the ground (base circle 40 mm; a cycloidal rise of 20 mm over 100
+    deg, dwell 80 deg, return over 100 deg) and a translating flat-faced follower on a vertical
+    guide 5 mm right of the cam's centre (its face normal to the guide, through F), pressed on
+    the cam by a compression spring, with gravity and a damper."""
+    e, rb = 5.0, 40.0
+    bodies = (body("ground", {"C": (0, 0), "G": (e, 0), "S": (e, 200)}),
+              body("cam", {"C": (0, 0)}, 2.0, (3, 1), 3000.0),
+              body("follower", {"F": (0, 0), "T": (0, 30)}, 0.5, (1, 15), 100.0))
+    joints = (rev("J1", "ground.C", "cam.C"), pri("J2", "ground.G", "follower.F", (0, 1)),
+              Joint("K", "flat_cam", "cam", "C", "follower", "F", base_radius=rb * MM,
+                    lift=20 * MM, rise=100 * DEG, dwell=80 * DEG, fall=100 * DEG,
+                    law=float(laws.CODES["cycloidal"])))
+    loads = (spring("ground", "S", "follower", "F", 2000.0, (200 - rb) * MM + 0.01),
+             damper("follower", "T", "ground", "S", 1.5))
+    return Model("flat-follower", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "follower": 0.0},
+                 assembly_q={"J2": rb * MM})
+
+
+def rocker_flat(speed=300 * RPM):
+    """A disc cam turning on the ground (base circle 40 mm) and an oscillating flat-faced
+    follower: an arm pivoted on the ground at A = (100, 0) mm, its face 10 mm from the pivot
+    towards the cam (the arm's frame: origin at the pivot, the face y = -10 mm, its normal +y),
+    swung 10 deg by a cycloidal rise over 100 deg, a dwell of 80 deg and a return over 100 deg;
+    a tension spring pulls the face on the cam, with gravity and a damper."""
+    a, f, rb = 100.0, 10.0, 40.0
+    alpha0 = math.acos((rb + f) / a)
+    bodies = (body("ground", {"C": (0, 0), "A": (a, 0), "S": (-20, -35)}),
+              body("cam", {"C": (0, 0)}, 2.0, (2, -1), 3000.0),
+              body("arm", {"A": (0, 0), "F": (-87, -f), "T": (-40, -f)}, 0.4, (-50, -4), 900.0))
+    joints = (rev("J1", "ground.C", "cam.C"), rev("J2", "ground.A", "arm.A"),
+              Joint("K", "rocker_flat_cam", "cam", "C", "arm", "F", base_radius=rb * MM,
+                    pivot=a * MM, offset=f * MM, swing=10 * DEG, rise=100 * DEG,
+                    dwell=80 * DEG, fall=100 * DEG, law=float(laws.CODES["cycloidal"])))
+    loads = (spring("ground", "S", "arm", "F", 1000.0, 0.04),
+             damper("arm", "T", "ground", "S", 1.5))
+    return Model("rocker-flat", bodies, joints, (Driver("J1", ConstantSpeed(speed)),), loads,
+                 GRAVITY, assembly_phi={"cam": 0.0, "arm": alpha0 - math.pi / 2})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-rod": hoeken_rod,
@@ -306,6 +368,9 @@ MODELS = {
     "scotch-yoke": scotch_yoke,
     "slotted-lever": slotted_lever,
     "cam-follower": cam_follower,
+    "rocker-cam": rocker_cam,
+    "flat-follower": flat_follower,
+    "rocker-flat": rocker_flat,
 }
 
 
@@ -480,40 +545,62 @@ def kinetic_energy(sol, states):
                + 0.5 * b.inertia * states[b.name].w ** 2 for b in sol.model.moving_bodies)
 
 
-UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1, "cam": 1}  # per joint
+FACES = ("flat_cam", "rocker_flat_cam")
+CAMS = ("cam", "rocker_cam") + FACES
+UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1,
+            **{k: 1 for k in CAMS}}  # per joint
 
 
 def cam_of(jt):
     """The cam of ``linkdyn cam`` (:class:`linkdyn.cams.Cam`) a cam joint's numbers describe:
-    rise, dwell, return, dwell."""
+    rise, dwell, return, dwell (a rocker cam's lift is its arm's swing, rad)."""
     x = jt.numbers
     law = laws_name(x["law"])
+    h = x["swing"] if "swing" in x else x["lift"]
     rest = 2 * math.pi - x["rise"] - x["dwell"] - x["fall"]
-    segs = tuple(s for s in (Segment(law, x["lift"], x["rise"]), Segment("dwell", 0.0, x["dwell"]),
+    segs = tuple(s for s in (Segment(law, h, x["rise"]), Segment("dwell", 0.0, x["dwell"]),
                              Segment(law, 0.0, x["fall"]), Segment("dwell", 0.0, rest))
                  if s.time > 0)
-    return Cam("joint", segs, x["base_radius"], "roller", x["roller_radius"], x["offset"])
+    return Cam("joint", segs, x["base_radius"], "roller", x.get("roller_radius", 0.0),
+               x.get("offset", 0.0))
 
 
-def cam_contact(cam, psi):
-    """The cam angles (shape of ``psi``) of the pitch points of ``cam`` (a linkdyn.cams.Cam) at
-    the polar angles ``psi`` in the cam's frame, found here by bracketing the pitch point's
-    polar angle ``atan2(d0 + s, e) - theta`` (C1 of linkdyn.cams, the lift by the cam's
-    SegmentMotion); and ``d0``."""
+def follower_point(jt, s, s1=0.0):
+    """The follower point F (..., 2) of a cam joint in the cam's frame at cam angle 0 when it
+    has risen by ``s``, and F_theta = dF/ds s' (..., 2): ``(e, d0 + s)`` translating, ``A + L
+    (cos(g0 - s), sin(g0 - s))`` oscillating (A = (pivot, 0), |F(0)| = R_b + R_f)."""
+    x = jt.numbers
+    rp = x["base_radius"] + x["roller_radius"]
+    s, s1 = np.asarray(s, float), np.asarray(s1, float)
+    if jt.kind == "cam":
+        e = x["offset"]
+        F = np.stack(np.broadcast_arrays(e, math.sqrt(rp * rp - e * e) + s), -1)
+        return F, np.stack(np.broadcast_arrays(0.0 * s1, s1), -1)
+    a, arm = x["pivot"], x["arm"]
+    g = math.acos((rp * rp - a * a - arm * arm) / (2 * a * arm)) - s
+    F = np.stack((a + arm * np.cos(g), arm * np.sin(g)), -1)
+    return F, np.stack((arm * np.sin(g) * s1, -arm * np.cos(g) * s1), -1)
+
+
+def cam_contact(jt, psi):
+    """The cam angles (shape of ``psi``) of the pitch points of a cam joint at the polar angles
+    ``psi`` in the cam's frame, found here by bracketing the pitch point's polar angle
+    ``atan2(F(s(theta))) - theta`` (C1 of linkdyn.cams, the lift by the cam's SegmentMotion)."""
     from scipy.optimize import brentq
 
-    e, d0 = cam.offset, math.sqrt((cam.base_radius + cam.roller_radius) ** 2 - cam.offset ** 2)
+    cam = cam_of(jt)
 
     def beta(th, p):   # the pitch point's polar angle minus psi, wrapped to (-pi, pi]
-        y = d0 + cam.motion.svaj(np.array([th % (2 * math.pi)]))[0][0]
-        return math.remainder(math.atan2(y, e) - th - p, 2 * math.pi)
+        F = follower_point(jt, cam.motion.svaj(np.array([th % (2 * math.pi)]))[0][0])[0]
+        return math.remainder(math.atan2(F[1], F[0]) - th - p, 2 * math.pi)
 
     out = np.zeros(np.shape(psi))
+    F0 = follower_point(jt, 0.0)[0]
     for k, p in enumerate(np.ravel(psi)):
-        th0 = math.atan2(d0, e) - p   # beta falls by about one turn over a turn of theta
+        th0 = math.atan2(F0[1], F0[0]) - p   # beta falls by about one turn over a turn
         out.reshape(-1)[k] = brentq(beta, th0 - 1.0, th0 + 1.0, args=(p,), xtol=1e-15,
                                     rtol=1e-15) % (2 * math.pi)
-    return out, d0
+    return out
 
 
 def cam_polar(phi, d):
@@ -524,20 +611,76 @@ def cam_polar(phi, d):
             np.linalg.norm(d, axis=-1))
 
 
+def pitch_normal(jt, th):
+    """The unit normal (..., 2) of a cam joint's pitch curve at the cam angle ``th``, pointing
+    away from the cam's centre, in the cam's frame turned back by ``th`` (the frame of F):
+    across the tangent C2, ``P' = R(-th) (F_theta - J F)``, so ``perp(F_theta - J F) = F + J
+    F_theta`` (J the quarter turn)."""
+    s0, s1 = cam_of(jt).motion.svaj(np.mod(th, 2 * math.pi))[:2]
+    F, Ft = follower_point(jt, s0, s1)
+    n = np.stack((F[..., 0] - Ft[..., 1], F[..., 1] + Ft[..., 0]), -1)
+    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+
+
 def cam_normal(sol, jt):
     """The unit normal (T, 2) of a cam joint's pitch curve at its follower point, pointing away
-    from the cam's centre: across the tangent C2 at the contact's cam angle (cam_contact),
-    turned with the cam."""
-    cam = cam_of(jt)
+    from the cam's centre, at the contact's cam angle (cam_contact), turned with the cam."""
     phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
     psi, _ = cam_polar(phi, sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a))
-    th, d0 = cam_contact(cam, psi)
-    s0, s1 = cam.motion.svaj(th)[:2]
-    # C2: P' = R(-th) (d0 + s, s' - e); the outward normal perp(P'), turned by the cam's angle
-    n = np.stack((-(s1 - cam.offset), d0 + s0), -1)
+    th = cam_contact(jt, psi)
+    n = pitch_normal(jt, th)
     c, s = np.cos(phi - th), np.sin(phi - th)
-    n = np.stack((c * n[..., 0] - s * n[..., 1], s * n[..., 0] + c * n[..., 1]), -1)
-    return n / np.linalg.norm(n, axis=-1, keepdims=True)
+    return np.stack((c * n[..., 0] - s * n[..., 1], s * n[..., 0] + c * n[..., 1]), -1)
+
+
+def face_line(jt, s):
+    """A flat face's normal angle ``alpha`` and distance ``h`` from the cam's centre at the lift
+    ``s``, in the cam's frame at cam angle 0: ``pi/2`` and ``R_b + s`` translating (C5 of
+    linkdyn.cams); ``alpha0 - s`` and ``a cos(alpha) - f`` oscillating (pivot (a, 0), the face
+    f from it), ``cos alpha0 = (R_b + f) / a``."""
+    x = jt.numbers
+    if jt.kind == "flat_cam":
+        return math.pi / 2 + 0.0 * s, x["base_radius"] + s
+    al = math.acos((x["base_radius"] + x["offset"]) / x["pivot"]) - s
+    return al, x["pivot"] * np.cos(al) - x["offset"]
+
+
+def support(jt, nu):
+    """The cam's support function ``H(nu)`` (float), the distance from its centre of the face
+    whose normal is at the angle ``nu`` in the cam's frame: the face's ``h`` at the cam angle
+    where ``alpha(s(theta)) - theta = nu``, found by bracketing."""
+    from scipy.optimize import brentq
+
+    motion = cam_of(jt).motion
+
+    def s_of(th):
+        return motion.svaj(np.array([th % (2 * math.pi)]))[0][0]
+
+    def miss(th):
+        return math.remainder(face_line(jt, s_of(th))[0] - th - nu, 2 * math.pi)
+
+    th0 = face_line(jt, 0.0)[0] - nu
+    th = brentq(miss, th0 - 1.0, th0 + 1.0, xtol=1e-15, rtol=1e-15)
+    return float(face_line(jt, s_of(th))[1])
+
+
+def face_contact(sol, jt):
+    """The face's normal n (T, 2, global: the follower's +y axis) and the contact point (T, 2,
+    global) of a flat-faced cam joint: ``C + R(phi_cam) (H u + H_nu perp(u))``, u at the
+    normal's angle nu in the cam's frame, ``H_nu`` by a five-point difference of
+    :func:`support` (the envelope's point of tangency)."""
+    phi = sol.phi(jt.body_a) if jt.body_a != "ground" else np.zeros(sol.t.shape)
+    pb = sol.phi(jt.body_b)
+    n = np.stack((-np.sin(pb), np.cos(pb)), -1)
+    nu = pb + math.pi / 2 - phi
+    h = 1e-3
+    X = np.zeros(sol.t.shape + (2,))
+    for k, v in enumerate(nu):
+        H = [support(jt, v + j * h) for j in (-2, -1, 0, 1, 2)]
+        Hn = (H[0] - 8 * H[1] + 8 * H[3] - H[4]) / (12 * h)
+        u, w = np.array([math.cos(v), math.sin(v)]), np.array([-math.sin(v), math.cos(v)])
+        X[k] = rot(phi[k], H[2] * u + Hn * w)
+    return n, X + sol.point(jt.body_a, jt.point_a)
 
 
 def joint_columns(model):
@@ -585,7 +728,13 @@ def ne_system(sol):
                 f = np.broadcast_to(f, T + (2,))
                 put(jt.body_b, c, f, x)
                 put(jt.body_a, c, -f, x)
-        elif jt.kind == "cam":
+        elif jt.kind in FACES:
+            # the contact force along the face's normal through the point of tangency
+            n, X = face_contact(sol, jt)
+            normals[jt.name] = (n, n, X)
+            put(jt.body_b, c0, n, X)
+            put(jt.body_a, c0, -n, X)
+        elif jt.kind in CAMS:
             # the contact force along the pitch curve's normal through the follower point
             n = cam_normal(sol, jt)
             normals[jt.name] = (n, n)
@@ -645,6 +794,9 @@ def ne_solve(sol):
             force[..., k, :] = x[..., c, None] * normals[jt.name][1]
             if jt.kind == PRISMATIC:
                 moment[..., k] = x[..., c + 1]
+            if jt.kind in FACES:   # about the follower's point: the contact's offset from it
+                moment[..., k] = cross(normals[jt.name][2] - sol.point(jt.body_b, jt.point_b),
+                                       force[..., k, :])
     return force, moment, x[..., n_unknowns:]
 
 
@@ -925,9 +1077,13 @@ def test_body_wrench_balance_with_reported_reactions(name):
     assert np.max(rel) <= RTOL, f"wrench balance residual {np.max(rel):.3e}"
     fs = force_scale(sol.reactions.force)
     for k, jt in enumerate(model.joints):
-        if jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
+        if jt.kind in FACES:  # a face's: the contact force's about the follower's point
+            X = normals[jt.name][2] - sol.point(jt.body_b, jt.point_b)
+            assert np.max(np.abs(sol.reactions.moment[..., k] - cross(
+                X, sol.reactions.force[..., k, :]))) <= RTOL * fs * size_of(model)
+        elif jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        if jt.kind in ("distance", "cam"):  # a rod's reaction along the rod, a cam's normal
+        if jt.kind in ("distance",) + CAMS:  # a rod's reaction along the rod, a cam's normal
             u = normals[jt.name][0]
             across = cross(u, sol.reactions.force[..., k, :])
             assert np.max(np.abs(across)) <= RTOL * fs

@@ -266,12 +266,17 @@ def test_slider_crank_matches_closed_form():
 # velocities and accelerations against finite differences of positions
 
 H = 1e-3                     # s
+# a shorter step for the cams whose motion law bends faster than the others' (the stencil's
+# truncation error (h w)^4 s^(5) / 30 grows as the rise's span to the -4th: ~2e-6 of the peak
+# rate at 1e-3 s for a 105 deg rise at 300 rpm); their segment ends sit between stencils
+STEP = {"cam_fourbar": 5e-4, "cam_flat_rocker": 5e-4}
 STENCIL = np.arange(-2, 3)   # 5-point stencils, O(h^4)
 N_BASE = 25
 
 
-def _fd(x):
-    """First and second derivatives at the stencil centres; x is (N_BASE * 5, ...)."""
+def _fd(x, H=H):
+    """First and second derivatives at the stencil centres; x is (N_BASE * 5, ...), sampled
+    at the step ``H`` (s)."""
     x = x.reshape((N_BASE, 5) + x.shape[1:])
     d1 = (x[:, 0] - 8 * x[:, 1] + 8 * x[:, 3] - x[:, 4]) / (12 * H)
     d2 = (-x[:, 0] + 16 * x[:, 1] - 30 * x[:, 2] + 16 * x[:, 3] - x[:, 4]) / (12 * H**2)
@@ -286,7 +291,8 @@ def _centre(x):
 def test_rates_match_finite_differences(name):
     mech = load(name)
     T = period(mech)
-    t = (np.linspace(0.0, T, N_BASE)[:, None] + H * STENCIL).ravel()
+    h = STEP.get(name, H)
+    t = (np.linspace(0.0, T, N_BASE)[:, None] + h * STENCIL).ravel()
     kin = kinematics.solve(mech, t)
     assert kin.valid.all()
     rv, ra = 1e-6, 1e-5           # measured worst: ~1e-7 (velocity), ~1e-7 (acceleration)
@@ -295,17 +301,17 @@ def test_rates_match_finite_differences(name):
     L = size(mech)
     n_checked = 0
     for k, j in enumerate(mech.joints):
-        d1, d2 = _fd(kin.q[:, k])
+        d1, d2 = _fd(kin.q[:, k], h)
         unit = 1.0 if j.kind == REVOLUTE else L
         assert_rel(d1, _centre(kin.qd[:, k]), rv, f"qd_{j.name}", floor=unit * w_ref)
         assert_rel(d2, _centre(kin.qdd[:, k]), ra, f"qdd_{j.name}", floor=unit * w_ref**2)
         n_checked += 1
     for b in mech.moving_bodies:
-        d1, d2 = _fd(phi(kin, b.name))
+        d1, d2 = _fd(phi(kin, b.name), h)
         assert_rel(d1, _centre(omega(kin, b.name)), rv, f"omega_{b.name}", floor=w_ref)
         assert_rel(d2, _centre(alpha(kin, b.name)), ra, f"alpha_{b.name}", floor=w_ref**2)
         for p in b.points:
-            d1, d2 = _fd(kin.point(b.name, p))
+            d1, d2 = _fd(kin.point(b.name, p), h)
             assert_rel(d1, _centre(kin.point_velocity(b.name, p)), rv, f"v_{b.name}.{p}",
                        floor=L * w_ref)
             acc = kin.point_acceleration(b.name, p)
@@ -349,17 +355,33 @@ def test_loop_closure_residual_and_joint_geometry(name):
             assert np.max(np.abs(roll)) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], j.radius_a * (fa - alpha), rtol=0,
                                        atol=1e-12 * L)
-        elif j.kind == "cam":
+        elif j.kind in ("cam", "rocker_cam"):
             # the follower's point on the pitch curve linkdyn cam draws (C1): at its polar angle
             # in the cam's frame, the pitch point's radius; q the lift there
-            from test_dynamics import cam_contact, cam_of, cam_polar
+            from test_dynamics import cam_contact, cam_of, cam_polar, follower_point
 
-            cam = cam_of(j)
             psi, r = cam_polar(fa, pb - pa)
-            th, d0 = cam_contact(cam, psi)
-            s = cam.motion.svaj(th)[0]
-            assert np.max(np.abs(r - np.hypot(cam.offset, d0 + s))) <= 1e-10 * L, j.name
+            s = cam_of(j).motion.svaj(cam_contact(j, psi))[0]
+            F = follower_point(j, s)[0]
+            assert np.max(np.abs(r - np.hypot(F[..., 0], F[..., 1]))) <= 1e-10 * L, j.name
             np.testing.assert_allclose(kin.q[:, k], s, rtol=0, atol=1e-12 * L)
+        elif j.kind in ("flat_cam", "rocker_flat_cam"):
+            # the face (normal n, the follower's +y axis) at the cam's support distance H(nu)
+            # from its centre, nu the normal's angle in the cam's frame; q the lift (or swing)
+            # whose face lies at that distance (C5: h = R_b + s, or a cos(alpha0 - s) - f)
+            from test_dynamics import support
+
+            n = np.stack((-np.sin(fb), np.cos(fb)), -1)
+            h = np.sum(n * (pb - pa), -1)
+            H_nu = np.array([support(j, v) for v in fb + np.pi / 2 - fa])
+            assert np.max(np.abs(h - H_nu)) <= 1e-10 * L, j.name
+            x = j.numbers
+            if j.kind == "flat_cam":
+                s = h - x["base_radius"]
+            else:
+                a, f = x["pivot"], x["offset"]
+                s = np.arccos((x["base_radius"] + f) / a) - np.arccos((h + f) / a)
+            np.testing.assert_allclose(kin.q[:, k], s, rtol=0, atol=1e-12 * np.ptp(s))
         else:
             # a slider's frames keep their relative angle (a slot's pin turns freely); the points
             # stay on the slide line through P_a
@@ -481,7 +503,7 @@ def _same(a, b, rtol, what):
 # prismatic examples, the slot of the scotch yoke, the gears of the geared five-bar) and for the
 # cam's (~0.3 s: its steps solve the contact by Newton's method on top of the closure's)
 N_LOOP = {"inverted_slider_crank": 10, "slider_crank": 10, "scotch_yoke": 10,
-          "geared_fivebar": 10, "cam_follower": 10}
+          "geared_fivebar": 10, "cam_follower": 10, "cam_fourbar": 10, "cam_flat_rocker": 10}
 
 
 @pytest.mark.parametrize("name", EXAMPLES)

@@ -32,6 +32,8 @@ EXPECTED = {
     "scotch_yoke": (3, 3, 1, 1, ["J3"]),      # the slot is always cut
     "geared_fivebar": (5, 6, 1, 2, ["G", "J5"]),  # the gear pair is always cut
     "cam_follower": (3, 3, 1, 1, ["K"]),      # the cam joint is always cut
+    "cam_fourbar": (5, 6, 1, 2, ["J5", "K"]),
+    "cam_flat_rocker": (3, 3, 1, 1, ["K"]),
 }
 
 
@@ -77,7 +79,8 @@ def test_mobility_loops_and_cuts_of_examples(name):
     assert (topo.n, len(mech.joints)) == (n_bodies, n_joints)
     # Grübler–Kutzbach: a revolute or prismatic joint removes 2 freedoms, a slot or a gear
     # pair or a cam 1; and one driver per degree of freedom
-    removed = sum(1 if j.kind in ("slot", "gear", "rack", "cam") else 2 for j in mech.joints)
+    removed = sum(1 if j.kind in ("slot", "gear", "rack", "cam", "rocker_cam", "flat_cam",
+                                  "rocker_flat_cam") else 2 for j in mech.joints)
     assert topo.mobility == mobility == 3 * (n_bodies - 1) - removed
     assert len(mech.drivers) == mobility
     # independent loops = joints - (bodies - 1): one cut joint per loop

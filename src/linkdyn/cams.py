@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .motion import Segment, SegmentMotion
+from .motion import PeriodicTable, Segment, SegmentMotion
 
 FOLLOWERS = ("knife", "roller", "flat")
 
@@ -51,7 +51,8 @@ class Cam:
     name : str
     segments : tuple[Segment, ...]
         The lift over the cam angle: each segment's ``to`` (m) and ``time`` its span of cam
-        angle (rad); the spans add up to one turn and the lift returns to 0.
+        angle (rad); the spans add up to one turn and the lift returns to 0 (empty with a
+        ``table``).
     base_radius : float
         ``R_b``, m: the smallest distance from O to the profile.
     follower : str
@@ -64,6 +65,9 @@ class Cam:
         ``w``, rad/s, counter-clockwise.
     length_unit, angle_unit : str
         The file's units, for what a person reads.
+    table : tuple of two ndarray (n,), optional
+        The lift by a table of points instead: cam angles (rad, increasing, within one turn)
+        and lifts (m), through which a periodic cubic spline runs.
     """
 
     name: str
@@ -75,10 +79,15 @@ class Cam:
     speed: float = 2 * math.pi
     length_unit: str = "m"
     angle_unit: str = "rad"
+    table: tuple | None = None
 
     @property
-    def motion(self) -> SegmentMotion:
-        """The lift as a function of the cam angle (the segments' ``time`` is their angle)."""
+    def motion(self) -> SegmentMotion | PeriodicTable:
+        """The lift as a function of the cam angle: by its segments (their ``time`` is their
+        angle), or, given a ``table`` ``(angles (n,) rad, lifts (n,) m)``, the periodic cubic
+        spline through its points."""
+        if self.table is not None:
+            return PeriodicTable(self.table[0], self.table[1], 2 * math.pi)
         return SegmentMotion(0.0, self.segments, repeat=True)
 
 
@@ -162,6 +171,15 @@ def profile(cam: Cam, n: int = 721) -> CamProfile:
     prof = _turn(theta, e - rf * nx, y - rf * ny)
     return CamProfile(cam, theta, s, w * s1, w * w * s2, w ** 3 * s3, phi, rho_p, rho_p - rf,
                       pitch, prof, (rho_p > 0) & (rho_p < rf))
+
+
+def joins(cam: Cam) -> tuple[np.ndarray, np.ndarray]:
+    """The cam angles (J,) rad of the joins between its segments (the cycle's own at 0) and
+    the jumps (4, J) of the follower's lift (m), velocity (m/s), acceleration (m/s^2) and
+    jerk (m/s^3) across each, at the cam's speed: the n-th derivative's jump in the cam angle
+    times ``w^n``."""
+    theta, jump = cam.motion.jumps()
+    return theta, jump * cam.speed ** np.arange(4)[:, None]
 
 
 def columns(p: CamProfile) -> dict[str, np.ndarray]:

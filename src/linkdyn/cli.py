@@ -498,6 +498,19 @@ def summary_text(s: dict) -> str:
                  f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
                  "follower would leave the cam; stiffen its spring or raise the preload"
                  if c["lost_samples"] else "; never lost"))
+        if c.get("jump_speed_rad_s") is not None:   # the constant speed where it is first lost
+            echo(f"    at constant speed the follower would leave the cam from "
+                 f"{num(c['jump_speed_rad_s'], '.6g', 30 / np.pi)} rpm (first at t = "
+                 f"{num(c['jump_time_s'], '.4g')} s of this run)")
+        for label, fix in c.get("springs", {}).items():   # the least spring that holds it
+            ways = ([f"free length {shown(fix['free_length_m'], 'length', 6)} (its force "
+                     f"{shown(abs(fix['tension_change_N']), 'force', 4)} more in "
+                     f"{'tension' if fix['tension_change_N'] >= 0 else 'compression'})"]
+                    if fix["free_length_m"] is not None else []) + (
+                [f"stiffness {shown(fix['stiffness_N_m'], 'stiffness', 6)} (same free length)"]
+                if fix["stiffness_N_m"] is not None else [])
+            echo(f"    {label} keeps it on at this speed with " + (
+                " or ".join(ways) if ways else "no change of its own"))
     if s.get("friction"):
         from .friction import summary_lines
         lines.extend(summary_lines(s["friction"]))

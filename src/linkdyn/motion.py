@@ -208,22 +208,25 @@ class SegmentMotion:
         u = (tc - self._times[k]) / np.diff(self._times)[k]
         return k, u
 
+    def _piece(self, j: int, u) -> list:
+        """``[q, qd, qdd, qddd]`` of segment ``j`` at its normalized times ``u`` (any shape)."""
+        from . import laws
+        h, T = self._ends[j + 1] - self._ends[j], self.segments[j].time
+        parts = laws.rise(self.segments[j].law, u)
+        # q = q_k + h s(u), and h s^(n)(u) / T^n                    (SVAJ)
+        out = [h * parts[n] / T ** n for n in range(4)]
+        out[0] = out[0] + self._ends[j]
+        return out
+
     def svaj(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(q, qd, qdd, qddd)``: coordinate, rate, acceleration and jerk at times ``t``."""
-        from . import laws
         k, u = self._at(t)
-        h = (self._ends[1:] - self._ends[:-1])[k]
-        T = np.diff(self._times)[k]
         out = [np.zeros_like(u) for _ in range(4)]
-        for j, x in enumerate(self.segments):
+        for j in range(len(self.segments)):
             on = k == j
-            if not np.any(on):
-                continue
-            parts = laws.rise(x.law, u[on])
-            # q = q_k + h s(u), and h s^(n)(u) / T^n                    (SVAJ)
-            for n in range(4):
-                out[n][on] = h[on] * parts[n] / T[on] ** n
-        out[0] = out[0] + self._ends[:-1][k]
+            if np.any(on):
+                for n, x in enumerate(self._piece(j, u[on])):
+                    out[n][on] = x
         if not self.repeat:      # at rest before t = 0 and after the last segment
             t = _time(t)
             still = (t < 0) | (t > self._times[-1])
@@ -235,6 +238,18 @@ class SegmentMotion:
         """``(q, qd, qdd)`` at times ``t`` (s, any shape); each of the shape of ``t``."""
         return self.svaj(t)[:3]
 
+    def jumps(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joins between consecutive segments (and, repeating, the one that closes the
+        cycle, at t = 0): their times (J,) s and the jumps (4, J) of q, qd, qdd and qddd
+        across each, the next segment's start minus the previous one's end (0 where the
+        motion is that smooth; a law's end at rest keeps q and qd continuous, a harmonic
+        law's acceleration and a cycloidal law's jerk jump at a dwell)."""
+        n = len(self.segments)
+        pairs = [(k, k + 1) for k in range(n - 1)] + ([(n - 1, 0)] if self.repeat else [])
+        jump = [np.subtract(self._piece(b, 0.0), self._piece(a, 1.0)) for a, b in pairs]
+        times = np.array([self._times[b] for _, b in pairs], float)
+        return times, np.array(jump, float).reshape(len(pairs), 4).T
+
     def describe(self, unit: str = "rad", scale: float = 1.0) -> str:
         """E.g. ``'from 0 rad: cycloidal to 1.047 rad in 0.5 s, dwell 0.25 s, ... (repeats
         every 1.5 s)'``, in ``unit`` of ``scale`` SI (the file's: ``'cycloidal to 60 deg'``)."""
@@ -242,6 +257,51 @@ class SegmentMotion:
                  f"{x.law} to {x.to / scale:.4g} {unit} in {x.time:.4g} s" for x in self.segments]
         tail = f" (repeats every {self.period:.4g} s)" if self.repeat else " (then holds)"
         return f"from {self.start / scale:.4g} {unit}: " + ", ".join(parts) + tail
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicTable:
+    """A periodic motion through a table of points: the periodic cubic spline (C2: the value,
+    rate and acceleration continuous everywhere, the first point's too after a period) through
+    ``(t_k, q_k)``, repeated every ``period``.
+
+    Attributes
+    ----------
+    t : ndarray (n,)
+        Times (or cam angles), strictly increasing, within one period of ``t[0]``; n >= 3.
+    q : ndarray (n,)
+    period : float
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    period: float
+
+    def __post_init__(self):
+        from scipy.interpolate import CubicSpline
+        t, q = np.asarray(self.t, float), np.asarray(self.q, float)
+        # the first point again one period later closes the curve
+        spline = CubicSpline(np.append(t, t[0] + self.period), np.append(q, q[0]),
+                             bc_type="periodic")
+        object.__setattr__(self, "_spline", spline)
+
+    def svaj(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, qd, qdd, qddd)`` at ``t`` (any shape); qddd is the spline's piecewise
+        constant third derivative (the right one at a point of the table)."""
+        x = self.t[0] + np.mod(_time(t) - self.t[0], self.period)
+        return tuple(self._spline(x, n) for n in range(4))
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.svaj(t)[:3]
+
+    def jumps(self) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`SegmentMotion.jumps`: the table's points (n,) and the jumps (4, n) across
+        them, only the third derivative's not zero (``6 (c_k - c_(k-1))``, ``c`` the cubic
+        coefficients of the intervals on either side)."""
+        c3 = 6 * self._spline.c[0]
+        jump = np.zeros((4, len(self.t)))
+        jump[3] = c3 - np.roll(c3, 1)
+        return np.array(self.t, float), jump
 
 
 class Free:

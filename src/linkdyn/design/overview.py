@@ -194,21 +194,175 @@ def contact(sol) -> dict:
     pull), its least value and time, and the samples where it is below zero (``lost_samples``,
     the first and last of their times): where the follower would leave the cam at the run's
     speed, and a stronger spring or preload is needed."""
-    m, topo, t = sol.model, sol.topology, sol.t
+    m, t = sol.model, sol.t
+    forces = contact_forces(sol, sol.dyn, sol.reactions)
     out = {}
-    for k, j in enumerate(topo.cut):
-        if not jk.get(m.joints[j].kind).one_sided:
-            continue
-        lam = sol.dyn.lam[..., topo.row_slice(k)][..., 0]
-        f = np.sign(lam) * np.linalg.norm(sol.reactions.force[..., j, :], axis=-1)
+    for name, f in forces.items():
         lost = np.isfinite(f) & (f < 0)
         kmin = int(np.nanargmin(f)) if np.any(np.isfinite(f)) else 0
-        out[m.joints[j].name] = {
+        out[name] = {
             "min_force_N": float(f[kmin]), "min_time_s": float(t[kmin]),
             "lost_samples": int(np.sum(lost)),
             "lost_from_s": float(t[lost][0]) if np.any(lost) else None,
             "lost_to_s": float(t[lost][-1]) if np.any(lost) else None}
+    if not prescribed(sol):
+        return out
+    if any(c["lost_samples"] for c in out.values()):
+        for name, fix in spring_fixes(sol, forces).items():
+            out[name]["springs"] = fix
+    for name, jump in jump_speeds(sol, forces).items():
+        out[name].update(jump)
     return out
+
+
+def prescribed(sol) -> bool:
+    """Whether the run's motion is prescribed (an ``analyze``, not a ``simulate``) and its
+    loads free of friction: then every contact force is affine in each load and, at one
+    driver angle, a quadratic in the driver's speed."""
+    from ..motion import Free
+    return (not getattr(sol, "friction", None)
+            and not any(isinstance(d.motion, Free) for d in sol.model.drivers))
+
+
+def contact_forces(sol, dyn, react) -> dict:
+    """The signed contact force (T,) N of every one-sided cut joint, by name, out of the
+    multipliers ``dyn.lam`` and reactions ``react``: ``sign(lam) |R|`` (negative: the cam
+    would pull)."""
+    m, topo = sol.model, sol.topology
+    out = {}
+    for k, j in enumerate(topo.cut):
+        if jk.get(m.joints[j].kind).one_sided:
+            lam = dyn.lam[..., topo.row_slice(k)][..., 0]
+            out[m.joints[j].name] = np.sign(lam) * np.linalg.norm(react.force[..., j, :],
+                                                                 axis=-1)
+    return out
+
+
+def contact_forces_of(sol, model, kin) -> dict:
+    """:func:`contact_forces` of ``model`` (``sol.model`` with other loads) moving as ``kin``
+    (``sol``'s motion, or the same positions at another speed): its inverse dynamics and
+    reactions on the numpy backend."""
+    from .. import loads as loads_mod, reactions as reactions_mod
+    from ..dynamics import denoc
+    dyn = denoc.solve(kin, loads_mod.wrenches(model, kin))
+    return contact_forces(sol, dyn, reactions_mod.solve(model, kin, dyn))
+
+
+def least_shift(f0, b):
+    """The ``x`` nearest 0 with ``f0 + x b >= 0`` at every finite sample (f0, b (T,)), or
+    None if none does: the interval ``[max -f0/b (b > 0), min -f0/b (b < 0)]``."""
+    ok = np.isfinite(f0) & np.isfinite(b)
+    f0, b = f0[ok], b[ok]
+    scale = np.max(np.abs(b), initial=0.0)
+    if np.any((np.abs(b) <= 1e-12 * scale) & (f0 < 0)):
+        return None   # a lost sample this load does not reach
+    up, down = b > 1e-12 * scale, b < -1e-12 * scale
+    lo = np.max(-f0[up] / b[up], initial=-np.inf)
+    hi = np.min(-f0[down] / b[down], initial=np.inf)
+    if lo > hi:
+        return None
+    return float(min(max(0.0, lo), hi))
+
+
+def smallest_root(A, B, C):
+    """The least ``r >= 0`` (per sample, shapes of A) where ``A + B r + C r^2`` turns negative
+    (0 where A < 0; inf where it never does)."""
+    scale = np.maximum(np.abs(A), 1e-300)
+    C = np.where(np.abs(C) <= 1e-9 * scale, 0.0, C)
+    B = np.where(np.abs(B) <= 1e-9 * scale, 0.0, B)
+    disc = B * B - 4 * A * C
+    root = np.sqrt(np.maximum(disc, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # the roots of C r^2 + B r + A (or of B r + A): the larger one where C < 0 (the
+        # parabola falls through it), the smaller where C > 0 and B < 0 (a dip below zero)
+        r = np.where(C < 0, (-B - root) / (2 * C),
+                     np.where(C > 0, np.where((B < 0) & (disc > 0), (-B - root) / (2 * C),
+                                              np.inf),
+                              np.where(B < 0, -A / B, np.inf)))
+    return np.where(A < 0, 0.0, np.where(np.isfinite(r) & (r >= 0), r, np.inf))
+
+
+def jump_speeds(sol, forces) -> dict:
+    """The speed at which each one-sided joint would first lose contact, for a run driven at
+    one constant speed ``w``: by joint name, ``jump_speed_rad_s`` (|w| r, None if never) and
+    ``jump_time_s`` (the run's sample, i.e. the driver's angle, where it goes first). At one
+    driver angle every velocity grows as w and every acceleration as w^2, so the contact force
+    is ``A + B r + C r^2`` at the speed ``r w`` (B of dampers, C of inertia): fitted through
+    runs at r = 1, 2, 3 and checked at r = 1/2 (a load that depends on time fails the check:
+    then the speed is not given)."""
+    from dataclasses import replace
+
+    from ..motion import ConstantSpeed
+
+    m, t, kin = sol.model, sol.t, sol.kin
+    motion = m.drivers[0].motion if len(m.drivers) == 1 else None
+    if not isinstance(motion, ConstantSpeed) or motion.speed == 0 or sol.batched:
+        return {}
+
+    def at(r):   # the contact forces at the speed r w, at the run's driver angles
+        q, qd, qdd = kin.joint_motion
+        # the same positions; velocities times r, accelerations times r^2 (no driver's own)
+        fast = replace(kin, t=t / r, joint_motion=(q, [r * x for x in qd],
+                                                   [r * r * x for x in qdd]),
+                       twists=[r * x for x in kin.twists],
+                       rates=[r * r * x for x in kin.rates], arrays=None)
+        return contact_forces_of(sol, m, fast)
+
+    f2, f3, half = at(2.0), at(3.0), at(0.5)
+    out = {}
+    for name, f1 in forces.items():
+        # through r = 1, 2, 3: C = (f1 - 2 f2 + f3) / 2, B = f2 - f1 - 3 C, A = f1 - B - C
+        C = (f1 - 2 * f2[name] + f3[name]) / 2
+        B = f2[name] - f1 - 3 * C
+        A = f1 - B - C
+        scale = np.nanmax(np.abs(np.stack((f1, f2[name], f3[name]))))
+        if not np.nanmax(np.abs(A + B / 2 + C / 4 - half[name])) <= 1e-8 * scale:
+            continue
+        r = smallest_root(A, B, C)
+        k = int(np.argmin(np.where(np.isfinite(r), r, np.inf)))
+        out[name] = {"jump_speed_rad_s": float(r[k] * abs(motion.speed))
+                     if np.isfinite(r[k]) else None,
+                     "jump_time_s": float(t[k]) if np.isfinite(r[k]) else None}
+    return out
+
+
+def spring_fixes(sol, forces) -> dict:
+    """For every one-sided joint that loses contact, each spring's change that keeps every
+    contact force at or above zero (the least one, exact at the worst sample), by joint name
+    then spring label: ``free_length_m`` (the stiffness kept: the spring's force changed by
+    ``tension_change_N``, positive pulling) and ``stiffness_N_m`` (the free length kept);
+    None where that change cannot. The motion is prescribed, so each contact force is affine
+    in a spring's force: ``f = f0 + c dT`` with ``c`` from one more inverse dynamics at a
+    changed free length, and ``dT = (r - 1) T0`` for the stiffness ``r k``."""
+    from dataclasses import replace
+
+    from .. import loads as loads_mod
+
+    m, kin = sol.model, sol.kin
+
+    def forces_with(k, **change):   # the contact forces with load k changed
+        return contact_forces_of(sol, replace(m, loads=tuple(
+            replace(x, **change) if i == k else x for i, x in enumerate(m.loads))), kin)
+
+    scale = max(float(np.nanmax(np.abs(f), initial=1.0)) for f in forces.values())
+    fixes: dict = {name: {} for name, f in forces.items() if np.nanmin(f) < 0}
+    for k, (load, label) in enumerate(zip(m.loads, loads_mod.labels(m))):
+        if load.kind != "spring" or not load.stiffness > 0:
+            continue
+        # c: the contact force per newton of added tension (the free length shorter by dT/k)
+        dT = scale
+        per_N = forces_with(k, free_length=load.free_length - dT / load.stiffness)
+        # b: the contact force's change as the stiffness doubles at the same free length
+        doubled = forces_with(k, stiffness=2 * load.stiffness)
+        for name in fixes:
+            f0 = forces[name]
+            x = least_shift(f0, (per_N[name] - f0) / dT)
+            r = least_shift(f0, doubled[name] - f0)
+            fixes[name][label] = {
+                "tension_change_N": x,
+                "free_length_m": None if x is None else load.free_length - x / load.stiffness,
+                "stiffness_N_m": None if r is None or r <= -1 else (1 + r) * load.stiffness}
+    return fixes
 
 
 def assembly(sol) -> dict:

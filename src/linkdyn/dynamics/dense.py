@@ -242,8 +242,9 @@ def solve(model: Model, kin: KinematicSolution, w_ext: np.ndarray) -> DenseSolut
             kind = jk.get(jt.kind)
             a, b = names.index(jt.body_a), names.index(jt.body_b)
             P = point(b, jt.point_b)
-            # the kind's numbers and frame: its axis and d = r_Pb - r_Pa
-            args = (kind.own(jt.numbers), axis(jt), P - point(a, jt.point_a))
+            # the kind's numbers and frame: its axis, d = r_Pb - r_Pa and b's x axis
+            args = (kind.own(jt.numbers), axis(jt), P - point(a, jt.point_a),
+                    _rot(phi[b]) @ np.array([1.0, 0.0]))
             S = kind.selection(*args)
             cut_args.append((kind, a, b, P, args))
             cols = topo.row_slice(k)

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..cams import FOLLOWERS, Cam, CamProfile
+from ..cams import FOLLOWERS, Cam, CamProfile, joins
 from ..motion import Segment
 
 
@@ -43,14 +43,49 @@ def text(p: CamProfile) -> str:
                      + (" or use a smaller roller" if cam.follower == "roller" else ""))
     else:
         lines.append("  no undercutting")
+    lines.append(continuity(p))
     return "\n".join(lines)
+
+
+ORDERS = ("displacement", "velocity", "acceleration", "jerk")
+
+
+def continuity(p: CamProfile) -> str:
+    """The line that says which of the follower's lift, velocity and acceleration are
+    continuous at every join of the cam's segments, and where the first that is not jumps
+    (a jump counts above 1e-9 of that quantity's peak over the turn)."""
+    from .units import ANGLE_UNITS, LENGTH_UNITS
+    cam = p.cam
+    L, Lu = LENGTH_UNITS[cam.length_unit], cam.length_unit
+    A, Au = ANGLE_UNITS[cam.angle_unit], cam.angle_unit
+    theta, jump = joins(cam)
+    peaks = [np.max(np.abs(x)) for x in (p.s, p.v, p.a, p.j)]
+    jumps = [np.abs(jump[n]) > 1e-9 * max(peaks[n], 1e-300) for n in range(4)]
+
+    def at(n):   # the cam angles where derivative n jumps, in order (a table's: how many)
+        x = np.sort(theta[jumps[n]]) / A
+        if len(x) > 8:
+            return f"{len(x)} cam angles from {x[0]:.4g} to {x[-1]:.4g} {Au}"
+        return "cam angles " + ", ".join(f"{v:.4g}" for v in x) + f" {Au}"
+
+    first = next((n for n in range(3) if np.any(jumps[n])), None)
+    if first is None:
+        return ("  displacement, velocity and acceleration continuous at every join"
+                + (f" (the jerk jumps at {at(3)})" if np.any(jumps[3]) else ""))
+    unit = f"{Lu}" + ("", "/s", "/s^2")[first]
+    return (f"  {ORDERS[first].upper()} JUMPS at {at(first)} (by up to "
+            f"{np.max(np.abs(jump[first])) / L:.6g} {unit}): "
+            + ("infinite jerk there, a shock at speed; next to a dwell use a law that starts "
+               "and ends at zero acceleration (cycloidal, poly345, poly4567, modified_sine, "
+               "modified_trapezoid)" if first == 2 else "the follower would be struck"))
 
 
 # --- the cam file: [units] and [cam] with its [[cam.segments]] --------------------------------
 
 CAM_KEYS = ("name", "base_radius", "follower", "roller_radius", "offset", "rpm", "samples",
-            "segments")
+            "segments", "table")
 SEGMENT_KEYS = ("law", "to", "angle")
+TABLE_KEYS = ("angle", "lift")
 
 
 def read(path) -> tuple[Cam, int]:
@@ -75,7 +110,10 @@ def read(path) -> tuple[Cam, int]:
     r.table(data, "", ("units", "cam"), required=("cam",), noun="section", what="sections")
     if "units" in data:
         _units(r, data["units"])
-    c = r.table(data["cam"], "cam", CAM_KEYS, required=("base_radius", "segments"))
+    c = r.table(data["cam"], "cam", CAM_KEYS, required=("base_radius",))
+    if ("segments" in c) == ("table" in c):
+        r.fail("cam.segments", "give the lift either by segments or by a table, one of them",
+               "Keep [[cam.segments]] or cam.table = { angle = [...], lift = [...] }")
     L, A = r.length, r.angle
     follower = r.choice(c.get("follower", "roller"), "cam.follower", FOLLOWERS, "follower")
     rb = r.number(c["base_radius"], "cam.base_radius", r.length_name, positive=True) * L
@@ -102,6 +140,11 @@ def read(path) -> tuple[Cam, int]:
     if samples < 3 or samples > 1_000_000:
         r.fail("cam.samples", f"must be from 3 to 1,000,000, got {samples}",
                "Give a number of cam angles, e.g. samples = 721")
+    common = dict(name=str(c.get("name", Path(file).stem)), base_radius=rb,
+                  follower=follower, roller_radius=rf, offset=e, speed=rpm * 2 * math.pi / 60,
+                  length_unit=r.length_name, angle_unit=r.angle_name)
+    if "table" in c:
+        return Cam(segments=(), table=lift_table(r, c["table"]), **common), samples
     items = r.entries(c["segments"], "cam.segments")
     if not items:
         r.fail("cam.segments", "no segments given", 'Add [[cam.segments]] tables')
@@ -129,7 +172,26 @@ def read(path) -> tuple[Cam, int]:
     if lift != 0.0:
         r.fail("cam.segments", f"the lift ends at {lift / L:g} {r.length_name}, not 0",
                "End the last rise or return at to = 0")
-    cam = Cam(name=str(c.get("name", Path(file).stem)), segments=tuple(segs), base_radius=rb,
-              follower=follower, roller_radius=rf, offset=e, speed=rpm * 2 * math.pi / 60,
-              length_unit=r.length_name, angle_unit=r.angle_name)
-    return cam, samples
+    return Cam(segments=tuple(segs), **common), samples
+
+
+def lift_table(r, value) -> tuple[np.ndarray, np.ndarray]:
+    """``cam.table``'s cam angles (rad) and lifts (m), checked: at least 4 points, the
+    angles increasing within one turn from the first (the spline closes the turn)."""
+    t = r.table(value, "cam.table", TABLE_KEYS, required=TABLE_KEYS)
+    cols = {}
+    for key, unit in (("angle", r.angle_name), ("lift", r.length_name)):
+        if not isinstance(t[key], list):
+            r.fail(f"cam.table.{key}", f"expected an array of numbers in {unit}",
+                   f"Write {key} = [..., ...]")
+        cols[key] = np.array([r.number(x, f"cam.table.{key}[{k}]", unit)
+                              for k, x in enumerate(t[key])])
+    angle, lift = cols["angle"] * r.angle, cols["lift"] * r.length
+    if len(angle) != len(lift) or len(angle) < 4:
+        r.fail("cam.table", f"angle and lift need the same number of points, at least 4 "
+               f"(got {len(angle)} and {len(lift)})", "Give one lift for each cam angle")
+    if np.any(np.diff(angle) <= 0) or angle[-1] - angle[0] >= 2 * math.pi:
+        r.fail("cam.table.angle", "the cam angles must increase within one turn",
+               "List each angle once, in order, the last less than a turn after the first "
+               "(the spline joins it to the first)")
+    return angle, lift

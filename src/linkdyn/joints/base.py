@@ -16,15 +16,16 @@ on b at P, ``S^T lam`` and any part that does no work) and ``coordinate`` (the j
 coordinate, rate and acceleration from its bodies' motion: a cut joint's ``q`` is an output,
 not an unknown).
 
-Every cut step (protocol version 2) takes first the cut's own numbers ``nums`` and its frame
+Every cut step (protocol version 3) takes first the cut's own numbers ``nums`` and its frame
 ``f``: ``nums`` is the tuple of the kind's scalar numbers (shape ``()``, in its declaration
-order, :attr:`JointKind.scalars`) padded with zeros to :data:`WIDTH`; ``f = (e_a, d)`` holds
-the axis ``e_a`` (the kind's ``axis`` fixed in a, global; ``(1, 0)`` turned with a for a kind
-without one) and ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m),
-:func:`frame`. A step that needs the frame's motion takes ``fd = (w_a, d')``: the axis turns at
-a's angular velocity ``w_a``, ``d'`` is the rate of ``d`` (m/s). So a kind may depend on both
-cut points (a gear's line of centres) and on any number of its own, with no edit of the
-solvers. :meth:`JointKind.motion_vector`,
+order, :attr:`JointKind.scalars`) padded with zeros to :data:`WIDTH`; ``f = (e_a, d, e_b)``
+holds the axis ``e_a`` (the kind's ``axis`` fixed in a, global; ``(1, 0)`` turned with a for a
+kind without one), ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m), and
+``e_b``, the second body's x axis (global), :func:`frame`. A step that needs the frame's motion
+takes ``fd = (w_a, d', w_b)``: ``e_a`` turns at a's angular velocity ``w_a``, ``e_b`` at b's
+``w_b``, ``d'`` is the rate of ``d`` (m/s). So a kind may depend on both cut points (a gear's
+line of centres), on both bodies' angles (a flat-faced cam follower's face) and on any number
+of its own, with no edit of the solvers. :meth:`JointKind.motion_vector`,
 :meth:`JointKind.cut_rows` and :meth:`JointKind.selection` give them as arrays.
 
 Arrays are component-first (see :mod:`linkdyn.planar`): a planar vector is ``(2, ...)``, a
@@ -90,15 +91,17 @@ class Number:
 
 
 #: the length of a cut's numbers tuple ``nums``, as every cut step takes it (the kind's scalar
-#: numbers, padded with zeros; a cam's eight the most)
-WIDTH = 8
+#: numbers, padded with zeros, or the numbers a kind derives from them: a cam's nine the most)
+WIDTH = 9
 
 
 @step
-def frame(r_pa, r_pb, e_a):
-    """A cut's frame ``(e_a, d)`` as the cut steps take it: its axis ``e_a`` (global) and
-    ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m)."""
-    return e_a, (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1])
+def frame(r_pa, r_pb, axes):
+    """A cut's frame ``(e_a, d, e_b)`` as the cut steps take it: its axis ``e_a`` (global),
+    ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m), and the second
+    body's x axis ``e_b`` (global), from the cut points and ``axes = (e_ax, e_ay, e_bx, e_by)``
+    (:func:`linkdyn.kinematics.recursion.cut_frame`)."""
+    return (axes[0], axes[1]), (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), (axes[2], axes[3])
 
 
 #: a slider's or a slot's axis: a unit direction fixed in the joint's first body, in its frame
@@ -191,7 +194,9 @@ class JointKind:
     def own(self, numbers: dict, zero=0.0) -> tuple:
         """The tuple ``nums`` of its cut steps from a joint's ``numbers`` (name -> value; a
         value may be an array with a design axis): its :attr:`scalars`, padded with ``zero``
-        to :data:`WIDTH`."""
+        to :data:`WIDTH`. A kind may override it to give its steps numbers derived from its
+        own (WIDTH of them, each ``zero`` plus a number where constant; a number no design
+        may vary stays a float under numpy, so a step may branch on it)."""
         own = tuple(numbers[k] for k in self.scalars)
         return own + (zero,) * (WIDTH - len(own))
 
@@ -229,8 +234,8 @@ class JointKind:
     #   plus_motion(s, e, x, rate) -> x + p_i rate
     #   plus_motion_rate(s, e, w_axis, x, rate) -> x + pd_i rate (w_axis: angular velocity
     #       of the body carrying the axis)
-    # The cut steps (protocol 2) take the cut's numbers ``nums`` (WIDTH-tuple) and frame
-    # ``f = (e_a, d)`` first (module docstring); ``fd = (w_a, d')`` is the frame's rate:
+    # The cut steps (protocol 3) take the cut's numbers ``nums`` (WIDTH-tuple) and frame
+    # ``f = (e_a, d, e_b)`` first (module docstring); ``fd = (w_a, d', w_b)`` is its rate:
     #   residual(nums, f, phi_a, phi_b) -> rows   position closure (cut joint)
     #   selected(nums, f, x) -> S x                   x: relative twist of b to a at the cut
     #   selected_rate(nums, f, fd, x) -> (dS/dt) x
@@ -256,18 +261,19 @@ class JointKind:
         return _stack(self.selected(nums, f, x)[:self.rows], x[0])
 
     # --- explicit matrices, for the dense reference -----------------------------------------
-    def selection(self, nums, e_a, d) -> np.ndarray:
+    def selection(self, nums, e_a, d, e_b) -> np.ndarray:
         """The cut-row selection matrix ``S`` (rows, 3) at one sample: ``nums`` the cut's
         numbers (:meth:`own`), ``e_a`` (2,) its global axis, ``d`` (2,) the second body's cut
-        point from the first's; the cut rows of the identity's columns."""
-        f = (np.asarray(e_a, float), np.asarray(d, float))
+        point from the first's, ``e_b`` (2,) the second body's x axis; the cut rows of the
+        identity's columns."""
+        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float))
         return np.asarray(self.cut_rows(nums, f, np.eye(3))).reshape(self.rows, 3)
 
-    def contact(self, nums, e_a, d, lam) -> np.ndarray:
+    def contact(self, nums, e_a, d, e_b, lam) -> np.ndarray:
         """The constraint wrench (3,) ``[n, fx, fy]`` of the multipliers ``lam`` (rows,) on the
         second body about its cut point at one sample (the kind's ``wrench``; ``S^T lam`` for
         a lower pair), for the dense reference."""
-        f = (np.asarray(e_a, float), np.asarray(d, float))
+        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float))
         lam = tuple(float(x) for x in lam) + (0.0,) * (3 - len(lam))
         return np.array([float(x) for x in self.wrench(nums, f, lam)])
 

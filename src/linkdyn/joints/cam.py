@@ -39,9 +39,8 @@ import math
 
 import numpy as np
 
-from .. import cams, laws
-from ..motion import Segment
-from ..steps import atan2, select, step
+from .. import laws
+from ..steps import atan2, by_kind, select, step
 from .base import JointKind, Number
 
 BASE_RADIUS = Number("base_radius", (), "length", 0.0,
@@ -63,6 +62,8 @@ LAW = Number("law", (), "", float(laws.CODES["cycloidal"]), design=False,
 ITERATIONS = 6
 STEEP = 0.5
 TWO_PI = 2.0 * math.pi
+#: the follower's motion, ``nums[8]``: along a line, or an arm swinging about a pivot
+TRANSLATING, OSCILLATING = 0, 1
 
 
 @step
@@ -84,32 +85,59 @@ def lift(nums, theta):
 
 
 @step
+def _translating(nums, s):
+    # F = (e, d0 + s): nums[0] = e, nums[1] = d0
+    return nums[0], nums[1] + s, 0.0, 1.0, 0.0, 0.0
+
+
+@step
+def _oscillating(nums, s):
+    # F = (a + L cos g, L sin g), g = g0 - s: nums[0] = a, nums[1] = L, nums[2] = g0
+    g = nums[2] - s
+    c, sn = nums[1] * np.cos(g), nums[1] * np.sin(g)
+    return nums[0] + c, sn, sn, -c, -c, -sn
+
+
+#: The step ``follower_point(code, nums, s) -> (X, Y, X', Y', X'', Y'')``: the follower point
+#: F in the cam's frame at cam angle 0 (m) when the follower has risen by ``s``, and its first
+#: and second derivatives in ``s``; code 0 a translating follower, 1 an oscillating one
+#: (``nums[8]``).
+follower_point = by_kind([(TRANSLATING, _translating), (OSCILLATING, _oscillating)])
+
+
+@step
 def contact(nums, f):
     """The contact on the pitch curve of the follower point ``d`` (``f[1]``) in the frame of
     the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s', s'')`` there, the
     pitch point's radius ``rho`` and ``rho_theta``, ``rho_theta_theta``, ``beta_theta``,
     ``beta_theta_theta`` (beta: its polar angle)."""
-    rp, e = nums[0] + nums[1], nums[2]
-    d0 = np.sqrt(rp * rp - e * e)
+    code = nums[8]
     ea, d = f[0], f[1]
     psi = atan2(ea[0] * d[1] - ea[1] * d[0], ea[0] * d[0] + ea[1] * d[1])
-    # Newton on beta(theta) = atan2(d0 + s, e) - theta = psi (mod 2 pi), from s = 0
-    theta = atan2(d0, e) - psi
+    # Newton on beta(theta) = atan2(F(s(theta))) - theta = psi (mod 2 pi), from s = 0, with
+    # beta_theta = (F x F') s' / |F|^2 - 1
+    p = follower_point(code, nums, 0.0)
+    theta = atan2(p[1], p[0]) - psi
     for _ in range(ITERATIONS):
         s = lift(nums, theta)
-        y = d0 + s[0]
-        miss = atan2(y, e) - theta - psi
-        bt = e * s[1] / (e * e + y * y) - 1.0
+        p = follower_point(code, nums, s[0])
+        miss = atan2(p[1], p[0]) - theta - psi
+        bt = (p[0] * p[3] - p[1] * p[2]) * s[1] / (p[0] * p[0] + p[1] * p[1]) - 1.0
         theta = theta - atan2(np.sin(miss), np.cos(miss)) / bt
     s = lift(nums, theta)
-    y = d0 + s[0]
-    r2 = e * e + y * y
+    p = follower_point(code, nums, s[0])
+    # F and its rates in theta: F_t = F' s',  F_tt = F'' s'^2 + F' s''
+    x, y = p[0], p[1]
+    xt, yt = p[2] * s[1], p[3] * s[1]
+    xtt, ytt = p[4] * s[1] * s[1] + p[2] * s[2], p[5] * s[1] * s[1] + p[3] * s[2]
+    r2 = x * x + y * y
     rho = np.sqrt(r2)
-    # rho_theta = y s' / rho;  beta_theta = e s' / rho^2 - 1, and their rates in theta
-    rt = y * s[1] / rho
-    rtt = (s[1] * s[1] + y * s[2]) / rho - y * y * s[1] * s[1] / (rho * r2)
-    bt = e * s[1] / r2 - 1.0
-    btt = e * s[2] / r2 - 2.0 * e * y * s[1] * s[1] / (r2 * r2)
+    # rho_t = F.F_t / rho,  beta_t = F x F_t / rho^2 - 1, and their rates in theta
+    fd, fx = x * xt + y * yt, x * yt - y * xt
+    rt = fd / rho
+    rtt = (xt * xt + yt * yt + x * xtt + y * ytt) / rho - fd * fd / (rho * r2)
+    bt = fx / r2 - 1.0
+    btt = (x * ytt - y * xtt) / r2 - 2.0 * fx * fd / (r2 * r2)
     return theta, s, rho, rt, rtt, bt, btt
 
 
@@ -201,6 +229,14 @@ class Cam(JointKind):
         th2 = (p2 - k[6] * th1 * th1) / k[5]
         return s[0], s[1] * th1, s[2] * th1 * th1 + s[1] * th2
 
+    def own(self, numbers: dict, zero=0.0) -> tuple:
+        """The cut steps' numbers: ``(e, d0, 0, lift, rise, dwell, fall, law, 0)``,
+        ``d0 = sqrt((R_b + R_f)^2 - e^2)`` (the follower point's height at s = 0)."""
+        x = numbers
+        rp, e = x["base_radius"] + x["roller_radius"], x["offset"]
+        return (e, np.sqrt(rp * rp - e * e), zero, x["lift"], x["rise"], x["dwell"], x["fall"],
+                x["law"], zero + TRANSLATING)
+
     def refuse(self, numbers: dict) -> str | None:
         """Why a cam's numbers make no cam (None: they do)."""
         rb, rf, e = numbers["base_radius"], numbers["roller_radius"], numbers["offset"]
@@ -212,45 +248,61 @@ class Cam(JointKind):
             return "the offset must be less than base_radius + roller_radius"
         if not numbers["lift"] > 0:
             return "lift must be positive"
+        return self.refuse_lift(numbers) or self.refuse_curve(numbers)
+
+    def refuse_lift(self, numbers: dict) -> str | None:
+        """Why the rise, dwell, fall and law make no lift (None: they do)."""
         if not (numbers["rise"] > 0 and numbers["fall"] > 0 and numbers["dwell"] >= 0):
             return "rise and fall must be positive angles, dwell 0 or more"
         if numbers["rise"] + numbers["dwell"] + numbers["fall"] > TWO_PI * (1 + 1e-12):
             return "rise + dwell + fall must be at most one turn"
         if laws_name(numbers["law"]) == "dwell":
             return "law must be a rise law (harmonic, cycloidal, poly345, ...), not dwell"
-        # the design's own checks (linkdyn cam's C3, C4), over a turn
-        p = cams.profile(design(numbers), 1441)
-        e, y = p.cam.offset, np.hypot(p.pitch[0], p.pitch[1])
-        steep = np.max(np.abs(e * p.v / p.cam.speed) / (y * y))
-        if steep > STEEP:
-            return (f"the pitch curve's polar angle must fall evenly along it, |e s'| <= "
-                    f"rho^2 / 2 (here up to {steep:.3g} rho^2), for its contact to be found; "
-                    "reduce the offset or enlarge base_radius")
-        if np.any(p.undercut):
-            at = np.degrees(p.theta[p.undercut])
+        return None
+
+    def refuse_curve(self, numbers: dict) -> str | None:
+        """Why the pitch curve cannot be followed (None: it can): its polar angle must fall
+        evenly for the contact's Newton iterations, and it must not bend tighter than the
+        roller (undercutting, C4 of :mod:`linkdyn.cams`), over a turn."""
+        steep, rho = pitch_curve(self.own({k: float(v) for k, v in numbers.items()}),
+                                 np.linspace(0.0, TWO_PI, 1441))
+        if np.max(steep) > STEEP:
+            return (f"the pitch curve's polar angle must fall evenly along it, |F x F_theta| "
+                    f"<= rho^2 / 2 (here up to {np.max(steep):.3g} rho^2), for its contact to "
+                    "be found; " + self.steep_fix)
+        under = (rho > 0) & (rho < numbers["roller_radius"])
+        if np.any(under):
+            at = np.degrees(np.linspace(0.0, TWO_PI, 1441)[under])
             return (f"the cam is undercut at cam angles {at[0]:.4g} .. {at[-1]:.4g} deg (the "
                     "pitch curve bends tighter than the roller); enlarge base_radius or use a "
                     "smaller roller")
         return None
 
+    #: what to change where the pitch curve's polar angle falls unevenly
+    steep_fix = "reduce the offset or enlarge base_radius"
+
+
+def pitch_curve(nums, theta):
+    """The pitch curve's steepness ``|F x F_theta| / |F|^2`` and radius of curvature
+    ``|P'|^3 / (P'' x P')`` (m, positive convex, C4 of :mod:`linkdyn.cams`) at the cam angles
+    ``theta`` (n,), of a cam with the cut numbers ``nums`` (floats). In the cam's frame
+    ``P = R(-theta) F``: ``P' = R(-theta) (F_t - J F)``, ``P'' = R(-theta) (F_tt - 2 J F_t -
+    F)``, J the quarter turn."""
+    s = lift(nums, theta)
+    p = follower_point(nums[8], nums, s[0])
+    x, y = p[0] + 0.0 * theta, p[1] + 0.0 * theta
+    xt, yt = p[2] * s[1], p[3] * s[1]
+    xtt, ytt = p[4] * s[1] * s[1] + p[2] * s[2], p[5] * s[1] * s[1] + p[3] * s[2]
+    # J (x, y) = (-y, x)
+    ux, uy = xt + y, yt - x
+    vx, vy = xtt + 2.0 * yt - x, ytt - 2.0 * xt - y
+    return (np.abs(x * yt - y * xt) / (x * x + y * y),
+            np.hypot(ux, uy) ** 3 / (vx * uy - vy * ux))
+
 
 def laws_name(code) -> str:
     """The motion law's name of the code a cam joint holds."""
     return tuple(laws.LAWS)[int(code)]
-
-
-def design(numbers: dict) -> cams.Cam:
-    """The cam of ``linkdyn cam`` (:class:`linkdyn.cams.Cam`, a knife edge or a roller) whose
-    pitch curve a cam joint's numbers (name -> SI value) describe: rise, dwell, return, and
-    the bottom dwell for the rest of the turn."""
-    law, x = laws_name(numbers["law"]), numbers
-    rest = TWO_PI - x["rise"] - x["dwell"] - x["fall"]
-    segs = tuple(s for s in (Segment(law, x["lift"], x["rise"]),
-                             Segment("dwell", 0.0, x["dwell"]), Segment(law, 0.0, x["fall"]),
-                             Segment("dwell", 0.0, rest)) if s.time > TWO_PI * 1e-12)
-    rf = x["roller_radius"]
-    return cams.Cam("cam joint", segs, x["base_radius"], "roller" if rf > 0 else "knife", rf,
-                    x["offset"])
 
 
 KIND = Cam()

@@ -149,10 +149,10 @@ def cut_numbers(L, ci, d):
     a tuple of :data:`linkdyn.joints.WIDTH` floats."""
     x = L.cut_own
     return (x[ci, 0, d], x[ci, 1, d], x[ci, 2, d], x[ci, 3, d], x[ci, 4, d], x[ci, 5, d],
-            x[ci, 6, d], x[ci, 7, d])
+            x[ci, 6, d], x[ci, 7, d], x[ci, 8, d])
 
 
-assert jk.WIDTH == 8, "cut_numbers gathers WIDTH numbers"
+assert jk.WIDTH == 9, "cut_numbers gathers WIDTH numbers"
 
 
 @inline
@@ -224,7 +224,7 @@ def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
 def _cut_frames(L, d, w, kw, nb, c, s, r, P):
     """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
     loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
-    (n_cut, 6, block) rows ``[r_Pa (2), r_Pb (2), e_a (2)]`` (design d's numbers, the poses
+    (n_cut, 8, block) rows ``[r_Pa (2), r_Pb (2), e_a (2), e_b (2)]`` (design d's numbers, the poses
     at ``w``, ``kw``)."""
     ks = slice(kw, kw + nb)
     for ci in range(len(L.cut_a)):
@@ -238,13 +238,15 @@ def _cut_frames(L, d, w, kw, nb, c, s, r, P):
                                         (rx_b[k], ry_b[k]), pa, pb, axis)
             P_c[0, k], P_c[1, k], P_c[2, k] = r_pa[0], r_pa[1], r_pb[0]
             P_c[3, k], P_c[4, k], P_c[5, k] = r_pb[1], e_a[0], e_a[1]
+            P_c[6, k], P_c[7, k] = e_a[2], e_a[3]
 
 
 @inline
 def _frame(P_c, k):
     """A cut's points and axis, sample k of the block, from its rows ``P_c`` = ``P[ci]``
-    (:func:`_cut_frames`): ``r_Pa``, ``r_Pb``, ``e_a``, each ``(x, y)``."""
-    return (P_c[0, k], P_c[1, k]), (P_c[2, k], P_c[3, k]), (P_c[4, k], P_c[5, k])
+    (:func:`_cut_frames`): ``r_Pa``, ``r_Pb``, each ``(x, y)``, and the axes ``(e_a, e_b)``."""
+    return ((P_c[0, k], P_c[1, k]), (P_c[2, k], P_c[3, k]),
+            (P_c[4, k], P_c[5, k], P_c[6, k], P_c[7, k]))
 
 
 @njit
@@ -506,7 +508,7 @@ def scratch(n, nc, nd, n_rows, block):
     factors of ``J_dep``, the solution, the pivots and the nearest nodes (:func:`block`)."""
     B = block
     return (np.ones((n, B)), np.zeros((n, B)), np.zeros((5, B)), np.zeros((5, B)),
-            np.zeros((n_rows, B)), np.zeros((nc, 6, B)), np.zeros((nd, nd, B)),
+            np.zeros((n_rows, B)), np.zeros((nc, 8, B)), np.zeros((nd, nd, B)),
             np.zeros((max(nd, 1), B)), np.zeros(B), np.zeros((nd, B), np.int64),
             np.zeros(B, np.int64))
 

@@ -125,16 +125,18 @@ def child_twist_rate(code, s, e, t_p, td_p, t_i, r_p, r_i, rate, accel):
 
 @step
 def cut_frame(c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis):
-    """A cut's points on its bodies a and b and its axis (fixed in a), global.
+    """A cut's points on its bodies a and b and its axes, global.
 
     ``c_*``, ``s_*``, ``r_*``: the bodies' cosines, sines and reference points; ``pa``, ``pb``
     the cut points relative to O_a, O_b and ``axis`` in a, in the bodies' frames (m).
-    Returns ``r_Pa``, ``r_Pb`` (m) and ``e_a``, each ``(x, y)``.
+    Returns ``r_Pa``, ``r_Pb`` (m), each ``(x, y)``, and the axes ``(e_ax, e_ay, e_bx, e_by)``:
+    the axis ``e_a`` fixed in a and b's x axis ``e_b`` (:func:`linkdyn.joints.frame`).
     """
-    # r_Pa = r_a + R_a pa,  r_Pb = r_b + R_b pb,  e_a = R_a axis
+    # r_Pa = r_a + R_a pa,  r_Pb = r_b + R_b pb,  e_a = R_a axis,  e_b = R_b (1, 0)
     ua, ub = turned(c_a, s_a, pa), turned(c_b, s_b, pb)
+    e_a = turned(c_a, s_a, axis)
     return ((r_a[0] + ua[0], r_a[1] + ua[1]), (r_b[0] + ub[0], r_b[1] + ub[1]),
-            turned(c_a, s_a, axis))
+            (e_a[0], e_a[1], c_b, s_b))
 
 
 @step
@@ -170,15 +172,15 @@ def cut_bias(cut, nums, e_a, t_a, td_a, r_a, t_b, td_b, r_b, r_pa, r_pb):
     twists, twist rates and reference points; ``r_Pa``, ``r_Pb``, ``e_a`` from
     :func:`cut_frame`.
     """
-    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x, the frame turning at w_a with
-    # d' = v_Pb - v_Pa
+    # both bodies' motion at P; d/dt (S x) = S x' + (dS/dt) x, the frame's axes turning at w_a
+    # and w_b, with d' = v_Pb - v_Pa
     v_pb = at(t_b, relative(r_b, r_pb))
     v_pa = at(t_a, relative(r_a, r_pa))
     tb, ab = moving_point(t_b, td_b, r_b, r_pb, (v_pb[1], v_pb[2]))
     ta, aa = moving_point(t_a, td_a, r_a, r_pb, (v_pb[1], v_pb[2]))
     f = frame(r_pa, r_pb, e_a)
     x = jk.selected(cut, nums, f, (ab[0] - aa[0], ab[1] - aa[1], ab[2] - aa[2]))
-    y = jk.selected_rate(cut, nums, f, (t_a[0], (v_pb[1] - v_pa[1], v_pb[2] - v_pa[2])),
+    y = jk.selected_rate(cut, nums, f, (t_a[0], (v_pb[1] - v_pa[1], v_pb[2] - v_pa[2]), t_b[0]),
                          (tb[0] - ta[0], tb[1] - ta[1], tb[2] - ta[2]))
     return (x[0] + y[0], x[1] + y[1], x[2] + y[2])
 
