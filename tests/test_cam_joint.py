@@ -381,3 +381,28 @@ def test_a_cam_that_makes_no_cam_is_refused(tmp_path, edits, words):
     res = CliRunner().invoke(main, ["check", str(path)])
     assert res.exit_code == 2 and "joints" in res.output and words in res.output, res.output
     assert "Traceback" not in res.output
+
+
+def test_a_sweep_of_the_base_circle_ranks_the_least_contact_force():
+    # the bundled follower (spring, gravity): its contact force is (m (w^2 s'' + g) + k (s +
+    # c0)) / cos(pressure angle), c0 = l0 - (200 mm - d0) the spring's compression at s = 0,
+    # d0 = sqrt((R_b + R_f)^2 - e^2) growing with the base circle; min_contact_K is its least
+    from linkdyn import studies
+
+    path = linkdyn.example_path("cam_follower")
+    model = linkdyn.load(path)
+    t = np.linspace(0.0, 2 * math.pi / W, 25)[:-1]
+    radii = [40.0, 50.0, 60.0]
+    df = studies.sweep(path, {"joints.K.base_radius": radii}, t, ["min_contact_K"])
+    theta = math.radians(7.5) + W * t
+    spring, m = model.loads[0], model.body("follower").mass
+    cam = cam_of(model.joint("K"))
+    s, s1, s2, _ = cam.motion.svaj(np.mod(theta, 2 * math.pi))
+    expected = []
+    for rb in radii:
+        d0 = math.sqrt((rb * MM + cam.roller_radius) ** 2 - cam.offset ** 2)
+        c0 = spring.free_length - (0.2 - d0)
+        ny = m * (W * W * s2 + 9.81) + spring.stiffness * (s + c0)
+        expected.append(np.min(ny / np.cos(np.arctan2(s1 - cam.offset, d0 + s))))
+    assert df["min_contact_K"].to_numpy() == pytest.approx(expected, rel=1e-9)
+    assert studies.metrics.sense("min_contact_K") == "max"

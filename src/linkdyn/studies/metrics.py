@@ -16,6 +16,10 @@ Each metric is computed by the same functions the summary of ``linkdyn analyze``
     Largest perpendicular distance of the path point from its total-least-squares line over the
     path range (the model's ``[analysis] path_point`` and ``path_range``, or given), m
     (:func:`linkdyn.design.path.line_fit`).
+``min_contact_<joint>``
+    Least contact force of each joint that can only push (a cam's), signed: negative where the
+    follower would leave the cam at the run's speed, N, better larger
+    (:func:`linkdyn.design.overview.contact_forces`, the summary's ``contact.*.min_force_N``).
 ``peak_shaking_force``
     Largest magnitude of the shaking force on the ground, N (:func:`linkdyn.design.shaking_force`).
 ``flywheel_inertia``
@@ -52,7 +56,7 @@ import numpy as np
 from ..design import four_bars, shaking_force, transmission_angle
 from ..design.energy import driver_power, energy_fluctuation, first_cycle, flywheel_inertia
 from ..design.fourbar import transmission_worst
-from ..design.overview import peak, rms
+from ..design.overview import contact_forces, peak, rms
 from ..design.path import (_in_range, _parse_point, default_path_point, line_fit, max_deviation,
                            travel)
 from ..errors import ModelError
@@ -65,7 +69,8 @@ __all__ = ["names", "evaluate", "path_spec", "reads_reactions", "sense", "cost",
            "unit", "quantity"]
 
 # metrics a designer wants large; every other metric is better small
-_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency", "output_efficiency")
+_LARGER_IS_BETTER = ("min_transmission_angle", "stroke_", "efficiency", "output_efficiency",
+                     "min_contact_")
 
 
 def sense(name: str) -> str:
@@ -95,7 +100,7 @@ def unit(name: str) -> str:
     ``'kg m^2'``."""
     if name.startswith(("peak_tau_", "rms_tau_")):
         return "N m"
-    if name.startswith(("peak_", "rms_")):
+    if name.startswith(("peak_", "rms_", "min_contact_")):
         return "N"
     return {"min_transmission_angle": "rad", "path_deviation": "m",
             "flywheel_inertia": "kg m^2", "friction_loss": "J"}.get(name, "m" if name.startswith("stroke_") else "")
@@ -107,7 +112,8 @@ def quantity(name: str) -> str | None:
     constraint's bound; None for an unknown name."""
     if name.startswith(("peak_tau_", "rms_tau_")):
         return "torque"
-    if name.startswith(("peak_force_", "rms_force_", "peak_F_")) or name == "peak_shaking_force":
+    if (name.startswith(("peak_force_", "rms_force_", "peak_F_", "min_contact_"))
+            or name == "peak_shaking_force"):
         return "force"
     if name.startswith("stroke_"):
         return "length"
@@ -121,7 +127,7 @@ def _effort(model: Model, joint: str) -> str:
 
 #: Metrics of planar models only (a spatial model has the efforts' and the joint forces').
 PLANAR_ONLY = ("min_transmission_angle", "path_deviation", "flywheel_inertia", "stroke_",
-               "friction_loss", "efficiency", "output_efficiency")
+               "friction_loss", "efficiency", "output_efficiency", "min_contact_")
 
 
 def _guides(model: Model) -> list[str]:
@@ -157,6 +163,7 @@ def names(model: Model, *, path_point=None) -> list[str]:
     out += [f"peak_F_{j.name}" for j in model.joints]
     if model.space == "spatial":
         return out + ["peak_shaking_force"]
+    out += [f"min_contact_{j.name}" for j in model.joints if jk.get(j.kind).one_sided]
     if four_bars(model):
         out.append("min_transmission_angle")
     if path_spec(model, path_point)[0]:
@@ -191,10 +198,12 @@ def check_names(model: Model, wanted, *, path_point=None) -> list[str]:
 
 
 def reads_reactions(wanted) -> bool:
-    """Whether any of the metrics ``wanted`` reads the joint reactions (``peak_F_<joint>``, and
+    """Whether any of the metrics ``wanted`` reads the joint reactions (``peak_F_<joint>``,
+    ``min_contact_<joint>``, and
     ``peak_shaking_force``, the ground joints' reactions summed): a sweep solves them only then.
     """
-    return any(w.startswith("peak_F_") or w == "peak_shaking_force" for w in wanted)
+    return any(w.startswith(("peak_F_", "min_contact_")) or w == "peak_shaking_force"
+               for w in wanted)
 
 
 def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
@@ -237,6 +246,9 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
     for k, j in enumerate(m.joints):
         if f"peak_F_{j.name}" in want:
             out[f"peak_F_{j.name}"] = peak(np.linalg.norm(sol.reactions.force[..., k, :], axis=-1))
+    if any(w.startswith("min_contact_") for w in want):
+        for name, f in contact_forces(sol, sol.dyn, sol.reactions).items():
+            out[f"min_contact_{name}"] = lowest(f)
     if "min_transmission_angle" in want:
         worst = [lowest(transmission_worst(transmission_angle(sol, fb))) for fb in four_bars(m)]
         out["min_transmission_angle"] = np.min(worst, axis=0)
