@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from .. import joints as jk
+from ..joints import coupling
 from ..model import GROUND, Body, Joint, point_spread
 from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
 
@@ -16,8 +17,8 @@ SHORT_LINK = 1e-9  # a link shorter than this fraction of the mechanism's size h
 
 BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars")
 BAR_KEYS = ("between", "mass", "mass_per_length")
-JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
-    key for kind in jk.REGISTRY.values() for key in kind.keys))
+JOINT_KEYS = ("name", "type", "connect", "joints") + tuple(dict.fromkeys(
+    x.name for kind in jk.REGISTRY.values() for x in kind.numbers if not x.derived))
 
 
 def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
@@ -147,14 +148,28 @@ def _reference(r: _Reader, value: Any, field: str, bodies: dict[str, Body]) -> t
 
 def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Joint]:
     joints: dict[str, Joint] = {}
+    later = []   # the couplings, read once the joints they name are
     for i, entry in enumerate(r.entries(entries, "joints")):
         f = _entry_field("joints", i, entry)
-        r.table(entry, f, JOINT_KEYS, required=("name", "type", "connect"))
+        couples = isinstance(entry, dict) and isinstance(entry.get("type"), str) \
+            and entry["type"] in jk.REGISTRY and jk.get(entry["type"]).couples
+        r.table(entry, f, JOINT_KEYS, required=("name", "type", "joints" if couples else "connect"))
         name = r.name(entry["name"], f"{f}.name")
-        if name in joints:
+        if name in joints or name in (n for _, n, _ in later):
             r.fail(f"joints[{i}].name", f"duplicate joint name '{name}'",
                    "Give every joint a different name")
         kind = r.choice(entry["type"], f"{f}.type", jk.names(), "joint type")
+        for key in jk.NUMBERS:
+            if key in entry and key not in jk.get(kind).keys:
+                takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
+                r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
+                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
+        if couples:
+            later.append((i, name, entry))
+            continue
+        if "joints" in entry:
+            r.fail(f"{f}.joints", f"a {kind} joint has no joints",
+                   'Remove joints (it names the joints of type = "coupling")')
         conn = entry["connect"]
         if not isinstance(conn, list) or len(conn) != 2:
             r.fail(f"{f}.connect", f"expected two \"body.point\" strings, got {_type_name(conn)}",
@@ -164,19 +179,41 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
         if a == b:
             r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
                    "A joint joins two different bodies; check the body names in connect")
-        accepts = jk.get(kind).keys
-        for key in jk.NUMBERS:
-            if key in entry and key not in accepts:
-                takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
-                r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
-                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
-        extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", a)
-                 for x in jk.get(kind).numbers}
-        why = jk.get(kind).refuse(extra)
-        if why:
-            r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
+        extra = _numbers_of(r, f, kind, name, entry, a)
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
-    return joints
+    for i, name, entry in later:
+        joints[name] = _coupling(r, _entry_field("joints", i, entry), name, entry, joints, bodies)
+    order = {name: k for k, name in enumerate(
+        e.get("name") for e in entries if isinstance(e, dict))}
+    return dict(sorted(joints.items(), key=lambda kv: order[kv[0]]))
+
+
+def _numbers_of(r: _Reader, f: str, kind: str, name: str, entry: dict, body_a: str) -> dict:
+    """A joint's numbers its kind declares (not the derived ones), read in SI and checked by the
+    kind (:meth:`~linkdyn.joints.JointKind.refuse`)."""
+    extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", body_a)
+             for x in jk.get(kind).numbers if not x.derived}
+    why = jk.get(kind).refuse(extra)
+    if why:
+        r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
+    return extra
+
+
+def _coupling(r: _Reader, f: str, name: str, entry: dict, joints: dict, bodies: dict) -> Joint:
+    """A coupling from the two joints its ``joints`` names (:func:`coupling.couple`)."""
+    pair = entry["joints"]
+    fix = 'Write joints = ["J1", "J2"], two revolute joints of one common body'
+    if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(x, str) for x in pair)):
+        r.fail(f"{f}.joints", f"expected two joint names, got {_type_name(pair)}", fix)
+    for k, x in enumerate(pair):
+        r.choice(x, f"{f}.joints[{k}]", joints, "joint", "joints (not couplings)")
+    if pair[0] == pair[1]:
+        r.fail(f"{f}.joints", f"the coupling names joint '{pair[0]}' twice", fix)
+    extra = _numbers_of(r, f, entry["type"], name, entry, "")
+    try:
+        return coupling.couple(name, joints[pair[0]], joints[pair[1]], bodies, **extra)
+    except coupling.CouplingError as e:
+        r.fail(f"{f}.joints", str(e), fix)
 
 
 def _number(r: _Reader, x: jk.Number, value: Any, field: str, body_a: str):

@@ -10,7 +10,7 @@ defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
 
 from __future__ import annotations
 
-from . import cam, distance, gear, prismatic, rack, revolute, slot
+from . import cam, coupling, distance, gear, prismatic, rack, revolute, slot
 from ..steps import by_kind
 from .base import WIDTH, JointKind, Number, frame, line_motion
 
@@ -21,7 +21,7 @@ BODY_FREEDOMS = 3
 REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.KIND,
                                                        slot.KIND,
                                                        gear.KIND, rack.KIND, distance.KIND,
-                                                       cam.KIND)}
+                                                       cam.KIND, coupling.KIND)}
 
 
 def _numbers() -> dict[str, Number]:
