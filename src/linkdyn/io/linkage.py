@@ -165,6 +165,9 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
                 r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
                        f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
         if couples:
+            if "connect" in entry:
+                r.fail(f"{f}.connect", f"a {kind} joint takes the joints it couples, not connect",
+                       'Remove connect; write joints = ["J1", "J2"]')
             later.append((i, name, entry))
             continue
         if "joints" in entry:
