@@ -184,3 +184,22 @@ def test_coaxial_joints_are_refused(tmp_path):
 def test_a_coupling_with_connect_is_refused(tmp_path):
     out = refused(tmp_path, ["J1", "J2"], connect=["gear1.O1", "gear2.O2"])
     assert "not connect" in out
+
+
+def test_both_backends_run_a_coupling():
+    """The coupling is a kind behind the cut protocol: the compiled kernels run it unchanged."""
+    pytest.importorskip("numba", reason="the compiled backend needs numba (the fast extra)")
+    from test_dynamics import coupled_carrier
+
+    model = coupled_carrier()
+    t = np.linspace(0.0, 1.3, 7)
+    a = linkdyn.analyze(model, t, backend="numpy").columns
+    b = linkdyn.analyze(model, t, backend="compiled").columns
+    for name in ("tau_J0", "tau_J1", "torque_K", "Fx_K", "M_K", "Fy_J2", "q_K", "qdd_K"):
+        assert np.max(np.abs(a[name] - b[name])) <= 1e-12 * max(np.max(np.abs(a[name])), 1.0), \
+            name
+    swing, _ = pendulums(-1.5, 0.2)
+    ts = np.linspace(0.0, 0.2, 5)
+    a = linkdyn.simulate(swing, ts, rtol=1e-10, atol=1e-12, backend="numpy").columns
+    b = linkdyn.simulate(swing, ts, rtol=1e-10, atol=1e-12, backend="compiled").columns
+    assert np.max(np.abs(a["q_J2"] - b["q_J2"])) <= 1e-8

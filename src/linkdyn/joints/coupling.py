@@ -160,7 +160,6 @@ def couple(name: str, first, second, bodies: dict, ratio: float = 1.0,
     CouplingError
         Naming the joint that cannot be coupled and why.
     """
-    from ..model import Joint
     for j in (first, second):
         if j.kind != "revolute":
             raise CouplingError(f"joint {j.name!r} is {j.kind}: a coupling couples two "
@@ -186,6 +185,7 @@ def couple(name: str, first, second, bodies: dict, ratio: float = 1.0,
         raise CouplingError(f"joints {first.name!r} and {second.name!r} are at one point of body "
                             f"{c!r}: a coupling needs its two joints at different points (two "
                             "coaxial joints' relative motion does not tell them apart)")
-    return Joint(name, KIND.name, a, pa, b, pb, ratio=float(ratio),
-                 offset_angle=float(offset_angle), sign_1=s1, sign_2=s2,
-                 beta=float(math.atan2(d[1], d[0])), coupled=(first.name, second.name))
+    # the coupled joints' own class (linkdyn.model.Joint), which this module may not import
+    return type(first)(name, KIND.name, a, pa, b, pb, ratio=float(ratio),
+                       offset_angle=float(offset_angle), sign_1=s1, sign_2=s2,
+                       beta=float(math.atan2(d[1], d[0])), coupled=(first.name, second.name))
