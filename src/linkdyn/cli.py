@@ -1123,13 +1123,21 @@ def export(model, to, output, at, allow_outside):
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Model file to write, *.toml or *.json [default: FILE's name with .toml].")
 @click.option("--length-unit", default="m", show_default=True,
-              help="Length unit of FILE's numbers (pylinkage has none): m, mm, cm, in...")
-def import_(file, output, length_unit):
-    """Write a mechanism saved by pylinkage (its JSON) as a linkdyn model file.
+              help="Length unit of FILE's numbers (pylinkage and Pyslvs have none): m, mm, cm, "
+                   "in...")
+@click.option("--input", "pair", metavar="BASE,DRIVE",
+              help="Pyslvs's input pair (joint numbers: the crank's ground joint, the joint it "
+                   "carries), for an expression, which has none, or instead of a project's.")
+def import_(file, output, length_unit, pair):
+    """Write a mechanism saved by pylinkage (its JSON) or drawn in Pyslvs (its expression or
+    YAML project) as a linkdyn model file.
 
-    Masses are placeholders (1 kg uniform bars per link); one pylinkage step is one second.
+    Masses are placeholders (1 kg uniform bars per link); one pylinkage step is one second, a
+    Pyslvs crank turns once a second.
     """
+    from .io import read_input
     from .io.pylinkage import import_pylinkage, model_text
+    from .io.pyslvs import import_pyslvs, is_pyslvs
     from .outputs import check_file, write_file
 
     out = Path(output) if output else Path(Path(file).stem + ".toml")
@@ -1137,7 +1145,17 @@ def import_(file, output, length_unit):
         raise ModelError(f"cannot write a model file named '{out}'", field="-o",
                          fix="Name it *.toml or *.json")
     check_file(out)
-    done = import_pylinkage(file, length_unit=length_unit)
+    if is_pyslvs(file, read_input(file, "file to import")):
+        inputs = None
+        if pair is not None:
+            try:
+                inputs = [tuple(int(k) for k in pair.split(","))]
+            except ValueError:
+                raise ModelError(f"expected two joint numbers BASE,DRIVE, got '{pair}'",
+                                 field="--input", fix="Give e.g. --input 0,1") from None
+        done = import_pyslvs(file, length_unit=length_unit, inputs=inputs)
+    else:
+        done = import_pylinkage(file, length_unit=length_unit)
     write_file(out, model_text(done, out.suffix))
     for note in done.notes:
         click.echo(note)
