@@ -15,7 +15,7 @@ from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
 
 SHORT_LINK = 1e-9  # a link shorter than this fraction of the mechanism's size has zero length
 
-BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars")
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars", "free")
 BAR_KEYS = ("between", "mass", "mass_per_length")
 JOINT_KEYS = ("name", "type", "connect", "joints") + tuple(dict.fromkeys(
     x.name for kind in jk.REGISTRY.values() for x in kind.numbers if not x.derived))
@@ -82,6 +82,65 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
             inertia = max(inertia - mass * d2, 0.0)
         bodies[name] = Body(name, points, mass=mass, com=com, inertia=inertia * L**2)
     return bodies
+
+
+def free_bodies(r: _Reader, bodies: Any, joints: Any) -> tuple[Any, Any]:
+    """The ``[[bodies]]`` and ``[[joints]]`` entries with each free body (``free = "P"``: joined
+    to nothing but loads) on its three planar freedoms.
+
+    A free body ``B`` with ``free = "P"`` hangs from the ground by two massless carriages and three
+    joints: the prismatic joint ``B_x`` (the ground's new point ``B_origin`` at the origin to the
+    carriage ``B_x``, along the ground's x axis), the prismatic joint ``B_y`` (carriage ``B_x`` to
+    carriage ``B_y``, along y) and the revolute joint ``B_phi`` (carriage ``B_y`` to ``B.P``). So
+    ``q_B_x``, ``q_B_y`` are the global coordinates of P and ``q_B_phi`` the body's angle. The
+    carriages have no mass or inertia: they add no term to the equations of motion (the free
+    coordinates' mass matrix is the body's own, regular when its mass and inertia are above zero).
+    Written out (``linkdyn.io.writer``), the model holds the carriages as bodies and joints.
+    """
+    if not isinstance(bodies, list) or not any(isinstance(e, dict) and "free" in e
+                                               for e in bodies):
+        return bodies, joints
+    names = {e.get("name") for e in bodies if isinstance(e, dict)}
+    out, carriages, links, origins = [], [], [], {}
+    for i, entry in enumerate(bodies):
+        if not (isinstance(entry, dict) and "free" in entry):
+            out.append(entry)
+            continue
+        f, name, point = _entry_field("bodies", i, entry), entry.get("name"), entry["free"]
+        if name == GROUND:
+            r.fail(f"{f}.free", "the ground is fixed: it cannot be free",
+                   "Remove free from the ground body")
+        pts = entry.get("points")
+        if not (isinstance(point, str) and isinstance(pts, dict) and point in pts):
+            r.fail(f"{f}.free", f"expected the name of one of the body's points, got "
+                   f"{_quote(point) if isinstance(point, str) else _type_name(point)}",
+                   'Write e.g. free = "C": the point whose x and y are the free coordinates')
+        for taken in (f"{name}_x", f"{name}_y"):
+            if taken in names:
+                r.fail(f"{f}.free", f"the free body's carriage would be named '{taken}', the name "
+                       "of another body", f"Rename body '{taken}'")
+        out.append({k: v for k, v in entry.items() if k != "free"})
+        origins[f"{name}_origin"] = f"{f}.free"
+        # ground -> B_x (along x) -> B_y (along y) -> B (turning about P)
+        for axis, (u, first) in {"x": ([1.0, 0.0], f"{GROUND}.{name}_origin"),
+                                 "y": ([0.0, 1.0], f"{name}_x.O")}.items():
+            carriages.append({"name": f"{name}_{axis}", "points": {"O": [0.0, 0.0]},
+                              "mass": 0.0, "inertia": 0.0})
+            links.append({"name": f"{name}_{axis}", "type": "prismatic", "axis": u,
+                          "connect": [first, f"{name}_{axis}.O"]})
+        links.append({"name": f"{name}_phi", "type": "revolute",
+                      "connect": [f"{name}_y.O", f"{name}.{point}"]})
+    for k, entry in enumerate(out):
+        if isinstance(entry, dict) and entry.get("name") == GROUND \
+                and isinstance(entry.get("points"), dict):
+            for origin, field in origins.items():
+                if origin in entry["points"]:
+                    r.fail(field, f"the free body's origin would be the ground's point "
+                           f"'{origin}', which the ground has", f"Rename the ground's point "
+                           f"'{origin}'")
+            out[k] = dict(entry, points={**entry["points"], **{o: [0.0, 0.0] for o in origins}})
+    given = joints if joints is not None else []
+    return out + carriages, (given + links if isinstance(given, list) else given)
 
 
 def _bars(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:
