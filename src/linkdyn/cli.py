@@ -1013,11 +1013,35 @@ def equilibrium(model, as_json, allow_outside):
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@click.option("--report", is_flag=True,
+              help="Also write mode<k>.html: each oscillating mode animated over one period.")
+@click.option("-o", "--outdir", default="out/modes", show_default=True,
+              type=click.Path(file_okay=False), help="Folder for the --report pages.")
 @_ALLOW_OUTSIDE
-def modes(model, as_json, allow_outside):
+def modes(model, as_json, report, outdir, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    _equilibrium(model, as_json, allow_outside, with_modes=True)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True)
+    if report:
+        from . import design, modal as eq_mod
+        from .analysis import analyze as run
+        from .report import render
+
+        check_outdir(outdir)
+        files = {}
+        for k in md.oscillating:
+            # the mode's motion, analyzed and shown as linkdyn analyze --report shows a run
+            moving = eq_mod.mode_motion(md, int(k))
+            sol = run(moving, np.linspace(0.0, moving.duration, 121))
+            page = render(sol, design.summary(sol))
+            files[f"mode{k + 1}.html"] = lambda path, page=page: Path(path).write_text(
+                page, encoding="utf-8")
+        if not files:
+            raise ModelError("no mode swings (every root is overdamped or unstable): no page "
+                             "to animate", field="--report", fix="Drop --report")
+        written = write_outputs(outdir, files, owned=("mode*.html",))
+        if not as_json:
+            click.echo(f"wrote {', '.join(map(str, written))}")
 
 
 def _equilibrium(model, as_json, allow_outside, with_modes):
@@ -1031,6 +1055,7 @@ def _equilibrium(model, as_json, allow_outside, with_modes):
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))
     else:
         click.echo(eq_mod.text(eq, md))
+    return md
 
 
 # ---------------------------------------------------------------------------- cam
