@@ -30,9 +30,10 @@ from linkdyn.cli import main
 from linkdyn.io.pyslvs import from_pyslvs, import_pyslvs, parse_expression
 
 EXAMPLES = json.loads((Path(__file__).parent / "data" / "pyslvs" / "examples.json").read_text())
-REVOLUTE = [n for n, e in EXAMPLES.items()
-            if len(e["input"]) == 1 and all(j["type"] == "R"
-                                            for j in parse_expression(e["mechanism"]))]
+IMPORTED = [n for n, e in EXAMPLES.items()
+            if len(e["input"]) == 1 and len(set(e["input"][0])) == 2 and all(
+                j["type"] == "R" or (j["type"] == "RP" and j["links"][0] == "ground")
+                for j in parse_expression(e["mechanism"]))]
 
 
 def run(*args):
@@ -41,9 +42,9 @@ def run(*args):
 
 def triangles(expression: str, pair, angle: float) -> np.ndarray:
     """Pyslvs's construction of the joints (n, 2) at input ``angle`` (rad), NaN rows where a
-    triangle does not close (or is flat), None if no triangles place them all: the driven joint by PLA from
-    the base, every other moving joint by PLLP from two placed joints sharing a link with it, on
-    its saved side."""
+    triangle does not close (or is flat), None if no triangles place them all: the driven joint
+    by PLA from the base, every other moving joint by PLLP from two placed joints sharing a link
+    with it, on its saved side."""
     joints = parse_expression(expression)
     saved = np.array([j["position"] for j in joints])
     links = [set(j["links"]) for j in joints]
@@ -75,37 +76,49 @@ def triangles(expression: str, pair, angle: float) -> np.ndarray:
     return np.array([pos[i] for i in range(len(joints))])
 
 
-def test_jansen_stands_where_pyslvs_test_suite_puts_it():
-    e = EXAMPLES["Jansen's linkage (Single)"]
+@pytest.mark.parametrize("name, joint, expected", [
+    ("Jansen's linkage (Single)", "P7", {0.0: (-43.170055, -91.753226),
+                                         45.0: (-24.406394, -91.789596)}),
+    ("Crank slider (RP joint)", "P5", {0.0: (103.801126, 78.393173)}),
+])
+def test_the_points_pyslvs_test_suite_asserts(name, joint, expected):
+    e = EXAMPLES[name]
     imp = from_pyslvs(e["mechanism"], e["input"], length_unit="mm")
-    p0, p1 = (np.array(j["position"]) for j in parse_expression(e["mechanism"])[:2])
+    p0, p1 = (np.array(parse_expression(e["mechanism"])[k]["position"]) for k in e["input"][0])
     saved = math.atan2(*(p1 - p0)[::-1])
-    at = [((math.radians(a) - saved) % math.tau) / math.tau for a in (0.0, 45.0)]
+    at = [((math.radians(a) - saved) % math.tau) / math.tau for a in expected]
     t = np.unique(np.concatenate([np.linspace(0.0, 1.0, 73), at]))
-    foot = linkdyn.analyze(imp.model, t).point(*imp.points["P7"]) * 1e3
-    for ti, ref in zip(at, ((-43.170055, -91.753226), (-24.406394, -91.789596))):
-        got = foot[np.searchsorted(t, ti)]
+    point = linkdyn.analyze(imp.model, t).point(*imp.points[joint]) * 1e3
+    for ti, ref in zip(at, expected.values()):
+        got = point[np.searchsorted(t, ti)]
         assert np.abs(got - ref).max() < 5e-7, (got, ref)   # Pyslvs's 6 decimals
 
 
-@pytest.mark.parametrize("name", REVOLUTE)
-def test_revolute_examples_stand_where_pyslvs_triangles_put_them(name):
+@pytest.mark.parametrize("name", IMPORTED)
+def test_the_examples_stand_where_pyslvs_triangles_put_them(name):
     e = EXAMPLES[name]
     imp = from_pyslvs(e["mechanism"], e["input"])
     joints = parse_expression(e["mechanism"])
     saved = np.array([j["position"] for j in joints])
     base, drive = e["input"][0]
     start = math.atan2(*(saved[drive] - saved[base])[::-1])
-    if triangles(e["mechanism"], (base, drive), start) is None:
-        # a loop no triangle solves (Stephenson II, III): the saved pose, every link rigid
+    sliders = [i for i, j in enumerate(joints) if j["type"] == "RP"]
+    if sliders or triangles(e["mechanism"], (base, drive), start) is None:
+        # a loop no triangle solves (Stephenson II, III), or a slider: the saved pose, every
+        # link rigid, every slider on its line, over a turn
         sol = linkdyn.analyze(imp.model, np.linspace(0.0, 1.0, 73))
         got = np.stack([sol.point(*imp.points[f"P{i}"]) for i in range(len(joints))], axis=1)
         size = np.abs(saved).max()
         assert np.abs(got[0] - saved).max() < 1e-12 * size
-        for a, b in ((a, b) for a in range(len(joints)) for b in range(a)
-                     if {*joints[a]["links"]} & {*joints[b]["links"]}):
+        # the links each joint is fixed in (a slider moves along the ground)
+        fixed = [set(j["links"][1:] if i in sliders else j["links"]) for i, j in enumerate(joints)]
+        for a, b in ((a, b) for a in range(len(joints)) for b in range(a) if fixed[a] & fixed[b]):
             assert np.abs(np.hypot(*(got[:, a] - got[:, b]).T)
                           - np.hypot(*(saved[a] - saved[b]))).max() < 1e-12 * size
+        for i in sliders:     # (p - p_saved) x (cos A, sin A) = 0
+            u = np.radians(joints[i]["angle"])
+            off = got[:, i] - saved[i]
+            assert np.abs(off[:, 0] * np.sin(u) - off[:, 1] * np.cos(u)).max() < 1e-12 * size
         return
     # the way the crank can turn from the saved pose (a toggle press only one way)
     sense = 1.0 if np.isfinite(triangles(e["mechanism"], (base, drive),
@@ -128,8 +141,9 @@ def test_revolute_examples_stand_where_pyslvs_triangles_put_them(name):
 
 
 @pytest.mark.parametrize("name, words", [
-    ("Crank slider (RP joint)", ["joint 2", "type RP"]),
+    ("Crank slider (Three bar)", ["joint 2", "type RP on link 'L2'"]),
     ("Inverted slider", ["joint 3", "type P"]),
+    ("Slider lifter", ["input pair (0, 0)"]),
     ("Arm", ["one input pair", "[[0, 1], [0, 2]]"]),
 ])
 def test_what_linkdyn_cannot_represent_is_refused_by_name(name, words, tmp_path):

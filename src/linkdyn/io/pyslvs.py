@@ -13,7 +13,10 @@ The import puts the mechanism in pylinkage's structure and reads it as
 :func:`linkdyn.io.pylinkage.from_pylinkage` does (one reader of links and joints):
 
 - joint ``i`` is the pylinkage joint ``P<i>`` at its saved position, a ground joint if it
-  joins the link ``ground``;
+  joins the link ``ground``; a slider on the ground (``RP`` whose first link is ``ground``: a
+  pin that slides along the ground's line through its saved position at ``A`` degrees and
+  turns) is pylinkage's prismatic joint, so a ``slot`` joint from that line to the first other
+  link, the others pinned to it;
 - each other link is a link holding its joints in the expression's order; the input pair's link
   (the one holding both joints) is the driver, its motor joint the base (a ground joint);
 - so each moving link is a body with its frame at its first joint, +x towards the next, each
@@ -25,9 +28,10 @@ The import puts the mechanism in pylinkage's structure and reads it as
 - masses are placeholders (1 kg uniform bars per link), gravity zero, lengths the file's
   numbers in the unit the caller names (Pyslvs has none).
 
-Refused, naming the joint by its number and type or the input pair: sliders (``P``, ``RP``),
-more or fewer than one input pair, an input pair no one moving link holds or whose base is not
-on the ground, an expression that does not parse, and what pylinkage's reader refuses (a link
+Refused, naming the joint by its number and type or the input pair: ``P`` sliders (which do
+not turn), ``RP`` sliders on a moving link, more or fewer than one input pair, an input pair
+no one moving link holds, whose base is not a revolute ground joint or that drives a slider
+(base and drive one joint), an expression that does not parse, and what pylinkage's reader refuses (a link
 pinned twice to the ground, a joint no link holds, a mobility other than one).
 """
 
@@ -161,10 +165,15 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
 
     joints = parse_expression(expression, source=source)
     for i, j in enumerate(joints):
+        # R, or RP on the ground: a pin sliding and turning on the ground's line at A[deg]
+        if j["type"] == "RP" and j["links"][:1] == ("ground",) and len(j["links"]) > 1:
+            continue
         if j["type"] != "R":
-            fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']} (a slider): linkdyn "
-                 "imports Pyslvs's revolute (R) joints", "Write the slider in the linkdyn model "
-                 "by hand (a prismatic or slot joint)")
+            where = f" on link '{j['links'][0]}'" if j["links"] and j["type"] == "RP" else ""
+            fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']}{where}: linkdyn "
+                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, ground "
+                 "the first link)", "Write the slider in the linkdyn model by hand (a prismatic or "
+                 "slot joint)")
     pairs = [tuple(p) for p in inputs] if isinstance(inputs, (list, tuple)) else None
     if not pairs or len(pairs) != 1 or len(pairs[0]) != 2 or not all(
             isinstance(k, int) and not isinstance(k, bool) and 0 <= k < len(joints)
@@ -175,18 +184,18 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
     base, drive = pairs[0]
     crank = [lk for lk in dict.fromkeys(joints[base]["links"])
              if lk != "ground" and lk in joints[drive]["links"]]
-    if "ground" not in joints[base]["links"] or len(crank) != 1:
+    if "ground" not in joints[base]["links"] or len(crank) != 1 or base == drive \
+            or joints[base]["type"] != "R":
         fail("input", f"input pair ({base}, {drive}): joint {base} must join the ground and one "
              f"moving link that also holds joint {drive}", "Give the crank's ground joint first")
     links: dict[str, list[str]] = {}
     for i, j in enumerate(joints):
-        for lk in dict.fromkeys(j["links"]):
+        for lk in dict.fromkeys(j["links"][1:] if j["type"] == "RP" else j["links"]):
             links.setdefault(lk, []).append(f"P{i}")
     (x0, y0), (x1, y1) = joints[base]["position"], joints[drive]["position"]
     data = {
         "name": name or os.path.splitext(os.path.basename(source))[0] or "mechanism",
-        "joints": [{"id": f"P{i}", "type": "ground" if "ground" in j["links"] else "revolute",
-                    "position": j["position"]} for i, j in enumerate(joints)],
+        "joints": [_joint(i, j) for i, j in enumerate(joints)],
         "links": [{"id": lk, "type": "ground" if lk == "ground" else
                    "driver" if lk == crank[0] else "link", "joints": ids,
                    **({"motor_joint": f"P{base}", "angular_velocity": math.tau,
@@ -194,3 +203,15 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
                   for lk, ids in links.items()],
     }
     return from_pylinkage(data, source=source, length_unit=length_unit, tool="Pyslvs")
+
+
+def _joint(i: int, j: dict) -> dict:
+    """Pyslvs's joint ``i`` as a pylinkage joint: ``P<i>``, a ground joint if it joins the
+    ground, a slider on the ground (RP) as pylinkage's prismatic joint on the line through its
+    saved position at ``A`` degrees."""
+    if j["type"] == "RP":
+        a = math.radians(j["angle"])
+        return {"id": f"P{i}", "type": "prismatic", "position": j["position"],
+                "axis": [math.cos(a), math.sin(a)], "line_point": j["position"]}
+    return {"id": f"P{i}", "type": "ground" if "ground" in j["links"] else "revolute",
+            "position": j["position"]}
