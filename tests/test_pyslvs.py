@@ -32,7 +32,7 @@ from linkdyn.io.pyslvs import from_pyslvs, import_pyslvs, parse_expression
 EXAMPLES = json.loads((Path(__file__).parent / "data" / "pyslvs" / "examples.json").read_text())
 IMPORTED = [n for n, e in EXAMPLES.items()
             if len(e["input"]) == 1 and len(set(e["input"][0])) == 2 and all(
-                j["type"] == "R" or (j["type"] == "RP" and j["links"][0] == "ground")
+                j["type"] == "R" or j["links"][0] == "ground"
                 for j in parse_expression(e["mechanism"]))]
 
 
@@ -102,7 +102,7 @@ def test_the_examples_stand_where_pyslvs_triangles_put_them(name):
     saved = np.array([j["position"] for j in joints])
     base, drive = e["input"][0]
     start = math.atan2(*(saved[drive] - saved[base])[::-1])
-    sliders = [i for i, j in enumerate(joints) if j["type"] == "RP"]
+    sliders = [i for i, j in enumerate(joints) if j["type"] != "R"]
     if sliders or triangles(e["mechanism"], (base, drive), start) is None:
         # a loop no triangle solves (Stephenson II, III), or a slider: the saved pose, every
         # link rigid, every slider on its line, over a turn
@@ -119,6 +119,10 @@ def test_the_examples_stand_where_pyslvs_triangles_put_them(name):
             u = np.radians(joints[i]["angle"])
             off = got[:, i] - saved[i]
             assert np.abs(off[:, 0] * np.sin(u) - off[:, 1] * np.cos(u)).max() < 1e-12 * size
+            if joints[i]["type"] == "P":    # its links translate: p_b - p_i as saved
+                for b in (b for b in range(len(joints)) if b != i and fixed[b] & fixed[i]):
+                    assert np.abs(got[:, b] - got[:, i] - (saved[b] - saved[i])).max() \
+                        < 1e-12 * size
         return
     # the way the crank can turn from the saved pose (a toggle press only one way)
     sense = 1.0 if np.isfinite(triangles(e["mechanism"], (base, drive),
@@ -142,7 +146,7 @@ def test_the_examples_stand_where_pyslvs_triangles_put_them(name):
 
 @pytest.mark.parametrize("name, words", [
     ("Crank slider (Three bar)", ["joint 2", "type RP on link 'L2'"]),
-    ("Inverted slider", ["joint 3", "type P"]),
+    ("Inverted slider", ["joint 3", "type P on link 'L3'"]),
     ("Slider lifter", ["input pair (0, 0)"]),
     ("Arm", ["one input pair", "[[0, 1], [0, 2]]"]),
 ])

@@ -366,7 +366,11 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
             line = ground_points(f"{jid}_line")
             ground["points"][line] = [float(x) for x in lp]
             name = jnames(jid)
-            model_joints.append({"name": name, "type": "slot", "axis": [float(x) for x in axis],
+            # a pin that turns (pylinkage's) is a slot joint; one that does not (Pyslvs's P
+            # slider, "turns": false) a prismatic joint, the link kept at its saved angle
+            still = {"type": "prismatic", "angle": phi[hold[0][0]]} \
+                if jd.get("turns", True) is False else {"type": "slot"}
+            model_joints.append({"name": name, **still, "axis": [float(x) for x in axis],
                                  "connect": [f"{GROUND}.{line}", "{}.{}".format(*hold[0])]})
             u = axis / np.hypot(*axis)
             assembly_q[name] = float((pos(jid) - lp) @ u)  # the pin's travel along the line

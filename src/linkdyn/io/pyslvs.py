@@ -16,7 +16,8 @@ The import puts the mechanism in pylinkage's structure and reads it as
   joins the link ``ground``; a slider on the ground (``RP`` whose first link is ``ground``: a
   pin that slides along the ground's line through its saved position at ``A`` degrees and
   turns) is pylinkage's prismatic joint, so a ``slot`` joint from that line to the first other
-  link, the others pinned to it;
+  link, the others pinned to it; a ``P`` slider on the ground (the link slides without
+  turning) a ``prismatic`` joint instead, the link at its saved angle;
 - each other link is a link holding its joints in the expression's order; the input pair's link
   (the one holding both joints) is the driver, its motor joint the base (a ground joint);
 - so each moving link is a body with its frame at its first joint, +x towards the next, each
@@ -28,8 +29,7 @@ The import puts the mechanism in pylinkage's structure and reads it as
 - masses are placeholders (1 kg uniform bars per link), gravity zero, lengths the file's
   numbers in the unit the caller names (Pyslvs has none).
 
-Refused, naming the joint by its number and type or the input pair: ``P`` sliders (which do
-not turn), ``RP`` sliders on a moving link, more or fewer than one input pair, an input pair
+Refused, naming the joint by its number and type or the input pair: sliders on a moving link, more or fewer than one input pair, an input pair
 no one moving link holds, whose base is not a revolute ground joint or that drives a slider
 (base and drive one joint), an expression that does not parse, and what pylinkage's reader refuses (a link
 pinned twice to the ground, a joint no link holds, a mobility other than one).
@@ -165,13 +165,13 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
 
     joints = parse_expression(expression, source=source)
     for i, j in enumerate(joints):
-        # R, or RP on the ground: a pin sliding and turning on the ground's line at A[deg]
-        if j["type"] == "RP" and j["links"][:1] == ("ground",) and len(j["links"]) > 1:
+        # R; RP (or P) on the ground: a pin sliding (and turning) on the ground's line at A
+        if j["type"] in ("RP", "P") and j["links"][:1] == ("ground",) and len(j["links"]) > 1:
             continue
         if j["type"] != "R":
-            where = f" on link '{j['links'][0]}'" if j["links"] and j["type"] == "RP" else ""
+            where = f" on link '{j['links'][0]}'" if j["links"] else ""
             fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']}{where}: linkdyn "
-                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, ground "
+                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, P: ground "
                  "the first link)", "Write the slider in the linkdyn model by hand (a prismatic or "
                  "slot joint)")
     pairs = [tuple(p) for p in inputs] if isinstance(inputs, (list, tuple)) else None
@@ -190,7 +190,7 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
              f"moving link that also holds joint {drive}", "Give the crank's ground joint first")
     links: dict[str, list[str]] = {}
     for i, j in enumerate(joints):
-        for lk in dict.fromkeys(j["links"][1:] if j["type"] == "RP" else j["links"]):
+        for lk in dict.fromkeys(j["links"][1:] if j["type"] != "R" else j["links"]):
             links.setdefault(lk, []).append(f"P{i}")
     (x0, y0), (x1, y1) = joints[base]["position"], joints[drive]["position"]
     data = {
@@ -207,11 +207,12 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
 
 def _joint(i: int, j: dict) -> dict:
     """Pyslvs's joint ``i`` as a pylinkage joint: ``P<i>``, a ground joint if it joins the
-    ground, a slider on the ground (RP) as pylinkage's prismatic joint on the line through its
-    saved position at ``A`` degrees."""
-    if j["type"] == "RP":
+    ground, a slider on the ground as pylinkage's prismatic joint on the line through its saved
+    position at ``A`` degrees (a P slider's link does not turn: ``"turns": False``)."""
+    if j["type"] != "R":
         a = math.radians(j["angle"])
         return {"id": f"P{i}", "type": "prismatic", "position": j["position"],
-                "axis": [math.cos(a), math.sin(a)], "line_point": j["position"]}
+                "axis": [math.cos(a), math.sin(a)], "line_point": j["position"],
+                **({"turns": False} if j["type"] == "P" else {})}
     return {"id": f"P{i}", "type": "ground" if "ground" in j["links"] else "revolute",
             "position": j["position"]}
