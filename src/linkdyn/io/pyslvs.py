@@ -29,10 +29,11 @@ The import puts the mechanism in pylinkage's structure and reads it as
 - masses are placeholders (1 kg uniform bars per link), gravity zero, lengths the file's
   numbers in the unit the caller names (Pyslvs has none).
 
-Refused, naming the joint by its number and type or the input pair: sliders on a moving link, more or fewer than one input pair, an input pair
-no one moving link holds, whose base is not a revolute ground joint or that drives a slider
-(base and drive one joint), an expression that does not parse, and what pylinkage's reader refuses (a link
-pinned twice to the ground, a joint no link holds, a mobility other than one).
+Refused, naming the joint by its number and type or the input pair: sliders on a moving link,
+more or fewer than one input pair, an input pair no one moving link holds, whose base is not a
+revolute ground joint or that drives a slider (base and drive one joint), an expression that
+does not parse, and what pylinkage's reader refuses (a link pinned twice to the ground, a joint
+no link holds, a mobility other than one).
 """
 
 from __future__ import annotations
@@ -171,9 +172,9 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
         if j["type"] != "R":
             where = f" on link '{j['links'][0]}'" if j["links"] else ""
             fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']}{where}: linkdyn "
-                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, P: ground "
-                 "the first link)", "Write the slider in the linkdyn model by hand (a prismatic or "
-                 "slot joint)")
+                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, P: "
+                 "ground the first link)", "Write the slider in the linkdyn model by hand (a "
+                 "prismatic or slot joint)")
     pairs = [tuple(p) for p in inputs] if isinstance(inputs, (list, tuple)) else None
     if not pairs or len(pairs) != 1 or len(pairs[0]) != 2 or not all(
             isinstance(k, int) and not isinstance(k, bool) and 0 <= k < len(joints)
