@@ -39,6 +39,7 @@ from linkdyn.motion import ConstantSpeed, ExpressionMotion
 from linkdyn import laws
 from linkdyn.cams import Cam
 from linkdyn.joints.cam import laws_name
+from linkdyn.joints.coupling import couple
 from linkdyn.motion import Segment
 
 from builders import DEG, MM, RPM, body, pri, rev, slot
@@ -350,6 +351,45 @@ def rocker_flat(speed=300 * RPM):
                  GRAVITY, assembly_phi={"cam": 0.0, "arm": alpha0 - math.pi / 2})
 
 
+def coupled_five_bar():
+    """The geared five-bar with its gear pair replaced by a coordinate coupling of the two
+    ground pivots, ``q_J1 = 0.8 q_J2 + 0.2 rad``, J2 declared ground second (its q = -phi)."""
+    bodies = (
+        body("ground", {"O1": (0, 0), "O2": (80, 0)}),
+        body("gear1", {"O1": (0, 0), "A": (25, 0)}, 0.5, (2, 1), 400.0),
+        body("gear2", {"O2": (0, 0), "B": (25, 0)}, 0.5, (0, -3), 400.0),
+        body("link1", {"A": (0, 0), "P": (90, 0)}, 0.2, (45, 0), 135.0),
+        body("link2", {"P": (0, 0), "B": (90, 0)}, 0.2, (45, 2), 135.0),
+    )
+    j1, j2 = rev("J1", "ground.O1", "gear1.O1"), rev("J2", "gear2.O2", "ground.O2")
+    joints = (j1, j2, couple("K", j1, j2, {b.name: b for b in bodies}, 0.8, 0.2),
+              rev("J3", "gear1.A", "link1.A"), rev("J4", "gear2.B", "link2.B"),
+              rev("J5", "link1.P", "link2.P"))
+    loads = (force("link1", "P", 3.0, -20.0, 2.0),)
+    return Model("coupled-five-bar", bodies, joints, (Driver("J1", ConstantSpeed(60 * RPM)),),
+                 loads, GRAVITY, assembly_phi={"gear1": 0.0, "gear2": 0.25, "link1": 1.1,
+                                               "link2": -1.1})
+
+
+def coupled_carrier():
+    """Two arms pinned at two points of a swinging carrier, their pins coupled:
+    ``q_J1 = 2 q_J2 + 0.3 rad`` (J2 declared arm first); the carrier and J1 driven."""
+    bodies = (
+        body("ground", {"O": (0, 0)}),
+        body("carrier", {"O": (0, 0), "P1": (60, 0), "P2": (-40, 30)}, 0.8, (10, 5), 900.0),
+        body("armA", {"P1": (0, 0), "T": (50, 0)}, 0.2, (25, 0), 45.0),
+        body("armB", {"P2": (0, 0), "T": (40, 0)}, 0.15, (20, 2), 25.0),
+    )
+    j1, j2 = rev("J1", "carrier.P1", "armA.P1"), rev("J2", "armB.P2", "carrier.P2")
+    joints = (rev("J0", "ground.O", "carrier.O"), j1, j2,
+              couple("K", j1, j2, {b.name: b for b in bodies}, 2.0, 0.3))
+    loads = (spring("armB", "T", "ground", "O", 300.0, 0.03), force("armA", "T", 2.0, -1.0, 3.0))
+    drivers = (Driver("J0", ExpressionMotion("0.6*sin(2*t)")),
+               Driver("J1", ExpressionMotion("0.5 + 0.8*sin(3*t)")))
+    return Model("coupled-carrier", bodies, joints, drivers, loads, GRAVITY,
+                 assembly_phi={"carrier": 0.0, "armA": 0.5, "armB": -0.1})
+
+
 MODELS = {
     "hoeken": hoeken,
     "hoeken-rod": hoeken_rod,
@@ -371,6 +411,8 @@ MODELS = {
     "rocker-cam": rocker_cam,
     "flat-follower": flat_follower,
     "rocker-flat": rocker_flat,
+    "coupled-five-bar": coupled_five_bar,
+    "coupled-carrier": coupled_carrier,
 }
 
 
@@ -441,7 +483,7 @@ def check_reactions(force_a, moment_a, force_b, moment_b, model, size, rtol=RTOL
         peak = max(np.max(np.abs(force_b[..., k, :])), 1e-6 * fs)
         worst = max(worst, check(force_a[..., k, :], force_b[..., k, :], rtol, peak,
                                  f"{what} force {jt.name}"))
-        mpeak = np.max(np.abs(moment_b[..., k])) if jt.kind == PRISMATIC else 0.0
+        mpeak = np.max(np.abs(moment_b[..., k])) if jt.kind in (PRISMATIC, "coupling") else 0.0
         worst = max(worst, check(moment_a[..., k], moment_b[..., k], rtol,
                                  max(mpeak, fs * size), f"{what} moment {jt.name}"))
     return worst
@@ -548,7 +590,7 @@ def kinetic_energy(sol, states):
 FACES = ("flat_cam", "rocker_flat_cam")
 CAMS = ("cam", "rocker_cam") + FACES
 UNKNOWNS = {REVOLUTE: 2, PRISMATIC: 2, "slot": 1, "distance": 1,
-            **{k: 1 for k in CAMS}}  # per joint
+            "coupling": 1, **{k: 1 for k in CAMS}}  # per joint
 
 
 def cam_of(jt):
@@ -689,6 +731,20 @@ def joint_columns(model):
     return [int(x) for x in start[:-1]], int(start[-1])
 
 
+def coupling_wrench(sol, jt):
+    """A coupling's wrench per unit torque on its second body about its point (the second
+    coupled pin): force (T, 2) ``(sigma_1 - ratio sigma_2) (d_y, -d_x) / |d|^2`` with ``d`` the
+    second pin from the first, and moment ``-ratio sigma_2``; the signs from the joints here."""
+    model = sol.model
+    j1, j2 = (model.joint(n) for n in jt.coupled)
+    s1 = 1.0 if j1.body_b == jt.body_a else -1.0
+    s2 = 1.0 if j2.body_b == jt.body_b else -1.0
+    d = sol.point(jt.body_b, jt.point_b) - sol.point(jt.body_a, jt.point_a)
+    k = (s1 - jt.ratio * s2) / np.sum(d * d, -1)
+    f = k[..., None] * np.stack((d[..., 1], -d[..., 0]), -1)
+    return f, np.broadcast_to(-jt.ratio * s2, sol.t.shape)
+
+
 def ne_system(sol):
     """The simultaneous Newton–Euler equations ``K x = rhs`` of all moving bodies.
 
@@ -740,6 +796,14 @@ def ne_system(sol):
             normals[jt.name] = (n, n)
             put(jt.body_b, c0, n, x)
             put(jt.body_a, c0, -n, x)
+        elif jt.kind == "coupling":
+            # the coupling torque lam on the coupled pins' bodies A and B: about B's pin, the
+            # moment -ratio sigma_2 lam and the force (sigma_1 - ratio sigma_2) lam perp(d)^T / |d|^2
+            # routing the shared body's reaction torque through the two pins (minus both on A)
+            f, mz = coupling_wrench(sol, jt)
+            normals[jt.name] = (f, f)
+            put(jt.body_b, c0, f, x, mz)
+            put(jt.body_a, c0, -f, x, -mz)
         elif jt.kind == "distance":
             # a rod's force along the line of its two points (applied anywhere on that line)
             d = x - sol.point(jt.body_a, jt.point_a)
@@ -790,6 +854,10 @@ def ne_solve(sol):
         c = col[k]
         if jt.kind == REVOLUTE:
             force[..., k, :] = x[..., c:c + 2]
+        elif jt.kind == "coupling":
+            f, mz = coupling_wrench(sol, jt)
+            force[..., k, :] = x[..., c, None] * f
+            moment[..., k] = x[..., c] * mz
         else:
             force[..., k, :] = x[..., c, None] * normals[jt.name][1]
             if jt.kind == PRISMATIC:
@@ -812,6 +880,8 @@ def reported_unknowns(sol):
         elif jt.kind == PRISMATIC:
             n = normals[jt.name][1]
             parts.append(np.stack((np.sum(f * n, -1), sol.reactions.moment[..., k]), -1))
+        elif jt.kind == "coupling":   # its torque, the multiplier's column
+            parts.append(sol.columns[f"torque_{jt.name}"][..., None])
         else:  # a slot: the normal force only; a distance: the rod's force
             parts.append(np.sum(f * normals[jt.name][1], -1)[..., None])
     parts.append(sol.dyn.tau)
@@ -1081,10 +1151,13 @@ def test_body_wrench_balance_with_reported_reactions(name):
             X = normals[jt.name][2] - sol.point(jt.body_b, jt.point_b)
             assert np.max(np.abs(sol.reactions.moment[..., k] - cross(
                 X, sol.reactions.force[..., k, :]))) <= RTOL * fs * size_of(model)
-        elif jt.kind != PRISMATIC:  # revolute and slot joints carry no moment
+        elif jt.kind not in (PRISMATIC, "coupling"):  # revolute and slot joints carry none
             assert np.max(np.abs(sol.reactions.moment[..., k])) <= RTOL * fs * size_of(model)
-        if jt.kind in ("distance",) + CAMS:  # a rod's reaction along the rod, a cam's normal
+        if jt.kind in ("distance", "coupling") + CAMS:
+            # a rod's reaction along the rod, a cam's along the normal, a coupling's across the
+            # line of its pins
             u = normals[jt.name][0]
+            u = u / np.linalg.norm(u, axis=-1, keepdims=True)
             across = cross(u, sol.reactions.force[..., k, :])
             assert np.max(np.abs(across)) <= RTOL * fs
         elif jt.kind != REVOLUTE:  # prismatic and slot reactions are normal to the axis

@@ -41,6 +41,7 @@ from linkdyn.motion import ConstantSpeed, ExpressionMotion
 mujoco = pytest.importorskip("mujoco", reason="the MuJoCo check needs mujoco (the mujoco extra)")  # the extra linkdyn[mujoco]; the export itself needs none
 
 from builders import DEG, RPM, body, pri, rev
+from test_dynamics import coupled_carrier, coupled_five_bar
 
 RTOL = 1e-12   # of the peak of each effort and reaction
 
@@ -129,6 +130,11 @@ def example(name, q="0.3 + 6*t + 0.8*sin(5*t)"):
     return dataclasses.replace(m, drivers=(Driver(m.drivers[0].joint, ExpressionMotion(q)),))
 
 
+def accelerated(m, q="0.3 + 6*t + 0.8*sin(5*t)"):
+    """``m`` with its driver accelerating."""
+    return dataclasses.replace(m, drivers=(Driver(m.drivers[0].joint, ExpressionMotion(q)),))
+
+
 CASES = {
     "hoeken-seed": (hoeken, 45 * RPM),
     "hoeken-gravity-loads": (
@@ -146,6 +152,10 @@ CASES = {
     "inverted-slider-crank": (lambda: example("inverted_slider_crank"), 6.0),
     # two loops, a tree with branches (MuJoCo's depth-first order differs from linkdyn's)
     "watt2": (lambda: example("watt2"), 6.0),
+    # a coordinate coupling as a joint equality (one of its joints written child first), and a
+    # coupling of two arms on a swinging carrier
+    "coupled-five-bar": (lambda: accelerated(coupled_five_bar()), 6.0),
+    "coupled-carrier": (coupled_carrier, 3.0),
 }
 
 
@@ -223,32 +233,42 @@ def check_against_mujoco(model, sol, xml, case=""):
     d = mujoco.MjData(m)
     nv = m.nv
     assert nv == len(model.moving_bodies)
-    cut_names = [m.eq(e).name for e in range(m.neq)]
+    # the constraint rows in the equalities' order: 3 per connect, 1 per joint equality
+    connect = [m.eq_type[e] == mujoco.mjtEq.mjEQ_CONNECT for e in range(m.neq)]
+    assert all(c or m.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT for e, c in enumerate(connect))
+    start = np.cumsum([0] + [3 if c else 1 for c in connect])
+    cut_names = [m.eq(e).name for e in range(m.neq) if connect[e]]
+    couplings = [m.eq(e).name for e in range(m.neq) if not connect[e]]
+    rows = [start[e] for e in range(m.neq) if connect[e]]
+    row1 = [start[e] for e in range(m.neq) if not connect[e]]
     S = _actuators(model, m)
-    taus, lams = [], []
+    taus, lams, torques = [], [], []
     for k in range(len(sol.t)):
         qacc = set_state(model, sol, m, d, k)
         M = np.zeros((nv, nv))
         mujoco.mj_fullM(m, d, M)                      # MuJoCo 4: mj_fullM(m, d, dst)
-        assert d.nefc == 3 * len(cut_names)
+        assert d.nefc == 3 * len(cut_names) + len(couplings)
         J = np.array(d.efc_J[:d.nefc * nv]).reshape(d.nefc, nv)
         # the connect rows are d(site1 - site2)/dq, site1 on the joint's second body
-        for c, name in enumerate(cut_names):
+        for c, name in zip(rows, cut_names):
             jt = model.joint(name)
             jac = []
             for site in (f"{jt.body_b}.{jt.point_b}", f"{jt.body_a}.{jt.point_a}"):
                 jp = np.zeros((3, nv))
                 mujoco.mj_jacSite(m, d, jp, None, m.site(site).id)
                 jac.append(jp)
-            np.testing.assert_allclose(J[3 * c:3 * c + 3], jac[0] - jac[1], atol=1e-14)
+            np.testing.assert_allclose(J[c:c + 3], jac[0] - jac[1], atol=1e-14)
         q_loads = load_forces(model, m, d, sol.t[k])
         rhs = M @ qacc + d.qfrc_bias - d.qfrc_passive - q_loads
         A = np.hstack((S, J.T))
         x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
         assert np.linalg.norm(A @ x - rhs) <= 1e-12 * np.linalg.norm(rhs)
         taus.append(x[:m.nu])
-        lams.append(x[m.nu:].reshape(len(cut_names), 3))
-    taus, lams = np.array(taus), np.array(lams)
+        lams.append(np.array([x[m.nu + r:m.nu + r + 3] for r in rows]).reshape(-1, 3))
+        # a joint equality's force on joint1's dof, as a torque in q_1 (qpos_1 = s_1 q_1)
+        torques.append([coupling_torque(model, m, J[r], x[m.nu + r], name)
+                        for r, name in zip(row1, couplings)])
+    taus, lams, torques = np.array(taus), np.array(lams), np.array(torques)
     worst = 0.0
     for c, drv in enumerate(model.drivers):
         err = _peak_error(sol.effort(drv.joint), taus[:, c])
@@ -260,7 +280,20 @@ def check_against_mujoco(model, sol, xml, case=""):
         assert err <= RTOL, f"{case}: reaction at {name} differs from MuJoCo by {err:.2e}"
         assert np.max(np.abs(lams[:, c, 1])) <= RTOL * np.max(np.abs(ref))
         worst = max(worst, err)
+    for c, name in enumerate(couplings):
+        err = _peak_error(sol.columns[f"torque_{name}"], torques[:, c])
+        assert err <= RTOL, f"{case}: torque_{name} differs from MuJoCo by {err:.2e}"
+        worst = max(worst, err)
     return worst
+
+
+def coupling_torque(model, m, row, lam, name):
+    """The generalized force ``row[dof_1] lam`` of a joint equality on its joint1's dof, in
+    linkdyn's sense of that joint (``qpos = s q``, ``s`` from the body MuJoCo's joint moves)."""
+    j1 = model.joint(name).coupled[0]
+    jid = m.joint(j1).id
+    s = 1.0 if m.body(m.jnt_bodyid[jid]).name == model.joint(j1).body_b else -1.0
+    return s * row[m.jnt_dofadr[jid]] * lam
 
 
 # ----------------------------------------------------------------------------------------------
@@ -274,7 +307,7 @@ def test_efforts_and_loop_forces_match_mujoco(case):
     t = np.linspace(0.0, 2 * math.pi / speed, 13)[:-1] + 0.01
     sol = analyze(model, t)
     export = mjcf(model, at=0.2)
-    assert set(export.cut) <= {j.name for j in model.joints if j.kind == "revolute"}
+    assert set(export.cut) <= {j.name for j in model.joints if j.kind in ("revolute", "coupling")}
     assert len(export.cut) == len(sol.topology.cut)
     check_against_mujoco(model, sol, export.text, case)
 

@@ -247,6 +247,12 @@ class Solution:
             for name in jk.get(j.kind).reaction:
                 put(f"{name}_{j.name}", w[{"M": 0, "Fx": 1, "Fy": 2}[name]],
                     "N m" if name == "M" else "N")
+        topo = kin.layout.topo
+        for ci, j in enumerate(m.joints[c] for c in topo.cut):
+            kind = jk.get(j.kind)   # a multiplier that is a generalized effort (a coupling's)
+            if kind.column:
+                put(f"{kind.column}_{j.name}", self.dyn.lam[..., topo.row_slice(ci).start],
+                    kind.multipliers[0][1])
         points = [(b.name, p) for b in m.moving_bodies for p in b.points]
         for b, p in points:
             xy = self.point(b, p)

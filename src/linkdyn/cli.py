@@ -1015,11 +1015,35 @@ def equilibrium(model, as_json, allow_outside):
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@click.option("--report", is_flag=True,
+              help="Also write mode<k>.html: each oscillating mode animated over one period.")
+@click.option("-o", "--outdir", default="out/modes", show_default=True,
+              type=click.Path(file_okay=False), help="Folder for the --report pages.")
 @_ALLOW_OUTSIDE
-def modes(model, as_json, allow_outside):
+def modes(model, as_json, report, outdir, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    _equilibrium(model, as_json, allow_outside, with_modes=True)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True)
+    if report:
+        from . import design, modal as eq_mod
+        from .analysis import analyze as run
+        from .report import render
+
+        check_outdir(outdir)
+        files = {}
+        for k in md.oscillating:
+            # the mode's motion, analyzed and shown as linkdyn analyze --report shows a run
+            moving = eq_mod.mode_motion(md, int(k))
+            sol = run(moving, np.linspace(0.0, moving.duration, 121))
+            page = render(sol, design.summary(sol))
+            files[f"mode{k + 1}.html"] = lambda path, page=page: Path(path).write_text(
+                page, encoding="utf-8")
+        if not files:
+            raise ModelError("no mode swings (every root is overdamped or unstable): no page "
+                             "to animate", field="--report", fix="Drop --report")
+        written = write_outputs(outdir, files, owned=("mode*.html",))
+        if not as_json:
+            click.echo(f"wrote {', '.join(map(str, written))}")
 
 
 def _equilibrium(model, as_json, allow_outside, with_modes):
@@ -1033,6 +1057,7 @@ def _equilibrium(model, as_json, allow_outside, with_modes):
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))
     else:
         click.echo(eq_mod.text(eq, md))
+    return md
 
 
 # ---------------------------------------------------------------------------- cam
@@ -1126,13 +1151,21 @@ def export(model, to, output, at, allow_outside):
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Model file to write, *.toml or *.json [default: FILE's name with .toml].")
 @click.option("--length-unit", default="m", show_default=True,
-              help="Length unit of FILE's numbers (pylinkage has none): m, mm, cm, in...")
-def import_(file, output, length_unit):
-    """Write a mechanism saved by pylinkage (its JSON) as a linkdyn model file.
+              help="Length unit of FILE's numbers (pylinkage and Pyslvs have none): m, mm, cm, "
+                   "in...")
+@click.option("--input", "pair", metavar="BASE,DRIVE",
+              help="Pyslvs's input pair (joint numbers: the crank's ground joint, the joint it "
+                   "carries), for an expression, which has none, or instead of a project's.")
+def import_(file, output, length_unit, pair):
+    """Write a mechanism saved by pylinkage (its JSON) or drawn in Pyslvs (its expression or
+    YAML project) as a linkdyn model file.
 
-    Masses are placeholders (1 kg uniform bars per link); one pylinkage step is one second.
+    Masses are placeholders (1 kg uniform bars per link); one pylinkage step is one second, a
+    Pyslvs crank turns once a second.
     """
+    from .io import read_input
     from .io.pylinkage import import_pylinkage, model_text
+    from .io.pyslvs import import_pyslvs, is_pyslvs
     from .outputs import check_file, write_file
 
     out = Path(output) if output else Path(Path(file).stem + ".toml")
@@ -1140,7 +1173,17 @@ def import_(file, output, length_unit):
         raise ModelError(f"cannot write a model file named '{out}'", field="-o",
                          fix="Name it *.toml or *.json")
     check_file(out)
-    done = import_pylinkage(file, length_unit=length_unit)
+    if is_pyslvs(file, read_input(file, "file to import")):
+        inputs = None
+        if pair is not None:
+            try:
+                inputs = [tuple(int(k) for k in pair.split(","))]
+            except ValueError:
+                raise ModelError(f"expected two joint numbers BASE,DRIVE, got '{pair}'",
+                                 field="--input", fix="Give e.g. --input 0,1") from None
+        done = import_pyslvs(file, length_unit=length_unit, inputs=inputs)
+    else:
+        done = import_pylinkage(file, length_unit=length_unit)
     write_file(out, model_text(done, out.suffix))
     for note in done.notes:
         click.echo(note)

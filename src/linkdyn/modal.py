@@ -29,7 +29,8 @@ from . import joints as jk
 from .errors import AssemblyError, ModelError
 from .forward import Partition, start_state, System, check_inertia, partition
 from .kinematics.positions import driver_values
-from .model import Model
+from .model import Driver, Model, point_spread
+from .motion import ExpressionMotion
 
 MAX_ITER = 50        # Newton steps of the equilibrium (E1)
 STEP_TOL = 1e-13     # converged when a step moves q_f less than this (rad, or m per size)
@@ -134,6 +135,13 @@ class Modes:
     def __repr__(self) -> str:
         f = ", ".join(f"{x:.6g}" for x in self.frequencies)
         return f"<Modes of {self.equilibrium.model.name!r}: {f} Hz>"
+
+    @property
+    def oscillating(self) -> np.ndarray:
+        """The modes that swing (not an overdamped or unstable real root): ``0 <= zeta < 1``
+        and a frequency above 0; indices, ascending."""
+        z = self.damping_ratios
+        return np.nonzero((z >= 0) & (z < 1) & (self.frequencies > 0))[0]
 
 
 def _scales(part: Partition) -> np.ndarray:
@@ -328,6 +336,55 @@ def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) ->
     return Modes(equilibrium=eq, eigenvalues=eig[order], frequencies=np.asarray(freq),
                  damping_ratios=np.asarray(zeta), shapes=V, joint_shapes=eq.shape_map @ V,
                  stable=stable)
+
+
+#: The largest free coordinate's swing in an animated mode: rad, or this part of the size.
+MODE_SWING = 0.1
+
+
+def mode_motion(md: Modes, k: int, *, swing: float = MODE_SWING) -> Model:
+    """The model moving in mode ``k`` (E3), for its report page: every free joint driven by
+    ``q_j(t) = q_eq_j + a v_j sin(w t)`` over one period, the drivers held at t = 0.
+
+    Parameters
+    ----------
+    md : Modes
+    k : int
+        The mode (0 the lowest), one that swings (:attr:`Modes.oscillating`).
+    swing : float
+        The swing ``a`` of the free coordinate whose shape component is 1: rad, or this part of
+        the mechanism's size (m).
+
+    Returns
+    -------
+    Model
+        Named after the mode and its frequency, its ``duration`` the period ``1 / f`` (s), its
+        assembly guesses the equilibrium's joint coordinates. ``analyze`` of it gives the
+        efforts that move the mechanism so: small (second order in ``a``) when ``v`` and ``w``
+        are a mode of the linearized equations.
+    """
+    eq = md.equilibrium
+    model, f, v = eq.model, float(md.frequencies[k]), md.shapes[:, k]
+    if k not in md.oscillating:
+        raise ModelError(f"mode {k + 1} does not swing ({f:g} Hz, damping ratio "
+                         f"{md.damping_ratios[k]:g})", field="modes",
+                         fix="Animate a mode with a damping ratio from 0 to below 1")
+    top = int(np.argmax(np.abs(v)))
+    kinds = {j.name: j.kind for j in model.joints}
+    size = float(point_spread(np.array([p for b in model.bodies for p in b.points.values()])))
+    angular = jk.get(kinds[eq.free[top]]).angular
+    a = swing * (1.0 if angular else size)
+    w = float(2 * np.pi * f)
+    # q_j(t) = q_eq_j + a v_j sin(w t)                                              (E3)
+    moving = tuple(Driver(j, ExpressionMotion(f"{float(q)!r} + {float(a * x)!r}*sin({w!r}*t)"))
+                   for j, q, x in zip(eq.free, eq.q, v))
+    held = _held(model)
+    return replace(held, name=f"{model.name}: mode {k + 1} at {f:.6g} Hz",
+                   description=f"Mode {k + 1} of {model.name!r}: {f:.6g} Hz, damping ratio "
+                               f"{md.damping_ratios[k]:.4g}, swung by {a:.4g} "
+                               f"{'rad' if angular else 'm'} about the static equilibrium",
+                   drivers=held.drivers + moving, duration=1.0 / f, cycles=None,
+                   assembly_q=dict(eq.joint_q), initial_q={}, initial_qd={})
 
 
 def _norm(h, K, scale) -> float:

@@ -109,6 +109,9 @@ class Joint:
         slider's ``axis`` (2,), unit sliding direction in ``body_a``'s frame, and ``angle``,
         rad, the fixed angle of ``body_b``'s frame to ``body_a``'s). Each is also an attribute
         (``joint.axis``); a number of another kind reads as that number's default.
+    coupled : tuple[str, ...]
+        The joints a coupling couples (``joints = [...]`` in the file; its bodies and points
+        are theirs, :func:`linkdyn.joints.coupling.couple`); empty for the other kinds.
     """
 
     name: str
@@ -118,9 +121,10 @@ class Joint:
     body_b: str
     point_b: str
     numbers: dict
+    coupled: tuple = ()
 
     def __init__(self, name, kind, body_a, point_a, body_b, point_b, *values, numbers=None,
-                 **named):
+                 coupled=(), **named):
         from . import joints as jk
         if kind not in jk.REGISTRY:   # no declarations to hold them to (topology names it)
             if values:
@@ -139,7 +143,8 @@ class Joint:
             given = {**dict(numbers or {}), **dict(zip(names, values)), **named}
             held = {x.name: x.value(given.get(x.name)) for x in declared}
         for k, v in (("name", name), ("kind", kind), ("body_a", body_a), ("point_a", point_a),
-                     ("body_b", body_b), ("point_b", point_b), ("numbers", held)):
+                     ("body_b", body_b), ("point_b", point_b), ("numbers", held),
+                     ("coupled", tuple(coupled))):
             object.__setattr__(self, k, v)
 
     def __getattr__(self, name: str):

@@ -21,7 +21,7 @@ from pathlib import Path
 from ..errors import ModelError, quiet, wrong_type
 from ..model import Model
 from .drivers import MOTION_KEYS, _drivers
-from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _check_links, _joints
+from .linkage import BODY_KEYS, JOINT_KEYS, _bodies, _check_links, _joints, free_bodies
 from .loads import LOAD_KEYS, _loads
 from .options import _analysis, _assembly, _initial, _topology
 from .files import MAX_FILE_BYTES, FileRefused, read_text
@@ -132,8 +132,9 @@ def model_from_dict(data: dict, *, source: str = "", base_dir: str | os.PathLike
     gravity = r.vector(mech.get("gravity", [0.0, 0.0]), "mechanism.gravity", "m/s^2")
     description = r.string(mech.get("description", ""), "mechanism.description", empty=True)
     _units(r, data.get("units", {}))
-    bodies = _bodies(r, data.get("bodies"))
-    joints = _joints(r, data.get("joints", []), bodies)
+    body_entries, joint_entries = free_bodies(r, data.get("bodies"), data.get("joints", []))
+    bodies = _bodies(r, body_entries)
+    joints = _joints(r, joint_entries, bodies)
     _check_links(r, bodies, joints)
     drivers = _drivers(r, data.get("drivers", []), joints)
     loads = _loads(r, data.get("loads", []), bodies, joints)

@@ -10,15 +10,16 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import joints as jk
+from ..joints import coupling
 from ..model import GROUND, Body, Joint, point_spread
 from .reader import _quote, _Reader, _did_you_mean, _entry_field, _type_name
 
 SHORT_LINK = 1e-9  # a link shorter than this fraction of the mechanism's size has zero length
 
-BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars")
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "inertia_about", "bars", "free")
 BAR_KEYS = ("between", "mass", "mass_per_length")
-JOINT_KEYS = ("name", "type", "connect") + tuple(dict.fromkeys(
-    key for kind in jk.REGISTRY.values() for key in kind.keys))
+JOINT_KEYS = ("name", "type", "connect", "joints") + tuple(dict.fromkeys(
+    x.name for kind in jk.REGISTRY.values() for x in kind.numbers if not x.derived))
 
 
 @dataclass(frozen=True)
@@ -126,6 +127,65 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
     return read_bodies(r, entries, PLANAR)
 
 
+def free_bodies(r: _Reader, bodies: Any, joints: Any) -> tuple[Any, Any]:
+    """The ``[[bodies]]`` and ``[[joints]]`` entries with each free body (``free = "P"``: joined
+    to nothing but loads) on its three planar freedoms.
+
+    A free body ``B`` with ``free = "P"`` hangs from the ground by two massless carriages and three
+    joints: the prismatic joint ``B_x`` (the ground's new point ``B_origin`` at the origin to the
+    carriage ``B_x``, along the ground's x axis), the prismatic joint ``B_y`` (carriage ``B_x`` to
+    carriage ``B_y``, along y) and the revolute joint ``B_phi`` (carriage ``B_y`` to ``B.P``). So
+    ``q_B_x``, ``q_B_y`` are the global coordinates of P and ``q_B_phi`` the body's angle. The
+    carriages have no mass or inertia: they add no term to the equations of motion (the free
+    coordinates' mass matrix is the body's own, regular when its mass and inertia are above zero).
+    Written out (``linkdyn.io.writer``), the model holds the carriages as bodies and joints.
+    """
+    if not isinstance(bodies, list) or not any(isinstance(e, dict) and "free" in e
+                                               for e in bodies):
+        return bodies, joints
+    names = {e.get("name") for e in bodies if isinstance(e, dict)}
+    out, carriages, links, origins = [], [], [], {}
+    for i, entry in enumerate(bodies):
+        if not (isinstance(entry, dict) and "free" in entry):
+            out.append(entry)
+            continue
+        f, name, point = _entry_field("bodies", i, entry), entry.get("name"), entry["free"]
+        if name == GROUND:
+            r.fail(f"{f}.free", "the ground is fixed: it cannot be free",
+                   "Remove free from the ground body")
+        pts = entry.get("points")
+        if not (isinstance(point, str) and isinstance(pts, dict) and point in pts):
+            r.fail(f"{f}.free", f"expected the name of one of the body's points, got "
+                   f"{_quote(point) if isinstance(point, str) else _type_name(point)}",
+                   'Write e.g. free = "C": the point whose x and y are the free coordinates')
+        for taken in (f"{name}_x", f"{name}_y"):
+            if taken in names:
+                r.fail(f"{f}.free", f"the free body's carriage would be named '{taken}', the name "
+                       "of another body", f"Rename body '{taken}'")
+        out.append({k: v for k, v in entry.items() if k != "free"})
+        origins[f"{name}_origin"] = f"{f}.free"
+        # ground -> B_x (along x) -> B_y (along y) -> B (turning about P)
+        for axis, (u, first) in {"x": ([1.0, 0.0], f"{GROUND}.{name}_origin"),
+                                 "y": ([0.0, 1.0], f"{name}_x.O")}.items():
+            carriages.append({"name": f"{name}_{axis}", "points": {"O": [0.0, 0.0]},
+                              "mass": 0.0, "inertia": 0.0})
+            links.append({"name": f"{name}_{axis}", "type": "prismatic", "axis": u,
+                          "connect": [first, f"{name}_{axis}.O"]})
+        links.append({"name": f"{name}_phi", "type": "revolute",
+                      "connect": [f"{name}_y.O", f"{name}.{point}"]})
+    for k, entry in enumerate(out):
+        if isinstance(entry, dict) and entry.get("name") == GROUND \
+                and isinstance(entry.get("points"), dict):
+            for origin, field in origins.items():
+                if origin in entry["points"]:
+                    r.fail(field, f"the free body's origin would be the ground's point "
+                           f"'{origin}', which the ground has", f"Rename the ground's point "
+                           f"'{origin}'")
+            out[k] = dict(entry, points={**entry["points"], **{o: [0.0, 0.0] for o in origins}})
+    given = joints if joints is not None else []
+    return out + carriages, (given + links if isinstance(given, list) else given)
+
+
 def _bars(r: _Reader, f: str, name: str, points: dict, entry: dict) -> Body:
     """A body whose mass, mass centre and inertia are composed of uniform bars between its
     points (``bars = [{ between = ["A", "B"], mass = ... }]``; ``mass_per_length`` in kg per
@@ -190,14 +250,31 @@ def _reference(r: _Reader, value: Any, field: str, bodies: dict[str, Body]) -> t
 
 def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Joint]:
     joints: dict[str, Joint] = {}
+    later = []   # the couplings, read once the joints they name are
     for i, entry in enumerate(r.entries(entries, "joints")):
         f = _entry_field("joints", i, entry)
-        r.table(entry, f, JOINT_KEYS, required=("name", "type", "connect"))
+        couples = isinstance(entry, dict) and isinstance(entry.get("type"), str) \
+            and entry["type"] in jk.REGISTRY and jk.get(entry["type"]).couples
+        r.table(entry, f, JOINT_KEYS, required=("name", "type", "joints" if couples else "connect"))
         name = r.name(entry["name"], f"{f}.name")
-        if name in joints:
+        if name in joints or name in (n for _, n, _ in later):
             r.fail(f"joints[{i}].name", f"duplicate joint name '{name}'",
                    "Give every joint a different name")
         kind = r.choice(entry["type"], f"{f}.type", jk.names(), "joint type")
+        for key in jk.NUMBERS:
+            if key in entry and key not in jk.get(kind).keys:
+                takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
+                r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
+                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
+        if couples:
+            if "connect" in entry:
+                r.fail(f"{f}.connect", f"a {kind} joint takes the joints it couples, not connect",
+                       'Remove connect; write joints = ["J1", "J2"]')
+            later.append((i, name, entry))
+            continue
+        if "joints" in entry:
+            r.fail(f"{f}.joints", f"a {kind} joint has no joints",
+                   'Remove joints (it names the joints of type = "coupling")')
         conn = entry["connect"]
         if not isinstance(conn, list) or len(conn) != 2:
             r.fail(f"{f}.connect", f"expected two \"body.point\" strings, got {_type_name(conn)}",
@@ -207,19 +284,41 @@ def _joints(r: _Reader, entries: Any, bodies: dict[str, Body]) -> dict[str, Join
         if a == b:
             r.fail(f"{f}.connect", f"the joint connects body '{a}' to itself",
                    "A joint joins two different bodies; check the body names in connect")
-        accepts = jk.get(kind).keys
-        for key in jk.NUMBERS:
-            if key in entry and key not in accepts:
-                takes = [k for k, x in jk.REGISTRY.items() if key in x.keys]
-                r.fail(f"{f}.{key}", f"a {kind} joint has no {key}",
-                       f"Remove {key}, or set type = " + " or ".join(f'"{k}"' for k in takes))
-        extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", a)
-                 for x in jk.get(kind).numbers}
-        why = jk.get(kind).refuse(extra)
-        if why:
-            r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
+        extra = _numbers_of(r, f, kind, name, entry, a)
         joints[name] = Joint(name, kind, a, pa, b, pb, **extra)
-    return joints
+    for i, name, entry in later:
+        joints[name] = _coupling(r, _entry_field("joints", i, entry), name, entry, joints, bodies)
+    order = {name: k for k, name in enumerate(
+        e.get("name") for e in entries if isinstance(e, dict))}
+    return dict(sorted(joints.items(), key=lambda kv: order[kv[0]]))
+
+
+def _numbers_of(r: _Reader, f: str, kind: str, name: str, entry: dict, body_a: str) -> dict:
+    """A joint's numbers its kind declares (not the derived ones), read in SI and checked by the
+    kind (:meth:`~linkdyn.joints.JointKind.refuse`)."""
+    extra = {x.name: _number(r, x, entry.get(x.name), f"{f}.{x.name}", body_a)
+             for x in jk.get(kind).numbers if not x.derived}
+    why = jk.get(kind).refuse(extra)
+    if why:
+        r.fail(f, f"a {kind} joint: {why}", f"Correct the numbers of joint '{name}'")
+    return extra
+
+
+def _coupling(r: _Reader, f: str, name: str, entry: dict, joints: dict, bodies: dict) -> Joint:
+    """A coupling from the two joints its ``joints`` names (:func:`coupling.couple`)."""
+    pair = entry["joints"]
+    fix = 'Write joints = ["J1", "J2"], two revolute joints of one common body'
+    if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(x, str) for x in pair)):
+        r.fail(f"{f}.joints", f"expected two joint names, got {_type_name(pair)}", fix)
+    for k, x in enumerate(pair):
+        r.choice(x, f"{f}.joints[{k}]", joints, "joint", "joints (not couplings)")
+    if pair[0] == pair[1]:
+        r.fail(f"{f}.joints", f"the coupling names joint '{pair[0]}' twice", fix)
+    extra = _numbers_of(r, f, entry["type"], name, entry, "")
+    try:
+        return coupling.couple(name, joints[pair[0]], joints[pair[1]], bodies, **extra)
+    except coupling.CouplingError as e:
+        r.fail(f"{f}.joints", str(e), fix)
 
 
 def _number(r: _Reader, x: jk.Number, value: Any, field: str, body_a: str):

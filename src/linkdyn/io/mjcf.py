@@ -15,7 +15,11 @@ What is written:
   ``hinge``, a prismatic one a ``slide``, each with ``ref`` its coordinate at that pose, so that
   ``qpos`` of a joint is ``s q`` (``q`` linkdyn's coordinate ``q_<joint>``, ``s = +1`` when the
   child body is the joint's second body, ``-1`` when its first) and the model loads assembled;
-- each cut joint as ``<equality><connect site1=B.q site2=A.p>`` (site1 on the joint's second
+- a coupling (``q_1 = ratio q_2 + offset_angle``) as ``<equality><joint joint1 joint2
+  polycoef="0 s_1 s_2 ratio 0 0 0">`` (MuJoCo's joint equality holds ``qpos_1 - qpos0_1`` to
+  the polynomial in ``qpos_2 - qpos0_2``, and ``qpos0`` is the pose's ``s q``); its two joints
+  must be joints of MuJoCo's tree, else it is refused naming the coupling;
+- each other cut joint as ``<equality><connect site1=B.q site2=A.p>`` (site1 on the joint's second
   body: the constraint force on site1's body is linkdyn's reaction, by the first body on the
   second). A connect closes a revolute joint only: a loop cut by linkdyn at a prismatic joint
   is cut here at a revolute joint of the same loop instead (MuJoCo's tree need not be
@@ -90,10 +94,10 @@ def mujoco_cut(model: Model, leave_out: tuple[str, ...] = ()):
     inner = _tree_model(model)
     topo = topology.build(inner)
     for _ in range(len(model.joints)):
-        bad = [j for j in topo.cut if model.joints[j].kind != "revolute"
+        bad = [j for j in topo.cut if model.joints[j].kind not in ("revolute", "coupling")
                and model.joints[j].name not in leave_out]
         if not bad:
-            return topo
+            return _coupled_in_tree(model, topo, leave_out)
         jt = model.joints[bad[0]]
         field = f"joints.{jt.name}.type"
         if not jk.get(jt.kind).tree:
@@ -121,6 +125,23 @@ def mujoco_cut(model: Model, leave_out: tuple[str, ...] = ()):
         cut.append(model.joints[topo.tree_joint[swap[0]]].name)
         topo = topology.build(dataclasses.replace(inner, cut=tuple(cut)))
     raise AssertionError("unreachable: each pass cuts one revolute joint more")  # pragma: no cover
+
+
+def _coupled_in_tree(model: Model, topo, leave_out):
+    """``topo``, once every joint a coupling couples is a joint of MuJoCo's tree (a joint
+    equality relates two joints' ``qpos``); else the ModelError naming the coupling."""
+    cut = {model.joints[j].name for j in topo.cut}
+    for jt in model.joints:
+        if jt.kind == "coupling" and jt.name not in leave_out:
+            loose = [n for n in jt.coupled if n in cut]
+            if loose:
+                raise ModelError(
+                    f"coupling '{jt.name}' couples joint '{loose[0]}', which closes a loop in "
+                    "MuJoCo's tree (a connect constraint), and a MuJoCo joint equality relates "
+                    "two joints of the tree", file=model.source, field=f"joints.{jt.name}.joints",
+                    fix=f"Cut the loop at another joint: [topology] cut = [...] without "
+                        f"'{loose[0]}'")
+    return topo
 
 
 
@@ -268,6 +289,13 @@ def mjcf(model: Model, *, at: float = 0.0, sol=None, kp: float | None = None,
         eq = ET.SubElement(root, "equality")
         for name in cut:
             jt = model.joints[joint_index[name]]
+            if jt.kind == "coupling":
+                # q_1 = ratio q_2 + offset about the pose (qpos0 = ref): qpos_1 - ref_1 =
+                # s_1 s_2 ratio (qpos_2 - ref_2), qpos = s q
+                j1, j2 = jt.coupled
+                ET.SubElement(eq, "joint", name=name, joint1=j1, joint2=j2,
+                              polycoef=f"0 {_num(sign[j1] * sign[j2] * jt.ratio)} 0 0 0")
+                continue
             # site1 on the second body: the constraint force on site1's body is by A on B
             ET.SubElement(eq, "connect", name=name, site1=f"{jt.body_b}.{jt.point_b}",
                           site2=f"{jt.body_a}.{jt.point_a}")

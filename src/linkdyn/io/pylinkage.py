@@ -58,8 +58,15 @@ __all__ = ["Imported", "read_pylinkage", "from_pylinkage", "import_pylinkage", "
 BAR_MASS = 1.0
 JOINT_TYPES = ("ground", "revolute", "prismatic", "tracker")
 LINK_TYPES = ("ground", "driver", "link")
-_DESCRIPTION = ("Imported from pylinkage by linkdyn import: masses are placeholders (1 kg "
-                "uniform bars per link); one pylinkage step is 1 s")
+_DESCRIPTION = ("Imported from {tool} by linkdyn import: masses are placeholders (1 kg "
+                "uniform bars per link); {time}")
+#: How each tool's crank speed becomes time: the description's words and the printed note's.
+_TIME = {"pylinkage": ("one pylinkage step is 1 s",
+                       "one pylinkage step is read as 1 s: the driver {joint} turns the crank "
+                       "{crank} at {speed!r} rad/s (pylinkage's {speed!r} rad per step)"),
+         "Pyslvs": ("the crank turns once a second",
+                    "Pyslvs has no time: the driver {joint} turns the crank {crank} once a "
+                    "second ({speed!r} rad/s) from its saved angle")}
 _FIX = "Save the mechanism with pylinkage.mechanism.mechanism_to_json"
 
 
@@ -79,12 +86,16 @@ class Imported:
         the model (the crank's motor joint: on the crank).
     notes : tuple of str
         What a user should read: the placeholder masses and the time scale.
+    tool : str
+        The tool the mechanism comes from: ``"pylinkage"`` or ``"Pyslvs"``
+        (:mod:`linkdyn.io.pyslvs`).
     """
 
     data: dict
     model: Model
     points: dict
     notes: tuple[str, ...]
+    tool: str = "pylinkage"
 
 
 def read_pylinkage(path: str | os.PathLike) -> dict:
@@ -135,7 +146,8 @@ def _bars(points: np.ndarray) -> tuple[np.ndarray, float]:
     return com, inertia
 
 
-def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> Imported:
+def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
+                   tool: str = "pylinkage") -> Imported:
     """A pylinkage mechanism (the structure ``mechanism_to_dict`` returns) as a linkdyn model.
 
     Parameters
@@ -146,6 +158,9 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
         The file, for messages.
     length_unit : str
         The length unit the file's numbers are in (a key of ``LENGTH_UNITS``); pylinkage has none.
+    tool : str
+        The tool named in the model's description and notes (a key of ``_TIME``): Pyslvs's
+        mechanisms are read by putting them in this structure (:mod:`linkdyn.io.pyslvs`).
 
     Returns
     -------
@@ -245,10 +260,9 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
              "driven by one crank", "Keep one 'driver' link")
     drv = drivers[0]
     motor = drv.get("motor_joint")
-    if motor not in drv["joints"] or len(drv["joints"]) != 2:
+    if motor not in drv["joints"]:     # pylinkage's crank holds two, Pyslvs's may hold more
         fail(f"links[{links_in.index(drv)}]", f"driver link {_quote(drv['id'])} of type 'driver' "
-             "must hold two joints, one of them its motor_joint",
-             "Give it motor_joint and one output joint")
+             "must hold its motor_joint", "Give it motor_joint and one output joint")
     speed, start = drv.get("angular_velocity", math.tau / 360), drv.get("initial_angle", 0.0)
     for key, v in (("angular_velocity", speed), ("initial_angle", start)):
         if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
@@ -352,7 +366,11 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
             line = ground_points(f"{jid}_line")
             ground["points"][line] = [float(x) for x in lp]
             name = jnames(jid)
-            model_joints.append({"name": name, "type": "slot", "axis": [float(x) for x in axis],
+            # a pin that turns (pylinkage's) is a slot joint; one that does not (Pyslvs's P
+            # slider, "turns": false) a prismatic joint, the link kept at its saved angle
+            still = {"type": "prismatic", "angle": phi[hold[0][0]]} \
+                if jd.get("turns", True) is False else {"type": "slot"}
+            model_joints.append({"name": name, **still, "axis": [float(x) for x in axis],
                                  "connect": [f"{GROUND}.{line}", "{}.{}".format(*hold[0])]})
             u = axis / np.hypot(*axis)
             assembly_q[name] = float((pos(jid) - lp) @ u)  # the pin's travel along the line
@@ -373,13 +391,12 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
     notes = (
         f"masses are placeholders: each moving body {BAR_MASS:g} kg as uniform bars along its "
         "joints (mass centre and inertia of those bars); replace them with the real ones",
-        f"one pylinkage step is read as 1 s: the driver {drive_joint} turns the crank {crank} at "
-        f"{float(speed)!r} rad/s (pylinkage's {float(speed)!r} rad per step)",
+        _TIME[tool][1].format(joint=drive_joint, crank=crank, speed=float(speed)),
         f"lengths are the file's numbers in {length_unit}; gravity is zero",
     )
     out: dict = {
         "mechanism": {"name": str(data.get("name") or Path(source).stem or "mechanism"),
-                      "description": _DESCRIPTION,
+                      "description": _DESCRIPTION.format(tool=tool, time=_TIME[tool][0]),
                       "gravity": [0.0, 0.0]},
         "units": {"length": length_unit, "angle": "rad"},
         "bodies": bodies,
@@ -401,7 +418,7 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
         except ModelError as err:
             fail("", f"the mechanism cannot be a linkdyn model: {err.message}"
                  + (f" (in the model made of it: {err.field})" if err.field else ""),
-                 "Check that the pylinkage mechanism has one degree of freedom, driven by its "
+                 f"Check that the {tool} mechanism has one degree of freedom, driven by its "
                  "crank")
         return model
 
@@ -414,7 +431,7 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m") -> I
                   f"{float(start)!r} rad: the assembly guesses are the saved pose carried there",)
         out["assembly"] = _carried(build, out, drive_joint, phi[crank], gap, frames, joints)
         model = build(out)
-    return Imported(out, model, where, notes)
+    return Imported(out, model, where, notes, tool)
 
 
 def _carried(build, out: dict, drive_joint: str, angle: float, gap: float, frames: dict,
@@ -445,6 +462,6 @@ def model_text(imported: Imported, suffix: str = ".toml") -> str:
         return json.dumps(imported.data, indent=2, allow_nan=False) + "\n"
     from .writer import dumps_toml
 
-    head = "".join(f"# {n}\n" for n in ("Imported from pylinkage by linkdyn import.",)
+    head = "".join(f"# {n}\n" for n in (f"Imported from {imported.tool} by linkdyn import.",)
                    + imported.notes)
     return head + "\n" + dumps_toml(imported.data)

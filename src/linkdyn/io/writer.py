@@ -231,9 +231,12 @@ def _joints(model: Model, L: float, A: float) -> list[dict]:
     """``[[joints]]`` of a planar model (the kinds' numbers in the file's units)."""
     joints = []
     for j in model.joints:
-        entry = {"name": j.name, "type": j.kind,
-                 "connect": [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]}
-        for x in jk.get(j.kind).numbers:   # the kind's numbers, in the file's units
+        entry = {"name": j.name, "type": j.kind}
+        if jk.get(j.kind).couples:   # a coupling names its joints (its bodies are theirs)
+            entry["joints"] = list(j.coupled)
+        else:
+            entry["connect"] = [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]
+        for x in (x for x in jk.get(j.kind).numbers if not x.derived):   # in the file's units
             scale = {"angle": A, "length": L}.get(x.unit, 1.0)
             v = j.numbers[x.name]
             entry[x.name] = (x.choices[int(v)] if x.choices else

@@ -10,8 +10,8 @@ defining a :class:`JointKind` subclass and its instance ``KIND``, and list it in
 
 from __future__ import annotations
 
-from . import (cam, distance, flat_cam, gear, prismatic, rack, revolute, rocker_cam,
-               rocker_flat_cam, slot)
+from . import (cam, coupling, distance, flat_cam, gear, prismatic, rack, revolute,
+               rocker_cam, rocker_flat_cam, slot)
 from ..steps import by_kind
 from .base import WIDTH, JointKind, Number, frame, line_motion
 
@@ -23,7 +23,8 @@ REGISTRY: dict[str, JointKind] = {k.name: k for k in (revolute.KIND, prismatic.K
                                                        slot.KIND,
                                                        gear.KIND, rack.KIND, distance.KIND,
                                                        cam.KIND, rocker_cam.KIND,
-                                                       flat_cam.KIND, rocker_flat_cam.KIND)}
+                                                       flat_cam.KIND, rocker_flat_cam.KIND,
+                                                       coupling.KIND)}
 
 
 def _numbers() -> dict[str, Number]:

@@ -72,6 +72,9 @@ class Number:
     choices : tuple[str, ...]
         For a number the file gives by name (a cam's motion law): the names of the values 0,
         1, 2, ...; the reader takes a name and the writer writes it back. Empty: a number.
+    derived : bool
+        Computed from the model by the kind (a coupling's signs and direction, from the joints
+        it couples), not read from the model file nor written to it.
     """
 
     name: str
@@ -82,6 +85,7 @@ class Number:
     design: bool = True
     doc: str = ""
     choices: tuple = ()
+    derived: bool = False
 
     def value(self, x=None) -> np.ndarray | float:
         """``x`` (SI) as this number's value, the default where None: a float, or a float
@@ -155,6 +159,14 @@ class JointKind:
     one_sided : bool
         Whether its contact can only push (a cam's): a multiplier below zero is where the
         bodies would part, which the run's summary reports (``contact`` in ``summary.json``).
+    column : str or None
+        Prefix of a results column that carries the cut's multiplier (its first row), named
+        ``<column>_<joint>`` in the unit of :attr:`multipliers` (a coupling's ``torque``, a
+        generalized effort); None: the multipliers are reported as the reaction only.
+    couples : bool
+        Whether the model file names the joints it couples (``joints = ["J1", "J2"]``) instead
+        of ``connect``: its bodies, points and derived numbers come from them (a coupling,
+        :func:`linkdyn.joints.coupling.couple`).
     """
 
     name = ""
@@ -169,6 +181,8 @@ class JointKind:
     dyad: str | None = None
     periodic = True
     one_sided = False
+    column: str | None = None
+    couples = False
 
     @property
     def cut_rank(self) -> int:

@@ -1,0 +1,213 @@
+"""``linkdyn import FILE``: Pyslvs's expressions and YAML projects as linkdyn models.
+
+The references are Pyslvs's own numbers and Pyslvs's own method, written here:
+
+- Pyslvs's test suite solves its Jansen example at input angles 0 and 45 degrees and asserts
+  the foot (joint 7) at (-43.170055, -91.753226) and (-24.406394, -91.789596), to 6 decimals:
+  the imported model, analysed at those crank angles, puts it there;
+- Pyslvs places every joint by triangles (its PLA and PLLP formulas): the driven joint at the
+  input angle from the base, each other joint from two placed joints of its links at their saved
+  distances, on the side of their line where the saved pose has it. That construction, written
+  here, shares no code with linkdyn's assembly (Newton's method and continuation on the loop
+  closures); every revolute, one-input example of Pyslvs's example list
+  (``tests/data/pyslvs/examples.json``, see its README) stands where it puts it, to 1e-12 of
+  the mechanism's size, over a crank turn (or the part of it the mechanism can move through);
+- the examples linkdyn cannot represent (sliders, two inputs) are refused by name.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+from linkdyn.cli import main
+from linkdyn.io.pyslvs import from_pyslvs, import_pyslvs, parse_expression
+
+EXAMPLES = json.loads((Path(__file__).parent / "data" / "pyslvs" / "examples.json").read_text())
+IMPORTED = [n for n, e in EXAMPLES.items()
+            if len(e["input"]) == 1 and len(set(e["input"][0])) == 2 and all(
+                j["type"] == "R" or j["links"][0] == "ground"
+                for j in parse_expression(e["mechanism"]))]
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def triangles(expression: str, pair, angle: float) -> np.ndarray:
+    """Pyslvs's construction of the joints (n, 2) at input ``angle`` (rad), NaN rows where a
+    triangle does not close (or is flat), None if no triangles place them all: the driven joint
+    by PLA from the base, every other moving joint by PLLP from two placed joints sharing a link
+    with it, on its saved side."""
+    joints = parse_expression(expression)
+    saved = np.array([j["position"] for j in joints])
+    links = [set(j["links"]) for j in joints]
+    base, drive = pair
+    pos = {i: saved[i] for i, lk in enumerate(links) if "ground" in lk}
+    pos[drive] = saved[base] + np.hypot(*(saved[drive] - saved[base])) * np.array(
+        [math.cos(angle), math.sin(angle)])
+    while len(pos) < len(joints):
+        for j in (j for j in range(len(joints)) if j not in pos):
+            near = [k for k in pos if links[k] & links[j]]      # on one link with j
+            pairs = [(a, b) for a in near for b in near
+                     if a < b and np.hypot(*(saved[b] - saved[a])) > 1e-9]
+            if pairs:
+                break
+        else:
+            return None                  # a loop no triangle solves (Pyslvs: its numeric solver)
+        a, b = pairs[0]
+        # PLLP: |p - p_a| = r_a, |p - p_b| = r_b, on the saved side of the line a -> b
+        ra, rb = (np.hypot(*(saved[j] - saved[k])) for k in (a, b))
+        d = pos[b] - pos[a]
+        L = np.hypot(*d)
+        u = d / L
+        along = (ra ** 2 - rb ** 2 + L ** 2) / (2 * L)
+        h2 = ra ** 2 - along ** 2
+        s0 = saved[b] - saved[a]
+        side = np.sign(s0[0] * (saved[j] - saved[a])[1] - s0[1] * (saved[j] - saved[a])[0])
+        h = math.sqrt(h2) if h2 > (1e-6 * L) ** 2 else math.nan    # flat: a toggle, no side
+        pos[j] = pos[a] + along * u + side * h * np.array([-u[1], u[0]])
+    return np.array([pos[i] for i in range(len(joints))])
+
+
+@pytest.mark.parametrize("name, joint, expected", [
+    ("Jansen's linkage (Single)", "P7", {0.0: (-43.170055, -91.753226),
+                                         45.0: (-24.406394, -91.789596)}),
+    ("Crank slider (RP joint)", "P5", {0.0: (103.801126, 78.393173)}),
+])
+def test_the_points_pyslvs_test_suite_asserts(name, joint, expected):
+    e = EXAMPLES[name]
+    imp = from_pyslvs(e["mechanism"], e["input"], length_unit="mm")
+    p0, p1 = (np.array(parse_expression(e["mechanism"])[k]["position"]) for k in e["input"][0])
+    saved = math.atan2(*(p1 - p0)[::-1])
+    at = [((math.radians(a) - saved) % math.tau) / math.tau for a in expected]
+    t = np.unique(np.concatenate([np.linspace(0.0, 1.0, 73), at]))
+    point = linkdyn.analyze(imp.model, t).point(*imp.points[joint]) * 1e3
+    for ti, ref in zip(at, expected.values()):
+        got = point[np.searchsorted(t, ti)]
+        assert np.abs(got - ref).max() < 5e-7, (got, ref)   # Pyslvs's 6 decimals
+
+
+@pytest.mark.parametrize("name", IMPORTED)
+def test_the_examples_stand_where_pyslvs_triangles_put_them(name):
+    e = EXAMPLES[name]
+    imp = from_pyslvs(e["mechanism"], e["input"])
+    joints = parse_expression(e["mechanism"])
+    saved = np.array([j["position"] for j in joints])
+    base, drive = e["input"][0]
+    start = math.atan2(*(saved[drive] - saved[base])[::-1])
+    sliders = [i for i, j in enumerate(joints) if j["type"] != "R"]
+    if sliders or triangles(e["mechanism"], (base, drive), start) is None:
+        # a loop no triangle solves (Stephenson II, III), or a slider: the saved pose, every
+        # link rigid, every slider on its line, over a turn
+        sol = linkdyn.analyze(imp.model, np.linspace(0.0, 1.0, 73))
+        got = np.stack([sol.point(*imp.points[f"P{i}"]) for i in range(len(joints))], axis=1)
+        size = np.abs(saved).max()
+        assert np.abs(got[0] - saved).max() < 1e-12 * size
+        # the links each joint is fixed in (a slider moves along the ground)
+        fixed = [set(j["links"][1:] if i in sliders else j["links"]) for i, j in enumerate(joints)]
+        for a, b in ((a, b) for a in range(len(joints)) for b in range(a) if fixed[a] & fixed[b]):
+            assert np.abs(np.hypot(*(got[:, a] - got[:, b]).T)
+                          - np.hypot(*(saved[a] - saved[b]))).max() < 1e-12 * size
+        for i in sliders:     # (p - p_saved) x (cos A, sin A) = 0
+            u = np.radians(joints[i]["angle"])
+            off = got[:, i] - saved[i]
+            assert np.abs(off[:, 0] * np.sin(u) - off[:, 1] * np.cos(u)).max() < 1e-12 * size
+            if joints[i]["type"] == "P":    # its links translate: p_b - p_i as saved
+                for b in (b for b in range(len(joints)) if b != i and fixed[b] & fixed[i]):
+                    assert np.abs(got[:, b] - got[:, i] - (saved[b] - saved[i])).max() \
+                        < 1e-12 * size
+        return
+    # the way the crank can turn from the saved pose (a toggle press only one way)
+    sense = 1.0 if np.isfinite(triangles(e["mechanism"], (base, drive),
+                                         start + math.radians(5.0))).all() else -1.0
+    t = np.linspace(0.0, 1.0, 73)                      # one turn, 5 degrees a sample
+    ref = np.stack([triangles(e["mechanism"], (base, drive), start + sense * math.tau * ti)
+                    for ti in t])
+    # the part of the turn the triangles close on, from the saved pose on
+    reach = np.isfinite(ref).all(axis=(1, 2))
+    n = len(t) if reach.all() else int(np.argmin(reach))
+    assert n >= 5, f"{name}: the crank turns less than 20 degrees"
+    data = json.loads(json.dumps(imp.data))
+    data["drivers"][0]["motion"]["speed"] *= sense
+    sol = linkdyn.analyze(linkdyn.model_from_dict(data), t[:n])
+    got = np.stack([sol.point(*imp.points[f"P{i}"]) for i in range(len(joints))], axis=1)
+    err = np.abs(got - ref[:n]).max() / np.abs(ref[:n]).max()
+    # 1e-11: the ball lifters' coupler tips, near a toggle at 300 degrees, differ by 3.5e-12 of
+    # the size while both keep every link's length to 2e-16 of it (the toggle's conditioning)
+    assert err < 1e-11, f"{name}: positions differ from Pyslvs's triangles by {err:.1e}"
+
+
+@pytest.mark.parametrize("name, words", [
+    ("Crank slider (Three bar)", ["joint 2", "type RP on link 'L2'"]),
+    ("Inverted slider", ["joint 3", "type P on link 'L3'"]),
+    ("Slider lifter", ["input pair (0, 0)"]),
+    ("Arm", ["one input pair", "[[0, 1], [0, 2]]"]),
+])
+def test_what_linkdyn_cannot_represent_is_refused_by_name(name, words, tmp_path):
+    yaml = pytest.importorskip("yaml", reason="Pyslvs projects need PyYAML (the pyslvs extra)")
+    file = tmp_path / "m.pyslvs"
+    file.write_text(yaml.safe_dump(EXAMPLES[name]))               # its expression and inputs
+    res = run("import", file, "-o", tmp_path / "m.toml")
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    for w in words + ["m.pyslvs"]:
+        assert w in res.output, res.output
+    assert not (tmp_path / "m.toml").exists()
+
+
+def test_a_yaml_project_and_an_expression_import_alike(tmp_path):
+    yaml = pytest.importorskip("yaml", reason="Pyslvs projects need PyYAML (the pyslvs extra)")
+    e = EXAMPLES["Crank rocker"]
+    project = tmp_path / "rocker.pyslvs"
+    project.write_text(yaml.safe_dump({"pyslvs_ver": "22.07.0", "mechanism": e["mechanism"],
+                                       "links": {"ground": "White"}, "input": e["input"]}))
+    expr = tmp_path / "rocker.txt"
+    expr.write_text(e["mechanism"])
+    out = tmp_path / "rocker.toml"
+    res = run("import", project, "-o", out, "--length-unit", "mm")
+    assert res.exit_code == 0, res.output
+    assert "Pyslvs has no time" in res.output and f"wrote {out}" in res.output
+    assert out.read_text().startswith("# Imported from Pyslvs by linkdyn import.")
+    a = import_pyslvs(project, length_unit="mm")
+    assert a.data == import_pyslvs(expr, inputs=[(0, 1)], length_unit="mm").data
+    # the written file is the model: at t = 0 every joint at the project's saved position
+    sol = linkdyn.analyze(linkdyn.load(out), np.array([0.0]))
+    for i, j in enumerate(parse_expression(e["mechanism"])):
+        assert np.abs(sol.point(*a.points[f"P{i}"])[0] * 1e3 - j["position"]).max() < 1e-12
+    res = run("import", expr, "-o", tmp_path / "x.toml")          # an expression names no input
+    assert res.exit_code == 2 and "--input" in res.output, res.output
+
+
+def test_bad_expressions_name_the_joint(tmp_path):
+    file = tmp_path / "bad.txt"
+    file.write_text("M[J[R, P[0, 0], L[ground, L1]], J[R, P[1, oops], L[L1]]]")
+    res = run("import", file, "--input", "0,1")
+    assert res.exit_code == 2 and "joint 1" in res.output and "bad.txt" in res.output, res.output
+    res = run("import", file, "--input", "zero")
+    assert res.exit_code == 2 and "--input" in res.output, res.output
+
+
+def test_the_documented_pyslvs_commands_run(tmp_path, monkeypatch):
+    """docs/cli.md's Pyslvs commands, on the Jansen expression and a Crank rocker project."""
+    pytest.importorskip("yaml", reason="Pyslvs projects need PyYAML (the pyslvs extra)")
+    import yaml
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text("utf-8")
+    block = doc[doc.index("### Pyslvs"):]
+    block = block[block.index("```sh") + 5:]
+    lines = [x.split() for x in block[:block.index("```")].splitlines() if x.strip()]
+    assert len(lines) == 2 and all(x[:2] == ["linkdyn", "import"] for x in lines)
+    monkeypatch.chdir(tmp_path)
+    Path("jansen.txt").write_text(EXAMPLES["Jansen's linkage (Single)"]["mechanism"])
+    Path("project.pyslvs").write_text(yaml.safe_dump(EXAMPLES["Crank rocker"]))
+    for x in lines:
+        res = run(*x[1:])
+        assert res.exit_code == 0, (x, res.output)
+    for out in ("jansen.toml", "project.toml"):
+        assert linkdyn.load(out).bodies
