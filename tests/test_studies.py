@@ -388,11 +388,12 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
                      re.S).group(1)
     data = json.loads(blob)
     assert data["design"] == df.design.tolist() and data["valid"] == df.valid.tolist()
-    for c in ["bodies.ground.points.O4[0]", "bodies.coupler.points.O3[0]", "peak_tau_J1",
-              "path_deviation"]:
-        want = df[c].to_numpy(float)
+    # in the file's units (Hoeken's: mm): the deviation, SI in the table, in mm on the page
+    for c, scale in [("bodies.ground.points.O4[0]", 1), ("bodies.coupler.points.O3[0]", 1),
+                     ("peak_tau_J1", 1), ("path_deviation", 1000)]:
+        want = df[c].to_numpy(float) * scale
         got = np.array([np.nan if v is None else v for v in data["cols"][c]])
-        np.testing.assert_array_equal(got, want)
+        np.testing.assert_allclose(got, want, rtol=1e-14)
     from linkdyn.report.sweep import pareto_front
     v = df.valid.to_numpy()
     assert data["fronts"]["peak_tau_J1|path_deviation"] == pareto_front(
