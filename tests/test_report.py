@@ -746,6 +746,32 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     assert peaks[0] != pytest.approx(peaks[1], rel=1e-3)  # the designs do differ
     saved = json.loads((tmp_path / "cmp" / "compare.json").read_text())
     assert saved["heavy"]["summary"]["drivers"] == own["heavy"]["drivers"]
+    # differences from the first design, absolute and %, and the better value by its sense
+    rows = {r["label"]: r for r in data["rows"]}
+    top = rows["RMS torque J1"]
+    a0, a1 = top["values"]
+    assert top["diff"] == [None, pytest.approx(a1 - a0, rel=1e-12)]
+    assert top["pct"][1] == pytest.approx(100 * (a1 - a0) / a0, rel=1e-12)
+    assert top["sense"] == "min" and top["best"] == [int(np.argmin([a0, a1]))]
+    mu = rows["min transmission angle coupler/rocker"]
+    assert mu["sense"] == "max" and mu["best"] == []   # the same geometry: no better one
+    tmin = rows["min torque J1"]   # signed: the smaller magnitude is the better
+    assert tmin["best"] == [int(np.argmin(np.abs(tmin["values"])))]
+    # the parameters that differ: the coupler's mass and inertia, in the file's units as
+    # linkdyn save writes them (the inertia about the mass centre, 115.2 mm from O2)
+    assert data["differs"] == [{"path": "bodies.coupler.mass", "values": [5, 10]},
+                               {"path": "bodies.coupler.inertia", "values": [
+                                   pytest.approx(88473.6 - 5 * 115.2 ** 2, rel=1e-12),
+                                   pytest.approx(176947.2 - 10 * 115.2 ** 2, rel=1e-12)]}]
+    assert "bodies.coupler.mass" in page and "Δ " in page
+    # the traced paths overlaid: coupler.P of each design, in mm, equal to its results.csv
+    assert data["length_unit"] == "mm" and list(data["paths"]) == ["coupler.P"]
+    for n, d in enumerate(data["designs"]):
+        cols = _csv_columns(tmp_path / f"own-{d['name']}" / "results.csv")
+        k = np.abs(cols["t"][:, None] - np.array(d["series"]["t"])[None]).argmin(0)
+        for c, xy in zip("xy", data["paths"]["coupler.P"][n]):
+            np.testing.assert_allclose(xy, cols[f"{c}_coupler.P"][k] * 1e3, rtol=2e-5,
+                                       atol=1e-9)
     # the page: curves of both designs in every panel, a hover readout per design
     pg = Page.__new__(Page)
     pg.page = browser.new_page(viewport={"width": 1440, "height": 900})
@@ -756,9 +782,19 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     n = len(data["panels"])
     assert n >= 5 and pg.page.locator("#plots path.series").count() == 2 * n
     svg = pg.page.locator("#plots .panel svg").first
+    svg.scroll_into_view_if_needed()
     box = svg.bounding_box()
     pg.page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
     assert pg.page.locator("#plots .tooltip b[data-design]").count() == 2
+    # the path overlay: one path per design, each of many points; the better values marked
+    paths = pg.page.eval_on_selector_all("#pathbox path.ppath", "es => es.map(e => "
+                                         "[+e.dataset.design, e.getAttribute('d').length])")
+    assert [n for n, _ in paths] == [0, 1] and all(n > 200 for _, n in paths)
+    assert pg.page.locator("table.cmp td.best").count() >= 3
+    # on a phone nothing is wider than the screen (the tables scroll in their box)
+    pg.page.set_viewport_size({"width": 390, "height": 844})
+    assert pg.page.evaluate("document.documentElement.scrollWidth") <= 390
+    assert pg.page.locator("#pathbox svg").bounding_box()["width"] <= 390
     assert errors == []
     pg.page.close()
 

@@ -158,6 +158,24 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     return items
 
 
+# which way a key result is better, by its label's start: 'min' smaller magnitude, 'max' larger;
+# the others (the largest transmission angle, kinetic energy) have no sense
+_SENSES = (("max torque", "min"), ("min torque", "min"), ("RMS torque", "min"),
+           ("max force", "min"), ("min force", "min"), ("RMS force", "min"),
+           ("peak |F|", "min"), ("side load", "min"), ("guide moment", "min"),
+           ("min transmission angle", "max"), ("min mechanical advantage", "max"),
+           ("peak shaking force", "min"), ("max shaking moment", "min"),
+           ("min shaking moment", "min"), ("flywheel on", "min"), ("straightness of", "min"))
+
+
+def key_sense(label: str) -> str | None:
+    """Which way the key result ``label`` is better: ``'min'`` (a smaller magnitude: efforts,
+    joint and shaking forces, the flywheel, a path's deviation), ``'max'`` (larger: the
+    smallest transmission angle and mechanical advantage, as the sweep's metrics), or None (no
+    sense: the largest transmission angle, kinetic energy)."""
+    return next((sense for start, sense in _SENSES if label.startswith(start)), None)
+
+
 def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:
     """(T,) deg: the angle between the rod (its pin on the slider to its other joint) and the
     guide's normal, in [0, 90]."""
