@@ -1184,3 +1184,86 @@ def test_spatial_page_of_a_planar_mechanism_shows_the_planar_pages_numbers():
     open_sets = next(it for it in space["key"] if it["label"].startswith("reaction sets"))
     assert open_sets["value"] == 3 and "Fz_J1" in open_sets["note"]
     assert "Joint angles" in titles and "Driver torque" in titles
+
+
+# ---------------------------------------------------------------------------- optimize, print
+
+# A4 at 96 px per inch, less the print stylesheet's 12 mm margins: the width a page lays out in
+A4_WIDTH = round((210 - 24) / 25.4 * 96)
+
+
+def test_optimize_page_leads_with_objective_constraints_and_changes(browser, tmp_path):
+    """The page optimize --report writes (its head from standing(), the rest the best design's
+    report): the objective, each constraint with its status, each parameter's change, in view
+    at 1440 x 900, within a phone's width, and first when printed."""
+    from linkdyn.report.optimized import optimize_html
+    from linkdyn.studies.optimize import optimize, standing
+    from linkdyn.studies.params import space
+    from linkdyn.units import Units
+    hoeken = linkdyn.example_path("hoeken")
+    t = np.linspace(0.0, 4.0 / 3.0, 41)
+    box = {"bodies.ground.points.O4[0]": (85.0, 95.0)}
+    res = optimize(hoeken, box, t, "peak_tau_J1", ["path_deviation<=0.2mm",
+                                                   "min_transmission_angle>=10deg"],
+                   popsize=4, maxiter=3, backend="numpy")
+    st = standing(res, space(hoeken, list(box)), box, Units("mm", "deg"))
+    sol = linkdyn.analyze(res.model, t, backend="numpy")
+    page = report.render(sol, design.summary(sol), title="Hoeken: peak_tau_J1 minimized",
+                         intro=optimize_html(st, evaluations=res.evaluations,
+                                             seconds=res.seconds))
+    path = tmp_path / "report.html"
+    path.write_text(page, "utf-8")
+    pg = Page(browser, path, 1440, 900)
+    p = pg.page
+    head = p.inner_text("#optimize h2")
+    assert head == f"Optimized: peak_tau_J1 minimized to {res.metrics['peak_tau_J1']:.6g} N m"
+    assert p.inner_text("h1") == "Hoeken: peak_tau_J1 minimized"
+    dev = res.metrics["path_deviation"]
+    rows = p.eval_on_selector_all("#opt-constraints tbody tr", "es => es.map(e => "
+                                  "[e.dataset.metric, e.className, e.innerText])")
+    assert [r[0] for r in rows] == ["path_deviation", "min_transmission_angle"]
+    assert (rows[0][1] == "active") == (abs(dev - 2e-4) <= 2e-6)
+    assert f"{dev * 1e3:.4g} mm" in rows[0][2] and rows[1][1] == ""
+    x = res.values["bodies.ground.points.O4[0]"]
+    change = p.inner_text("#opt-params tr[data-path='bodies.ground.points.O4[0]']")
+    assert "89.50 mm" in change and report.tables.fmt(x) + " mm" in change
+    for sel in ("#optimize h2", "#opt-params"):   # in view without scrolling
+        b = p.locator(sel).bounding_box()
+        assert b["y"] + b["height"] <= 900 and b["x"] + b["width"] <= 1440, sel
+    p.set_viewport_size({"width": 390, "height": 844})
+    assert p.evaluate("document.documentElement.scrollWidth") <= 390
+    # printed: the optimize head first, then the key results
+    p.set_viewport_size({"width": A4_WIDTH, "height": 1000})
+    p.emulate_media(media="print")
+    tops = [p.locator(s).bounding_box()["y"] for s in ("#optimize", "section.keys", "#summary")]
+    assert tops == sorted(tops)
+    assert pg.errors == []
+    pg.close()
+
+
+def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken_report):
+    """The report under the print stylesheet at an A4 page's width: the key results, then the
+    summary, then the animation; no value cut (every key value and summary cell fits its box
+    and the page) and the flywheel printed whole. page.pdf() writes the A4 PDF."""
+    pg = Page(browser, hoeken_report, A4_WIDTH, 1000)
+    p = pg.page
+    p.emulate_media(media="print")
+    tops = [p.locator(s).bounding_box()["y"] for s in ("section.keys", "#summary",
+                                                       "section.top", "#plotsec", "#model")]
+    assert tops == sorted(tops)
+    cut = p.evaluate("""w => Array.from(document.querySelectorAll(
+        '.keyitem .kv, .keyitem .kl, #summary td, #summary th, #model td, #model th'))
+        .filter(e => e.offsetParent !== null)
+        .filter(e => e.scrollWidth > e.clientWidth + 1 || e.getBoundingClientRect().right > w + 0.5)
+        .map(e => e.textContent)""", A4_WIDTH)
+    assert cut == []
+    assert p.evaluate("document.documentElement.scrollWidth") <= A4_WIDTH
+    fly = p.locator(".keyitem", has_text="flywheel on J1")
+    key = {it["label"]: it for it in json.loads(p.inner_text("#linkdyn-data"))["key"]}
+    assert fly.locator(".kv").inner_text() == report.tables.key_value(key["flywheel on J1"])
+    kv, item = fly.locator(".kv").bounding_box(), fly.bounding_box()
+    assert kv["x"] >= item["x"] and kv["x"] + kv["width"] <= item["x"] + item["width"]
+    pdf = p.pdf(format="A4")
+    assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", pdf)) >= 2
+    assert pg.errors == []
+    pg.close()
