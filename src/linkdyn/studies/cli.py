@@ -7,6 +7,7 @@ import os
 import re
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import click
 import numpy as np
@@ -298,7 +299,9 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
                  + "".join(f", {c}" for c in res.constraints) + "\n"
                  + dumps_toml(res.data), encoding="utf-8"),
              "optimize.json": lambda p: p.write_text(json.dumps(json_safe(info), indent=2)),
-             "results.csv": lambda p: write_csv(sol, p),
+             # a spatial solution's columns are a method (linkdyn analyze writes them so too)
+             "results.csv": lambda p: write_csv(SimpleNamespace(columns=sol.columns())
+                                                if sp.spatial else sol, p),
              "summary.json": lambda p: p.write_text(json.dumps(json_safe(summ), indent=2,
                                                                allow_nan=False))}
     if report:
