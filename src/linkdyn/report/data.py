@@ -9,10 +9,11 @@ import numpy as np
 
 from .. import joints as jk
 from ..model import GROUND
+from ..units import REPORT
 from .keys import driver_position, is_noise, key_results, scales
 
 MAX_FRAMES = 2000
-DEG = 180.0 / math.pi
+DEG = 1.0 / REPORT.unit("angle")[1]   # rad -> the page's angle unit (deg)
 
 # one colour per joint (or per driver / cut joint), the same in every panel
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
@@ -337,7 +338,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         from .. import design
         fbs = design.four_bars(m)
         for n, fb in enumerate(fbs):
-            key = add(f"mu:{n}", np.degrees(design.transmission_angle(sol, fb)))
+            key = add(f"mu:{n}", REPORT.value(design.transmission_angle(sol, fb), "angle"))
             panel("Design", f"Transmission angle ({fb.coupler} / {fb.output})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[n % len(PALETTE)]}])
         from .keys import guide_transmission_angle, slider_rods

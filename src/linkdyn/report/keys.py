@@ -13,6 +13,7 @@ import numpy as np
 from .. import joints as jk
 from ..design.checks import slider_rods
 from ..model import GROUND
+from ..units import REPORT
 
 NOISE = 1e-12  # relative to the scale of the quantity's unit family
 
@@ -110,7 +111,7 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     # motion quality of every four-bar loop: transmission angle, mechanical advantage
     for fb in design.four_bars(m):
         which = f"{fb.coupler}/{fb.output}"
-        mu = np.degrees(design.transmission_angle(sol, fb))
+        mu = REPORT.value(design.transmission_angle(sol, fb), "angle")
         add("Four-bar loops", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg")
         add("Four-bar loops", f"max transmission angle {which}", mu, _k(mu, np.nanargmax), "deg")
         ma = np.asarray(design.mechanical_advantage(sol, fb), float)
@@ -151,9 +152,11 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     ps = summary.get("path_straightness")
     if isinstance(ps, dict) and ps.get("max_deviation_m") is not None:
         items.append({"group": "Path", "label": f"straightness of {ps.get('point', 'path')}",
-                      "value": float(ps["max_deviation_m"]) * 1e3, "unit": "mm",
+                      "value": REPORT.value(float(ps["max_deviation_m"]), "length"),
+                      "unit": REPORT.unit("length")[0],
                       "signed": False, "k": None,
-                      "note": f"max deviation over {float(ps.get('length_m') or 0) * 1e3:.4g} mm"
+                      "note": "max deviation over "
+                              + REPORT.show(float(ps.get("length_m") or 0), "length", 4)
                               + (" (whole run)" if ps.get("range") is None else "")})
     return items
 
@@ -182,7 +185,7 @@ def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarr
     d = np.asarray(sol.point(rod, other)) - np.asarray(sol.point(rod, pin))
     d = d / np.linalg.norm(d, axis=-1, keepdims=True)
     c = np.abs(np.sum(d * _guide_normal(sol, g), axis=-1))  # cos of the angle to the normal
-    return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
+    return REPORT.value(np.arccos(np.clip(c, 0.0, 1.0)), "angle")
 
 
 def _guide_normal(sol, j) -> np.ndarray:
@@ -199,6 +202,5 @@ def driver_position(sol, k: int) -> tuple[str, float, str] | None:
         return None
     d = sol.model.drivers[0]
     q = float(sol.columns[f"q_{d.joint}"][k])
-    if jk.get(sol.model.joint(d.joint).kind).angular:
-        return d.joint, float(np.degrees(q)), "deg"
-    return d.joint, q * 1e3, "mm"
+    quantity = "angle" if jk.get(sol.model.joint(d.joint).kind).angular else "length"
+    return d.joint, float(REPORT.value(q, quantity)), REPORT.unit(quantity)[0]

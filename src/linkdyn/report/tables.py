@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import GROUND
+from ..units import REPORT
 from .data import joint_roles
 
 
@@ -69,8 +70,9 @@ def _travel_in_degrees(travel: dict) -> dict:
     out = {}
     for j, e in travel.items():
         if isinstance(e, dict) and e.get("unit") == "rad":
-            e = {k: (math.degrees(v) if k in ("min", "max", "range") and isinstance(v, float)
-                     else v) for k, v in e.items()}
+            e = {k: (REPORT.value(v, "angle")
+                     if k in ("min", "max", "range") and isinstance(v, float) else v)
+                 for k, v in e.items()}
             e["unit"] = "deg"
         out[j] = e
     return out
@@ -143,9 +145,9 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
     if isinstance(ps, dict):  # lengths in mm, the range in the driver's display unit
         ps = dict(ps)
         for k in [k for k in ps if k.endswith("_m") and isinstance(ps[k], (int, float))]:
-            ps[k[:-2] + "_mm"] = ps.pop(k) * 1e3
+            ps[k[:-2] + "_mm"] = REPORT.value(ps.pop(k), "length")
         if isinstance(ps.get("range"), (list, tuple)) and ps.get("range_unit", "rad") == "rad":
-            ps["range_deg"] = [math.degrees(v) for v in ps.pop("range")]
+            ps["range_deg"] = [REPORT.value(v, "angle") for v in ps.pop("range")]
         s["path_straightness"] = ps
     parts = []
     run_keys = ("model", "samples", "duration_s", "mobility", "loops", "cut_joints",
@@ -205,7 +207,8 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
                                                 ("input", "coupler", "output")))
                      + (f"<br><span class='note'>pins {_e(', '.join(fb['pins']))}</span>"
                         if fb.get("pins") else "") + "</td><td>"
-                     + _e(", ".join(f"{k} {fmt(v * 1e3)}" for k, v in L.items())) + "</td><td>"
+                     + _e(", ".join(f"{k} {fmt(REPORT.value(v, 'length'))}"
+                                    for k, v in L.items())) + "</td><td>"
                      + _e(fb.get("grashof", "")) + "</td><td class='num'>"
                      + _e(f"{fmt(ta.get('min'))} .. {fmt(ta.get('max'))}") + "<br>"
                      + _e(f"worst {fmt(ta.get('worst'))} at t = {fmt(ta.get('worst_time_s'))} s")
@@ -288,7 +291,8 @@ def model_html(sol) -> str:
     roles = joint_roles(sol)
 
     def mm(xy):
-        return "(" + ", ".join(fmt(float(v) * 1e3) for v in np.asarray(xy, float)) + ")"
+        return "(" + ", ".join(fmt(REPORT.value(float(v), "length"))
+                               for v in np.asarray(xy, float)) + ")"
 
     rows = ""
     for b in m.bodies:
