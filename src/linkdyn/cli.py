@@ -459,8 +459,15 @@ def summary_text(s: dict) -> str:
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
-            echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
-                 f"{num(ma['max'], '.4g')}{frame}")
+            lo = "0" if ma.get("zero_at_s") else num(ma["min"], ".4g")
+            hi = "infinite" if ma.get("infinite_at_s") else num(ma["max"], ".4g")
+            stops = "; ".join(f"{word} where the {link} stops, t = "
+                              + ", ".join(num(x, ".4g") for x in ma[key]) + " s"
+                              for key, word, link in (("zero_at_s", "0", "input"),
+                                                      ("infinite_at_s", "infinite", "output"))
+                              if ma.get(key))
+            echo(f"    mechanical advantage |w_in/w_out| {lo}..{hi}{frame}"
+                 + (f" ({stops})" if stops else ""))
     for j, d in s["drivers"].items():
         q = "force" if d["effort"] == "force" else "torque"
         echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "

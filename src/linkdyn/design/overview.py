@@ -10,7 +10,7 @@ from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
 from .energy import driver_energy, load_energy
-from .fourbar import (four_bars, link_travel, mechanical_advantage, transmission_angle,
+from .fourbar import (four_bars, link_travel, mechanical_advantage, stops, transmission_angle,
                       transmission_worst, travel_words)
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
@@ -55,6 +55,20 @@ def _extremes(t, x) -> dict:
     kmin, kmax = int(np.nanargmin(x)), int(np.nanargmax(x))
     return {"min": float(x[kmin]), "min_time_s": float(t[kmin]),
             "max": float(x[kmax]), "max_time_s": float(t[kmax])}
+
+
+def advantage_range(sol, fb) -> dict:
+    """A four-bar loop's mechanical advantage over the run: :func:`_extremes` of the samples,
+    but infinite where the output stops (``max`` None, ``infinite_at_s`` the times of its
+    stops, :func:`.fourbar.stops`) and zero where the input stops (``min`` 0, ``zero_at_s``):
+    the sampled extreme there is a number of the sampling, not of the linkage."""
+    ma = _extremes(np.asarray(sol.t), mechanical_advantage(sol, fb))
+    out, inp = stops(sol, fb, "output"), stops(sol, fb, "input")
+    if out:
+        ma.update(max=np.nan, max_time_s=out[0]["t"], infinite_at_s=[s["t"] for s in out])
+    if inp:
+        ma.update(min=0.0, min_time_s=inp[0]["t"], zero_at_s=[s["t"] for s in inp])
+    return ma
 
 
 @quiet
@@ -137,7 +151,7 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             # what the run does, beside what the lengths allow
             "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb), units)),
             "transmission_angle_deg": ta,
-            "mechanical_advantage": _extremes(t, mechanical_advantage(sol, fb))})
+            "mechanical_advantage": advantage_range(sol, fb)})
     out["joint_travel"] = {}
     for j in m.joints:
         lo, hi = joint_travel(sol, j.name)

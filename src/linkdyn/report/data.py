@@ -152,6 +152,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         it["t"] = None if k is None else float(sol.t[k])
         pos = driver_position(sol, k)
         it["at"] = None if pos is None or not math.isfinite(pos[1]) else list(pos)
+        if math.isinf(it["value"]):   # JSON has no inf: said by "infinite"
+            it["infinite"] = True
         if not math.isfinite(it["value"]):
             it["value"] = None
     t = np.asarray(sol.t)[idx]

@@ -115,10 +115,19 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
         add("Four-bar loops", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg")
         add("Four-bar loops", f"max transmission angle {which}", mu, _k(mu, np.nanargmax), "deg")
         ma = np.asarray(design.mechanical_advantage(sol, fb), float)
-        add("Four-bar loops", f"min mechanical advantage {which}", ma, _k(ma, np.nanargmin), "",
-            note="|ω_in / ω_out|")
-        add("Four-bar loops", f"max mechanical advantage {which}", ma, _k(ma, np.nanargmax), "",
-            note="|ω_in / ω_out|")
+        for end, pick, link, bound in (("min", np.nanargmin, "input", 0.0),
+                                       ("max", np.nanargmax, "output", np.inf)):
+            label = f"{end} mechanical advantage {which}"
+            at = design.stops(sol, fb, link)
+            if not at:   # the link never stops: the sampled extreme is the linkage's
+                add("Four-bar loops", label, ma, _k(ma, pick), "", note="|ω_in / ω_out|")
+                continue
+            # a link that stops: the advantage reaches its bound there, between samples
+            where = stop_words(sol, at)
+            items.append({"group": "Four-bar loops", "label": label, "value": bound, "unit": "",
+                          "signed": False, "k": at[0]["k"],
+                          "note": f"|ω_in / ω_out|, {'zero' if bound == 0 else 'infinite'} "
+                                  f"where the {link} stops: {where}"})
 
     # the RRP dyad of each guide: transmission angle between the rod that drives the slider
     # and the guide's normal (90 deg: the rod pushes along the guide)
@@ -193,6 +202,18 @@ def _guide_normal(sol, j) -> np.ndarray:
     phi = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
     a = np.arctan2(float(j.axis[1]), float(j.axis[0])) + np.asarray(phi) + np.zeros(np.shape(sol.t))
     return np.stack([-np.sin(a), np.cos(a)], axis=-1)
+
+
+def stop_words(sol, at: list[dict]) -> str:
+    """Where a link stops (:func:`linkdyn.design.stops`), in words: the first driver's
+    coordinate at each stop in the page's units (``'J1 = 48.34, 228.3 deg'``), else the
+    times."""
+    d = sol.model.drivers[0] if sol.model.drivers else None
+    if d is None or any(s["q"] is None for s in at):
+        return "t = " + ", ".join(f"{s['t']:.4g}" for s in at) + " s"
+    quantity = "angle" if jk.get(sol.model.joint(d.joint).kind).angular else "length"
+    return (f"{d.joint} = " + ", ".join(f"{REPORT.value(s['q'], quantity):.4g}" for s in at)
+            + f" {REPORT.unit(quantity)[0]}")
 
 
 def driver_position(sol, k: int) -> tuple[str, float, str] | None:

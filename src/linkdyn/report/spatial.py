@@ -117,6 +117,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
             quantity = "angle" if _kind(sol, d0.joint).angular else "length"
             q = REPORT.value(float(cols[f"q_{d0.joint}"][k]), quantity)
             it["at"] = [d0.joint, q, REPORT.unit(quantity)[0]] if math.isfinite(q) else None
+        if math.isinf(it["value"]):   # JSON has no inf: said by "infinite"
+            it["infinite"] = True
         if not math.isfinite(it["value"]):
             it["value"] = None
     series: dict[str, list] = {"t": _num(np.asarray(sol.t)[idx], 7)}

@@ -213,7 +213,14 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
                      + _e(f"{fmt(ta.get('min'))} .. {fmt(ta.get('max'))}") + "<br>"
                      + _e(f"worst {fmt(ta.get('worst'))} at t = {fmt(ta.get('worst_time_s'))} s")
                      + "</td><td class='num'>"
-                     + (_e(f"{fmt(ma.get('min'))} .. {fmt(ma.get('max'))}") if ma else "—")
+                     + (_e(f"{fmt(ma.get('min'))} .. "
+                           + ("∞" if ma.get("infinite_at_s") else fmt(ma.get("max"))))
+                        + "".join(f"<br><span class='note'>{word} where the {link} stops, t = "
+                                  + _e(", ".join(fmt(x) for x in ma[key])) + " s</span>"
+                                  for key, word, link in (("zero_at_s", "0", "input"),
+                                                          ("infinite_at_s", "∞", "output"))
+                                  if ma.get(key))
+                        if ma else "—")
                      + "</td><td>" + (_kv_table(extra) if extra else "") + "</td></tr>")
         parts.append("<h3>Four-bar loops</h3><table class='grid'><thead><tr><th>input / "
                      "coupler / output</th><th>lengths (mm)</th><th>Grashof type</th>"
@@ -234,7 +241,7 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
 def key_value(item: dict) -> str:
     """A key result's value as text: 4 significant digits, a sign on signed quantities."""
     v = item.get("value")
-    text = fmt(v)
+    text = "∞" if item.get("infinite") else fmt(v)
     if item.get("signed") and isinstance(v, float) and v > 0:
         text = "+" + text
     return f"{text} {item.get('unit', '')}".strip()
