@@ -531,8 +531,11 @@ def summary_text(s: dict) -> str:
         echo(f"    {j:8s} {shown(r['peak_force_N'], 'force', 6)} at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
+    balance = (f"{num(h['energy_balance_residual_rel'], '.2e')} (relative)"
+               if h.get("energy_balance_residual_rel") is not None or "energy_balance" not in h
+               else h["energy_balance"])
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
-         f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
+         f"balance {balance}, worst "
          f"condition number {num(h['worst_condition_number'], '.3g')}")
     smp = s.get("sampling")
     if smp and smp["coarse"]:
