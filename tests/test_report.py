@@ -845,9 +845,25 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     assert row[2] == series[0]
     svg = p.evaluate("window.__linkdynExport.svg(0)")
     assert svg.startswith("<svg") and "Joint angles" in svg and "<path" in svg
+    # the figure has its legend (each series' label beside a line of its colour) and none of
+    # the page's state (the time cursor, its dots, the hover line)
+    import xml.etree.ElementTree as ET
+    root = ET.fromstring(svg)
+    ns = "{http://www.w3.org/2000/svg}"
+    classes = [e.get("class", "") for e in root.iter()]
+    assert not any(c.split() and set(c.split()) & {"cursor", "dot", "hoverline"} for c in classes)
+    legend = [e for e in root.iter(ns + "text") if "legendtext" in e.get("class", "")]
+    assert [e.text for e in legend] == [s["label"] for s in spec["series"]]
+    swatches = [e.get("stroke") for e in root.iter(ns + "line") if e.get("stroke-width") == "3"]
+    assert swatches == [s["color"] for s in spec["series"]]
+    height = float(root.get("height"))
+    assert all(float(e.get("y")) < height for e in legend)
     with p.expect_download() as dl:
         p.locator("#plots .panel").first.locator(".pexport button", has_text="PNG").click()
-    assert open(dl.value.path(), "rb").read(8) == b"\x89PNG\r\n\x1a\n"
+    png = open(dl.value.path(), "rb").read()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    # IHDR: the image is the figure at twice its size, legend included
+    assert int.from_bytes(png[20:24], "big") == 2 * round(height)
     assert page.errors == []
 
 
