@@ -867,6 +867,24 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     assert page.errors == []
 
 
+def test_each_joints_bar_is_its_force_now_against_its_own_run_peak(page, hoeken_report_run):
+    # each joint's bar: |F| at the frame over that joint's peak |F| over the run, from
+    # results.csv (not the largest joint's peak, which made the lighter joints' bars short)
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    p = page.page
+    k = 200
+    p.evaluate("k => { const s = document.getElementById('scrubber'); s.value = String(k);"
+               " s.dispatchEvent(new Event('input')); }", k)
+    p.wait_for_function(f"window.__linkdynFrame === {k}")
+    rows = p.locator("#jointforces tbody tr")
+    for n in range(rows.count()):
+        name = rows.nth(n).locator("th").inner_text()
+        f = np.hypot(csv[f"Fx_{name}"], csv[f"Fy_{name}"])
+        width = rows.nth(n).locator(".fbar").evaluate("e => parseFloat(e.style.width)")
+        assert width == pytest.approx(100.0 * f[k] / f.max(), abs=0.06), name
+    assert page.errors == []
+
+
 # ------------------------------------------------ link-frame forces and instant centres
 
 def test_reaction_local_is_the_global_reaction_turned_into_the_second_body():

@@ -55,16 +55,23 @@
   });
   (function () {
     var tr = h("tr", "", h("thead", "", elJF));
-    h("th", "", tr, "joint"); h("th", "", tr, "|F| now"); h("th", "", tr, "vs. run peak");
+    h("th", "", tr, "joint"); h("th", "", tr, "|F| now"); h("th", "", tr, "vs. its run peak");
   })();
+  // each joint's own peak |F| over the run (the page's frames hold every joint's peak sample)
+  var Fpeak = {};
+  G.joints.forEach(function (j) {
+    var a = S["F:" + j.name] || [], p = 0;
+    for (var i = 0; i < a.length; i++) if (fin(a[i]) && a[i] > p) p = a[i];
+    Fpeak[j.name] = p;
+  });
   var jfBody = h("tbody", "", elJF);
   var jfRows = G.joints.map(function (j) {
     var tr = h("tr", "", jfBody);
     h("th", "", tr, j.name);
     var td = h("td", "num", tr), bar = h("td", "bar", tr), fb = h("span", "fbar", bar);
+    bar.title = "run peak " + fmtS("F:" + j.name, Fpeak[j.name]) + " N";
     return {tr: tr, td: td, bar: fb, name: j.name};
   });
-  var Fpeak = G.fmax || 1;
   function drawInfo(k, best) {
     elTime.textContent = "t = " + T[k].toFixed(4) + " s";
     elFrame.textContent = "frame " + (k + 1) + " / " + N + (D.valid[k] ? "" : "  (singular: NaN)");
@@ -82,7 +89,8 @@
     jfRows.forEach(function (o, n) {
       var f = S["F:" + o.name][k];
       o.td.textContent = fmtS("F:" + o.name, f) + " N";
-      o.bar.style.width = (fin(f) ? Math.min(100, 100 * f / Fpeak) : 0).toFixed(1) + "%";
+      var p = Fpeak[o.name];
+      o.bar.style.width = (fin(f) && p > 0 ? Math.min(100, 100 * f / p) : 0).toFixed(1) + "%";
       o.tr.className = n === best ? "hot" : "";
     });
   }
