@@ -113,3 +113,4 @@ def test_the_printout_and_the_page_say_infinite_where_the_rocker_stops(turn, tmp
     got = [float(x) for x in where.removesuffix(" deg").split(", ")]
     assert got == pytest.approx(limit_positions_deg(), abs=0.1)
     assert math.isfinite(items["min mechanical advantage coupler/rocker"]["value"])
+

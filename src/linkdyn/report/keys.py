@@ -17,6 +17,10 @@ from ..units import REPORT
 
 NOISE = 1e-12  # relative to the scale of the quantity's unit family
 
+#: The key results' groups, in reading order; each keeps its colour (``g<n>``) on every page.
+GROUPS = ("Driver efforts", "Joint loads", "Four-bar loops", "Slider dyads",
+          "Shaking (on the frame)", "Energy", "Path")
+
 
 def scales(sol) -> dict[str, float]:
     """Scale of each unit family over the run: ``'N'`` the largest joint force or driver force,

@@ -255,6 +255,13 @@ def key_where(item: dict) -> str:
     return f"t = {fmt(item['t'])} s" + (f" · {at[0]} = {fmt(at[1])} {at[2]}" if at else "")
 
 
+def group_colour(group: str) -> int:
+    """The colour class number (``g0`` .. ``g6``) of a key result group: fixed by the group
+    (:data:`.keys.GROUPS`), not by where it falls on a page."""
+    from .keys import GROUPS
+    return GROUPS.index(group) if group in GROUPS else len(GROUPS) - 1
+
+
 def key_results_html(items: list) -> str:
     """The key results (:func:`.keys.key_results` with their page frames) in one dense grid,
     in reading order, each tagged with its group; a result that occurs at one sample is a
@@ -263,20 +270,20 @@ def key_results_html(items: list) -> str:
     for it in items:
         if it["group"] not in groups:
             groups.append(it["group"])
-        g = groups.index(it["group"])
+        g = group_colour(it["group"])
         where = key_where(it)
         inner = (f"<span class='kl'>{_e(it['label'])}</span>"
                  f"<span class='kv'>{_e(key_value(it))}</span>"
                  f"<span class='kt'>{_e(where)}"
                  + (f"{' · ' if where else ''}{_e(it['note'])}" if it.get("note") else "")
                  + "</span>")
-        attrs = f"class='keyitem g{g % 6}' data-group='{_e(it['group'])}'"
+        attrs = f"class='keyitem g{g}' data-group='{_e(it['group'])}'"
         if it.get("frame") is not None:
             cells.append(f"<button type='button' {attrs} data-frame='{it['frame']}' "
                          f"title='{_e(it['group'])}: show this instant'>{inner}</button>")
         else:
             cells.append(f"<div {attrs} title='{_e(it['group'])}'>{inner}</div>")
-    legend = "".join(f"<span class='keytag g{n % 6}'>{_e(g)}</span>" for n, g in enumerate(groups))
+    legend = "".join(f"<span class='keytag g{group_colour(g)}'>{_e(g)}</span>" for g in groups)
     return (f"<div class='keylegend'>{legend}</div><div class='keygrid'>{''.join(cells)}</div>"
             if cells else "")
 
