@@ -718,8 +718,8 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     runner = CliRunner()
     res = runner.invoke(main, ["compare", str(a), str(b), "-o", str(tmp_path / "cmp")])
     assert res.exit_code == 0, res.output
-    assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == ["compare.html",
-                                                                     "compare.json"]
+    assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == [
+        "compare.csv", "compare.html", "compare.json"]
     page = (tmp_path / "cmp" / "compare.html").read_text("utf-8")
     blob = page.split('type="application/json">', 1)[1].split("</script>", 1)[0]
     data = json.loads(blob)

@@ -744,7 +744,7 @@ def _write_results(outdir, files: dict, progress=None) -> list[Path]:
 @main.command()
 @click.argument("models", nargs=-1, type=click.Path(dir_okay=False))
 @click.option("-o", "--outdir", default="out/compare", show_default=True, type=click.Path(),
-              help="Folder for compare.html and compare.json.")
+              help="Folder for compare.html, compare.json and compare.csv.")
 @click.option("--sweep", "sweep_dir", type=click.Path(file_okay=False),
               help="Also compare a sweep's best designs: the folder of its designs.parquet "
                    "and summary.json.")
@@ -810,12 +810,15 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
         name = stem if stem not in names else f"{stem} ({len(names) + 1})"
         names.append(name)
         runs.append((name, sol, summ))
-    page = compare_mod.render_compare(runs)
+    table = compare_mod.compare_data(runs)
+    page = compare_mod.render_compare(runs, data=table)
     data = {name: {"file": str(path), **({"sweep": row} if row else {}),
                    "summary": json_safe(summ)}
             for (name, _, summ), (path, _, _, row) in zip(runs, designs)}
     files = {"compare.html": lambda p: p.write_text(page, encoding="utf-8"),
-             "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
+             "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False)),
+             "compare.csv": lambda p: p.write_text(compare_mod.compare_csv(table),
+                                                   encoding="utf-8")}
     written = write_outputs(outdir, files, owned=tuple(files))
     for name, sol, summ in runs:
         peaks = ", ".join(f"peak |{c}| {v:.6g} {'N m' if c.startswith('tau') else 'N'}"

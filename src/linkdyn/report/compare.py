@@ -5,12 +5,15 @@ overlaid, their key results side by side with each one's difference from the fir
 Each design is solved and summarized exactly as ``linkdyn analyze`` does; its key results are
 :func:`.keys.key_results` of its own solution (so each column equals that design's own report),
 and its curves are the series of its own :func:`.data.page_data`, drawn together against time
-(or against the first driver's angle when every design has it).
+(or against the first driver's angle when every design has it). :func:`compare_csv` is the
+export: the key results and the differing fields as one table, at full precision.
 """
 
 from __future__ import annotations
 
+import csv
 import html
+import io
 from pathlib import Path
 
 import numpy as np
@@ -63,6 +66,9 @@ def compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
     return out
 
 
+SAME = 1e-9   # key results closer than this fraction of the larger are equal (no best)
+
+
 def key_rows(designs: list) -> list[dict]:
     """Key results side by side: one row per result (in the first design's order, then any
     other design's), each with ``values`` (one per design, None where it has none), ``diff``
@@ -89,12 +95,14 @@ def key_rows(designs: list) -> list[dict]:
                        for n, v in enumerate(vals)]
         row["pct"] = [None if dv is None or ref == 0 else 100.0 * dv / abs(ref)
                       for dv in row["diff"]]
-        # the better value: the smallest (or largest) magnitude, 'min' or 'max' sense
+        # the better value: the smallest (or largest) magnitude, 'min' or 'max' sense; values
+        # within SAME of each other are one (the rounding of equal designs marks none)
         have = [abs(v) for v in vals if v is not None]
         best = []
-        if row["sense"] and len(have) > 1 and max(have) > min(have):
+        if row["sense"] and len(have) > 1 and max(have) - min(have) > SAME * max(have):
             pick = min(have) if row["sense"] == "min" else max(have)
-            best = [n for n, v in enumerate(vals) if v is not None and abs(v) == pick]
+            best = [n for n, v in enumerate(vals)
+                    if v is not None and abs(abs(v) - pick) <= SAME * max(have)]
         row["best"] = best
         out.append(row)
     return out
@@ -274,9 +282,41 @@ def differs_html(designs: list, differs: list) -> str:
             f"</tr></thead><tbody>{body}</tbody></table>")
 
 
-def render_compare(runs, *, max_frames: int = MAX_FRAMES) -> str:
-    """The whole comparison page as a string."""
-    data = compare_data(runs, max_frames=max_frames)
+def compare_csv(data: dict) -> str:
+    """``compare.csv``: the comparison's table for a spreadsheet, from :func:`compare_data`.
+
+    One row per key result (``kind`` = ``key result``; its group, label, unit and sense, each
+    design's value at full precision, ``inf`` where it is infinite, empty where a design has
+    none; each other design's difference from the first, absolute and in %; the best designs'
+    names, ``;``-separated) and one per model field that differs (``kind`` = ``model field``,
+    its dotted path, each design's value in its own file's units).
+    """
+    names = [d["name"] for d in data["designs"]]
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(["kind", "group", "name", "unit", "sense", *names,
+                *(f"diff {n}" for n in names[1:]), *(f"pct {n}" for n in names[1:]), "best"])
+
+    def cell(v):
+        return "" if v is None else repr(float(v)) if isinstance(v, (int, float)) and not \
+            isinstance(v, bool) else str(v)
+
+    for row in data["rows"]:
+        values = [("inf" if it is not None and it.get("infinite") else cell(v))
+                  for it, v in zip(row["items"], row["values"])]
+        w.writerow(["key result", row["group"], row["label"], row["unit"], row["sense"] or "",
+                    *values, *map(cell, row["diff"][1:]), *map(cell, row["pct"][1:]),
+                    ";".join(names[n] for n in row["best"])])
+    for f in data["differs"]:
+        w.writerow(["model field", "", f["path"], "file units", "", *map(cell, f["values"]),
+                    *[""] * (2 * (len(names) - 1)), ""])
+    return out.getvalue()
+
+
+def render_compare(runs, *, max_frames: int = MAX_FRAMES, data: dict | None = None) -> str:
+    """The whole comparison page as a string (``data``: :func:`compare_data` of ``runs``, if
+    already made)."""
+    data = data if data is not None else compare_data(runs, max_frames=max_frames)
     names = ", ".join(d["name"] for d in data["designs"])
     files = "".join(f"<li style='color:{d['color']}'><b>{html.escape(d['name'])}</b>: "
                     f"{html.escape(d['model'] or '')}, {fmt(d['samples'])} samples</li>"
