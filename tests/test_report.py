@@ -867,6 +867,21 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     assert page.errors == []
 
 
+def test_the_arrow_keys_step_the_frame_after_a_click_on_a_key_result(page):
+    p = page.page
+    btn = p.locator(".keyitem[data-frame]").nth(1)
+    k = int(btn.get_attribute("data-frame"))
+    btn.click()
+    assert page.frame() == k
+    assert p.evaluate("document.activeElement.classList.contains('keyitem')")
+    p.keyboard.press("ArrowRight")
+    p.wait_for_function(f"window.__linkdynFrame === {k + 1}", timeout=3000)
+    p.keyboard.press("ArrowLeft")
+    p.keyboard.press("ArrowLeft")
+    p.wait_for_function(f"window.__linkdynFrame === {k - 1}", timeout=3000)
+    assert page.errors == []
+
+
 def test_each_joints_bar_is_its_force_now_against_its_own_run_peak(page, hoeken_report_run):
     # each joint's bar: |F| at the frame over that joint's peak |F| over the run, from
     # results.csv (not the largest joint's peak, which made the lighter joints' bars short)

@@ -365,7 +365,10 @@
   view.resize();
   document.addEventListener("keydown", function (e) {
     var tag = (e.target && e.target.tagName) || "";
-    if (tag === "INPUT" || tag === "SELECT" || tag === "BUTTON") return;
+    // a field keeps its keys, a button its Space; the arrows step the frame from a button too
+    // (after a click on a key result, which focuses it)
+    if (tag === "INPUT" || tag === "SELECT" || tag === "TEXTAREA") return;
+    if (tag === "BUTTON" && (e.key === " " || e.key === "Enter")) return;
     if (e.key === " ") { e.preventDefault(); if (playing) pause(); else play(); }
     else if (e.key === "ArrowRight") { pause(); setFrame(frame + 1); }
     else if (e.key === "ArrowLeft") { pause(); setFrame(frame - 1); }
