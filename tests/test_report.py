@@ -665,28 +665,44 @@ def _check_link_frame_panels_and_instant_centres(p, D, csv, overlap):
     p.locator("#anim").scroll_into_view_if_needed()
     assert p.eval_on_selector("#anim g.ics", "g => getComputedStyle(g).display") == "none"
     p.check("#show-ics")
-    seen = 0
-    for k in (n // 4, 2 * n // 3):
+    seen = noted = 0
+
+    def centre(body, k):   # r_P + perp(v_P) / omega from results.csv, in view units
+        pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
+        w = csv[f"omega_{body}"][k]
+        with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: no centre
+            x = csv[f"x_{body}.{pt}"][k] - csv[f"vy_{body}.{pt}"][k] / w
+            y = csv[f"y_{body}.{pt}"][k] + csv[f"vx_{body}.{pt}"][k] / w
+        return w, (x - B[0]) * sc, (B[3] - y) * sc
+
+    def off(k):
+        return any(abs(w) > 1e-6 and not (-1 < X < (B[2] - B[0]) * sc + 1
+                                          and -1 < Y < (B[3] - B[1]) * sc + 1)
+                   for w, X, Y in (centre(c["body"], k) for c in D["geom"]["ics"]))
+    away = next((k for k in range(0, n, max(1, n // 60)) if off(k)), None)
+    for k in (n // 4, 2 * n // 3) + (() if away is None else (away,)):
         p.eval_on_selector("#scrubber", f"s => {{ s.value = '{k}'; s.dispatchEvent(new Event('input')); }}")
         marks = p.eval_on_selector_all(".icmark", """ms => ms.map(m => [m.getAttribute('data-body'),
             m.style.display !== 'none', m.getAttribute('transform')])""")
         assert len(marks) == len(D["geom"]["ics"])
+        labels = dict(p.eval_on_selector_all(".iclabel", """ls => ls.map(l =>
+            [l.textContent.split(' ')[1], [l.style.display !== 'none', l.textContent]])"""))
         for body, shown, tr in marks:
-            pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
-            w = csv[f"omega_{body}"][k]
-            with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: no centre
-                x = csv[f"x_{body}.{pt}"][k] - csv[f"vy_{body}.{pt}"][k] / w
-                y = csv[f"y_{body}.{pt}"][k] + csv[f"vx_{body}.{pt}"][k] / w
-            X, Y = (x - B[0]) * sc, (B[3] - y) * sc
+            w, X, Y = centre(body, k)
             inside = 1 < X < (B[2] - B[0]) * sc - 1 and 1 < Y < (B[3] - B[1]) * sc - 1
+            outside = not (-1 < X < (B[2] - B[0]) * sc + 1 and -1 < Y < (B[3] - B[1]) * sc + 1)
             if shown:
                 got = [float(v) for v in re.match(r"translate\(([^,]+),([^)]+)\)", tr).groups()]
                 assert got == pytest.approx([X, Y], abs=0.2), (body, k)
                 seen += 1
             else:
                 assert not inside or abs(w) < 1e-6, (body, k)
+            if abs(w) > 1e-6 and outside:   # off the view: its label says so, not nothing
+                assert labels[body][0] and " off view " in labels[body][1], (body, k, labels)
+                noted += 1
         assert p.evaluate(overlap) == [], k
     assert seen > 0 or not D["geom"]["ics"]
+    assert (noted > 0) == (away is not None)
     p.uncheck("#show-ics")
 
 
