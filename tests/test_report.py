@@ -898,6 +898,33 @@ def test_the_arrow_keys_step_the_frame_after_a_click_on_a_key_result(page):
     assert page.errors == []
 
 
+def test_a_tap_on_a_phone_shows_the_readout_of_the_frame_it_picks(browser, hoeken_report_run):
+    # a phone has no hover: the tap picks the frame and shows that frame's readout
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    p = browser.new_page(viewport={"width": 390, "height": 844}, has_touch=True, is_mobile=True)
+    errors: list[str] = []
+    p.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        p.goto((hoeken_report_run / "report.html").resolve().as_uri())
+        p.wait_for_function("window.__linkdynFrame === 0")
+        D = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent)")
+        at = next(n for n, s in enumerate(D["plots"]) if s["title"].startswith("Driver"))
+        panel = p.locator("#plots .panel").nth(at)
+        panel.scroll_into_view_if_needed()
+        box = panel.locator("svg").bounding_box()
+        p.touchscreen.tap(box["x"] + 0.6 * box["width"], box["y"] + 0.5 * box["height"])
+        tip = panel.locator(".tooltip")
+        p.wait_for_function("() => [...document.querySelectorAll('.tooltip')]"
+                            ".some(t => t.style.display === 'block')", timeout=3000)
+        k = int(tip.get_attribute("data-frame"))
+        assert p.evaluate("window.__linkdynFrame") == k > 0
+        text = tip.locator("b").first.inner_text().split()[0]
+        assert float(text) == pytest.approx(csv["tau_J1"][k], abs=1e-3 * abs(csv["tau_J1"]).max())
+        assert errors == []
+    finally:
+        p.close()
+
+
 def test_each_joints_bar_is_its_force_now_against_its_own_run_peak(page, hoeken_report_run):
     # each joint's bar: |F| at the frame over that joint's peak |F| over the run, from
     # results.csv (not the largest joint's peak, which made the lighter joints' bars short)

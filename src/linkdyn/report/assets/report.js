@@ -209,10 +209,12 @@
       };
       var tip = h("div", "tooltip", panel);
       var down = false;
-      hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); });
+      // a press (a tap on a phone, which has no hover) picks the frame and shows its readout;
+      // a finger lifted keeps it, a mouse that leaves hides it
+      hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); readout(e); });
       hit.addEventListener("pointermove", function (e) { if (down) pick(e); readout(e); });
       hit.addEventListener("pointerup", function () { down = false; });
-      hit.addEventListener("pointerleave", function () { tip.style.display = "none"; hover.style.display = "none"; });
+      hit.addEventListener("pointerleave", function (e) { if (e.pointerType === "touch") return; tip.style.display = "none"; hover.style.display = "none"; });
       exportButtons(panel, spec, svg);
       plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, xval: xval, polar: polar, y0: y0, y1: y1});
     });
