@@ -250,8 +250,7 @@ def _check_run(mech, topo) -> None:
     """``check`` of a driven model over its run: it assembles and does not lock (exit 3
     naming the loop and the driver values otherwise), with the dyads' motion over it."""
     from . import design
-    from .design.checks import length, over_run, span
-    from .report.keys import guide_transmission_angle, slider_rods
+    from .design.checks import over_run, slider_crank_runs, span
     from .units import Units
 
     u = Units.of(mech)
@@ -274,16 +273,21 @@ def _check_run(mech, topo) -> None:
         words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb), u)
         click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
                    f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)}")
-    guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
-    for g, rod, pin, other in slider_rods(mech):
-        if g.name not in guides:
-            continue
-        lo, hi = design.path.joint_travel(sol, g.name)
-        mu = np.radians(guide_transmission_angle(sol, g, rod, pin, other))
-        click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
-                   f"{span(mech, g.name, lo, hi)}); transmission "
-                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)} (rod against the "
-                   "guide's normal)")
+    for sc in slider_crank_runs(sol):
+        click.echo("  " + slider_crank_words(sc, u))
+
+
+def slider_crank_words(sc: dict, u) -> str:
+    """A slider-crank's run (:func:`linkdyn.design.checks.slider_crank_runs`, or its entry in
+    summary.json) in words, in the units ``u`` (:class:`linkdyn.units.Units`, the file's):
+    ``slider-crank rod/slider: stroke 100.7 mm (q_J4 128.452 .. 229.129 mm); transmission
+    angle 67.11 .. 89.89 deg (rod against the guide's normal)``, as ``check`` and ``analyze``
+    print it."""
+    mu = sc["transmission_angle_rad"]
+    lo, hi = sc["travel_m"]
+    return (f"slider-crank {sc['rod']}/{sc['slider']}: stroke {u.show(sc['stroke_m'], 'length', 4)}"
+            f" (q_{sc['guide']} {u.span(lo, hi, 'length')}); transmission angle "
+            f"{u.span(mu['min'], mu['max'], 'angle', 4)} (rod against the guide's normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -468,6 +472,8 @@ def summary_text(s: dict) -> str:
                               if ma.get(key))
             echo(f"    mechanical advantage |w_in/w_out| {lo}..{hi}{frame}"
                  + (f" ({stops})" if stops else ""))
+    for sc in s.get("slider_cranks", []):
+        echo("  " + slider_crank_words(sc, u))
     for j, d in s["drivers"].items():
         q = "force" if d["effort"] == "force" else "torque"
         echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "

@@ -152,6 +152,8 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb), units)),
             "transmission_angle_deg": ta,
             "mechanical_advantage": advantage_range(sol, fb)})
+    from .checks import slider_crank_runs
+    out["slider_cranks"] = slider_crank_runs(sol)
     out["joint_travel"] = {}
     for j in m.joints:
         lo, hi = joint_travel(sol, j.name)

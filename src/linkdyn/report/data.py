@@ -343,9 +343,10 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
             key = add(f"mu:{n}", REPORT.value(design.transmission_angle(sol, fb), "angle"))
             panel("Design", f"Transmission angle ({fb.coupler} / {fb.output})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[n % len(PALETTE)]}])
-        from .keys import guide_transmission_angle, slider_rods
+        from ..design.checks import guide_transmission_angle, slider_rods
         for n, (g, rod, pin, other) in enumerate(slider_rods(m)):
-            key = add(f"mu_s:{n}", guide_transmission_angle(sol, g, rod, pin, other))
+            key = add(f"mu_s:{n}", REPORT.value(guide_transmission_angle(sol, g, rod, pin, other),
+                                                "angle"))
             panel("Design", f"Transmission angle ({rod} / {g.body_b})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[(n + 3) % len(PALETTE)]}])
         ws = design.shaking_wrench(sol)

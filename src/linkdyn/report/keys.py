@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import joints as jk
-from ..design.checks import slider_rods
+from ..design.checks import guide_normal, guide_transmission_angle, slider_rods
 from ..model import GROUND
 from ..units import REPORT
 
@@ -101,7 +101,7 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
             note=f"{j.body_a} on {j.body_b}")
         kind = jk.get(j.kind)
         if not kind.angular and "axis" in kind.keys:  # a guide: its normal force
-            n = _guide_normal(sol, j)
+            n = guide_normal(sol, j)
             side = np.sum(sol.reactions.force[..., k, :] * n, axis=-1)
             kk = _k(np.abs(side), np.nanargmax)
             add("Joint loads", f"side load {j.name}", side, kk, "N", signed=True,
@@ -136,7 +136,7 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     # the RRP dyad of each guide: transmission angle between the rod that drives the slider
     # and the guide's normal (90 deg: the rod pushes along the guide)
     for j, rod, pin, other in slider_rods(m):
-        mu = guide_transmission_angle(sol, j, rod, pin, other)
+        mu = REPORT.value(guide_transmission_angle(sol, j, rod, pin, other), "angle")
         which = f"{rod}/{j.body_b if rod != j.body_b else j.body_a}"
         add("Slider dyads", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg",
             note="rod against the guide's normal")
@@ -190,22 +190,6 @@ def key_sense(label: str) -> str | None:
     smallest transmission angle and mechanical advantage, as the sweep's metrics), or None (no
     sense: the largest transmission angle, kinetic energy)."""
     return next((sense for start, sense in _SENSES if label.startswith(start)), None)
-
-
-def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:
-    """(T,) deg: the angle between the rod (its pin on the slider to its other joint) and the
-    guide's normal, in [0, 90]."""
-    d = np.asarray(sol.point(rod, other)) - np.asarray(sol.point(rod, pin))
-    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-    c = np.abs(np.sum(d * _guide_normal(sol, g), axis=-1))  # cos of the angle to the normal
-    return REPORT.value(np.arccos(np.clip(c, 0.0, 1.0)), "angle")
-
-
-def _guide_normal(sol, j) -> np.ndarray:
-    """Unit normal (T, 2) of a guide's axis, global, to the axis's left."""
-    phi = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
-    a = np.arctan2(float(j.axis[1]), float(j.axis[0])) + np.asarray(phi) + np.zeros(np.shape(sol.t))
-    return np.stack([-np.sin(a), np.cos(a)], axis=-1)
 
 
 def stop_words(sol, at: list[dict]) -> str:

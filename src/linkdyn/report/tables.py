@@ -149,6 +149,16 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
         if isinstance(ps.get("range"), (list, tuple)) and ps.get("range_unit", "rad") == "rad":
             ps["range_deg"] = [REPORT.value(v, "angle") for v in ps.pop("range")]
         s["path_straightness"] = ps
+    if isinstance(s.get("slider_cranks"), list):   # lengths in mm, angles in deg, as the page
+        s["slider_cranks"] = [
+            {**{k: v for k, v in sc.items()
+                if k not in ("stroke_m", "travel_m", "transmission_angle_rad")},
+             "stroke_mm": REPORT.value(sc["stroke_m"], "length"),
+             "travel_mm": [REPORT.value(x, "length") for x in sc["travel_m"]],
+             "transmission_angle_deg": {k: (v if k.endswith("_s") or v is None
+                                            else REPORT.value(v, "angle"))
+                                        for k, v in sc["transmission_angle_rad"].items()}}
+            for sc in s["slider_cranks"]]
     parts = []
     run_keys = ("model", "samples", "duration_s", "mobility", "loops", "cut_joints",
                 "spanning_tree", "invalid_samples")
