@@ -306,9 +306,9 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
           [{"key": f"F:{j.name}", "label": j.name, "color": jcolor[j.name]} for j in joints],
           "N")
     for k, j in enumerate(joints):
-        # a cut joint's reaction is its multipliers λ: one panel shows both
+        # a cut joint's reaction is its multipliers λ: one panel shows both, said in words
         panel(efforts, f"Reaction at {j.name} ({j.body_a} on {j.body_b})"
-              + (", cut joint: λ" if j.name in cut else ""), "N",
+              + (", where the loop is cut" if j.name in cut else ""), "N",
               [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
                {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}], "N")
     # the reactions in the second body's frame (Solution.reaction_local): along and across

@@ -358,7 +358,8 @@ def model_html(sol) -> str:
               "the minimum-norm reactions. " if getattr(sol, "space", "planar") == "spatial"
               else ". ")
            + "Driver effort: what the actuator applies on the second body. "
-           "λ: the reaction at a cut joint, solved together with the driver efforts.</p>"]
+           "A joint where a loop is cut: its reaction is solved together with the driver "
+           "efforts (the method's multipliers λ), the others follow body by body.</p>"]
     if drv:
         out += ["<h3>Drivers</h3>", f"<ul>{drv}</ul>"]
     if loads:
