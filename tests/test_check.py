@@ -82,3 +82,34 @@ def test_check_gives_hoekens_transmission_angle_range_in_closed_form(tmp_path):
     m = re.search(r"transmission angle ([0-9.]+) \.\. ([0-9.]+) deg", res.output)
     assert float(m.group(1)) == pytest.approx(min(mu), rel=1e-3)
     assert float(m.group(2)) == pytest.approx(max(mu), rel=1e-3)
+
+
+
+def test_analyze_gives_the_slider_cranks_stroke_and_transmission_angle_in_closed_form(tmp_path):
+    # the bundled offset slider-crank: crank r = 50, rod l = 180, offset e = 20 (mm); the slider
+    # sits at sqrt((l +- r)^2 - e^2) from the crank pivot along the guide at the dead centres,
+    # and the rod leans most from the guide, asin((r + e) / l), with the crank normal to it
+    import json
+    r, l, e = 50.0, 180.0, 20.0
+    lo, hi = math.sqrt((l - r) ** 2 - e * e), math.sqrt((l + r) ** 2 - e * e)
+    mu_min = 90.0 - math.degrees(math.asin((r + e) / l))
+    res = CliRunner().invoke(main, ["analyze", str(linkdyn.example_path("slider_crank")),
+                                    "--samples", "181", "-o", str(tmp_path / "o"), "--backend", "numpy"])
+    assert res.exit_code == 0, res.output
+    (sc,) = json.loads((tmp_path / "o" / "summary.json").read_text())["slider_cranks"]
+    assert (sc["rod"], sc["slider"], sc["guide"]) == ("rod", "slider", "J4")
+    # 181 samples, 2 deg of crank apart: a dead centre lies within 1 deg of one, where the
+    # slider is within about r (1 deg)^2 of its extreme
+    tol = r * math.radians(1.0) ** 2
+    assert [x * 1e3 for x in sc["travel_m"]] == pytest.approx([lo, hi], abs=tol)
+    assert sc["stroke_m"] * 1e3 == pytest.approx(hi - lo, abs=2 * tol)
+    assert math.degrees(sc["transmission_angle_rad"]["min"]) == pytest.approx(mu_min, abs=0.03)
+    m = re.search(r"slider-crank rod/slider: stroke ([0-9.]+) mm \(q_J4 ([0-9.]+) \.\. "
+                  r"([0-9.]+) mm\); transmission angle ([0-9.]+) \.\. ([0-9.]+) deg", res.output)
+    assert m, res.output
+    got = [float(x) for x in m.groups()]
+    assert got[:4] == pytest.approx([hi - lo, lo, hi, mu_min], rel=1e-3)
+    # the report's summary shows them in mm and deg, as its other tables
+    from linkdyn.report.tables import summary_html
+    page = summary_html(json.loads((tmp_path / "o" / "summary.json").read_text()))
+    assert "<th>stroke (mm)</th>" in page and f"<td>{hi - lo:.1f}</td>" in page

@@ -180,28 +180,133 @@ def test_stroke_of_a_slider_crank_is_the_closed_form_and_the_summarys_travel():
         linkdyn.design.summary(sol)["joint_travel"]["J4"]["range"]
 
 
-@pytest.mark.parametrize("width, height", [(1440, 900), (390, 844)])
-def test_the_sweep_pages_best_designs_follow_the_sense(browser, swept, width, height):
+def _page_data(out):
+    text = (out / "sweep.html").read_text("utf-8")
+    return json.loads(re.search(r'<script id="linkdyn-data" type="application/json">(.*?)'
+                                r'</script>', text, re.S).group(1))
+
+
+def test_the_sweep_page_shows_every_number_in_the_files_units(swept):
+    """Hoeken's file is in mm and deg: the page's columns are the table's (SI) turned by hand
+    (deg = rad * 180/pi, mm = m * 1000), each with its unit, and the summary names the units."""
     out, df, _ = swept
-    pg = browser.new_page(viewport={"width": width, "height": height})
+    data = _page_data(out)
+    assert json.loads((out / "summary.json").read_text())["units"] == {"length": "mm",
+                                                                       "angle": "deg"}
+    col = lambda c: np.array([np.nan if v is None else v for v in data["cols"][c]])  # noqa
+    np.testing.assert_allclose(col("min_transmission_angle"),
+                               df.min_transmission_angle * 180 / np.pi, rtol=1e-13)
+    np.testing.assert_allclose(col("peak_tau_J1"), df.peak_tau_J1, rtol=1e-15)
+    np.testing.assert_array_equal(col("bodies.ground.points.O4[0]"), df["bodies.ground.points.O4[0]"])
+    assert data["units"] == {"min_transmission_angle": "deg", "peak_tau_J1": "N m",
+                             "bodies.ground.points.O4[0]": "mm",
+                             "bodies.coupler.points.O3[0]": "mm"}
+    # designs on a bound of a --vary range: the grid's first and last values
+    assert data["ranges"] == {"bodies.ground.points.O4[0]": [40.0, 200.0],
+                              "bodies.coupler.points.O3[0]": [60.0, 140.0]}
+    for c, (lo, hi) in data["ranges"].items():
+        want = np.where(df[c] == lo, -1, np.where(df[c] == hi, 1, 0))
+        assert data["edges"][c] == want.tolist()
+    assert data["pair"] == ["peak_tau_J1", "min_transmission_angle"]
+
+
+def test_a_design_near_a_bound_is_at_it_and_one_inside_is_not():
+    from linkdyn.report.sweep import at_bounds
+    # range 40..200, width 160: within 1.6 of a bound is at it
+    got = at_bounds([40.0, 41.5, 41.7, 120.0, 198.4, 198.3, 200.0, np.nan], 40.0, 200.0)
+    assert got.tolist() == [-1, -1, 0, 0, 1, 0, 1, 0]
+
+
+def test_the_default_axes_are_the_pair_of_metrics_that_trade_off_most():
+    """Three metrics: a and b improve together, c worsens as they do (c maximized, so its cost
+    -c rises with a). The pair with the most negative Spearman rho of their costs (here
+    pandas' ranks and numpy's Pearson correlation of them) is the default."""
+    pd = pytest.importorskip("pandas")
+    from linkdyn.report.sweep import trade_off
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 1, 40)
+    df = pd.DataFrame({"design": np.arange(40), "valid": x < 0.9,
+                       "peak_tau_J1": x + 0.05 * rng.normal(size=40),
+                       "path_deviation": x ** 2 + 0.3 * rng.normal(size=40),
+                       "min_transmission_angle": x + 0.1 * rng.normal(size=40)})
+    ok = df[df.valid]
+    names = ["peak_tau_J1", "path_deviation", "min_transmission_angle"]
+    cost = {"peak_tau_J1": ok.peak_tau_J1, "path_deviation": ok.path_deviation,
+            "min_transmission_angle": -ok.min_transmission_angle}
+    rho = {(a, b): np.corrcoef(cost[a].rank(), cost[b].rank())[0, 1]
+           for i, a in enumerate(names) for b in names[i + 1:]}
+    want = min(rho, key=rho.get)
+    assert rho[want] < -0.5 and trade_off(df, names) == list(want)
+
+
+def test_the_sweep_page_in_the_browser(browser, swept):
+    """One page load at 1440x900 then 390x844: senses, units, the colour map, the filters,
+    the marks on range bounds and what stays in view."""
+    out, df, _ = swept
+    pg = browser.new_page(viewport={"width": 1440, "height": 900})
     errors = []
     pg.on("pageerror", lambda e: errors.append(str(e)))
     pg.goto((out / "sweep.html").resolve().as_uri())
     pg.wait_for_function("window.__linkdynSweep === true")
-    pg.select_option("#bm", "min_transmission_angle")
+    rows = lambda sel: sorted(pg.eval_on_selector_all(  # noqa: E731
+        sel, "es => es.map(e => +e.getAttribute('data-row'))"))
     ok = df[df.valid]
+    deg = df.min_transmission_angle * 180 / np.pi
+    # the default axes are the two metrics, each titled with its unit and its sense
+    assert pg.input_value("#sx") == "peak_tau_J1"
+    assert pg.input_value("#sy") == "min_transmission_angle"
+    ticks = pg.eval_on_selector("#scatter svg", "e => e.textContent")
+    assert "peak_tau_J1 (N m), smaller is better" in ticks
+    assert "min_transmission_angle (deg), larger is better" in ticks
+    # the front of the two metrics, each in its sense, is the one drawn in red
+    v = df.valid.to_numpy()
+    front = _front_min_max(np.where(v, df.peak_tau_J1, np.nan),
+                           np.where(v, df.min_transmission_angle, np.nan))
+    assert rows("#scatter circle.front") == front
+    # best designs by the angle: the largest first, its column first, in degrees
+    pg.select_option("#bm", "min_transmission_angle")
     want = ok.sort_values("min_transmission_angle", ascending=False).index[:3].tolist()
     assert pg.eval_on_selector_all("#best tbody tr", "es => es.map(e => +e.dataset.row)") == want
     assert "(larger)" in pg.inner_text("#bm option[value='min_transmission_angle']")
     assert "(smaller)" in pg.inner_text("#bm option[value='peak_tau_J1']")
     assert pg.get_attribute("#preview", "src") == f"design-{df.design[want[0]]}.html"
-    # the front of the two metrics, each in its sense, is the one drawn in red
-    pg.select_option("#sx", "peak_tau_J1")
-    pg.select_option("#sy", "min_transmission_angle")
-    red = sorted(pg.eval_on_selector_all("#scatter circle.front",
-                                         "es => es.map(e => +e.getAttribute('data-row'))"))
-    v = df.valid.to_numpy()
-    assert red == _front_min_max(np.where(v, df.peak_tau_J1, np.nan),
-                                 np.where(v, df.min_transmission_angle, np.nan))
+    heads = pg.eval_on_selector_all("#best thead th", "es => es.map(e => e.textContent)")
+    assert heads[:2] == ["design", "min_transmission_angle (deg)"]
+    first = pg.inner_text(f"#best tbody tr[data-row='{want[0]}'] td[data-col='min_transmission_angle']")
+    assert float(first) == pytest.approx(deg[want[0]], rel=1e-3)
+    # a cell on a bound of its range is marked, and so is the design's point
+    edge = {c: (df[c] == lo) | (df[c] == hi) for c, (lo, hi) in
+            _page_data(out)["ranges"].items()}
+    any_edge = edge["bodies.ground.points.O4[0]"] | edge["bodies.coupler.points.O3[0]"]
+    assert rows("#scatter circle.edge") == np.flatnonzero(any_edge & v).tolist()
+    marked = pg.eval_on_selector_all("#best td.edge", "es => es.map(e => [+e.parentNode.dataset"
+                                     ".row, e.dataset.col])")
+    assert sorted(marked) == sorted([k, c] for k in want for c in edge if edge[c][k])
+    # at 1440 x 900 the plot and the ranking metric's column are in view without scrolling
+    for sel in ("#scatter svg", "#best th[data-col='min_transmission_angle']",
+                f"#best td[data-col='min_transmission_angle']"):
+        b = pg.locator(sel).first.bounding_box()
+        assert b["x"] >= 0 and b["y"] >= 0 and b["x"] + b["width"] <= 1440 and \
+            b["y"] + b["height"] <= 900, sel
+    # colour by a parameter: its smallest value at the ramp's start, its largest at its end
+    pg.select_option("#sc", "bodies.ground.points.O4[0]")
+    fill = lambda k: pg.eval_on_selector(f"#scatter circle[data-row='{k}']",  # noqa: E731
+                                         "e => e.style.fill")
+    o4 = df["bodies.ground.points.O4[0]"][v]
+    assert fill(o4.idxmin()) == "rgb(68, 1, 84)" and fill(o4.idxmax()) == "rgb(253, 231, 37)"
+    assert "mm" in pg.inner_text("#colorbar")
+    # a filter: the angle at least 30 deg keeps those designs only, in the plot and the table
+    pg.fill("#filters tr[data-col='min_transmission_angle'] input[data-limit='min']", "30")
+    keep = np.flatnonzero(v & (deg >= 30).to_numpy()).tolist()
+    assert 0 < len(keep) < v.sum()
+    assert rows("#scatter circle.pt") == keep
+    assert set(rows("#best tbody tr")) <= set(keep)
+    assert rows("#scatter circle.front") == [k for k in front if k in keep]
+    assert f"{len(keep)} of {len(df)} designs meet the filters" in pg.inner_text("#filternote")
+    # on a phone the ranking metric's column is still the first after the design's number
+    pg.set_viewport_size({"width": 390, "height": 844})
+    b = pg.locator("#best th[data-col='min_transmission_angle']").bounding_box()
+    assert b["x"] >= 0 and b["x"] + b["width"] <= 390
+    assert pg.evaluate("document.documentElement.scrollWidth") <= 390
     assert errors == []
     pg.close()

@@ -147,7 +147,7 @@ def test_page_data_matches_the_solution():
     np.testing.assert_allclose(d["series"]["Fx:J4"], sol.dyn.lam[:, 0], rtol=1e-4,
                                atol=1e-9 * np.max(np.abs(sol.dyn.lam)))
     titles = [p["title"] for p in d["plots"]]
-    assert "Reaction at J4 (ground on rocker), cut joint: λ" in titles
+    assert "Reaction at J4 (ground on rocker), where the loop is cut" in titles
     assert not any(t.startswith("λ") for t in titles) and len(set(titles)) == len(titles)
     np.testing.assert_allclose(d["series"]["q:J3"], np.degrees(sol.kin.q[:, 2]), rtol=1e-4)
     xy = sol.point("coupler", "P")
@@ -747,28 +747,44 @@ def _check_link_frame_panels_and_instant_centres(p, D, csv, overlap):
     p.locator("#anim").scroll_into_view_if_needed()
     assert p.eval_on_selector("#anim g.ics", "g => getComputedStyle(g).display") == "none"
     p.check("#show-ics")
-    seen = 0
-    for k in (n // 4, 2 * n // 3):
+    seen = noted = 0
+
+    def centre(body, k):   # r_P + perp(v_P) / omega from results.csv, in view units
+        pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
+        w = csv[f"omega_{body}"][k]
+        with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: no centre
+            x = csv[f"x_{body}.{pt}"][k] - csv[f"vy_{body}.{pt}"][k] / w
+            y = csv[f"y_{body}.{pt}"][k] + csv[f"vx_{body}.{pt}"][k] / w
+        return w, (x - B[0]) * sc, (B[3] - y) * sc
+
+    def off(k):
+        return any(abs(w) > 1e-6 and not (-1 < X < (B[2] - B[0]) * sc + 1
+                                          and -1 < Y < (B[3] - B[1]) * sc + 1)
+                   for w, X, Y in (centre(c["body"], k) for c in D["geom"]["ics"]))
+    away = next((k for k in range(0, n, max(1, n // 60)) if off(k)), None)
+    for k in (n // 4, 2 * n // 3) + (() if away is None else (away,)):
         p.eval_on_selector("#scrubber", f"s => {{ s.value = '{k}'; s.dispatchEvent(new Event('input')); }}")
         marks = p.eval_on_selector_all(".icmark", """ms => ms.map(m => [m.getAttribute('data-body'),
             m.style.display !== 'none', m.getAttribute('transform')])""")
         assert len(marks) == len(D["geom"]["ics"])
+        labels = dict(p.eval_on_selector_all(".iclabel", """ls => ls.map(l =>
+            [l.textContent.split(' ')[1], [l.style.display !== 'none', l.textContent]])"""))
         for body, shown, tr in marks:
-            pt = next(c.split(".", 1)[1] for c in csv if c.startswith(f"vx_{body}."))
-            w = csv[f"omega_{body}"][k]
-            with np.errstate(divide="ignore", invalid="ignore"):  # w = 0: no centre
-                x = csv[f"x_{body}.{pt}"][k] - csv[f"vy_{body}.{pt}"][k] / w
-                y = csv[f"y_{body}.{pt}"][k] + csv[f"vx_{body}.{pt}"][k] / w
-            X, Y = (x - B[0]) * sc, (B[3] - y) * sc
+            w, X, Y = centre(body, k)
             inside = 1 < X < (B[2] - B[0]) * sc - 1 and 1 < Y < (B[3] - B[1]) * sc - 1
+            outside = not (-1 < X < (B[2] - B[0]) * sc + 1 and -1 < Y < (B[3] - B[1]) * sc + 1)
             if shown:
                 got = [float(v) for v in re.match(r"translate\(([^,]+),([^)]+)\)", tr).groups()]
                 assert got == pytest.approx([X, Y], abs=0.2), (body, k)
                 seen += 1
             else:
                 assert not inside or abs(w) < 1e-6, (body, k)
+            if abs(w) > 1e-6 and outside:   # off the view: its label says so, not nothing
+                assert labels[body][0] and " off view " in labels[body][1], (body, k, labels)
+                noted += 1
         assert p.evaluate(overlap) == [], k
     assert seen > 0 or not D["geom"]["ics"]
+    assert (noted > 0) == (away is not None)
     p.uncheck("#show-ics")
 
 
@@ -800,8 +816,8 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     runner = CliRunner()
     res = runner.invoke(main, ["compare", str(a), str(b), "-o", str(tmp_path / "cmp")])
     assert res.exit_code == 0, res.output
-    assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == ["compare.html",
-                                                                     "compare.json"]
+    assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == [
+        "compare.csv", "compare.html", "compare.json"]
     page = (tmp_path / "cmp" / "compare.html").read_text("utf-8")
     blob = page.split('type="application/json">', 1)[1].split("</script>", 1)[0]
     data = json.loads(blob)
@@ -828,6 +844,32 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     assert peaks[0] != pytest.approx(peaks[1], rel=1e-3)  # the designs do differ
     saved = json.loads((tmp_path / "cmp" / "compare.json").read_text())
     assert saved["heavy"]["summary"]["drivers"] == own["heavy"]["drivers"]
+    # differences from the first design, absolute and %, and the better value by its sense
+    rows = {r["label"]: r for r in data["rows"]}
+    top = rows["RMS torque J1"]
+    a0, a1 = top["values"]
+    assert top["diff"] == [None, pytest.approx(a1 - a0, rel=1e-12)]
+    assert top["pct"][1] == pytest.approx(100 * (a1 - a0) / a0, rel=1e-12)
+    assert top["sense"] == "min" and top["best"] == [int(np.argmin([a0, a1]))]
+    mu = rows["min transmission angle coupler/rocker"]
+    assert mu["sense"] == "max" and mu["best"] == []   # the same geometry: no better one
+    tmin = rows["min torque J1"]   # signed: the smaller magnitude is the better
+    assert tmin["best"] == [int(np.argmin(np.abs(tmin["values"])))]
+    # the parameters that differ: the coupler's mass and inertia, in the file's units as
+    # linkdyn save writes them (the inertia about the mass centre, 115.2 mm from O2)
+    assert data["differs"] == [{"path": "bodies.coupler.mass", "values": [5, 10]},
+                               {"path": "bodies.coupler.inertia", "values": [
+                                   pytest.approx(88473.6 - 5 * 115.2 ** 2, rel=1e-12),
+                                   pytest.approx(176947.2 - 10 * 115.2 ** 2, rel=1e-12)]}]
+    assert "bodies.coupler.mass" in page and "Δ " in page
+    # the traced paths overlaid: coupler.P of each design, in mm, equal to its results.csv
+    assert data["length_unit"] == "mm" and list(data["paths"]) == ["coupler.P"]
+    for n, d in enumerate(data["designs"]):
+        cols = _csv_columns(tmp_path / f"own-{d['name']}" / "results.csv")
+        k = np.abs(cols["t"][:, None] - np.array(d["series"]["t"])[None]).argmin(0)
+        for c, xy in zip("xy", data["paths"]["coupler.P"][n]):
+            np.testing.assert_allclose(xy, cols[f"{c}_coupler.P"][k] * 1e3, rtol=2e-5,
+                                       atol=1e-9)
     # the page: curves of both designs in every panel, a hover readout per design
     pg = Page.__new__(Page)
     pg.page = browser.new_page(viewport={"width": 1440, "height": 900})
@@ -838,9 +880,19 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     n = len(data["panels"])
     assert n >= 5 and pg.page.locator("#plots path.series").count() == 2 * n
     svg = pg.page.locator("#plots .panel svg").first
+    svg.scroll_into_view_if_needed()
     box = svg.bounding_box()
     pg.page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
     assert pg.page.locator("#plots .tooltip b[data-design]").count() == 2
+    # the path overlay: one path per design, each of many points; the better values marked
+    paths = pg.page.eval_on_selector_all("#pathbox path.ppath", "es => es.map(e => "
+                                         "[+e.dataset.design, e.getAttribute('d').length])")
+    assert [n for n, _ in paths] == [0, 1] and all(n > 200 for _, n in paths)
+    assert pg.page.locator("table.cmp td.best").count() >= 3
+    # on a phone nothing is wider than the screen (the tables scroll in their box)
+    pg.page.set_viewport_size({"width": 390, "height": 844})
+    assert pg.page.evaluate("document.documentElement.scrollWidth") <= 390
+    assert pg.page.locator("#pathbox svg").bounding_box()["width"] <= 390
     assert errors == []
     pg.page.close()
 
@@ -891,9 +943,85 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     assert row[2] == series[0]
     svg = p.evaluate("window.__linkdynExport.svg(0)")
     assert svg.startswith("<svg") and "Joint angles" in svg and "<path" in svg
+    # the figure has its legend (each series' label beside a line of its colour) and none of
+    # the page's state (the time cursor, its dots, the hover line)
+    import xml.etree.ElementTree as ET
+    root = ET.fromstring(svg)
+    ns = "{http://www.w3.org/2000/svg}"
+    classes = [e.get("class", "") for e in root.iter()]
+    assert not any(c.split() and set(c.split()) & {"cursor", "dot", "hoverline"} for c in classes)
+    legend = [e for e in root.iter(ns + "text") if "legendtext" in e.get("class", "")]
+    assert [e.text for e in legend] == [s["label"] for s in spec["series"]]
+    swatches = [e.get("stroke") for e in root.iter(ns + "line") if e.get("stroke-width") == "3"]
+    assert swatches == [s["color"] for s in spec["series"]]
+    height = float(root.get("height"))
+    assert all(float(e.get("y")) < height for e in legend)
     with p.expect_download() as dl:
         p.locator("#plots .panel").first.locator(".pexport button", has_text="PNG").click()
-    assert open(dl.value.path(), "rb").read(8) == b"\x89PNG\r\n\x1a\n"
+    png = open(dl.value.path(), "rb").read()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    # IHDR: the image is the figure at twice its size, legend included
+    assert int.from_bytes(png[20:24], "big") == 2 * round(height)
+    assert page.errors == []
+
+
+def test_the_arrow_keys_step_the_frame_after_a_click_on_a_key_result(page):
+    p = page.page
+    btn = p.locator(".keyitem[data-frame]").nth(1)
+    k = int(btn.get_attribute("data-frame"))
+    btn.click()
+    assert page.frame() == k
+    assert p.evaluate("document.activeElement.classList.contains('keyitem')")
+    p.keyboard.press("ArrowRight")
+    p.wait_for_function(f"window.__linkdynFrame === {k + 1}", timeout=3000)
+    p.keyboard.press("ArrowLeft")
+    p.keyboard.press("ArrowLeft")
+    p.wait_for_function(f"window.__linkdynFrame === {k - 1}", timeout=3000)
+    assert page.errors == []
+
+
+def test_a_tap_on_a_phone_shows_the_readout_of_the_frame_it_picks(browser, hoeken_report_run):
+    # a phone has no hover: the tap picks the frame and shows that frame's readout
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    p = browser.new_page(viewport={"width": 390, "height": 844}, has_touch=True, is_mobile=True)
+    errors: list[str] = []
+    p.on("pageerror", lambda e: errors.append(str(e)))
+    try:
+        p.goto((hoeken_report_run / "report.html").resolve().as_uri())
+        p.wait_for_function("window.__linkdynFrame === 0")
+        D = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent)")
+        at = next(n for n, s in enumerate(D["plots"]) if s["title"].startswith("Driver"))
+        panel = p.locator("#plots .panel").nth(at)
+        panel.scroll_into_view_if_needed()
+        box = panel.locator("svg").bounding_box()
+        p.touchscreen.tap(box["x"] + 0.6 * box["width"], box["y"] + 0.5 * box["height"])
+        tip = panel.locator(".tooltip")
+        p.wait_for_function("() => [...document.querySelectorAll('.tooltip')]"
+                            ".some(t => t.style.display === 'block')", timeout=3000)
+        k = int(tip.get_attribute("data-frame"))
+        assert p.evaluate("window.__linkdynFrame") == k > 0
+        text = tip.locator("b").first.inner_text().split()[0]
+        assert float(text) == pytest.approx(csv["tau_J1"][k], abs=1e-3 * abs(csv["tau_J1"]).max())
+        assert errors == []
+    finally:
+        p.close()
+
+
+def test_each_joints_bar_is_its_force_now_against_its_own_run_peak(page, hoeken_report_run):
+    # each joint's bar: |F| at the frame over that joint's peak |F| over the run, from
+    # results.csv (not the largest joint's peak, which made the lighter joints' bars short)
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    p = page.page
+    k = 200
+    p.evaluate("k => { const s = document.getElementById('scrubber'); s.value = String(k);"
+               " s.dispatchEvent(new Event('input')); }", k)
+    p.wait_for_function(f"window.__linkdynFrame === {k}")
+    rows = p.locator("#jointforces tbody tr")
+    for n in range(rows.count()):
+        name = rows.nth(n).locator("th").inner_text()
+        f = np.hypot(csv[f"Fx_{name}"], csv[f"Fy_{name}"])
+        width = rows.nth(n).locator(".fbar").evaluate("e => parseFloat(e.style.width)")
+        assert width == pytest.approx(100.0 * f[k] / f.max(), abs=0.06), name
     assert page.errors == []
 
 
@@ -1230,3 +1358,86 @@ def test_spatial_page_of_a_planar_mechanism_shows_the_planar_pages_numbers():
     open_sets = next(it for it in space["key"] if it["label"].startswith("reaction sets"))
     assert open_sets["value"] == 3 and "Fz_J1" in open_sets["note"]
     assert "Joint angles" in titles and "Driver torque" in titles
+
+
+# ---------------------------------------------------------------------------- optimize, print
+
+# A4 at 96 px per inch, less the print stylesheet's 12 mm margins: the width a page lays out in
+A4_WIDTH = round((210 - 24) / 25.4 * 96)
+
+
+def test_optimize_page_leads_with_objective_constraints_and_changes(browser, tmp_path):
+    """The page optimize --report writes (its head from standing(), the rest the best design's
+    report): the objective, each constraint with its status, each parameter's change, in view
+    at 1440 x 900, within a phone's width, and first when printed."""
+    from linkdyn.report.optimized import optimize_html
+    from linkdyn.studies.optimize import optimize, standing
+    from linkdyn.studies.params import space
+    from linkdyn.units import Units
+    hoeken = linkdyn.example_path("hoeken")
+    t = np.linspace(0.0, 4.0 / 3.0, 41)
+    box = {"bodies.ground.points.O4[0]": (85.0, 95.0)}
+    res = optimize(hoeken, box, t, "peak_tau_J1", ["path_deviation<=0.2mm",
+                                                   "min_transmission_angle>=10deg"],
+                   popsize=4, maxiter=3, backend="numpy")
+    st = standing(res, space(hoeken, list(box)), box, Units("mm", "deg"))
+    sol = linkdyn.analyze(res.model, t, backend="numpy")
+    page = report.render(sol, design.summary(sol), title="Hoeken: peak_tau_J1 minimized",
+                         intro=optimize_html(st, evaluations=res.evaluations,
+                                             seconds=res.seconds))
+    path = tmp_path / "report.html"
+    path.write_text(page, "utf-8")
+    pg = Page(browser, path, 1440, 900)
+    p = pg.page
+    head = p.inner_text("#optimize h2")
+    assert head == f"Optimized: peak_tau_J1 minimized to {res.metrics['peak_tau_J1']:.6g} N m"
+    assert p.inner_text("h1") == "Hoeken: peak_tau_J1 minimized"
+    dev = res.metrics["path_deviation"]
+    rows = p.eval_on_selector_all("#opt-constraints tbody tr", "es => es.map(e => "
+                                  "[e.dataset.metric, e.className, e.innerText])")
+    assert [r[0] for r in rows] == ["path_deviation", "min_transmission_angle"]
+    assert (rows[0][1] == "active") == (abs(dev - 2e-4) <= 2e-6)
+    assert f"{dev * 1e3:.4g} mm" in rows[0][2] and rows[1][1] == ""
+    x = res.values["bodies.ground.points.O4[0]"]
+    change = p.inner_text("#opt-params tr[data-path='bodies.ground.points.O4[0]']")
+    assert "89.50 mm" in change and report.tables.fmt(x) + " mm" in change
+    for sel in ("#optimize h2", "#opt-params"):   # in view without scrolling
+        b = p.locator(sel).bounding_box()
+        assert b["y"] + b["height"] <= 900 and b["x"] + b["width"] <= 1440, sel
+    p.set_viewport_size({"width": 390, "height": 844})
+    assert p.evaluate("document.documentElement.scrollWidth") <= 390
+    # printed: the optimize head first, then the key results
+    p.set_viewport_size({"width": A4_WIDTH, "height": 1000})
+    p.emulate_media(media="print")
+    tops = [p.locator(s).bounding_box()["y"] for s in ("#optimize", "section.keys", "#summary")]
+    assert tops == sorted(tops)
+    assert pg.errors == []
+    pg.close()
+
+
+def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken_report):
+    """The report under the print stylesheet at an A4 page's width: the key results, then the
+    summary, then the animation; no value cut (every key value and summary cell fits its box
+    and the page) and the flywheel printed whole. page.pdf() writes the A4 PDF."""
+    pg = Page(browser, hoeken_report, A4_WIDTH, 1000)
+    p = pg.page
+    p.emulate_media(media="print")
+    tops = [p.locator(s).bounding_box()["y"] for s in ("section.keys", "#summary",
+                                                       "section.top", "#plotsec", "#model")]
+    assert tops == sorted(tops)
+    cut = p.evaluate("""w => Array.from(document.querySelectorAll(
+        '.keyitem .kv, .keyitem .kl, #summary td, #summary th, #model td, #model th'))
+        .filter(e => e.offsetParent !== null)
+        .filter(e => e.scrollWidth > e.clientWidth + 1 || e.getBoundingClientRect().right > w + 0.5)
+        .map(e => e.textContent)""", A4_WIDTH)
+    assert cut == []
+    assert p.evaluate("document.documentElement.scrollWidth") <= A4_WIDTH
+    fly = p.locator(".keyitem", has_text="flywheel on J1")
+    key = {it["label"]: it for it in json.loads(p.inner_text("#linkdyn-data"))["key"]}
+    assert fly.locator(".kv").inner_text() == report.tables.key_value(key["flywheel on J1"])
+    kv, item = fly.locator(".kv").bounding_box(), fly.bounding_box()
+    assert kv["x"] >= item["x"] and kv["x"] + kv["width"] <= item["x"] + item["width"]
+    pdf = p.pdf(format="A4")
+    assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", pdf)) >= 2
+    assert pg.errors == []
+    pg.close()

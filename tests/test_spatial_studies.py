@@ -135,6 +135,7 @@ def _draws_both_designs(path, panels: int) -> None:
         page.goto(path.as_uri())
         page.wait_for_function("window.__linkdynCompare === true")
         assert page.locator("#plots path.series").count() == 2 * panels
+        page.locator("#plots .panel svg").first.scroll_into_view_if_needed()
         box = page.locator("#plots .panel svg").first.bounding_box()
         page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + 0.5 * box["height"])
         assert page.locator("#plots .tooltip b[data-design]").count() == 2
@@ -324,3 +325,7 @@ def test_sweep_and_optimize_commands_on_a_spatial_model(tmp_path):
     # the best design's report page, the spatial one linkdyn analyze --report writes
     page = (tmp_path / "o" / "report.html").read_text()
     assert '"dim":3' in page.replace(" ", "") and "plot_efforts.png" not in info["files"]
+    # headed by the objective, and the run's results.csv beside it (3 samples)
+    assert "Optimized: peak_tau_J1 minimized" in page
+    head = (tmp_path / "o" / "results.csv").read_text().splitlines()
+    assert len(head) == 4 and "tau_J1" in head[0].split(",")

@@ -282,15 +282,31 @@ def test_optimize_command_writes_a_model_that_analyzes_to_its_metrics(tmp_path):
     import json
     r = _cli("optimize", HOEKEN, "--vary", "bodies.ground.points.O4[0]=85:95",
              "--minimize", "peak_tau_J1", "--constraint", "path_deviation<=0.2mm",
+             "--constraint", "min_transmission_angle>=10",
              "--samples", 61, "--popsize", 5, "--maxiter", 4, "--backend", "numpy", "-o", tmp_path)
     assert r.exit_code == 0, r.output
     info = json.loads((tmp_path / "optimize.json").read_text())
     best = linkdyn.load(tmp_path / "best.toml")
-    got = evaluate_metrics(linkdyn.analyze(best, T, backend="numpy"), ["peak_tau_J1"])
+    got = evaluate_metrics(linkdyn.analyze(best, T, backend="numpy"),
+                           ["peak_tau_J1", "path_deviation", "min_transmission_angle"])
     assert got["peak_tau_J1"] == pytest.approx(info["metrics"]["peak_tau_J1"], rel=1e-12)
-    assert best.body("ground").points["O4"][0] == pytest.approx(
-        info["parameters"]["bodies.ground.points.O4[0]"] * 1e-3, rel=1e-15)
+    x = info["parameters"]["bodies.ground.points.O4[0]"]
+    assert best.body("ground").points["O4"][0] == pytest.approx(x * 1e-3, rel=1e-15)
     assert (tmp_path / "summary.json").is_file()
+    # each constraint's status: active when within 1 % of its bound (the design's own metrics,
+    # analyzed again), shown in the file's unit; each parameter's change from the file's value
+    dev, mu = got["path_deviation"], np.degrees(got["min_transmission_angle"])
+    (c1, c2) = info["constraint_status"]
+    assert c1["text"] == "path_deviation <= 0.2 mm" and c1["active"] == (abs(dev - 2e-4) <= 2e-6)
+    assert c1["shown"] == f"{dev * 1e3:.4g} mm" and c1["slack"] == pytest.approx(2e-4 - dev, abs=1e-12)
+    assert c2["text"] == "min_transmission_angle >= 10 deg" and c2["active"] == (abs(mu - 10) <= 0.1)
+    (ch,) = info["changes"]
+    assert (ch["base"], ch["best"]) == (89.5, x) and ch["change"] == pytest.approx(x - 89.5)
+    assert info["objective_shown"] == f"{got['peak_tau_J1']:.6g} N m"
+    # results.csv is the best design's run: its torque peaks at the objective
+    head = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
+    tau = np.loadtxt(tmp_path / "results.csv", delimiter=",", skiprows=1)[:, head.index("tau_J1")]
+    assert len(tau) == 61 and np.max(np.abs(tau)) == pytest.approx(got["peak_tau_J1"], rel=1e-12)
 
 
 def test_driver_speed_and_load_parameters_are_per_design():
@@ -388,11 +404,12 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
                      re.S).group(1)
     data = json.loads(blob)
     assert data["design"] == df.design.tolist() and data["valid"] == df.valid.tolist()
-    for c in ["bodies.ground.points.O4[0]", "bodies.coupler.points.O3[0]", "peak_tau_J1",
-              "path_deviation"]:
-        want = df[c].to_numpy(float)
+    # in the file's units (Hoeken's: mm): the deviation, SI in the table, in mm on the page
+    for c, scale in [("bodies.ground.points.O4[0]", 1), ("bodies.coupler.points.O3[0]", 1),
+                     ("peak_tau_J1", 1), ("path_deviation", 1000)]:
+        want = df[c].to_numpy(float) * scale
         got = np.array([np.nan if v is None else v for v in data["cols"][c]])
-        np.testing.assert_array_equal(got, want)
+        np.testing.assert_allclose(got, want, rtol=1e-14)
     from linkdyn.report.sweep import pareto_front
     v = df.valid.to_numpy()
     assert data["fronts"]["peak_tau_J1|path_deviation"] == pareto_front(

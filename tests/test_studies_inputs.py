@@ -208,9 +208,10 @@ def test_sweep_optimize_and_compare_leave_what_they_did_not_write_byte_for_byte(
         "sweep": (["sweep", model, *VARY], {"designs.parquet", "summary.json"}),
         "sweep --resume": (["sweep", model, *VARY, "--resume"],
                            {"designs.parquet", "summary.json"}),
-        "optimize": (["optimize", model, *OPT], {"best.toml", "optimize.json", "summary.json"}),
+        "optimize": (["optimize", model, *OPT],
+                     {"best.toml", "optimize.json", "summary.json", "results.csv"}),
         "compare": (["compare", model, model, "--samples", 11, "--backend", "numpy"],
-                    {"compare.html", "compare.json"}),
+                    {"compare.html", "compare.json", "compare.csv"}),
     }
     for name, (args, own) in runs.items():
         out = tmp_path / name.replace(" ", "_")

@@ -734,11 +734,18 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     t = np.asarray(t, dtype=float)
     kin, applied, dyn, react, valid, fr = _stages(models if designs else model, t, backend)
     model = models[0]
-    if not (allow_singular or designs) and not np.all(valid):
+    # a sample that fails stops the run, unless allowed; so does a run left with none
+    if not designs and not np.all(valid) and (not allow_singular or not np.any(valid)):
         k = int(np.argmin(valid))
         _check_drivers(model, float(kin.t[k]))  # a motion that overflows, not the loops
         if fr is not None and fr.locked[k]:
             raise friction_mod.locked_error(model, fr, k, _at(model, float(kin.t[k])))
+        if not np.isfinite(kin.residual[k]):   # no branch from t = 0: a singular start?
+            from .kinematics.layout import compile_layout
+            from .kinematics.positions import singular_start, starts_singular
+            lay = compile_layout(model)
+            if starts_singular(model, lay):
+                raise singular_start(model, lay)
         raise failure(model, kin.t[k], kin.residual[k])
     # every number finite, or the run stops naming the time and the cause
     valid = _finite(model, kin, applied, dyn, react, valid, not (allow_singular or designs))

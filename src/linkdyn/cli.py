@@ -236,8 +236,7 @@ def _check_run(mech, topo) -> None:
     """``check`` of a driven model over its run: it assembles and does not lock (exit 3
     naming the loop and the driver values otherwise), with the dyads' motion over it."""
     from . import design
-    from .design.checks import length, over_run, span
-    from .report.keys import guide_transmission_angle, slider_rods
+    from .design.checks import over_run, slider_crank_runs, span
     from .units import Units
 
     u = Units.of(mech)
@@ -260,16 +259,21 @@ def _check_run(mech, topo) -> None:
         words = design.fourbar.travel_words(design.fourbar.link_travel(sol, fb), u)
         click.echo(f"  four-bar {fb.input}/{fb.coupler}/{fb.output}: {words}; transmission "
                    f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)}")
-    guides = {sc.guide for sc in design.checks.slider_cranks(mech)}
-    for g, rod, pin, other in slider_rods(mech):
-        if g.name not in guides:
-            continue
-        lo, hi = design.path.joint_travel(sol, g.name)
-        mu = np.radians(guide_transmission_angle(sol, g, rod, pin, other))
-        click.echo(f"  slider-crank {rod}/{g.body_b}: stroke {length(mech, hi - lo)} (q_{g.name} "
-                   f"{span(mech, g.name, lo, hi)}); transmission "
-                   f"angle {u.span(np.min(mu), np.max(mu), 'angle', 4)} (rod against the "
-                   "guide's normal)")
+    for sc in slider_crank_runs(sol):
+        click.echo("  " + slider_crank_words(sc, u))
+
+
+def slider_crank_words(sc: dict, u) -> str:
+    """A slider-crank's run (:func:`linkdyn.design.checks.slider_crank_runs`, or its entry in
+    summary.json) in words, in the units ``u`` (:class:`linkdyn.units.Units`, the file's):
+    ``slider-crank rod/slider: stroke 100.7 mm (q_J4 128.452 .. 229.129 mm); transmission
+    angle 67.11 .. 89.89 deg (rod against the guide's normal)``, as ``check`` and ``analyze``
+    print it."""
+    mu = sc["transmission_angle_rad"]
+    lo, hi = sc["travel_m"]
+    return (f"slider-crank {sc['rod']}/{sc['slider']}: stroke {u.show(sc['stroke_m'], 'length', 4)}"
+            f" (q_{sc['guide']} {u.span(lo, hi, 'length')}); transmission angle "
+            f"{u.span(mu['min'], mu['max'], 'angle', 4)} (rod against the guide's normal)")
 
 
 def _assembly_at_zero(mech, topo) -> str:
@@ -445,8 +449,17 @@ def summary_text(s: dict) -> str:
         if "mechanical_advantage" in fb:
             ma = fb["mechanical_advantage"]
             frame = "" if fb.get("frame", "ground") == "ground" else f", frame {fb['frame']}"
-            echo(f"    mechanical advantage |w_in/w_out| {num(ma['min'], '.4g')}.."
-                 f"{num(ma['max'], '.4g')}{frame}")
+            lo = "0" if ma.get("zero_at_s") else num(ma["min"], ".4g")
+            hi = "infinite" if ma.get("infinite_at_s") else num(ma["max"], ".4g")
+            stops = "; ".join(f"{word} where the {link} stops, t = "
+                              + ", ".join(num(x, ".4g") for x in ma[key]) + " s"
+                              for key, word, link in (("zero_at_s", "0", "input"),
+                                                      ("infinite_at_s", "infinite", "output"))
+                              if ma.get(key))
+            echo(f"    mechanical advantage |w_in/w_out| {lo}..{hi}{frame}"
+                 + (f" ({stops})" if stops else ""))
+    for sc in s.get("slider_cranks", []):
+        echo("  " + slider_crank_words(sc, u))
     for j, d in s["drivers"].items():
         q = "force" if d["effort"] == "force" else "torque"
         echo(f"  driver {j}: peak {d['effort']} {shown(d['peak'], q, 6)} at "
@@ -526,8 +539,11 @@ def summary_text(s: dict) -> str:
         echo(f"    {j:8s} {shown(r['peak_force_N'], 'force', 6)} at t = "
              f"{num(r['peak_time_s'], '.4g')} s{extra}")
     h = s["health"]
+    balance = (f"{num(h['energy_balance_residual_rel'], '.2e')} (relative)"
+               if h.get("energy_balance_residual_rel") is not None or "energy_balance" not in h
+               else h["energy_balance"])
     echo(f"  closure residual {num(h['closure_residual_rel'], '.2e')} (relative), energy "
-         f"balance {num(h['energy_balance_residual_rel'], '.2e')} (relative), worst "
+         f"balance {balance}, worst "
          f"condition number {num(h['worst_condition_number'], '.3g')}")
     smp = s.get("sampling")
     if smp and smp["coarse"]:
@@ -736,7 +752,7 @@ def _write_results(outdir, files: dict, progress=None) -> list[Path]:
 @main.command()
 @click.argument("models", nargs=-1, type=click.Path(dir_okay=False))
 @click.option("-o", "--outdir", default="out/compare", show_default=True, type=click.Path(),
-              help="Folder for compare.html and compare.json.")
+              help="Folder for compare.html, compare.json and compare.csv.")
 @click.option("--sweep", "sweep_dir", type=click.Path(file_okay=False),
               help="Also compare a sweep's best designs: the folder of its designs.parquet "
                    "and summary.json.")
@@ -802,12 +818,15 @@ def compare(ctx, models, outdir, samples, duration, cycles, fluctuation, sweep_d
         name = stem if stem not in names else f"{stem} ({len(names) + 1})"
         names.append(name)
         runs.append((name, sol, summ))
-    page = compare_mod.render_compare(runs)
+    table = compare_mod.compare_data(runs)
+    page = compare_mod.render_compare(runs, data=table)
     data = {name: {"file": str(path), **({"sweep": row} if row else {}),
                    "summary": json_safe(summ)}
             for (name, _, summ), (path, _, _, row) in zip(runs, designs)}
     files = {"compare.html": lambda p: p.write_text(page, encoding="utf-8"),
-             "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False))}
+             "compare.json": lambda p: p.write_text(json.dumps(data, indent=2, allow_nan=False)),
+             "compare.csv": lambda p: p.write_text(compare_mod.compare_csv(table),
+                                                   encoding="utf-8")}
     written = write_outputs(outdir, files, owned=tuple(files))
     for name, sol, summ in runs:
         peaks = ", ".join(f"peak |{c}| {v:.6g} {'N m' if c.startswith('tau') else 'N'}"

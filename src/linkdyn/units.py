@@ -27,7 +27,7 @@ import numpy as np
 from .errors import ModelError
 from .io.units import ANGLE_UNITS, LENGTH_UNITS
 
-__all__ = ["Units", "QUANTITIES", "coordinate", "joint_units", "model_columns", "of"]
+__all__ = ["Units", "QUANTITIES", "REPORT", "coordinate", "joint_units", "model_columns", "of"]
 
 # the quantities a value may be: how its unit is made from the file's length L and angle A
 QUANTITIES = ("length", "angle", "angular_rate", "angular_acceleration", "velocity",
@@ -173,6 +173,12 @@ def model_columns(columns: dict, si_units: dict, units: Units) -> dict:
         unit, size = units.unit(quantity) if quantity else (si, 1.0)
         out[f"{name} [{unit}]" if unit else name] = np.asarray(values, float) / size
     return out
+
+
+#: The report page's own display units: angles in deg, lengths of its geometry, paths and
+#: key results in mm (its plots are otherwise SI): every deg and mm the page shows comes
+#: through it.
+REPORT = Units("mm", "deg")
 
 
 def of(model) -> Units:

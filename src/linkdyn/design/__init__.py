@@ -17,14 +17,15 @@ arrays of the :class:`~linkdyn.Solution`; all values are SI (m, rad, s, N, N m, 
 from . import checks
 from .energy import (driver_energy, driver_power, energy_account, energy_fluctuation,
                      flywheel_inertia, load_energy)
-from .fourbar import FourBar, four_bars, mechanical_advantage, transmission_angle, velocity_ratio
+from .fourbar import (FourBar, four_bars, mechanical_advantage, stops, transmission_angle,
+                      velocity_ratio)
 from .overview import health, summary
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_force, shaking_moment, shaking_wrench
 from .speed import speed_statistics
 
 __all__ = ["FourBar", "four_bars", "transmission_angle", "velocity_ratio",
-           "mechanical_advantage", "shaking_wrench", "shaking_force", "shaking_moment",
+           "mechanical_advantage", "stops", "shaking_wrench", "shaking_force", "shaking_moment",
            "inertia_wrench", "driver_power", "driver_energy", "energy_fluctuation",
            "flywheel_inertia", "joint_travel", "default_path_point", "path_straightness",
            "summary", "health", "TWO_PI", "load_energy", "energy_account", "speed_statistics"]

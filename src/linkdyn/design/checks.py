@@ -33,7 +33,7 @@ from ..planar import cross
 from ..units import Units, coordinate
 
 __all__ = ["over_run", "loops", "SliderCrank", "slider_cranks", "free_coordinates", "shown",
-           "span", "length"]
+           "span", "length", "guide_normal", "guide_transmission_angle", "slider_crank_runs"]
 
 REFINE = 3          # bisection rounds of where a loop locks (32 samples each)
 
@@ -178,6 +178,47 @@ def slider_cranks(model: Model) -> list[SliderCrank]:
         axis = np.asarray(g.axis, float) / np.linalg.norm(g.axis)
         e = abs(float(cross(axis, _point(model, GROUND, p) - _point(model, GROUND, g))))
         out.append(SliderCrank(g.name, crank, rod, g.body_b, r, l, e))
+    return out
+
+
+def guide_normal(sol, j) -> np.ndarray:
+    """Unit normal (T, 2) of a guide's axis, global, to the axis's left."""
+    phi = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
+    a = np.arctan2(float(j.axis[1]), float(j.axis[0])) + np.asarray(phi) + np.zeros(np.shape(sol.t))
+    return np.stack([-np.sin(a), np.cos(a)], axis=-1)
+
+
+def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:
+    """(T,) rad: the angle between the rod (its pin on the slider to its other joint) and the
+    guide's normal, in [0, pi/2] (pi/2: the rod pushes along the guide)."""
+    d = np.asarray(sol.point(rod, other)) - np.asarray(sol.point(rod, pin))
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    c = np.abs(np.sum(d * guide_normal(sol, g), axis=-1))  # cos of the angle to the normal
+    return np.arccos(np.clip(c, 0.0, 1.0))
+
+
+def slider_crank_runs(sol) -> list[dict]:
+    """What a run does with each slider-crank dyad (:func:`slider_cranks`), SI: ``rod``,
+    ``slider``, ``guide``, ``stroke_m`` (the slider's travel along its guide, max - min of
+    ``q_guide`` over the valid samples), ``travel_m`` ([min, max]) and
+    ``transmission_angle_rad`` (``min``, ``max``, ``min_time_s``: the rod against the guide's
+    normal, :func:`guide_transmission_angle`)."""
+    from .path import joint_travel
+
+    m, t = sol.model, np.asarray(sol.t, float)
+    guides = {sc.guide for sc in slider_cranks(m)}
+    out = []
+    for g, rod, pin, other in slider_rods(m):
+        if g.name not in guides:
+            continue
+        lo, hi = joint_travel(sol, g.name)
+        mu = np.asarray(guide_transmission_angle(sol, g, rod, pin, other), float)
+        k = int(np.nanargmin(mu)) if np.any(np.isfinite(mu)) else None
+        out.append({"rod": rod, "slider": g.body_b, "guide": g.name, "stroke_m": hi - lo,
+                    "travel_m": [lo, hi], "transmission_angle_rad": {
+                        "min": None if k is None else float(mu[k]),
+                        "max": None if k is None else float(np.nanmax(mu)),
+                        "min_time_s": None if k is None else float(t[k])}})
     return out
 
 

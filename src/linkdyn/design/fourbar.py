@@ -24,7 +24,9 @@ Mechanical advantage (:func:`mechanical_advantage`)
     omega_out = 0`` makes it the ratio of output to input torque magnitudes. It is infinite where
     the output stops (a rocker's limit positions, where the linkage locks against a load on the
     output) and zero at the toggle where the input stops. :func:`velocity_ratio` is the signed
-    inverse, ``omega_out / omega_in``.
+    inverse, ``omega_out / omega_in``. A sampled run's largest value is only a number of its
+    sampling (1251 at 361 samples of Hoeken's crank turn, 5112 at 3601), so :func:`stops`
+    locates where a link stops between samples: there the advantage is infinite (or zero).
 """
 
 from __future__ import annotations
@@ -203,6 +205,58 @@ def mechanical_advantage(sol, fb: FourBar) -> np.ndarray:
     w_f = sol.omega(fb.frame)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.abs((sol.omega(fb.input) - w_f) / (sol.omega(fb.output) - w_f))
+
+
+def stops(sol, fb: FourBar, role: str) -> list[dict]:
+    """Where the loop's ``role`` link (``'input'`` or ``'output'``) stops relative to its frame
+    in the run while the other one moves: there the mechanical advantage is zero (the input
+    stops: the toggle) or infinite (the output stops: a rocker's limit positions).
+
+    A stop is a sign change of the link's relative angular speed ``w = omega_role -
+    omega_frame`` between two valid samples, or a sample where ``w`` is zero (below 1e-12 of its
+    largest magnitude; a rest of several samples counts once). Between samples k and k+1 the
+    stop is where the linear interpolation of ``w`` vanishes, ``f = w_k / (w_k - w_k+1)``, and
+    so are its time and the first driver's coordinate. A stop the other link shares (in the
+    same sample interval, as a loop whose input and output both swing with one rocker) leaves
+    the ratio finite (0/0) and is not listed.
+
+    Returns
+    -------
+    list of dict
+        In time order, each ``{'k': nearest sample, 't': time s, 'q': the first driver's
+        coordinate at the stop (SI: rad or m), or None without a driver}``; empty when the
+        link never stops, or never moves.
+    """
+    other = {"input": "output", "output": "input"}[role]
+    a, b, f = _rate_stops(sol.omega(getattr(fb, role)) - sol.omega(fb.frame))
+    keep = ~np.isin(a, _rate_stops(sol.omega(getattr(fb, other)) - sol.omega(fb.frame))[0])
+    a, b, f = a[keep], b[keep], f[keep]
+    t = np.asarray(sol.t, float).reshape(-1)
+    q = None
+    if sol.model.drivers:
+        q = np.asarray(sol.columns[f"q_{sol.model.drivers[0].joint}"], float).reshape(-1)
+    return [{"k": int(a[n] if f[n] < 0.5 else b[n]),
+             "t": float(t[a[n]] + f[n] * (t[b[n]] - t[a[n]])),
+             "q": None if q is None else float(q[a[n]] + f[n] * (q[b[n]] - q[a[n]]))}
+            for n in range(a.size)]
+
+
+def _rate_stops(w) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The stops of a rate ``w`` (T,) for :func:`stops`: the samples ``a`` and ``b`` (the next
+    valid one) around each and the fraction ``f`` of the way from ``a`` to ``b``."""
+    w = np.asarray(w, float).reshape(-1)
+    ok = np.flatnonzero(np.isfinite(w))
+    if ok.size == 0 or not np.any(w[ok]):
+        return np.zeros(0, int), np.zeros(0, int), np.zeros(0)
+    w_ok = w[ok]
+    sign = np.sign(w_ok) * (np.abs(w_ok) > 1e-12 * np.max(np.abs(w_ok)))
+    # a zero sample that does not follow another, and a sign change between nonzero ones
+    zero = (sign == 0) & np.r_[True, sign[:-1] != 0]
+    change = np.r_[sign[:-1] * sign[1:] < 0, False]
+    at = np.flatnonzero(zero | change)
+    a, b = ok[at], ok[np.minimum(at + 1, ok.size - 1)]
+    f = np.where(zero[at], 0.0, w[a] / np.where(w[a] != w[b], w[a] - w[b], 1.0))
+    return a, b, f
 
 
 def link_travel(sol, fb: FourBar) -> dict:

@@ -10,7 +10,7 @@ from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
 from .energy import driver_energy, load_energy
-from .fourbar import (four_bars, link_travel, mechanical_advantage, transmission_angle,
+from .fourbar import (four_bars, link_travel, mechanical_advantage, stops, transmission_angle,
                       transmission_worst, travel_words)
 from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
@@ -55,6 +55,20 @@ def _extremes(t, x) -> dict:
     kmin, kmax = int(np.nanargmin(x)), int(np.nanargmax(x))
     return {"min": float(x[kmin]), "min_time_s": float(t[kmin]),
             "max": float(x[kmax]), "max_time_s": float(t[kmax])}
+
+
+def advantage_range(sol, fb) -> dict:
+    """A four-bar loop's mechanical advantage over the run: :func:`_extremes` of the samples,
+    but infinite where the output stops (``max`` None, ``infinite_at_s`` the times of its
+    stops, :func:`.fourbar.stops`) and zero where the input stops (``min`` 0, ``zero_at_s``):
+    the sampled extreme there is a number of the sampling, not of the linkage."""
+    ma = _extremes(np.asarray(sol.t), mechanical_advantage(sol, fb))
+    out, inp = stops(sol, fb, "output"), stops(sol, fb, "input")
+    if out:
+        ma.update(max=np.nan, max_time_s=out[0]["t"], infinite_at_s=[s["t"] for s in out])
+    if inp:
+        ma.update(min=0.0, min_time_s=inp[0]["t"], zero_at_s=[s["t"] for s in inp])
+    return ma
 
 
 @quiet
@@ -137,7 +151,9 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
             # what the run does, beside what the lengths allow
             "motion": dict(link_travel(sol, fb), words=travel_words(link_travel(sol, fb), units)),
             "transmission_angle_deg": ta,
-            "mechanical_advantage": _extremes(t, mechanical_advantage(sol, fb))})
+            "mechanical_advantage": advantage_range(sol, fb)})
+    from .checks import slider_crank_runs
+    out["slider_cranks"] = slider_crank_runs(sol)
     out["joint_travel"] = {}
     for j in m.joints:
         lo, hi = joint_travel(sol, j.name)
@@ -396,6 +412,9 @@ def sampling(sol) -> dict:
     return {"driver_step": steps, "coarse": coarse}
 
 
+POWER_NOISE = 1e-9   # a power below this fraction of KE times the fastest rate is rounding
+
+
 def health(sol) -> dict:
     """Numerical health of the run: closure residual, energy balance, conditioning.
 
@@ -403,7 +422,10 @@ def health(sol) -> dict:
     ``P_loads`` is the power of every applied load (gravity and springs included) and ``dKE/dt``
     is computed from the mass centres, ``sum m v_C . a_C + I_C w al`` — a path independent of
     the Newton–Euler wrenches about O_i the solver uses. The residual is relative to the largest
-    of the three powers over the run. The condition number is that of ``J_dep`` (the matrix of
+    of the three powers over the run; it is None (``energy_balance`` says "not meaningful")
+    when even that power is rounding: below ``POWER_NOISE`` of the mechanism's power scale, the
+    largest kinetic energy times its fastest rate (a body's ``|w|`` or ``|v_C| / size``), as a
+    parallelogram turned at constant speed without loads, whose every power is zero. The condition number is that of ``J_dep`` (the matrix of
     the rate and the ``[lam; tau]`` solves) made dimensionless: rows of velocity divided by the
     mechanism's size, columns of slider rates multiplied by it.
     """
@@ -411,15 +433,21 @@ def health(sol) -> dict:
     ok = sol.valid
     p_drv = sol.driver_power
     p_loads = sum(dot(t, w) for t, w in zip(kin.twists, sol.loads.wrenches))
-    dke = np.zeros(kin.shape)
+    dke, ke, rate = np.zeros(kin.shape), np.zeros(kin.shape), np.zeros(kin.shape)
     for i in range(1, topo.n):
         d = kin.pose.rotate(i, lay.com[i])
         (w, v), (al, a) = (kin.twists[i][0], kin.twists[i][1:]), (kin.rates[i][0], kin.rates[i][1:])
         v_c = v + w * perp(d)
         a_c = a + al * perp(d) - w ** 2 * d
         dke = dke + lay.mass[i] * dot(v_c, a_c) + lay.inertia[i] * w * al
+        # the power scale: KE = sum (m v_C^2 + I w^2) / 2 times the fastest rate
+        ke = ke + 0.5 * (lay.mass[i] * dot(v_c, v_c) + lay.inertia[i] * w * w)
+        rate = np.fmax(rate, np.fmax(np.abs(w), np.sqrt(dot(v_c, v_c)) / np.min(lay.size)))
     resid = np.abs(p_drv + p_loads - dke)[ok]
     scale = max((float(np.max(np.abs(x[ok]))) for x in (p_drv, p_loads, dke)), default=0.0)
+    p0 = float(np.max(ke[ok]) * np.max(rate[ok])) if np.any(ok) else 0.0
+    balance = (float(np.max(resid) / scale) if scale > POWER_NOISE * p0 and scale > 0
+               else None) if resid.size else None
     dep = np.array(topo.dependent, int)
     cond = None
     if len(dep) and np.any(ok):
@@ -431,7 +459,8 @@ def health(sol) -> dict:
         cond = float(np.max(np.linalg.cond(Jd)))
     return {
         "closure_residual_rel": float(np.nanmax(kin.residual[ok])) if np.any(ok) else None,
-        "energy_balance_residual_rel": (float(np.max(resid) / scale) if scale > 0 else 0.0)
-        if resid.size else None,
+        "energy_balance_residual_rel": balance,
+        "energy_balance": ("not meaningful (every power is rounding)" if resid.size and
+                           balance is None else "checked" if resid.size else "no valid sample"),
         "worst_condition_number": cond,
     }

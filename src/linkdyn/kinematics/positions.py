@@ -129,6 +129,32 @@ def not_assembled(model: Model, lay: Layout, q_drv0: np.ndarray, t0: float = 0.0
         fix="Check the link lengths and the [assembly] guess")
 
 
+def starts_singular(model: Model, lay: Layout) -> bool:
+    """Whether ``model`` assembles at t = 0 (its loops close on the ``[assembly]`` branch) but
+    sits there at a singular position: ``J_dep qd_dep = -J_ind qd_ind`` gives no dependent rates
+    (a toggle or a dead centre, links in line), so no branch can be followed from it."""
+    q_drv, qd_drv, _ = lay.driver_values(np.zeros(1))
+    q = assemble([model], lay, q_drv[..., 0], 0.0, raise_error=False)   # (n, 1)
+    if not lay.topo.dependent or not np.all(np.isfinite(q)):
+        return False
+    pose = forward_positions(lay, q)
+    x, _ = dependent_rates(lay, closure_jacobian(lay, pose, motion_vectors(lay, pose)), qd_drv)
+    return not bool(np.all(np.isfinite(x)))
+
+
+def singular_start(model: Model, lay: Layout) -> AssemblyError:
+    """The error of a mechanism that :func:`starts_singular`: named as such, not as a position
+    it cannot reach."""
+    q_drv = lay.driver_values(np.zeros(1))[0][:, 0]
+    return AssemblyError(
+        "the mechanism starts at a singular position (a toggle or dead centre: links in line): "
+        "its loops close there, but the motion through it is not determined",
+        file=model.source, time=0.0, drivers=_drivers_at(model, lay, q_drv),
+        units=joint_units(model),
+        fix="Start the driver away from it (its motion's start) or give an [assembly] guess "
+            "with the links out of line")
+
+
 FIT = 1e-6   # a kind's fit (a gear's centre distance) holds to this fraction of the size
 
 

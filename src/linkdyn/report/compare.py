@@ -1,15 +1,19 @@
-"""``compare.html``: several designs on one self-contained page, their curves overlaid and their
-key results side by side.
+"""``compare.html``: several designs on one self-contained page, their curves and traced paths
+overlaid, their key results side by side with each one's difference from the first design
+(absolute and %) and the better value marked by its sense, and the model parameters that differ.
 
 Each design is solved and summarized exactly as ``linkdyn analyze`` does; its key results are
 :func:`.keys.key_results` of its own solution (so each column equals that design's own report),
 and its curves are the series of its own :func:`.data.page_data`, drawn together against time
-(or against the first driver's angle when every design has it).
+(or against the first driver's angle when every design has it). :func:`compare_csv` is the
+export: the key results and the differing fields as one table, at full precision.
 """
 
 from __future__ import annotations
 
+import csv
 import html
+import io
 from pathlib import Path
 
 import numpy as np
@@ -55,7 +59,124 @@ def compare_data(runs, *, max_frames: int = MAX_FRAMES) -> dict:
     for d, out in zip(per, designs):
         out["series"] = {k: v for k, v in d["series"].items()
                          if k in keys or k in {a["key"] for a in xaxes}}
-    return {"designs": designs, "panels": panels, "xaxes": xaxes}
+    out = {"designs": designs, "panels": panels, "xaxes": xaxes,
+           "rows": key_rows(designs), "differs": differing(runs)}
+    if all(getattr(sol, "space", "planar") != "spatial" for _, sol, _ in runs):
+        out.update(traced_paths(runs, per))
+    return out
+
+
+SAME = 1e-9   # key results closer than this fraction of the larger are equal (no best)
+
+
+def key_rows(designs: list) -> list[dict]:
+    """Key results side by side: one row per result (in the first design's order, then any
+    other design's), each with ``values`` (one per design, None where it has none), ``diff``
+    and ``pct``: each design's value minus the first design's and that as % of the first's
+    |value| (None for the first, where either is missing, and ``pct`` where the first is 0),
+    ``sense`` (:func:`.keys.key_sense`) and ``best``: the designs whose value is best in that
+    sense (the smallest or largest magnitude; none when every value is equal or no sense)."""
+    from .keys import key_sense
+
+    rows: dict[tuple[str, str], dict] = {}
+    for n, d in enumerate(designs):
+        for it in d["key"]:
+            row = rows.setdefault((it["group"], it["label"]), {
+                "group": it["group"], "label": it["label"], "unit": it["unit"],
+                "sense": key_sense(it["label"]), "items": [None] * len(designs)})
+            row["items"][n] = it
+    out = []
+    for row in rows.values():
+        vals = [None if it is None or not _finite(it["value"]) else float(it["value"])
+                for it in row["items"]]
+        ref = vals[0]
+        row["values"] = vals
+        row["diff"] = [None if n == 0 or v is None or ref is None else v - ref
+                       for n, v in enumerate(vals)]
+        row["pct"] = [None if dv is None or ref == 0 else 100.0 * dv / abs(ref)
+                      for dv in row["diff"]]
+        # the better value: the smallest (or largest) magnitude, 'min' or 'max' sense; values
+        # within SAME of each other are one (the rounding of equal designs marks none)
+        have = [abs(v) for v in vals if v is not None]
+        best = []
+        if row["sense"] and len(have) > 1 and max(have) - min(have) > SAME * max(have):
+            pick = min(have) if row["sense"] == "min" else max(have)
+            best = [n for n, v in enumerate(vals)
+                    if v is not None and abs(abs(v) - pick) <= SAME * max(have)]
+        row["best"] = best
+        out.append(row)
+    return out
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and np.isfinite(v)
+
+
+def traced_paths(runs, per) -> dict:
+    """The traced points' paths (:func:`.data.traced_points`) that every design has:
+    ``paths``, ``{point: [[x...], [y...]] per design}`` on each page's frames, in the first
+    design's file length unit (``length_unit``), for the overlay."""
+    from ..units import Units
+
+    u = Units.of(runs[0][1].model)
+    common = [p for p in per[0]["geom"]["traces"] if all(p in d["geom"]["traces"] for d in per)]
+    paths = {p: [[_scaled(d["geom"]["points"][p][c], u) for c in ("x", "y")] for d in per]
+             for p in common}
+    return {"paths": paths, "length_unit": u.unit("length")[0]}
+
+
+def _scaled(values, u) -> list:
+    return [None if v is None else float(u.value(v, "length")) for v in values]
+
+
+# fields of a model file that do not make one design differ from another
+_NOT_PARAMETERS = ("mechanism.name", "mechanism.description")
+
+
+def flatten(data, prefix: str = "") -> dict:
+    """A model file's structure (:func:`linkdyn.io.writer.model_to_dict`) as dotted field
+    paths, as ``--vary`` names them: ``{'bodies.coupler.points.P[0]': 230.4, ...}`` (a list of
+    named tables keyed by its names, a list of numbers by index)."""
+    out = {}
+    if isinstance(data, dict):
+        for k, v in data.items():
+            out.update(flatten(v, f"{prefix}.{k}" if prefix else str(k)))
+    elif isinstance(data, list) and data and all(isinstance(v, dict) and "name" in v
+                                                 for v in data):
+        for v in data:
+            out.update(flatten({k: x for k, x in v.items() if k != "name"},
+                               f"{prefix}.{v['name']}"))
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            out.update(flatten(v, f"{prefix}[{i}]"))
+    else:
+        out[prefix] = data
+    return out
+
+
+def differing(runs) -> list[dict]:
+    """The model fields whose values differ between the designs (numbers beyond 1e-9 of their
+    size, the rounding of a file written back): ``[{'path', 'values'}]``, each design's value
+    in its own file's units (None where it has no such field), in the first design's order."""
+    from ..io.writer import model_to_dict
+
+    flat = [flatten(model_to_dict(sol.model)) for _, sol, _ in runs]
+    paths = list(flat[0]) + [p for f in flat[1:] for p in f if p not in flat[0]]
+    out = []
+    for p in dict.fromkeys(paths):
+        if p in _NOT_PARAMETERS:
+            continue
+        vals = [f.get(p) for f in flat]
+        if any(not _same(v, vals[0]) for v in vals[1:]):
+            out.append({"path": p, "values": vals})
+    return out
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(
+            a, bool) and not isinstance(b, bool):
+        return abs(a - b) <= 1e-9 * max(abs(a), abs(b), 1e-300)
+    return a == b
 
 
 def sweep_best(sweep_dir, metric, n_best) -> list:
@@ -103,38 +224,106 @@ def sweep_best(sweep_dir, metric, n_best) -> list:
     return out
 
 
-def key_table_html(designs: list) -> str:
-    """Key results side by side: one row per result (in the first design's order, then any
-    other design's), one column per design; '—' where a design has no such result."""
-    rows: dict[tuple[str, str], list] = {}
-    for n, d in enumerate(designs):
-        for it in d["key"]:
-            rows.setdefault((it["group"], it["label"]), [None] * len(designs))[n] = it
+def key_table_html(designs: list, rows: list) -> str:
+    """Key results side by side (:func:`key_rows`): one column per design; under each value
+    but the first design's, its difference from the first (absolute and %); the better value
+    in its row's sense marked "best"; '—' where a design has no such result."""
     head = "".join(f"<th style='color:{d['color']}'>{html.escape(d['name'])}</th>" for d in designs)
     body, group = "", None
-    for (g, label), its in rows.items():
-        if g != group:
-            group = g
-            body += f"<tr class='grp'><th colspan='{len(designs) + 1}'>{html.escape(g)}</th></tr>"
-        cells = "".join(
-            "<td>—</td>" if it is None else
-            f"<td class='num' data-value='{'' if it['value'] is None else repr(it['value'])}'>"
-            f"<b>{html.escape(key_value(it))}</b><br><span class='note'>"
-            f"{html.escape(key_where(it))}</span></td>" for it in its)
-        body += f"<tr><th>{html.escape(label)}</th>{cells}</tr>"
+    for row in rows:
+        if row["group"] != group:
+            group = row["group"]
+            body += (f"<tr class='grp'><th colspan='{len(designs) + 1}'>{html.escape(group)}"
+                     "</th></tr>")
+        cells = ""
+        for n, it in enumerate(row["items"]):
+            if it is None:
+                cells += "<td>—</td>"
+                continue
+            best = n in row["best"]
+            delta = _delta(row, n)
+            cells += (f"<td class='num{' best' if best else ''}' data-value="
+                      f"'{'' if it['value'] is None else repr(it['value'])}'>"
+                      f"<b>{html.escape(key_value(it))}</b>"
+                      + (" <span class='besttag'>best</span>" if best else "")
+                      + (f"<br><span class='delta'>{html.escape(delta)}</span>" if delta else "")
+                      + f"<br><span class='note'>{html.escape(key_where(it))}</span></td>")
+        signed = any(it and it.get("signed") for it in row["items"])
+        sense = {"min": f"smaller {'magnitude ' if signed else ''}is better",
+                 "max": "larger is better"}.get(row["sense"], "")
+        body += (f"<tr data-label='{html.escape(row['label'])}'><th>{html.escape(row['label'])}"
+                 + (f"<br><span class='note'>{sense}</span>" if sense else "")
+                 + f"</th>{cells}</tr>")
     return (f"<table class='grid cmp'><thead><tr><th></th>{head}</tr></thead>"
             f"<tbody>{body}</tbody></table>")
 
 
-def render_compare(runs, *, max_frames: int = MAX_FRAMES) -> str:
-    """The whole comparison page as a string."""
-    data = compare_data(runs, max_frames=max_frames)
+def _delta(row: dict, n: int) -> str:
+    """``'Δ +1.234 N m (+5.6 %)'``: design ``n``'s difference from the first design."""
+    dv, pct = row["diff"][n], row["pct"][n]
+    if dv is None:
+        return ""
+    text = f"Δ {'+' if dv > 0 else ''}{fmt(dv)} {row['unit']}".rstrip()
+    return text + (f" ({'+' if pct > 0 else ''}{fmt(pct)} %)" if pct is not None else "")
+
+
+def differs_html(designs: list, differs: list) -> str:
+    """The model fields that differ between the designs, one column per design (each in its
+    file's units)."""
+    if not differs:
+        return "<p class='note'>The designs' model files hold the same values.</p>"
+    head = "".join(f"<th style='color:{d['color']}'>{html.escape(d['name'])}</th>" for d in designs)
+    body = "".join(
+        f"<tr data-path='{html.escape(r['path'])}'><th><code>{html.escape(r['path'])}</code></th>"
+        + "".join("<td class='num'>" + ("—" if v is None else html.escape(
+            fmt(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else str(v)))
+            + "</td>" for v in r["values"]) + "</tr>" for r in differs)
+    return (f"<table class='grid' id='differs'><thead><tr><th>field (file units)</th>{head}"
+            f"</tr></thead><tbody>{body}</tbody></table>")
+
+
+def compare_csv(data: dict) -> str:
+    """``compare.csv``: the comparison's table for a spreadsheet, from :func:`compare_data`.
+
+    One row per key result (``kind`` = ``key result``; its group, label, unit and sense, each
+    design's value at full precision, ``inf`` where it is infinite, empty where a design has
+    none; each other design's difference from the first, absolute and in %; the best designs'
+    names, ``;``-separated) and one per model field that differs (``kind`` = ``model field``,
+    its dotted path, each design's value in its own file's units).
+    """
+    names = [d["name"] for d in data["designs"]]
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(["kind", "group", "name", "unit", "sense", *names,
+                *(f"diff {n}" for n in names[1:]), *(f"pct {n}" for n in names[1:]), "best"])
+
+    def cell(v):
+        return "" if v is None else repr(float(v)) if isinstance(v, (int, float)) and not \
+            isinstance(v, bool) else str(v)
+
+    for row in data["rows"]:
+        values = [("inf" if it is not None and it.get("infinite") else cell(v))
+                  for it, v in zip(row["items"], row["values"])]
+        w.writerow(["key result", row["group"], row["label"], row["unit"], row["sense"] or "",
+                    *values, *map(cell, row["diff"][1:]), *map(cell, row["pct"][1:]),
+                    ";".join(names[n] for n in row["best"])])
+    for f in data["differs"]:
+        w.writerow(["model field", "", f["path"], "file units", "", *map(cell, f["values"]),
+                    *[""] * (2 * (len(names) - 1)), ""])
+    return out.getvalue()
+
+
+def render_compare(runs, *, max_frames: int = MAX_FRAMES, data: dict | None = None) -> str:
+    """The whole comparison page as a string (``data``: :func:`compare_data` of ``runs``, if
+    already made)."""
+    data = data if data is not None else compare_data(runs, max_frames=max_frames)
     names = ", ".join(d["name"] for d in data["designs"])
     files = "".join(f"<li style='color:{d['color']}'><b>{html.escape(d['name'])}</b>: "
                     f"{html.escape(d['model'] or '')}, {fmt(d['samples'])} samples</li>"
                     for d in data["designs"])
     body = _BODY.format(title=html.escape(f"Comparison: {names}"), files=files,
-                        table=key_table_html(data["designs"]))
+                        table=key_table_html(data["designs"], data["rows"]),
+                        differs=differs_html(data["designs"], data["differs"]))
     return html_page(title=html.escape(f"Comparison: {names}"), body=body, data=data,
                      script="compare.js", css=_CSS)
 
@@ -142,21 +331,34 @@ def render_compare(runs, *, max_frames: int = MAX_FRAMES) -> str:
 _CSS = """
 table.cmp td { min-width: 9em; }
 table.cmp tr.grp th { background: var(--panel); font-size: 12px; text-transform: uppercase; color: var(--muted); }
+table.cmp td.best { background: #e8f5e9; }
+.besttag { font-size: 11px; color: #2e7d32; font-weight: bold; }
+.delta { font-size: 12px; }
+#pathbox { max-width: 640px; }
+#pathbox svg { width: 100%; height: auto; display: block; }
+#pathbox .ppath { fill: none; stroke-width: 1.8; }
 """
 
 _BODY = """<header>
 <h1>{title}</h1>
 <ul class="designs">{files}</ul>
-<p class="note">Angles in degrees, everything else SI. Each design solved as
-<code>linkdyn analyze</code> solves it; hover a plot to read every design's value.</p>
+<p class="note">Angles in degrees, everything else SI (the traced paths in the first model
+file's length unit, the fields in each file's units). Each design solved as <code>linkdyn analyze</code> solves it; hover a plot
+to read every design's value. Differences are from the first design.</p>
 </header>
+<section class="tables">
+<h2>Key results</h2>
+<div class="scroll">{table}</div>
+<h2>Parameters that differ</h2>
+<div class="scroll">{differs}</div>
+</section>
+<section>
+  <h2>Traced paths</h2>
+  <div id="pathbox" class="panel"></div>
+</section>
 <section>
   <div class="plotbar"><h2>Curves</h2>
   <label>x axis <select id="xaxis"></select></label></div>
   <div id="plots" class="pgrid"></div>
-</section>
-<section class="tables">
-<h2>Key results</h2>
-<div class="scroll">{table}</div>
 </section>
 """

@@ -9,10 +9,11 @@ import numpy as np
 
 from .. import joints as jk
 from ..model import GROUND
+from ..units import REPORT
 from .keys import driver_position, is_noise, key_results, scales
 
 MAX_FRAMES = 2000
-DEG = 180.0 / math.pi
+DEG = 1.0 / REPORT.unit("angle")[1]   # rad -> the page's angle unit (deg)
 
 # one colour per joint (or per driver / cut joint), the same in every panel
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
@@ -182,6 +183,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         it["t"] = None if k is None else float(sol.t[k])
         pos = driver_position(sol, k)
         it["at"] = None if pos is None or not math.isfinite(pos[1]) else list(pos)
+        if math.isinf(it["value"]):   # JSON has no inf: said by "infinite"
+            it["infinite"] = True
         if not math.isfinite(it["value"]):
             it["value"] = None
     t = np.asarray(sol.t)[idx]
@@ -319,9 +322,9 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
           [{"key": f"F:{j.name}", "label": j.name, "color": jcolor[j.name]} for j in joints],
           "N")
     for k, j in enumerate(joints):
-        # a cut joint's reaction is its multipliers λ: one panel shows both
+        # a cut joint's reaction is its multipliers λ: one panel shows both, said in words
         panel(efforts, f"Reaction at {j.name} ({j.body_a} on {j.body_b})"
-              + (", cut joint: λ" if j.name in cut else ""), "N",
+              + (", where the loop is cut" if j.name in cut else ""), "N",
               [{"key": f"Fx:{j.name}", "label": "Fx", "color": X_COLOR},
                {"key": f"Fy:{j.name}", "label": "Fy", "color": Y_COLOR}], "N")
     # the reactions in the second body's frame (Solution.reaction_local): along and across
@@ -353,12 +356,13 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         from .. import design
         fbs = design.four_bars(m)
         for n, fb in enumerate(fbs):
-            key = add(f"mu:{n}", np.degrees(design.transmission_angle(sol, fb)))
+            key = add(f"mu:{n}", REPORT.value(design.transmission_angle(sol, fb), "angle"))
             panel("Design", f"Transmission angle ({fb.coupler} / {fb.output})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[n % len(PALETTE)]}])
-        from .keys import guide_transmission_angle, slider_rods
+        from ..design.checks import guide_transmission_angle, slider_rods
         for n, (g, rod, pin, other) in enumerate(slider_rods(m)):
-            key = add(f"mu_s:{n}", guide_transmission_angle(sol, g, rod, pin, other))
+            key = add(f"mu_s:{n}", REPORT.value(guide_transmission_angle(sol, g, rod, pin, other),
+                                                "angle"))
             panel("Design", f"Transmission angle ({rod} / {g.body_b})", "deg",
                   [{"key": key, "label": "μ", "color": PALETTE[(n + 3) % len(PALETTE)]}])
         ws = design.shaking_wrench(sol)

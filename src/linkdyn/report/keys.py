@@ -11,10 +11,15 @@ from __future__ import annotations
 import numpy as np
 
 from .. import joints as jk
-from ..design.checks import slider_rods
+from ..design.checks import guide_normal, guide_transmission_angle, slider_rods
 from ..model import GROUND
+from ..units import REPORT
 
 NOISE = 1e-12  # relative to the scale of the quantity's unit family
+
+#: The key results' groups, in reading order; each keeps its colour (``g<n>``) on every page.
+GROUPS = ("Driver efforts", "Joint loads", "Four-bar loops", "Slider dyads",
+          "Shaking (on the frame)", "Energy", "Path")
 
 
 def scales(sol) -> dict[str, float]:
@@ -103,7 +108,7 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
             note=f"{j.body_a} on {j.body_b}")
         kind = jk.get(j.kind)
         if not kind.angular and "axis" in kind.keys:  # a guide: its normal force
-            n = _guide_normal(sol, j)
+            n = guide_normal(sol, j)
             side = np.sum(sol.reactions.force[..., k, :] * n, axis=-1)
             kk = _k(np.abs(side), np.nanargmax)
             add("Joint loads", f"side load {j.name}", side, kk, "N", signed=True,
@@ -117,19 +122,28 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     # motion quality of every four-bar loop: transmission angle, mechanical advantage
     for fb in design.four_bars(m):
         which = f"{fb.coupler}/{fb.output}"
-        mu = np.degrees(design.transmission_angle(sol, fb))
+        mu = REPORT.value(design.transmission_angle(sol, fb), "angle")
         add("Four-bar loops", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg")
         add("Four-bar loops", f"max transmission angle {which}", mu, _k(mu, np.nanargmax), "deg")
         ma = np.asarray(design.mechanical_advantage(sol, fb), float)
-        add("Four-bar loops", f"min mechanical advantage {which}", ma, _k(ma, np.nanargmin), "",
-            note="|ω_in / ω_out|")
-        add("Four-bar loops", f"max mechanical advantage {which}", ma, _k(ma, np.nanargmax), "",
-            note="|ω_in / ω_out|")
+        for end, pick, link, bound in (("min", np.nanargmin, "input", 0.0),
+                                       ("max", np.nanargmax, "output", np.inf)):
+            label = f"{end} mechanical advantage {which}"
+            at = design.stops(sol, fb, link)
+            if not at:   # the link never stops: the sampled extreme is the linkage's
+                add("Four-bar loops", label, ma, _k(ma, pick), "", note="|ω_in / ω_out|")
+                continue
+            # a link that stops: the advantage reaches its bound there, between samples
+            where = stop_words(sol, at)
+            items.append({"group": "Four-bar loops", "label": label, "value": bound, "unit": "",
+                          "signed": False, "k": at[0]["k"],
+                          "note": f"|ω_in / ω_out|, {'zero' if bound == 0 else 'infinite'} "
+                                  f"where the {link} stops: {where}"})
 
     # the RRP dyad of each guide: transmission angle between the rod that drives the slider
     # and the guide's normal (90 deg: the rod pushes along the guide)
     for j, rod, pin, other in slider_rods(m):
-        mu = guide_transmission_angle(sol, j, rod, pin, other)
+        mu = REPORT.value(guide_transmission_angle(sol, j, rod, pin, other), "angle")
         which = f"{rod}/{j.body_b if rod != j.body_b else j.body_a}"
         add("Slider dyads", f"min transmission angle {which}", mu, _k(mu, np.nanargmin), "deg",
             note="rod against the guide's normal")
@@ -179,27 +193,43 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
     ps = summary.get("path_straightness")
     if isinstance(ps, dict) and ps.get("max_deviation_m") is not None:
         items.append({"group": "Path", "label": f"straightness of {ps.get('point', 'path')}",
-                      "value": float(ps["max_deviation_m"]) * 1e3, "unit": "mm",
+                      "value": REPORT.value(float(ps["max_deviation_m"]), "length"),
+                      "unit": REPORT.unit("length")[0],
                       "signed": False, "k": None,
-                      "note": f"max deviation over {float(ps.get('length_m') or 0) * 1e3:.4g} mm"
+                      "note": "max deviation over "
+                              + REPORT.show(float(ps.get("length_m") or 0), "length", 4)
                               + (" (whole run)" if ps.get("range") is None else "")})
     return items
 
 
-def guide_transmission_angle(sol, g, rod: str, pin: str, other: str) -> np.ndarray:
-    """(T,) deg: the angle between the rod (its pin on the slider to its other joint) and the
-    guide's normal, in [0, 90]."""
-    d = np.asarray(sol.point(rod, other)) - np.asarray(sol.point(rod, pin))
-    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
-    c = np.abs(np.sum(d * _guide_normal(sol, g), axis=-1))  # cos of the angle to the normal
-    return np.degrees(np.arccos(np.clip(c, 0.0, 1.0)))
+# which way a key result is better, by its label's start: 'min' smaller magnitude, 'max' larger;
+# the others (the largest transmission angle, kinetic energy) have no sense
+_SENSES = (("max torque", "min"), ("min torque", "min"), ("RMS torque", "min"),
+           ("max force", "min"), ("min force", "min"), ("RMS force", "min"),
+           ("peak |F|", "min"), ("side load", "min"), ("guide moment", "min"),
+           ("min transmission angle", "max"), ("min mechanical advantage", "max"),
+           ("peak shaking force", "min"), ("max shaking moment", "min"),
+           ("min shaking moment", "min"), ("flywheel on", "min"), ("straightness of", "min"))
 
 
-def _guide_normal(sol, j) -> np.ndarray:
-    """Unit normal (T, 2) of a guide's axis, global, to the axis's left."""
-    phi = 0.0 if j.body_a == GROUND else sol.phi(j.body_a)
-    a = np.arctan2(float(j.axis[1]), float(j.axis[0])) + np.asarray(phi) + np.zeros(np.shape(sol.t))
-    return np.stack([-np.sin(a), np.cos(a)], axis=-1)
+def key_sense(label: str) -> str | None:
+    """Which way the key result ``label`` is better: ``'min'`` (a smaller magnitude: efforts,
+    joint and shaking forces, the flywheel, a path's deviation), ``'max'`` (larger: the
+    smallest transmission angle and mechanical advantage, as the sweep's metrics), or None (no
+    sense: the largest transmission angle, kinetic energy)."""
+    return next((sense for start, sense in _SENSES if label.startswith(start)), None)
+
+
+def stop_words(sol, at: list[dict]) -> str:
+    """Where a link stops (:func:`linkdyn.design.stops`), in words: the first driver's
+    coordinate at each stop in the page's units (``'J1 = 48.34, 228.3 deg'``), else the
+    times."""
+    d = sol.model.drivers[0] if sol.model.drivers else None
+    if d is None or any(s["q"] is None for s in at):
+        return "t = " + ", ".join(f"{s['t']:.4g}" for s in at) + " s"
+    quantity = "angle" if jk.get(sol.model.joint(d.joint).kind).angular else "length"
+    return (f"{d.joint} = " + ", ".join(f"{REPORT.value(s['q'], quantity):.4g}" for s in at)
+            + f" {REPORT.unit(quantity)[0]}")
 
 
 def driver_position(sol, k: int) -> tuple[str, float, str] | None:
@@ -209,6 +239,5 @@ def driver_position(sol, k: int) -> tuple[str, float, str] | None:
         return None
     d = sol.model.drivers[0]
     q = float(sol.columns[f"q_{d.joint}"][k])
-    if jk.get(sol.model.joint(d.joint).kind).angular:
-        return d.joint, float(np.degrees(q)), "deg"
-    return d.joint, q * 1e3, "mm"
+    quantity = "angle" if jk.get(sol.model.joint(d.joint).kind).angular else "length"
+    return d.joint, float(REPORT.value(q, quantity)), REPORT.unit(quantity)[0]

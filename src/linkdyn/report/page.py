@@ -13,19 +13,24 @@ from .keys import scales
 from .tables import key_results_html, model_html, summary_html
 
 
-def outputs(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> dict:
-    """Files this module contributes to ``linkdyn analyze --report``.
+def outputs(sol, summary: dict, *, max_frames: int = MAX_FRAMES, title: str | None = None,
+            intro: str = "") -> dict:
+    """Files this module contributes to ``linkdyn analyze --report`` (and, with a ``title``
+    and an ``intro``, to ``linkdyn optimize --report``: see :func:`render`).
 
     Returns ``{"report.html": writer}`` where ``writer(path)`` writes the page.
     """
     def write(path: Path) -> None:
-        Path(path).write_text(render(sol, summary, max_frames=max_frames), encoding="utf-8")
+        Path(path).write_text(render(sol, summary, max_frames=max_frames, title=title,
+                                     intro=intro), encoding="utf-8")
 
     return {"report.html": write}
 
 
-def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
-    """The whole page as a string."""
+def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES, title: str | None = None,
+           intro: str = "") -> str:
+    """The whole page as a string; ``title`` instead of the model's name, and ``intro``, HTML
+    shown first under the header (an optimize's objective, constraints and changes)."""
     spatial = getattr(sol, "space", "planar") == "spatial"
     if spatial:
         from . import spatial as sp
@@ -34,13 +39,13 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES) -> str:
     else:
         data, sc = page_data(sol, max_frames=max_frames, summary=summary), scales(sol)
     m = sol.model
-    title = html.escape(m.name or "mechanism")
+    title = html.escape(title or m.name or "mechanism")
     n, total = len(data["t"]), int(len(sol.t))
     note = (f"{total} samples; the page shows {n} of them evenly spaced (results.csv has all)"
             if n < total else f"{total} samples")
     desc = f"<p class='desc'>{html.escape(m.description)}</p>" if m.description else ""
     body = _BODY.format(
-        title=title, desc=desc, note=html.escape(note),
+        title=title, desc=desc, note=html.escape(note), intro=intro,
         summary=summary_html(summary, sc), model=model_html(sol),
         key=key_results_html(data["key"]))
     return html_page(title=title, kind="linkdyn report", body=body, data=data,
@@ -106,7 +111,7 @@ _BODY = """<header>
 <p class="note">{note}. Angles in degrees, everything else SI. Click or drag on any plot to move
 the time cursor; keys: space play/pause, ← → step.</p>
 </header>
-<section class="top">
+{intro}<section class="top">
   <div class="animbox">
     <svg id="anim" role="img" aria-label="animation of the mechanism"></svg>
     <div class="controls">
@@ -140,16 +145,16 @@ the time cursor; keys: space play/pause, ← → step.</p>
 <h2>Key results <span class="note">click one to show that instant</span></h2>
 {key}
 </section>
-<section>
+<section id="plotsec">
   <div class="plotbar"><h2>Plots</h2>
   <label>x axis <select id="xaxis"></select></label></div>
   <div id="plots"></div>
 </section>
-<section class="tables">
+<section class="tables" id="summary">
 <h2>Summary</h2>
 <div class="scroll">{summary}</div>
 </section>
-<section class="tables">
+<section class="tables" id="model">
 <h2>Model</h2>
 <div class="scroll">{model}</div>
 </section>

@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from ..model import GROUND
+from ..units import REPORT
 from .data import (BODY_COLORS, DEG, MAX_FRAMES, PALETTE, X_COLOR, Y_COLOR, M_COLOR, _num,
                    body_entries, body_shape, frame_indices, point_tracks, traced_points)
 from .keys import NOISE, _k, is_noise, key_item
@@ -109,9 +110,11 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         it["t"] = None if k is None else float(sol.t[k])
         it["at"] = None
         if k is not None and d0 is not None and f"q_{d0.joint}" in cols:
-            ang = _kind(sol, d0.joint).angular
-            q = float(cols[f"q_{d0.joint}"][k]) * (DEG if ang else 1e3)
-            it["at"] = [d0.joint, q, "deg" if ang else "mm"] if math.isfinite(q) else None
+            quantity = "angle" if _kind(sol, d0.joint).angular else "length"
+            q = REPORT.value(float(cols[f"q_{d0.joint}"][k]), quantity)
+            it["at"] = [d0.joint, q, REPORT.unit(quantity)[0]] if math.isfinite(q) else None
+        if math.isinf(it["value"]):   # JSON has no inf: said by "infinite"
+            it["infinite"] = True
         if not math.isfinite(it["value"]):
             it["value"] = None
     series: dict[str, list] = {"t": _num(np.asarray(sol.t)[idx], 7)}

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model import GROUND
+from ..units import REPORT
 from .data import joint_roles
 
 
@@ -69,8 +70,9 @@ def _travel_in_degrees(travel: dict) -> dict:
     out = {}
     for j, e in travel.items():
         if isinstance(e, dict) and e.get("unit") == "rad":
-            e = {k: (math.degrees(v) if k in ("min", "max", "range") and isinstance(v, float)
-                     else v) for k, v in e.items()}
+            e = {k: (REPORT.value(v, "angle")
+                     if k in ("min", "max", "range") and isinstance(v, float) else v)
+                 for k, v in e.items()}
             e["unit"] = "deg"
         out[j] = e
     return out
@@ -143,10 +145,20 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
     if isinstance(ps, dict):  # lengths in mm, the range in the driver's display unit
         ps = dict(ps)
         for k in [k for k in ps if k.endswith("_m") and isinstance(ps[k], (int, float))]:
-            ps[k[:-2] + "_mm"] = ps.pop(k) * 1e3
+            ps[k[:-2] + "_mm"] = REPORT.value(ps.pop(k), "length")
         if isinstance(ps.get("range"), (list, tuple)) and ps.get("range_unit", "rad") == "rad":
-            ps["range_deg"] = [math.degrees(v) for v in ps.pop("range")]
+            ps["range_deg"] = [REPORT.value(v, "angle") for v in ps.pop("range")]
         s["path_straightness"] = ps
+    if isinstance(s.get("slider_cranks"), list):   # lengths in mm, angles in deg, as the page
+        s["slider_cranks"] = [
+            {**{k: v for k, v in sc.items()
+                if k not in ("stroke_m", "travel_m", "transmission_angle_rad")},
+             "stroke_mm": REPORT.value(sc["stroke_m"], "length"),
+             "travel_mm": [REPORT.value(x, "length") for x in sc["travel_m"]],
+             "transmission_angle_deg": {k: (v if k.endswith("_s") or v is None
+                                            else REPORT.value(v, "angle"))
+                                        for k, v in sc["transmission_angle_rad"].items()}}
+            for sc in s["slider_cranks"]]
     parts = []
     run_keys = ("model", "samples", "duration_s", "mobility", "loops", "cut_joints",
                 "spanning_tree", "invalid_samples")
@@ -205,12 +217,20 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
                                                 ("input", "coupler", "output")))
                      + (f"<br><span class='note'>pins {_e(', '.join(fb['pins']))}</span>"
                         if fb.get("pins") else "") + "</td><td>"
-                     + _e(", ".join(f"{k} {fmt(v * 1e3)}" for k, v in L.items())) + "</td><td>"
+                     + _e(", ".join(f"{k} {fmt(REPORT.value(v, 'length'))}"
+                                    for k, v in L.items())) + "</td><td>"
                      + _e(fb.get("grashof", "")) + "</td><td class='num'>"
                      + _e(f"{fmt(ta.get('min'))} .. {fmt(ta.get('max'))}") + "<br>"
                      + _e(f"worst {fmt(ta.get('worst'))} at t = {fmt(ta.get('worst_time_s'))} s")
                      + "</td><td class='num'>"
-                     + (_e(f"{fmt(ma.get('min'))} .. {fmt(ma.get('max'))}") if ma else "—")
+                     + (_e(f"{fmt(ma.get('min'))} .. "
+                           + ("∞" if ma.get("infinite_at_s") else fmt(ma.get("max"))))
+                        + "".join(f"<br><span class='note'>{word} where the {link} stops, t = "
+                                  + _e(", ".join(fmt(x) for x in ma[key])) + " s</span>"
+                                  for key, word, link in (("zero_at_s", "0", "input"),
+                                                          ("infinite_at_s", "∞", "output"))
+                                  if ma.get(key))
+                        if ma else "—")
                      + "</td><td>" + (_kv_table(extra) if extra else "") + "</td></tr>")
         parts.append("<h3>Four-bar loops</h3><table class='grid'><thead><tr><th>input / "
                      "coupler / output</th><th>lengths (mm)</th><th>Grashof type</th>"
@@ -231,7 +251,7 @@ def summary_html(s: dict, scales: dict | None = None) -> str:
 def key_value(item: dict) -> str:
     """A key result's value as text: 4 significant digits, a sign on signed quantities."""
     v = item.get("value")
-    text = fmt(v)
+    text = "∞" if item.get("infinite") else fmt(v)
     if item.get("signed") and isinstance(v, float) and v > 0:
         text = "+" + text
     return f"{text} {item.get('unit', '')}".strip()
@@ -245,6 +265,13 @@ def key_where(item: dict) -> str:
     return f"t = {fmt(item['t'])} s" + (f" · {at[0]} = {fmt(at[1])} {at[2]}" if at else "")
 
 
+def group_colour(group: str) -> int:
+    """The colour class number (``g0`` .. ``g6``) of a key result group: fixed by the group
+    (:data:`.keys.GROUPS`), not by where it falls on a page."""
+    from .keys import GROUPS
+    return GROUPS.index(group) if group in GROUPS else len(GROUPS) - 1
+
+
 def key_results_html(items: list) -> str:
     """The key results (:func:`.keys.key_results` with their page frames) in one dense grid,
     in reading order, each tagged with its group; a result that occurs at one sample is a
@@ -253,20 +280,20 @@ def key_results_html(items: list) -> str:
     for it in items:
         if it["group"] not in groups:
             groups.append(it["group"])
-        g = groups.index(it["group"])
+        g = group_colour(it["group"])
         where = key_where(it)
         inner = (f"<span class='kl'>{_e(it['label'])}</span>"
                  f"<span class='kv'>{_e(key_value(it))}</span>"
                  f"<span class='kt'>{_e(where)}"
                  + (f"{' · ' if where else ''}{_e(it['note'])}" if it.get("note") else "")
                  + "</span>")
-        attrs = f"class='keyitem g{g % 6}' data-group='{_e(it['group'])}'"
+        attrs = f"class='keyitem g{g}' data-group='{_e(it['group'])}'"
         if it.get("frame") is not None:
             cells.append(f"<button type='button' {attrs} data-frame='{it['frame']}' "
                          f"title='{_e(it['group'])}: show this instant'>{inner}</button>")
         else:
             cells.append(f"<div {attrs} title='{_e(it['group'])}'>{inner}</div>")
-    legend = "".join(f"<span class='keytag g{n % 6}'>{_e(g)}</span>" for n, g in enumerate(groups))
+    legend = "".join(f"<span class='keytag g{group_colour(g)}'>{_e(g)}</span>" for g in groups)
     return (f"<div class='keylegend'>{legend}</div><div class='keygrid'>{''.join(cells)}</div>"
             if cells else "")
 
@@ -288,7 +315,8 @@ def model_html(sol) -> str:
     roles = joint_roles(sol)
 
     def mm(xy):
-        return "(" + ", ".join(fmt(float(v) * 1e3) for v in np.asarray(xy, float)) + ")"
+        return "(" + ", ".join(fmt(REPORT.value(float(v), "length"))
+                               for v in np.asarray(xy, float)) + ")"
 
     rows = ""
     for b in m.bodies:
@@ -330,7 +358,8 @@ def model_html(sol) -> str:
               "the minimum-norm reactions. " if getattr(sol, "space", "planar") == "spatial"
               else ". ")
            + "Driver effort: what the actuator applies on the second body. "
-           "λ: the reaction at a cut joint, solved together with the driver efforts.</p>"]
+           "A joint where a loop is cut: its reaction is solved together with the driver "
+           "efforts (the method's multipliers λ), the others follow body by body.</p>"]
     if drv:
         out += ["<h3>Drivers</h3>", f"<ul>{drv}</ul>"]
     if loads:

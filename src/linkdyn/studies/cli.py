@@ -7,6 +7,7 @@ import os
 import re
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import click
 import numpy as np
@@ -247,7 +248,9 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
 
     Differential evolution (a generation solved as one batch of designs), then a batched
     compass search. Writes OUTDIR/best.toml (the model file with the best values),
-    OUTDIR/optimize.json and the best design's OUTDIR/summary.json (and report.html). When no
+    OUTDIR/optimize.json (with each constraint's status and each parameter's change) and the
+    best design's OUTDIR/results.csv and summary.json (and report.html, headed by the
+    objective, the constraints, active or not, and the parameters changed). When no
     design meets every constraint it exits with status 3, naming the constraint nearest to
     holding, and writes nothing.
     """
@@ -255,7 +258,8 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
     from ..analysis import analyze
     from ..io.writer import dumps_toml
     from .files import owned_before
-    from .optimize import optimize as run
+    from .optimize import optimize as run, standing
+    from ..cli import write_csv
 
     if not vary:
         raise ModelError("nothing to vary", field="--vary", fix="Give --vary PATH=LO:HI")
@@ -281,31 +285,40 @@ def optimize(model, vary, samples, duration, cycles, seed, path_point, path_rang
                               path_point=path_point or best.path_point,
                               path_range=q_range, default_range=best.path_range)
     verb = "minimize" if res.sense == "min" else "maximize"
+    st = standing(res, sp, dict(zip(paths, bounds)), u)
     info = {"model": os.fspath(model), verb: res.objective, "objective": res.objective,
             "sense": res.sense,
             "constraints": [str(c) for c in res.constraints],
             "feasible": res.feasible, "parameters": res.values, "metrics": res.metrics,
             "evaluations": res.evaluations, "generations": res.generations,
             "seconds": res.seconds, "seed": seed, "samples": len(t),
-            "history": res.history}
+            "history": res.history, "objective_shown": st["objective"]["shown"],
+            "constraint_status": st["constraints"], "changes": st["parameters"]}
     files = {"best.toml": lambda p: p.write_text(
                  f"# {res.objective} {verb}d by linkdyn optimize from {Path(model).name}"
                  + "".join(f", {c}" for c in res.constraints) + "\n"
                  + dumps_toml(res.data), encoding="utf-8"),
              "optimize.json": lambda p: p.write_text(json.dumps(json_safe(info), indent=2)),
+             # a spatial solution's columns are a method (linkdyn analyze writes them so too)
+             "results.csv": lambda p: write_csv(SimpleNamespace(columns=sol.columns())
+                                                if sp.spatial else sol, p),
              "summary.json": lambda p: p.write_text(json.dumps(json_safe(summ), indent=2,
                                                                allow_nan=False))}
     if report:
         from .. import plots as plots_mod
         from .. import report as report_mod
-        files.update(report_mod.outputs(sol, summ))
+        from ..report.optimized import optimize_html
+        files.update(report_mod.outputs(
+            sol, summ, title=f"{best.name or Path(model).stem}: {res.objective} {verb}d",
+            intro=optimize_html(st, evaluations=res.evaluations, seconds=res.seconds)))
         if not sp.spatial:   # a spatial page's figures cost several runs: analyze --plots
             files.update(plots_mod.outputs(sol))
     out = Path(outdir)
     # the files written, listed in optimize.json: a later run removes those it does not write
     info["files"] = list(files)
     write_outputs(out, files, owned=owned_before(out, "optimize.json", (
-        "best.toml", "summary.json", "report.html", "plot_*.png", "plot_*.svg")))
+        "best.toml", "summary.json", "results.csv", "report.html", "plot_*.png",
+        "plot_*.svg")))
     click.echo(f"best design (feasible) after {res.evaluations} designs in {res.seconds:.3g} s:")
     units_of = {p.path: p.unit for p in sp.params}
     for p, v in res.values.items():   # in the file's units, as --vary gave them

@@ -108,8 +108,8 @@ def unit(name: str) -> str:
 
 def quantity(name: str) -> str | None:
     """What a metric measures, a quantity of :mod:`linkdyn.units` (``'torque'``, ``'force'``,
-    ``'angle'``, ``'length'``, ``'inertia'``), for its display in the file's units and a
-    constraint's bound; None for an unknown name."""
+    ``'angle'``, ``'length'``, ``'inertia'``, ``'energy'``, ``'number'``), for its display in the
+    file's units and a constraint's bound; None for an unknown name."""
     if name.startswith(("peak_tau_", "rms_tau_")):
         return "torque"
     if (name.startswith(("peak_force_", "rms_force_", "peak_F_", "min_contact_"))
@@ -118,7 +118,8 @@ def quantity(name: str) -> str | None:
     if name.startswith("stroke_"):
         return "length"
     return {"min_transmission_angle": "angle", "path_deviation": "length",
-            "flywheel_inertia": "inertia"}.get(name)
+            "flywheel_inertia": "inertia", "friction_loss": "energy",
+            "efficiency": "number"}.get(name)
 
 
 def _effort(model: Model, joint: str) -> str:

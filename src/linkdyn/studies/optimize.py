@@ -176,6 +176,63 @@ class Result:
                 + (f"; {len(miss) - 1} other constraint(s) missed too" if len(miss) > 1 else ""))
 
 
+#: a constraint is active (binding) when its slack is within this fraction of its bound
+ACTIVE = 0.01
+
+
+def standing(res: Result, sp: Space, bounds: dict, units: Units) -> dict:
+    """What an optimize found, for its report: the objective, each constraint with its value
+    and whether it is active, and each parameter's change.
+
+    Parameters
+    ----------
+    res : Result
+    sp : Space
+        The design space (each parameter's base value and unit, the file's).
+    bounds : dict
+        ``{path: (lo, hi)}`` of ``--vary``, in the file's units.
+    units : Units
+        The model file's units, to show the metrics in.
+
+    Returns
+    -------
+    dict
+        ``objective``: ``{metric, sense, value, shown}`` (``value`` SI, ``shown`` in the file's
+        unit); ``constraints``: ``{text, metric, value, shown, slack, active}`` each (``slack``
+        SI, >= 0 where it holds; ``active`` when the slack is within :data:`ACTIVE` of the
+        bound's magnitude: the constraint limits the design); ``parameters``: ``{path, unit,
+        base, best, change, pct, at_bound}`` each, in the file's units (``at_bound``: 'low',
+        'high' or '' when within 1 % of the range's width of a bound).
+    """
+    def show(metric, x):
+        return units.show(x, quantity(metric) or "number")
+
+    obj = res.metrics.get(res.objective)
+    cons = []
+    for c in res.constraints:
+        x = res.metrics.get(c.metric)
+        slack = (c.value - x if c.upper else x - c.value) if x is not None else None
+        active = slack is not None and np.isfinite(slack) and \
+            abs(slack) <= ACTIVE * max(abs(c.value), 1e-300)
+        cons.append({"text": str(c), "metric": c.metric, "value": x, "shown": c.shown(x)
+                     if x is not None else "n/a", "slack": slack, "active": bool(active)})
+    params = []
+    for prm in sp.params:
+        best = float(res.values[prm.path])
+        lo, hi = bounds.get(prm.path, (None, None))
+        edge = ""
+        if lo is not None:
+            tol = 0.01 * abs(hi - lo)
+            edge = "low" if abs(best - lo) <= tol else "high" if abs(best - hi) <= tol else ""
+        params.append({"path": prm.path, "unit": prm.unit, "base": float(prm.base),
+                       "best": best, "change": best - float(prm.base),
+                       "pct": 100.0 * (best - prm.base) / abs(prm.base) if prm.base else None,
+                       "at_bound": edge, "range": [lo, hi]})
+    return {"objective": {"metric": res.objective, "sense": res.sense, "value": obj,
+                          "shown": show(res.objective, obj)},
+            "constraints": cons, "parameters": params}
+
+
 class _Objective:
     """Scores of a batch of designs: the objective's cost (negated when maximized) where
     feasible, else BIG + violation."""

@@ -36,6 +36,7 @@ from .files import _pandas
 from . import metrics as metrics_mod
 from . import vectorize
 from .params import Space
+from ..units import Units
 
 METHODS = ("grid", "random", "lhs", "sobol")
 # design-samples per chunk (the unit of work, of writing and of resuming): four chunks per
@@ -615,9 +616,12 @@ def _address(text: str) -> tuple[str | None, int | None]:
 def summary(task: Task, df, stats: dict, *, bounds=None, method=None, seed=None) -> dict:
     """``summary.json`` of a sweep: what was varied, how many designs are valid, and for each
     metric its range over the valid designs, the design where it is smallest, its unit (SI),
-    its sense (``'min'`` or ``'max'``: which way is better) and its best valid design."""
+    its sense (``'min'`` or ``'max'``: which way is better) and its best valid design; and
+    ``units``, the model file's length and angle units (the pages show every number in them)."""
     valid = df["valid"].to_numpy()
+    u = Units.of(task.space.model())
     out = {"model": task.space.source, "designs": int(len(df)), "valid": int(valid.sum()),
+           "units": {"length": u.length, "angle": u.angle},
            "invalid": int((~valid).sum()), "samples": int(len(task.t)),
            "duration_s": float(task.t[-1] - task.t[0]) if len(task.t) else 0.0,
            "method": method, "seed": seed,

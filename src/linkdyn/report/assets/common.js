@@ -77,7 +77,8 @@ var LD = (function () {
   // labels placed clear of each other: each label goes to the first of a ring of positions
   // around its anchor whose box overlaps no label placed before it and no obstacle, inside
   // the W x H view, or is hidden this frame; sizes in screen pixels whatever the zoom
-  // (textScale: view units per screen pixel). Items: {node, x, y, fs, r, prefer}.
+  // (textScale: view units per screen pixel). Items: {node, x, y, fs, r, prefer, must}; a
+  // label that must show (must) takes its first position inside the view when none is clear.
   function placer(VW, VH) {
     var widthCache = {};
     function textBox(node, fs) {
@@ -104,7 +105,7 @@ var LD = (function () {
       items.forEach(function (it) {
         if (it.node.style.display === "none" || !fin(it.x) || !fin(it.y)) return;
         var fs = it.fs * textScale, wh = textBox(it.node, fs), w = wh[0] + 2, hgt = fs * 1.05;
-        var pad = 2 * textScale, best = null;
+        var pad = 2 * textScale, best = null, first = null;
         var dirs = it.prefer ? [it.prefer].concat(DIRS) : DIRS;
         for (var ring = 0; ring < 4 && !best; ring++) {
           var r = (it.r || 6) * textScale + ring * 10 * textScale;
@@ -114,9 +115,11 @@ var LD = (function () {
             var y0 = it.y + dy * r - (dy < 0 ? hgt : dy === 0 ? hgt / 2 : 0);
             var b = [x0 - pad, y0 - pad, x0 + w + pad, y0 + hgt + pad];
             if (b[0] < 0 || b[2] > VW || b[1] < 0 || b[3] > VH) continue;
+            first = first || b;
             if (!overlaps(b, placed)) { best = b; break; }
           }
         }
+        if (!best && it.must) best = first;
         if (!best) { it.node.style.display = "none"; return; }  // no room: left out this frame
         placed.push(best);
         it.node.setAttribute("font-size", fs.toFixed(2));

@@ -60,6 +60,42 @@
       hit.addEventListener("pointerleave", function () { tip.style.display = "none"; line.style.display = "none"; });
     });
   }
+  // every design's traced paths in one drawing, x and y to one scale (the file's length unit)
+  function paths() {
+    var pbox = document.getElementById("pathbox"), keys = Object.keys(D.paths || {});
+    if (!keys.length) { pbox.textContent = "No traced point common to every design."; pbox.className = "note"; return; }
+    var xs = [], ys = [];
+    keys.forEach(function (p) { D.paths[p].forEach(function (xy) { xs.push(xy[0]); ys.push(xy[1]); }); });
+    var xr = range(xs), yr = range(ys), W = 600, H = 380, M = 40;
+    var s = Math.min((W - 2 * M) / (xr[1] - xr[0]), (H - 2 * M) / (yr[1] - yr[0]));
+    var cx = (xr[0] + xr[1]) / 2, cy = (yr[0] + yr[1]) / 2;
+    var fx = function (v) { return W / 2 + (v - cx) * s; }, fy = function (v) { return H / 2 - (v - cy) * s; };
+    var svg = el("svg", {viewBox: "0 0 " + W + " " + H}, pbox);
+    var st = niceStep((W - 2 * M) / s, 6), v;
+    for (v = Math.ceil((cx - W / 2 / s) / st) * st; v <= cx + W / 2 / s; v += st) {
+      el("line", {x1: fx(v), x2: fx(v), y1: 0, y2: H - 18, "class": "gridl"}, svg);
+      el("text", {x: fx(v), y: H - 4, "text-anchor": "middle", "class": "tick"}, svg).textContent = LD.tickText(v, st);
+    }
+    for (v = Math.ceil((cy - H / 2 / s) / st) * st; v <= cy + H / 2 / s; v += st) {
+      el("line", {x1: 30, x2: W, y1: fy(v), y2: fy(v), "class": "gridl"}, svg);
+      el("text", {x: 28, y: fy(v) + 3.5, "text-anchor": "end", "class": "tick"}, svg).textContent = LD.tickText(v, st);
+    }
+    el("text", {x: W - 4, y: 12, "text-anchor": "end", "class": "tick"}, svg).textContent = "x, y (" + D.length_unit + "), one scale";
+    keys.forEach(function (p) {
+      D.paths[p].forEach(function (xy, n) {
+        var d = "", pen = false;
+        for (var k = 0; k < xy[0].length; k++) {
+          if (fin(xy[0][k]) && fin(xy[1][k])) { d += (pen ? "L" : "M") + fx(xy[0][k]).toFixed(1) + "," + fy(xy[1][k]).toFixed(1); pen = true; }
+          else pen = false;
+        }
+        el("path", {d: d, "class": "ppath", stroke: D.designs[n].color, "data-design": n, "data-point": p}, svg);
+      });
+    });
+    var leg = h("div", "legend", pbox);
+    D.designs.forEach(function (d) { var it = h("span", "", leg), sw = h("i", "", it); sw.style.background = d.color; h("span", "", it, d.name); });
+    h("span", "note", leg, "points: " + keys.join(", "));
+  }
+  paths();
   D.xaxes.forEach(function (a, n) { var o = document.createElement("option"); o.value = n; o.textContent = a.label; sel.appendChild(o); });
   sel.addEventListener("change", function () { xmode = D.xaxes[+sel.value]; build(); });
   build();

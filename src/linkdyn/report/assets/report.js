@@ -55,16 +55,23 @@
   });
   (function () {
     var tr = h("tr", "", h("thead", "", elJF));
-    h("th", "", tr, "joint"); h("th", "", tr, "|F| now"); h("th", "", tr, "vs. run peak");
+    h("th", "", tr, "joint"); h("th", "", tr, "|F| now"); h("th", "", tr, "vs. its run peak");
   })();
+  // each joint's own peak |F| over the run (the page's frames hold every joint's peak sample)
+  var Fpeak = {};
+  G.joints.forEach(function (j) {
+    var a = S["F:" + j.name] || [], p = 0;
+    for (var i = 0; i < a.length; i++) if (fin(a[i]) && a[i] > p) p = a[i];
+    Fpeak[j.name] = p;
+  });
   var jfBody = h("tbody", "", elJF);
   var jfRows = G.joints.map(function (j) {
     var tr = h("tr", "", jfBody);
     h("th", "", tr, j.name);
     var td = h("td", "num", tr), bar = h("td", "bar", tr), fb = h("span", "fbar", bar);
+    bar.title = "run peak " + fmtS("F:" + j.name, Fpeak[j.name]) + " N";
     return {tr: tr, td: td, bar: fb, name: j.name};
   });
-  var Fpeak = G.fmax || 1;
   function drawInfo(k, best) {
     elTime.textContent = "t = " + T[k].toFixed(4) + " s";
     elFrame.textContent = "frame " + (k + 1) + " / " + N + (D.valid[k] ? "" : "  (singular: NaN)");
@@ -82,7 +89,8 @@
     jfRows.forEach(function (o, n) {
       var f = S["F:" + o.name][k];
       o.td.textContent = fmtS("F:" + o.name, f) + " N";
-      o.bar.style.width = (fin(f) ? Math.min(100, 100 * f / Fpeak) : 0).toFixed(1) + "%";
+      var p = Fpeak[o.name];
+      o.bar.style.width = (fin(f) && p > 0 ? Math.min(100, 100 * f / p) : 0).toFixed(1) + "%";
       o.tr.className = n === best ? "hot" : "";
     });
   }
@@ -156,7 +164,7 @@
       // the cursor: a vertical line, or on a polar diagram the force vector from the origin
       var cursor = el("line", {"class": "cursor", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
       if (polar) cursor.setAttribute("class", "cursor polar");
-      var dots = spec.series.map(function (s) { return el("circle", {r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, svg); });
+      var dots = spec.series.map(function (s) { return el("circle", {"class": "dot", r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, svg); });
       var leg = h("div", "legend", panel);
       var vals = spec.series.map(function (s) {
         var it = h("span", "", leg), sw = h("i", "", it); sw.style.background = s.color;
@@ -201,10 +209,12 @@
       };
       var tip = h("div", "tooltip", panel);
       var down = false;
-      hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); });
+      // a press (a tap on a phone, which has no hover) picks the frame and shows its readout;
+      // a finger lifted keeps it, a mouse that leaves hides it
+      hit.addEventListener("pointerdown", function (e) { down = true; try { hit.setPointerCapture(e.pointerId); } catch (err) {} pick(e); readout(e); });
       hit.addEventListener("pointermove", function (e) { if (down) pick(e); readout(e); });
       hit.addEventListener("pointerup", function () { down = false; });
-      hit.addEventListener("pointerleave", function () { tip.style.display = "none"; hover.style.display = "none"; });
+      hit.addEventListener("pointerleave", function (e) { if (e.pointerType === "touch") return; tip.style.display = "none"; hover.style.display = "none"; });
       exportButtons(panel, spec, svg);
       plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, xval: xval, polar: polar, y0: y0, y1: y1});
     });
@@ -226,30 +236,45 @@
       lines.push([T[k]].concat(xcol.concat(spec.series).map(function (s) { var v = S[s.key][k]; return fin(v) ? v : ""; })).join(","));
     return lines.join("\n") + "\n";
   }
-  function panelSVG(svg) {
+  // a panel as a figure of its own: no cursor, dots or hover line (the page's state), and
+  // its legend (each series' colour and label) in rows below the plot
+  function panelFigure(svg, spec) {
     var c = svg.cloneNode(true);
-    c.setAttribute("xmlns", NS); c.setAttribute("width", PW); c.setAttribute("height", PH);
+    Array.prototype.slice.call(c.querySelectorAll(".cursor,.dot,.hoverline")).forEach(function (e) { e.remove(); });
+    var x = ML, y = PH + 8, rows = [];
+    spec.series.forEach(function (s) {
+      var w = 22 + 6.2 * s.label.length;
+      if (x + w > PW - 4 && x > ML) { x = ML; y += 15; }
+      rows.push([s, x, y]); x += w + 12;
+    });
+    var H = spec.series.length ? y + 12 : PH;
+    rows.forEach(function (r) {
+      el("line", {x1: r[1], x2: r[1] + 14, y1: r[2], y2: r[2], stroke: r[0].color, "stroke-width": 3}, c);
+      el("text", {x: r[1] + 18, y: r[2] + 3.5, "class": "tick legendtext"}, c).textContent = r[0].label;
+    });
+    c.setAttribute("xmlns", NS); c.setAttribute("width", PW); c.setAttribute("height", H);
+    c.setAttribute("viewBox", "0 0 " + PW + " " + H);
     var st = document.createElementNS(NS, "style");
     st.textContent = "text{font-family:DejaVu Sans,Helvetica,Arial,sans-serif}.ptitle{font-size:12.5px;font-weight:bold}" +
       ".tick{font-size:10.5px;fill:#444}.axis{stroke:#888}.gridl{stroke:#eceff2}.zero{stroke:#b9c0c7}" +
-      ".cursor{stroke:#c62828;stroke-width:1.3}.hoverline{display:none}.series{fill:none;stroke-width:1.6}";
+      ".series{fill:none;stroke-width:1.6}";
     c.insertBefore(st, c.firstChild);
     var bg = document.createElementNS(NS, "rect");
-    bg.setAttribute("width", PW); bg.setAttribute("height", PH); bg.setAttribute("fill", "#fff");
+    bg.setAttribute("width", PW); bg.setAttribute("height", H); bg.setAttribute("fill", "#fff");
     c.insertBefore(bg, st.nextSibling);
-    return new XMLSerializer().serializeToString(c);
+    return {text: new XMLSerializer().serializeToString(c), height: H};
   }
   function exportButtons(panel, spec, svg) {
     var bar = h("div", "pexport", panel), name = slug(spec.title);
     var b1 = h("button", "", bar, "CSV"); b1.type = "button"; b1.title = "the panel's series as CSV";
     b1.addEventListener("click", function () { download(name + ".csv", new Blob([panelCSV(spec)], {type: "text/csv"})); });
     var b2 = h("button", "", bar, "SVG"); b2.type = "button";
-    b2.addEventListener("click", function () { download(name + ".svg", new Blob([panelSVG(svg)], {type: "image/svg+xml"})); });
+    b2.addEventListener("click", function () { download(name + ".svg", new Blob([panelFigure(svg, spec).text], {type: "image/svg+xml"})); });
     var b3 = h("button", "", bar, "PNG"); b3.type = "button";
     b3.addEventListener("click", function () {
-      var img = new Image(), url = URL.createObjectURL(new Blob([panelSVG(svg)], {type: "image/svg+xml"}));
+      var fig = panelFigure(svg, spec), img = new Image(), url = URL.createObjectURL(new Blob([fig.text], {type: "image/svg+xml"}));
       img.onload = function () {
-        var cv = document.createElement("canvas"); cv.width = PW * 2; cv.height = PH * 2;
+        var cv = document.createElement("canvas"); cv.width = PW * 2; cv.height = fig.height * 2;
         var cx = cv.getContext("2d"); cx.scale(2, 2); cx.drawImage(img, 0, 0);
         URL.revokeObjectURL(url);
         cv.toBlob(function (blob) { download(name + ".png", blob); }, "image/png");
@@ -258,7 +283,7 @@
     });
   }
   window.__linkdynExport = {csv: function (n) { return panelCSV(D.plots[n]); },
-                            svg: function (n) { return panelSVG(plots[n].svg); }};
+                            svg: function (n) { return panelFigure(plots[n].svg, plots[n].spec).text; }};
 
   function drawPlots(k) {
     plots.forEach(function (p) {
@@ -342,7 +367,10 @@
   view.resize();
   document.addEventListener("keydown", function (e) {
     var tag = (e.target && e.target.tagName) || "";
-    if (tag === "INPUT" || tag === "SELECT" || tag === "BUTTON") return;
+    // a field keeps its keys, a button its Space; the arrows step the frame from a button too
+    // (after a click on a key result, which focuses it)
+    if (tag === "INPUT" || tag === "SELECT" || tag === "TEXTAREA") return;
+    if (tag === "BUTTON" && (e.key === " " || e.key === "Enter")) return;
     if (e.key === " ") { e.preventDefault(); if (playing) pause(); else play(); }
     else if (e.key === "ArrowRight") { pause(); setFrame(frame + 1); }
     else if (e.key === "ArrowLeft") { pause(); setFrame(frame - 1); }

@@ -144,6 +144,12 @@ LD.view2d = function (D, anim, fmtS) {
     return {c: c, g: g, lab: lab};
   });
 
+  // an arrow from the view's edge towards a point off it, (dx, dy) in view units (y down)
+  function pointer(dx, dy) {
+    var a = Math.atan2(-dy, dx) * 180 / Math.PI, arrows = ["→", "↗", "↑", "↖", "←", "↙", "↓", "↘"];
+    return arrows[((Math.round(a / 45) % 8) + 8) % 8];
+  }
+
   // forces: one scale (viewBox units per N) for every arrow, shown by a legend bar of a round
   // force; the largest force drawn is about a fifth of the view
   function seriesMax(key) {
@@ -371,10 +377,20 @@ LD.view2d = function (D, anim, fmtS) {
       o.x = X(p[0]); o.y = Y(p[1]);
     });
     ics.forEach(function (o) {
-      var x = S[o.c.x][k], y = S[o.c.y][k], ok = fin(x) && fin(y);
-      if (ok) { o.x = X(x); o.y = Y(y); ok = o.x >= 0 && o.x <= VW && o.y >= 0 && o.y <= VH; }
-      o.g.style.display = o.lab.style.display = ok ? "" : "none";
+      var x = S[o.c.x][k], y = S[o.c.y][k], ok = fin(x) && fin(y), inside = false;
+      o.off = false;
+      if (ok) { o.x = X(x); o.y = Y(y); inside = o.x >= 0 && o.x <= VW && o.y >= 0 && o.y <= VH; }
+      o.g.style.display = inside ? "" : "none";
+      o.lab.style.display = ok ? "" : "none";
       if (!ok) { o.x = o.y = NaN; return; }
+      if (!inside) {
+        // a centre outside the view: its label at the view's edge, pointing to it, says so
+        var m = 14 * textScale, cx = Math.min(Math.max(o.x, m), VW - m), cy = Math.min(Math.max(o.y, m), VH - m);
+        o.lab.textContent = "I " + o.c.body + " off view " + pointer(o.x - cx, o.y - cy);
+        o.x = cx; o.y = cy; o.off = true;
+        return;
+      }
+      o.lab.textContent = "I " + o.c.body;
       o.g.setAttribute("transform", "translate(" + o.x.toFixed(1) + "," + o.y.toFixed(1) + ") scale(" + textScale.toFixed(3) + ")");
     });
     // labels: pivots are obstacles; joint names first, then traced points, bodies, forces
@@ -386,7 +402,9 @@ LD.view2d = function (D, anim, fmtS) {
       traces.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 12, r: 6}); });
       bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6, prefer: o.pref}); });
     }
-    if (showICs) ics.forEach(function (o) { items.push({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8}); });
+    // a centre off the view is said at the edge whatever the room (o.off), first
+    if (showICs) ics.forEach(function (o) { if (o.off) items.unshift({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8, must: true}); });
+    if (showICs) ics.forEach(function (o) { if (!o.off) items.push({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8}); });
     if (showForces) {
       joints.forEach(function (o) { if (o.tip) items.push({node: o.flab, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
       loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
