@@ -271,9 +271,14 @@ def test_horizontal_push_up_an_incline_and_its_lock():
     with pytest.raises(AssemblyError, match=r"locks at joint J2") as err:
         analyze(pushed_up_an_incline(alpha, 1.05 * math.tan(alpha)), t)
     assert err.value.time == pytest.approx(0.0)
-    # kept as NaN rows when asked
-    sol = analyze(pushed_up_an_incline(alpha, 1.05 * math.tan(alpha)), t, allow_singular=True)
-    assert not np.any(sol.valid) and np.all(sol.friction.locked)
+    # a run none of whose samples can be driven stops even when such samples are allowed
+    with pytest.raises(AssemblyError, match=r"locks at joint J2"):
+        analyze(pushed_up_an_incline(alpha, 1.05 * math.tan(alpha)), t, allow_singular=True)
+    # in a batch of designs the locked design's rows are NaN and flagged, the other's solved
+    sol = analyze([pushed_up_an_incline(alpha, 1.05 * math.tan(alpha)),
+                   pushed_up_an_incline(alpha, 0.3)], t, allow_singular=True)
+    assert not np.any(sol.valid[0]) and np.all(sol.friction.locked[0])
+    assert np.all(sol.valid[1]) and not np.any(sol.friction.locked[1])
 
 
 def test_journal_friction_circle():
