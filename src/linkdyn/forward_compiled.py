@@ -33,6 +33,11 @@ from .dynamics import compiled as dc
 from .kinematics import compiled as kc
 from .kinematics.positions import ACCEPT
 
+try:  # optional: the numpy path is complete without it
+    from numba.typed import List
+except ImportError:  # pragma: no cover - depends on the environment
+    List = None
+
 #: The work arrays of :func:`rhs_kernel`, shaped as the batch kernels' for a block of one
 #: sample (design axis 1, block 1; :func:`work`): the kinematics' ``q``, ``phi``, ``c``, ``s``,
 #: ``qd``, ``qdd`` (n, 1, 1), ``r``, ``e`` (n, 2, 1, 1), ``tw``, ``td`` (n, 3, 1, 1), ``J``
@@ -241,16 +246,20 @@ def work(lay, n_drivers: int, n_vars: int, n_code: int) -> Work:
         tau=z(k, cases))
 
 
-def _held(item):
-    """``item`` in a numba typed List of one item (the kernel then unboxes one object per
-    call, not each of its arrays)."""
-    try:
-        from numba.typed import List
-    except ImportError:  # pragma: no cover
-        return [item]
+@njit
+def _hold(item):
+    """``item`` in a numba typed List of one item, made by compiled code: the list's methods
+    for the item's type are compiled with this function, and cached on disk with it (a list
+    made by Python compiles them again in every process)."""
     held = List()
     held.append(item)
     return held
+
+
+def _held(item):
+    """``item`` held for :func:`rhs_kernel` (:func:`_hold`; the kernel then unboxes one object
+    per call, not each of its arrays); a plain list without numba."""
+    return _hold(item) if List is not None else [item]
 
 
 class Kernel:
