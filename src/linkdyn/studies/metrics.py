@@ -44,7 +44,8 @@ A spatial model (``Model.space == "spatial"``) has the effort metrics, ``peak_F_
 the others are for planar models only (:data:`PLANAR_ONLY`, refused by name).
 
 Senses: every metric is better smaller (:func:`sense` ``'min'``) except
-``min_transmission_angle``, ``stroke_<joint>`` and ``efficiency``, better larger (``'max'``). Whatever ranks
+``min_transmission_angle``, ``stroke_<joint>``, ``efficiency``, ``output_efficiency`` and
+``min_contact_<joint>``, better larger (``'max'``). Whatever ranks
 designs (the sweep's best designs and Pareto fronts, ``compare --sweep --by``, ``optimize``)
 ranks by :func:`cost`, the metric signed so that smaller is better.
 """
