@@ -427,6 +427,44 @@ def test_stiff_toggle_implicit_methods_agree():
     assert radau.energy_drift < 1e-5 and np.all(radau.work[1:] < 0)  # the damper takes energy
 
 
+def _toggle(stiffness):
+    """The bundled toggle with its spring's stiffness changed (N/m)."""
+    m = linkdyn.load(linkdyn.example_path("toggle_spring"))
+    return replace(m, loads=tuple(replace(x, stiffness=stiffness) if x.kind == "spring" else x
+                                  for x in m.loads))
+
+
+def test_a_stiff_springs_free_acceleration_keeps_its_digits():
+    """The free acceleration is affine in the spring's stiffness k (H does not hold k, h is
+    affine in it): extrapolated from k = 0 and 2 N/mm, where it is a few hundred rad/s^2, it
+    predicts that of k = 20,000 and 2,000,000 N/mm (about 1e7 and 1e9 rad/s^2) to the
+    extrapolation's own error (~1e-13), where a unit free acceleration of 1 rad/s^2 in F5 would
+    lose the digits of 1e7 in H (~5e-10)."""
+    def qdd(k):
+        sol = simulate(_toggle(k), np.array([0.0, 1e-9]), backend="numpy")
+        return sol.columns["qdd_J1"][0]
+    a0, a1 = qdd(0.0), qdd(2e3)
+    for k in (2e7, 2e9):
+        predicted = a0 + k / 2e3 * (a1 - a0)
+        assert abs(predicted) > 1e6
+        assert abs(qdd(k) / predicted - 1) < 1e-11, k
+
+
+def test_a_thousand_times_stiffer_toggle_by_radau_agrees_with_dop853():
+    """The toggle's spring at 20,000 N/mm (the crank snaps at ~1e7 rad/s^2): Radau completes
+    and gives DOP853's motion, and both keep the energy balance."""
+    m = _toggle(2e7)
+    t = np.linspace(0.0, 2e-4, 3)
+    radau = simulate(m, t, rtol=1e-6, atol=1e-8, method="Radau", backend="numpy")
+    dop = simulate(m, t, rtol=1e-6, atol=1e-8, method="DOP853", backend="numpy")
+    q = radau.columns["q_J1"]
+    assert abs(q[-1] - q[0]) > 0.1                                    # it did snap
+    assert np.allclose(q, dop.columns["q_J1"], rtol=0, atol=1e-6)
+    w = np.abs(dop.columns["qd_J1"]).max()
+    assert np.allclose(radau.columns["qd_J1"], dop.columns["qd_J1"], rtol=0, atol=1e-4 * w)
+    assert radau.energy_drift < 1e-5 and dop.energy_drift < 1e-5
+
+
 def test_simulation_models_round_trip_through_save(tmp_path):
     from linkdyn.cli import simulation_example_names
     for name in simulation_example_names():

@@ -84,7 +84,23 @@ PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
 # moves with a constant shift of the state (:func:`restate`; not LSODA, ODEPACK's)
 UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
+UNIT_MAX = 2.0 ** 14  # free accelerations (rad/s^2, m/s^2) up to which the unit ones of F5 are 1
 MAX_EVENTS = 10_000  # changes of the stick-slip state in a run (F13)
+
+
+def unit_scale(qdd_f) -> np.ndarray:
+    """Size of the unit free accelerations of F5 (nf, T) for states whose free accelerations
+    are about ``qdd_f`` (nf, T): 1 up to :data:`UNIT_MAX`, else the power of two nearest
+    ``|qdd_f|``.
+
+    Column j of ``H`` is ``(tau(s e_j) - tau(0)) / s``, and ``|tau(0)| = |h| ~ |H qdd_f|``: with
+    ``s = 1`` the difference loses the digits of ``|qdd_f|`` (about 7 under a stiff spring's
+    1e7 rad/s^2). A power of two keeps the division exact and every ordinary motion's numbers
+    as they were; what is not finite, or too large to scale, keeps 1.
+    """
+    a = np.abs(np.asarray(qdd_f, dtype=float))
+    big = np.isfinite(a) & (a > UNIT_MAX) & (a < 2.0 ** 512)
+    return np.where(big, np.exp2(np.round(np.log2(np.where(big, a, 1.0)))), 1.0)
 
 
 @dataclass(frozen=True)
@@ -379,6 +395,7 @@ class System:
         self.held = np.zeros(self.nf, bool)      # the free coordinates stuck
         self.sense = np.ones(self.nf)            # the sense of sliding of the others
         self.efforts = self.ratio = None
+        self.scale = np.ones((self.nf, 1))   # the unit free accelerations' sizes (F5)
         self.iterations = 0
         # sample 0: qdd_f = 0; sample 1 + j: qdd_f = e_j (unit acceleration)          (F5)
         # sample 1 + nf + l: qdd_f = 0 and a unit effort in friction load l           (F13)
@@ -428,25 +445,27 @@ class System:
             g[self.dep] += S @ (q_ind - g[self.ind])
         return g
 
-    def reduced(self, t, q_f, qd_f, guess, drivers=None):
+    def reduced(self, t, q_f, qd_f, guess, drivers=None, scale=None):
         """The free coordinates' equations of motion ``H qdd_f + h = 0`` at the states
         ``(t, q_f, qd_f)``, each (nf, T) but t (T,), from a tree-coordinate ``guess`` (n, T);
-        ``drivers``: the drivers' ``(q, qd, qdd)`` (nd, T) at ``t`` when the caller has them.
+        ``drivers``: the drivers' ``(q, qd, qdd)`` (nd, T) at ``t`` when the caller has them;
+        ``scale`` (nf, T): the size of the unit free accelerations (:func:`unit_scale`; 1).
 
         Returns ``H`` (nf, nf, T) (kg m^2, kg m or kg), ``h`` (nf, T) (N m or N: the effort
         an actuator in each free joint would need to hold ``qdd_f = 0``, without friction),
         the efforts ``tau`` of every independent joint (k, C, T) of the batch, and its
         kinematics, loads and dynamics (C, T), ``C = 1 + nf + k`` (sample 0: ``qdd_f = 0``;
-        1 + j: ``qdd_f = e_j``; 1 + nf + l: a unit effort in friction load l, F13).
+        1 + j: ``qdd_f = scale[j] e_j``; 1 + nf + l: a unit effort in friction load l, F13).
         """
         nd, nf, k = self.nd, self.nf, len(self.rows)
         part, lay = self.part, self.lay
         C = 1 + nf + k
         q_d, qd_d, qdd_d = driver_values(part.model, t) if drivers is None else drivers
+        scale = np.ones((nf, len(t))) if scale is None else scale
         q_ind = np.concatenate((q_d, q_f))[:, None]              # (k, 1, T)
         qd_ind = np.concatenate((qd_d, qd_f))[:, None]
         qdd_ind = np.concatenate((np.broadcast_to(qdd_d[:, None], (nd, C, len(t))),
-                                  np.broadcast_to(self.unit, (nf, C, len(t)))))
+                                  self.unit * scale[:, None]))
         kin = at_state(part.inner, lay, t, q_ind, qd_ind, qdd_ind, guess[:, None])
         # the layout holds the model's gravity and load rows (not rebuilt at every call)
         applied = loads_mod.wrenches(None, kin)
@@ -460,11 +479,13 @@ class System:
         tau = np.moveaxis(dyn.tau, -1, 0)                        # (k, 1 + nf, T)
         # tau_f = H qdd_f + h: h at qdd_f = 0, H's columns the unit responses   (F4-F5)
         h = tau[nd:, 0]
-        H = tau[nd:, 1:1 + nf] - h[:, None]                      # (row, column, T)
+        H = (tau[nd:, 1:1 + nf] - h[:, None]) / scale            # (row, column, T)
         return H, h, tau, kin, applied, dyn
 
-    def evaluate(self, t, q_f, qd_f, guess):
-        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,).
+    def evaluate(self, t, q_f, qd_f, guess, near=None):
+        """Free accelerations at the states ``(t, q_f, qd_f)``, each (nf, T) but t (T,);
+        ``near`` (nf, T): free accelerations about as large (the reference's by default), which
+        size the unit ones (:func:`unit_scale`, kept in :attr:`scale`).
 
         Returns ``qdd_f`` (nf, T), the kinematics of the batch (C, T) (sample 0: qdd_f = 0)
         and the power of drivers and non-conservative loads, friction's included (T,). With
@@ -474,10 +495,12 @@ class System:
         """
         nd, nf = self.nd, self.nf
         drivers = driver_values(self.part.model, t)
-        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess, drivers)
+        near = self.ref[3][self.ind[nd:], None] if near is None else near
+        self.scale = scale = np.broadcast_to(unit_scale(near), (nf, len(t)))
+        H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess, drivers, scale)
         qd_d = drivers[1]
         if self.rows:
-            qdd_f, f, tau_d = self._friction(tau, kin, dyn)
+            qdd_f, f, tau_d = self._friction(tau, kin, dyn, scale)
             # friction's power f qd_joint joins the loads'                          (F13)
             power = applied.power[0] + np.sum(tau_d * qd_d, axis=0) + np.sum(
                 f * np.stack([kin.joint_motion[1][r.joint][0] for r in self.rows]), axis=0)
@@ -488,15 +511,17 @@ class System:
             else:
                 qdd_f = solve_small(H, -h)[0] if nf else np.zeros((0, len(t)))
             # drivers' efforts at the solution (affine in qdd_f) and the power balance   (F8)
-            tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", tau[:nd, 1:] - tau[:nd, :1], qdd_f)
+            tau_d = tau[:nd, 0] + np.einsum("jkt,kt->jt", (tau[:nd, 1:] - tau[:nd, :1]) / scale,
+                                            qdd_f)
             power = applied.power[0] + np.sum(tau_d * qd_d, axis=0)
         ok = kin.valid[0] & (kin.pivot[0] > SINGULAR) & (dyn.pivot[0] > SINGULAR)
         qdd_f = np.where(ok, qdd_f, np.nan)
         return qdd_f, kin, power
 
-    def _friction(self, tau, kin, dyn):
+    def _friction(self, tau, kin, dyn, scale):
         """The free accelerations (nf, T), friction efforts (k, T) and drivers' efforts
-        (nd, T) of the batch of :meth:`reduced`, solved together (F13).
+        (nd, T) of the batch of :meth:`reduced` (unit accelerations of sizes ``scale``
+        (nf, T)), solved together (F13).
 
         Efforts and reaction forces are affine in the free accelerations and the friction
         efforts (columns 1 .. nf and 1 + nf .. of the batch). A stuck coordinate has
@@ -511,7 +536,8 @@ class System:
         def split(x):
             # (..., C, T) -> value at case 0, unit-acceleration and unit-effort responses
             x0 = x[..., 0, :]
-            return x0, x[..., 1:n1, :] - x0[..., None, :], x[..., n1:, :] - x0[..., None, :]
+            return (x0, (x[..., 1:n1, :] - x0[..., None, :]) / scale,
+                    x[..., n1:, :] - x0[..., None, :])
         react = reactions_mod.solve(self.part.inner, kin, dyn)
         F0, Fq, Ff = split(friction_mod.forces(react, self.rows))   # (k, 2, [nf | k], T)
         h, H, B = split(tau[nd:])                                    # (nf, [nf | k], T)
@@ -561,18 +587,19 @@ class System:
         tau_d = d0 + np.einsum("jkt,kt->jt", Dq, qdd_f) + np.einsum("jkt,kt->jt", Df, f)
         return qdd_f, f, tau_d
 
-    def tree(self, kin, qdd_f) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def tree(self, kin, qdd_f, scale) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Tree coordinates, rates and accelerations (n, T) at the solution of an
-        :meth:`evaluate` (the accelerations affine in ``qdd_f``, F5)."""
+        :meth:`evaluate` (the accelerations affine in ``qdd_f``, F5; ``scale`` (nf, T) its
+        unit accelerations' sizes)."""
         q, qd, qdd = kin.joint_motion
         tj = self.tree_joint
         qt, qdt, qddt = (np.stack([np.zeros_like(x[tj[0]][0])] + [x[j][0] for j in tj])
                          for x in (q, qd, qdd))
         if len(qdd_f):
-            # column k of the unit responses: qdd(qdd_f = e_k) - qdd(0)
+            # column k of the unit responses: (qdd(qdd_f = s_k e_k) - qdd(0)) / s_k
             n1 = 1 + len(qdd_f)
             du = np.stack([np.zeros_like(qdd[tj[0]][1:n1])]
-                          + [qdd[j][1:n1] - qdd[j][:1] for j in tj])
+                          + [(qdd[j][1:n1] - qdd[j][:1]) / scale for j in tj])
             qddt = qddt + np.einsum("kt,nkt->nt", qdd_f, du)
         return qt, qdt, qddt
 
@@ -582,14 +609,14 @@ class System:
         if self.kernel is not None:
             out = self.kernel(t, y, self.ref)
             if out is not None:
-                self.last = (t, y.copy(), None, None)
+                self.last = (t, y.copy(), None, None, None)
                 self._check(t, y, out)
                 return out
         tt = np.array([t])
         q_ind = np.concatenate((driver_values(self.part.model, tt)[0], y[:nf, None]))
         qdd, kin, power = self.evaluate(tt, y[:nf, None], y[nf:2 * nf, None],
                                         self.guess(tt, q_ind))
-        self.last = (t, y.copy(), kin, qdd)
+        self.last = (t, y.copy(), kin, qdd, self.scale)
         out = np.concatenate((y[nf:2 * nf], qdd[:, 0], power))
         self._check(t, y, out)
         return out
@@ -623,12 +650,12 @@ class System:
         (n_rows, n - 1), or None where the state does not close."""
         if self.last is None or self.last[0] != t or not np.array_equal(self.last[1], y):
             self(t, y)
-        _, _, kin, qdd_f = self.last
+        _, _, kin, qdd_f, scale = self.last
         if kin is None:   # the compiled kernel's last evaluation
             q, qd, qdd = (x.copy() for x in self.kernel.state)
             J = self.kernel.J.copy()
         else:
-            q, qd, qdd = (x[:, 0] for x in self.tree(kin, qdd_f))
+            q, qd, qdd = (x[:, 0] for x in self.tree(kin, qdd_f, scale))
             J = kin.jacobian[:, :, 0, 0]
         if J is not None and all(np.all(np.isfinite(x)) for x in (q, qd, qdd)):
             self.set_reference(t, q, qd, qdd, J)
@@ -1295,7 +1322,11 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend, modes):
         # numpy's stages (and their damped restart) where the compiled Newton did not close
         if system.rows:
             system.modes(mode[:nf] > 0.5, mode[nf:])
-        qdd_f[:, at] = system.evaluate(t[at], q_f[:, at], qd_f[:, at], guesses[:, at])[0]
+        args = (t[at], q_f[:, at], qd_f[:, at], guesses[:, at])
+        qdd_f[:, at] = qdd = system.evaluate(*args)[0]
+        if np.any(unit_scale(qdd) != 1.0):
+            # again with unit accelerations the size of these (F5)
+            qdd_f[:, at] = system.evaluate(*args, near=qdd)[0]
         if system.rows:
             efforts[:, at] = system.efforts
     q_d, qd_d, qdd_d = driver_values(model, t)
