@@ -19,10 +19,8 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import argparse  # noqa: E402
 import dataclasses  # noqa: E402
 import math  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -32,6 +30,7 @@ from linkdyn.joints.cam import laws_name  # noqa: E402
 from linkdyn.joints.rocker_cam import start_angle  # noqa: E402
 from linkdyn.model import Driver  # noqa: E402
 from linkdyn.motion import Segment, SegmentMotion  # noqa: E402
+from ratio import best_time, options, verdict  # noqa: E402
 
 TARGET_RATIO = 0.5   # issue 26: a cam-driven four-bar at least half the plain four-bar's speed
 
@@ -54,23 +53,10 @@ def plain_fourbar(cam):
         assembly_phi={**{n: v for n, v in cam.assembly_phi.items() if n != "cam"}, "arm": g0})
 
 
-def best_time(fn, repeat, clock):
-    times = []
-    for _ in range(repeat):
-        t0 = clock()
-        fn()
-        times.append(clock() - t0)
-    return min(times)
-
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", type=int, default=100_000)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--backend", default="compiled")
-    ap.add_argument("--clock", choices=("wall", "cpu"), default="cpu")
-    args = ap.parse_args()
-    clock = time.process_time if args.clock == "cpu" else time.perf_counter
+    args = options(__doc__)
+    clock = args.time
     cam = linkdyn.load(linkdyn.example_path("cam_fourbar"))
     plain = plain_fourbar(cam)
     t = np.linspace(0.0, 2 * math.pi / cam.drivers[0].motion.speed, args.samples)
@@ -92,8 +78,7 @@ def main():
         print(f"  {name:22s} {speed[name]:12.4g} samples/s   (kinematics "
               f"{100 * kin / full:4.0f} % of it)")
     ratio = speed["cam-driven four-bar"] / speed["plain four-bar"]
-    print(f"  ratio                  {ratio:12.3f}   (target >= {TARGET_RATIO}: "
-          f"{'met' if ratio >= TARGET_RATIO else 'NOT met'})")
+    print(verdict(ratio, TARGET_RATIO))
 
 
 if __name__ == "__main__":

@@ -16,14 +16,13 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-import argparse  # noqa: E402
 import dataclasses  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
 from linkdyn.friction import joint_friction  # noqa: E402
+from ratio import best_time, options, verdict  # noqa: E402
 
 TARGET_RATIO = 0.5   # issue 25: friction at four pins at least half the frictionless throughput
 
@@ -34,23 +33,10 @@ def with_friction(mech, mu=0.15, radius=0.008):
     return dataclasses.replace(mech, loads=mech.loads + extra)
 
 
-def best_time(fn, repeat, clock):
-    times = []
-    for _ in range(repeat):
-        t0 = clock()
-        fn()
-        times.append(clock() - t0)
-    return min(times)
-
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--samples", type=int, default=100_000)
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--backend", default="compiled")
-    ap.add_argument("--clock", choices=("wall", "cpu"), default="cpu")
-    args = ap.parse_args()
-    clock = time.process_time if args.clock == "cpu" else time.perf_counter
+    args = options(__doc__)
+    clock = args.time
     plain = linkdyn.load(linkdyn.example_path("hoeken"))
     rubbing = with_friction(plain)
     t = np.linspace(0.0, 1.0, args.samples)
@@ -65,8 +51,7 @@ def main():
     print(f"  friction at 4 pins   {args.samples / tf:12.4g} samples/s "
           f"(Newton {sol.friction.iterations} iterations)")
     ratio = tp / tf
-    print(f"  ratio                {ratio:12.3f}   (target >= {TARGET_RATIO}: "
-          f"{'met' if ratio >= TARGET_RATIO else 'NOT met'})")
+    print(verdict(ratio, TARGET_RATIO))
 
 
 if __name__ == "__main__":

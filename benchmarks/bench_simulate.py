@@ -44,7 +44,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 import linkdyn  # noqa: E402
-from linkdyn.forward import _start, _System, partition, simulate  # noqa: E402
+from linkdyn.forward import System, partition, simulate, start_state  # noqa: E402
 from linkdyn.model import Model  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -206,8 +206,8 @@ def rhs_time(model, repeat=200, h=2e-3, fast=False):
     of this process (best of three rounds): on a shared machine the wall time counts the other
     jobs too. ``fast``: the compiled right-hand side (compiled before the timing)."""
     part = partition(model)
-    q0 = _start(part)
-    system = _System(part, q0, np.zeros(len(q0)), fast)
+    q0 = start_state(part)
+    system = System(part, q0, np.zeros(len(q0)), fast)
     y = np.array([q0[part.layout.topo.driven[-1]], 3.0, 0.0])
     system.accept(0.0, y)
     y1 = y + h * system(0.0, y)
