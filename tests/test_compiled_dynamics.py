@@ -133,7 +133,7 @@ def test_bundled_examples(name):
 def test_dynamics_test_models(name):
     model = MODELS[name]()
     kin = numpy_kinematics(model, times(model, 33))
-    check_all(*both(model, kin))
+    check_all(*both(model, kin), size=float(np.max(kin.layout.size)))
 
 
 def yoke_and_rocker():
