@@ -369,26 +369,12 @@ def test_reference_cylindrical_redundant_loop_closed_form(tmp_path):
 
 # -------------------------------------------------------------- linkdyn against the reference
 
-@functools.lru_cache(maxsize=None)
-def spatial_solver_ready() -> bool:
-    """True when linkdyn loads a spatial model as one (the solver is merged)."""
-    try:
-        return getattr(linkdyn.load(linkdyn.example_path("rsur")), "space", None) == "spatial"
-    except Exception:                                   # noqa: BLE001 - any refusal means "not yet"
-        return False
-
-
-needs_solver = pytest.mark.skipif("not spatial_solver_ready()",
-                                  reason="linkdyn's spatial solver is not on this branch")
-
-
 def linkdyn_columns(name: str, t) -> dict:
     sol = linkdyn.analyze(linkdyn.load(linkdyn.example_path(name)), t)
     cols = sol.columns() if callable(sol.columns) else sol.columns
     return {k: np.asarray(v) for k, v in cols.items()}
 
 
-@needs_solver
 @pytest.mark.parametrize("name", SPATIAL)
 def test_linkdyn_spatial_equals_the_reference(name):
     """Every column the contract names (joint coordinates and rates, quaternions, angular rates,
@@ -400,7 +386,6 @@ def test_linkdyn_spatial_equals_the_reference(name):
     assert_close(got, want, 1e-9)
 
 
-@needs_solver
 def test_linkdyn_hoeken_spatial_equals_linkdyn_planar():
     """linkdyn's spatial solve of hoeken_spatial against its planar solve of hoeken.toml: to 1e-12
     of each column's peak, out-of-plane reactions zero."""
@@ -427,7 +412,6 @@ def test_linkdyn_hoeken_spatial_equals_linkdyn_planar():
             assert np.max(np.abs(s[f"M{c}_{j}"])) <= 1e-12 * fpeak * size
 
 
-@needs_solver
 @pytest.mark.parametrize("name, gruebler, mobility", [
     ("hoeken_spatial", -2, 1), ("rsur", 1, 1), ("spherical_fourbar", -2, 1),
     ("spatial_slider_crank", 1, 1), ("rps3", 3, 3), ("stewart", 6, 6)])
@@ -447,7 +431,6 @@ def test_linkdyn_check_counts_and_names_the_redundant_rows(name, gruebler, mobil
         assert not redundant, out
 
 
-@needs_solver
 @pytest.mark.parametrize("name, dimension", [("hoeken_spatial", 3), ("spherical_fourbar", 3),
                                              ("rsur", 0)])
 def test_linkdyn_undetermined_reactions_span_the_references(name, dimension):
@@ -468,7 +451,6 @@ def test_linkdyn_undetermined_reactions_span_the_references(name, dimension):
         assert np.max(np.abs(q @ q.T - b @ b.T)) < 1e-9
 
 
-@needs_solver
 @pytest.mark.parametrize("text, duration", [(SKEW_PENDULUM, 1.5), (SCREW, 1.2)],
                          ids=["skew_pendulum", "cylindrical_screw"])
 def test_linkdyn_closed_form_models_equal_the_reference(tmp_path, text, duration):
@@ -484,7 +466,6 @@ def test_linkdyn_closed_form_models_equal_the_reference(tmp_path, text, duration
     assert_close(got, want, 1e-9)
 
 
-@needs_solver
 def test_linkdyn_spatial_api_gives_the_reference_numbers():
     """The Solution's arrays (the contract's Python API) against the reference's columns on rsur:
     effort, reaction (spherical: zero couple), point and its rates, omega, alpha, quaternion,
@@ -517,7 +498,6 @@ def test_linkdyn_spatial_api_gives_the_reference_numbers():
     assert_close(got, {k: v for k, v in want.items() if k not in EXTRA}, 1e-9, names=list(got))
 
 
-@needs_solver
 def test_linkdyn_analyze_writes_the_reference_columns(tmp_path):
     """`linkdyn analyze spatial_slider_crank --samples 9`: results.csv holds every column the
     reference computes, equal to it at the file's own times (1e-9 of each column's peak)."""
