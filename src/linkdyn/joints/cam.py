@@ -260,6 +260,17 @@ class Cam(JointKind):
             return "law must be a rise law (harmonic, cycloidal, poly345, ...), not dwell"
         return None
 
+    def refuse_swing(self, numbers: dict, start: float, part: str, fix: str) -> str | None:
+        """Why an oscillating follower's ``swing`` is no swing (None: it is one): positive, and
+        short of the line of centres, ``start`` (rad) away at the bottom of the swing; ``part``
+        names what swings, ``fix`` what to change."""
+        if not numbers["swing"] > 0:
+            return "swing must be a positive angle"
+        if not numbers["swing"] < start:
+            return (f"the {part} would swing past the line of centres (swing at most "
+                    f"{math.degrees(start):.4g} deg here); {fix}")
+        return None
+
     def refuse_curve(self, numbers: dict) -> str | None:
         """Why the pitch curve cannot be followed (None: it can): its polar angle must fall
         evenly for the contact's Newton iterations, and it must not bend tighter than the

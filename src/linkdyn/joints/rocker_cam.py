@@ -26,8 +26,6 @@ with its follower point ``F(s)`` in place of ``(e, d0 + s)``. ``q`` is the arm's
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .base import Number
@@ -71,13 +69,9 @@ class RockerCam(Cam):
         if not abs(a - arm) < rb + rf < a + arm:
             return ("the arm must reach the prime circle: |pivot - arm| < base_radius + "
                     "roller_radius < pivot + arm")
-        if not numbers["swing"] > 0:
-            return "swing must be a positive angle"
-        if not numbers["swing"] < start_angle(numbers):
-            return (f"the arm would swing past the line of centres (swing at most "
-                    f"{math.degrees(start_angle(numbers)):.4g} deg here); shorten the swing "
-                    "or lengthen the arm")
-        return self.refuse_lift(numbers) or self.refuse_curve(numbers)
+        return (self.refuse_swing(numbers, start_angle(numbers), "arm",
+                                  "shorten the swing or lengthen the arm")
+                or self.refuse_lift(numbers) or self.refuse_curve(numbers))
 
     steep_fix = "shorten the swing, or move the pivot further from the cam"
 

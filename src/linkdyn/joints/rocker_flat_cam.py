@@ -18,8 +18,6 @@ angle ``alpha0`` that puts it at ``R_b`` from C; the cam turning counter-clockwi
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .cam import BASE_RADIUS, DWELL, FALL, LAW, OFFSET, OSCILLATING, RISE
@@ -52,13 +50,9 @@ class RockerFlatCam(FlatCam):
         if not 0 < rb + f < a:
             return ("the pivot must be further from the cam's centre than the face at the "
                     "base circle: 0 < base_radius + offset < pivot")
-        if not numbers["swing"] > 0:
-            return "swing must be a positive angle"
-        if not numbers["swing"] < start_angle(numbers):
-            return (f"the face would swing past the line of centres (swing at most "
-                    f"{math.degrees(start_angle(numbers)):.4g} deg here); shorten the swing "
-                    "or move the pivot further from the cam")
-        return self.refuse_lift(numbers) or self.refuse_curve(numbers)
+        return (self.refuse_swing(numbers, start_angle(numbers), "face",
+                                  "shorten the swing or move the pivot further from the cam")
+                or self.refuse_lift(numbers) or self.refuse_curve(numbers))
 
     steep_fix = "shorten the swing or lengthen the rise and the return"
 
