@@ -14,6 +14,13 @@ that changes any result beyond rounding fails here (a sweep's metric is held to 
 over the designs; the optimizer must find the same best design, each parameter to 1e-12 of its
 range, each metric to 1e-12 of its value); an output meant to change is re-recorded
 with ``python tests/golden.py`` and the commit says why.
+
+A ``simulate`` run is held to 1e-9 of its scale instead: an integration carries the rounding of
+every step forward, and the machine's own rounding moves it. Measured: the same commit on the
+same numpy and scipy, with OpenBLAS's AVX-512 kernels against its AVX2 ones
+(``OPENBLAS_CORETYPE=Haswell``), differs by 4.7e-11 on ``fourbar_release`` and 1.7e-12 on
+``toggle_spring``, far below the runs' integration tolerances (1e-8 and 1e-5), which a change of
+method or formula would cross.
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ from linkdyn import compiled
 import golden
 
 RTOL = 1e-12
+SIMULATE_RTOL = 1e-9   # an integration's rounding grows with its steps (the docstring)
 STORED = np.load(golden.PATH)
 STORED_EXAMPLES = sorted({k.split("/")[0] for k in STORED.files})
 RUNS = np.load(golden.RUNS)
@@ -97,8 +105,8 @@ def stored_run(prefix: str) -> dict[str, np.ndarray]:
     return {k[len(prefix) + 1:]: RUNS[k] for k in RUNS.files if k.startswith(prefix + "/")}
 
 
-def off(got: dict, stored: dict, scale: dict) -> dict[str, float]:
-    """The columns of ``got`` farther than ``RTOL * scale`` from ``stored`` (NaN where the
+def off(got: dict, stored: dict, scale: dict, rtol: float = RTOL) -> dict[str, float]:
+    """The columns of ``got`` farther than ``rtol * scale`` from ``stored`` (NaN where the
     stored value is NaN is agreement; anywhere else it fails), relative to their scale."""
     missing = set(stored) - set(got)
     assert not missing, f"columns gone: {sorted(missing)}"
@@ -107,7 +115,7 @@ def off(got: dict, stored: dict, scale: dict) -> dict[str, float]:
         new = np.asarray(got[c], float)
         same_nan = np.array_equal(np.isnan(new), np.isnan(ref))
         err = float(np.nanmax(np.abs(new - ref), initial=0.0))
-        if not (same_nan and err <= RTOL * scale[c]):
+        if not (same_nan and err <= rtol * scale[c]):
             bad[c] = err / scale[c] if same_nan else "NaN moved"
     return bad
 
@@ -124,7 +132,7 @@ def test_stored_runs_cover_every_case():
 @pytest.mark.parametrize("case", sorted(golden.SIMULATE))
 def test_simulate_matches_stored(case, backend):
     stored = stored_run(f"simulate/{case}")
-    bad = off(golden.simulate(case, backend), stored, scales(stored))
+    bad = off(golden.simulate(case, backend), stored, scales(stored), SIMULATE_RTOL)
     assert not bad, f"simulate {case} ({backend}): columns off by (relative to scale): {bad}"
 
 

@@ -337,7 +337,17 @@ def test_parallelogram_chain_falls_flat_and_through():
     ref = reference(lambda t, y: [y[1], -G * b * math.cos(y[0]) / a], [math.pi / 4, 0.0], t)
     phi = sol.columns["q_G0"]
     assert phi.min() < -math.pi          # through flat (0) and flat again (-pi)
-    assert np.max(np.abs(phi - ref[0])) < 1e-6
+    # 1e-6 where a step's dense output does not span a flat position; 1e-4 where it does: the
+    # right-hand side 4.5e-5 rad from flat is 1.5e-2 off the closed form (its dependent
+    # coordinates are ill-determined there) and a stage landing there bends the interpolant
+    # between the step's accurate ends (measured 4e-5 with OpenBLAS's AVX-512 kernels, 1e-8 with
+    # its AVX2 ones, the same steps)
+    s = np.sign(np.sin(ref[0]))
+    crossed = np.flatnonzero(s[1:] != s[:-1])     # flat between samples i and i + 1
+    near_flat = np.isin(np.arange(len(t)), np.concatenate((crossed, crossed + 1)))
+    assert near_flat.sum() == 4
+    assert np.max(np.abs(phi - ref[0])[~near_flat]) < 1e-6
+    assert np.max(np.abs(phi - ref[0])) < 1e-4
     # every window stays a parallelogram (the branch its velocity leads to)
     for k in range(n + 1):
         assert np.max(np.abs(sol.columns[f"q_G{k}"] - phi)) < 1e-9

@@ -16,6 +16,9 @@ from .path import TWO_PI, default_path_point, joint_travel, path_straightness
 from .shaking import inertia_wrench, shaking_wrench
 from ..units import Units
 
+# a cam's contact force counts as lost below -ROUNDING x its peak, not at the last digit
+ROUNDING = 1e-12
+
 
 def peak(x):
     """Largest |x| over the last (time) axis, finite samples only: (...,) for x (..., T); NaN
@@ -207,14 +210,17 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
 def contact(sol) -> dict:
     """The contact force of every joint that can only push (a cam's, ``one_sided``), by joint
     name: its signed magnitude ``|R|`` (N; negative where the multiplier is: the cam would
-    pull), its least value and time, and the samples where it is below zero (``lost_samples``,
-    the first and last of their times): where the follower would leave the cam at the run's
-    speed, and a stronger spring or preload is needed."""
+    pull), its least value and time, and the samples where it is below zero by more than
+    rounding, 1e-12 of its peak (``lost_samples``, the first and last of their times): where
+    the follower would leave the cam at the run's speed, and a stronger spring or preload is
+    needed. (A spring the summary proposes makes the least force zero: rounding decides its
+    sign there.)"""
     m, t = sol.model, sol.t
     forces = contact_forces(sol, sol.dyn, sol.reactions)
     out = {}
     for name, f in forces.items():
-        lost = np.isfinite(f) & (f < 0)
+        # lost: below zero beyond rounding
+        lost = np.isfinite(f) & (f < -ROUNDING * np.nanmax(np.abs(f), initial=0.0))
         kmin = int(np.nanargmin(f)) if np.any(np.isfinite(f)) else 0
         out[name] = {
             "min_force_N": float(f[kmin]), "min_time_s": float(t[kmin]),
