@@ -153,3 +153,29 @@ def test_a_damper_beside_the_spring_damps_the_mode_as_the_closed_form_says():
     assert md.stable and md.damping_ratios[0] == pytest.approx(-s.real / abs(s), rel=1e-12)
     at = modes(equilibrium(benchmark(THETA_PUBLISHED, damping=1.0), search=False))
     assert abs(pair(at.eigenvalues)[0] - (-0.242385809304825 + 2.133955028187978j)) < 4e-11
+
+
+def test_the_command_line_linearizes_at_the_published_equilibrium(tmp_path):
+    """``linkdyn modes --at-start`` on the file started at the published angle: no Newton step,
+    the frequency of the published eigenvalue, the residual the equation leaves there."""
+    import json
+
+    from click.testing import CliRunner
+
+    from linkdyn.cli import main
+    path = tmp_path / "iftomm.toml"
+    path.write_text(FILE.read_text("utf-8").replace("q = { B = 2.0 }",
+                                                    f"q = {{ B = {THETA_PUBLISHED} }}"), "utf-8")
+    res = CliRunner().invoke(main, ["modes", str(path), "--at-start", "--json"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.output)
+    assert data["iterations"] == 0 and data["q"]["B"] == THETA_PUBLISHED
+    assert data["residual"][0] == pytest.approx(generalized_force(THETA_PUBLISHED), abs=1e-12)
+    f = data["modes"][0]["frequency_hz"]
+    assert f == pytest.approx(EIGEN_PUBLISHED / (2 * math.pi), abs=2e-12)
+    txt = CliRunner().invoke(main, ["modes", str(path), "--at-start"]).output
+    assert "taken as the equilibrium: the start of B" in txt and "after 0 Newton step" in txt
+    assert f"{f:.6g} Hz" in txt
+    # without --at-start: Newton's method moves it to the root, 3.8e-11 rad away
+    res = CliRunner().invoke(main, ["equilibrium", str(path), "--json"])
+    assert json.loads(res.output)["q"]["B"] == pytest.approx(root(), abs=1e-12)

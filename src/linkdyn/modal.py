@@ -65,7 +65,7 @@ class Equilibrium:
     residual : ndarray (f,)
         ``h`` at the solution, N m or N (what an actuator in each free joint would still need).
     iterations : int
-        Newton steps taken.
+        Newton steps taken (0: the start taken as the equilibrium, ``search=False``).
     mass, stiffness, damping : ndarray (f, f)
         ``H``, ``K = dh/dq_f``, ``C = dh/dqd_f`` there (kg m^2 / N m per rad / N m s per rad
         for angles; kg, N/m, N s/m for lengths; mixed where the coordinates mix).
@@ -448,7 +448,8 @@ def as_dict(eq: Equilibrium, md: Modes | None = None) -> dict:
 def text(eq: Equilibrium, md: Modes | None = None) -> str:
     """The equilibrium (and modes) as the command line prints them, in the file's units."""
     m = eq.model
-    lines = [f"{m.name}: static equilibrium of {', '.join(eq.free)}"
+    what = "static equilibrium" if eq.iterations else "taken as the equilibrium: the start"
+    lines = [f"{m.name}: {what} of {', '.join(eq.free)}"
              + (" (drivers held at their t = 0 position)" if m.drivers else "")]
     for j in eq.tree_joints:
         unit, si, _ = _unit(m, j)
