@@ -72,3 +72,8 @@ def test_bench_cam():
     # its check: the plain four-bar's input follows the cam's arm (1e-9 rad) before timing
     out = run("bench_cam.py", "--samples", "2000", "--repeat", "1")
     assert "cam-driven four-bar" in out and "ratio" in out
+
+
+def test_bench_modes():
+    out = run("bench_modes.py", "--repeat", "1", "--executions", "2")
+    assert "accuracy" in out and "equilibrium + modes" in out and "2 linearizations" in out

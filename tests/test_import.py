@@ -166,6 +166,10 @@ def _free_tracker(d):
     d["joints"].append({"id": "T", "type": "tracker", "position": [1, 1]})
 
 
+def _slot_of_no_link(d):
+    d["joints"].append({"id": "S", "type": "prismatic", "position": [1, 1], "line_link": "nope"})
+
+
 @pytest.mark.parametrize("case, words", [
     ("chebyshev", ["link 'crank'", "'arc_driver'"]),
     ("inverted_stroke_engine", ["link 'Slider_guide'", "pinned to the ground at 2 joints"]),
@@ -173,7 +177,9 @@ def _free_tracker(d):
     (_second_driver, ["2 driver links", "crank, rocker"]),
     (_legacy, ["joint 'coupler.0_crank.tip'", "'Crank'"]),
     (_free_tracker, ["joint 'T'", "'tracker'", "no reference joints"]),
-], ids=["arc_driver", "pinned-twice", "mobility-0", "two-drivers", "legacy-type", "free-tracker"])
+    (_slot_of_no_link, ["joint 'S'", "'prismatic'", "link 'nope'"]),
+], ids=["arc_driver", "pinned-twice", "mobility-0", "two-drivers", "legacy-type", "free-tracker",
+        "slot-of-no-link"])
 def test_what_linkdyn_cannot_represent_is_refused_by_name(case, words, tmp_path):
     if isinstance(case, str):
         file = DATA / f"{case}.json"

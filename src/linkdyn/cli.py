@@ -1021,14 +1021,21 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
 
 # ---------------------------------------------------------------------------- equilibrium
 
+_AT_START = click.option(
+    "--at-start", is_flag=True,
+    help="No Newton step: take the start ([initial] q) as the equilibrium, e.g. a published "
+         "one, and linearize there; the residual says how far it is from one.")
+
+
 @main.command()
 @click.argument("model", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print the results as JSON (SI units).")
+@_AT_START
 @_ALLOW_OUTSIDE
-def equilibrium(model, as_json, allow_outside):
+def equilibrium(model, as_json, at_start, allow_outside):
     """The static equilibrium of MODEL's free joints under its loads, from [initial] q (else the
     assembly), drivers held at their t = 0 position, and whether it is stable."""
-    _equilibrium(model, as_json, allow_outside, with_modes=False)
+    _equilibrium(model, as_json, allow_outside, with_modes=False, at_start=at_start)
 
 
 @main.command()
@@ -1038,11 +1045,12 @@ def equilibrium(model, as_json, allow_outside):
               help="Also write mode<k>.html: each oscillating mode animated over one period.")
 @click.option("-o", "--outdir", default="out/modes", show_default=True,
               type=click.Path(file_okay=False), help="Folder for the --report pages.")
+@_AT_START
 @_ALLOW_OUTSIDE
-def modes(model, as_json, report, outdir, allow_outside):
+def modes(model, as_json, report, outdir, at_start, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    md = _equilibrium(model, as_json, allow_outside, with_modes=True)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start)
     if report:
         from . import design, modal as eq_mod
         from .analysis import analyze as run
@@ -1065,12 +1073,12 @@ def modes(model, as_json, report, outdir, allow_outside):
             click.echo(f"wrote {', '.join(map(str, written))}")
 
 
-def _equilibrium(model, as_json, allow_outside, with_modes):
+def _equilibrium(model, as_json, allow_outside, with_modes, at_start):
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
     not_yet(mech, "modes" if with_modes else "equilibrium")
-    eq = eq_mod.equilibrium(mech)
+    eq = eq_mod.equilibrium(mech, search=not at_start)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))

@@ -65,7 +65,7 @@ class Equilibrium:
     residual : ndarray (f,)
         ``h`` at the solution, N m or N (what an actuator in each free joint would still need).
     iterations : int
-        Newton steps taken.
+        Newton steps taken (0: the start taken as the equilibrium, ``search=False``).
     mass, stiffness, damping : ndarray (f, f)
         ``H``, ``K = dh/dq_f``, ``C = dh/dqd_f`` there (kg m^2 / N m per rad / N m s per rad
         for angles; kg, N/m, N s/m for lengths; mixed where the coordinates mix).
@@ -191,7 +191,8 @@ def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
     return h[:, 0], H[:, :, 0], derivative(1), derivative(1 + 4 * nf), tau[:, 0, 0], kin
 
 
-def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilibrium:
+def equilibrium(model: Model, *, free: tuple[str, ...] | None = None,
+                search: bool = True) -> Equilibrium:
     """The static equilibrium of the free coordinates of ``model`` near ``[initial] q`` (else
     its assembly), with the drivers held at their position at t = 0 and the loads at t = 0.
 
@@ -201,6 +202,10 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilib
         A mechanism with at least one free degree of freedom (as for ``simulate``).
     free : tuple of str, optional
         The free joints (default: ``[initial]``'s, else chosen as ``simulate`` chooses).
+    search : bool
+        False: no Newton step; ``H``, ``K`` and ``C`` (E2) at the start itself, as where a
+        benchmark publishes its equilibrium and asks for the linearization there. The
+        ``residual`` then says how far the start is from an equilibrium (``iterations`` 0).
 
     Returns
     -------
@@ -233,8 +238,39 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilib
     if system.accept(0.0, state) is None:
         raise AssemblyError("the mechanism does not close at its start", file=src,
                             time=0.0, fix="Start the free joints ([initial] q) elsewhere")
-    last = np.inf
     lin = _linear(system, q_f, scale)
+    if search:
+        q_f, lin, it = _newton(system, part, q_f, lin, scale)
+    elif lin is None:
+        raise AssemblyError(
+            "the start cannot be linearized: a dead point, or a loop that does not close "
+            "beside it", file=src, time=0.0, fix="Start the free joints ([initial] q) elsewhere")
+    else:
+        it = 0
+    h, H, K, C, tau, kin = lin
+    # every tree joint's coordinate and its share of the free ones' changes        (F2)
+    tree_joint = topo.tree_joint[1:]
+    names = tuple(model.joints[j].name for j in tree_joint)
+    q_now = system.ref[1]
+    S = system.ref[4]
+    ind, dep = list(topo.driven), list(topo.dependent)
+    shape_map = np.zeros((topo.n, nf))
+    shape_map[free_bodies] = np.eye(nf)
+    if S is not None and len(dep):
+        shape_map[dep] = S[:, nd:]
+    return Equilibrium(
+        model=model, free=part.free, q=q_f, iterations=it,
+        joint_q={n_: float(q_now[i]) for n_, i in zip(names, range(1, topo.n))},
+        residual=h, mass=H, stiffness=K, damping=C,
+        efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
+        shape_map=shape_map[1:], tree_joints=names)
+
+
+def _newton(system: System, part: Partition, q_f: np.ndarray, lin, scale: np.ndarray):
+    """Newton's method on ``h(q_f, 0) = 0`` (E1) from ``q_f``, whose :func:`_linear` is
+    ``lin``: the equilibrium, its ``_linear`` and the steps taken."""
+    src, nf = part.model.source, len(q_f)
+    last = np.inf
     for it in range(1, MAX_ITER + 1):
         if lin is None:
             raise AssemblyError(
@@ -278,22 +314,7 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None) -> Equilib
     else:
         raise AssemblyError(f"no equilibrium found in {MAX_ITER} Newton steps from the start",
                             file=src, fix="Start the free joints ([initial] q) nearer it")
-    # every tree joint's coordinate and its share of the free ones' changes        (F2)
-    tree_joint = topo.tree_joint[1:]
-    names = tuple(model.joints[j].name for j in tree_joint)
-    q_now = system.ref[1]
-    S = system.ref[4]
-    ind, dep = list(topo.driven), list(topo.dependent)
-    shape_map = np.zeros((topo.n, nf))
-    shape_map[free_bodies] = np.eye(nf)
-    if S is not None and len(dep):
-        shape_map[dep] = S[:, nd:]
-    return Equilibrium(
-        model=model, free=part.free, q=q_f, iterations=it,
-        joint_q={n_: float(q_now[i]) for n_, i in zip(names, range(1, topo.n))},
-        residual=h, mass=H, stiffness=K, damping=C,
-        efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
-        shape_map=shape_map[1:], tree_joints=names)
+    return q_f, lin, it
 
 
 def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) -> Modes:
@@ -427,7 +448,8 @@ def as_dict(eq: Equilibrium, md: Modes | None = None) -> dict:
 def text(eq: Equilibrium, md: Modes | None = None) -> str:
     """The equilibrium (and modes) as the command line prints them, in the file's units."""
     m = eq.model
-    lines = [f"{m.name}: static equilibrium of {', '.join(eq.free)}"
+    what = "static equilibrium" if eq.iterations else "taken as the equilibrium: the start"
+    lines = [f"{m.name}: {what} of {', '.join(eq.free)}"
              + (" (drivers held at their t = 0 position)" if m.drivers else "")]
     for j in eq.tree_joints:
         unit, si, _ = _unit(m, j)

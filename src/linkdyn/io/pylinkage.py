@@ -17,7 +17,10 @@ The linkdyn model says the same thing with bodies and joints:
   for a ground joint) and each other one, named after the pylinkage joint (and, where it makes
   several, the second body: ``A_crank``); names keep letters, digits, ``_`` and ``-``;
 - a prismatic joint (a pin that slides on the fixed line through ``line_point`` along ``axis``)
-  is a ``slot`` joint: the line is the ground's, the pin the first link's that holds it;
+  is a ``slot`` joint: the line is the ground's, the pin the first link's that holds it (the
+  ground's point if a ground link holds it). With ``line_link`` (Pyslvs's sliders on a moving
+  link) the line is that link's instead: through ``line_point`` along ``axis`` as saved, a point
+  ``<joint>_line`` of its body that also counts for its frame and its placeholder mass;
 - a tracker (a point at ``distance`` and ``angle`` from the line of two reference joints) is a
   point of the body that holds both reference joints;
 - the driver link's motor joint is a constant-speed revolute driver: ``q = initial_angle +
@@ -214,7 +217,8 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
                  "Load the file in pylinkage and save it with mechanism_to_json")
         if jid in joints:
             fail(f"joints[{i}]", f"two joints have the id {_quote(jid)}", "Give each joint its own id")
-        jd = dict(jd, type="ground" if jid in grounded and kind != "tracker" else kind)
+        jd = dict(jd, type="ground" if jid in grounded and kind not in ("tracker", "prismatic")
+                  else kind)
         if kind != "tracker":
             pos = jd.get("position")
             ok = isinstance(pos, list) and len(pos) == 2 and all(
@@ -227,6 +231,27 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
 
     def pos(jid) -> np.ndarray:
         return np.array(joints[jid]["position"], float)
+
+    # --- sliders on a moving link: the links that carry a prismatic joint's line
+    link_ids = {ld["id"]: ld.get("type", "link") for ld in links_in}
+    lines: dict[str, list[str]] = {}                 # link id -> the joints whose line it is
+    for i, (jid, jd) in enumerate(joints.items()):
+        carrier = jd.get("line_link") if jd["type"] == "prismatic" else None
+        if carrier is None or link_ids.get(carrier) == "ground":
+            continue
+        if carrier not in link_ids:
+            fail(f"joints[{i}]", f"joint {_quote(jid)} of type 'prismatic' slides on the link "
+                 f"{_quote(carrier)}, which the file does not define",
+                 "Give line_link the id of a link")
+        try:
+            ok = all(np.isfinite(np.array(jd.get(k, [0.0, 0.0]), float).reshape(2)).all()
+                     for k in ("axis", "line_point"))
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            fail(f"joints[{i}]", f"joint {_quote(jid)} of type 'prismatic': axis and "
+                 "line_point must be two finite numbers each")
+        lines.setdefault(carrier, []).append(jid)
 
     # --- links: the ground (all ground links and ground joints) and the moving links
     moving: list[dict] = []
@@ -243,7 +268,7 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
                      "Join the link at a revolute joint")
         if ld.get("type") == "ground":
             continue
-        if len(ids) < 2 or len(set(ids)) != len(ids):
+        if len(ids) + len(lines.get(ld["id"], [])) < 2 or len(set(ids)) != len(ids):
             fail(f"links[{i}]", f"link {_quote(ld['id'])} of type {_quote(ld.get('type', 'link'))}"
                  " must hold two or more different joints", "Give the link its joints")
         pinned = [j for j in ids if joints[j]["type"] == "ground"]
@@ -276,19 +301,23 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
     where: dict[str, tuple[str, str]] = {}
     held: dict[str, list[tuple[str, str]]] = {}       # joint id -> [(body, point)]
     for jid, jd in joints.items():
-        if jd["type"] == "ground":
+        if jd["type"] == "ground" or (jd["type"] == "prismatic" and jid in grounded):
             p = ground_points(jid)
             ground["points"][p] = [float(x) for x in pos(jid)]
             held[jid] = [(GROUND, p)]
             where[jid] = (GROUND, p)
     bodies, frames, phi = [ground], {}, {}
+    line_at: dict[str, tuple[str, str, np.ndarray]] = {}   # joint -> (body, point, axis in it)
     for ld in moving:
         ids = list(ld["joints"])
         if ld is drv:
             ids.sort(key=lambda j: j != motor)         # the motor joint first: q is the angle
-        origin = pos(ids[0])
-        ahead = next((pos(j) - origin for j in ids[1:]
-                      if np.hypot(*(pos(j) - origin)) > 0), None)
+        # its joints, then the lines of the sliders it carries (their saved points)
+        spots = [(j, pos(j)) for j in ids] + [
+            (f"{j}_line", np.array(joints[j].get("line_point", joints[j]["position"]), float))
+            for j in lines.get(ld["id"], [])]
+        origin = spots[0][1]
+        ahead = next((x - origin for _, x in spots[1:] if np.hypot(*(x - origin)) > 0), None)
         if ahead is None:
             fail(f"links[{links_in.index(ld)}]", f"link {_quote(ld['id'])} has all its joints at "
                  "one place", "Save the mechanism in an assembled pose")
@@ -298,13 +327,18 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
         name = names(ld["id"])
         pts = _Names()
         local = {}
-        for jid in ids:
+        for jid, x in spots:
             p = pts(jid)
-            local[p] = rot @ (pos(jid) - origin)
-            if np.array_equal(pos(jid) - origin, ahead):   # on the +x axis by construction
+            local[p] = rot @ (x - origin)
+            if np.array_equal(x - origin, ahead):   # on the +x axis by construction
                 local[p] = np.array([math.hypot(*ahead), 0.0])
-            held.setdefault(jid, []).append((name, p))
-            where.setdefault(jid, (name, p))
+            if jid in joints:
+                held.setdefault(jid, []).append((name, p))
+                where.setdefault(jid, (name, p))
+            else:                                   # a slider's line: axis R(-theta) axis
+                slider = jid[:-len("_line")]
+                axis = np.array(joints[slider].get("axis", [1.0, 0.0]), float)
+                line_at[slider] = (name, p, rot @ axis)
         com, inertia = _bars(np.array(list(local.values())))
         bodies.append({"name": name, "points": {p: [float(x) for x in v] for p, v in local.items()},
                        "mass": BAR_MASS, "com": [float(x) for x in com], "inertia": inertia})
@@ -363,15 +397,20 @@ def from_pylinkage(data: dict, *, source: str = "", length_unit: str = "m",
             if not (np.isfinite(axis).all() and np.isfinite(lp).all()) or np.hypot(*axis) < 1e-10:
                 fail(f"joints[{i}]", f"joint {_quote(jid)} of type 'prismatic': axis must be a "
                      "finite direction, line_point a finite point")
-            line = ground_points(f"{jid}_line")
-            ground["points"][line] = [float(x) for x in lp]
+            if jid in line_at:        # the line of a moving link, its axis in that body
+                carrier, line, along = line_at[jid]
+            else:
+                carrier, line, along = GROUND, ground_points(f"{jid}_line"), axis
+                ground["points"][line] = [float(x) for x in lp]
             name = jnames(jid)
             # a pin that turns (pylinkage's) is a slot joint; one that does not (Pyslvs's P
-            # slider, "turns": false) a prismatic joint, the link kept at its saved angle
-            still = {"type": "prismatic", "angle": phi[hold[0][0]]} \
+            # slider, "turns": false) a prismatic joint, the pin's link kept at its saved angle
+            # to the line's
+            still = {"type": "prismatic", "angle": phi.get(hold[0][0], 0.0)
+                     - phi.get(carrier, 0.0)} \
                 if jd.get("turns", True) is False else {"type": "slot"}
-            model_joints.append({"name": name, **still, "axis": [float(x) for x in axis],
-                                 "connect": [f"{GROUND}.{line}", "{}.{}".format(*hold[0])]})
+            model_joints.append({"name": name, **still, "axis": [float(x) for x in along],
+                                 "connect": [f"{carrier}.{line}", "{}.{}".format(*hold[0])]})
             u = axis / np.hypot(*axis)
             assembly_q[name] = float((pos(jid) - lp) @ u)  # the pin's travel along the line
         elif not hold:

@@ -13,11 +13,13 @@ The import puts the mechanism in pylinkage's structure and reads it as
 :func:`linkdyn.io.pylinkage.from_pylinkage` does (one reader of links and joints):
 
 - joint ``i`` is the pylinkage joint ``P<i>`` at its saved position, a ground joint if it
-  joins the link ``ground``; a slider on the ground (``RP`` whose first link is ``ground``: a
-  pin that slides along the ground's line through its saved position at ``A`` degrees and
-  turns) is pylinkage's prismatic joint, so a ``slot`` joint from that line to the first other
-  link, the others pinned to it; a ``P`` slider on the ground (the link slides without
-  turning) a ``prismatic`` joint instead, the link at its saved angle;
+  joins the link ``ground``; a slider (``RP``: a pin that slides along a line of its first
+  link, the slot link, through its saved position at ``A`` degrees, and turns) is pylinkage's
+  prismatic joint, so a ``slot`` joint from that line to the first other link, the others
+  pinned to it; a ``P`` slider (the other links slide without turning on the slot link) a
+  ``prismatic`` joint instead, at their saved angle to it. A slot on a moving link is that
+  link's line as saved (its point ``P<i>_line``), turning with it: Pyslvs's solver keeps the
+  slot at its saved angle to the link and the slot's base point on it;
 - each other link is a link holding its joints in the expression's order; the input pair's link
   (the one holding both joints) is the driver, its motor joint the base (a ground joint);
 - so each moving link is a body with its frame at its first joint, +x towards the next, each
@@ -29,10 +31,10 @@ The import puts the mechanism in pylinkage's structure and reads it as
 - masses are placeholders (1 kg uniform bars per link), gravity zero, lengths the file's
   numbers in the unit the caller names (Pyslvs has none).
 
-Refused, naming the joint by its number and type or the input pair: sliders on a moving link,
-more or fewer than one input pair, an input pair no one moving link holds, whose base is not a
-revolute ground joint or that drives a slider (base and drive one joint), an expression that
-does not parse, and what pylinkage's reader refuses (a link pinned twice to the ground, a joint
+Refused, naming the joint by its number and type or the input pair: a slider with no link but
+its slot link, more or fewer than one input pair, an input pair no one moving link holds,
+whose base is not a revolute ground joint or that drives a slider (base and drive one joint),
+an expression that does not parse, and what pylinkage's reader refuses (a link pinned twice to the ground, a joint
 no link holds, a mobility other than one).
 """
 
@@ -166,15 +168,12 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
 
     joints = parse_expression(expression, source=source)
     for i, j in enumerate(joints):
-        # R; RP (or P) on the ground: a pin sliding (and turning) on the ground's line at A
-        if j["type"] in ("RP", "P") and j["links"][:1] == ("ground",) and len(j["links"]) > 1:
-            continue
-        if j["type"] != "R":
+        # R; RP (or P): a pin sliding (and turning) on the line at A of its first link
+        if j["type"] != "R" and len(j["links"]) < 2:
             where = f" on link '{j['links'][0]}'" if j["links"] else ""
-            fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']}{where}: linkdyn "
-                 "imports Pyslvs's revolute (R) joints and its sliders on the ground (RP, P: "
-                 "ground the first link)", "Write the slider in the linkdyn model by hand (a "
-                 "prismatic or slot joint)")
+            fail(f"mechanism joint {i}", f"joint {i} is of type {j['type']}{where} and joins no "
+                 "other link: a slider needs its slot link first and the sliding links after it",
+                 "List the slot link and the links that slide on it in the joint's L[...]")
     pairs = [tuple(p) for p in inputs] if isinstance(inputs, (list, tuple)) else None
     if not pairs or len(pairs) != 1 or len(pairs[0]) != 2 or not all(
             isinstance(k, int) and not isinstance(k, bool) and 0 <= k < len(joints)
@@ -208,12 +207,14 @@ def from_pyslvs(expression: str, inputs, *, source: str = "", length_unit: str =
 
 def _joint(i: int, j: dict) -> dict:
     """Pyslvs's joint ``i`` as a pylinkage joint: ``P<i>``, a ground joint if it joins the
-    ground, a slider on the ground as pylinkage's prismatic joint on the line through its saved
-    position at ``A`` degrees (a P slider's link does not turn: ``"turns": False``)."""
+    ground, a slider as pylinkage's prismatic joint on the line through its saved position at
+    ``A`` degrees (a P slider's link does not turn: ``"turns": False``), the line its slot
+    link's (``"line_link"``) unless that is the ground."""
     if j["type"] != "R":
         a = math.radians(j["angle"])
         return {"id": f"P{i}", "type": "prismatic", "position": j["position"],
                 "axis": [math.cos(a), math.sin(a)], "line_point": j["position"],
-                **({"turns": False} if j["type"] == "P" else {})}
+                **({"turns": False} if j["type"] == "P" else {}),
+                **({"line_link": j["links"][0]} if j["links"][0] != "ground" else {})}
     return {"id": f"P{i}", "type": "ground" if "ground" in j["links"] else "revolute",
             "position": j["position"]}
