@@ -45,6 +45,7 @@ bench: $(VENV)/.installed-fast $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_compile.py
 	$(BIN)/python benchmarks/bench_friction.py
+	$(BIN)/python benchmarks/bench_page.py
 
 accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py

@@ -423,8 +423,8 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
     for k in rows:
         page_text = (tmp_path / "s" / data["previews"][str(df.design[k])]).read_text("utf-8")
         assert 'id="anim"' in page_text
-        own = json.loads(re.search(r'<script id="linkdyn-data" type="application/json">(.*?)'
-                                   r'</script>', page_text, re.S).group(1))
+        from test_report import page_blob
+        own = page_blob(page_text)
         tau = np.array([v for v in own["series"]["tau:J1"] if v is not None])
         assert np.max(np.abs(tau)) == pytest.approx(df.peak_tau_J1[k], rel=1e-4)
     # a page that cannot be written leaves no file at all

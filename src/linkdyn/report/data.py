@@ -1,8 +1,13 @@
 """What the page shows, JSON-ready: the samples thinned to at most ``max_frames`` frames, the
-animation's geometry, and the series and panels of the plots (deg for angles, else SI)."""
+animation's geometry, and the series and panels of the plots (deg for angles, else SI).
+
+The series keep every digit of the solution (results.csv's numbers at the page's frames); the
+page carries them packed (:func:`packed`), the drawing's point tracks at 6 significant digits.
+"""
 
 from __future__ import annotations
 
+import base64
 import math
 
 import numpy as np
@@ -39,11 +44,26 @@ def frame_indices(n: int, max_frames: int = MAX_FRAMES, keep=()) -> np.ndarray:
     return idx
 
 
-def _num(a, sig: int = 5) -> list:
-    """A JSON-ready list with ``sig`` significant digits; NaN and inf become null."""
+def _num(a, sig: int | None = None) -> list:
+    """A JSON-ready list, every digit kept (``sig``: rounded to that many significant digits);
+    NaN and inf become null."""
     a = np.asarray(a, float).ravel()
+    ok = np.isfinite(a).tolist()
+    if sig is None:
+        return [v if f else None for v, f in zip(a.tolist(), ok)]
     txt = np.char.mod(f"%.{sig}g", np.where(np.isfinite(a), a, 0.0))
-    return [float(s) if ok else None for s, ok in zip(txt.tolist(), np.isfinite(a).tolist())]
+    return [float(s) if f else None for s, f in zip(txt.tolist(), ok)]
+
+
+def packed(series: dict) -> dict:
+    """``series`` as the page carries it: each list of floats (null for a gap) as the base64
+    text of its little-endian float64 bytes (NaN for a gap), every digit kept in about 11
+    characters a value (a decimal that round-trips takes 18 to 24); the page's script
+    unpacks it (``LD.unpack``, assets/common.js)."""
+    def one(v):
+        a = np.array([np.nan if x is None else x for x in v], dtype="<f8")
+        return base64.b64encode(a.tobytes()).decode("ascii")
+    return {k: one(v) for k, v in series.items()}
 
 
 def joint_roles(sol) -> dict[str, str]:
@@ -192,10 +212,10 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
     joints = list(m.joints)
     jcolor = {j.name: PALETTE[k % len(PALETTE)] for k, j in enumerate(joints)}
     roles = joint_roles(sol)
-    series: dict[str, list] = {"t": _num(t, 7)}
+    series: dict[str, list] = {"t": _num(t)}
 
-    def add(key, values, sig=5):
-        series[key] = _num(np.asarray(values)[idx], sig)
+    def add(key, values):
+        series[key] = _num(np.asarray(values)[idx])
         return key
 
     # ---- geometry of the animation (m, global frame)
@@ -479,8 +499,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         if not np.any(np.isfinite(ic[..., 0])):
             continue
         ics.append({"body": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)],
-                    "x": add(f"ic:{b.name}:x", ic[..., 0], 6),
-                    "y": add(f"ic:{b.name}:y", ic[..., 1], 6)})
+                    "x": add(f"ic:{b.name}:x", ic[..., 0]),
+                    "y": add(f"ic:{b.name}:y", ic[..., 1])})
 
     margin = 0.07 * size
     return {
