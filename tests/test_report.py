@@ -1587,3 +1587,166 @@ def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken
     assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", pdf)) >= 2
     assert pg.errors == []
     pg.close()
+
+
+# ------------------------------------------------ the free-body view and its force polygon
+
+def _newton(model, csv, body, k):
+    """m a_G of ``body`` at sample k from results.csv's columns alone: a named point P's
+    acceleration, the body's omega, alpha and phi, and the model's mass centre c and P's
+    coordinates p: ``a_G = a_P + alpha perp(d) - omega^2 d``, ``d = R(phi) (c - p)``."""
+    b = model.body(body)
+    pname = next(iter(b.points))
+    c, s = np.cos(csv[f"phi_{body}"][k]), np.sin(csv[f"phi_{body}"][k])
+    loc = np.asarray(b.com, float) - np.asarray(b.points[pname], float)
+    d = np.array([c * loc[0] - s * loc[1], s * loc[0] + c * loc[1]])
+    w, al = csv[f"omega_{body}"][k], csv[f"alpha_{body}"][k]
+    a = np.array([csv[f"ax_{body}.{pname}"][k], csv[f"ay_{body}.{pname}"][k]])
+    return b.mass * (a + al * np.array([-d[1], d[0]]) - w * w * d)
+
+
+def _forces_from_csv(model, csv, body, k):
+    """Each force on ``body`` at sample k from results.csv and the model file: each joint's
+    reaction (by the first body on the second: + on the second, - on the first), the weight
+    m g, a point force's value columns and a spring's or damper's tension along its line."""
+    out = {}
+    for j in model.joints:
+        if body in (j.body_a, j.body_b):
+            sign = 1.0 if j.body_b == body else -1.0
+            out[j.name] = sign * np.array([csv[f"Fx_{j.name}"][k], csv[f"Fy_{j.name}"][k]])
+    out["weight"] = model.body(body).mass * np.asarray(model.gravity, float)
+    from linkdyn.loads import labels
+    for ld, label in zip(model.loads, labels(model)):
+        if ld.kind == "force" and ld.body == body:
+            out[label] = np.array([csv[f"value_x_{label}"][k], csv[f"value_y_{label}"][k]])
+        elif ld.kind in ("spring", "damper") and body in (ld.body, ld.body2):
+            mine, other = ((ld.body, ld.point), (ld.body2, ld.point2))[:: 1 if ld.body == body else -1]
+            r = [np.array([csv[f"x_{b}.{p}"][k], csv[f"y_{b}.{p}"][k]]) if b != "ground" else
+                 np.asarray(model.body(b).points[p], float) for b, p in (mine, other)]
+            u = (r[1] - r[0]) / np.linalg.norm(r[1] - r[0])   # tension pulls toward the other end
+            out[label] = csv[f"value_{label}"][k] * u
+    return {n: f for n, f in out.items() if np.any(f != 0)}
+
+
+@pytest.mark.parametrize("example", ["slider_crank", "cam_follower", "geared_fivebar"])
+def test_free_body_forces_are_results_csv_and_sum_to_m_a(example):
+    # design.free_body: each force is results.csv's (signed reaction, weight, load), and by
+    # Newton's law they sum to m a_G from the csv's kinematics, for every body at every sample
+    from linkdyn.sampling import times
+    model = linkdyn.load(linkdyn.example_path(example))
+    sol = linkdyn.analyze(model, times(model, None, None, None))
+    csv = {c: np.asarray(v, float) for c, v in sol.columns.items()}
+    for b in model.moving_bodies:
+        forces, m_a = design.free_body(sol, b.name)
+        scale = max(np.max(np.abs(f.force)) for f in forces)
+        for k in range(0, len(sol.t), 7):
+            want = _forces_from_csv(model, csv, b.name, k)
+            got = {f.label: f.force[k] for f in forces if f.kind in ("joint", "weight", "load")}
+            assert set(want) <= set(got), (b.name, k)
+            for name, f in want.items():
+                np.testing.assert_allclose(got[name], f, rtol=0, atol=1e-12 * scale,
+                                           err_msg=f"{b.name} {name} {k}")
+            newton = _newton(model, csv, b.name, k)
+            np.testing.assert_allclose(sum(f.force[k] for f in forces), newton, rtol=0,
+                                       atol=1e-9 * scale, err_msg=f"{b.name} {k}")
+            np.testing.assert_allclose(m_a[k], newton, rtol=0, atol=1e-9 * scale)
+
+
+def test_free_body_of_a_block_pushed_up_an_incline_with_friction():
+    # a slider driver's effort and the guide's friction are forces of the free body too: a
+    # block of weight W pushed up a guide at angle a at constant speed, friction mu: the
+    # driver's W (sin a + mu cos a) along the guide, the friction -mu W cos a, the guide's
+    # normal W cos a, the weight; no acceleration, so they sum to zero
+    import math
+    import tomllib
+    from linkdyn.io import model_from_dict
+    a, mu, mass, G = 20 * math.pi / 180, 0.3, 2.0, 9.81
+    model = model_from_dict(tomllib.loads(f"""
+[mechanism]
+name = "incline"
+gravity = [0.0, {-G}]
+[[bodies]]
+name = "ground"
+points = {{ O = [0.0, 0.0] }}
+[[bodies]]
+name = "block"
+points = {{ B = [0.0, 0.0] }}
+mass = {mass}
+inertia = 0.01
+[[joints]]
+name = "J1"
+type = "prismatic"
+connect = ["ground.O", "block.B"]
+axis = [{math.cos(a)}, {math.sin(a)}]
+[[drivers]]
+joint = "J1"
+motion = {{ kind = "constant_speed", speed = 0.5, start = 0.1 }}
+[[loads]]
+kind = "friction"
+joint = "J1"
+coefficient = {mu}
+transition_speed = 1e-9
+"""))
+    sol = linkdyn.analyze(model, np.linspace(0.0, 1.0, 5), backend="numpy")
+    forces, m_a = design.free_body(sol, "block")
+    got = {f.kind: f.force for f in forces}
+    W, e, n = mass * G, np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+    want = {"driver": W * (math.sin(a) + mu * math.cos(a)) * e, "friction": -mu * W * math.cos(a) * e,
+            "joint": W * math.cos(a) * n, "weight": np.array([0.0, -W])}
+    assert set(got) == set(want)
+    for kind, f in want.items():
+        np.testing.assert_allclose(got[kind], np.broadcast_to(f, got[kind].shape), rtol=0,
+                                   atol=1e-12 * W, err_msg=kind)
+    np.testing.assert_allclose(m_a, 0.0, atol=1e-12 * W)
+
+
+@pytest.mark.parametrize("size", [(1440, 900), (390, 844)], ids=["desktop", "phone"])
+def test_free_body_view_shows_each_links_forces_closing_to_m_a(browser, example_runs, size):
+    # the page's free-body view of each link of the slider-crank (joints, weight, the gas
+    # load): its table is results.csv's forces, its sum row and the polygon's closing side
+    # m a_G by Newton's law from the csv's kinematics; each side of the drawn polygon is its
+    # force at the polygon's scale, head to tail from the origin
+    path, csv = example_runs("slider_crank")
+    model = linkdyn.load(linkdyn.example_path("slider_crank"))
+    pg = Page(browser, path, width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#freebody").scroll_into_view_if_needed()
+        bodies = p.eval_on_selector_all("#fbody option", "os => os.map(o => o.textContent)")
+        assert bodies == [b.name for b in model.moving_bodies]
+        n = len(csv["t"])
+        for n_b, body in enumerate(bodies):
+            p.select_option("#fbody", str(n_b))
+            for k in (n // 6, n // 2, 5 * n // 6):
+                p.evaluate("k => { const s = document.getElementById('scrubber');"
+                           " s.value = String(k); s.dispatchEvent(new Event('input')); }", k)
+                rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+                    [r.dataset.label, +r.dataset.fx, +r.dataset.fy])""")
+                want = _forces_from_csv(model, csv, body, k)
+                newton = _newton(model, csv, body, k)
+                scale = max(np.max(np.abs(f)) for f in want.values())
+                got = {r[0]: np.array(r[1:]) for r in rows}
+                assert set(got) == set(want) | {"sum = m a_G"}, (body, k, got)
+                for name, f in want.items():
+                    np.testing.assert_allclose(got[name], f, rtol=0, atol=1e-12 * scale)
+                np.testing.assert_allclose(got["sum = m a_G"], newton, rtol=0, atol=1e-9 * scale)
+                # the drawing: sides head to tail at the polygon's scale, closed by m a_G
+                sc = float(p.get_attribute("#fbpoly", "data-scale"))
+                sides = p.eval_on_selector_all("#fbpoly line.fbside", """ls => ls.map(l =>
+                    [l.dataset.label, +l.getAttribute('x1'), +l.getAttribute('y1'),
+                     +l.getAttribute('x2'), +l.getAttribute('y2')])""")
+                assert [s[0] for s in sides] == [r[0] for r in rows[:-1]]
+                for (name, x1, y1, x2, y2), (nxt) in zip(sides, sides[1:] + [None]):
+                    np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc], want[name],
+                                               rtol=0, atol=0.02 / sc)
+                    if nxt:
+                        assert (nxt[1], nxt[2]) == pytest.approx((x2, y2), abs=0.011)
+                x1, y1, x2, y2 = p.eval_on_selector("#fbpoly line.fbsum", """l =>
+                    ['x1', 'y1', 'x2', 'y2'].map(a => +l.getAttribute(a))""")
+                assert (x1, y1) == pytest.approx((sides[0][1], sides[0][2]), abs=0.011)
+                np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc], newton, rtol=0,
+                                           atol=0.02 / sc)
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0]
+        assert pg.errors == []
+    finally:
+        pg.close()

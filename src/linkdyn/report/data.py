@@ -481,6 +481,31 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         c = np.mean([ground.points[p.split(".", 1)[1]] for p in pivots], axis=0)
         shaking = {"x": float(c[0]), "y": float(c[1]), "fx": "shake:Fx", "fy": "shake:Fy"}
 
+    # each moving body's free-body diagram (design.free_body): a joint's force is its sign
+    # times the joint's reaction series; a weight constant over the run its value; any other
+    # force (a load, a slider driver's effort, a sliding joint's friction) a series of its own.
+    # The page draws them head to tail; their sum, the polygon's closing side, is m a_G
+    from ..design import free_body
+    freebody = []
+    for n, b in enumerate(m.moving_bodies):
+        forces, _ = free_body(sol, b.name)
+        items, com = [], None
+        for f_n, f in enumerate(forces):
+            it = {"label": f.label, "kind": f.kind, "at": f.where}
+            fk = np.asarray(f.force, float)[idx]
+            if f.kind == "joint":
+                it.update({"x": f"Fx:{f.label}", "y": f"Fy:{f.label}", "sign": f.sign})
+            elif f.kind == "weight" and np.all(fk == fk[:1]):
+                it["value"] = [float(v) for v in fk[0]]
+            else:
+                it.update({"x": add(f"fb:{b.name}:{f_n}:x", fk[:, 0]),
+                           "y": add(f"fb:{b.name}:{f_n}:y", fk[:, 1]), "sign": 1.0})
+            if f.where == "G":
+                com = {c: _num(np.asarray(f.at, float)[idx, n_], 6) for n_, c in enumerate("xy")}
+            items.append(it)
+        freebody.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
+                         "forces": items, "com": com})
+
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
     for d in m.drivers:
@@ -518,5 +543,6 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                  "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
                             float(hi[0] + margin), float(hi[1] + margin)],
                  "ground": _ground_outline(ground, used),
-                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking, "ics": ics},
+                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking, "ics": ics,
+                 "freebody": freebody},
     }

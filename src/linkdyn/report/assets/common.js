@@ -171,7 +171,8 @@ var LD = (function () {
     };
   }
   // the colours of the forces drawn on a view, each kind its own, named by the page's force key
-  var FORCE = {joint: "#c62828", load: "#1565c0", driver: "#2e7d32", shaking: "#6a1b9a"};
+  var FORCE = {joint: "#c62828", load: "#1565c0", driver: "#2e7d32", shaking: "#6a1b9a",
+               friction: "#ef6c00", weight: "#6d4c41"};
   return {NS: NS, FORCE: FORCE, unpack: unpack, placer: placer, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
           tickText: tickText, range: range, placeTip: placeTip};
 })();

@@ -45,6 +45,18 @@
   // the mechanism drawn at a frame: in the plane or in space, by the data's dimension
   var view = (G.dim === 3 ? LD.view3d : LD.view2d)(D, anim, fmtS);
 
+  // the free-body view of a link (freebody.js; planar pages), drawn while on the screen
+  var fbSec = document.getElementById("freebody"), fbView = null, fbSeen = true;
+  if (fbSec && G.dim !== 3 && G.freebody && G.freebody.length) {
+    fbView = LD.freebody(D);
+    if (typeof IntersectionObserver === "function") {
+      new IntersectionObserver(function (es) {
+        fbSeen = es[es.length - 1].isIntersecting;
+        if (fbSeen) fbView.draw(frame);
+      }, {rootMargin: "100px"}).observe(fbSec);
+    }
+  } else if (fbSec) fbSec.style.display = "none";
+
   // ------------------------------------------------------------------ info panel
   var elTime = document.getElementById("time"), elFrame = document.getElementById("frameinfo"),
       elDrv = document.getElementById("drivers"), elLoaded = document.getElementById("loaded"),
@@ -346,6 +358,7 @@
     window.__linkdynFrame = k;
     var best = view.draw(k);
     drawPlots(k, !playing);
+    if (fbView && (fbSeen || !playing)) fbView.draw(k);
     drawInfo(k, best);
     if (!fromScrub) scrub.value = String(k);
     if (!playing) { simT = T[k]; keepHash(); }
