@@ -344,9 +344,16 @@ LD.view3d = function (D, anim, fmtS) {
       joints.forEach(function (o) { if (o.s) items.push({node: o.lab, x: o.s[0], y: o.s[1], fs: 11.5, r: 8}); });
       bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6}); });
     }
-    if (showForces) joints.concat(loadArrows, drvArrows).forEach(function (o) {
+    // a force's value never drops out: with no room by its tip, at the view's edge with a
+    // dashed leader line to the tip
+    joints.concat(loadArrows, drvArrows).forEach(function (o) {
       var node = o.flab || o.t;
-      if (o.tip) { node.style.display = ""; items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); }
+      o.leader = o.leader || el("line", {stroke: node.getAttribute("fill"), "stroke-dasharray": "3 2", "class": "leader"}, gFLabels);
+      o.leader.style.display = "none";
+      if (showForces && o.tip) {
+        node.style.display = "";
+        items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader});
+      }
     });
     place(items, obst, textScale);
     return best;
