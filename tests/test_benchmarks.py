@@ -72,3 +72,11 @@ def test_bench_cam():
     # its check: the plain four-bar's input follows the cam's arm (1e-9 rad) before timing
     out = run("bench_cam.py", "--samples", "2000", "--repeat", "1")
     assert "cam-driven four-bar" in out and "ratio" in out
+
+
+def test_bench_page():
+    # the page's playback against its paused frame rate in headless Chromium (few samples: the
+    # rates mean nothing at this size; the script runs and says its ratio and verdict)
+    out = run("bench_page.py", "--samples", "200", "--repeat", "1")
+    for words in ("report.html playback", "paused", "playing", "frames/s", "(target >= 0.8:"):
+        assert words in out
