@@ -66,9 +66,44 @@ LD.freebody = function (D) {
   }
   function clear(s) { Array.prototype.slice.call(s.childNodes).forEach(function (c) { if (c.tagName !== "defs") c.remove(); }); }
 
+  // view units per screen pixel of the drawing (labels 11 px on the screen), measured once
+  // and again after a resize (a measure between drawing steps would force a layout each frame)
+  var ts0 = null;
+  function textScale() {
+    if (ts0 === null) { var w = fbd.getBoundingClientRect().width; ts0 = w > 0 ? Math.max(1, W / w) : 1; }
+    return ts0;
+  }
+  window.addEventListener("resize", function () { ts0 = null; });
+  // the table's rows, made once for the body shown: the forces, then their sum
+  var rowsOf = null, rowsBody = null;
+  function rows(b) {
+    if (rowsBody === b) return rowsOf;
+    table.innerHTML = "";
+    var head = h("tr", "", h("thead", "", table));
+    ["", "force on " + b.body, "at", "Fx (N)", "Fy (N)", "|F| (N)"].forEach(function (t) { h("th", "", head, t); });
+    var body = h("tbody", "", table);
+    function row(label, at, color, cls) {
+      var tr = h("tr", cls || "", body);
+      var sw = h("i", "", h("td", "", tr)); sw.style.background = color;
+      h("td", "", tr, label); h("td", "", tr, at);
+      tr.setAttribute("data-label", label);
+      return {tr: tr, fx: h("td", "num", tr), fy: h("td", "num", tr), f: h("td", "num", tr)};
+    }
+    rowsOf = b.forces.map(function (f) { return row(f.label, f.at === "G" ? "mass centre" : f.at, COLOR[f.kind]); });
+    rowsOf.push(row("sum = m a_G", "", COLOR.sum, "fbtotal"));
+    rowsBody = b;
+    return rowsOf;
+  }
+  // a row's numbers: 4 significant digits shown, every digit in data-fx, data-fy
+  function fill(r, v) {
+    r.fx.textContent = fmt(v[0], 4); r.fy.textContent = fmt(v[1], 4); r.f.textContent = fmt(Math.hypot(v[0], v[1]), 4);
+    r.tr.setAttribute("data-fx", v[0]); r.tr.setAttribute("data-fy", v[1]);
+  }
+
   function draw(k) {
     var b = G.freebody[parseInt(sel.value, 10) || 0], sc = scales(b), sb = shape[b.body];
-    clear(fbd); clear(poly); table.innerHTML = "";
+    textScale();
+    clear(fbd); clear(poly);
     var vals = b.forces.map(function (f) { return F(f, k); });
     // the body about its centroid at this frame
     var pts = sb.points.map(function (id) { return P(b, id, k); }), ok = pts.every(function (p) { return fin(p[0]) && fin(p[1]); });
@@ -83,7 +118,7 @@ LD.freebody = function (D) {
          "stroke-linejoin": "round", opacity: 0.8}, fbd);
       // every force at its point, at one scale (N per view unit); the labels by the arrows'
       // tips, clear of each other (LD.placer, at the edge with a leader when crowded)
-      var items = [], w = fbd.getBoundingClientRect().width, ts = w > 0 ? Math.max(1, W / w) : 1;
+      var items = [], ts = textScale();
       b.forces.forEach(function (f, n) {
         var p = P(b, f.at, k), v = vals[n];
         if (!fin(p[0]) || !fin(v[0]) || Math.hypot(v[0], v[1]) * sc.force < 1) return;
@@ -98,35 +133,27 @@ LD.freebody = function (D) {
     } else el("text", {x: 10, y: 20, "font-size": 12, fill: "#555"}, fbd).textContent = "not assembled at this frame";
     // the force polygon: head to tail from the origin, the closing side from the origin to
     // the last head (the sum: m a_G)
-    var ox = W / 2, oy = H / 2, px = 0, py = 0;
+    var ox = W / 2, oy = H / 2, px = 0, py = 0, bad = false;
     poly.setAttribute("data-scale", sc.poly);
     el("circle", {cx: ox, cy: oy, r: 2.5, fill: "#111"}, poly);
     b.forces.forEach(function (f, n) {
       var v = vals[n];
-      if (!fin(v[0]) || !fin(v[1])) return;
+      if (!fin(v[0]) || !fin(v[1])) { bad = true; return; }
       var x0 = ox + px * sc.poly, y0 = oy - py * sc.poly;
       px += v[0]; py += v[1];
       arrow(poly, x0, y0, ox + px * sc.poly, oy - py * sc.poly, f.kind, 1, {"data-label": f.label, "class": "fbside"});
     });
-    var sum = arrow(poly, ox, oy, ox + px * sc.poly, oy - py * sc.poly, "sum", 1, {"class": "fbsum", "stroke-dasharray": "5 3"});
-    if (Math.hypot(px, py) * sc.poly < 1) sum.removeAttribute("marker-end");
-    el("text", {x: (ox + px * sc.poly / 2 + 4).toFixed(1), y: (oy - py * sc.poly / 2 - 4).toFixed(1), "font-size": 11.5,
-                "font-weight": "bold", fill: "#111"}, poly).textContent = "m a_G";
-    // the table: each force and the sum, N (every digit in data-fx, data-fy)
-    var head = h("tr", "", h("thead", "", table));
-    ["", "force on " + b.body, "at", "Fx (N)", "Fy (N)", "|F| (N)"].forEach(function (t) { h("th", "", head, t); });
-    var body = h("tbody", "", table);
-    function row(label, at, v, color, cls) {
-      var tr = h("tr", cls || "", body);
-      var sw = h("i", "", h("td", "", tr)); sw.style.background = color;
-      h("td", "", tr, label); h("td", "", tr, at);
-      h("td", "num", tr, fmt(v[0], 4)); h("td", "num", tr, fmt(v[1], 4)); h("td", "num", tr, fmt(Math.hypot(v[0], v[1]), 4));
-      tr.setAttribute("data-label", label); tr.setAttribute("data-fx", v[0]); tr.setAttribute("data-fy", v[1]);
+    if (bad) px = py = NaN;   // a frame that is not solved: no sum
+    else {
+      var sum = arrow(poly, ox, oy, ox + px * sc.poly, oy - py * sc.poly, "sum", 1, {"class": "fbsum", "stroke-dasharray": "5 3"});
+      if (Math.hypot(px, py) * sc.poly < 1) sum.removeAttribute("marker-end");
+      el("text", {x: (ox + px * sc.poly / 2 + 4).toFixed(1), y: (oy - py * sc.poly / 2 - 4).toFixed(1), "font-size": 11.5,
+                  "font-weight": "bold", fill: "#111"}, poly).textContent = "m a_G";
     }
-    b.forces.forEach(function (f, n) {
-      row(f.label, f.at === "G" ? "mass centre" : f.at, vals[n], COLOR[f.kind]);
-    });
-    row("sum = m a_G", "", [px, py], COLOR.sum, "fbtotal");
+    // the table: each force and the sum, N
+    var rs = rows(b);
+    vals.forEach(function (v, n) { fill(rs[n], v); });
+    fill(rs[rs.length - 1], [px, py]);
   }
   sel.addEventListener("change", function () { draw(window.__linkdynFrame || 0); });
   return {draw: draw};
