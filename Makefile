@@ -46,6 +46,7 @@ bench: $(VENV)/.installed-fast $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bench_compile.py
 	$(BIN)/python benchmarks/bench_friction.py
 	$(BIN)/python benchmarks/bench_modes.py
+	$(BIN)/python benchmarks/bench_page.py
 
 accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py

@@ -77,3 +77,11 @@ def test_bench_cam():
 def test_bench_modes():
     out = run("bench_modes.py", "--repeat", "1", "--executions", "2")
     assert "accuracy" in out and "equilibrium + modes" in out and "2 linearizations" in out
+
+
+def test_bench_page():
+    # the page's playback against its paused frame rate in headless Chromium (few samples: the
+    # rates mean nothing at this size; the script runs and says its ratio and verdict)
+    out = run("bench_page.py", "--samples", "200", "--repeat", "1")
+    for words in ("report.html playback", "paused", "playing", "frames/s", "(target >= 0.8:"):
+        assert words in out

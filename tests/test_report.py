@@ -7,6 +7,7 @@ Playwright is missing; with ``CI=true`` they fail instead, so CI cannot pass wit
 
 from __future__ import annotations
 
+import base64
 import io
 import json
 import os
@@ -297,6 +298,34 @@ def test_play_advances_the_frame_and_pause_stops_it(page):
     assert page.errors == []
 
 
+def test_every_panel_shows_the_frame_after_a_pause(page, hoeken_report):
+    # while playing only the panels on the screen follow the frames (a smooth cursor at 2000
+    # frames); a panel scrolled into view catches up, and a pause brings every panel, on the
+    # screen or not, to the frame shown: each cursor of a time axis at that frame's time
+    p = page.page
+    p.evaluate("window.scrollTo(0, 0)")
+    p.click("#play")
+    p.wait_for_function("window.__linkdynFrame > 20", timeout=5000)
+    last = p.locator("#plots .panel").last
+    last.scroll_into_view_if_needed()
+    p.wait_for_timeout(200)
+    p.click("#play")
+    k = page.frame()
+    D = _page_data(hoeken_report)
+    t = D["t"]
+    got = p.evaluate("""() => [...document.querySelectorAll('#plots .panel')].map(panel => {
+        const c = panel.querySelector('.cursor'), box = panel.querySelector('svg.plot');
+        return [+c.getAttribute('x1'), box.viewBox.baseVal.width];
+    })""")
+    timed = [n for n, s in enumerate(D["plots"]) if "x" not in s]
+    assert len(timed) >= 10
+    ml, mr = 50, 16   # the plots' margins (report.js: ML, MR)
+    for n in timed:
+        x, w = got[n]
+        assert x == pytest.approx(ml + (t[k] - t[0]) / (t[-1] - t[0]) * (w - ml - mr), abs=0.06), n
+    assert page.errors == []
+
+
 def test_speed_control_offers_quarter_to_four_times(page):
     values = page.page.eval_on_selector_all("#speed option", "os => os.map(o => +o.value)")
     assert min(values) == 0.25 and max(values) == 4 and 1 in values
@@ -490,11 +519,29 @@ def _column_of(key: str) -> tuple[str, float] | None:
     return next(((p + name, 1.0) for p in table[kind]), None)
 
 
-def _page_data(path) -> dict:
-    """The data block report.html carries (what its script reads), parsed by Python."""
-    text = path.read_text("utf-8")
+def page_blob(text: str) -> dict:
+    """The data block a page carries (what its script reads), parsed by Python: each packed
+    series (the base64 text of its little-endian float64 values) unpacked here to a list of
+    floats, None for NaN, as the page's JSON had them before they were packed."""
     blob = text.split('<script id="linkdyn-data" type="application/json">', 1)[1]
-    return json.loads(blob.split("</script>", 1)[0])
+    D = json.loads(blob.split("</script>", 1)[0])
+
+    def unpack(v):
+        if not isinstance(v, str):
+            return v
+        a = np.frombuffer(base64.b64decode(v), dtype="<f8")
+        return [None if np.isnan(x) else float(x) for x in a]
+    for d in [D] + list(D.get("designs", [])):
+        if isinstance(d.get("series"), dict):
+            d["series"] = {k: unpack(v) for k, v in d["series"].items()}
+        if "t" in d:
+            d["t"] = unpack(d["t"])
+    return D
+
+
+def _page_data(path) -> dict:
+    """The data block report.html carries, parsed by Python (:func:`page_blob`)."""
+    return page_blob(path.read_text("utf-8"))
 
 
 @pytest.mark.parametrize("example", EXAMPLES)
@@ -573,7 +620,7 @@ def test_report_acceptance(browser, example_runs, example, size):
     pg = Page(browser, path, width=size[0], height=size[1])
     p = pg.page
     try:
-        D = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent)")
+        D = _page_data(path)
         n = len(D["t"])
         assert n == len(csv["t"])  # the default runs are short: one frame per sample
         # no horizontal overflow
@@ -630,7 +677,7 @@ def test_report_acceptance(browser, example_runs, example, size):
         for at in sorted({0, 2, *efforts, len(D["plots"]) - 1}):
             spec = D["plots"][at]
             cols = [(s["key"], _column_of(s["key"])) for s in spec["series"]]
-            svg = panels.nth(at).locator("svg")
+            svg = panels.nth(at).locator("svg.plot")
             svg.scroll_into_view_if_needed()
             box = svg.bounding_box()
             p.mouse.move(box["x"] + 0.57 * box["width"], box["y"] + 0.5 * box["height"])
@@ -685,10 +732,73 @@ def test_report_acceptance(browser, example_runs, example, size):
         pg.close()
 
 
+@pytest.mark.parametrize("example, size", [("stephenson", (390, 844)), ("fivebar", (390, 844))],
+                         ids=["stephenson-phone", "fivebar-phone"])
+def test_force_labels_never_drop_out(browser, example_runs, example, size):
+    # forces on, at every fifth frame: each joint force drawn has its label, inside the view
+    # and clear of every other label, saying results.csv's |F|; a label with no room by its
+    # arrow's tip sits at the view's edge, its leader line ending on that tip
+    path, csv = example_runs(example)
+    pg = Page(browser, path, width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#anim").scroll_into_view_if_needed()
+        assert not p.locator("#forcekey").is_visible()
+        p.check("#show-forces")
+        # the force key, shown with the forces: each kind drawn, in its arrows' colour
+        key = dict(p.eval_on_selector_all("#forcekey .fk", """es => es.map(e =>
+            [e.dataset.kind, getComputedStyle(e.querySelector('i')).backgroundColor])"""))
+        drawn = p.eval_on_selector(".farrow[data-joint]", "a => (a.style.color = a.getAttribute("
+                                   "'stroke'), getComputedStyle(a).color)")
+        assert set(key) == {"joint", "driver", "shaking"} and key["joint"] == drawn
+        n = len(csv["t"])
+        peak = max(np.max(np.hypot(csv[c], csv["Fy_" + c[3:]])) for c in csv if c.startswith("Fx_"))
+        leaders = 0
+        for k in range(0, n, 5):
+            p.evaluate("k => { const s = document.getElementById('scrubber'); s.value = String(k);"
+                       " s.dispatchEvent(new Event('input')); }", k)
+            shown = p.evaluate("""() => {
+                const view = document.getElementById('anim').getBoundingClientRect();
+                const boxes = [...document.querySelectorAll('#anim .labels text')]
+                    .filter(e => e.style.display !== 'none' && e.getClientRects().length)
+                    .map(e => [e, e.getBoundingClientRect()]);
+                return [...document.querySelectorAll('#anim .farrow[data-joint]')]
+                    .filter(a => a.style.display !== 'none').map(a => {
+                    const name = a.dataset.joint;
+                    const hit = boxes.filter(([e]) => e.textContent.startsWith(name + ' '));
+                    if (hit.length !== 1) return [name, null];
+                    const [e, r] = hit[0];
+                    const inside = r.left >= view.left - 0.5 && r.right <= view.right + 0.5 &&
+                                   r.top >= view.top - 0.5 && r.bottom <= view.bottom + 0.5;
+                    const clear = boxes.every(([o, q]) => o === e || !(r.left < q.right - 0.5 &&
+                        q.left < r.right - 0.5 && r.top < q.bottom - 0.5 && q.top < r.bottom - 0.5));
+                    const led = [...document.querySelectorAll('#anim line.leader')]
+                        .filter(l => l.style.display !== 'none' &&
+                                Math.abs(l.getAttribute('x2') - a.getAttribute('x2')) < 0.11 &&
+                                Math.abs(l.getAttribute('y2') - a.getAttribute('y2')) < 0.11).length;
+                    return [name, [e.textContent, inside, clear, led]];
+                });
+            }""")
+            assert shown, k
+            for name, label in shown:
+                assert label is not None, (name, k)
+                text, inside, clear, led = label
+                assert led <= 1, (name, k)
+                assert inside and clear, (name, k, text)
+                f = np.hypot(csv[f"Fx_{name}"][k], csv[f"Fy_{name}"][k])
+                assert float(text.split()[1]) == pytest.approx(f, abs=1e-3 * peak), (name, k)
+            leaders += p.evaluate("[...document.querySelectorAll('#anim line.leader')]"
+                                  ".filter(l => l.style.display !== 'none').length")
+        assert leaders > 0   # these two crowd their views: some labels go to the edge
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
 def _hover(p, at, fx=0.57, fy=0.5):
     """Hover panel ``at`` at a fraction of its plot; the tooltip's frame and locator."""
     panel = p.locator("#plots .panel").nth(at)
-    svg = panel.locator("svg")
+    svg = panel.locator("svg.plot")
     svg.scroll_into_view_if_needed()
     box = svg.bounding_box()
     p.mouse.move(box["x"] + fx * box["width"], box["y"] + fy * box["height"])
@@ -819,8 +929,7 @@ def test_compare_shows_each_designs_own_numbers(browser, tmp_path):
     assert sorted(p.name for p in (tmp_path / "cmp").iterdir()) == [
         "compare.csv", "compare.html", "compare.json"]
     page = (tmp_path / "cmp" / "compare.html").read_text("utf-8")
-    blob = page.split('type="application/json">', 1)[1].split("</script>", 1)[0]
-    data = json.loads(blob)
+    data = page_blob(page)
     assert [d["name"] for d in data["designs"]] == ["hoeken", "heavy"]
     own = {}
     for path in (a, b):
@@ -929,7 +1038,7 @@ def test_slider_dyad_transmission_angle_is_the_closed_form():
     np.testing.assert_allclose(d["series"]["mu_s:0"], mu, rtol=1e-4)
 
 
-def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
+def test_a_panel_exports_its_series_as_csv_svg_and_png(page, hoeken_report_run):
     p = page.page
     spec = p.evaluate("JSON.parse(document.getElementById('linkdyn-data').textContent).plots[0]")
     with p.expect_download() as dl:
@@ -937,10 +1046,15 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     text = open(dl.value.path(), encoding="utf-8").read().splitlines()
     assert dl.value.suggested_filename == "joint_angles.csv"
     assert text[0].startswith('"t_s","J1 (deg)"') and len(text) == 1 + 361
-    row = [float(v) for v in text[180].split(",")]
-    series = p.evaluate("k => [JSON.parse(document.getElementById('linkdyn-data').textContent)"
-                        ".series[k][179]]", spec["series"][1]["key"])
-    assert row[2] == series[0]
+    # every digit: each exported value is results.csv's (angles turned to degrees), to the
+    # last bit but the one rounding of that turn (5 significant digits failed this)
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    got = np.array([[float(v) for v in line.split(",")] for line in text[1:]])
+    np.testing.assert_array_equal(got[:, 0], csv["t"])
+    for n, s in enumerate(spec["series"]):
+        want = csv[_column_of(s["key"])[0]] * (np.degrees(1) if spec["unit"] == "deg" else 1)
+        np.testing.assert_allclose(got[:, 1 + n], want, rtol=3e-16,
+                                   atol=3e-16 * np.max(np.abs(want)), err_msg=s["key"])
     svg = p.evaluate("window.__linkdynExport.svg(0)")
     assert svg.startswith("<svg") and "Joint angles" in svg and "<path" in svg
     # the figure has its legend (each series' label beside a line of its colour) and none of
@@ -962,6 +1076,39 @@ def test_a_panel_exports_its_series_as_csv_svg_and_png(page):
     assert png[:8] == b"\x89PNG\r\n\x1a\n"
     # IHDR: the image is the figure at twice its size, legend included
     assert int.from_bytes(png[20:24], "big") == 2 * round(height)
+    assert page.errors == []
+
+
+def test_every_readout_is_results_csv_correctly_rounded(page, hoeken_report_run):
+    # each panel's readout under its legend, at frames across the run: results.csv's value
+    # (turned to degrees for an angle) rounded once to the decimals shown. The page's data
+    # keep every digit; at 5 significant digits stored and 4 shown, about 3 % of these were
+    # one unit off (a value rounded twice)
+    csv = _csv_columns(hoeken_report_run / "results.csv")
+    D = _page_data(hoeken_report_run / "report.html")
+    unit = {s["key"]: p["unit"] for p in D["plots"] for s in p["series"]}
+    p = page.page
+    checked = 0
+    for k in range(3, 361, 9):
+        p.evaluate("k => { const s = document.getElementById('scrubber'); s.value = String(k);"
+                   " s.dispatchEvent(new Event('input')); }", k)
+        shown = p.eval_on_selector_all("#plots .legend b[data-key]",
+                                       "bs => bs.map(b => [b.dataset.key, b.textContent])")
+        for key, text in shown:
+            col = _column_of(key)
+            if col is None or col[0] not in csv:
+                continue
+            want = csv[col[0]][k] * (np.degrees(1) if unit[key] == "deg" else 1.0)
+            if "e" in text:   # a series of peak below 1e-3 or from 1e6: 4 significant digits
+                assert float(text) == float(f"{want:.3e}"), (key, k, text, want)
+            else:
+                digits = len(text.split(".")[1]) if "." in text else 0
+                expect = f"{want:.{digits}f}"
+                if float(expect) == 0:
+                    expect = expect.lstrip("-")
+                assert text == expect, (key, k, text, want)
+            checked += 1
+    assert checked > 800
     assert page.errors == []
 
 
@@ -993,7 +1140,7 @@ def test_a_tap_on_a_phone_shows_the_readout_of_the_frame_it_picks(browser, hoeke
         at = next(n for n, s in enumerate(D["plots"]) if s["title"].startswith("Driver"))
         panel = p.locator("#plots .panel").nth(at)
         panel.scroll_into_view_if_needed()
-        box = panel.locator("svg").bounding_box()
+        box = panel.locator("svg.plot").bounding_box()
         p.touchscreen.tap(box["x"] + 0.6 * box["width"], box["y"] + 0.5 * box["height"])
         tip = panel.locator(".tooltip")
         p.wait_for_function("() => [...document.querySelectorAll('.tooltip')]"
@@ -1217,8 +1364,7 @@ def test_spatial_report_is_one_self_contained_file(rsur_report_run):
     assert "http://" not in text and "https://" not in text
     assert not re.search(r"<script[^>]*\bsrc\s*=|<link[^>]*\bhref\s*=|<(img|iframe)\b", text, re.I)
     assert "fetch(" not in text and "XMLHttpRequest" not in text
-    blob = text.split('<script id="linkdyn-data" type="application/json">', 1)[1].split("</script>")[0]
-    D = json.loads(blob)
+    D = page_blob(text)
     assert D["geom"]["dim"] == 3
     # the drawn points are results.csv's, at every frame (all 121 samples are frames)
     cols = _csv_columns(rsur_report_run / "results.csv")
@@ -1317,7 +1463,7 @@ def test_spatial_plots_are_the_pages_panels(rsur_report_run, tmp_path):
     the energy section alone (the others are drawn alike), its curve the csv's energy."""
     from linkdyn.plots import panel_outputs
     text = (rsur_report_run / "report.html").read_text("utf-8")
-    D = json.loads(text.split('type="application/json">', 1)[1].split("</script>")[0])
+    D = page_blob(text)
     names = set(panel_outputs(D))
     assert {"plot_joints.png", "plot_efforts.svg", "plot_energy.png"} <= names
     D["plots"] = [p for p in D["plots"] if p["section"] == "Energy"]
@@ -1441,3 +1587,166 @@ def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken
     assert pdf.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", pdf)) >= 2
     assert pg.errors == []
     pg.close()
+
+
+# ------------------------------------------------ the free-body view and its force polygon
+
+def _newton(model, csv, body, k):
+    """m a_G of ``body`` at sample k from results.csv's columns alone: a named point P's
+    acceleration, the body's omega, alpha and phi, and the model's mass centre c and P's
+    coordinates p: ``a_G = a_P + alpha perp(d) - omega^2 d``, ``d = R(phi) (c - p)``."""
+    b = model.body(body)
+    pname = next(iter(b.points))
+    c, s = np.cos(csv[f"phi_{body}"][k]), np.sin(csv[f"phi_{body}"][k])
+    loc = np.asarray(b.com, float) - np.asarray(b.points[pname], float)
+    d = np.array([c * loc[0] - s * loc[1], s * loc[0] + c * loc[1]])
+    w, al = csv[f"omega_{body}"][k], csv[f"alpha_{body}"][k]
+    a = np.array([csv[f"ax_{body}.{pname}"][k], csv[f"ay_{body}.{pname}"][k]])
+    return b.mass * (a + al * np.array([-d[1], d[0]]) - w * w * d)
+
+
+def _forces_from_csv(model, csv, body, k):
+    """Each force on ``body`` at sample k from results.csv and the model file: each joint's
+    reaction (by the first body on the second: + on the second, - on the first), the weight
+    m g, a point force's value columns and a spring's or damper's tension along its line."""
+    out = {}
+    for j in model.joints:
+        if body in (j.body_a, j.body_b):
+            sign = 1.0 if j.body_b == body else -1.0
+            out[j.name] = sign * np.array([csv[f"Fx_{j.name}"][k], csv[f"Fy_{j.name}"][k]])
+    out["weight"] = model.body(body).mass * np.asarray(model.gravity, float)
+    from linkdyn.loads import labels
+    for ld, label in zip(model.loads, labels(model)):
+        if ld.kind == "force" and ld.body == body:
+            out[label] = np.array([csv[f"value_x_{label}"][k], csv[f"value_y_{label}"][k]])
+        elif ld.kind in ("spring", "damper") and body in (ld.body, ld.body2):
+            mine, other = ((ld.body, ld.point), (ld.body2, ld.point2))[:: 1 if ld.body == body else -1]
+            r = [np.array([csv[f"x_{b}.{p}"][k], csv[f"y_{b}.{p}"][k]]) if b != "ground" else
+                 np.asarray(model.body(b).points[p], float) for b, p in (mine, other)]
+            u = (r[1] - r[0]) / np.linalg.norm(r[1] - r[0])   # tension pulls toward the other end
+            out[label] = csv[f"value_{label}"][k] * u
+    return {n: f for n, f in out.items() if np.any(f != 0)}
+
+
+@pytest.mark.parametrize("example", ["slider_crank", "cam_follower", "geared_fivebar"])
+def test_free_body_forces_are_results_csv_and_sum_to_m_a(example):
+    # design.free_body: each force is results.csv's (signed reaction, weight, load), and by
+    # Newton's law they sum to m a_G from the csv's kinematics, for every body at every sample
+    from linkdyn.sampling import times
+    model = linkdyn.load(linkdyn.example_path(example))
+    sol = linkdyn.analyze(model, times(model, None, None, None))
+    csv = {c: np.asarray(v, float) for c, v in sol.columns.items()}
+    for b in model.moving_bodies:
+        forces, m_a = design.free_body(sol, b.name)
+        scale = max(np.max(np.abs(f.force)) for f in forces)
+        for k in range(0, len(sol.t), 7):
+            want = _forces_from_csv(model, csv, b.name, k)
+            got = {f.label: f.force[k] for f in forces if f.kind in ("joint", "weight", "load")}
+            assert set(want) <= set(got), (b.name, k)
+            for name, f in want.items():
+                np.testing.assert_allclose(got[name], f, rtol=0, atol=1e-12 * scale,
+                                           err_msg=f"{b.name} {name} {k}")
+            newton = _newton(model, csv, b.name, k)
+            np.testing.assert_allclose(sum(f.force[k] for f in forces), newton, rtol=0,
+                                       atol=1e-9 * scale, err_msg=f"{b.name} {k}")
+            np.testing.assert_allclose(m_a[k], newton, rtol=0, atol=1e-9 * scale)
+
+
+def test_free_body_of_a_block_pushed_up_an_incline_with_friction():
+    # a slider driver's effort and the guide's friction are forces of the free body too: a
+    # block of weight W pushed up a guide at angle a at constant speed, friction mu: the
+    # driver's W (sin a + mu cos a) along the guide, the friction -mu W cos a, the guide's
+    # normal W cos a, the weight; no acceleration, so they sum to zero
+    import math
+    import tomllib
+    from linkdyn.io import model_from_dict
+    a, mu, mass, G = 20 * math.pi / 180, 0.3, 2.0, 9.81
+    model = model_from_dict(tomllib.loads(f"""
+[mechanism]
+name = "incline"
+gravity = [0.0, {-G}]
+[[bodies]]
+name = "ground"
+points = {{ O = [0.0, 0.0] }}
+[[bodies]]
+name = "block"
+points = {{ B = [0.0, 0.0] }}
+mass = {mass}
+inertia = 0.01
+[[joints]]
+name = "J1"
+type = "prismatic"
+connect = ["ground.O", "block.B"]
+axis = [{math.cos(a)}, {math.sin(a)}]
+[[drivers]]
+joint = "J1"
+motion = {{ kind = "constant_speed", speed = 0.5, start = 0.1 }}
+[[loads]]
+kind = "friction"
+joint = "J1"
+coefficient = {mu}
+transition_speed = 1e-9
+"""))
+    sol = linkdyn.analyze(model, np.linspace(0.0, 1.0, 5), backend="numpy")
+    forces, m_a = design.free_body(sol, "block")
+    got = {f.kind: f.force for f in forces}
+    W, e, n = mass * G, np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+    want = {"driver": W * (math.sin(a) + mu * math.cos(a)) * e, "friction": -mu * W * math.cos(a) * e,
+            "joint": W * math.cos(a) * n, "weight": np.array([0.0, -W])}
+    assert set(got) == set(want)
+    for kind, f in want.items():
+        np.testing.assert_allclose(got[kind], np.broadcast_to(f, got[kind].shape), rtol=0,
+                                   atol=1e-12 * W, err_msg=kind)
+    np.testing.assert_allclose(m_a, 0.0, atol=1e-12 * W)
+
+
+@pytest.mark.parametrize("size", [(1440, 900), (390, 844)], ids=["desktop", "phone"])
+def test_free_body_view_shows_each_links_forces_closing_to_m_a(browser, example_runs, size):
+    # the page's free-body view of each link of the slider-crank (joints, weight, the gas
+    # load): its table is results.csv's forces, its sum row and the polygon's closing side
+    # m a_G by Newton's law from the csv's kinematics; each side of the drawn polygon is its
+    # force at the polygon's scale, head to tail from the origin
+    path, csv = example_runs("slider_crank")
+    model = linkdyn.load(linkdyn.example_path("slider_crank"))
+    pg = Page(browser, path, width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#freebody").scroll_into_view_if_needed()
+        bodies = p.eval_on_selector_all("#fbody option", "os => os.map(o => o.textContent)")
+        assert bodies == [b.name for b in model.moving_bodies]
+        n = len(csv["t"])
+        for n_b, body in enumerate(bodies):
+            p.select_option("#fbody", str(n_b))
+            for k in (n // 6, n // 2, 5 * n // 6):
+                p.evaluate("k => { const s = document.getElementById('scrubber');"
+                           " s.value = String(k); s.dispatchEvent(new Event('input')); }", k)
+                rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+                    [r.dataset.label, +r.dataset.fx, +r.dataset.fy])""")
+                want = _forces_from_csv(model, csv, body, k)
+                newton = _newton(model, csv, body, k)
+                scale = max(np.max(np.abs(f)) for f in want.values())
+                got = {r[0]: np.array(r[1:]) for r in rows}
+                assert set(got) == set(want) | {"sum = m a_G"}, (body, k, got)
+                for name, f in want.items():
+                    np.testing.assert_allclose(got[name], f, rtol=0, atol=1e-12 * scale)
+                np.testing.assert_allclose(got["sum = m a_G"], newton, rtol=0, atol=1e-9 * scale)
+                # the drawing: sides head to tail at the polygon's scale, closed by m a_G
+                sc = float(p.get_attribute("#fbpoly", "data-scale"))
+                sides = p.eval_on_selector_all("#fbpoly line.fbside", """ls => ls.map(l =>
+                    [l.dataset.label, +l.getAttribute('x1'), +l.getAttribute('y1'),
+                     +l.getAttribute('x2'), +l.getAttribute('y2')])""")
+                assert [s[0] for s in sides] == [r[0] for r in rows[:-1]]
+                for (name, x1, y1, x2, y2), (nxt) in zip(sides, sides[1:] + [None]):
+                    np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc], want[name],
+                                               rtol=0, atol=0.02 / sc)
+                    if nxt:
+                        assert (nxt[1], nxt[2]) == pytest.approx((x2, y2), abs=0.011)
+                x1, y1, x2, y2 = p.eval_on_selector("#fbpoly line.fbsum", """l =>
+                    ['x1', 'y1', 'x2', 'y2'].map(a => +l.getAttribute(a))""")
+                assert (x1, y1) == pytest.approx((sides[0][1], sides[0][2]), abs=0.011)
+                np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc], newton, rtol=0,
+                                           atol=0.02 / sc)
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0]
+        assert pg.errors == []
+    finally:
+        pg.close()

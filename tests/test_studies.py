@@ -423,8 +423,8 @@ def test_sweep_report_holds_every_design_and_nothing_is_written_on_failure(tmp_p
     for k in rows:
         page_text = (tmp_path / "s" / data["previews"][str(df.design[k])]).read_text("utf-8")
         assert 'id="anim"' in page_text
-        own = json.loads(re.search(r'<script id="linkdyn-data" type="application/json">(.*?)'
-                                   r'</script>', page_text, re.S).group(1))
+        from test_report import page_blob
+        own = page_blob(page_text)
         tau = np.array([v for v in own["series"]["tau:J1"] if v is not None])
         assert np.max(np.abs(tau)) == pytest.approx(df.peak_tau_J1[k], rel=1e-4)
     # a page that cannot be written leaves no file at all
@@ -486,3 +486,53 @@ def test_dyads_that_cannot_close_are_the_designs_no_newton_start_assembles(examp
     if example == "hoeken":   # circles: |r1 - r2| <= d <= r1 + r2, crank pin at (38.1, 0)
         d = np.abs([m.body("ground").points["O4"][0] - 0.0381 for m in models])
         assert np.array_equal(can, (abs(0.1152 - 0.1152) <= d) & (d <= 0.2304))
+
+
+# --- docs/design-studies.md: Hoeken with mass that follows the geometry -----------------------
+
+HOEKEN_BARS = {   # the doc's bars for the bundled file's three moving bodies
+    'mass = 1.5\ncom = [19.05, 0.0]\ninertia = 725.80\ninertia_about = "O1"':
+        'bars = [{ between = ["O1", "O2"], mass_per_length = 0.03937008 }]',
+    'mass = 5.0\ncom = [115.2, 0.0]\ninertia = 88473.60\ninertia_about = "O2"':
+        'bars = [{ between = ["O2", "P"], mass_per_length = 0.02170139 }]',
+    'mass = 3.0\ncom = [57.6, 0.0]\ninertia = 13271.76\ninertia_about = "O3"':
+        'bars = [{ between = ["O3", "O4"], mass_per_length = 0.02604167 }]'}
+FOUR = ["bodies.ground.points.O4[0]", "bodies.coupler.points.O3[0]", "bodies.coupler.points.P[0]",
+        "bodies.rocker.points.O4[0]"]
+
+
+def test_the_hoeken_study_with_mass_that_follows_the_geometry(tmp_path):
+    # the table of docs/design-studies.md: each optimizer's design (optimize.json's values,
+    # shown rounded there) analyzed again in each file, its peak torque as printed (4 digits)
+    # and its path within 0.1 mm; the bars file gives the bundled file's run
+    from linkdyn.sampling import times
+    text = HOEKEN.read_text("utf-8")
+    for old, new in HOEKEN_BARS.items():
+        assert old in text
+        text = text.replace(old, new)
+    bars = tmp_path / "hoeken_bars.toml"
+    bars.write_text(text, "utf-8")
+    fixed_best = [105.1273642319959, 140.0, 277.7413442701448, 139.07504221142307]
+    bars_best = [101.00190542458482, 112.82185536179979, 180.0, 137.31283331690975]
+
+    def run(path, values=None):
+        sp = space(path, FOUR)
+        m = sp.model(values if values is not None else [p.base for p in sp.params])
+        got = evaluate_metrics(linkdyn.analyze(m, times(m, None, None, None), backend="numpy"),
+                               ["peak_tau_J1", "path_deviation"])
+        return m, float(got["peak_tau_J1"]), float(got["path_deviation"])
+
+    assert run(bars)[1] == pytest.approx(run(HOEKEN)[1], abs=1e-5)   # 1.11902 N m both
+    for path, values, want in ((HOEKEN, fixed_best, 0.6869), (bars, fixed_best, 1.0302),
+                               (bars, bars_best, 0.5932)):
+        m, tau, dev = run(path, values)
+        assert tau == pytest.approx(want, abs=5e-5), (path.name, values)
+        assert dev <= 1e-4 * (1 + 1e-6)
+    # with P fixed both files' optimizers find one design (only the rocker's mass moves)
+    three = [103.29970514753767, 129.98886155498934, 230.4, 139.96768460416044]
+    assert run(HOEKEN, three)[1] == pytest.approx(0.7712, abs=5e-5)
+    assert run(bars, three)[1] == pytest.approx(0.7721, abs=5e-5)
+    # the fixed-mass design's links weigh their lengths with bars: the coupler 6.03 kg
+    m = space(bars, FOUR).model(fixed_best)
+    assert m.body("coupler").mass == pytest.approx(0.02170139 * 277.7413442701448, rel=1e-12)
+    assert round(m.body("coupler").mass, 2) == 6.03 and round(m.body("rocker").mass, 2) == 3.62

@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import point_acceleration
-from .. import joints as jk
 from ..model import GROUND
-from ..planar import cross, first, last, rotate
+from ..planar import cross, first, last
+from .free_body import effort_wrench, mass_centre
 
 
 def shaking_wrench(sol) -> np.ndarray:
@@ -40,13 +39,10 @@ def shaking_wrench(sol) -> np.ndarray:
         f = np.array(sol.reactions.force[..., k, :])
         n = np.array(sol.reactions.moment[..., k])
         if j.name in drivers:
-            tau = sol.dyn.tau[..., drivers[j.name]]
             # the actuator's tau p (p of the second body; a slider's axis is fixed in the first
             # body and its line passes the joint points)
-            e = rotate(sol.phi(j.body_a), np.asarray(j.axis, float))
-            p = np.broadcast_to(jk.get(j.kind).motion_vector(1.0, e, np.ndim(tau)),
-                                (3,) + np.shape(tau))
-            n, f = n + tau * p[0], f + tau[..., None] * last(p[1:])
+            dn, df = effort_wrench(sol, j, sol.dyn.tau[..., drivers[j.name]])
+            n, f = n + dn, f + df
         r = sol.point(j.body_b, j.point_b)
         sign = 1.0 if j.body_b == GROUND else -1.0
         out[..., 0] += sign * (n + cross(first(r), first(f)))
@@ -69,12 +65,10 @@ def inertia_wrench(sol) -> np.ndarray:
     """Inertia load of the moving links, (T, 3): ``[-sum(r_G x m a_G + I_G alpha), -sum m a_G]``,
     moment about the global origin. Equals the shaking wrench when no loads act."""
     kin = sol.kin
-    lay, pose = kin.layout, kin.pose
+    lay = kin.layout
     out = np.zeros((3,) + sol.kin.shape)
     for i in range(1, lay.topo.n):
-        # mass centre: r_G = r_i + d, a_G = a_i + alpha perp(d) - w^2 d
-        d = pose.rotate(i, lay.com[i])
-        r_g, a_g = pose.r[i] + d, point_acceleration(kin.twists[i], kin.rates[i], d)
+        r_g, a_g = mass_centre(sol, i)
         out[1:] -= lay.mass[i] * a_g
         out[0] -= lay.mass[i] * cross(r_g, a_g) + lay.inertia[i] * kin.rates[i][0]
     return last(out)

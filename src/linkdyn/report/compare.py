@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
-from .data import MAX_FRAMES, PALETTE, page_data
+from .data import MAX_FRAMES, PALETTE, packed, page_data
 from .page import html_page
 from .tables import fmt, key_value, key_where
 
@@ -324,6 +324,7 @@ def render_compare(runs, *, max_frames: int = MAX_FRAMES, data: dict | None = No
     body = _BODY.format(title=html.escape(f"Comparison: {names}"), files=files,
                         table=key_table_html(data["designs"], data["rows"]),
                         differs=differs_html(data["designs"], data["differs"]))
+    data = {**data, "designs": [{**d, "series": packed(d["series"])} for d in data["designs"]]}
     return html_page(title=html.escape(f"Comparison: {names}"), body=body, data=data,
                      script="compare.js", css=_CSS)
 

@@ -1,8 +1,13 @@
 """What the page shows, JSON-ready: the samples thinned to at most ``max_frames`` frames, the
-animation's geometry, and the series and panels of the plots (deg for angles, else SI)."""
+animation's geometry, and the series and panels of the plots (deg for angles, else SI).
+
+The series keep every digit of the solution (results.csv's numbers at the page's frames); the
+page carries them packed (:func:`packed`), the drawing's point tracks at 6 significant digits.
+"""
 
 from __future__ import annotations
 
+import base64
 import math
 
 import numpy as np
@@ -39,11 +44,26 @@ def frame_indices(n: int, max_frames: int = MAX_FRAMES, keep=()) -> np.ndarray:
     return idx
 
 
-def _num(a, sig: int = 5) -> list:
-    """A JSON-ready list with ``sig`` significant digits; NaN and inf become null."""
+def _num(a, sig: int | None = None) -> list:
+    """A JSON-ready list, every digit kept (``sig``: rounded to that many significant digits);
+    NaN and inf become null."""
     a = np.asarray(a, float).ravel()
+    ok = np.isfinite(a).tolist()
+    if sig is None:
+        return [v if f else None for v, f in zip(a.tolist(), ok)]
     txt = np.char.mod(f"%.{sig}g", np.where(np.isfinite(a), a, 0.0))
-    return [float(s) if ok else None for s, ok in zip(txt.tolist(), np.isfinite(a).tolist())]
+    return [float(s) if f else None for s, f in zip(txt.tolist(), ok)]
+
+
+def packed(series: dict) -> dict:
+    """``series`` as the page carries it: each list of floats (null for a gap) as the base64
+    text of its little-endian float64 bytes (NaN for a gap), every digit kept in about 11
+    characters a value (a decimal that round-trips takes 18 to 24); the page's script
+    unpacks it (``LD.unpack``, assets/common.js)."""
+    def one(v):
+        a = np.array([np.nan if x is None else x for x in v], dtype="<f8")
+        return base64.b64encode(a.tobytes()).decode("ascii")
+    return {k: one(v) for k, v in series.items()}
 
 
 def joint_roles(sol) -> dict[str, str]:
@@ -192,10 +212,10 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
     joints = list(m.joints)
     jcolor = {j.name: PALETTE[k % len(PALETTE)] for k, j in enumerate(joints)}
     roles = joint_roles(sol)
-    series: dict[str, list] = {"t": _num(t, 7)}
+    series: dict[str, list] = {"t": _num(t)}
 
-    def add(key, values, sig=5):
-        series[key] = _num(np.asarray(values)[idx], sig)
+    def add(key, values):
+        series[key] = _num(np.asarray(values)[idx])
         return key
 
     # ---- geometry of the animation (m, global frame)
@@ -461,6 +481,31 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         c = np.mean([ground.points[p.split(".", 1)[1]] for p in pivots], axis=0)
         shaking = {"x": float(c[0]), "y": float(c[1]), "fx": "shake:Fx", "fy": "shake:Fy"}
 
+    # each moving body's free-body diagram (design.free_body): a joint's force is its sign
+    # times the joint's reaction series; a weight constant over the run its value; any other
+    # force (a load, a slider driver's effort, a sliding joint's friction) a series of its own.
+    # The page draws them head to tail; their sum, the polygon's closing side, is m a_G
+    from ..design import free_body
+    freebody = []
+    for n, b in enumerate(m.moving_bodies):
+        forces, _ = free_body(sol, b.name)
+        items, com = [], None
+        for f_n, f in enumerate(forces):
+            it = {"label": f.label, "kind": f.kind, "at": f.where}
+            fk = np.asarray(f.force, float)[idx]
+            if f.kind == "joint":
+                it.update({"x": f"Fx:{f.label}", "y": f"Fy:{f.label}", "sign": f.sign})
+            elif f.kind == "weight" and np.all(fk == fk[:1]):
+                it["value"] = [float(v) for v in fk[0]]
+            else:
+                it.update({"x": add(f"fb:{b.name}:{f_n}:x", fk[:, 0]),
+                           "y": add(f"fb:{b.name}:{f_n}:y", fk[:, 1]), "sign": 1.0})
+            if f.where == "G":
+                com = {c: _num(np.asarray(f.at, float)[idx, n_], 6) for n_, c in enumerate("xy")}
+            items.append(it)
+        freebody.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
+                         "forces": items, "com": com})
+
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
     for d in m.drivers:
@@ -479,8 +524,8 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         if not np.any(np.isfinite(ic[..., 0])):
             continue
         ics.append({"body": b.name, "color": BODY_COLORS[k % len(BODY_COLORS)],
-                    "x": add(f"ic:{b.name}:x", ic[..., 0], 6),
-                    "y": add(f"ic:{b.name}:y", ic[..., 1], 6)})
+                    "x": add(f"ic:{b.name}:x", ic[..., 0]),
+                    "y": add(f"ic:{b.name}:y", ic[..., 1])})
 
     margin = 0.07 * size
     return {
@@ -498,5 +543,6 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                  "bounds": [float(lo[0] - margin), float(lo[1] - margin - 0.05 * size),
                             float(hi[0] + margin), float(hi[1] + margin)],
                  "ground": _ground_outline(ground, used),
-                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking, "ics": ics},
+                 "fmax": fmax, "loads": drawn_loads, "shaking": shaking, "ics": ics,
+                 "freebody": freebody},
     }

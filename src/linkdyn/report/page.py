@@ -8,7 +8,7 @@ import json
 from importlib import resources
 from pathlib import Path
 
-from .data import MAX_FRAMES, page_data
+from .data import MAX_FRAMES, packed, page_data
 from .keys import scales
 from .tables import key_results_html, model_html, summary_html
 
@@ -48,8 +48,9 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES, title: str | Non
         title=title, desc=desc, note=html.escape(note), intro=intro,
         summary=summary_html(summary, sc), model=model_html(sol),
         key=key_results_html(data["key"]))
+    data = {**data, "series": packed(data["series"]), "t": packed({"t": data["t"]})["t"]}
     return html_page(title=title, kind="linkdyn report", body=body, data=data,
-                     script=("view2d.js", "view3d.js", "report.js"),
+                     script=("view2d.js", "view3d.js", "freebody.js", "report.js"),
                      footer="recursive DeNOC kinematics and inverse dynamics")
 
 
@@ -132,6 +133,7 @@ the time cursor; keys: space play/pause, ← → step.</p>
       <label><input type="checkbox" id="show-ics"> instant centres</label>
       <span id="ratenote" class="note"></span>
     </div>
+    <div id="forcekey" class="forcekey" hidden></div>
   </div>
   <aside class="info">
     <div id="time" class="time">t = 0 s</div>
@@ -140,6 +142,16 @@ the time cursor; keys: space play/pause, ← → step.</p>
     <div id="loaded" class="loaded"></div>
     <div class="scroll"><table id="jointforces" class="grid small"></table></div>
   </aside>
+</section>
+<section id="freebody">
+  <h2>Free body <span class="note">every force on one link at the frame shown, and its force
+  polygon: the forces head to tail, closed by their sum m a_G (Newton's law)</span></h2>
+  <div class="controls"><label>link <select id="fbody"></select></label></div>
+  <div class="fbwrap">
+    <svg id="fbd" role="img" aria-label="free-body diagram of the link"></svg>
+    <svg id="fbpoly" role="img" aria-label="force polygon of the link"></svg>
+    <div class="scroll"><table id="fbtable" class="grid small"></table></div>
+  </div>
 </section>
 <section class="keys">
 <h2>Key results <span class="note">click one to show that instant</span></h2>

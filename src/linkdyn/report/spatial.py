@@ -117,9 +117,9 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
             it["infinite"] = True
         if not math.isfinite(it["value"]):
             it["value"] = None
-    series: dict[str, list] = {"t": _num(np.asarray(sol.t)[idx], 7)}
+    series: dict[str, list] = {"t": _num(np.asarray(sol.t)[idx])}
 
-    def add(key, values, sig=5):
+    def add(key, values, sig=None):
         series[key] = _num(np.asarray(values)[idx], sig)
         return key
 

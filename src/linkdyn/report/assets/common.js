@@ -19,6 +19,20 @@ var LD = (function () {
     if (parent) parent.appendChild(e);
     return e;
   }
+  // a page's series as its data carries them (report/data.py: packed): each the base64 text
+  // of little-endian float64 values, NaN for a gap; unpacked to arrays of numbers, every digit
+  // kept (a list of numbers passes through)
+  function unpack(series) {
+    var out = {};
+    Object.keys(series).forEach(function (k) {
+      var s = series[k];
+      if (typeof s !== "string") { out[k] = s; return; }
+      var b = atob(s), u = new Uint8Array(b.length);
+      for (var i = 0; i < b.length; i++) u[i] = b.charCodeAt(i);
+      out[k] = Array.prototype.slice.call(new Float64Array(u.buffer));
+    });
+    return out;
+  }
   function fin(v) { return v !== null && v !== undefined && isFinite(v); }
   // sig significant digits (default 4), fixed between 1e-3 and 1e6, exponent outside
   function fmt(v, sig) {
@@ -77,8 +91,11 @@ var LD = (function () {
   // labels placed clear of each other: each label goes to the first of a ring of positions
   // around its anchor whose box overlaps no label placed before it and no obstacle, inside
   // the W x H view, or is hidden this frame; sizes in screen pixels whatever the zoom
-  // (textScale: view units per screen pixel). Items: {node, x, y, fs, r, prefer, must}; a
-  // label that must show (must) takes its first position inside the view when none is clear.
+  // (textScale: view units per screen pixel). Items: {node, x, y, fs, r, prefer, must, edge,
+  // leader}; a label that must show (must) takes its first position inside the view when none
+  // is clear; a label with a place at the edge (edge: a force's value) that finds no room near
+  // its anchor goes to the first clear slot down the view's right edge, then its left, joined
+  // to its anchor by its leader line, and never leaves the view.
   function placer(VW, VH) {
     var widthCache = {};
     function textBox(node, fs) {
@@ -103,6 +120,7 @@ var LD = (function () {
     return function place(items, obstacles, textScale) {
       var placed = obstacles.slice();
       items.forEach(function (it) {
+        if (it.leader) it.leader.style.display = "none";
         if (it.node.style.display === "none" || !fin(it.x) || !fin(it.y)) return;
         var fs = it.fs * textScale, wh = textBox(it.node, fs), w = wh[0] + 2, hgt = fs * 1.05;
         var pad = 2 * textScale, best = null, first = null;
@@ -120,6 +138,29 @@ var LD = (function () {
           }
         }
         if (!best && it.must) best = first;
+        var led = false;
+        if (!best && it.edge) {
+          // a column of slots down the right edge, then the left: the first clear one (in a
+          // view too crowded for any, the first, on top of another label rather than none)
+          var step = hgt + 2 * pad + textScale, slots = [];
+          for (var side = 0; side < 2; side++)
+            for (var sy = 0; sy + hgt + 2 * pad <= VH; sy += step) {
+              var sx = side === 0 ? VW - w - 2 * pad : 0;
+              slots.push([sx, sy, sx + w + 2 * pad, sy + hgt + 2 * pad]);
+            }
+          for (var n2 = 0; n2 < slots.length && !best; n2++) if (!overlaps(slots[n2], placed)) best = slots[n2];
+          best = best || slots[0] || [0, 0, w + 2 * pad, hgt + 2 * pad];
+          led = true;
+        }
+        if (it.leader) {
+          it.leader.style.display = led ? "" : "none";
+          if (led) {  // from the label's nearest point to its anchor
+            var lx = Math.min(Math.max(it.x, best[0]), best[2]), ly = Math.min(Math.max(it.y, best[1]), best[3]);
+            it.leader.setAttribute("x1", lx.toFixed(1)); it.leader.setAttribute("y1", ly.toFixed(1));
+            it.leader.setAttribute("x2", it.x.toFixed(1)); it.leader.setAttribute("y2", it.y.toFixed(1));
+            it.leader.setAttribute("stroke-width", (0.8 * textScale).toFixed(2));
+          }
+        }
         if (!best) { it.node.style.display = "none"; return; }  // no room: left out this frame
         placed.push(best);
         it.node.setAttribute("font-size", fs.toFixed(2));
@@ -129,6 +170,9 @@ var LD = (function () {
       });
     };
   }
-  return {NS: NS, placer: placer, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
+  // the colours of the forces drawn on a view, each kind its own, named by the page's force key
+  var FORCE = {joint: "#c62828", load: "#1565c0", driver: "#2e7d32", shaking: "#6a1b9a",
+               friction: "#ef6c00", weight: "#6d4c41"};
+  return {NS: NS, FORCE: FORCE, unpack: unpack, placer: placer, el: el, h: h, fin: fin, fmt: fmt, nearest: nearest, niceStep: niceStep,
           tickText: tickText, range: range, placeTip: placeTip};
 })();

@@ -3,6 +3,7 @@
 (function () {
   "use strict";
   var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
+  D.designs.forEach(function (d) { d.series = LD.unpack(d.series); });
   var el = LD.el, h = LD.h, fin = LD.fin, fmt = LD.fmt, nearest = LD.nearest, niceStep = LD.niceStep,
       range = LD.range;
   var PW = 360, PH = 220, ML = 52, MR = 14, MT = 22, MB = 32;

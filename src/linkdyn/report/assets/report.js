@@ -3,6 +3,8 @@
 (function () {
   "use strict";
   var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
+  D.series = LD.unpack(D.series);
+  D.t = LD.unpack({t: D.t}).t;
   var S = D.series, G = D.geom, T = D.t, N = T.length;
   var anim = document.getElementById("anim");
   var NS = anim.namespaceURI;
@@ -43,6 +45,18 @@
   // the mechanism drawn at a frame: in the plane or in space, by the data's dimension
   var view = (G.dim === 3 ? LD.view3d : LD.view2d)(D, anim, fmtS);
 
+  // the free-body view of a link (freebody.js; planar pages), drawn while on the screen
+  var fbSec = document.getElementById("freebody"), fbView = null, fbSeen = true;
+  if (fbSec && G.dim !== 3 && G.freebody && G.freebody.length) {
+    fbView = LD.freebody(D);
+    if (typeof IntersectionObserver === "function") {
+      new IntersectionObserver(function (es) {
+        fbSeen = es[es.length - 1].isIntersecting;
+        if (fbSeen) fbView.draw(frame);
+      }, {rootMargin: "100px"}).observe(fbSec);
+    }
+  } else if (fbSec) fbSec.style.display = "none";
+
   // ------------------------------------------------------------------ info panel
   var elTime = document.getElementById("time"), elFrame = document.getElementById("frameinfo"),
       elDrv = document.getElementById("drivers"), elLoaded = document.getElementById("loaded"),
@@ -78,7 +92,7 @@
     drv.forEach(function (o) {
       var q = S[o.d.q] ? S[o.d.q][k] : null;
       o.eff.textContent = " driver " + o.d.word + " " + fmtS(o.d.key, S[o.d.key][k]) + " " + o.d.unit;
-      o.q.textContent = q !== null ? "at q = " + fmtS(o.d.q, q) + " " + o.d.qunit : "";
+      o.q.textContent = fin(q) ? "at q = " + fmtS(o.d.q, q) + " " + o.d.qunit : "";
     });
     if (best >= 0) {
       var name = G.joints[best].name;
@@ -114,7 +128,12 @@
         grid = h("div", "pgrid", container);
       }
       var panel = h("div", "panel", grid);
-      var svg = el("svg", {viewBox: "0 0 " + PW + " " + PH}, panel);
+      // the plot (grid, ticks, curves: drawn once) and above it, in a layer of its own, what
+      // moves with the frame (the cursor, its dots, the hover line), so that a frame repaints
+      // only that layer and never the panel's curves
+      var pbox = h("div", "pbox", panel);
+      var svg = el("svg", {viewBox: "0 0 " + PW + " " + PH, "class": "plot"}, pbox);
+      var ov = el("svg", {viewBox: "0 0 " + PW + " " + PH, "class": "overlay", "aria-hidden": "true"}, pbox);
       var yr = range(spec.series.map(function (s) { return S[s.key]; }));
       var x0 = ML, x1 = PW - MR, y0 = PH - MB, y1 = MT;
       if (polar) {  // the origin in view and one scale on both axes (N per px alike)
@@ -162,18 +181,20 @@
         el("path", {d: d, "class": "series", stroke: s.color}, svg);
       });
       // the cursor: a vertical line, or on a polar diagram the force vector from the origin
-      var cursor = el("line", {"class": "cursor", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
+      var cursor = el("line", {"class": "cursor", x1: x0, x2: x0, y1: y0, y2: y1}, ov);
       if (polar) cursor.setAttribute("class", "cursor polar");
-      var dots = spec.series.map(function (s) { return el("circle", {"class": "dot", r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, svg); });
+      var dots = spec.series.map(function (s) { return el("circle", {"class": "dot", r: 3, fill: s.color, stroke: "#fff", "stroke-width": 1}, ov); });
       var leg = h("div", "legend", panel);
       var vals = spec.series.map(function (s) {
         var it = h("span", "", leg), sw = h("i", "", it); sw.style.background = s.color;
         h("span", "", it, s.label);
-        return h("b", "", it, "");
+        var b = h("b", "", it, "");
+        b.setAttribute("data-key", s.key);
+        return b;
       });
       var xval = null;
       if (spec.x) { var xit = h("span", "", leg); h("span", "", xit, spec.x.short || xm.label); xval = h("b", "", xit, ""); }
-      var hover = el("line", {"class": "hoverline", x1: x0, x2: x0, y1: y0, y2: y1}, svg);
+      var hover = el("line", {"class": "hoverline", x1: x0, x2: x0, y1: y0, y2: y1}, ov);
       hover.style.display = "none";
       var hit = el("rect", {x: x0, y: y1, width: x1 - x0, height: y0 - y1, fill: "transparent"}, svg);
       var at = function (e) {
@@ -216,9 +237,21 @@
       hit.addEventListener("pointerup", function () { down = false; });
       hit.addEventListener("pointerleave", function (e) { if (e.pointerType === "touch") return; tip.style.display = "none"; hover.style.display = "none"; });
       exportButtons(panel, spec, svg);
-      plots.push({spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, xval: xval, polar: polar, y0: y0, y1: y1});
+      var entry = {spec: spec, svg: svg, sx: sx, sy: sy, xs: xs, cursor: cursor, dots: dots, vals: vals, xval: xval, polar: polar, y0: y0, y1: y1, seen: true, k: -1};
+      plots.push(entry);
+      if (seen) { entry.seen = false; seen.observe(panel); panel.__plot = entry; }
     });
   }
+  // the panels on the screen: while playing, only these follow each frame (a panel scrolled
+  // into view catches up with the frame shown; a pause brings every panel to it)
+  var seen = typeof IntersectionObserver === "function" ? new IntersectionObserver(function (entries) {
+    entries.forEach(function (e) {
+      var p = e.target.__plot;
+      if (!p) return;
+      p.seen = e.isIntersecting;
+      if (p.seen && p.k !== frame) drawPlot(p, frame);
+    });
+  }, {rootMargin: "100px"}) : null;
   // export: a panel's series as CSV (every page frame), the panel as SVG or PNG
   function download(name, blob) {
     var a = document.createElement("a");
@@ -285,24 +318,27 @@
   window.__linkdynExport = {csv: function (n) { return panelCSV(D.plots[n]); },
                             svg: function (n) { return panelFigure(plots[n].svg, plots[n].spec).text; }};
 
-  function drawPlots(k) {
-    plots.forEach(function (p) {
-      var x = p.xs[k], cx = fin(x) ? p.sx(x).toFixed(1) : -10;
-      if (p.polar) {  // the force vector: from the origin to the current point
-        var py = S[p.spec.series[0].key][k], okp = fin(x) && fin(py);
-        p.cursor.style.display = okp ? "" : "none";
-        if (okp) {
-          p.cursor.setAttribute("x1", p.sx(0).toFixed(1)); p.cursor.setAttribute("y1", p.sy(0).toFixed(1));
-          p.cursor.setAttribute("x2", cx); p.cursor.setAttribute("y2", p.sy(py).toFixed(1));
-        }
-      } else { p.cursor.setAttribute("x1", cx); p.cursor.setAttribute("x2", cx); }
-      if (p.xval) p.xval.textContent = fmtS(p.spec.x.key, x);
-      p.spec.series.forEach(function (s, n) {
-        var y = S[s.key][k], ok = fin(y) && fin(x);
-        p.dots[n].style.display = ok ? "" : "none";
-        if (ok) { p.dots[n].setAttribute("cx", cx); p.dots[n].setAttribute("cy", p.sy(y).toFixed(1)); }
-        p.vals[n].textContent = fmtS(s.key, y);
-      });
+  // each panel's cursor, dots and readouts at frame k: every panel (all), or those on the screen
+  function drawPlots(k, all) {
+    plots.forEach(function (p) { if (all || p.seen) drawPlot(p, k); });
+  }
+  function drawPlot(p, k) {
+    p.k = k;
+    var x = p.xs[k], cx = fin(x) ? p.sx(x).toFixed(1) : -10;
+    if (p.polar) {  // the force vector: from the origin to the current point
+      var py = S[p.spec.series[0].key][k], okp = fin(x) && fin(py);
+      p.cursor.style.display = okp ? "" : "none";
+      if (okp) {
+        p.cursor.setAttribute("x1", p.sx(0).toFixed(1)); p.cursor.setAttribute("y1", p.sy(0).toFixed(1));
+        p.cursor.setAttribute("x2", cx); p.cursor.setAttribute("y2", p.sy(py).toFixed(1));
+      }
+    } else { p.cursor.setAttribute("x1", cx); p.cursor.setAttribute("x2", cx); }
+    if (p.xval) p.xval.textContent = fmtS(p.spec.x.key, x);
+    p.spec.series.forEach(function (s, n) {
+      var y = S[s.key][k], ok = fin(y) && fin(x);
+      p.dots[n].style.display = ok ? "" : "none";
+      if (ok) { p.dots[n].setAttribute("cx", cx); p.dots[n].setAttribute("cy", p.sy(y).toFixed(1)); }
+      p.vals[n].textContent = fmtS(s.key, y);
     });
   }
 
@@ -321,7 +357,8 @@
     frame = k;
     window.__linkdynFrame = k;
     var best = view.draw(k);
-    drawPlots(k);
+    drawPlots(k, !playing);
+    if (fbView && (fbSeen || !playing)) fbView.draw(k);
     drawInfo(k, best);
     if (!fromScrub) scrub.value = String(k);
     if (!playing) { simT = T[k]; keepHash(); }
@@ -346,7 +383,11 @@
     btnPlay.textContent = "❚❚ Pause";
     requestAnimationFrame(tick);
   }
-  function pause() { var was = playing; playing = false; btnPlay.textContent = "▶ Play"; if (was) keepHash(); }
+  function pause() {
+    var was = playing;
+    playing = false; btnPlay.textContent = "▶ Play";
+    if (was) { drawPlots(frame, true); keepHash(); }
+  }
   btnPlay.addEventListener("click", function () { if (playing) pause(); else play(); });
   document.getElementById("step").addEventListener("click", function () { pause(); setFrame(frame + 1); });
   document.getElementById("stepback").addEventListener("click", function () { pause(); setFrame(frame - 1); });
@@ -356,12 +397,33 @@
   D.xaxes.forEach(function (a, n) {
     var o = document.createElement("option"); o.value = String(n); o.textContent = a.label; selX.appendChild(o);
   });
-  selX.addEventListener("change", function () { xmode = D.xaxes[parseInt(selX.value, 10)]; buildPlots(); drawPlots(frame); });
+  selX.addEventListener("change", function () {
+    if (seen) seen.disconnect();
+    xmode = D.xaxes[parseInt(selX.value, 10)]; buildPlots(); drawPlots(frame, true);
+  });
+  // the force key, shown with the forces: what each arrow's colour is (the scale is the bar
+  // drawn in the view)
+  var fkey = document.getElementById("forcekey"), hasTorque = false, hasForce = false;
+  (G.loads || []).forEach(function (l) { if (l.kind === "force") hasForce = true; else if (l.kind !== "spring" && l.kind !== "damper") hasTorque = true; });
+  [["joint", "joint force: by the joint's first body on its second, at the joint", true],
+   ["load", "applied " + (hasForce && hasTorque ? "force or torque" : hasTorque ? "torque" : "force"), hasForce || hasTorque],
+   ["driver", "driver effort", D.drivers.length > 0],
+   ["shaking", "shaking force on the frame", !!G.shaking]].forEach(function (e) {
+    if (!e[2]) return;
+    var it = h("span", "fk", fkey), sw = h("i", "", it);
+    sw.style.background = LD.FORCE[e[0]];
+    it.setAttribute("data-kind", e[0]);
+    h("span", "", it, e[1]);
+  });
   // the view's toggles (a view without instant centres hides that one)
   [["show-labels", "labels"], ["show-traces", "traces"], ["show-forces", "forces"], ["show-ics", "ics"]].forEach(function (b) {
     var box = document.getElementById(b[0]);
     if (view.toggles.indexOf(b[1]) < 0) { box.parentNode.style.display = "none"; return; }
-    box.addEventListener("change", function (e) { view.show(b[1], e.target.checked); setFrame(frame); });
+    box.addEventListener("change", function (e) {
+      view.show(b[1], e.target.checked);
+      if (b[1] === "forces") fkey.hidden = !e.target.checked;
+      setFrame(frame);
+    });
   });
   window.addEventListener("resize", function () { view.resize(); setFrame(frame); });
   view.resize();

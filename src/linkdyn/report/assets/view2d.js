@@ -23,8 +23,8 @@ LD.view2d = function (D, anim, fmtS) {
   el("line", {x1: 0, y1: 0, x2: 0, y2: 6, stroke: "#666", "stroke-width": 1.6}, pat);
   var mk = el("marker", {id: "arrowhead", viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
                          markerHeight: 7, orient: "auto-start-reverse"}, defs);
-  el("path", {d: "M0,0 L10,5 L0,10 z", fill: "#c62828"}, mk);
-  [["arrow-load", "#1565c0"], ["arrow-shake", "#6a1b9a"], ["arrow-drv", "#2e7d32"]].forEach(function (m) {
+  el("path", {d: "M0,0 L10,5 L0,10 z", fill: LD.FORCE.joint}, mk);
+  [["arrow-load", LD.FORCE.load], ["arrow-shake", LD.FORCE.shaking], ["arrow-drv", LD.FORCE.driver]].forEach(function (m) {
     var k = el("marker", {id: m[0], viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
                           markerHeight: 7, orient: "auto-start-reverse"}, defs);
     el("path", {d: "M0,0 L10,5 L0,10 z", fill: m[1]}, k);
@@ -118,17 +118,25 @@ LD.view2d = function (D, anim, fmtS) {
   });
 
   // joints
+  // a force label placed at the view's edge is joined to its arrow by a thin leader line
+  var leaders = [];
+  function leader(color) {
+    var l = el("line", {stroke: color, "stroke-dasharray": "3 2", "class": "leader"}, gFLabels);
+    l.style.display = "none";
+    leaders.push(l);
+    return l;
+  }
   var joints = G.joints.map(function (j) {
     var c = j.kind === "revolute" ? el("circle", {r: 5.5, fill: "#fff", stroke: "#222", "stroke-width": 2}, gJoints)
                                   : el("circle", {r: 3, fill: "#222"}, gJoints);
     var lab = el("text", {"font-size": 11.5, fill: "#222"}, gLabels);
     lab.textContent = j.name;
-    var arrow = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)",
+    var arrow = el("line", {stroke: LD.FORCE.joint, "stroke-width": 2.2, "marker-end": "url(#arrowhead)",
                             "class": "farrow", "data-joint": j.name}, gForces);
-    var flab = el("text", {"font-size": 11, fill: "#c62828"}, gFLabels);
-    return {j: j, c: c, lab: lab, arrow: arrow, flab: flab};
+    var flab = el("text", {"font-size": 11, fill: LD.FORCE.joint}, gFLabels);
+    return {j: j, c: c, lab: lab, arrow: arrow, flab: flab, leader: leader(LD.FORCE.joint)};
   });
-  var ring = el("circle", {r: 11, fill: "none", stroke: "#c62828", "stroke-width": 2.5}, gJoints);
+  var ring = el("circle", {r: 11, fill: "none", stroke: LD.FORCE.joint, "stroke-width": 2.5}, gJoints);
 
   // instant centres of velocity (toggle, off by default): a small crossed ring per moving body
   // in its colour, labelled I_body; none while the body translates or when out of view
@@ -192,8 +200,8 @@ LD.view2d = function (D, anim, fmtS) {
     var Fr = [1, 2, 5, 10].map(function (f) { return f * mag; }).filter(function (v) { return v <= fall / 2.5 * 1.0001; }).pop() || mag;
     var lx1 = VW - 14, lx0 = lx1 - Fr * fscale, ly = VH - 12;
     fleg = el("g", {id: "force-legend", "data-force": Fr, "data-length": (Fr * fscale).toFixed(4)}, gForces);
-    el("line", {x1: lx0, y1: ly, x2: lx1, y2: ly, stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrowhead)"}, fleg);
-    el("text", {x: lx0 - 6, y: ly + 4, "text-anchor": "end", "font-size": 12, fill: "#c62828", "class": "legtext"}, fleg).textContent =
+    el("line", {x1: lx0, y1: ly, x2: lx1, y2: ly, stroke: LD.FORCE.joint, "stroke-width": 2.2, "marker-end": "url(#arrowhead)"}, fleg);
+    el("text", {x: lx0 - 6, y: ly + 4, "text-anchor": "end", "font-size": 12, fill: LD.FORCE.joint, "class": "legtext"}, fleg).textContent =
       "force scale: " + fmt(Fr, 3) + " N";
   }
   window.__linkdynForces = {scale: fscale};
@@ -201,11 +209,11 @@ LD.view2d = function (D, anim, fmtS) {
   var loadArrows = (G.loads || []).map(function (l) {
     var line = l.kind === "spring" || l.kind === "damper";
     // springs and dampers are part of the drawing (below the bodies' joints), their tension a label
-    var a = l.kind === "force" ? el("line", {stroke: "#1565c0", "stroke-width": 2.2, "marker-end": "url(#arrow-load)", "class": "farrow"}, gForces)
+    var a = l.kind === "force" ? el("line", {stroke: LD.FORCE.load, "stroke-width": 2.2, "marker-end": "url(#arrow-load)", "class": "farrow"}, gForces)
           : line ? el("path", {fill: "none", stroke: "#455a64", "stroke-width": 1.6, "class": "f" + l.kind, "data-load": l.label}, gSliders)
-          : el("path", {fill: "none", stroke: "#1565c0", "stroke-width": 2, "marker-end": "url(#arrow-load)", "class": "ftorque"}, gForces);
-    var t = el("text", {"font-size": 11, fill: "#1565c0"}, gFLabels);
-    return {l: l, a: a, t: t};
+          : el("path", {fill: "none", stroke: LD.FORCE.load, "stroke-width": 2, "marker-end": "url(#arrow-load)", "class": "ftorque"}, gForces);
+    var t = el("text", {"font-size": 11, fill: LD.FORCE.load}, gFLabels);
+    return {l: l, a: a, t: t, leader: leader(LD.FORCE.load)};
   });
   function zigzag(x0, y0, x1, y1, kind, lane) {  // a spring's zigzag or a damper's pot between two points
     var dx = x1 - x0, dy = y1 - y0, L = Math.hypot(dx, dy) || 1, ux = dx / L, uy = dy / L, nx = -uy, ny = ux;
@@ -224,13 +232,13 @@ LD.view2d = function (D, anim, fmtS) {
   }
   var drvArrows = D.drivers.map(function (d) {
     var j = G.joints.filter(function (x) { return x.name === d.joint; })[0];
-    var a = d.unit === "N m" ? el("path", {fill: "none", stroke: "#2e7d32", "stroke-width": 2.4, "marker-end": "url(#arrow-drv)"}, gForces)
-                             : el("line", {stroke: "#2e7d32", "stroke-width": 2.4, "marker-end": "url(#arrow-drv)", "class": "farrow"}, gForces);
-    var t = el("text", {"font-size": 11, fill: "#2e7d32"}, gFLabels);
-    return {d: d, j: j, a: a, t: t};
+    var a = d.unit === "N m" ? el("path", {fill: "none", stroke: LD.FORCE.driver, "stroke-width": 2.4, "marker-end": "url(#arrow-drv)"}, gForces)
+                             : el("line", {stroke: LD.FORCE.driver, "stroke-width": 2.4, "marker-end": "url(#arrow-drv)", "class": "farrow"}, gForces);
+    var t = el("text", {"font-size": 11, fill: LD.FORCE.driver}, gFLabels);
+    return {d: d, j: j, a: a, t: t, leader: leader(LD.FORCE.driver)};
   });
-  var shake = G.shaking ? {a: el("line", {stroke: "#6a1b9a", "stroke-width": 2.4, "marker-end": "url(#arrow-shake)", "class": "farrow"}, gForces),
-                           t: el("text", {"font-size": 11, fill: "#6a1b9a"}, gFLabels)} : null;
+  var shake = G.shaking ? {a: el("line", {stroke: LD.FORCE.shaking, "stroke-width": 2.4, "marker-end": "url(#arrow-shake)", "class": "farrow"}, gForces),
+                           t: el("text", {"font-size": 11, fill: LD.FORCE.shaking}, gFLabels), leader: leader(LD.FORCE.shaking)} : null;
   function arc(x, y, r, m) {  // a 270-degree arc around (x, y), counter-clockwise for m > 0
     var a0 = Math.PI * 0.75, a1 = a0 + (m >= 0 ? 1 : -1) * Math.PI * 1.5;
     var p0 = [x + r * Math.cos(a0), y - r * Math.sin(a0)], p1 = [x + r * Math.cos(a1), y - r * Math.sin(a1)];
@@ -405,10 +413,12 @@ LD.view2d = function (D, anim, fmtS) {
     // a centre off the view is said at the edge whatever the room (o.off), first
     if (showICs) ics.forEach(function (o) { if (o.off) items.unshift({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8, must: true}); });
     if (showICs) ics.forEach(function (o) { if (!o.off) items.push({node: o.lab, x: o.x, y: o.y, fs: 11, r: 8}); });
+    leaders.forEach(function (l) { l.style.display = "none"; });
     if (showForces) {
-      joints.forEach(function (o) { if (o.tip) items.push({node: o.flab, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
-      loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); });
-      if (shake && shake.tip) items.push({node: shake.t, x: shake.tip[0], y: shake.tip[1], fs: 11, r: 3});
+      // a force's label never drops out: with no room by its arrow's tip, at the view's edge
+      joints.forEach(function (o) { if (o.tip) items.push({node: o.flab, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader}); });
+      loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader}); });
+      if (shake && shake.tip) items.push({node: shake.t, x: shake.tip[0], y: shake.tip[1], fs: 11, r: 3, edge: true, leader: shake.leader});
     }
     place(items, obst, textScale);
     return best;

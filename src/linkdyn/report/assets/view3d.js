@@ -45,7 +45,7 @@ LD.view3d = function (D, anim, fmtS) {
 
   // ------------------------------------------------------------------ markers and layers
   var defs = el("defs", {}, anim);
-  [["arrow3-r", "#c62828"], ["arrow3-l", "#1565c0"], ["arrow3-d", "#2e7d32"]].forEach(function (m) {
+  [["arrow3-r", LD.FORCE.joint], ["arrow3-l", LD.FORCE.load], ["arrow3-d", LD.FORCE.driver]].forEach(function (m) {
     var k = el("marker", {id: m[0], viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
                           markerHeight: 7, orient: "auto-start-reverse"}, defs);
     el("path", {d: "M0,0 L10,5 L0,10 z", fill: m[1]}, k);
@@ -135,12 +135,12 @@ LD.view3d = function (D, anim, fmtS) {
           : el("circle", {"class": "jc", r: j.kind === "prismatic" ? 3 : 4.5, fill: "#fff", stroke: "#222", "stroke-width": 2}, g);
     var lab = el("text", {"font-size": 11.5, fill: "#222"}, gLabels);
     lab.textContent = j.name;
-    var arrow = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrow3-r)",
+    var arrow = el("line", {stroke: LD.FORCE.joint, "stroke-width": 2.2, "marker-end": "url(#arrow3-r)",
                             "class": "farrow", "data-joint": j.name}, gForces);
-    var flab = el("text", {"font-size": 11, fill: "#c62828"}, gFLabels);
+    var flab = el("text", {"font-size": 11, fill: LD.FORCE.joint}, gFLabels);
     return {j: j, g: g, c: c, parts: parts, lab: lab, arrow: arrow, flab: flab};
   });
-  var ring = el("circle", {r: 11, fill: "none", stroke: "#c62828", "stroke-width": 2.5}, gJoints);
+  var ring = el("circle", {r: 11, fill: "none", stroke: LD.FORCE.joint, "stroke-width": 2.5}, gJoints);
   var Lpin = 0.09 * G.radius;   // half length of a pin or a cross arm, m
 
   // ------------------------------------------------------------------ forces
@@ -167,20 +167,20 @@ LD.view3d = function (D, anim, fmtS) {
     var fmag = Math.pow(10, Math.floor(Math.log10(fall / 2.5)));
     var Fr = [1, 2, 5, 10].map(function (f) { return f * fmag; }).filter(function (v) { return v <= fall / 2.5 * 1.0001; }).pop() || fmag;
     fleg = {Fr: Fr, g: el("g", {id: "force-legend", "data-force": Fr}, gForces)};
-    fleg.line = el("line", {stroke: "#c62828", "stroke-width": 2.2, "marker-end": "url(#arrow3-r)"}, fleg.g);
-    fleg.t = el("text", {"text-anchor": "end", "font-size": 12, fill: "#c62828"}, fleg.g);
+    fleg.line = el("line", {stroke: LD.FORCE.joint, "stroke-width": 2.2, "marker-end": "url(#arrow3-r)"}, fleg.g);
+    fleg.t = el("text", {"text-anchor": "end", "font-size": 12, fill: LD.FORCE.joint}, fleg.g);
     fleg.t.textContent = "force scale: " + fmt(Fr, 3) + " N";
   }
   var loadArrows = (G.loads || []).map(function (l) {
-    return {l: l, a: el(l.kind === "force" ? "line" : "path", {fill: "none", stroke: "#1565c0", "stroke-width": 2.2,
+    return {l: l, a: el(l.kind === "force" ? "line" : "path", {fill: "none", stroke: LD.FORCE.load, "stroke-width": 2.2,
                                                               "marker-end": "url(#arrow3-l)", "class": "farrow"}, gForces),
-            t: el("text", {"font-size": 11, fill: "#1565c0"}, gFLabels)};
+            t: el("text", {"font-size": 11, fill: LD.FORCE.load}, gFLabels)};
   });
   var drvArrows = D.drivers.map(function (d) {
     var j = G.joints.filter(function (x) { return x.name === d.joint; })[0];
-    return {d: d, j: j, a: el(d.unit === "N m" ? "path" : "line", {fill: "none", stroke: "#2e7d32", "stroke-width": 2.4,
+    return {d: d, j: j, a: el(d.unit === "N m" ? "path" : "line", {fill: "none", stroke: LD.FORCE.driver, "stroke-width": 2.4,
                                                                   "marker-end": "url(#arrow3-d)", "class": "farrow"}, gForces),
-            t: el("text", {"font-size": 11, fill: "#2e7d32"}, gFLabels)};
+            t: el("text", {"font-size": 11, fill: LD.FORCE.driver}, gFLabels)};
   });
   // an arrow from p (m) along f (N): hidden when shorter than 2 px on the view
   function arrow(a, p, f) {
@@ -344,9 +344,16 @@ LD.view3d = function (D, anim, fmtS) {
       joints.forEach(function (o) { if (o.s) items.push({node: o.lab, x: o.s[0], y: o.s[1], fs: 11.5, r: 8}); });
       bodies.forEach(function (o) { items.push({node: o.lab, x: o.ax, y: o.ay, fs: 12, r: 6}); });
     }
-    if (showForces) joints.concat(loadArrows, drvArrows).forEach(function (o) {
+    // a force's value never drops out: with no room by its tip, at the view's edge with a
+    // dashed leader line to the tip
+    joints.concat(loadArrows, drvArrows).forEach(function (o) {
       var node = o.flab || o.t;
-      if (o.tip) { node.style.display = ""; items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3}); }
+      o.leader = o.leader || el("line", {stroke: node.getAttribute("fill"), "stroke-dasharray": "3 2", "class": "leader"}, gFLabels);
+      o.leader.style.display = "none";
+      if (showForces && o.tip) {
+        node.style.display = "";
+        items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader});
+      }
     });
     place(items, obst, textScale);
     return best;

@@ -1,0 +1,127 @@
+"""A moving body's free-body diagram: every force on it at each sample, which sum to ``m a_G``.
+
+The forces on body b, global components (N), each at its point of application (m, global):
+
+- each joint's reaction on b: ``+F`` where b is the joint's second body, ``-F`` where it is the
+  first (``Fx_``, ``Fy_`` are by the first body on the second), at the second body's joint point;
+- a slider driver's effort and a sliding joint's friction force, inside their joint (along its
+  axis on the second body, minus that on the first), at the same point;
+- gravity ``m g`` at the mass centre G;
+- each applied load with a force (``force``, ``spring``, ``damper``, ``joint_force``): the loads
+  stage (:func:`linkdyn.loads.wrenches`) run on that load alone, at its point on b.
+
+Couples have no force and are not listed: torques, a revolute driver's or friction's couple, a
+prismatic joint's moment. By Newton's law the forces sum to the mass times the mass centre's
+acceleration ``m a_G`` (:func:`mass_centre`), the force polygon's closing side; that the listed
+forces do is a check of the whole solution (``tests/test_free_body_view.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import joints as jk
+from ..kinematics import point_acceleration
+from ..planar import last, rotate
+
+
+@dataclass(frozen=True)
+class Force:
+    """One force on a body: its ``label`` (a joint's name, ``driver J``, ``friction J``, a
+    load's label or ``weight``), ``kind`` (``joint``, ``driver``, ``friction``, ``weight`` or
+    ``load``), point of application ``at`` (T, 2) m and its name ``where`` (``BODY.POINT``, or
+    ``G`` for the mass centre), ``force`` (T, 2) N, global components, and ``sign``: +1 where
+    the body is the joint's second body, -1 where it is the first (a joint's force is ``sign``
+    times its reaction ``Fx_``, ``Fy_``; +1 for a weight or a load)."""
+
+    label: str
+    kind: str
+    at: np.ndarray
+    force: np.ndarray
+    where: str = ""
+    sign: float = 1.0
+
+
+def mass_centre(sol, i: int) -> tuple[np.ndarray, np.ndarray]:
+    """Position and acceleration (2, T) of body i's mass centre G (tree index), global, m and
+    m/s^2: ``r_G = r_i + d``, ``a_G = a_i + alpha perp(d) - w^2 d``, ``d = R_i c_i``."""
+    kin = sol.kin
+    lay, pose = kin.layout, kin.pose
+    d = pose.rotate(i, lay.com[i])
+    return pose.r[i] + d, point_acceleration(kin.twists[i], kin.rates[i], d)
+
+
+def effort_wrench(sol, joint, effort) -> tuple[np.ndarray, np.ndarray]:
+    """The wrench ``effort p`` of an effort (T,) inside ``joint`` on its second body, about its
+    second body's joint point: the couple (T,) N m and the force (T, 2) N, global (``p`` the
+    joint's motion vector with its axis fixed in the first body; minus both on the first)."""
+    e = rotate(sol.phi(joint.body_a), np.asarray(joint.axis, float))
+    p = np.broadcast_to(jk.get(joint.kind).motion_vector(1.0, e, np.ndim(effort)),
+                        (3,) + np.shape(effort))
+    return effort * p[0], effort[..., None] * last(p[1:])
+
+
+def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
+    """The forces on ``body`` (see the module docstring) and ``m a_G`` (T, 2) N.
+
+    Returns
+    -------
+    forces : list of Force
+        Joint reactions (model joint order), driver efforts and friction forces, the weight,
+        then the applied loads (model load order); a force that is zero at every sample left
+        out.
+    m_a : ndarray (T, 2)
+        The body's mass times its mass centre's acceleration, N: the sum of ``forces``.
+    """
+    from ..loads import labels, wrenches
+
+    m = sol.model
+    i = sol.body_index(body)
+    lay = sol.kin.layout
+    shape = np.shape(sol.t)
+    forces: list[Force] = []
+
+    def add(label, kind, at, f, where, sign=1.0):
+        f = np.broadcast_to(np.asarray(f, float), shape + (2,))
+        if np.any(f != 0):
+            forces.append(Force(label, kind, np.broadcast_to(at, shape + (2,)), f, where, sign))
+
+    # the joints' reactions on b, drivers' and friction's forces inside their joints
+    drivers = {d.joint: k for k, d in enumerate(m.drivers)}
+    fr = getattr(sol, "friction", None)
+    frk = {j: k for k, (j, a) in enumerate(zip(fr.joints, fr.angular)) if not a} if fr else {}
+    for k, j in enumerate(m.joints):
+        if body not in (j.body_a, j.body_b) or j.body_a == j.body_b:
+            continue
+        sign = 1.0 if j.body_b == body else -1.0
+        at, where = sol.point(j.body_b, j.point_b), f"{j.body_b}.{j.point_b}"
+        add(j.name, "joint", at, sign * sol.reactions.force[..., k, :], where, sign)
+        if j.name in drivers and not jk.get(j.kind).angular:
+            add(f"driver {j.name}", "driver", at,
+                sign * effort_wrench(sol, j, sol.dyn.tau[..., drivers[j.name]])[1], where, sign)
+        if j.name in frk:
+            add(f"friction {j.name}", "friction", at,
+                sign * effort_wrench(sol, j, fr.effort[frk[j.name]])[1], where, sign)
+    # gravity: the loads stage with no load, the body's share
+    r_g, a_g = mass_centre(sol, i)
+    weight = wrenches(replace(m, loads=()), sol.kin).wrenches[i]
+    add("weight", "weight", last(r_g), last(weight[1:]), "G")
+    # each applied load alone (without gravity), at its point on b
+    nog = np.zeros(2)
+    for ld, label in zip(m.loads, labels(m)):
+        if ld.kind not in ("force", "spring", "damper", "joint_force"):
+            continue   # couples, and friction (above, from the reactions' solve)
+        if ld.kind == "joint_force":
+            j = m.joint(ld.joint)
+            if body not in (j.body_a, j.body_b):
+                continue
+            owner, point = j.body_b, j.point_b
+        elif body in (ld.body, ld.body2):
+            owner, point = body, (ld.point if ld.body == body else ld.point2)
+        else:
+            continue
+        w = wrenches(replace(m, loads=(ld,), gravity=nog), sol.kin).wrenches[i]
+        add(label, "load", sol.point(owner, point), last(w[1:]), f"{owner}.{point}")
+    return forces, lay.mass[i] * last(a_g)

@@ -1,0 +1,160 @@
+/* linkdyn report: the free-body view of one moving body at the frame shown. The body with
+   every force on it at its point of application (report/data.py from design.free_body), the
+   force polygon (the forces head to tail from the origin; the closing side, their sum, is
+   m a_G by Newton's law) and a table of each force's components. LD.freebody(D) returns
+   {draw(k)}; report.js calls it at every frame while the section is on the screen. */
+LD.freebody = function (D) {
+  "use strict";
+  var S = D.series, G = D.geom, N = D.t.length;
+  var el = LD.el, h = LD.h, fin = LD.fin, fmt = LD.fmt;
+  var sel = document.getElementById("fbody"), fbd = document.getElementById("fbd"),
+      poly = document.getElementById("fbpoly"), table = document.getElementById("fbtable");
+  var W = 320, H = 320;
+  [fbd, poly].forEach(function (s) { s.setAttribute("viewBox", "0 0 " + W + " " + H); });
+  var COLOR = {joint: LD.FORCE.joint, load: LD.FORCE.load, driver: LD.FORCE.driver,
+               friction: LD.FORCE.friction, weight: LD.FORCE.weight, sum: "#111"};
+  // an arrowhead per colour in each drawing
+  [fbd, poly].forEach(function (s, n) {
+    var defs = el("defs", {}, s);
+    Object.keys(COLOR).forEach(function (c) {
+      var mk = el("marker", {id: "fbh-" + n + "-" + c, viewBox: "0 0 10 10", refX: 9, refY: 5, markerWidth: 7,
+                             markerHeight: 7, orient: "auto-start-reverse"}, defs);
+      el("path", {d: "M0,0 L10,5 L0,10 z", fill: COLOR[c]}, mk);
+    });
+  });
+  G.freebody.forEach(function (b, n) {
+    var o = document.createElement("option"); o.value = String(n); o.textContent = b.body; sel.appendChild(o);
+  });
+  var place = LD.placer(W, H), shape = {};
+  G.bodies.forEach(function (b) { shape[b.name] = b; });
+
+  // a point at frame k: a named point, or the mass centre (G) of the body shown
+  function P(b, id, k) {
+    if (id === "G") return b.com ? [b.com.x[k], b.com.y[k]] : [NaN, NaN];
+    var p = G.points[id];
+    return p.static ? [p.x, p.y] : [p.x[k], p.y[k]];
+  }
+  // a force at frame k, N, global: its sign times its series, or its constant value
+  function F(f, k) {
+    if (f.value) return f.value;
+    return [f.sign * S[f.x][k], f.sign * S[f.y][k]];
+  }
+  // each body's drawing scales, fixed over the run: the body's points within 0.3 of the
+  // view about their centroid, its largest force 0.17 of it; the polygon's longest chain
+  // (sum of |F|) within 0.45 of its view about the origin
+  function scales(b) {
+    if (b.sc) return b.sc;
+    var ids = shape[b.body].points.concat(b.forces.map(function (f) { return f.at; })), R = 0, Fm = 0, Lm = 0;
+    for (var k = 0; k < N; k++) {
+      var pts = ids.map(function (id) { return P(b, id, k); }).filter(function (p) { return fin(p[0]) && fin(p[1]); });
+      if (!pts.length) continue;
+      var cx = 0, cy = 0;
+      pts.forEach(function (p) { cx += p[0] / pts.length; cy += p[1] / pts.length; });
+      pts.forEach(function (p) { R = Math.max(R, Math.hypot(p[0] - cx, p[1] - cy)); });
+      var L = 0;
+      b.forces.forEach(function (f) { var v = F(f, k), m = Math.hypot(v[0], v[1]); if (fin(m)) { Fm = Math.max(Fm, m); L += m; } });
+      Lm = Math.max(Lm, L);
+    }
+    b.sc = {len: R > 0 ? 0.3 * W / R : 1, force: Fm > 0 ? 0.17 * W / Fm : 0, poly: Lm > 0 ? 0.45 * W / Lm : 0};
+    return b.sc;
+  }
+  function arrow(parent, x0, y0, x1, y1, kind, n, attrs) {
+    var a = el("line", {x1: x0.toFixed(2), y1: y0.toFixed(2), x2: x1.toFixed(2), y2: y1.toFixed(2), stroke: COLOR[kind],
+                        "stroke-width": kind === "sum" ? 2.6 : 2.2, "marker-end": "url(#fbh-" + n + "-" + kind + ")"}, parent);
+    for (var k in attrs) a.setAttribute(k, attrs[k]);
+    return a;
+  }
+  function clear(s) { Array.prototype.slice.call(s.childNodes).forEach(function (c) { if (c.tagName !== "defs") c.remove(); }); }
+
+  // view units per screen pixel of the drawing (labels 11 px on the screen), measured once
+  // and again after a resize (a measure between drawing steps would force a layout each frame)
+  var ts0 = null;
+  function textScale() {
+    if (ts0 === null) { var w = fbd.getBoundingClientRect().width; ts0 = w > 0 ? Math.max(1, W / w) : 1; }
+    return ts0;
+  }
+  window.addEventListener("resize", function () { ts0 = null; });
+  // the table's rows, made once for the body shown: the forces, then their sum
+  var rowsOf = null, rowsBody = null;
+  function rows(b) {
+    if (rowsBody === b) return rowsOf;
+    table.innerHTML = "";
+    var head = h("tr", "", h("thead", "", table));
+    ["", "force on " + b.body, "at", "Fx (N)", "Fy (N)", "|F| (N)"].forEach(function (t) { h("th", "", head, t); });
+    var body = h("tbody", "", table);
+    function row(label, at, color, cls) {
+      var tr = h("tr", cls || "", body);
+      var sw = h("i", "", h("td", "", tr)); sw.style.background = color;
+      h("td", "", tr, label); h("td", "", tr, at);
+      tr.setAttribute("data-label", label);
+      return {tr: tr, fx: h("td", "num", tr), fy: h("td", "num", tr), f: h("td", "num", tr)};
+    }
+    rowsOf = b.forces.map(function (f) { return row(f.label, f.at === "G" ? "mass centre" : f.at, COLOR[f.kind]); });
+    rowsOf.push(row("sum = m a_G", "", COLOR.sum, "fbtotal"));
+    rowsBody = b;
+    return rowsOf;
+  }
+  // a row's numbers: 4 significant digits shown, every digit in data-fx, data-fy
+  function fill(r, v) {
+    r.fx.textContent = fmt(v[0], 4); r.fy.textContent = fmt(v[1], 4); r.f.textContent = fmt(Math.hypot(v[0], v[1]), 4);
+    r.tr.setAttribute("data-fx", v[0]); r.tr.setAttribute("data-fy", v[1]);
+  }
+
+  function draw(k) {
+    var b = G.freebody[parseInt(sel.value, 10) || 0], sc = scales(b), sb = shape[b.body];
+    textScale();
+    clear(fbd); clear(poly);
+    var vals = b.forces.map(function (f) { return F(f, k); });
+    // the body about its centroid at this frame
+    var pts = sb.points.map(function (id) { return P(b, id, k); }), ok = pts.every(function (p) { return fin(p[0]) && fin(p[1]); });
+    var cx = 0, cy = 0;
+    pts.forEach(function (p) { cx += p[0] / pts.length; cy += p[1] / pts.length; });
+    function X(x) { return W / 2 + (x - cx) * sc.len; }
+    function Y(y) { return H / 2 - (y - cy) * sc.len; }
+    if (ok) {
+      var out = sb.outline.map(function (id) { var p = P(b, id, k); return X(p[0]).toFixed(1) + "," + Y(p[1]).toFixed(1); });
+      el(sb.shape === "polygon" ? "polygon" : "polyline", {points: out.join(" "), fill: sb.shape === "polygon" ? b.color : "none",
+         "fill-opacity": 0.25, stroke: b.color, "stroke-width": sb.shape === "polygon" ? 3 : 8, "stroke-linecap": "round",
+         "stroke-linejoin": "round", opacity: 0.8}, fbd);
+      // every force at its point, at one scale (N per view unit); the labels by the arrows'
+      // tips, clear of each other (LD.placer, at the edge with a leader when crowded)
+      var items = [], ts = textScale();
+      b.forces.forEach(function (f, n) {
+        var p = P(b, f.at, k), v = vals[n];
+        if (!fin(p[0]) || !fin(v[0]) || Math.hypot(v[0], v[1]) * sc.force < 1) return;
+        var x = X(p[0]), y = Y(p[1]), tx = x + v[0] * sc.force, ty = y - v[1] * sc.force;
+        arrow(fbd, x, y, tx, ty, f.kind, 0, {"data-label": f.label, "class": "fbforce"});
+        var lab = el("text", {"font-size": 11, fill: COLOR[f.kind], "class": "fblabel"}, fbd);
+        lab.textContent = f.label;
+        var led = el("line", {stroke: COLOR[f.kind], "stroke-dasharray": "3 2"}, fbd);
+        items.push({node: lab, x: tx, y: ty, fs: 11, r: 3, edge: true, leader: led});
+      });
+      place(items, [], ts);
+    } else el("text", {x: 10, y: 20, "font-size": 12, fill: "#555"}, fbd).textContent = "not assembled at this frame";
+    // the force polygon: head to tail from the origin, the closing side from the origin to
+    // the last head (the sum: m a_G)
+    var ox = W / 2, oy = H / 2, px = 0, py = 0, bad = false;
+    poly.setAttribute("data-scale", sc.poly);
+    el("circle", {cx: ox, cy: oy, r: 2.5, fill: "#111"}, poly);
+    b.forces.forEach(function (f, n) {
+      var v = vals[n];
+      if (!fin(v[0]) || !fin(v[1])) { bad = true; return; }
+      var x0 = ox + px * sc.poly, y0 = oy - py * sc.poly;
+      px += v[0]; py += v[1];
+      arrow(poly, x0, y0, ox + px * sc.poly, oy - py * sc.poly, f.kind, 1, {"data-label": f.label, "class": "fbside"});
+    });
+    if (bad) px = py = NaN;   // a frame that is not solved: no sum
+    else {
+      var sum = arrow(poly, ox, oy, ox + px * sc.poly, oy - py * sc.poly, "sum", 1, {"class": "fbsum", "stroke-dasharray": "5 3"});
+      if (Math.hypot(px, py) * sc.poly < 1) sum.removeAttribute("marker-end");
+      el("text", {x: (ox + px * sc.poly / 2 + 4).toFixed(1), y: (oy - py * sc.poly / 2 - 4).toFixed(1), "font-size": 11.5,
+                  "font-weight": "bold", fill: "#111"}, poly).textContent = "m a_G";
+    }
+    // the table: each force and the sum, N
+    var rs = rows(b);
+    vals.forEach(function (v, n) { fill(rs[n], v); });
+    fill(rs[rs.length - 1], [px, py]);
+  }
+  sel.addEventListener("change", function () { draw(window.__linkdynFrame || 0); });
+  return {draw: draw};
+};
