@@ -22,7 +22,8 @@ the other's; larger is faster):
 
 Every baseline writes fresh outputs (as linkdyn does) and is checked against linkdyn's numpy
 backend before it is timed. linkdyn's compiled time is then split by stage (each kernel alone
-on outputs already touched, as ``bench_kernels.py`` runs them).
+on outputs already touched, as ``bench_kernels.py`` runs them), and the kinematics kernel by
+step.
 
 Without a C compiler the C kernels are skipped (said so) and the ratios are to hand-written
 numpy.
@@ -39,6 +40,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import ctypes  # noqa: E402
+import resource  # noqa: E402
 import shutil  # noqa: E402
 import subprocess  # noqa: E402
 import tempfile  # noqa: E402
@@ -336,6 +338,21 @@ def batch(mech, designs: int, samples: int):
     return solve
 
 
+def system_share(fn, samples: int, repeat: int) -> tuple[float, float, int]:
+    """The call of ``fn`` with the least CPU time of ``repeat``: its user and system CPU
+    seconds per sample and the page faults it took (the system's part is mostly the first
+    touch of fresh output memory)."""
+    best = None
+    for _ in range(repeat):
+        r0 = resource.getrusage(resource.RUSAGE_SELF)
+        fn()
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        x = ((r1.ru_utime - r0.ru_utime) / samples, (r1.ru_stime - r0.ru_stime) / samples,
+             r1.ru_minflt - r0.ru_minflt)
+        best = x if best is None or sum(x[:2]) < sum(best[:2]) else best
+    return best
+
+
 def more(ap):
     ap.add_argument("--designs", type=int, default=2000,
                     help="designs of the batch (x 360 samples)")
@@ -404,7 +421,7 @@ def main():
                   f"{name.split(',')[0]} ({per[name] / single:.2f} x its speed)")
 
     # where linkdyn's compiled time goes: each kernel alone, outputs already touched
-    from bench_kernels import kernel_arguments
+    from bench_kernels import kernel_arguments, steps
     kernels = kernel_arguments(mech, t)
     print("linkdyn compiled by stage (each kernel alone, outputs already touched):")
     total = 0.0
@@ -415,6 +432,23 @@ def main():
     print(f"  {'the three kernels':28s} {total * 1e9:8.1f} ns/sample; the rest of analyze "
           f"(allocating and first touching the outputs, Python) "
           f"{(per['linkdyn compiled'] - total) * 1e9:.1f}")
+    print("  one call's CPU split, the least of a few (the system's part: page faults of fresh "
+          "outputs):")
+    shares = {"linkdyn compiled": lambda: linkdyn.analyze(mech, t, backend="compiled")}
+    if ref_name.startswith("C, scalar"):
+        shares[ref_name] = lambda: runs[ref_name](t, np.empty((ROWS, T)))
+    for name, fn in shares.items():
+        user, system, faults = system_share(fn, T, args.repeat)
+        print(f"    {name:44s} user {user * 1e9:6.1f}, system {system * 1e9:6.1f} ns/sample,"
+              f" {faults} page faults")
+    print("  the kinematics kernel, step by step (called block by block from Python, a few ns "
+          "of the calls each):")
+    table, block = steps(kernels["kinematics"][1])
+    for name, fn in table.items():
+        fn(0, block)
+        x = best_time(lambda: [fn(k0, min(block, T - k0)) for k0 in range(0, T, block)],
+                      args.repeat, args.time) / T
+        print(f"    {name:36s} {x * 1e9:8.1f} ns/sample")
 
 
 if __name__ == "__main__":
