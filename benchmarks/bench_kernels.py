@@ -74,7 +74,7 @@ def steps(args):
         "close the dyads": lambda k0, nb: kc._close(L, X.modes, 0, 0, k0, nb, *closed, up, low),
         "cut frames": lambda k0, nb: kc._cut_frames(L, 0, 0, k0, nb, c, s, r, P),
         "closure residual": lambda k0, nb: kc._residual(L, 0, k0, 0, k0, nb, phi, P, err, rhs),
-        "closure Jacobian": lambda k0, nb: kc._jacobian(L, 0, k0, nb, r, e, P, J),
+        "closure Jacobian": lambda k0, nb: kc._jacobian(L, 0, 0, k0, nb, r, e, P, J),
         "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(L.dependent, J, 0, k0,
                                                                         nb, A, perm, col),
         "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(
@@ -82,8 +82,8 @@ def steps(args):
         "twists": lambda k0, nb: kc._twists(L, 0, k0, nb, r, e, qd, tw),
         "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(L, 0, k0, nb, r, e,
                                                                               tw, qd, qdd, td),
-        "closure bias": lambda k0, nb: kc._bias(L, 0, k0, nb, r, tw, td, P, rhs),
-        "cut-joint motion": lambda k0, nb: kc._cut_motion(L, 0, k0, nb, phi, r, tw, td, P, cut),
+        "closure bias": lambda k0, nb: kc._bias(L, 0, 0, k0, nb, r, tw, td, P, rhs),
+        "cut-joint motion": lambda k0, nb: kc._cut_motion(L, 0, 0, k0, nb, phi, r, tw, td, P, cut),
     }, block
 
 
