@@ -25,6 +25,11 @@ $(VENV)/.installed-fast: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast,parquet]"
 	touch $@ $(VENV)/.installed
 
+# make bench: numba, and sympy for bench_inverse.py's sympy.mechanics baseline
+$(VENV)/.installed-bench: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[fast,parquet,bench]"
+	touch $@ $(VENV)/.installed-fast $(VENV)/.installed
+
 demo: $(VENV)/.installed-demo
 	$(BIN)/linkdyn example hoeken > hoeken.toml
 	$(BIN)/linkdyn analyze hoeken.toml -o out/hoeken --report
@@ -36,11 +41,12 @@ test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 # the scripts' own reference checks (pytest -m bench, tests/test_benchmarks.py), then the timings
-bench: $(VENV)/.installed-fast $(VENV)/.installed-test
+bench: $(VENV)/.installed-bench $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -m bench tests/test_benchmarks.py
 	$(BIN)/python benchmarks/bench_hoeken.py
 	$(BIN)/python benchmarks/bench_kernels.py
 	$(BIN)/python benchmarks/bench_ceiling.py
+	$(BIN)/python benchmarks/bench_inverse.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_simulate.py
 	$(BIN)/python benchmarks/bench_compile.py

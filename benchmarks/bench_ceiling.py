@@ -203,26 +203,36 @@ def check(out, mech, t):
             assert err <= 1e-9 * scale, f"{key}: {err}"
 
 
-def setup(mech):
-    """The hand-written kernel bound to Hoeken's numbers: ``run(t, out)`` fills ``out``
-    ((ROWS_KIN or ROWS_ALL, T)) at the times ``t`` and returns it."""
+def numbers(mech) -> dict:
+    """Hoeken's numbers as the hand-written kernels take them (SI): the crank speed ``w``; the
+    pins ``u`` (coupler on the crank), ``v`` (rocker on the coupler), ``pb`` (ground on the
+    rocker), each in its body's frame, and ``pa`` (the ground pin); ``side``, the assembly
+    branch at t = 0; ``size``; per body, ground first, ``mass``, ``com`` (4, 2) and ``i_o``,
+    the inertia about the body's origin. ``layout``: the compiled layout they come from."""
     lay = compile_layout(mech)
     (cut,) = lay.cuts
     u, v, pa, pb = lay.joint_point[2], lay.joint_point[3], cut.pa, cut.pb
     assert not np.any(lay.joint_point[1]), "the kernel takes the crank pivot at the origin"
-    w = mech.drivers[0].motion.speed
     mass = np.asarray(lay.mass, float)
     com = np.array([np.asarray(x, float) for x in lay.com])
-    i_o = np.asarray(lay.inertia, float) + mass * np.sum(com**2, axis=1)   # about the origin
     # the branch of the assembled mechanism at t = 0
     s0 = kinematics.solve(mech, np.zeros(1), backend="numpy")
     r2, r3 = s0.pose.r[2][:, 0], s0.pose.r[3][:, 0]
     (dx, dy), (ex, ey) = pa - r2, r3 - r2
-    side = float(np.sign(dx * ey - dy * ex))
+    return {"w": mech.drivers[0].motion.speed, "u": u, "v": v, "pa": pa, "pb": pb,
+            "side": float(np.sign(dx * ey - dy * ex)), "size": float(lay.size), "mass": mass,
+            "com": com, "i_o": np.asarray(lay.inertia, float) + mass * np.sum(com**2, axis=1),
+            "layout": lay}
+
+
+def setup(mech):
+    """The hand-written kernel bound to Hoeken's numbers: ``run(t, out)`` fills ``out``
+    ((ROWS_KIN or ROWS_ALL, T)) at the times ``t`` and returns it."""
+    p = numbers(mech)
 
     def run(t, out):
-        HOEKEN[len(out) == ROWS_ALL](t, w, u, v, pa, pb, side, float(lay.size), mass, i_o,
-                                    com, out)
+        HOEKEN[len(out) == ROWS_ALL](t, p["w"], p["u"], p["v"], p["pa"], p["pb"], p["side"],
+                                    p["size"], p["mass"], p["i_o"], p["com"], out)
         return out
 
     return run

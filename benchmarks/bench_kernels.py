@@ -60,36 +60,30 @@ def kernel_arguments(mech, t):
 
 
 def steps(args):
-    """The kinematics kernel's steps, each a function of a block ``(k0, nb)``."""
-    (tree, anc, dep, drv, cuts, side, dyads, geo, cgeo, size, t_s, nodes, lo, hi, Qn, cQ, sQ,
-     modes, q_in, q_drv, qd_drv, qdd_drv, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot,
-     err, fin, block) = args
-    n, nc, nd = len(tree), len(cuts), len(dep)
-    cq, sq = np.ones((n, block)), np.zeros((n, block))   # cos, sin of s q: any angle will do
-    up, low, rhs = np.zeros((5, block)), np.zeros((5, block)), np.zeros((2 * nc, block))
-    P = np.zeros((nc, 6, block))
-    kc._cut_frames(cuts, cgeo, 0, 0, 0, block, c, s, r, P)   # the first block's, for every block
-    A, sol, col = np.zeros((nd, nd, block)), np.zeros((max(nd, 1), block)), np.zeros(block)
-    perm = np.zeros((nd, block), np.int64)
+    """The kinematics kernel's steps, each a function of a block ``(k0, nb)`` (design 0, the
+    outputs of the real call as the work arrays, its scratch from ``kinematics.compiled.scratch``);
+    ``(table, block)``."""
+    (L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block) = args
+    n, nc, nd = len(L.parent), len(L.cut_a), len(L.dependent)
+    cq, sq, up, low, rhs, P, A, sol, col, perm, _ = kc.scratch(n, nc, nd, J.shape[0], block)
+    kc._cut_frames(L, 0, 0, 0, block, c, s, r, P)   # the first block's, for every block
     closed = [x.copy() for x in (q, phi, c, s, r, e)]   # the close step turns a copy
     return {
-        "place the bodies": lambda k0, nb: kc._place(tree, geo, 0, 0, k0, nb, q, cq, sq, phi, c, s,
-                                                     r, e),
-        "close the dyads": lambda k0, nb: kc._close(dyads, anc, tree, cuts, cgeo, modes, 0, 0, k0, nb,
-                                                    *closed, up, low),
-        "cut frames": lambda k0, nb: kc._cut_frames(cuts, cgeo, 0, 0, k0, nb, c, s, r, P),
-        "closure residual": lambda k0, nb: kc._residual(cuts, cgeo, size, 0, k0, 0, k0, nb, phi, P,
-                                                              err),
-        "closure Jacobian": lambda k0, nb: kc._jacobian(tree, side, cuts, 0, k0, nb, r, e, P, J),
-        "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(dep, J, 0, k0, nb, A, perm,
-                                                                        col),
-        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(dep, A, perm, col, 0, k0,
-                                                                         nb, rhs, qd, sol),
-        "twists": lambda k0, nb: kc._twists(tree, 0, k0, nb, r, e, qd, tw),
-        "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(tree, 0, k0, nb, r, e,
+        "place the bodies": lambda k0, nb: kc._place(L, 0, 0, k0, nb, q, cq, sq, phi, c, s, r,
+                                                     e),
+        "close the dyads": lambda k0, nb: kc._close(L, X.modes, 0, 0, k0, nb, *closed, up, low),
+        "cut frames": lambda k0, nb: kc._cut_frames(L, 0, 0, k0, nb, c, s, r, P),
+        "closure residual": lambda k0, nb: kc._residual(L, 0, k0, 0, k0, nb, phi, P, err, rhs),
+        "closure Jacobian": lambda k0, nb: kc._jacobian(L, 0, 0, k0, nb, r, e, P, J),
+        "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(L.dependent, J, 0, k0,
+                                                                        nb, A, perm, col),
+        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(
+            L.dependent, A, perm, col, 0, k0, nb, rhs, qd, sol),
+        "twists": lambda k0, nb: kc._twists(L, 0, k0, nb, r, e, qd, tw),
+        "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(L, 0, k0, nb, r, e,
                                                                               tw, qd, qdd, td),
-        "closure bias": lambda k0, nb: kc._bias(cuts, 0, k0, nb, r, tw, td, P, rhs),
-        "cut-joint motion": lambda k0, nb: kc._cut_motion(cuts, 0, k0, nb, phi, r, tw, td, P, cut),
+        "closure bias": lambda k0, nb: kc._bias(L, 0, 0, k0, nb, r, tw, td, P, rhs),
+        "cut-joint motion": lambda k0, nb: kc._cut_motion(L, 0, 0, k0, nb, phi, r, tw, td, P, cut),
     }, block
 
 

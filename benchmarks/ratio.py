@@ -1,4 +1,5 @@
-"""What the ratio benchmarks share (``bench_cam.py``, ``bench_friction.py``): their options, the
+"""What the ratio benchmarks share (``bench_cam.py``, ``bench_friction.py``,
+``bench_inverse.py``): their options, the
 best of a few timings on the clock asked for, and the line that says whether a target is met.
 
 A benchmark script imports it as a sibling module (``python benchmarks/bench_cam.py`` puts
@@ -11,11 +12,14 @@ import argparse
 import time
 
 
-def options(doc: str, samples: int = 100_000) -> argparse.Namespace:
+def options(doc: str, samples: int = 100_000, more=None) -> argparse.Namespace:
     """The command line of a ratio benchmark: ``--samples``, ``--repeat``, ``--backend`` and
     ``--clock`` (``cpu``: this process's CPU time, the other jobs of a shared machine left out),
-    the script's docstring ``doc`` its description; ``.clock`` the clock as a function."""
+    the script's docstring ``doc`` its description; ``.clock`` the clock as a function.
+    ``more``: a function adding the script's own options to the parser."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    if more is not None:
+        more(ap)
     ap.add_argument("--samples", type=int, default=samples)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--backend", default="compiled")

@@ -3,7 +3,8 @@
 Each script checks its references before it times anything: ``bench_hoeken.py`` that the
 per-sample baselines and the hand-written numpy four-bar agree with linkdyn, ``bench_ceiling.py``
 that every row of its hand-written compiled kernels (kinematics; torque, pin forces, kinetic
-energy) agrees with linkdyn's numpy path. A wrong reference would make a wrong comparison, so
+energy) agrees with linkdyn's numpy path, ``bench_inverse.py`` that its C, numpy and sympy
+baselines of the full inverse dynamics do. A wrong reference would make a wrong comparison, so
 those checks run here; the timings they print mean nothing at this size. They time the
 compiled backend too: the test extras install numba.
 
@@ -45,6 +46,16 @@ def test_bench_ceiling():
     out = run("bench_ceiling.py", "--samples", "3000", "--repeat", "1")
     assert out.count("ceiling, hand-written compiled kernel") == 2
     assert "47 numbers per sample" in out and "59 numbers per sample" in out
+
+
+def test_bench_inverse():
+    # its checks: each baseline's 18 rows (C, numpy, sympy.mechanics) against linkdyn's numpy
+    # backend before timing; C and sympy are skipped, saying so, where absent
+    out = run("bench_inverse.py", "--samples", "3000", "--repeat", "1", "--designs", "10")
+    assert "numpy, hand-written, chunks of 8192" in out and "linkdyn compiled by stage" in out
+    assert "10 designs x 360 samples in one batch" in out and "linkdyn numpy" in out
+    assert ("C, scalar" in out) != ("no C compiler" in out)
+    assert ("sympy.mechanics, lambdified" in out) != ("sympy is not installed" in out)
 
 
 def test_bench_sweep():

@@ -8,7 +8,8 @@ stage's on the full kinematics, to 1e-12 of each quantity's peak with NaN at the
 what it leaves out (twists, their rates, the Jacobian) comes from the full kernel when read.
 Covered: every bundled example and the dynamics tests' models, their loads removed (the sweep
 kernel runs layouts whose only applied load is gravity), with gravity and without: one and two
-loops, prismatic tree and cut joints, slot joints, two drivers; two designs stacked; several
+loops, prismatic tree and cut joints, slot joints, two drivers; two designs stacked (a cam's
+two lifts among them, so that each design's cut numbers are its own); several
 blocks of samples with a partial last one; a design that cannot assemble and one driven past a
 limit position.
 """
@@ -55,6 +56,19 @@ CASES = {f"example-{n}": (lambda n=n: [unloaded(linkdyn.load(linkdyn.example_pat
 CASES.update({f"model-{n}": (lambda n=n: [unloaded(MODELS[n](), s) for s in (1.0, 1.6)])
               for n in ("slider-crank-cut-J3", "inverted-slider-crank-cut-prismatic",
                         "boom-offset", "five-bar", "slotted-lever")})
+
+
+def _numbers(model, kind, **numbers):
+    """``model`` with the numbers of its joints of ``kind`` replaced."""
+    return dataclasses.replace(model, joints=tuple(
+        dataclasses.replace(j, numbers={**j.numbers, **numbers}) if j.kind == kind else j
+        for j in model.joints))
+
+
+# two designs whose cut joints' own numbers differ: each design's rows of the closure Jacobian,
+# its bias and its cut motion from its own numbers (design 0's took the others' once)
+CASES["cam-lift"] = lambda: [_numbers(unloaded(linkdyn.load(linkdyn.example_path(
+    "cam_follower"))), "cam", lift=x) for x in (0.02, 0.03)]
 # two designs that close, one that cannot assemble, one past a limit position
 CASES["hoeken-invalid"] = lambda: [hoeken_design(38.1), hoeken_design(42.0),
                                    hoeken_design(400.0), _limit_design()]

@@ -124,7 +124,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
               perm, col, sol)
     if not W.err[0, 0] <= ACCEPT:
         return 1
-    kc._jacobian(L, z, z, one, W.r, W.e, P, W.J)
+    kc._jacobian(L, z, z, z, one, W.r, W.e, P, W.J)
     # rates: J_dep qd_dep = -J_ind qd_ind                                          (eqs. 4-5)
     for j in range(k_ind):
         W.qd_ind[j, 0, 0] = drv[1, j] if j < nd else y[nf + j - nd]
@@ -138,7 +138,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
     kc._twists(L, z, z, one, W.r, W.e, W.qd, W.tw)
     # the loads: formulas of t and the joints' motion (the twist rates not yet known)
     W.td[:, :, :, :] = 0.0
-    kc._cut_motion(L, z, z, one, W.phi, W.r, W.tw, W.td, P, W.cut)
+    kc._cut_motion(L, z, z, z, one, W.phi, W.r, W.tw, W.td, P, W.cut)
     x = W.x[:, 0]
     x[0] = t
     for i in range(1, n):
@@ -161,7 +161,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
             qdd[dep[a]] = 0.0
         kc._twist_rates(L, z, z, one, W.r, W.e, W.tw, W.qd, W.qdd, W.td)
         if m > 0:
-            kc._bias(L, z, z, one, W.r, W.tw, W.td, P, rhs)
+            kc._bias(L, z, z, z, one, W.r, W.tw, W.td, P, rhs)
             for a in range(m):
                 rhs[a, 0] = -rhs[a, 0]
             kc._solve_dep(dep, A, perm, col, z, z, one, rhs, W.qdd, sol)

@@ -372,7 +372,7 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
             kc.block(L, X, d, k0, nb, work, z, z, err, pivot, fin, tmp)
-            kc._cut_motion(L, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
+            kc._cut_motion(L, d, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
             for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
                            (qdd_w, qdd)):
                 _keep(x, out, d, k0, nb)

@@ -281,11 +281,12 @@ def _residual(L, d, k0, w, kw, nb, phi, P, err, g):
 
 
 @njit
-def _jacobian(L, d, k0, nb, r, e, P, J):
+def _jacobian(L, d, w, kw, nb, r, e, P, J):
     """Loop-closure Jacobian J (n_rows, n - 1): each cut's rows of each tree joint's rate
     (:func:`.recursion.jacobian_column`, eqs. 20-24); the columns of joints that move both
-    bodies of a cut alike, or neither, stay zero."""
-    ks = slice(k0, k0 + nb)
+    bodies of a cut alike, or neither, stay zero. Design d's cut numbers, the arrays at design
+    ``w``, samples from ``kw``."""
+    ks = slice(kw, kw + nb)   # the block's samples in the arrays
     last = J.shape[0] - 1
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
@@ -296,12 +297,12 @@ def _jacobian(L, d, k0, nb, r, e, P, J):
             if f == 0:
                 continue
             code, sign = L.kind[j], float(L.sign[j])
-            rx_j, ry_j = vector_views(r, j, d, ks)
-            ex_j, ey_j = vector_views(e, j, d, ks)
+            rx_j, ry_j = vector_views(r, j, w, ks)
+            ex_j, ey_j = vector_views(e, j, w, ks)
             # cut ci's rows (a view of a row past the cut's is never written)
-            J0 = J[row, j - 1, d, ks]
-            J1 = J[min(row + 1, last), j - 1, d, ks]
-            J2 = J[min(row + 2, last), j - 1, d, ks]
+            J0 = J[row, j - 1, w, ks]
+            J1 = J[min(row + 1, last), j - 1, w, ks]
+            J2 = J[min(row + 2, last), j - 1, w, ks]
             for k in range(nb):
                 r_pa, r_pb, e_a = _frame(P_c, k)
                 x = jacobian_column(cut, nums, code, sign, f, (ex_j[k], ey_j[k]),
@@ -359,17 +360,18 @@ def _twist_rates(L, d, k0, nb, r, e, tw, qd, qdd, td):
 
 
 @njit
-def _bias(L, d, k0, nb, r, tw, td, P, bias):
+def _bias(L, d, w, kw, nb, r, tw, td, P, bias):
     """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td``
-    (:func:`.recursion.cut_bias`); ``bias`` (n_rows, block)."""
-    ks = slice(k0, k0 + nb)
+    (:func:`.recursion.cut_bias`); ``bias`` (n_rows, block). Design d's cut numbers, the
+    arrays at design ``w``, samples from ``kw``."""
+    ks = slice(kw, kw + nb)   # the block's samples in the arrays
     last = bias.shape[0] - 1
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
         a, b, cut = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci]
         row, rows = L.cut_row[ci], L.cut_rows[ci]
-        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
-        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
+        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, w, ks)
+        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, w, ks)
         B0, B1, B2 = bias[row], bias[min(row + 1, last)], bias[min(row + 2, last)]
         nums = cut_numbers(L, ci, d)
         for k in range(nb):
@@ -410,17 +412,18 @@ def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
 
 
 @njit
-def _cut_motion(L, d, k0, nb, phi, r, tw, td, P, out):
+def _cut_motion(L, d, w, kw, nb, phi, r, tw, td, P, out):
     """Coordinate, rate and acceleration of every cut joint (:func:`.recursion.cut_coordinate`);
-    ``out`` (n_cut, 3, D, T)."""
-    ks = slice(k0, k0 + nb)
+    ``out`` (n_cut, 3, D, T). Design d's cut numbers, the arrays at design
+    ``w``, samples from ``kw``."""
+    ks = slice(kw, kw + nb)   # the block's samples in the arrays
     for ci in range(len(L.cut_a)):
         P_c = P[ci]
         a, b, cut = L.cut_a[ci], L.cut_b[ci], L.cut_kind[ci]
-        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, d, ks)
-        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, d, ks)
-        phi_a, phi_b = phi[a, d, ks], phi[b, d, ks]
-        q_c, qd_c, qdd_c = out[ci, 0, d, ks], out[ci, 1, d, ks], out[ci, 2, d, ks]
+        w_a, vx_a, vy_a, al_a, ax_a, ay_a, rx_a, ry_a = _motion(tw, td, r, a, w, ks)
+        w_b, vx_b, vy_b, al_b, ax_b, ay_b, rx_b, ry_b = _motion(tw, td, r, b, w, ks)
+        phi_a, phi_b = phi[a, w, ks], phi[b, w, ks]
+        q_c, qd_c, qdd_c = out[ci, 0, w, ks], out[ci, 1, w, ks], out[ci, 2, w, ks]
         nums = cut_numbers(L, ci, d)
         for k in range(nb):
             r_pa, r_pb, e_a = _frame(P_c, k)
@@ -472,7 +475,7 @@ def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col,
     _residual(L, d, k0, d, k0, nb, phi, P, err, g)
     for _ in range(MAXITER if m else 0):
         # J_dep dx = -g                                                          (F1-F2)
-        _jacobian(L, d, k0, nb, r, e, P, J)
+        _jacobian(L, d, d, k0, nb, r, e, P, J)
         _factor_dep(dep, J, d, k0, nb, A, perm, col)
         for a in range(m):
             for k in range(nb):
@@ -574,7 +577,7 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
         _close(L, X.modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
     _cut_frames(L, d, w, kw, nb, c, s, r, P)
     _residual(L, d, k0, w, kw, nb, phi, P, err, rhs)
-    _jacobian(L, w, kw, nb, r, e, P, J)
+    _jacobian(L, d, w, kw, nb, r, e, P, J)
     # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
     for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
         qdd[dep[m], w, kws] = 0.0
@@ -590,7 +593,7 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
     _twist_rates(L, w, kw, nb, r, e, tw, qd, qdd, td)
     if nd:
-        _bias(L, w, kw, nb, r, tw, td, P, rhs)
+        _bias(L, d, w, kw, nb, r, tw, td, P, rhs)
         for row in range(nd):
             for k in range(nb):
                 rhs[row, k] = -rhs[row, k]
@@ -618,7 +621,7 @@ def kernel(L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, b
         for k0 in range(0, T, block_size):
             nb = min(block_size, T - k0)
             block(L, X, d, k0, nb, work, d, k0, err, pivot, fin, tmp)
-            _cut_motion(L, d, k0, nb, phi, r, tw, td, tmp[5], cut)
+            _cut_motion(L, d, d, k0, nb, phi, r, tw, td, tmp[5], cut)
 
 
 def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,

@@ -54,7 +54,7 @@ def kernel(L, modes, q, qd_drv, q0, k_zero, x, ok, phi, c, s, r, e, J, block):
             _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             _close(L, modes, d, d, k0, nb, q, phi, c, s, r, e, up, low)
             _cut_frames(L, d, d, k0, nb, c, s, r, P)
-            _jacobian(L, d, k0, nb, r, e, P, J)
+            _jacobian(L, d, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
             _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, nb, rhs)
             if nd:
