@@ -40,7 +40,8 @@ import math
 import numpy as np
 
 from .. import laws
-from ..steps import atan2, by_kind, select, step
+from ..planar import wrapped
+from ..steps import atan2, by_kind, select, settled, step
 from .base import JointKind, Number
 
 BASE_RADIUS = Number("base_radius", (), "length", 0.0,
@@ -55,11 +56,14 @@ FALL = Number("fall", (), "angle", 0.0, doc="cam angle of the return")
 LAW = Number("law", (), "", float(laws.CODES["cycloidal"]), design=False,
              choices=tuple(laws.LAWS), doc="motion law")
 
-#: Newton's iterations for the contact's cam angle. The polar angle's rate along the pitch curve
-#: is ``beta_theta = e s' / rho^2 - 1``; a cam with ``|e s'| <= STEEP rho^2`` (refused otherwise)
-#: has it within [-3/2, -1/2], and from ``s = 0`` the iterations reached rounding (5e-15 rad) by
-#: the fifth on 199 random such cams (every law, offsets to 0.95 of the prime circle)
+#: Newton's iterations for the contact's cam angle, at most. The polar angle's rate along the
+#: pitch curve is ``beta_theta = e s' / rho^2 - 1``; a cam with ``|e s'| <= STEEP rho^2``
+#: (refused otherwise) has it within [-3/2, -1/2], and from ``s = 0`` the iterations reached
+#: rounding (5e-15 rad) by the fifth on 199 random such cams (every law, offsets to 0.95 of the
+#: prime circle). They stop after a step below ``SETTLED`` (rad) on every sample: converging
+#: quadratically, the error left is of its square, rounding (the fourth step, usually)
 ITERATIONS = 6
+SETTLED = 1e-9
 STEEP = 0.5
 TWO_PI = 2.0 * math.pi
 #: the follower's motion, ``nums[8]``: along a line, or an arm swinging about a pivot
@@ -123,7 +127,10 @@ def contact(nums, f):
         p = follower_point(code, nums, s[0])
         miss = atan2(p[1], p[0]) - theta - psi
         bt = (p[0] * p[3] - p[1] * p[2]) * s[1] / (p[0] * p[0] + p[1] * p[1]) - 1.0
-        theta = theta - atan2(np.sin(miss), np.cos(miss)) / bt
+        dt = wrapped(miss) / bt
+        theta = theta - dt
+        if settled(dt, SETTLED):
+            break
     s = lift(nums, theta)
     p = follower_point(code, nums, s[0])
     # F and its rates in theta: F_t = F' s',  F_tt = F'' s'^2 + F' s''

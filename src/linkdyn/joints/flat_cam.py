@@ -34,9 +34,10 @@ import math
 
 import numpy as np
 
-from ..steps import atan2, by_kind, step
-from .cam import (BASE_RADIUS, DWELL, FALL, ITERATIONS, LAW, LIFT, OSCILLATING, RISE, STEEP,
-                  TRANSLATING, TWO_PI, Cam, lift)
+from ..planar import wrapped
+from ..steps import atan2, by_kind, settled, step
+from .cam import (BASE_RADIUS, DWELL, FALL, ITERATIONS, LAW, LIFT, OSCILLATING, RISE, SETTLED,
+                  STEEP, TRANSLATING, TWO_PI, Cam, lift)
 
 
 @step
@@ -75,8 +76,10 @@ def contact(nums, f):
     for _ in range(ITERATIONS):
         s = lift(nums, theta)
         p = face_line(code, nums, s[0])
-        miss = p[0] - theta - nu
-        theta = theta - atan2(np.sin(miss), np.cos(miss)) / (-p[4] * s[1] - 1.0)
+        dt = wrapped(p[0] - theta - nu) / (-p[4] * s[1] - 1.0)
+        theta = theta - dt
+        if settled(dt, SETTLED):
+            break
     s = lift(nums, theta)
     p = face_line(code, nums, s[0])
     # h_t = h' s',  h_tt = h'' s'^2 + h' s'';  H_nu = h_t / nu_t,
