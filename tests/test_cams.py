@@ -254,7 +254,7 @@ def test_a_table_of_points_gives_the_periodic_spline_through_them(tmp_path):
     ([0, 90, 180, 270], [0, 1, 2], "cam.table", "same number of points"),
     ([0, 180, 90, 270], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
     ([0, 90, 180, 360], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
-    (None, None, "cam.segments", "either by segments or by a table")])
+    (None, None, "cam.segments", "by segments, by a table or by a formula")])
 def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words):
     path = tmp_path / "cam.toml"
     if angles is None:   # segments and a table both
@@ -265,3 +265,73 @@ def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words
     res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
     assert res.exit_code == 2 and "Traceback" not in res.output
     assert field in res.output and words in res.output
+
+
+FORMULA = """[units]
+length = "mm"
+angle = "deg"
+
+[cam]
+name = "by a formula"
+base_radius = 40.0
+roller_radius = 10.0
+offset = 5.0
+rpm = 300.0
+formula = "LIFT"
+"""
+
+#: the doc file's cam (dwell 60 deg, cycloidal rise of 20 mm over 100 deg, dwell 100 deg, 3-4-5
+#: return over 100 deg) written as one formula of the cam angle in deg
+DRDR = ("where(theta < 60, 0, where(theta < 160, 20*((theta - 60)/100 - sin(2*pi*(theta - 60)"
+        "/100)/(2*pi)), where(theta < 260, 20, 20*(1 - ((theta - 260)/100)**3*(10 - 15*(theta"
+        " - 260)/100 + 6*((theta - 260)/100)**2)))))")
+
+
+def test_a_lift_by_a_formula_is_the_built_in_laws_to_rounding(tmp_path):
+    # the same cam by segments (each law's hand-written derivatives, linkdyn.laws) and by a
+    # formula (its derivatives symbolic, linkdyn.expr): SVAJ, pressure angle, curvature and
+    # points agree to 1e-12 of their peaks (1001 angles: none on a join, where a law's jerk
+    # jumps and the two could take different sides)
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", DRDR), "utf-8")
+    design, _ = camfile.read(path)
+    laws_ = cams.profile(cam(), 1001)
+    by_formula = cams.profile(design, 1001)
+    for name in ("s", "v", "a", "j", "pressure_angle", "rho_pitch", "rho", "pitch", "profile"):
+        x, y = getattr(by_formula, name), getattr(laws_, name)
+        assert x == pytest.approx(y, rel=0, abs=1e-12 * np.max(np.abs(y))), name
+    # the continuity line: the cycle closes smoothly (only there are joins looked for)
+    theta, jump = cams.joins(design)
+    assert theta == pytest.approx([0.0])
+    assert np.max(np.abs(jump[:3])) <= 1e-12 * np.max(np.abs(laws_.a))
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "lift 20 mm" in res.output and "continuous" in res.output
+
+
+def test_a_formula_that_jumps_where_the_cycle_closes_is_reported(tmp_path):
+    # a harmonic rise over the whole turn, 10 (1 - cos(pi theta / 360)) (theta in deg): at 360
+    # deg its lift is 20 mm, at 0 it is 0: the lift jumps by -20 mm where the cycle closes
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", "10*(1 - cos(pi*theta/360))"), "utf-8")
+    design, _ = camfile.read(path)
+    _, jump = cams.joins(design)
+    assert jump[0] == pytest.approx([-H])
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "DISPLACEMENT JUMPS at cam angles 0 deg (by up to 20 mm)" in res.output
+
+
+@pytest.mark.parametrize("lift, words", [
+    ("20*sin(theta", "formula"),
+    ("__import__('os')", "formula"),
+    ("20*sin(theta)", "below 0"),
+    ("log(theta - 10)", "not finite"),
+    ("20*(1 - cos(t))", "formula")])
+def test_a_bad_formula_is_named_with_its_fix(tmp_path, lift, words):
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", lift.replace('"', "'")), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    assert "cam.formula" in res.output and words in res.output, res.output
+    assert not (tmp_path / "out").exists()

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .motion import PeriodicTable, Segment, SegmentMotion
+from .motion import PeriodicFormula, PeriodicTable, Segment, SegmentMotion
 
 FOLLOWERS = ("knife", "roller", "flat")
 
@@ -68,6 +68,8 @@ class Cam:
     table : tuple of two ndarray (n,), optional
         The lift by a table of points instead: cam angles (rad, increasing, within one turn)
         and lifts (m), through which a periodic cubic spline runs.
+    formula : PeriodicFormula, optional
+        The lift by a formula of the cam angle instead (its derivatives exact).
     """
 
     name: str
@@ -80,12 +82,15 @@ class Cam:
     length_unit: str = "m"
     angle_unit: str = "rad"
     table: tuple | None = None
+    formula: PeriodicFormula | None = None
 
     @property
-    def motion(self) -> SegmentMotion | PeriodicTable:
+    def motion(self) -> SegmentMotion | PeriodicTable | PeriodicFormula:
         """The lift as a function of the cam angle: by its segments (their ``time`` is their
         angle), or, given a ``table`` ``(angles (n,) rad, lifts (n,) m)``, the periodic cubic
-        spline through its points."""
+        spline through its points, or its ``formula``."""
+        if self.formula is not None:
+            return self.formula
         if self.table is not None:
             return PeriodicTable(self.table[0], self.table[1], 2 * math.pi)
         return SegmentMotion(0.0, self.segments, repeat=True)

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ..cams import FOLLOWERS, Cam, CamProfile, joins
-from ..motion import Segment
+from ..motion import PeriodicFormula, Segment
 
 
 def text(p: CamProfile) -> str:
@@ -83,7 +83,7 @@ def continuity(p: CamProfile) -> str:
 # --- the cam file: [units] and [cam] with its [[cam.segments]] --------------------------------
 
 CAM_KEYS = ("name", "base_radius", "follower", "roller_radius", "offset", "rpm", "samples",
-            "segments", "table")
+            "segments", "table", "formula")
 SEGMENT_KEYS = ("law", "to", "angle")
 TABLE_KEYS = ("angle", "lift")
 
@@ -111,9 +111,10 @@ def read(path) -> tuple[Cam, int]:
     if "units" in data:
         _units(r, data["units"])
     c = r.table(data["cam"], "cam", CAM_KEYS, required=("base_radius",))
-    if ("segments" in c) == ("table" in c):
-        r.fail("cam.segments", "give the lift either by segments or by a table, one of them",
-               "Keep [[cam.segments]] or cam.table = { angle = [...], lift = [...] }")
+    if sum(k in c for k in ("segments", "table", "formula")) != 1:
+        r.fail("cam.segments", "give the lift by segments, by a table or by a formula, one of "
+               "them", "Keep [[cam.segments]], cam.table = { angle = [...], lift = [...] } or "
+               "cam.formula = \"...\"")
     L, A = r.length, r.angle
     follower = r.choice(c.get("follower", "roller"), "cam.follower", FOLLOWERS, "follower")
     rb = r.number(c["base_radius"], "cam.base_radius", r.length_name, positive=True) * L
@@ -145,6 +146,8 @@ def read(path) -> tuple[Cam, int]:
                   length_unit=r.length_name, angle_unit=r.angle_name)
     if "table" in c:
         return Cam(segments=(), table=lift_table(r, c["table"]), **common), samples
+    if "formula" in c:
+        return Cam(segments=(), formula=lift_formula(r, c["formula"]), **common), samples
     items = r.entries(c["segments"], "cam.segments")
     if not items:
         r.fail("cam.segments", "no segments given", 'Add [[cam.segments]] tables')
@@ -195,3 +198,32 @@ def lift_table(r, value) -> tuple[np.ndarray, np.ndarray]:
                "List each angle once, in order, the last less than a turn after the first "
                "(the spline joins it to the first)")
     return angle, lift
+
+
+def lift_formula(r, value) -> PeriodicFormula:
+    """``cam.formula``, the lift (the file's length unit) as a formula of the cam angle
+    ``theta`` (its angle unit), read by :func:`linkdyn.expr.parse` (never executed) and
+    checked: finite and not below 0 over the turn (the base circle is where it is 0)."""
+    from ..expr import ExpressionError
+    field = "cam.formula"
+    unit = f"theta in {r.angle_name}, the lift in {r.length_name}"
+    if not isinstance(value, str):
+        r.fail(field, f"expected a formula as text ({unit})",
+               'Write formula = "20*(1 - cos(pi*theta/180))/2", say')
+    try:
+        f = PeriodicFormula(value, r.length, r.angle)
+    except ExpressionError as exc:
+        r.fail(field, str(exc).rstrip("."), f"Write the lift as a formula of theta ({unit})")
+    theta = np.linspace(0.0, 2 * math.pi, 3601)
+    s = np.stack(f.svaj(theta))
+    bad = ~np.all(np.isfinite(s), axis=0)
+    if np.any(bad):
+        r.fail(field, f"the lift or its derivatives are not finite at cam angle "
+               f"{theta[bad][0] / r.angle:.6g} {r.angle_name}",
+               "Keep every function inside its domain over the whole turn")
+    low = int(np.argmin(s[0]))
+    if s[0, low] < -1e-9 * max(np.max(np.abs(s[0])), 1e-300):
+        r.fail(field, f"the lift falls below 0 ({s[0, low] / r.length:.6g} {r.length_name} "
+               f"at cam angle {theta[low] / r.angle:.6g} {r.angle_name})",
+               "Measure the lift from its lowest point (the base circle is where it is 0)")
+    return f
