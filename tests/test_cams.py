@@ -488,3 +488,31 @@ def test_a_bad_oscillating_follower_is_named_with_its_fix(tmp_path, follower, sw
     assert res.exit_code == 2 and "Traceback" not in res.output, res.output
     assert field in res.output and words in res.output, res.output
     assert not (tmp_path / "out").exists()
+
+
+def test_a_textbook_valve_cam_gives_its_printed_answers(tmp_path):
+    # docs/cams.md "A textbook problem": a harmonic rise of 50 mm in 1/3 turn, a dwell of
+    # 1/12, a harmonic return in 1/6, at 100 rpm; printed: the valve's largest speed 0.39 m/s
+    # raising, 0.78 lowering, its largest acceleration 6.17 and 24.67 m/s^2
+    block = DOC.read_text("utf-8").split("## A textbook problem", 1)[1]
+    path = tmp_path / "valve.toml"
+    path.write_text(block.split("```toml\n", 1)[1].split("```", 1)[0], "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    rows = list(csv.DictReader((tmp_path / "out" / "cam.csv").open()))
+    deg = np.degrees([float(r["theta_rad"]) for r in rows])
+    v = np.abs([float(r["v_m_s"]) for r in rows])
+    a = np.abs([float(r["a_m_s2"]) for r in rows])
+    raising, lowering = deg <= 120.0, (deg >= 150.0) & (deg <= 210.0)
+    printed = {"v raising": 0.39, "v lowering": 0.78, "a raising": 6.17, "a lowering": 24.67}
+    ours = {"v raising": np.max(v[raising]), "v lowering": np.max(v[lowering]),
+            "a raising": np.max(a[raising]), "a lowering": np.max(a[lowering])}
+    for key, value in printed.items():
+        assert ours[key] == pytest.approx(value, rel=0.01), key
+    # and the closed forms: h pi w / (2 beta), h pi^2 w^2 / (2 beta^2)
+    w, h = 100 * 2 * math.pi / 60, 0.050
+    for key, beta in (("raising", 2 * math.pi / 3), ("lowering", math.pi / 3)):
+        assert ours[f"v {key}"] == pytest.approx(h * math.pi * w / (2 * beta), rel=1e-12)
+        assert ours[f"a {key}"] == pytest.approx(h * math.pi ** 2 * w ** 2 / (2 * beta ** 2),
+                                                 rel=1e-12)
+    assert "ACCELERATION JUMPS" in res.output
