@@ -253,7 +253,8 @@ def test_the_spring_the_summary_gives_keeps_an_oscillating_face_on_the_cam():
                       for i, x in enumerate(fast.loads))
         again = contact(linkdyn.analyze(dataclasses.replace(fast, loads=loads), t))["K"]
         assert again["min_force_N"] == pytest.approx(0.0, abs=1e-9 * scale), change
-        assert "springs" not in again or again["lost_samples"] == 0
+        # lost nowhere but where the fix is exact: that force is zero to rounding, either sign
+        assert again["lost_samples"] <= 1, change
 
 
 def test_the_jump_speed_is_the_translating_followers_closed_form():
@@ -406,3 +407,21 @@ def test_a_sweep_of_the_base_circle_ranks_the_least_contact_force():
         expected.append(np.min(ny / np.cos(np.arctan2(s1 - cam.offset, d0 + s))))
     assert df["min_contact_K"].to_numpy() == pytest.approx(expected, rel=1e-9)
     assert studies.metrics.sense("min_contact_K") == "max"
+
+
+def test_the_compiled_continuation_follows_numpys_nodes():
+    # a cam's loop is no dyad: the branch is followed by Newton's method node by node, on the
+    # compiled backend by compiled_nodes.follow (the kinematics kernel's Newton): numpy's
+    # nodes, reach, coordinates and rates to rounding
+    pytest.importorskip("numba")
+    from linkdyn.kinematics import compile_layout, compiled_nodes
+    from linkdyn.kinematics.positions import follow
+    model = linkdyn.load(linkdyn.example_path("cam_fourbar"))
+    lay = compile_layout(model)
+    t = np.linspace(-0.05, 0.25, 7)
+    ref = follow([model], lay, t)
+    got = follow([model], lay, t, newton_nodes=compiled_nodes.follow)
+    assert np.array_equal(got.nodes, ref.nodes) and np.array_equal(got.reach, ref.reach)
+    for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
+        assert np.all(np.isfinite(b)) and a.shape == b.shape
+        assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))

@@ -254,7 +254,7 @@ def test_a_table_of_points_gives_the_periodic_spline_through_them(tmp_path):
     ([0, 90, 180, 270], [0, 1, 2], "cam.table", "same number of points"),
     ([0, 180, 90, 270], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
     ([0, 90, 180, 360], [0, 1, 2, 1], "cam.table.angle", "increase within one turn"),
-    (None, None, "cam.segments", "either by segments or by a table")])
+    (None, None, "cam.segments", "by segments, by a table or by a formula")])
 def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words):
     path = tmp_path / "cam.toml"
     if angles is None:   # segments and a table both
@@ -265,3 +265,254 @@ def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words
     res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
     assert res.exit_code == 2 and "Traceback" not in res.output
     assert field in res.output and words in res.output
+
+
+FORMULA = """[units]
+length = "mm"
+angle = "deg"
+
+[cam]
+name = "by a formula"
+base_radius = 40.0
+roller_radius = 10.0
+offset = 5.0
+rpm = 300.0
+formula = "LIFT"
+"""
+
+#: the doc file's cam (dwell 60 deg, cycloidal rise of 20 mm over 100 deg, dwell 100 deg, 3-4-5
+#: return over 100 deg) written as one formula of the cam angle in deg
+DRDR = ("where(theta < 60, 0, where(theta < 160, 20*((theta - 60)/100 - sin(2*pi*(theta - 60)"
+        "/100)/(2*pi)), where(theta < 260, 20, 20*(1 - ((theta - 260)/100)**3*(10 - 15*(theta"
+        " - 260)/100 + 6*((theta - 260)/100)**2)))))")
+
+
+def test_a_lift_by_a_formula_is_the_built_in_laws_to_rounding(tmp_path):
+    # the same cam by segments (each law's hand-written derivatives, linkdyn.laws) and by a
+    # formula (its derivatives symbolic, linkdyn.expr): SVAJ, pressure angle, curvature and
+    # points agree to 1e-12 of their peaks (1001 angles: none on a join, where a law's jerk
+    # jumps and the two could take different sides)
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", DRDR), "utf-8")
+    design, _ = camfile.read(path)
+    laws_ = cams.profile(cam(), 1001)
+    by_formula = cams.profile(design, 1001)
+    for name in ("s", "v", "a", "j", "pressure_angle", "rho_pitch", "rho", "pitch", "profile"):
+        x, y = getattr(by_formula, name), getattr(laws_, name)
+        assert x == pytest.approx(y, rel=0, abs=1e-12 * np.max(np.abs(y))), name
+    # the continuity line: the cycle closes smoothly (only there are joins looked for)
+    theta, jump = cams.joins(design)
+    assert theta == pytest.approx([0.0])
+    assert np.max(np.abs(jump[:3])) <= 1e-12 * np.max(np.abs(laws_.a))
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "lift 20 mm" in res.output and "continuous" in res.output
+
+
+def test_a_formula_that_jumps_where_the_cycle_closes_is_reported(tmp_path):
+    # a harmonic rise over the whole turn, 10 (1 - cos(pi theta / 360)) (theta in deg): at 360
+    # deg its lift is 20 mm, at 0 it is 0: the lift jumps by -20 mm where the cycle closes
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", "10*(1 - cos(pi*theta/360))"), "utf-8")
+    design, _ = camfile.read(path)
+    _, jump = cams.joins(design)
+    assert jump[0] == pytest.approx([-H])
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "DISPLACEMENT JUMPS at cam angles 0 deg (by up to 20 mm)" in res.output
+
+
+@pytest.mark.parametrize("lift, words", [
+    ("20*sin(theta", "formula"),
+    ("__import__('os')", "formula"),
+    ("20*sin(theta)", "below 0"),
+    ("log(theta - 10)", "not finite"),
+    ("20*(1 - cos(t))", "formula")])
+def test_a_bad_formula_is_named_with_its_fix(tmp_path, lift, words):
+    path = tmp_path / "cam.toml"
+    path.write_text(FORMULA.replace("LIFT", lift.replace('"', "'")), "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    assert "cam.formula" in res.output and words in res.output, res.output
+    assert not (tmp_path / "out").exists()
+
+
+OSCILLATING = """[units]
+length = "mm"
+angle = "deg"
+
+[cam]
+name = "oscillating"
+base_radius = 40.0
+FOLLOWER
+rpm = 300.0
+
+[[cam.segments]]
+law = "cycloidal"
+to = SWING
+angle = 105.0
+
+[[cam.segments]]
+law = "dwell"
+angle = 75.0
+
+[[cam.segments]]
+law = "poly345"
+to = 0.0
+angle = 105.0
+
+[[cam.segments]]
+law = "dwell"
+angle = 75.0
+"""
+ROLLER_ARM = 'follower = "roller"\nroller_radius = 10.0\npivot = 120.0\narm = 90.0'
+FLAT_ARM = 'follower = "flat"\npivot = 100.0\noffset = 10.0'
+
+
+def oscillating(tmp_path, follower, swing):
+    path = tmp_path / "cam.toml"
+    path.write_text(OSCILLATING.replace("FOLLOWER", follower).replace("SWING", repr(swing)),
+                    "utf-8")
+    return path
+
+
+def to_fixed(theta, x, y):
+    """Points of the cam's frame at the cam angles theta, in the fixed frame: R(theta) (x, y)."""
+    c, s = np.cos(theta), np.sin(theta)
+    return c * x - s * y, s * x + c * y
+
+
+def on_dwell(theta):
+    return (theta > math.radians(290.0)) & (theta < math.radians(355.0))
+
+
+def curvature_error(p, points, rho, joins):
+    """The largest difference of the sampled curve's curvature (``points`` of the cam's frame,
+    which sees it run clockwise) from ``1 / rho``, relative to the largest, by central
+    differences away from the ``joins`` (deg, where the jerk jumps)."""
+    h = p.theta[1] - p.theta[0]
+    kappa = -1 / curvature(*points, h)
+    at = np.radians(joins)
+    smooth = np.min(np.abs(p.theta[:, None] - at[None, :]), axis=1) > 4 * h
+    return np.max(np.abs(kappa - 1 / rho)[smooth]) / np.max(np.abs(1 / rho))
+
+
+def test_an_oscillating_roller_has_its_closed_forms(tmp_path):
+    # the arm (pivot A at a = 120 mm, roller's centre F at L = 90 mm from it) swung 15 deg
+    a, L, rb, rf = 0.120, 0.090, 0.040, 0.010
+    design, _ = camfile.read(oscillating(tmp_path, ROLLER_ARM, 15.0))
+    n = 36001
+    p = cams.profile(design, n)
+    # SVAJ: the arm's angle, the cycloidal law's closed form (rad)
+    b, top = math.radians(105.0), math.radians(15.0)
+    rise = p.theta < b
+    u = p.theta[rise] / b
+    assert p.s[rise] == pytest.approx(top * (u - np.sin(2 * np.pi * u) / (2 * np.pi)),
+                                      abs=1e-14)
+    assert p.v[rise] == pytest.approx(top / b * (1 - np.cos(2 * np.pi * u)) * W,
+                                      abs=1e-12 * top / b * W)
+    # on the bottom dwell: the prime and base circles; the pressure angle from the triangle
+    # C A F (law of cosines: the angle at F, less the right angle of F's motion to AF)
+    dw = on_dwell(p.theta)
+    assert p.rho_pitch[dw] == pytest.approx(rb + rf, rel=1e-12)
+    assert p.rho[dw] == pytest.approx(rb, rel=1e-12)
+    assert np.hypot(*p.profile[:, dw]) == pytest.approx(rb, rel=1e-12)
+    at_f = math.acos((L * L + (rb + rf) ** 2 - a * a) / (2 * L * (rb + rf)))
+    assert np.abs(p.pressure_angle[dw]) == pytest.approx(at_f - math.pi / 2, abs=1e-12)
+    # everywhere: the common normal (from the profile point to the roller's centre) passes
+    # through the instant centre of cam and arm on the line of centres (Aronhold-Kennedy),
+    # x = a s' / (1 + s'), s' the swing's rate per cam angle
+    fx, fy = to_fixed(p.theta, *p.pitch)
+    nx, ny = to_fixed(p.theta, *((p.pitch - p.profile) / rf))
+    s1 = p.v / W
+    steep = np.abs(ny) > 0.1
+    x = (fx - fy / ny * nx)[steep]
+    assert x == pytest.approx((a * s1 / (1 + s1))[steep], abs=1e-9 * a)
+    # the pressure angle: from the roller centre's velocity (the arm turning clockwise about
+    # A as the swing grows: -J (F - A)) to that normal
+    vx, vy = fy, a - fx
+    assert p.pressure_angle == pytest.approx(np.arctan2(vx * ny - vy * nx, vx * nx + vy * ny),
+                                             abs=1e-12)
+    assert np.hypot(fx - a, fy) == pytest.approx(L, rel=1e-12)
+    # the pitch curve's radius of curvature by central differences of its own points
+    assert curvature_error(p, p.pitch, p.rho_pitch, [0.0, 105.0, 180.0, 285.0, 360.0]) <= 1e-6
+
+
+def test_an_oscillating_flat_face_has_its_closed_forms(tmp_path):
+    # the face 10 mm from the arm's pivot (a = 100 mm), swung 10 deg
+    a, f, rb = 0.100, 0.010, 0.040
+    design, _ = camfile.read(oscillating(tmp_path, FLAT_ARM, 10.0))
+    p = cams.profile(design, 36001)
+    alpha0 = math.acos((rb + f) / a)
+    # on the dwell: the base circle, and the pressure angle tan(phi) = -f / (a sin(alpha0))
+    # (the face's point R_b n moving as -J (R_b n - A), n at alpha0)
+    dw = on_dwell(p.theta)
+    assert p.rho[dw] == pytest.approx(rb, rel=1e-12)
+    assert np.hypot(*p.profile[:, dw]) == pytest.approx(rb, rel=1e-12)
+    assert p.pressure_angle[dw] == pytest.approx(math.atan2(-f, a * math.sin(alpha0)),
+                                                 abs=1e-12)
+    # everywhere: the contact point is on the face (its normal n at alpha0 - s, at a cos -
+    # f from C) and the normal through it passes through the instant centre a s' / (1 + s')
+    al = alpha0 - p.s
+    nx, ny = np.cos(al), np.sin(al)
+    qx, qy = to_fixed(p.theta, *p.profile)
+    assert nx * qx + ny * qy == pytest.approx(a * np.cos(al) - f, abs=1e-14)
+    s1 = p.v / W
+    x = qx - qy / ny * nx
+    assert x == pytest.approx(a * s1 / (1 + s1), abs=1e-9 * a)
+    # the profile's radius of curvature by central differences of its own points
+    assert curvature_error(p, p.profile, p.rho, [0.0, 105.0, 180.0, 285.0, 360.0]) <= 1e-6
+
+
+def test_the_command_prints_an_oscillating_followers_swing_in_angles(tmp_path):
+    res = CliRunner().invoke(main, ["cam", str(oscillating(tmp_path, ROLLER_ARM, 15.0)), "-o",
+                                    str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert "oscillating roller follower" in res.output and "swing 15 deg" in res.output
+    rows = list(csv.DictReader((tmp_path / "out" / "cam.csv").open()))
+    assert max(float(r["s_rad"]) for r in rows) == pytest.approx(math.radians(15.0))
+
+
+@pytest.mark.parametrize("follower, swing, field, words", [
+    ('follower = "roller"\nroller_radius = 10.0\npivot = 120.0', 15.0, "cam.arm",
+     "missing required key"),
+    ('follower = "roller"\nroller_radius = 10.0\npivot = 120.0\narm = 20.0', 15.0, "cam.arm",
+     "cannot reach the prime circle"),
+    ('follower = "flat"\npivot = 40.0\noffset = 10.0', 10.0, "cam.pivot", "further"),
+    (ROLLER_ARM + "\noffset = 5.0", 15.0, "cam.offset", "pivot and arm"),
+    (ROLLER_ARM, 200.0, "cam.segments", "past the line of centres")])
+def test_a_bad_oscillating_follower_is_named_with_its_fix(tmp_path, follower, swing, field,
+                                                         words):
+    res = CliRunner().invoke(main, ["cam", str(oscillating(tmp_path, follower, swing)), "-o",
+                                    str(tmp_path / "out")])
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    assert field in res.output and words in res.output, res.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_textbook_valve_cam_gives_its_printed_answers(tmp_path):
+    # docs/cams.md "A textbook problem": a harmonic rise of 50 mm in 1/3 turn, a dwell of
+    # 1/12, a harmonic return in 1/6, at 100 rpm; printed: the valve's largest speed 0.39 m/s
+    # raising, 0.78 lowering, its largest acceleration 6.17 and 24.67 m/s^2
+    block = DOC.read_text("utf-8").split("## A textbook problem", 1)[1]
+    path = tmp_path / "valve.toml"
+    path.write_text(block.split("```toml\n", 1)[1].split("```", 1)[0], "utf-8")
+    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    rows = list(csv.DictReader((tmp_path / "out" / "cam.csv").open()))
+    deg = np.degrees([float(r["theta_rad"]) for r in rows])
+    v = np.abs([float(r["v_m_s"]) for r in rows])
+    a = np.abs([float(r["a_m_s2"]) for r in rows])
+    raising, lowering = deg <= 120.0, (deg >= 150.0) & (deg <= 210.0)
+    printed = {"v raising": 0.39, "v lowering": 0.78, "a raising": 6.17, "a lowering": 24.67}
+    ours = {"v raising": np.max(v[raising]), "v lowering": np.max(v[lowering]),
+            "a raising": np.max(a[raising]), "a lowering": np.max(a[lowering])}
+    for key, value in printed.items():
+        assert ours[key] == pytest.approx(value, rel=0.01), key
+    # and the closed forms: h pi w / (2 beta), h pi^2 w^2 / (2 beta^2)
+    w, h = 100 * 2 * math.pi / 60, 0.050
+    for key, beta in (("raising", 2 * math.pi / 3), ("lowering", math.pi / 3)):
+        assert ours[f"v {key}"] == pytest.approx(h * math.pi * w / (2 * beta), rel=1e-12)
+        assert ours[f"a {key}"] == pytest.approx(h * math.pi ** 2 * w ** 2 / (2 * beta ** 2),
+                                                 rel=1e-12)
+    assert "ACCELERATION JUMPS" in res.output

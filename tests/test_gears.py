@@ -416,8 +416,14 @@ def test_both_backends_agree():
     for name in MODELS:
         a = analyze(MODELS[name](), T, backend="compiled").columns
         b = solution(name).columns
+        # each column at the peak of its kind's (a column zero to rounding, such as a driven
+        # joint's acceleration, at its siblings' scale: the backends' rounding differs)
+        peak = {}
         for col, v in b.items():
-            scale = max(np.max(np.abs(v)), 1e-9)
+            kind = col.split("_")[0]
+            peak[kind] = max(peak.get(kind, 0.0), float(np.max(np.abs(v))))
+        for col, v in b.items():
+            scale = max(peak[col.split("_")[0]], 1e-9)
             assert np.max(np.abs(a[col] - v)) <= 1e-10 * scale, (name, col)
 
 

@@ -25,6 +25,18 @@ Flat-faced follower (C5), its face normal to its line: contact at the distance `
 line, ``(s', R_b + s)`` in the fixed frame; the profile's radius ``rho = R_b + s + s''``, which
 must stay positive (a cusp otherwise); the pressure angle is 0.
 
+Oscillating followers (C6): an arm swinging about its pivot ``A = (a, 0)`` (``pivot``), its
+swing ``s(theta)`` (rad) the lift. C1-C5 hold with the follower's geometry of the cam joints
+(:mod:`linkdyn.joints.cam`, :mod:`linkdyn.joints.flat_cam`), whose steps compute them here
+too: a knife edge or roller's centre at ``F(s) = A + L (cos(g0 - s), sin(g0 - s))`` (``arm``
+L, ``g0`` putting F on the prime circle at s = 0), the pitch curve's normal ``N = F + J F_t``
+(J the quarter turn, ``F_t = dF/dtheta``; ``(e - s', d + s)`` translating) and the pressure
+angle from the follower point's direction of motion ``F' = dF/ds`` to N; a flat face at the
+``offset`` f from the pivot, its normal at ``alpha(s) = alpha0 - s``, touching the profile at
+``Q = H n + H_nu J n`` (H the cam's support function), the profile's radius ``H + H_nu_nu``,
+the pressure angle from the face point's velocity ``-J (Q - A)`` (the arm turning clockwise as
+s grows) to n.
+
 Everything is SI (m, rad, s); :func:`linkdyn.io.camfile.text` prints in the file's units, and
 :func:`linkdyn.io.camfile.read` reads a cam file (this module imports no reader: the cam joint,
 :mod:`linkdyn.joints.cam`, checks its design by :func:`profile`).
@@ -37,14 +49,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .motion import PeriodicTable, Segment, SegmentMotion
+from .motion import PeriodicFormula, PeriodicTable, Segment, SegmentMotion
 
 FOLLOWERS = ("knife", "roller", "flat")
 
 
 @dataclass(frozen=True)
 class Cam:
-    """A disc cam and its translating follower.
+    """A disc cam and its follower, translating or (``pivot`` > 0) oscillating.
 
     Attributes
     ----------
@@ -60,7 +72,8 @@ class Cam:
     roller_radius : float
         ``R_f``, m (a roller's; 0 otherwise).
     offset : float
-        ``e``, m: the follower's line from O (knife and roller; 0 for a flat face).
+        ``e``, m: the follower's line from O (knife and roller; 0 for a flat face), or an
+        oscillating flat face's distance ``f`` from its pivot towards O.
     speed : float
         ``w``, rad/s, counter-clockwise.
     length_unit, angle_unit : str
@@ -68,6 +81,13 @@ class Cam:
     table : tuple of two ndarray (n,), optional
         The lift by a table of points instead: cam angles (rad, increasing, within one turn)
         and lifts (m), through which a periodic cubic spline runs.
+    formula : PeriodicFormula, optional
+        The lift by a formula of the cam angle instead (its derivatives exact).
+    pivot : float
+        ``a``, m: an oscillating follower's pivot from O (0: a translating follower). Its
+        lift is then the arm's swing, rad, and SVAJ its angle's (rad, rad/s, ...).
+    arm : float
+        ``L``, m: an oscillating knife edge's or roller's centre from the pivot.
     """
 
     name: str
@@ -80,12 +100,22 @@ class Cam:
     length_unit: str = "m"
     angle_unit: str = "rad"
     table: tuple | None = None
+    formula: PeriodicFormula | None = None
+    pivot: float = 0.0
+    arm: float = 0.0
 
     @property
-    def motion(self) -> SegmentMotion | PeriodicTable:
+    def oscillating(self) -> bool:
+        """Whether the follower swings about a pivot (its lift an angle)."""
+        return self.pivot > 0
+
+    @property
+    def motion(self) -> SegmentMotion | PeriodicTable | PeriodicFormula:
         """The lift as a function of the cam angle: by its segments (their ``time`` is their
         angle), or, given a ``table`` ``(angles (n,) rad, lifts (n,) m)``, the periodic cubic
-        spline through its points."""
+        spline through its points, or its ``formula``."""
+        if self.formula is not None:
+            return self.formula
         if self.table is not None:
             return PeriodicTable(self.table[0], self.table[1], 2 * math.pi)
         return SegmentMotion(0.0, self.segments, repeat=True)
@@ -99,9 +129,10 @@ class CamProfile:
     ----------
     theta : ndarray
     s, v, a, j : ndarray
-        The follower's lift (m), velocity (m/s), acceleration (m/s^2) and jerk (m/s^3).
+        The follower's lift (m), velocity (m/s), acceleration (m/s^2) and jerk (m/s^3); an
+        oscillating follower's swing (rad) and its rates (rad/s, ...).
     pressure_angle : ndarray
-        rad (C3; 0 for a flat face).
+        rad (C3; 0 for a translating flat face).
     rho_pitch : ndarray
         Radius of curvature of the pitch curve, m (C4; the profile's for a flat face).
     rho : ndarray
@@ -139,38 +170,59 @@ def _turn(theta, x, y):
     return np.stack((c * x + sn * y, -sn * x + c * y))
 
 
+def follower_numbers(cam: Cam) -> tuple:
+    """The follower's geometry as the cam joints' steps take it (their ``nums``,
+    :data:`linkdyn.joints.WIDTH` floats, the lift's own numbers 0): a knife edge's or roller's
+    point F(s) (:func:`linkdyn.joints.cam.follower_point`), or a flat face
+    (:func:`linkdyn.joints.flat_cam.face_line`), translating or oscillating."""
+    from .joints import cam as jc, rocker_cam, rocker_flat_cam
+    rb, rf, e, a = cam.base_radius, cam.roller_radius, cam.offset, cam.pivot
+    if cam.follower == "flat" and cam.oscillating:
+        x = {"base_radius": rb, "offset": e, "pivot": a}
+        head = (a, e, float(rocker_flat_cam.start_angle(x)), jc.OSCILLATING)
+    elif cam.follower == "flat":
+        head = (rb, 0.0, math.pi / 2, jc.TRANSLATING)
+    elif cam.oscillating:
+        x = {"base_radius": rb, "roller_radius": rf, "pivot": a, "arm": cam.arm}
+        head = (a, cam.arm, float(rocker_cam.start_angle(x)), jc.OSCILLATING)
+    else:
+        head = (e, math.sqrt((rb + rf) ** 2 - e * e), 0.0, jc.TRANSLATING)
+    return head[:3] + (0.0,) * 5 + (float(head[3]),)
+
+
 def profile(cam: Cam, n: int = 721) -> CamProfile:
     """The cam's design quantities at ``n`` cam angles over one turn, both ends included."""
+    from .joints import cam as jc, flat_cam as jf
     theta = np.linspace(0.0, 2 * math.pi, int(n))
-    s, s1, s2, s3 = cam.motion.svaj(theta)
+    s = cam.motion.svaj(theta)
     w = cam.speed
-    rb, rf, e = cam.base_radius, cam.roller_radius, cam.offset
+    svaj = (s[0], w * s[1], w * w * s[2], w ** 3 * s[3])
+    nums, rf, zero = follower_numbers(cam), cam.roller_radius, 0.0 * theta
     if cam.follower == "flat":
-        # C5: contact (s', R_b + s) in the fixed frame; rho = R_b + s + s''
-        y = rb + s
-        pitch = _turn(theta, np.full_like(s, 0.0), y)
-        prof = _turn(theta, s1, y)
-        rho = rb + s + s2
-        return CamProfile(cam, theta, s, w * s1, w * w * s2, w ** 3 * s3, np.zeros_like(s),
-                          rho, rho, pitch, prof, rho <= 0)
-    rp = rb + rf
-    d = math.sqrt(rp * rp - e * e)
-    y = d + s
-    # C1-C2: the pitch curve and its derivatives (in the fixed frame's axes, rotated)
-    x1, y1 = y, s1 - e
-    x2, y2 = 2 * s1 - e, s2 - y
-    # C3: tan(phi) = (s' - e) / (d + s)
-    phi = np.arctan2(s1 - e, y)
-    # C4: rho_p = |P'|^3 / (P'' x P') (the cam turning counter-clockwise, its frame sees the
-    # pitch curve run clockwise: positive where it is convex); the profile rho_p - R_f
-    speed = np.hypot(x1, y1)
-    rho_p = speed ** 3 / (y1 * x2 - x1 * y2)
-    # outward normal of the pitch curve in the fixed frame: (-(s' - e), d + s) / |P'|
-    nx, ny = -y1 / speed, x1 / speed
-    pitch = _turn(theta, np.full_like(s, e), y)
-    prof = _turn(theta, e - rf * nx, y - rf * ny)
-    return CamProfile(cam, theta, s, w * s1, w * w * s2, w ** 3 * s3, phi, rho_p, rho_p - rf,
-                      pitch, prof, (rho_p > 0) & (rho_p < rf))
+        # C5: the face's normal n at alpha(s), at H from O, touching the profile at Q = H n +
+        # H_nu J n; the profile's radius H + H_nu_nu
+        al, H, H_nu, H_nunu = jf.support(nums[8], nums, s[:3])[:4]
+        nx, ny = np.cos(al) + zero, np.sin(al) + zero
+        qx, qy = H * nx - H_nu * ny, H * ny + H_nu * nx
+        rho = H + H_nunu
+        # Q moving as s grows: along n, or turning clockwise about the pivot, -J (Q - A)
+        vx, vy = (qy, cam.pivot - qx) if cam.oscillating else (nx, ny)
+        phi = np.arctan2(vx * ny - vy * nx, vx * nx + vy * ny)
+        return CamProfile(cam, theta, *svaj, phi, rho, rho, _turn(theta, H * nx, H * ny),
+                          _turn(theta, qx, qy), rho <= 0)
+    # C1-C4: F and F_t; the pitch curve's normal N = F + J F_t, away from O; C3: the pressure
+    # angle from the follower point's direction of motion F' = dF/ds to N
+    x, y, xt, yt = jc.pitch_point(nums[8], nums, s[:3])[:4]
+    x, y = x + zero, y + zero
+    p = jc.follower_point(nums[8], nums, s[0])
+    nx, ny = x - yt, y + xt
+    phi = np.arctan2(p[2] * ny - p[3] * nx, p[2] * nx + p[3] * ny)
+    rho_p = jc.pitch_curve(nums, s[:3])[1]
+    # the profile: the pitch curve moved R_f along the normal towards O
+    size = np.hypot(nx, ny)
+    return CamProfile(cam, theta, *svaj, phi, rho_p, rho_p - rf, _turn(theta, x, y),
+                      _turn(theta, x - rf * nx / size, y - rf * ny / size),
+                      (rho_p > 0) & (rho_p < rf))
 
 
 def joins(cam: Cam) -> tuple[np.ndarray, np.ndarray]:
@@ -183,8 +235,11 @@ def joins(cam: Cam) -> tuple[np.ndarray, np.ndarray]:
 
 
 def columns(p: CamProfile) -> dict[str, np.ndarray]:
-    """The profile's table: its header (SI units in it) -> values (n,)."""
-    return {"theta_rad": p.theta, "s_m": p.s, "v_m_s": p.v, "a_m_s2": p.a, "j_m_s3": p.j,
+    """The profile's table: its header (SI units in it) -> values (n,); an oscillating
+    follower's swing and its rates in rad (``s_rad``, ``v_rad_s``, ...)."""
+    u = "rad" if p.cam.oscillating else "m"
+    return {"theta_rad": p.theta, f"s_{u}": p.s, f"v_{u}_s": p.v, f"a_{u}_s2": p.a,
+            f"j_{u}_s3": p.j,
             "pressure_angle_rad": p.pressure_angle, "rho_pitch_m": p.rho_pitch,
             "rho_m": p.rho, "pitch_x_m": p.pitch[0], "pitch_y_m": p.pitch[1],
             "profile_x_m": p.profile[0], "profile_y_m": p.profile[1],

@@ -1095,9 +1095,10 @@ def _equilibrium(model, as_json, allow_outside, with_modes, at_start):
               type=click.Path(file_okay=False), help="Folder for cam.csv.")
 def cam(camfile, outdir):
     """Design a disc cam from its follower's motion (CAMFILE: [units] and [cam] with
-    [[cam.segments]]): prints the lift, SVAJ peaks, the largest pressure angle, the smallest
-    radius of curvature and any undercutting, and writes cam.csv (SVAJ, pressure angle,
-    curvature, the pitch curve and the profile's points, SI)."""
+    [[cam.segments]], a table or a formula; a translating or an oscillating follower): prints
+    the lift or swing, SVAJ peaks, the largest pressure angle, the smallest radius of curvature
+    and any undercutting, and writes cam.csv (SVAJ, pressure angle, curvature, the pitch curve
+    and the profile's points, SI)."""
     from . import cams
     from .io import camfile as cam_file
 

@@ -22,7 +22,8 @@ if TYPE_CHECKING:                            # imported when a table is built (s
 from .errors import InvalidValue, ModelError
 from .expr import Expr, parse
 
-__all__ = ["ConstantSpeed", "ExpressionMotion", "Segment", "SegmentMotion", "TableMotion"]
+__all__ = ["ConstantSpeed", "ExpressionMotion", "Segment", "SegmentMotion", "TableMotion",
+           "PeriodicFormula"]
 
 
 def _time(t) -> np.ndarray:
@@ -302,6 +303,63 @@ class PeriodicTable:
         jump = np.zeros((4, len(self.t)))
         jump[3] = c3 - np.roll(c3, 1)
         return np.array(self.t, float), jump
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicFormula:
+    """A periodic motion by a formula: ``q(x) = scale f(x / unit)``, ``f`` an expression of
+    ``variable`` (:func:`linkdyn.expr.parse`, never executed) evaluated at ``x`` taken within
+    one ``period`` from 0, with its exact symbolic derivatives (:meth:`linkdyn.expr.Expr.diff`),
+    e.g. a cam's lift in mm as a formula of the cam angle in deg.
+
+    Attributes
+    ----------
+    text : str
+        E.g. ``"10*(1 - cos(theta))"``.
+    scale : float
+        ``q`` per unit of ``f``, to SI (1e-3 for mm).
+    unit : float
+        ``x`` per unit of the variable (pi/180 for deg): ``f``'s n-th derivative is divided by
+        ``unit**n``.
+    period : float
+        ``x`` of one cycle (2 pi for a cam angle in rad).
+    variable : str
+    """
+
+    text: str
+    scale: float = 1.0
+    unit: float = 1.0
+    period: float = 2 * math.pi
+    variable: str = "theta"
+
+    def __post_init__(self):
+        f = parse(self.text, (self.variable,))
+        # f and its first three derivatives, exact, in the variable
+        d = [f]
+        for _ in range(3):
+            d.append(d[-1].diff(self.variable))
+        object.__setattr__(self, "_d", tuple(d))
+
+    def _at(self, x: np.ndarray) -> tuple:
+        # q^(n)(x) = scale f^(n)(x / unit) / unit^n
+        u = x / self.unit
+        return tuple(self.scale / self.unit ** n * g.evaluate(**{self.variable: u})
+                     for n, g in enumerate(self._d))
+
+    def svaj(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(q, q', q'', q''')`` at ``x`` (any shape; per unit of ``x``: rad or s), NaN outside
+        a function's domain."""
+        return self._at(np.mod(_time(x), self.period))
+
+    def evaluate(self, x) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self.svaj(x)[:3]
+
+    def jumps(self) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`SegmentMotion.jumps`, where the cycle closes: x = 0 (1,) and the jumps
+        (4, 1) of q and its first three derivatives from the end of a cycle to the start of the
+        next (only there: the joins of a ``where`` inside the formula are not looked for)."""
+        start, end = self._at(np.zeros(1)), self._at(np.full(1, float(self.period)))
+        return np.zeros(1), np.subtract(start, end)
 
 
 class Free:

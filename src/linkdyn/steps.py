@@ -7,7 +7,9 @@ arithmetic, comparisons, the functions ``np.sqrt``, ``np.cos``, ``np.sin``, ``np
 steps, and the two helpers below that differ by backend:
 
 - :func:`select` (``np.where`` on arrays, a conditional expression on scalars),
-- :func:`atan2` (``np.arctan2`` on arrays, straight-line code that vectorizes on scalars).
+- :func:`atan2` (``np.arctan2`` on arrays, straight-line code that vectorizes on scalars),
+- :func:`settled` (whether an iteration's every step is below a tolerance: ``np.all`` on
+  arrays, one comparison on scalars), so that an iteration stops once converged.
 
 It returns a tuple (or one component). Under numpy the solvers call a step once per body on
 whole arrays (the loops run over bodies, never over samples); the compiled backend registers
@@ -63,6 +65,13 @@ def atan2(y, x):
     return np.arctan2(y, x)
 
 
+def settled(dx, tol) -> bool:
+    """Whether every ``|dx|`` is at most ``tol`` (False where ``dx`` is NaN): an iteration
+    inside a step stops once its last step is below ``tol`` on every sample (compiled: on
+    its one sample)."""
+    return bool(np.all(np.abs(dx) <= tol))
+
+
 def by_kind(steps: list):
     """One step ``f(code, *args)`` that calls ``steps[k](*args)`` for the ``(code, step)``
     pair whose code matches: a chain of comparisons, so that numba compiles every branch with
@@ -86,8 +95,8 @@ _registered = False
 
 
 def register(scalar_select, scalar_atan2) -> None:
-    """Register every step with numba (compiled into its callers by the compiler), and the
-    scalar versions of :func:`select` and :func:`atan2`; idempotent. Called by
+    """Register every step with numba (compiled into its callers by the compiler), the
+    scalar versions of :func:`select` and :func:`atan2`, and :func:`settled`; idempotent. Called by
     :mod:`linkdyn.compiled` when numba is installed."""
     global _registered
     if _registered:
@@ -111,5 +120,11 @@ def register(scalar_select, scalar_atan2) -> None:
         if isinstance(y, types.Array) or isinstance(x, types.Array):
             return lambda y, x: np.arctan2(y, x)
         return lambda y, x: scalar_atan2(y, x)
+
+    @overload(settled)
+    def _settled(dx, tol):
+        if isinstance(dx, types.Array):
+            return lambda dx, tol: np.all(np.abs(dx) <= tol)
+        return lambda dx, tol: abs(dx) <= tol
 
     _registered = True

@@ -40,7 +40,8 @@ import math
 import numpy as np
 
 from .. import laws
-from ..steps import atan2, by_kind, select, step
+from ..planar import wrapped
+from ..steps import atan2, by_kind, select, settled, step
 from .base import JointKind, Number
 
 BASE_RADIUS = Number("base_radius", (), "length", 0.0,
@@ -55,11 +56,14 @@ FALL = Number("fall", (), "angle", 0.0, doc="cam angle of the return")
 LAW = Number("law", (), "", float(laws.CODES["cycloidal"]), design=False,
              choices=tuple(laws.LAWS), doc="motion law")
 
-#: Newton's iterations for the contact's cam angle. The polar angle's rate along the pitch curve
-#: is ``beta_theta = e s' / rho^2 - 1``; a cam with ``|e s'| <= STEEP rho^2`` (refused otherwise)
-#: has it within [-3/2, -1/2], and from ``s = 0`` the iterations reached rounding (5e-15 rad) by
-#: the fifth on 199 random such cams (every law, offsets to 0.95 of the prime circle)
+#: Newton's iterations for the contact's cam angle, at most. The polar angle's rate along the
+#: pitch curve is ``beta_theta = e s' / rho^2 - 1``; a cam with ``|e s'| <= STEEP rho^2``
+#: (refused otherwise) has it within [-3/2, -1/2], and from ``s = 0`` the iterations reached
+#: rounding (5e-15 rad) by the fifth on 199 random such cams (every law, offsets to 0.95 of the
+#: prime circle). They stop after a step below ``SETTLED`` (rad) on every sample: converging
+#: quadratically, the error left is of its square, rounding (the fourth step, usually)
 ITERATIONS = 6
+SETTLED = 1e-9
 STEEP = 0.5
 TWO_PI = 2.0 * math.pi
 #: the follower's motion, ``nums[8]``: along a line, or an arm swinging about a pivot
@@ -106,6 +110,17 @@ follower_point = by_kind([(TRANSLATING, _translating), (OSCILLATING, _oscillatin
 
 
 @step
+def pitch_point(code, nums, s):
+    """The follower point F in the cam's frame at cam angle 0 and its rates in the cam angle,
+    ``(x, y, x_t, y_t, x_tt, y_tt)`` (m, m/rad, m/rad^2), at the lift ``s = (s, s', s'')``
+    (code: :func:`follower_point`'s)."""
+    p = follower_point(code, nums, s[0])
+    # F_t = F' s',  F_tt = F'' s'^2 + F' s''
+    return (p[0], p[1], p[2] * s[1], p[3] * s[1], p[4] * s[1] * s[1] + p[2] * s[2],
+            p[5] * s[1] * s[1] + p[3] * s[2])
+
+
+@step
 def contact(nums, f):
     """The contact on the pitch curve of the follower point ``d`` (``f[1]``) in the frame of
     the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s', s'')`` there, the
@@ -123,13 +138,12 @@ def contact(nums, f):
         p = follower_point(code, nums, s[0])
         miss = atan2(p[1], p[0]) - theta - psi
         bt = (p[0] * p[3] - p[1] * p[2]) * s[1] / (p[0] * p[0] + p[1] * p[1]) - 1.0
-        theta = theta - atan2(np.sin(miss), np.cos(miss)) / bt
+        dt = wrapped(miss) / bt
+        theta = theta - dt
+        if settled(dt, SETTLED):
+            break
     s = lift(nums, theta)
-    p = follower_point(code, nums, s[0])
-    # F and its rates in theta: F_t = F' s',  F_tt = F'' s'^2 + F' s''
-    x, y = p[0], p[1]
-    xt, yt = p[2] * s[1], p[3] * s[1]
-    xtt, ytt = p[4] * s[1] * s[1] + p[2] * s[2], p[5] * s[1] * s[1] + p[3] * s[2]
+    x, y, xt, yt, xtt, ytt = pitch_point(code, nums, s)
     r2 = x * x + y * y
     rho = np.sqrt(r2)
     # rho_t = F.F_t / rho,  beta_t = F x F_t / rho^2 - 1, and their rates in theta
@@ -275,8 +289,8 @@ class Cam(JointKind):
         """Why the pitch curve cannot be followed (None: it can): its polar angle must fall
         evenly for the contact's Newton iterations, and it must not bend tighter than the
         roller (undercutting, C4 of :mod:`linkdyn.cams`), over a turn."""
-        steep, rho = pitch_curve(self.own({k: float(v) for k, v in numbers.items()}),
-                                 np.linspace(0.0, TWO_PI, 1441))
+        nums = self.own({k: float(v) for k, v in numbers.items()})
+        steep, rho = pitch_curve(nums, lift(nums, np.linspace(0.0, TWO_PI, 1441)))
         if np.max(steep) > STEEP:
             return (f"the pitch curve's polar angle must fall evenly along it, |F x F_theta| "
                     f"<= rho^2 / 2 (here up to {np.max(steep):.3g} rho^2), for its contact to "
@@ -293,17 +307,14 @@ class Cam(JointKind):
     steep_fix = "reduce the offset or enlarge base_radius"
 
 
-def pitch_curve(nums, theta):
+def pitch_curve(nums, s):
     """The pitch curve's steepness ``|F x F_theta| / |F|^2`` and radius of curvature
-    ``|P'|^3 / (P'' x P')`` (m, positive convex, C4 of :mod:`linkdyn.cams`) at the cam angles
-    ``theta`` (n,), of a cam with the cut numbers ``nums`` (floats). In the cam's frame
-    ``P = R(-theta) F``: ``P' = R(-theta) (F_t - J F)``, ``P'' = R(-theta) (F_tt - 2 J F_t -
-    F)``, J the quarter turn."""
-    s = lift(nums, theta)
-    p = follower_point(nums[8], nums, s[0])
-    x, y = p[0] + 0.0 * theta, p[1] + 0.0 * theta
-    xt, yt = p[2] * s[1], p[3] * s[1]
-    xtt, ytt = p[4] * s[1] * s[1] + p[2] * s[2], p[5] * s[1] * s[1] + p[3] * s[2]
+    ``|P'|^3 / (P'' x P')`` (m, positive convex, C4 of :mod:`linkdyn.cams`) at the lifts ``s =
+    (s, s', s'')`` (each (n,)) of a follower with the cut numbers ``nums`` (floats). In the
+    cam's frame ``P = R(-theta) F``: ``P' = R(-theta) (F_t - J F)``, ``P'' = R(-theta) (F_tt
+    - 2 J F_t - F)``, J the quarter turn."""
+    x, y, xt, yt, xtt, ytt = pitch_point(nums[8], nums, s)
+    x, y = x + 0.0 * s[0], y + 0.0 * s[0]
     # J (x, y) = (-y, x)
     ux, uy = xt + y, yt - x
     vx, vy = xtt + 2.0 * yt - x, ytt - 2.0 * xt - y

@@ -34,9 +34,10 @@ import math
 
 import numpy as np
 
-from ..steps import atan2, by_kind, step
-from .cam import (BASE_RADIUS, DWELL, FALL, ITERATIONS, LAW, LIFT, OSCILLATING, RISE, STEEP,
-                  TRANSLATING, TWO_PI, Cam, lift)
+from ..planar import wrapped
+from ..steps import atan2, by_kind, settled, step
+from .cam import (BASE_RADIUS, DWELL, FALL, ITERATIONS, LAW, LIFT, OSCILLATING, RISE, SETTLED,
+                  STEEP, TRANSLATING, TWO_PI, Cam, lift)
 
 
 @step
@@ -60,6 +61,20 @@ face_line = by_kind([(TRANSLATING, _translating), (OSCILLATING, _oscillating)])
 
 
 @step
+def support(code, nums, s):
+    """The face at the lift ``s = (s, s', s'')``: its normal's angle ``alpha`` (rad, the cam's
+    frame at cam angle 0), the support function ``H`` (m) and its rates ``H_nu``, ``H_nu_nu``
+    in the normal's angle nu, ``nu_theta``, ``nu_theta_theta`` and ``k`` (code:
+    :func:`face_line`'s)."""
+    p = face_line(code, nums, s[0])
+    # h_t = h' s',  h_tt = h'' s'^2 + h' s'';  nu_t = -k s' - 1,  nu_tt = -k s'';
+    # H_nu = h_t / nu_t,  H_nu_nu = (h_tt nu_t - h_t nu_tt) / nu_t^3
+    ht, htt = p[2] * s[1], p[3] * s[1] * s[1] + p[2] * s[2]
+    bt, btt = -p[4] * s[1] - 1.0, -p[4] * s[2]
+    return p[0], p[1], ht / bt, (htt * bt - ht * btt) / (bt * bt * bt), bt, btt, p[4]
+
+
+@step
 def contact(nums, f):
     """The contact of the face (normal ``n``: the second body's +y axis, ``f[2]`` turned a
     quarter turn) with the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s',
@@ -75,15 +90,13 @@ def contact(nums, f):
     for _ in range(ITERATIONS):
         s = lift(nums, theta)
         p = face_line(code, nums, s[0])
-        miss = p[0] - theta - nu
-        theta = theta - atan2(np.sin(miss), np.cos(miss)) / (-p[4] * s[1] - 1.0)
+        dt = wrapped(p[0] - theta - nu) / (-p[4] * s[1] - 1.0)
+        theta = theta - dt
+        if settled(dt, SETTLED):
+            break
     s = lift(nums, theta)
-    p = face_line(code, nums, s[0])
-    # h_t = h' s',  h_tt = h'' s'^2 + h' s'';  H_nu = h_t / nu_t,
-    # H_nu_nu = (h_tt nu_t - h_t nu_tt) / nu_t^3
-    ht, htt = p[2] * s[1], p[3] * s[1] * s[1] + p[2] * s[2]
-    bt, btt = -p[4] * s[1] - 1.0, -p[4] * s[2]
-    return theta, s, p[1], ht / bt, (htt * bt - ht * btt) / (bt * bt * bt), bt, btt, n
+    u = support(code, nums, s)
+    return theta, s, u[1], u[2], u[3], u[4], u[5], n
 
 
 @step
@@ -160,8 +173,8 @@ class FlatCam(Cam):
         enough for the contact's Newton iterations (``k |s'| <= 1/2``), and the profile's
         radius of curvature ``H + H_nu_nu`` (C5 of :mod:`linkdyn.cams`) positive over a turn
         (a cusp otherwise)."""
-        steep, rho = face_curve(self.own({k: float(v) for k, v in numbers.items()}),
-                                np.linspace(0.0, TWO_PI, 1441))
+        nums = self.own({k: float(v) for k, v in numbers.items()})
+        steep, rho = face_curve(nums, lift(nums, np.linspace(0.0, TWO_PI, 1441)))
         if np.max(steep) > STEEP:
             return (f"the face turns too fast for its contact to be found, |s'| <= 1/2 (here "
                     f"up to {np.max(steep):.3g}); " + self.steep_fix)
@@ -175,15 +188,12 @@ class FlatCam(Cam):
     steep_fix = "lengthen the rise and the return"
 
 
-def face_curve(nums, theta):
+def face_curve(nums, s):
     """The face's turning rate ``k |s'|`` and the profile's radius of curvature ``H +
-    H_nu_nu`` (m, C5 of :mod:`linkdyn.cams` for a translating face) at the cam angles
-    ``theta`` (n,), of a flat-faced cam with the cut numbers ``nums`` (floats)."""
-    s = lift(nums, theta)
-    p = face_line(nums[8], nums, s[0])
-    ht, htt = p[2] * s[1], p[3] * s[1] * s[1] + p[2] * s[2]
-    bt, btt = -p[4] * s[1] - 1.0, -p[4] * s[2]
-    return np.abs(p[4] * s[1]), p[1] + (htt * bt - ht * btt) / bt ** 3
+    H_nu_nu`` (m, C5 of :mod:`linkdyn.cams` for a translating face) at the lifts ``s = (s,
+    s', s'')`` (each (n,)) of a flat-faced follower with the cut numbers ``nums`` (floats)."""
+    u = support(nums[8], nums, s)
+    return np.abs(u[6] * s[1]), u[1] + u[3]
 
 
 KIND = FlatCam()

@@ -385,7 +385,7 @@ class Branch:
 
 
 def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
-           start: np.ndarray | None = None, nodes=None) -> Branch:
+           start: np.ndarray | None = None, nodes=None, newton_nodes=None) -> Branch:
     """Assemble at t = 0 on the branch of the ``[assembly]`` guess and follow it through
     continuation nodes over the times ``t`` (driver travel at most ``STEP_ANGLE`` rad or
     ``STEP_LENGTH`` of the size between nodes: a loop over driver steps, not samples).
@@ -398,6 +398,9 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     of dyads' nodes, ``nodes(lay, Q, QD_drv, modes, q0, k0) -> (Q, QD_dep, ok)`` as
     :func:`_follow_dyads` does it here (the compiled backend's
     :func:`.compiled_nodes.close`: the same steps, to rounding); default these numpy passes.
+    ``newton_nodes``: another backend's Newton continuation through the nodes of a mechanism
+    not all of dyads, ``newton_nodes(lay, q_start, times) -> (Q, QD, last)`` as
+    :func:`_continuation` (:func:`.compiled_nodes.follow`); default the numpy one.
     """
     q_start = start if start is not None else assemble(
         models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0, raise_error=single)
@@ -409,7 +412,8 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     lo, hi = min(0.0, float(t.min())), max(0.0, float(t.max()))
     if not lay.topo.dependent or not hi > lo:
         return Branch(q_start, modes)
-    return Branch(q_start, modes, *continuation(lay, q_start, lo, hi, modes, nodes))
+    return Branch(q_start, modes, *continuation(lay, q_start, lo, hi, modes, nodes,
+                                                 newton_nodes))
 
 
 def _travel_nodes(lay: Layout, start: float, end: float) -> np.ndarray:
@@ -435,7 +439,8 @@ def _at_node(x: np.ndarray, k: int, ndim: int) -> np.ndarray:
     return x.reshape(x.shape + (1,) * (ndim - x.ndim))
 
 
-def continuation(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes=None):
+def continuation(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, nodes=None,
+                 newton_nodes=None):
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
@@ -444,21 +449,22 @@ def continuation(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, 
     if lay.dyads is not None:
         return _follow_dyads(lay, q0, lo, hi, modes, nodes)
     if q0.ndim == 1:
-        return _follow_newton(lay, q0, lo, hi)
+        return _follow_newton(lay, q0, lo, hi, newton_nodes)
     # designs: Newton's batch is (D, 1), the trailing axis standing for time
-    nodes, Q, QD, reach = _follow_newton(lay, q0[..., None], lo, hi)
+    nodes, Q, QD, reach = _follow_newton(lay, q0[..., None], lo, hi, newton_nodes)
     return nodes, Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
 
 
-def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float):
-    """:func:`continuation` by Newton continuation, node by node."""
+def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float, run=None):
+    """:func:`continuation` by Newton continuation, node by node (by :func:`_continuation`, or
+    ``run`` with its arguments and results)."""
     nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
     for end in (hi, lo):
         if end == 0.0:
             reach.append(np.zeros(q0.shape[1:]))
             continue
         nd = _travel_nodes(lay, 0.0, end)
-        Qe, QDe, last = _continuation(lay, q0, nd)
+        Qe, QDe, last = (run or _continuation)(lay, q0, nd)
         reach.append(last)
         if end < 0:
             nd, Qe, QDe = nd[::-1], Qe[..., ::-1], QDe[..., ::-1]

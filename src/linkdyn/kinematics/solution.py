@@ -77,7 +77,8 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     # the branch: the [assembly] guess describes the mechanism at t = 0; assembled there and
     # followed to the samples (on the compiled backend its nodes closed by its kernel)
     branch = follow(models, lay, t, single, start,
-                    nodes=compiled_nodes.close if be.compiled else None)
+                    nodes=compiled_nodes.close if be.compiled else None,
+                    newton_nodes=compiled_nodes.follow if be.compiled else None)
     if be.compiled:
         kin = _compiled(models[0], lay, t, q_ind, qd_ind, qdd_ind, branch, run or kc.run)
         if run is None or run is kc.run:
