@@ -31,7 +31,7 @@ from .compiled import factor, njit, substitute
 from .compiled.loads import applied, table
 from .dynamics import compiled as dc
 from .kinematics import compiled as kc
-from .kinematics.positions import ACCEPT
+from .kinematics.positions import ACCEPT, driver_values
 
 try:  # optional: the numpy path is complete without it
     from numba.typed import List
@@ -281,14 +281,20 @@ class Kernel:
         self.state = np.zeros((3, n))
         self.J = np.zeros((rows, n - 1))
         self.energy = np.zeros(2)
+        # the reference as the kernel reads it, stacked once per reference (System.ref is
+        # replaced, never changed in place): (ref, (3, n) array, S)
+        self._ref = (None, None, None)
 
     def __call__(self, t: float, y: np.ndarray, ref) -> np.ndarray | None:
         """``y'`` (2 nf + 1,) at ``(t, y)`` from the reference ``ref`` = ``(t0, q, qd, qdd,
         S)`` (``System.ref``), else None where Newton's method from the guess does not close
         the loops; :attr:`state` (3, n) and :attr:`J` hold the tree state and the closure
         Jacobian of the last call, :attr:`energy` its kinetic and potential energy."""
-        from .kinematics.positions import driver_values
-        t0, q, qd, qdd, S = ref
+        if self._ref[0] is not ref:   # a new reference (an accepted step)
+            S = ref[4]
+            self._ref = (ref, np.stack(ref[1:4]),
+                         self.noS if S is None else np.ascontiguousarray(S))
+        _, tree, S = self._ref
         drv = self.drv_none
         if self.nd:
             drv = np.ascontiguousarray(np.stack(driver_values(self.part.model, np.array([t])))
@@ -299,9 +305,7 @@ class Kernel:
             ext = np.array([np.reshape(lay.load_values(lay.loads[m], tt), -1)[k]
                             for m, k in self.external])
         out = np.empty(len(y))
-        status = rhs_kernel(self.held, float(t0), float(t),
-                            np.ascontiguousarray(y, dtype=float), drv, ext,
-                            np.stack((q, qd, qdd)),
-                            self.noS if S is None else np.ascontiguousarray(S), out,
+        status = rhs_kernel(self.held, float(ref[0]), float(t),
+                            np.ascontiguousarray(y, dtype=float), drv, ext, tree, S, out,
                             self.state, self.J, self.energy)
         return out if status == 0 else None
