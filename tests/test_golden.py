@@ -18,7 +18,7 @@ with ``python tests/golden.py`` and the commit says why.
 A ``simulate`` run is held to 1e-8 of its scale instead: an integration carries the rounding of
 every step forward, and the machine's own rounding moves it. Measured: the same commit on the
 same numpy and scipy, with OpenBLAS's AVX-512 kernels against its AVX2 ones
-(``OPENBLAS_CORETYPE=Haswell``), differs by 4.7e-11 on ``fourbar_release`` and 1.7e-12 on
+(``OPENBLAS_CORETYPE=Haswell``), differs by 9.2e-10 on ``fourbar_release`` and 1.7e-12 on
 ``toggle_spring``, far below the runs' integration tolerances (1e-8 and 1e-5), which a change of
 method or formula would cross.
 """
