@@ -2,12 +2,16 @@
 
 ``make test`` runs the suite on every core (``pytest -n auto --dist loadgroup``). The tests that
 run the compiled (numba) backend all go to one worker, in collection order: on a fresh clone
-the first of them compiles the kernels once (40-45 s) and writes them to numba's on-disk cache,
-and the rest load them from there, while the other workers run the numpy, CLI and browser
-tests one test at a time as each worker frees up. Spread over several workers, each worker would
-compile the same kernels at the same time. The grouping is a scheduler of its own (xdist's
-``xdist_group`` mark sets ``item._nodeid``, which pytest 9.2 no longer reads). Without xdist
-(``pytest`` alone) none of this applies.
+the first of them compiles the kernels once (about 230 s of CPU measured in a full run on a
+shared 2-core machine: analyze's kernels, the sweep's, simulate's right-hand side, friction's)
+and writes them to numba's on-disk cache, and the rest load them from there, while the other
+workers run the numpy, CLI and browser tests one test at a time as each worker frees up.
+Spread over several workers, each worker would compile the same kernels at the same time. A
+test that runs compiled code must say so in its name or parameters (:func:`uses_numba`),
+``backend="auto"`` included where its work is large enough to switch to compiled: a test left
+out compiles on another worker, cold, at the same time. The grouping is a scheduler of its own
+(xdist's ``xdist_group`` mark sets ``item._nodeid``, which pytest 9.2 no longer reads). Without
+xdist (``pytest`` alone) none of this applies.
 """
 
 from __future__ import annotations

@@ -194,8 +194,8 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
             hb[a, 0] = -tau[nd + a, 0]
             for k in range(nf):
                 H[a, k, 0] = tau[nd + a, 1 + k] - tau[nd + a, 0]
-        factor(H, nf, 1, hperm, hrel)
-        substitute(H, hperm, hrel, nf, 1, hb, hx, kc.PIVOT_TOL)
+        factor(H, nf, one, hperm, hrel)
+        substitute(H, hperm, hrel, nf, one, hb, hx, kc.PIVOT_TOL)
         for a in range(nf):
             qdd_f[a] = hx[a, 0]
     # the drivers' efforts at the solution and the power balance                  (F8)

@@ -64,7 +64,9 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
     m = L.dependent.shape[0]
     D, T = c.shape[1], c.shape[2]
     B = block
-    z = np.int64(0)
+    # the block's place and keep=False as run-time values, not literals: the stages of
+    # linkdyn.dynamics.compiled then reuse their compilations for its kernels
+    z, no = np.int64(0), np.bool_(False)
     # one block's kinematics, shared by the 1 + k cases
     cb, sb = np.zeros((n, 1, B)), np.zeros((n, 1, B))
     rb, eb = np.zeros((n, 2, 1, B)), np.zeros((n, 2, 1, B))
@@ -119,7 +121,7 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
                 for a in range(nv):
                     tau_b[a, :nb] = tau_c[case, a, 0, :nb]
                 cd._cut_wrenches(L, z, dp, z, nb, cb, sb, rb, lam, zero, wc, on_c[case])
-                cd._tree_reactions(L, z, dp, z, nb, z, z, False, cb, sb, rb, eb, tau_b, wc,
+                cd._tree_reactions(L, z, dp, z, nb, z, z, no, cb, sb, rb, eb, tau_b, wc,
                                    wstar, tree, on_c[case])
             for k in range(nb):
                 _sample(on_c, k, fj, fp, dq, qd, d, k0 + k, F0, A, cs, vs, ps)

@@ -280,4 +280,5 @@ def eliminate(A, m, nb, x, rel, tol):
     ``rel`` (block,) as in :func:`factor` and :func:`substitute`."""
     perm = np.empty((m, nb), np.int64)
     factor(A, m, nb, perm, rel)
-    substitute(A, perm, rel, m, nb, A[:, m, :], x, tol)
+    # b copied out contiguous: substitute then compiles once for its C-contiguous callers
+    substitute(A, perm, rel, m, nb, np.ascontiguousarray(A[:, m, :]), x, tol)

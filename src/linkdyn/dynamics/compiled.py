@@ -300,6 +300,7 @@ def _reactions(L, c, s, r, e, tw, twd, w_ext, lam, tau, o_on, o_tree, block, kee
     wc = np.zeros((n, 3, B))      # cut-joint wrenches on the bodies
     lam_b, tau_b = np.zeros((max(n_rows, 1), B)), np.zeros((max(n_drv, 1), B))
     zero, ke = np.zeros(B), np.zeros(B)
+    z = np.int64(0)   # the scratch's place as an int64: _newton_euler compiles once (_sweep)
     for d in range(D):
         dp = d if n_designs > 1 else 0
         _constant(w_ext, d, w_const)
@@ -310,7 +311,7 @@ def _reactions(L, c, s, r, e, tw, twd, w_ext, lam, tau, o_on, o_tree, block, kee
                 lam_b[a, :nb] = lam[a, d, k0:k0 + nb]
             for a in range(n_drv):
                 tau_b[a, :nb] = tau[a, d, k0:k0 + nb]
-            _newton_euler(L, d, dp, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const, ke, ws, ws2)
+            _newton_euler(L, d, dp, k0, nb, z, z, c, s, tw, twd, w_ext, w_const, ke, ws, ws2)
             _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam_b, zero, wc, o_on)
             _tree_reactions(L, d, dp, k0, nb, di, ki, keep, c, s, r, e, tau_b, wc, ws, o_tree,
                             o_on)
