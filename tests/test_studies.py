@@ -534,6 +534,7 @@ def test_the_hoeken_study_with_mass_that_follows_the_geometry(tmp_path):
     assert m.body("coupler").mass == pytest.approx(0.02170139 * 277.7413442701448, rel=1e-12)
     assert round(m.body("coupler").mass, 2) == 6.03 and round(m.body("rocker").mass, 2) == 3.62
 
+
 @DYAD_SPACES
 def test_compiled_nodes_follow_the_branch_of_designs_that_cannot_all_close(example, path, lo,
                                                                           hi):
