@@ -135,7 +135,7 @@ def follow_kernel(L, Q, QD, qd_drv, times, alive, phi, c, s, r, e, J, err):
                     _coordinates(L, i, Q[i, d, ks], Q[i, d, ks], cq[i], sq[i], one)
                 newton(L, d, np.int64(k), one, Q, cq, sq, phi, c, s, r, e, J, P, rhs, err, A,
                        perm, col, sol)
-                _jacobian(L, d, np.int64(k), one, r, e, P, J)
+                _jacobian(L, d, d, np.int64(k), one, r, e, P, J)
                 _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, one, rhs)
                 if nd:
                     _factor_dep(dep, J, d, np.int64(k), one, A, perm, col)
