@@ -778,20 +778,25 @@ def rate_resolution(system, t: float, y: np.ndarray) -> float:
         return 0.0
     bad = system.bad             # (a neighbour not finite is not where the run stopped)
     D = np.empty((nf, 2 * nf))
-    for j in range(2 * nf):
-        # column j of [A, B]: (qdd_f(y + d e_j) - qdd_f(y - d e_j)) / 2 d
-        d = 1e-6 * max(1.0, abs(float(y[j])))
-        up, down = y.copy(), y.copy()
-        up[j] += d
-        down[j] -= d
-        D[:, j] = (system(t, up)[nf:2 * nf] - system(t, down)[nf:2 * nf]) / (2 * d)
-    system.bad = bad
-    if not np.all(np.isfinite(D)):
-        return 0.0
-    # lam = max |eig [[0, I], [A, B]]|
-    lam = float(np.max(np.abs(np.linalg.eigvals(
-        np.block([[np.zeros((nf, nf)), np.eye(nf)], [D]])))))
-    return lam * np.finfo(float).eps * max(1.0, float(np.max(np.abs(y[:nf]))))
+    with np.errstate(all="ignore"):
+        for j in range(2 * nf):
+            # column j of [A, B]: (qdd_f(y + d e_j) - qdd_f(y - d e_j)) / 2 d
+            d = 1e-6 * max(1.0, abs(float(y[j])))
+            up, down = y.copy(), y.copy()
+            up[j] += d
+            down[j] -= d
+            D[:, j] = (system(t, up)[nf:2 * nf] - system(t, down)[nf:2 * nf]) / (2 * d)
+        system.bad = bad
+        if not np.all(np.isfinite(D)):
+            return 0.0
+        # lam = max |eig [[0, I], [A, B]]|
+        try:
+            lam = float(np.max(np.abs(np.linalg.eigvals(
+                np.block([[np.zeros((nf, nf)), np.eye(nf)], [D]])))))
+        except (np.linalg.LinAlgError, ValueError):
+            return 0.0
+        res = lam * np.finfo(float).eps * max(1.0, float(np.max(np.abs(y[:nf]))))
+    return res if np.isfinite(res) else 0.0
 
 
 def tolerances(rtol, atol, names=("rtol", "atol")) -> tuple[float, float]:
