@@ -78,9 +78,20 @@ def fivebar(drivers: int):
     return linkdyn.model_from_dict(d)
 
 
+def stiffer(model, factor):
+    """``model`` with its springs ``factor`` times stiffer: free accelerations of 1e6 rad/s^2
+    and more, whose unit accelerations of F5 are sized (``forward.unit_scale``)."""
+    return replace(model, loads=tuple(replace(x, stiffness=factor * x.stiffness)
+                                      if x.kind == "spring" else x for x in model.loads))
+
+
 MODELS = {"hoeken_motor": hoeken_motor, "slider_crank": slider_crank,
           "stephenson": stephenson, "fivebar_driven": lambda: fivebar(1),
-          "fivebar_free": lambda: fivebar(0)}
+          "fivebar_free": lambda: fivebar(0),
+          # the bundled toggle at 20,000 N/mm, a five-bar's spring at 3e5 N/mm
+          "stiff_toggle": lambda: stiffer(linkdyn.load(linkdyn.example_path("toggle_spring")),
+                                          1e3),
+          "stiff_fivebar": lambda: stiffer(fivebar(0), 1e6)}
 
 
 @pytest.mark.parametrize("name", MODELS)
@@ -92,18 +103,21 @@ def test_compiled_rhs_equals_numpy_at_random_states(name):
     slow, fast = System(part, q0, np.zeros(len(q0))), System(part, q0, np.zeros(len(q0)), True)
     rng = np.random.default_rng(7)
     y = np.concatenate((q0[list(part.layout.topo.driven[part.n_drivers:])], np.zeros(nf + 1)))
-    t = 0.0
+    t, sizes = 0.0, []
     for _ in range(4):
         # an accepted state a little way on (closed by the numpy path), shared by both
         t += 0.05
         y = y + np.concatenate((rng.uniform(-0.15, 0.15, nf), rng.uniform(-3, 3, nf), [0.0]))
         assert slow.accept(t, y) is not None
         fast.ref = slow.ref
-        # a state an integrator asks for from there: a step on, another rate
-        h = 2e-3
-        z = y + h * slow(t, y) + np.concatenate((np.zeros(nf), rng.uniform(-1, 1, nf), [0.0]))
+        # a state an integrator asks for from there: a step on (shorter under a stiff spring),
+        # another rate
+        f = slow(t, y)
+        h = min(2e-3, 100.0 / np.max(np.abs(f[nf:2 * nf])))
+        z = y + h * f + np.concatenate((np.zeros(nf), rng.uniform(-1, 1, nf), [0.0]))
         a, b = slow(t + h, z), fast(t + h, z)
         assert fast.kernel is not None and fast.last[2] is None   # the kernel ran
+        sizes.append(np.max(slow.sizes()))
         scale = np.abs(a) + np.max(np.abs(a))
         assert np.all(np.abs(b - a) <= 1e-11 * scale), (a, b)   # measured: 4e-14 at most
         # the tree state and the Jacobian kept for the reference agree too
@@ -111,6 +125,8 @@ def test_compiled_rhs_equals_numpy_at_random_states(name):
         assert np.allclose(Jb, Ja, rtol=1e-10, atol=1e-10 * np.max(np.abs(Ja)))
         for x, w in zip(slow.ref[1:4], fast.ref[1:4]):
             assert np.allclose(w, x, rtol=1e-9, atol=1e-9 * np.max(np.abs(x)))
+    # the stiff springs' states have unit accelerations of F5 other than 1, the others not
+    assert (max(sizes) > 1.0) == name.startswith("stiff"), sizes
 
 
 def test_op_code_program_equals_expr_evaluate():

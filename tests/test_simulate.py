@@ -475,6 +475,25 @@ def test_a_thousand_times_stiffer_toggle_by_radau_agrees_with_dop853():
     assert radau.energy_drift < 1e-5 and dop.energy_drift < 1e-5
 
 
+@pytest.mark.parametrize("method", ["Radau", "BDF"])
+def test_a_stiff_toggle_at_rest_stays_there_in_few_implicit_steps(method):
+    """The 20,000 N/mm toggle started at its static equilibrium (linkdyn.modal, Newton's method
+    on the efforts) stays there. Its right-hand side resolves the free rate to ~1e-12 rad/s
+    (its accelerations step by ~2e-8 rad/s^2 per last digit of the slider's position), so with
+    the rate's atol at 1e-10 Radau's Newton iterations met noise and the steps collapsed (more
+    than 200 steps before 0.05 s); with the rate's atol raised to its resolution (F14) a few
+    steps reach 1 s."""
+    from linkdyn import modal
+    m = _toggle(2e7)
+    rest = modal.equilibrium(m).q[0]
+    m = replace(m, initial_q={"J1": rest})
+    sol = simulate(m, np.linspace(0.0, 1.0, 3), rtol=1e-8, atol=1e-10, method=method,
+                   max_steps=200, backend="numpy")
+    assert 1e-10 < sol.stats["atol_rates"] < 1e-6      # measured 1.3e-8 rad/s
+    assert np.allclose(sol.columns["q_J1"], rest, rtol=0, atol=1e-12)
+    assert np.all(np.abs(sol.columns["qd_J1"]) < sol.stats["atol_rates"])
+
+
 def test_simulation_models_round_trip_through_save(tmp_path):
     from linkdyn.cli import simulation_example_names
     for name in simulation_example_names():

@@ -869,8 +869,8 @@ def integration(sol) -> dict:
                                                                sol.potential_energy))
     return {
         "free_joints": list(sol.free),
-        **{k: sol.stats[k] for k in ("method", "rtol", "atol", "steps", "rhs_evaluations",
-                                     "energy_projections")},
+        **{k: sol.stats[k] for k in ("method", "rtol", "atol", "atol_rates", "steps",
+                                     "rhs_evaluations", "energy_projections")},
         # where a free joint with friction stuck, slipped or reversed (F13; planar models:
         # spatial ones have no friction loads)
         **({"stick_slip": [{"t_s": ts, "joint": j, "event": what}
@@ -1002,7 +1002,10 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     sim = summ["simulation"]
     text = text + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
-        f"rtol {sim['rtol']:g} atol {sim['atol']:g}: {sim['steps']} steps, "
+        f"rtol {sim['rtol']:g} atol {sim['atol']:g}"
+        + (f" (the free rates' {sim['atol_rates']:.2g}, their resolution under the right-hand "
+           f"side)" if sim["atol_rates"] > sim["atol"] else "")
+        + f": {sim['steps']} steps, "
         f"{sim['rhs_evaluations']} evaluations; energy balance drift "
         f"{sim['energy_balance_drift_rel']:.2e} (relative to the largest energy)"
         + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "

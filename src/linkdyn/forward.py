@@ -85,6 +85,10 @@ PROJECTED = ("RK45", "DOP853", "RK23", "Radau")
 UNWOUND = PROJECTED + ("BDF",)
 PROJECT_MAX = 1e-3   # largest relative change of the free rates the energy projection makes (F11)
 UNIT_MAX = 2.0 ** 14  # free accelerations (rad/s^2, m/s^2) up to which the unit ones of F5 are 1
+# the implicit methods whose Newton's iterations are judged against the tolerances (F14): the free
+# rates' atol at least RESOLVE times their resolution under the right-hand side
+IMPLICIT = ("Radau", "BDF")
+RESOLVE = 1e4
 MAX_EVENTS = 10_000  # changes of the stick-slip state in a run (F13)
 
 
@@ -332,7 +336,9 @@ class Simulation(Solution):
     free : tuple[str, ...]
         The joints whose coordinates were integrated first (``[initial]``'s).
     stats : dict
-        ``method``, ``rtol``, ``atol``, ``steps``, ``rhs_evaluations``, ``switches`` (a list of
+        ``method``, ``rtol``, ``atol`` (those used), ``atol_rates`` (the free rates' atol: with
+        Radau or BDF at least their resolution under the right-hand side, F14; else ``atol``),
+        ``steps``, ``rhs_evaluations``, ``switches`` (a list of
         ``(t, [joints])``: where the integration went on in other free coordinates, F10),
         ``free_effort_residual`` (largest effort the free joints would need at the output
         states, relative to the largest effort or load, ~0 when the accelerations solve F6),
@@ -495,8 +501,7 @@ class System:
         """
         nd, nf = self.nd, self.nf
         drivers = driver_values(self.part.model, t)
-        near = self.ref[3][self.ind[nd:], None] if near is None else near
-        self.scale = scale = np.broadcast_to(unit_scale(near), (nf, len(t)))
+        self.scale = scale = np.broadcast_to(self.sizes(near), (nf, len(t)))
         H, h, tau, kin, applied, dyn = self.reduced(t, q_f, qd_f, guess, drivers, scale)
         qd_d = drivers[1]
         if self.rows:
@@ -517,6 +522,13 @@ class System:
         ok = kin.valid[0] & (kin.pivot[0] > SINGULAR) & (dyn.pivot[0] > SINGULAR)
         qdd_f = np.where(ok, qdd_f, np.nan)
         return qdd_f, kin, power
+
+    def sizes(self, near=None) -> np.ndarray:
+        """The sizes of the unit free accelerations of F5 (nf, T) (:func:`unit_scale`) for
+        states whose free accelerations are about ``near`` (nf, T), by default the reference
+        state's (nf, 1): both right-hand sides, numpy's and the compiled one, take them
+        from here."""
+        return unit_scale(self.ref[3][self.ind[self.nd:], None] if near is None else near)
 
     def _friction(self, tau, kin, dyn, scale):
         """The free accelerations (nf, T), friction efforts (k, T) and drivers' efforts
@@ -607,7 +619,7 @@ class System:
         nf = self.nf
         self.nfev += 1
         if self.kernel is not None:
-            out = self.kernel(t, y, self.ref)
+            out = self.kernel(t, y, self.ref, self.sizes()[:, 0])
             if out is not None:
                 self.last = (t, y.copy(), None, None, None)
                 self._check(t, y, out)
@@ -747,6 +759,44 @@ def _transition(system: System, dense, t0: float, t1: float, y1: np.ndarray):
     y[nf + i] = 0.0
     _settle(system, tc, y, [i])
     return tc, y, (i, "sticks" if system.held[i] else "reverses")
+
+
+def rate_resolution(system, t: float, y: np.ndarray) -> float:
+    """The resolution of the free rates under the right-hand side of ``system`` (either space's
+    :class:`System`) at the state ``(t, y)``, rad/s or m/s (F14): ``lam eps max(1, |q_f|)``.
+
+    The right-hand side reads the free coordinates rounded to ``eps max(1, |q_f|)`` (rad or m;
+    more coarsely where a dependent coordinate carries a stiff load), so its free accelerations
+    step by ``|A| eps |q_f|``, ``A = dqdd_f/dq_f``, and over the time ``1/lam`` of the fastest
+    motion the rates by ``lam eps |q_f|``. ``lam`` is the spectral radius of the free motion
+    linearized at the state, ``[[0, I], [A, B]]`` with ``B = dqdd_f/dqd_f`` (central
+    differences of the right-hand side, steps ``1e-6 max(1, |y_j|)``). 0 where the
+    linearization is not finite.
+    """
+    nf = system.nf
+    if not nf:
+        return 0.0
+    bad = system.bad             # (a neighbour not finite is not where the run stopped)
+    D = np.empty((nf, 2 * nf))
+    with np.errstate(all="ignore"):
+        for j in range(2 * nf):
+            # column j of [A, B]: (qdd_f(y + d e_j) - qdd_f(y - d e_j)) / 2 d
+            d = 1e-6 * max(1.0, abs(float(y[j])))
+            up, down = y.copy(), y.copy()
+            up[j] += d
+            down[j] -= d
+            D[:, j] = (system(t, up)[nf:2 * nf] - system(t, down)[nf:2 * nf]) / (2 * d)
+        system.bad = bad
+        if not np.all(np.isfinite(D)):
+            return 0.0
+        # lam = max |eig [[0, I], [A, B]]|
+        try:
+            lam = float(np.max(np.abs(np.linalg.eigvals(
+                np.block([[np.zeros((nf, nf)), np.eye(nf)], [D]])))))
+        except (np.linalg.LinAlgError, ValueError):
+            return 0.0
+        res = lam * np.finfo(float).eps * max(1.0, float(np.max(np.abs(y[:nf]))))
+    return res if np.isfinite(res) else 0.0
 
 
 def tolerances(rtol, atol, names=("rtol", "atol")) -> tuple[float, float]:
@@ -907,6 +957,7 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         held_at[:, at0], sense_at[:, at0] = system.held[:, None], system.sense[:, None]
     parts, switches = [part], []
     steps, nfev, t_now, projections = 0, 0, 0.0, 0
+    atol_rates = atol          # the free rates' atol (F14; the largest of the run's restarts)
     # a free angle is integrated less its whole turns (``turns``, rad; F12): the relative
     # tolerance on it would otherwise loosen as a crank turns on (rtol |q_f| grows with the
     # turns, and with it the error of every step). Not when a load formula reads a joint
@@ -939,7 +990,14 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             y = np.concatenate((q[list(best)], qd[list(best)], y[-1:]))
             parts.append(part)
             switches.append((t_now, part.free))
-        solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=atol)
+        tol = atol
+        if method in IMPLICIT:
+            # the free rates' atol at least RESOLVE times their resolution: Newton's iterations
+            # of the implicit step must be able to meet it                               (F14)
+            tol = np.full(len(y), atol)
+            tol[nf:2 * nf] = max(atol, RESOLVE * rate_resolution(system, t_now, y))
+            atol_rates = max(atol_rates, float(tol[nf]))
+        solver = getattr(si, method)(system, t_now, y, t_end, rtol=rtol, atol=tol)
         recent = [solver.t]      # the times of the last steps
         walls, wall = 0, np.inf   # such steps, and the earliest time not finite
         restart = False
@@ -1066,7 +1124,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         if restart:
             continue
     nfev += system.nfev
-    stats = dict(method=method, rtol=rtol, atol=atol, steps=steps, rhs_evaluations=nfev,
+    stats = dict(method=method, rtol=rtol, atol=atol, atol_rates=atol_rates, steps=steps,
+                 rhs_evaluations=nfev,
                  switches=[(float(ts), list(fr)) for ts, fr in switches],
                  energy_projections=projections, backend=be.name,
                  compiled_after=compiled_after,
@@ -1308,7 +1367,11 @@ def _stages(part: Partition, t, Y, guesses, kernel, backend, modes):
         zero = np.zeros(lay.topo.n)
         guesses = guesses.copy()
         for k in range(len(t)):
-            out = kernel(t[k], Y[:, k], (t[k], guesses[:, k], zero, zero, None))
+            ref = (t[k], guesses[:, k], zero, zero, None)
+            out = kernel(t[k], Y[:, k], ref, np.ones(nf))
+            if out is not None and np.any(unit_scale(out[nf:2 * nf]) != 1.0):
+                # again with unit accelerations the size of these (F5)
+                out = kernel(t[k], Y[:, k], ref, unit_scale(out[nf:2 * nf]))
             if out is not None:
                 qdd_f[:, k], guesses[:, k], open_[k] = out[nf:2 * nf], kernel.state[0], False
     system = System(part, guesses[:, 0], np.zeros(lay.topo.n))

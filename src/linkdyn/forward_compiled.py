@@ -47,7 +47,8 @@ except ImportError:  # pragma: no cover - depends on the environment
 #: ``power`` (1,), the applied wrenches ``w``; the dynamics' ``wstar``, ``wtilde`` (n, 3, 1,
 #: 1), ``Q`` (n, 1, 1), ``A`` (m, m + 1, 1), ``lam`` (m, 1), ``ke``, ``piv`` (1,), ``lam_b``
 #: (n_rows, 1, 1), ``tau_b`` (k, 1, 1), ``pivot`` (1, 1); each case's ``qdd_c`` (1 + nf, n)
-#: and efforts ``tau`` (k, 1 + nf).
+#: and efforts ``tau`` (k, 1 + nf) (then, in the unit cases' rows, the responses per unit
+#: free acceleration).
 Work = namedtuple("Work", (
     "q", "phi", "c", "s", "r", "e", "J", "qd", "qdd", "tw", "td", "cut", "err", "tmp", "qd_ind",
     "x", "reg", "pe", "power", "w", "wstar", "wtilde", "Q", "A", "lam", "ke", "piv", "lam_b",
@@ -55,7 +56,7 @@ Work = namedtuple("Work", (
 
 
 @njit
-def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
+def rhs_kernel(held, t0, t, y, drv, ext, ref, S, unit, o_y, o_state, o_J, o_e):
     """``y' = F(t, y)`` (F7) at one state, ``y = [q_f, qd_f, W]``.
 
     Parameters
@@ -78,6 +79,9 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
     ref : float (3, n)
         The reference state's tree coordinates, rates and accelerations at ``t0``; ``S``
         (m, k) the dependent coordinates' share of the independent ones there (0 x 0: none).
+    unit : float (nf,)
+        The size of each unit free acceleration of F5, ``s_k`` (:func:`linkdyn.forward.unit_scale`:
+        1, or a power of two near a large ``|qdd_f|``), rad/s^2 or m/s^2.
     o_y : float (2 nf + 1,)
         ``y'``; ``o_state`` (3, n) the tree coordinates, rates and accelerations; ``o_J``
         (n_rows, n - 1) the closure Jacobian; ``o_e`` (2,) the kinetic and potential energy.
@@ -148,14 +152,14 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
     for k in range(ext.shape[0]):
         x[1 + 2 * nj + k] = ext[k]
     applied(L, T, z, one, W.c, W.s, W.r, W.tw, W.x, W.reg, W.w, W.pe, W.power)
-    # 1 + nf acceleration cases: qdd_f = 0, then each unit free acceleration        (F5)
+    # 1 + nf acceleration cases: qdd_f = 0, then qdd_f = s_k e_k                     (F5)
     ok = math.isfinite(piv_kin)
     for i in range(n):
         ok = ok and math.isfinite(qd[i])
     piv_dyn = 1.0
     for cs in range(1 + nf):
         for j in range(k_ind):
-            qdd[ind[j]] = drv[2, j] if j < nd else (1.0 if j - nd == cs - 1 else 0.0)
+            qdd[ind[j]] = drv[2, j] if j < nd else (unit[j - nd] if j - nd == cs - 1 else 0.0)
         # J_dep qdd_dep = -bias(qdd_dep = 0)                                       (eqs. 6-7)
         for a in range(m):
             qdd[dep[a]] = 0.0
@@ -182,10 +186,16 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
         for j in range(k_ind):
             W.tau[j, cs] = W.tau_b[j, 0, 0]
     tau = W.tau
+    # each unit case's response per unit acceleration, (tau(s_k e_k) - tau(0)) / s_k  (F5)
+    for k in range(nf):
+        for j in range(k_ind):
+            tau[j, 1 + k] = (tau[j, 1 + k] - tau[j, 0]) / unit[k]
+        for i in range(n):
+            W.qdd_c[1 + k, i] = (W.qdd_c[1 + k, i] - W.qdd_c[0, i]) / unit[k]
     # tau_f = H qdd_f + h; no actuator in a free joint: H qdd_f = -h              (F4-F6)
     qdd_f = np.zeros(nf)
     if nf == 1:
-        qdd_f[0] = -tau[nd, 0] / (tau[nd, 1] - tau[nd, 0])
+        qdd_f[0] = -tau[nd, 0] / tau[nd, 1]
     elif nf > 1:
         H = np.empty((nf, nf, 1))
         hb, hx = np.empty((nf, 1)), np.empty((nf, 1))
@@ -193,7 +203,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
         for a in range(nf):
             hb[a, 0] = -tau[nd + a, 0]
             for k in range(nf):
-                H[a, k, 0] = tau[nd + a, 1 + k] - tau[nd + a, 0]
+                H[a, k, 0] = tau[nd + a, 1 + k]
         factor(H, nf, one, hperm, hrel)
         substitute(H, hperm, hrel, nf, one, hb, hx, kc.PIVOT_TOL)
         for a in range(nf):
@@ -203,7 +213,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
     for j in range(nd):
         eff = tau[j, 0]
         for k in range(nf):
-            eff += (tau[j, 1 + k] - tau[j, 0]) * qdd_f[k]
+            eff += tau[j, 1 + k] * qdd_f[k]
         power += eff * drv[1, j]
     ok = ok and piv_kin > SINGULAR and piv_dyn > SINGULAR
     for k in range(nf):
@@ -215,7 +225,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, o_y, o_state, o_J, o_e):
         o_state[0, i], o_state[1, i] = q[i], qd[i]
         acc = W.qdd_c[0, i]
         for k in range(nf):
-            acc += qdd_f[k] * (W.qdd_c[1 + k, i] - W.qdd_c[0, i])
+            acc += qdd_f[k] * W.qdd_c[1 + k, i]
         o_state[2, i] = acc
     for a in range(o_J.shape[0]):
         for j in range(o_J.shape[1]):
@@ -285,11 +295,13 @@ class Kernel:
         # replaced, never changed in place): (ref, (3, n) array, S)
         self._ref = (None, None, None)
 
-    def __call__(self, t: float, y: np.ndarray, ref) -> np.ndarray | None:
+    def __call__(self, t: float, y: np.ndarray, ref, unit: np.ndarray) -> np.ndarray | None:
         """``y'`` (2 nf + 1,) at ``(t, y)`` from the reference ``ref`` = ``(t0, q, qd, qdd,
-        S)`` (``System.ref``), else None where Newton's method from the guess does not close
-        the loops; :attr:`state` (3, n) and :attr:`J` hold the tree state and the closure
-        Jacobian of the last call, :attr:`energy` its kinetic and potential energy."""
+        S)`` (``System.ref``) with unit free accelerations of sizes ``unit`` (nf,)
+        (:meth:`linkdyn.forward.System.sizes`), else None where Newton's method from the guess
+        does not close the loops; :attr:`state` (3, n) and :attr:`J` hold the tree state and
+        the closure Jacobian of the last call, :attr:`energy` its kinetic and potential
+        energy."""
         if self._ref[0] is not ref:   # a new reference (an accepted step)
             S = ref[4]
             self._ref = (ref, np.stack(ref[1:4]),
@@ -306,6 +318,7 @@ class Kernel:
                             for m, k in self.external])
         out = np.empty(len(y))
         status = rhs_kernel(self.held, float(ref[0]), float(t),
-                            np.ascontiguousarray(y, dtype=float), drv, ext, tree, S, out,
+                            np.ascontiguousarray(y, dtype=float), drv, ext, tree, S,
+                            np.ascontiguousarray(unit, dtype=float), out,
                             self.state, self.J, self.energy)
         return out if status == 0 else None
