@@ -191,6 +191,17 @@ def test_simulate_names_a_load_that_is_not_finite_not_the_mechanism(formula, t_b
     nothing_written(out)
 
 
+def test_an_implicit_methods_jacobian_beyond_floating_point_is_exit_3_not_a_traceback(tmp_path):
+    # 1e300 qd^2 is finite at rest, but BDF's finite-difference Jacobian of it is not: scipy's
+    # LU refuses it (was a ValueError traceback, found by the mutation test below)
+    out = tmp_path / "out"
+    path = model(tmp_path, text=RELEASE + LOAD.format("1e300*qd_J1*qd_J1"))
+    res = run("simulate", path, "-o", out, "--duration", 0.01, "--samples", 3, "--method", "BDF",
+              "--backend", "numpy")
+    user_error(res, 3, str(path), "at t = ", "Jacobian", "--method DOP853")
+    nothing_written(out)
+
+
 def test_a_duration_far_beyond_reach_is_refused_after_a_few_steps(tmp_path):
     import time
 

@@ -1004,7 +1004,21 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         while solver.status == "running":
             t_old, before, bad = solver.t, system.ref, system.bad
             modes = (system.held.copy(), system.sense.copy()) if rubbing else None
-            message = solver.step()
+            try:
+                message = solver.step()
+            except ValueError as exc:
+                # an implicit method's Jacobian not finite (scipy refuses its LU): the
+                # right-hand side overflows between nearby states
+                if "infs or NaNs" not in str(exc):
+                    raise
+                sp.blame_loads(system, system.last)   # a load not finite, by its field
+                raise AssemblyError(
+                    f"the {method} method's Jacobian of the motion is not finite (a load or the "
+                    "accelerations overflow between nearby states)", file=src,
+                    time=float(t_old), drivers=sp.values(part, before[1]),
+                    units=sp.units(part.model),
+                    fix="Check the loads for values beyond floating point, or use an explicit "
+                        "method (--method DOP853)") from None
             steps += 1
             # a motion approaching a position it cannot pass (a singular position of the
             # mechanism) has accelerations growing without bound: its steps collapse
