@@ -30,8 +30,6 @@ import numpy as np
 
 from .steps import atan2, step
 
-TWO_PI = 2.0 * np.pi
-
 
 def _empty(k: int, *parts) -> np.ndarray:
     """An output of k components over the broadcast shape of ``parts`` (written in place by the
@@ -78,9 +76,10 @@ def about(w, a):
 
 @step
 def wrapped(angle):
-    """``angle`` wrapped into (-pi, pi]: ``angle + 2 pi k``, ``k = floor((pi - angle) / 2 pi)``
-    (exact to rounding of ``angle``; a floor costs less than a sine, a cosine and an atan2)."""
-    return angle + TWO_PI * np.floor((np.pi - angle) / TWO_PI)
+    """``angle`` wrapped into [-pi, pi] (by its sine and cosine: an angle at +-pi keeps its
+    side, which the branch an assembly without a guess takes depends on; a floor,
+    ``angle + 2 pi floor((pi - angle) / 2 pi)``, costs less but sends -pi to pi)."""
+    return atan2(np.sin(angle), np.cos(angle))
 
 
 def perp(a: np.ndarray) -> np.ndarray:
