@@ -45,6 +45,17 @@ def design(model, theta):
     return cam, d0, s, s1, s2, np.arctan2(s1 - cam.offset, d0 + s)
 
 
+def follower_turn(model, w, n):
+    """``n`` samples over one turn at the cam speed ``w`` of the translating follower of a
+    :func:`still` ``model``, and its closed form there: the lift and its derivatives
+    (:func:`design`), the spring, the follower's mass, the spring's compression ``c0`` at
+    s = 0; the contact force's vertical part is ``m w^2 s'' + k (s + c0)``."""
+    t = np.linspace(0.0, 2 * math.pi / w, n + 1)[:-1]
+    _, d0, s, s1, s2, _ = design(model, w * t)
+    spring = model.loads[0]
+    return t, s, s2, spring, model.body("follower").mass, spring.free_length - (0.2 - d0)
+
+
 @pytest.mark.parametrize("offset, law", [(5.0, "cycloidal"), (30.0, "harmonic"),
                                          (-20.0, "modified_trapezoid")])
 def test_the_follower_sits_on_its_prescribed_motion(offset, law):
@@ -198,14 +209,11 @@ def test_an_oscillating_flat_face_swings_on_its_design_and_balances_the_arm():
 
 
 def test_the_summary_finds_where_the_follower_would_leave_the_cam():
-    fast = still(cam_follower(1200 * RPM))
     w = 1200 * RPM
-    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
+    fast = still(cam_follower(w))
+    t, s, s2, spring, m, c0 = follower_turn(fast, w, 72)
     sol = linkdyn.analyze(fast, t)
-    _, d0, s, s1, s2, phi = design(fast, w * t)
-    spring = fast.loads[0]
-    need = fast.body("follower").mass * w * w * s2 + spring.stiffness * (
-        s + spring.free_length - (0.2 - d0))
+    need = m * w * w * s2 + spring.stiffness * (s + c0)
     c = contact(sol)["K"]
     # the samples where the closed form's force is below zero (none near zero here)
     assert np.min(np.abs(need)) > 1.0
@@ -220,10 +228,7 @@ def test_the_summary_gives_the_spring_that_keeps_the_follower_on_the_cam():
     # length) is k max(-m w^2 s'' / (k (s + c0))) over the lost samples
     w = 1200 * RPM
     fast = still(cam_follower(w))
-    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
-    _, d0, s, s1, s2, phi = design(fast, w * t)
-    spring, m = fast.loads[0], fast.body("follower").mass
-    c0 = spring.free_length - (0.2 - d0)
+    t, s, s2, spring, m, c0 = follower_turn(fast, w, 72)
     need = m * w * w * s2 + spring.stiffness * (s + c0)
     fix = contact(linkdyn.analyze(fast, t))["K"]["springs"]["loads[0]"]
     P = np.max(-need)
@@ -263,10 +268,7 @@ def test_the_jump_speed_is_the_translating_followers_closed_form():
     # reaches zero at w^2 = min k (s + c0) / (-m s'') over the samples where s'' < 0
     w = 300 * RPM
     model = still(cam_follower(w))
-    t = np.linspace(0.0, 2 * math.pi / w, 73)[:-1]
-    _, d0, s, s1, s2, phi = design(model, w * t)
-    spring, m = model.loads[0], model.body("follower").mass
-    c0 = spring.free_length - (0.2 - d0)
+    t, s, s2, spring, m, c0 = follower_turn(model, w, 72)
     falling = s2 < 0
     ratio = np.full_like(s, np.inf)
     ratio[falling] = spring.stiffness * (s[falling] + c0) / (-m * s2[falling])
@@ -414,7 +416,7 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     # a cam's loop is no dyad: the branch is followed by Newton's method node by node, on the
     # compiled backend by compiled_nodes.follow (the kinematics kernel's Newton): numpy's
     # nodes, reach, coordinates and rates to rounding
-    pytest.importorskip("numba")
+    pytest.importorskip("numba", reason="the compiled continuation needs numba (the fast extra)")
     from linkdyn.kinematics import compile_layout, compiled_nodes
     from linkdyn.kinematics.positions import follow
     model = linkdyn.load(linkdyn.example_path("cam_fourbar"))

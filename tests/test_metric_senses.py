@@ -221,7 +221,7 @@ def test_the_default_axes_are_the_pair_of_metrics_that_trade_off_most():
     """Three metrics: a and b improve together, c worsens as they do (c maximized, so its cost
     -c rises with a). The pair with the most negative Spearman rho of their costs (here
     pandas' ranks and numpy's Pearson correlation of them) is the default."""
-    pd = pytest.importorskip("pandas")
+    pd = pytest.importorskip("pandas", reason="the sweep's table needs pandas (the parquet extra)")
     from linkdyn.report.sweep import trade_off
     rng = np.random.default_rng(3)
     x = rng.uniform(0, 1, 40)
