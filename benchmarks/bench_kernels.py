@@ -38,7 +38,8 @@ from bench_hoeken import best_time, one_core  # noqa: E402
 
 def kernel_arguments(mech, t):
     """The kernels ``linkdyn.analyze`` calls and their arguments (outputs included):
-    ``{name: (kernel, args)}`` for the kinematics, dynamics and reactions."""
+    ``{name: (kernel, args)}`` for the kinematics, dynamics and reactions, those it called
+    (the dynamics kernel takes the reactions in its blocks when they are wanted)."""
     seen = {}
     kernels = {"kinematics": (kc, "kernel"), "dynamics": (dc, "_dynamics"),
                "reactions": (dc, "_reactions")}
@@ -56,7 +57,7 @@ def kernel_arguments(mech, t):
     finally:
         for name, (mod, attr) in kernels.items():
             setattr(mod, attr, real[name])
-    return {name: (real[name], seen[name]) for name in kernels}
+    return {name: (real[name], seen[name]) for name in kernels if name in seen}
 
 
 def steps(args):
