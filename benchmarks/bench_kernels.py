@@ -1,8 +1,9 @@
 """Where the compiled backend's time goes, on the bundled Hoeken four-bar, one core.
 
 Prints, in ns per sample:
-  1. the kinematics, dynamics and reactions kernels alone, writing into outputs already touched
-     (each kernel re-run on the arguments of a real ``linkdyn.analyze`` call);
+  1. the kinematics and dynamics kernels alone (the dynamics kernel takes the reactions in its
+     blocks, as ``analyze`` runs it), writing into outputs already touched (each kernel re-run
+     on the arguments of a real ``linkdyn.analyze`` call);
   2. the kinematics kernel with blocks of 512, 1024 and 2048 samples (linkdyn uses
      ``linkdyn.kinematics.compiled.BLOCK``);
   3. each step of the kinematics kernel, called block by block from Python (each figure
