@@ -21,8 +21,11 @@ the other's; larger is faster):
   one stacked layout, ``analysis.analyze_layout``).
 
 Every baseline writes fresh outputs (as linkdyn does) and is checked against linkdyn's numpy
-backend before it is timed. linkdyn's compiled time is then split by stage (each kernel alone
-on outputs already touched, as ``bench_kernels.py`` runs them), and the kinematics kernel by
+backend before it is timed. linkdyn's compiled time is then split by stage: each kernel alone
+on outputs already touched (as ``bench_kernels.py`` runs them; the dynamics kernel takes the
+reactions in its blocks), one ``analyze`` call stage by stage as it runs (the layout, the
+assembly and continuation nodes, the kinematics kernel's call, the loads, the dynamics and
+reactions, the finiteness checks, the rest), and the kinematics and dynamics kernels step by
 step.
 
 Without a C compiler the C kernels are skipped (said so) and the ratios are to hand-written
@@ -338,6 +341,87 @@ def batch(mech, designs: int, samples: int):
     return solve
 
 
+def analyze_stages(mech, t, repeat: int, clock) -> dict:
+    """Where one ``linkdyn.analyze(mech, t, backend="compiled")`` spends its time, stage by
+    stage, each the least of ``repeat`` calls (seconds): the layout, the assembly and
+    continuation nodes (``positions.follow``), the kinematics kernel's call (its inputs and
+    outputs allocated), the loads, the dynamics and reactions, the finiteness checks, and the
+    rest (the driver values, the ``Solution``, Python between the stages)."""
+    from linkdyn import loads
+    from linkdyn.dynamics import compiled as dc
+    from linkdyn.kinematics import compiled as kc
+    from linkdyn.kinematics import solution
+    spots = {"layout (compile_layout)": (solution, "compile_layout"),
+             "assembly, continuation nodes (follow)": (solution, "follow"),
+             "kinematics kernel (kinematics.compiled.run)": (kc, "run"),
+             "loads (loads.wrenches)": (loads, "wrenches"),
+             "dynamics and reactions (one kernel)": (dc, "inverse"),
+             "dynamics (dynamics.compiled.solve)": (dc, "solve"),
+             "reactions (dynamics.compiled.reactions)": (dc, "reactions"),
+             "finiteness of the outputs (analysis._finite)": (analysis, "_finite")}
+    spots = {k: v for k, v in spots.items() if hasattr(*v)}
+    real = {k: getattr(*v) for k, v in spots.items()}
+    spent = {k: [] for k in spots}
+
+    def spy(name, fn):
+        def call(*a, **kw):
+            t0 = clock()
+            try:
+                return fn(*a, **kw)
+            finally:
+                spent[name][-1] += clock() - t0
+        return call
+    best = {k: np.inf for k in spots}
+    total = np.inf
+    for (mod, attr), name in zip(spots.values(), spots):
+        setattr(mod, attr, spy(name, real[name]))
+    try:
+        for _ in range(repeat):
+            for k in spent:
+                spent[k].append(0.0)
+            t0 = clock()
+            linkdyn.analyze(mech, t, backend="compiled")
+            total = min(total, clock() - t0)
+            best = {k: min(best[k], spent[k][-1]) for k in spots}
+    finally:
+        for (mod, attr), name in zip(spots.values(), spots):
+            setattr(mod, attr, real[name])
+    out = {k: x for k, x in best.items() if x > 0}
+    out["the rest (drivers, Solution, Python)"] = max(total - sum(out.values()), 0.0)
+    return out
+
+
+def dynamics_steps(args):
+    """The dynamics kernel's steps (its reactions too, as ``analyze`` runs them in the same
+    blocks), each a function of a block ``(k0, nb)`` of design 0 on the arguments of the real
+    call, with scratch of their own: ``(table, block)``."""
+    from linkdyn.dynamics import compiled as dc
+    (L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot,
+     *rest) = args
+    block = rest[-2]
+    o_on = rest[0] if len(rest) == 3 else np.zeros((0, 3) + c.shape[1:])
+    n, m, n_rows, n_drv = len(L.parent), len(L.dependent), o_lam.shape[0], o_tau.shape[0]
+    B = block
+    w_const, ws, wt = (np.zeros((n, 3, 1, B)) for _ in range(3))
+    Q, A, ke, piv = np.zeros((n, 1, B)), np.zeros((m, m + 1, B)), np.zeros(B), np.zeros(B)
+    lam = np.zeros((max(m, n_rows, 1), B))
+    wc, tree, tau_b, zero = (np.zeros((n, 3, B)), np.zeros((n, 3, 1, B)),
+                             np.zeros((max(n_drv, 1), B)), np.zeros(B))
+    table = {
+        "Newton-Euler w_star": lambda k0, nb: dc._newton_euler(
+            L, 0, 0, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const, ke, ws, wt),
+        "composite w_tilde": lambda k0, nb: dc._composite(L, r, 0, k0, nb, 0, 0, wt),
+        "generalized forces Q": lambda k0, nb: dc._generalized(L, 0, k0, nb, 0, 0, e, wt, Q),
+        "multipliers and efforts": lambda k0, nb: dc._multipliers(
+            L, 0, k0, nb, J, Q[:, 0, 0:nb], A, lam, piv, o_lam, o_tau, o_pivot)}
+    if o_on.shape[0]:
+        table["cut-joint wrenches"] = lambda k0, nb: dc._cut_wrenches(
+            L, 0, 0, k0, nb, c, s, r, lam, zero, wc, o_on)
+        table["tree reactions"] = lambda k0, nb: dc._tree_reactions(
+            L, 0, 0, k0, nb, 0, 0, False, c, s, r, e, tau_b, wc, ws, tree, o_on)
+    return table, block
+
+
 def system_share(fn, samples: int, repeat: int) -> tuple[float, float, int]:
     """The call of ``fn`` with the least CPU time of ``repeat``: its user and system CPU
     seconds per sample and the page faults it took (the system's part is mostly the first
@@ -428,10 +512,14 @@ def main():
     for name, (kernel, kargs) in kernels.items():
         x = best_time(lambda: kernel(*kargs), args.repeat, args.time) / T
         total += x
+        name += " and reactions" if name == "dynamics" and "reactions" not in kernels else ""
         print(f"  {name:28s} {x * 1e9:8.1f} ns/sample")
     print(f"  {'the three kernels':28s} {total * 1e9:8.1f} ns/sample; the rest of analyze "
           f"(allocating and first touching the outputs, Python) "
           f"{(per['linkdyn compiled'] - total) * 1e9:.1f}")
+    print("  one analyze call by stage (the least of a few calls each):")
+    for name, x in analyze_stages(mech, t, args.repeat, args.time).items():
+        print(f"    {name:48s} {x / T * 1e9:8.1f} ns/sample")
     print("  one call's CPU split, the least of a few (the system's part: page faults of fresh "
           "outputs):")
     shares = {"linkdyn compiled": lambda: linkdyn.analyze(mech, t, backend="compiled")}
@@ -443,7 +531,14 @@ def main():
               f" {faults} page faults")
     print("  the kinematics kernel, step by step (called block by block from Python, a few ns "
           "of the calls each):")
-    table, block = steps(kernels["kinematics"][1])
+    by_step(*steps(kernels["kinematics"][1]), T, args)
+    print("  the dynamics kernel (with the reactions), step by step (called as above):")
+    by_step(*dynamics_steps(kernels["dynamics"][1]), T, args)
+
+
+def by_step(table, block, T, args):
+    """Print each step of ``table`` (a function of a block ``(k0, nb)``) run over the ``T``
+    samples block by block, in ns a sample."""
     for name, fn in table.items():
         fn(0, block)
         x = best_time(lambda: [fn(k0, min(block, T - k0)) for k0 in range(0, T, block)],

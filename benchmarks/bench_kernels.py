@@ -1,8 +1,9 @@
 """Where the compiled backend's time goes, on the bundled Hoeken four-bar, one core.
 
 Prints, in ns per sample:
-  1. the kinematics, dynamics and reactions kernels alone, writing into outputs already touched
-     (each kernel re-run on the arguments of a real ``linkdyn.analyze`` call);
+  1. the kinematics and dynamics kernels alone (the dynamics kernel takes the reactions in its
+     blocks, as ``analyze`` runs it), writing into outputs already touched (each kernel re-run
+     on the arguments of a real ``linkdyn.analyze`` call);
   2. the kinematics kernel with blocks of 512, 1024 and 2048 samples (linkdyn uses
      ``linkdyn.kinematics.compiled.BLOCK``);
   3. each step of the kinematics kernel, called block by block from Python (each figure
@@ -38,7 +39,8 @@ from bench_hoeken import best_time, one_core  # noqa: E402
 
 def kernel_arguments(mech, t):
     """The kernels ``linkdyn.analyze`` calls and their arguments (outputs included):
-    ``{name: (kernel, args)}`` for the kinematics, dynamics and reactions."""
+    ``{name: (kernel, args)}`` for the kinematics, dynamics and reactions, those it called
+    (the dynamics kernel takes the reactions in its blocks when they are wanted)."""
     seen = {}
     kernels = {"kinematics": (kc, "kernel"), "dynamics": (dc, "_dynamics"),
                "reactions": (dc, "_reactions")}
@@ -56,7 +58,7 @@ def kernel_arguments(mech, t):
     finally:
         for name, (mod, attr) in kernels.items():
             setattr(mod, attr, real[name])
-    return {name: (real[name], seen[name]) for name in kernels}
+    return {name: (real[name], seen[name]) for name in kernels if name in seen}
 
 
 def steps(args):

@@ -364,3 +364,24 @@ def test_arctan2_within_three_ulp_of_the_c_library():
     out = np.empty(1)
     _arctan2_all(np.array([np.inf]), np.array([-np.inf]), out)
     assert np.isnan(out[0])
+
+
+def test_the_bracketing_node_is_searchsorted_from_any_guess():
+    """The kernel's bracketing continuation node (``kinematics.compiled.bracket``, which
+    tries the previous sample's node and the next before bisecting) is numpy's
+    ``searchsorted(nodes, t, "right") - 1`` clamped to ``0 .. K - 2`` for every guess: times in
+    order and shuffled, before the first node, past the last, on a node; NaN (which compares
+    false) the first node, as the bisection alone gave it."""
+    rng = np.random.default_rng(7)
+    for K in (1, 2, 3, 64):
+        nodes = np.sort(rng.uniform(0.0, 1.0, K))
+        ts = np.concatenate([np.linspace(-0.2, 1.2, 301), nodes, rng.uniform(-0.1, 1.1, 50),
+                             [np.nan]])
+        want = np.minimum(np.maximum(np.searchsorted(nodes, ts, side="right") - 1, 0), K - 2)
+        want[np.isnan(ts)] = min(0, K - 2)   # every comparison false: the lower end
+        j = 0
+        for k, tc in enumerate(ts):
+            j_in = j if K > 1 else 0
+            j = kc.bracket(nodes, tc, j_in)
+            assert j == want[k], (K, tc, j_in)
+            assert kc.bracket(nodes, tc, int(rng.integers(0, max(K - 1, 1)))) == want[k]

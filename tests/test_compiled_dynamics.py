@@ -433,6 +433,30 @@ def test_internals_not_kept_are_computed_when_first_read(monkeypatch, name, bloc
     check_all((dyn, reactions.solve(model, kin, dyn)), lean)
 
 
+@pytest.mark.parametrize("name", ["hoeken", "stephenson", "inverted_slider_crank",
+                                  "scotch_yoke", "slider_crank"])
+@pytest.mark.parametrize("block", [5, 1024])
+def test_dynamics_and_reactions_in_one_kernel_equal_the_two_stages(monkeypatch, name, block):
+    """``compiled.inverse`` (the reactions taken in the dynamics kernel's blocks, as
+    ``analyze`` runs them) gives the two stages' numbers to the bit, their internals when read
+    too, and the numpy solvers' to rounding; ``analyze`` on the compiled backend gives them."""
+    monkeypatch.setattr(compiled, "BLOCK", block)
+    model = linkdyn.load(linkdyn.example_path(name))
+    kin = kinematics.solve(model, times(model, 41), backend="compiled")
+    applied = loads_mod.wrenches(model, kin)
+    two = compiled_stages(kin, applied)
+    one = compiled.inverse(kin, applied)
+    for name_ in ("tau", "lam", "kinetic_energy", "pivot", "w_star", "w_tilde", "Q"):
+        assert np.array_equal(getattr(one[0], name_), getattr(two[0], name_)), name_
+    assert np.array_equal(np.stack(one[1].on_second), np.stack(two[1].on_second))
+    assert np.array_equal(np.stack(one[1].tree), np.stack(two[1].tree))
+    dyn = denoc.solve(kin, applied)
+    check_all((dyn, reactions.solve(model, kin, dyn)), one, size=float(np.max(kin.layout.size)))
+    sol = linkdyn.analyze(model, kin.t, backend="compiled")
+    assert np.array_equal(sol.reactions.force, one[1].force)
+    assert np.array_equal(sol.dyn.tau, one[0].tau)
+
+
 def test_a_solution_without_kept_internals_pickles():
     """The internals computed on first read survive a pickle round trip (a design sweep may
     send solutions between processes)."""

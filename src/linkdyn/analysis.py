@@ -613,6 +613,12 @@ def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool
                                                      if backend.compiled else None)
         valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR) & ~fr.locked
         return kin, applied, dyn, react, valid, fr
+    if reactions and backend.compiled and not swept:   # both stages in one kernel
+        dyn, react = compiled_dynamics.inverse(kin, applied)
+        backend_mod.mark_cached("dynamics")
+        backend_mod.mark_cached("reactions")
+        valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
+        return kin, applied, dyn, react, valid, fr
     dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)
     react = partial(reactions_stage, models[0], kin, applied, dyn)
     valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)

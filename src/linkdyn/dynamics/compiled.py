@@ -243,7 +243,7 @@ def _constant(w_ext, d, w_const):
 
 @njit
 def _dynamics(L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke,
-              o_pivot, block, keep):
+              o_pivot, o_on, block, keep):
     """The dynamics of every sample: ``w_star``, ``w_tilde = N_l^T w_star``, ``Q = N_d^T
     w_tilde``, ``lam``, ``tau`` and the kinetic energy; arguments as in :func:`solve`, outputs
     written in place (component-first, batch ``(D, T)`` last) into zeroed arrays (the ground's
@@ -254,17 +254,29 @@ def _dynamics(L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o
     else one block's scratch, (n, 3, 1, block) and (n, 1, block). The samples are taken
     ``block`` at a time: each stage runs over the bodies, and for each body over the samples
     of the block, which are independent.
+
+    ``o_on`` (n_joints, 3, D, T), or no row: with rows (and without ``keep``), the reactions
+    stage of :func:`_reactions` runs on each block too, from the block's ``w_star``,
+    multipliers and efforts while they are at hand (:func:`inverse`), and writes every joint's
+    reaction into it; ``R_i`` is then one block's scratch.
     """
     n, m = L.parent.shape[0], L.dependent.shape[0]   # m = the cut rows: J_dep^T lam = Q_dep
     D, T = c.shape[1], c.shape[2]
     n_designs = L.mass.shape[1]
+    n_rows, n_drv = o_lam.shape[0], o_tau.shape[0]
+    react = o_on.shape[0] > 0 and not keep
     B = block
     # scratch for one block of samples, allocated once per call
     w_const = np.zeros((n, 3, 1, B))   # w_ext constant in time, repeated over a block
     A = np.zeros((m, m + 1, B))        # [J_dep^T | Q_dep]
-    lam = np.zeros((max(m, 1), B))
+    lam = np.zeros((max(m, n_rows, 1), B))   # rows past m (none in a full-rank J_dep) zero
     ke = np.zeros(B)
     piv = np.zeros(B)
+    # the reactions' scratch (_reactions): cut wrenches, R_i, the efforts of the block
+    nr = B if react else 0
+    wc, tree = np.zeros((n, 3, nr)), np.zeros((n, 3, 1, nr))
+    tau_b, zero = np.zeros((max(n_drv, 1), nr)), np.zeros(nr)
+    z = np.int64(0)
     for d in range(D):
         dp = d if n_designs > 1 else 0
         _constant(w_ext, d, w_const)
@@ -281,6 +293,12 @@ def _dynamics(L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o
             _generalized(L, d, k0, nb, di, ki, e, o_wtilde, o_Q)
             _multipliers(L, d, k0, nb, J, o_Q[:, di, ki:ki + nb], A, lam, piv, o_lam, o_tau,
                          o_pivot)
+            if react:   # the block's w_star (o_wstar, the scratch), lam and tau as _reactions
+                for a in range(n_drv):
+                    tau_b[a, :nb] = o_tau[a, d, k0:k0 + nb]
+                _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on)
+                _tree_reactions(L, d, dp, k0, nb, z, z, False, c, s, r, e, tau_b, wc, o_wstar,
+                                tree, o_on)
 
 
 @njit
@@ -531,6 +549,21 @@ def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> Dyna
         ``wstar``, ``wtilde`` (3, ...) per body; ``Q`` (..., n), ``lam`` (..., n_rows),
         ``tau`` (..., n_drivers) components last; ``kinetic_energy`` (...) J; ``pivot`` (...).
     """
+    return _solve(kin, loads, internals, False)[0]
+
+
+def inverse(kin: KinematicSolution, loads: Loads) -> tuple[DynamicSolution, Reactions]:
+    """The dynamics of :func:`solve` and the reactions of :func:`reactions` by one kernel
+    (each block's ``w_star``, multipliers and efforts taken by the reactions stage while they
+    are at hand, instead of a second kernel reading the kinematics again and forming
+    ``w_star`` again): the same numbers as the two stages, ``(dyn, react)``; their internals
+    by the stages, as theirs, when first read."""
+    return _solve(kin, loads, False, True)
+
+
+def _solve(kin, loads, internals: bool, react: bool) -> tuple:
+    """:func:`solve`'s dynamics, and with ``react`` the reactions (else None) of the same
+    kernel call: ``(dyn, react)``."""
     shape = kin.shape
     D, T = (shape[0] if len(shape) == 2 else 1), shape[-1]
     x = _inputs(kin)
@@ -543,17 +576,23 @@ def solve(kin: KinematicSolution, loads: Loads, internals: bool = False) -> Dyna
     out = {"wstar": np.zeros((n, 3) + at), "wtilde": np.zeros((n, 3) + at),
            "Q": np.zeros((n,) + at), "lam": np.zeros((n_rows, D, T)),
            "tau": np.zeros((len(L.driven), D, T)), "ke": np.zeros((D, T)),
-           "pivot": np.zeros((D, T))}
-    _dynamics(L, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"],
-              _applied(loads, shape), out["wstar"], out["wtilde"], out["Q"], out["lam"],
-              out["tau"], out["ke"], out["pivot"], block, internals)
+           "pivot": np.zeros((D, T)),
+           "on": np.zeros(((kin.layout.n_joints if react else 0), 3, D, T))}
+    applied = _applied(loads, shape)
+    _dynamics(L, x["c"], x["s"], x["r"], x["e"], x["tw"], x["twd"], x["J"], applied,
+              out["wstar"], out["wtilde"], out["Q"], out["lam"], out["tau"], out["ke"],
+              out["pivot"], out["on"], block, internals)
     lam, tau = _comps(out["lam"], shape), _comps(out["tau"], shape)
     ke, pivot = out["ke"].reshape(shape), out["pivot"].reshape(shape)
     if not internals:   # the kernel again, keeping them, when first read
-        return DynamicSolution(lam, tau, ke, pivot, _Again(solve, kin, loads).dynamics)
-    return DynamicSolution(lam, tau, ke, pivot, (_per(out["wstar"], shape),
-                                                 _per(out["wtilde"], shape),
-                                                 _comps(out["Q"], shape)))
+        dyn = DynamicSolution(lam, tau, ke, pivot, _Again(solve, kin, loads).dynamics)
+    else:
+        dyn = DynamicSolution(lam, tau, ke, pivot, (_per(out["wstar"], shape),
+                                                    _per(out["wtilde"], shape),
+                                                    _comps(out["Q"], shape)))
+    if not react:
+        return dyn, None
+    return dyn, Reactions(_per(out["on"], shape), _Again(reactions, kin, loads, dyn).tree)
 
 
 def reactions(kin: KinematicSolution, loads: Loads, dyn: DynamicSolution,

@@ -53,17 +53,31 @@ PIVOT_TOL = 1e-13    # relative pivot below which a small system counts as singu
 # --- scalar helpers, compiled into their callers -----------------------------------------------
 
 @inline
-def nearest(nodes, tc):
-    """Index of the continuation node nearest to the time ``tc`` (positions.nearest_node)."""
-    lo, hi = 0, len(nodes)
+def bracket(nodes, tc, j):
+    """The node j with ``nodes[j] <= tc < nodes[j + 1]``, clamped to ``0 .. K - 2``
+    (``searchsorted(nodes, tc, side="right") - 1``): ``j`` itself or the next when one of them
+    brackets ``tc`` (the previous sample's, for times in order), else by bisection."""
+    K = len(nodes)
+    if j + 1 < K and nodes[j] <= tc and tc < nodes[j + 1]:
+        return j
+    if j + 2 < K and nodes[j + 1] <= tc and tc < nodes[j + 2]:
+        return j + 1
+    lo, hi = 0, K
     while lo < hi:   # searchsorted(nodes, tc, side="right")
         mid = (lo + hi) // 2
         if nodes[mid] <= tc:
             lo = mid + 1
         else:
             hi = mid
-    j = min(max(lo - 1, 0), len(nodes) - 2)
-    return nearest_node(j, nodes[j], nodes[j + 1], tc)
+    return min(max(lo - 1, 0), K - 2)
+
+
+@inline
+def nearest(nodes, tc, j):
+    """Index of the continuation node nearest to the time ``tc`` (positions.nearest_node),
+    and the node j bracketing it (:func:`bracket`, from the guess ``j``)."""
+    j = bracket(nodes, tc, j)
+    return nearest_node(j, nodes[j], nodes[j + 1], tc), j
 
 
 # --- the steps of one block of samples -----------------------------------------------------------
@@ -449,10 +463,11 @@ def _finite(d, k0, w, kw, nb, qd, qdd, fin):
 def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
     """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
     ``s q_i`` for an angular joint (the ``turn`` of :func:`.recursion.child_pose`)."""
-    angular, sign = L.angular[i], L.sign[i]
+    sign = L.sign[i]
     for k in range(nb):
         q_i[k] = q_from[k]
-        if angular:
+    if L.angular[i]:   # decided once per joint, not per sample
+        for k in range(nb):
             x = sign * q_i[k]
             cq_i[k], sq_i[k] = math.cos(x), math.sin(x)
 
@@ -557,8 +572,9 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     ks, kws = slice(k0, k0 + nb), slice(kw, kw + nb)   # the samples, in the work arrays
     # coordinates: the nearest node's (or the closed ones) and the drivers'
     if nodes.shape[0] > 0:
+        jb = 0   # the bracketing node of the previous sample
         for k in range(nb):
-            node[k] = nearest(nodes, min(max(X.t_s[k0 + k], X.lo[d]), X.hi[d]))
+            node[k], jb = nearest(nodes, min(max(X.t_s[k0 + k], X.lo[d]), X.hi[d]), jb)
         for i in range(1, n):
             q_i, cq_i, sq_i = q[i, w, kws], cq[i], sq[i]
             Qn_i, cQ_i, sQ_i = X.Qn[i, d], X.cQ[i, d], X.sQ[i, d]
