@@ -112,7 +112,8 @@ LD.freebody = function (D) {
     function X(x) { return W / 2 + (x - cx) * sc.len; }
     function Y(y) { return H / 2 - (y - cy) * sc.len; }
     if (ok) {
-      var out = sb.outline.map(function (id) { var p = P(b, id, k); return X(p[0]).toFixed(1) + "," + Y(p[1]).toFixed(1); });
+      var xy = sb.outline.map(function (id) { var p = P(b, id, k); return [X(p[0]), Y(p[1])]; });
+      var out = xy.map(function (p) { return p[0].toFixed(1) + "," + p[1].toFixed(1); });
       el(sb.shape === "polygon" ? "polygon" : "polyline", {points: out.join(" "), fill: sb.shape === "polygon" ? b.color : "none",
          "fill-opacity": 0.25, stroke: b.color, "stroke-width": sb.shape === "polygon" ? 3 : 8, "stroke-linecap": "round",
          "stroke-linejoin": "round", opacity: 0.8}, fbd);
@@ -129,7 +130,8 @@ LD.freebody = function (D) {
         var led = el("line", {stroke: COLOR[f.kind], "stroke-dasharray": "3 2"}, fbd);
         items.push({node: lab, x: tx, y: ty, fs: 11, r: 3, edge: true, leader: led});
       });
-      place(items, [], ts);
+      // the labels keep clear of the drawn body too (its border or bar, half its stroke)
+      place(items, [], ts, [{pts: xy, r: sb.shape === "polygon" ? 1.5 : 4, closed: sb.shape === "polygon"}]);
     } else el("text", {x: 10, y: 20, "font-size": 12, fill: "#555"}, fbd).textContent = "not assembled at this frame";
     // the force polygon: head to tail from the origin, the closing side from the origin to
     // the last head (the sum: m a_G)

@@ -5,6 +5,7 @@
   var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
   D.series = LD.unpack(D.series);
   D.t = LD.unpack({t: D.t}).t;
+  LD.unpackGeom(D.geom);
   var S = D.series, G = D.geom, T = D.t, N = T.length;
   var anim = document.getElementById("anim");
   var NS = anim.namespaceURI;
