@@ -1696,6 +1696,100 @@ def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken
 
 # ------------------------------------------------ the free-body view and its force polygon
 
+@pytest.mark.parametrize("example, size", [("spatial_slider_crank", (1440, 900)),
+                                           ("spatial_slider_crank", (390, 844)),
+                                           ("stewart", (1440, 900))],
+                         ids=["slider_crank-desktop", "slider_crank-phone", "stewart-desktop"])
+def test_spatial_free_body_view_balances_each_links_inertia_force(browser, tmp_path, example,
+                                                                    size):
+    # the spatial page's free-body view of each link: its table's joint rows are results.csv's
+    # reactions, signed, the weight m g; every row summed with the inertia force -m a_G (from
+    # the csv's kinematics alone: Newton-Euler, independent of the reactions) is zero; the
+    # polygon's sides are the forces as the 3-D view's camera sees them, head to tail, closed by
+    # their sum; turning the view turns the drawing
+    from test_free_body import spatial_m_a
+    out = _analyze(tmp_path, example, "--report")
+    csv = _csv_columns(out / "results.csv")
+    model = linkdyn.load(linkdyn.example_path(example))
+    pg = Page(browser, out / "report.html", width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#freebody").scroll_into_view_if_needed()
+        assert p.locator("#freebody").is_visible()
+        bodies = p.eval_on_selector_all("#fbody option", "os => os.map(o => o.textContent)")
+        assert bodies == [b.name for b in model.moving_bodies]
+        n = len(csv["t"])
+
+        def polygon_is_the_camera_view(rows):
+            cam = p.evaluate("window.__linkdynCamera")
+            az, el = cam["az"], cam["el"]
+            right = np.array([-np.sin(az), np.cos(az), 0.0])
+            up = np.array([-np.sin(el) * np.cos(az), -np.sin(el) * np.sin(az), np.cos(el)])
+            sc = float(p.get_attribute("#fbpoly", "data-scale"))
+            sides = p.eval_on_selector_all("#fbpoly line.fbside", """ls => ls.map(l =>
+                [l.dataset.label, +l.getAttribute('x1'), +l.getAttribute('y1'),
+                 +l.getAttribute('x2'), +l.getAttribute('y2')])""")
+            force = {r[0]: np.array(r[1:]) for r in rows}
+            assert [s[0] for s in sides] == [r[0] for r in rows[:-1]]
+            for (name, x1, y1, x2, y2), nxt in zip(sides, sides[1:] + [None]):
+                np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc],
+                                           [force[name] @ right, force[name] @ up], rtol=0,
+                                           atol=0.02 / sc)
+                if nxt:
+                    assert (nxt[1], nxt[2]) == pytest.approx((x2, y2), abs=0.011)
+            x1, y1, x2, y2 = p.eval_on_selector("#fbpoly line.fbsum", """l =>
+                ['x1', 'y1', 'x2', 'y2'].map(a => +l.getAttribute(a))""")
+            total = force["sum = m a_G"]
+            np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc],
+                                       [total @ right, total @ up], rtol=0, atol=0.02 / sc)
+            return cam
+
+        for n_b, body in enumerate(bodies):
+            p.select_option("#fbody", str(n_b))
+            b = model.body(body)
+            for k in (n // 6, n // 2, 5 * n // 6):
+                p.evaluate("k => { const s = document.getElementById('scrubber');"
+                           " s.value = String(k); s.dispatchEvent(new Event('input')); }", k)
+                rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+                    [r.dataset.label, +r.dataset.fx, +r.dataset.fy, +r.dataset.fz])""")
+                got = {r[0]: np.array(r[1:]) for r in rows}
+                scale = max(np.max(np.abs(f)) for f in got.values())
+                assert rows[-1][0] == "sum = m a_G" and "weight" in got, (body, k)
+                np.testing.assert_allclose(got["weight"], b.mass * np.asarray(model.gravity),
+                                           rtol=0, atol=1e-12 * scale)
+                joints = 0
+                for j in model.joints:
+                    if body in (j.body_a, j.body_b) and j.name in got:
+                        sign = 1.0 if j.body_b == body else -1.0
+                        want = sign * np.array([csv[f"F{c}_{j.name}"][k] for c in "xyz"])
+                        np.testing.assert_allclose(got[j.name], want, rtol=0, atol=1e-12 * scale)
+                        joints += 1
+                assert joints >= 1, (body, k)
+                inertia = -spatial_m_a(model, csv, body, k)
+                forces = [f for name, f in got.items() if name != "sum = m a_G"]
+                np.testing.assert_allclose(sum(forces) + inertia, 0.0, rtol=0, atol=1e-9 * scale,
+                                           err_msg=f"{body} {k}")
+                np.testing.assert_allclose(got["sum = m a_G"], sum(forces), rtol=0,
+                                           atol=1e-12 * scale)
+                cam0 = polygon_is_the_camera_view(rows)
+        # turning the 3-D view turns the free body's drawing with it
+        p.locator("#anim").scroll_into_view_if_needed()
+        box = p.locator("#anim").bounding_box()
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        p.mouse.move(x, y)
+        p.mouse.down()
+        p.mouse.move(x + 60, y + 25, steps=4)
+        p.mouse.up()
+        rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+            [r.dataset.label, +r.dataset.fx, +r.dataset.fy, +r.dataset.fz])""")
+        cam1 = polygon_is_the_camera_view(rows)
+        assert abs(cam1["az"] - cam0["az"]) > 0.1
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0] + 1
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
 def _newton(model, csv, body, k):
     """m a_G of ``body`` at sample k from results.csv's columns alone: a named point P's
     acceleration, the body's omega, alpha and phi, and the model's mass centre c and P's

@@ -220,6 +220,39 @@ def body_entries(model, shape) -> list[dict]:
     return bodies
 
 
+def freebody_entries(sol, idx, add, axes: str) -> list[dict]:
+    """Each moving body's free-body diagram (:func:`linkdyn.design.free_body`) as the page's
+    free-body view reads it, planar (``axes = "xy"``) or spatial (``"xyz"``): a joint's force
+    is its sign times the joint's reaction series (``Fx:J``, ...); a weight constant over the
+    run its value; any other force (a load, a sliding driver's effort, a sliding joint's
+    friction) series of its own, added by ``add(key, values)``; ``com`` the mass centre's
+    track. The page draws them head to tail; their sum, the polygon's closing side, is
+    ``m a_G``."""
+    from ..design import free_body
+    out = []
+    for n, b in enumerate(sol.model.moving_bodies):
+        forces, _ = free_body(sol, b.name)
+        items, com = [], None
+        for f_n, f in enumerate(forces):
+            it = {"label": f.label, "kind": f.kind, "at": f.where}
+            fk = np.asarray(f.force, float)[idx]
+            if f.kind == "joint":
+                it.update({c: f"F{c}:{f.label}" for c in axes})
+                it["sign"] = f.sign
+            elif f.kind == "weight" and np.all(fk == fk[:1]):
+                it["value"] = [float(v) for v in fk[0]]
+            else:
+                it.update({c: add(f"fb:{b.name}:{f_n}:{c}", fk[:, n_])
+                           for n_, c in enumerate(axes)})
+                it["sign"] = 1.0
+            if f.where == "G":
+                com = {c: _num(np.asarray(f.at, float)[idx, n_]) for n_, c in enumerate(axes)}
+            items.append(it)
+        out.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
+                    "forces": items, "com": com})
+    return out
+
+
 def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
     """Everything the page's script needs, JSON-ready (plot units: deg for angles, else SI).
 
@@ -514,30 +547,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         c = np.mean([ground.points[p.split(".", 1)[1]] for p in pivots], axis=0)
         shaking = {"x": float(c[0]), "y": float(c[1]), "fx": "shake:Fx", "fy": "shake:Fy"}
 
-    # each moving body's free-body diagram (design.free_body): a joint's force is its sign
-    # times the joint's reaction series; a weight constant over the run its value; any other
-    # force (a load, a slider driver's effort, a sliding joint's friction) a series of its own.
-    # The page draws them head to tail; their sum, the polygon's closing side, is m a_G
-    from ..design import free_body
-    freebody = []
-    for n, b in enumerate(m.moving_bodies):
-        forces, _ = free_body(sol, b.name)
-        items, com = [], None
-        for f_n, f in enumerate(forces):
-            it = {"label": f.label, "kind": f.kind, "at": f.where}
-            fk = np.asarray(f.force, float)[idx]
-            if f.kind == "joint":
-                it.update({"x": f"Fx:{f.label}", "y": f"Fy:{f.label}", "sign": f.sign})
-            elif f.kind == "weight" and np.all(fk == fk[:1]):
-                it["value"] = [float(v) for v in fk[0]]
-            else:
-                it.update({"x": add(f"fb:{b.name}:{f_n}:x", fk[:, 0]),
-                           "y": add(f"fb:{b.name}:{f_n}:y", fk[:, 1]), "sign": 1.0})
-            if f.where == "G":
-                com = {c: _num(np.asarray(f.at, float)[idx, n_]) for n_, c in enumerate("xy")}
-            items.append(it)
-        freebody.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
-                         "forces": items, "com": com})
+    freebody = freebody_entries(sol, idx, add, "xy")
 
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]
