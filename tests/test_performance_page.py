@@ -44,6 +44,7 @@ MODES = "benchmarks/bench_modes.py"
 PAGE_PLAY = "benchmarks/bench_page.py"
 FRICTION = "benchmarks/bench_friction.py --samples 100000"
 CEILING = "benchmarks/bench_ceiling.py"
+HOEKEN = "benchmarks/bench_hoeken.py --samples 1000000 --clock cpu"
 
 FIGURES = {
     # equilibrium and modes of the IFToMM four-bar with a spring
@@ -71,6 +72,17 @@ FIGURES = {
                                       + NUMBER + ") samples/s", "timing"),
     "ceiling.analysis_rate": Figure(CEILING, r"full analysis: ceiling.*?into fresh outputs\s+("
                                     + NUMBER + ") samples/s", "timing"),
+    # linkdyn's rates on Hoeken, each backend
+    "hoeken.numpy_kinematics": Figure(HOEKEN, r"\[numpy\]\nkinematics\s+(" + NUMBER + ")",
+                                      "timing"),
+    "hoeken.numpy_analysis": Figure(HOEKEN, r"\[numpy\].*?full analysis\s+(" + NUMBER + ")",
+                                    "timing"),
+    "hoeken.compiled_kinematics": Figure(HOEKEN, r"\[compiled\]\nkinematics\s+(" + NUMBER
+                                         + ")", "timing"),
+    "hoeken.compiled_analysis": Figure(HOEKEN, r"\[compiled\].*?full analysis\s+(" + NUMBER
+                                       + ")", "timing"),
+    "hoeken.handwritten": Figure(HOEKEN, r"closed form for this one four-bar in numpy: ("
+                                 + NUMBER + ")/s", "timing"),
 }
 
 
