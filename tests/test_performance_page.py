@@ -43,7 +43,7 @@ class Figure:
 MODES = "benchmarks/bench_modes.py"
 PAGE_PLAY = "benchmarks/bench_page.py"
 FRICTION = "benchmarks/bench_friction.py --samples 100000"
-CEILING = "benchmarks/bench_ceiling.py"
+CEILING = "benchmarks/bench_ceiling.py --clock cpu"
 HOEKEN = "benchmarks/bench_hoeken.py --samples 1000000 --clock cpu"
 
 FIGURES = {

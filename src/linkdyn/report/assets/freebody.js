@@ -123,7 +123,7 @@ LD.freebody = function (D) {
 
   function draw(k) {
     var b = G.freebody[parseInt(sel.value, 10) || 0], sc = scales(b), sb = shape[b.body];
-    textScale(); camera();
+    textScale(); if (DIM === 3) camera();
     clear(fbd); clear(poly);
     var vals = b.forces.map(function (f) { return F(f, k); }), seen = vals.map(flat);
     // the body about its centroid at this frame (as the camera sees it, in space)
