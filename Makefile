@@ -42,7 +42,7 @@ test: $(VENV)/.installed-test
 
 # the scripts' own reference checks (pytest -m bench, tests/test_benchmarks.py), then the timings
 bench: $(VENV)/.installed-bench $(VENV)/.installed-test
-	$(BIN)/python -m pytest -q -m bench tests/test_benchmarks.py
+	$(BIN)/python -m pytest -q -m bench tests/test_benchmarks.py tests/test_performance_page.py
 	$(BIN)/python benchmarks/bench_hoeken.py
 	$(BIN)/python benchmarks/bench_kernels.py
 	$(BIN)/python benchmarks/bench_ceiling.py

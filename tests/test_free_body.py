@@ -144,3 +144,57 @@ def test_a_bad_free_is_refused_naming_the_field(free, extra, words, tmp_path):
     assert res.exit_code == 2 and "Traceback" not in res.output, res.output
     for w in words + ["m.toml"]:
         assert w in res.output, res.output
+
+
+# ------------------------------------------------------------------ spatial free bodies
+
+def spatial_m_a(model, csv, body, k):
+    """m a_G (3,) of a spatial ``body`` at sample k from results.csv's columns alone (no
+    reaction read): a named point P's acceleration, the body's quaternion, omega and alpha,
+    and the model's mass centre c and P (body frame): ``a_G = a_P + alpha x d + omega x
+    (omega x d)``, ``d = R (c - p)``."""
+    b = model.body(body)
+    pname = next(iter(b.points))
+    w, x, y, z = (csv[f"quat_{c}_{body}"][k] for c in "wxyz")
+    R = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    d = R @ (np.asarray(b.com, float) - np.asarray(b.points[pname], float))
+    om = np.array([csv[f"omega_{c}_{body}"][k] for c in "xyz"])
+    al = np.array([csv[f"alpha_{c}_{body}"][k] for c in "xyz"])
+    a = np.array([csv[f"a{c}_{body}.{pname}"][k] for c in "xyz"])
+    return b.mass * (a + np.cross(al, d) + np.cross(om, np.cross(om, d)))
+
+
+@pytest.mark.parametrize("example", ["spatial_slider_crank", "rsur", "stewart"])
+def test_a_spatial_links_forces_are_results_csv_and_balance_its_inertia_force(example):
+    # design.free_body of a spatial solution: each joint's force is results.csv's reaction,
+    # signed (+ on the joint's second body, - on its first), the weight m g; and the forces
+    # with the inertia force -m a_G, a_G from the csv's kinematics (quaternion, omega, alpha,
+    # a point's acceleration), sum to zero: Newton's law, which nothing in the solution's
+    # reactions is made to satisfy by this test
+    from linkdyn import design
+    from linkdyn.sampling import times
+    model = linkdyn.load(linkdyn.example_path(example))
+    sol = linkdyn.analyze(model, times(model, None, None, None))
+    csv = {c: np.asarray(v, float) for c, v in sol.columns().items()}
+    checked = 0
+    for b in model.moving_bodies:
+        forces, m_a = design.free_body(sol, b.name)
+        by = {f.label: f for f in forces}
+        scale = max(np.max(np.abs(f.force)) for f in forces)
+        assert by["weight"].force[0] == pytest.approx(b.mass * np.asarray(model.gravity),
+                                                      abs=1e-12 * scale)
+        for j in model.joints:
+            if b.name in (j.body_a, j.body_b) and j.name in by:
+                sign = 1.0 if j.body_b == b.name else -1.0
+                want = sign * np.stack([csv[f"F{c}_{j.name}"] for c in "xyz"], 1)
+                np.testing.assert_allclose(by[j.name].force, want, rtol=0, atol=1e-12 * scale)
+                checked += 1
+        for k in range(0, len(sol.t), 5):
+            inertia = -spatial_m_a(model, csv, b.name, k)
+            np.testing.assert_allclose(sum(f.force[k] for f in forces) + inertia, 0.0, rtol=0,
+                                       atol=1e-9 * scale, err_msg=f"{b.name} {k}")
+            np.testing.assert_allclose(m_a[k], -inertia, rtol=0, atol=1e-9 * scale)
+    assert checked >= 2 * len(model.joints) - sum(
+        1 for j in model.joints if "ground" in (j.body_a, j.body_b))

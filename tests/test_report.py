@@ -133,7 +133,19 @@ def test_long_runs_are_downsampled_for_the_page():
     assert all(len(v) == report.MAX_FRAMES for v in data["series"].values())
     html = report.render(sol, design.summary(sol))
     assert "the page shows 2000 of them" in html
-    assert len(html) < 1_500_000
+    assert len(html) < 1_350_000   # 1.32 MB: the drawn-only tracks as float32 (1.48 before)
+    # what the page prints keeps every digit; what it only draws is float32 of the solution
+    D = page_blob(html)
+    assert D["series"] == report.page_data(sol)["series"] | {
+        k: v for k, v in D["series"].items() if k.startswith("ic:")}
+    idx = np.searchsorted(sol.t, D["t"])
+    assert np.array_equal(sol.t[idx], D["t"])
+    xy = np.asarray(sol.point("coupler", "P"))
+    np.testing.assert_array_equal(D["geom"]["points"]["coupler.P"]["x"],
+                                  xy[idx, 0].astype(np.float32))
+    ic = np.asarray(sol.instant_centre("coupler"))[idx]
+    np.testing.assert_array_equal(np.array(D["series"]["ic:coupler:x"], float),
+                                  np.where(np.isfinite(ic[:, 0]), ic[:, 0], np.nan).astype(np.float32))
 
 
 def test_page_data_matches_the_solution():
@@ -529,13 +541,20 @@ def page_blob(text: str) -> dict:
     def unpack(v):
         if not isinstance(v, str):
             return v
-        a = np.frombuffer(base64.b64decode(v), dtype="<f8")
+        f4 = v.startswith("f4:")   # drawn only: float32 (report.data.packed)
+        a = np.frombuffer(base64.b64decode(v[3:] if f4 else v), dtype="<f4" if f4 else "<f8")
         return [None if np.isnan(x) else float(x) for x in a]
     for d in [D] + list(D.get("designs", [])):
         if isinstance(d.get("series"), dict):
             d["series"] = {k: unpack(v) for k, v in d["series"].items()}
         if "t" in d:
             d["t"] = unpack(d["t"])
+        geom = d.get("geom", {})
+        for p in geom.get("points", {}).values():
+            p.update({c: unpack(p[c]) for c in "xyz" if c in p})
+        for b in geom.get("freebody", []):
+            if b.get("com"):
+                b["com"] = {c: unpack(v) for c, v in b["com"].items()}
     return D
 
 
@@ -790,6 +809,92 @@ def test_force_labels_never_drop_out(browser, example_runs, example, size):
             leaders += p.evaluate("[...document.querySelectorAll('#anim line.leader')]"
                                   ".filter(l => l.style.display !== 'none').length")
         assert leaders > 0   # these two crowd their views: some labels go to the edge
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def _segment_box_distance(a, b, box, step=0.25):
+    """Distance (px) from the segment a-b to the box (x0, y0, x1, y1), the segment sampled
+    every ``step`` px (so within step / 2 of the exact distance)."""
+    n = max(2, int(np.ceil(np.hypot(*(np.subtract(b, a))) / step)) + 1)
+    s = np.linspace(0.0, 1.0, n)[:, None]
+    p = np.asarray(a, float) + s * (np.asarray(b, float) - np.asarray(a, float))
+    dx = np.maximum.reduce([box[0] - p[:, 0], np.zeros(n), p[:, 0] - box[2]])
+    dy = np.maximum.reduce([box[1] - p[:, 1], np.zeros(n), p[:, 1] - box[3]])
+    return float(np.min(np.hypot(dx, dy)))
+
+
+def _box_on_shape(box, shape) -> bool:
+    """Whether a label's box (client px) touches a body as drawn: its outline's segments with
+    half the stroke's width (``r``), and the inside of a closed outline (a plate, a block)."""
+    from matplotlib.path import Path as MplPath
+    pts, r, closed = shape["pts"], shape["r"], shape["closed"]
+    segs = list(zip(pts, pts[1:] + pts[:1] if closed else pts[1:])) or [(pts[0], pts[0])]
+    if any(_segment_box_distance(a, b, box) < r for a, b in segs):
+        return True
+    if closed and len(pts) > 2:
+        corners = [(box[0], box[1]), (box[2], box[1]), (box[2], box[3]), (box[0], box[3]),
+                   ((box[0] + box[2]) / 2, (box[1] + box[3]) / 2)]
+        return bool(MplPath(pts).contains_points(corners).any())
+    return False
+
+
+_DRAWN_BODIES = r"""() => {
+    // each body as drawn (#anim .body, .slider), in client px: its points through the
+    // element's screen matrix, half its stroke scaled the same way
+    const out = [];
+    const at = (e, x, y) => { const m = e.getScreenCTM(), p = new DOMPoint(+x, +y).matrixTransform(m);
+                              return [p.x, p.y]; };
+    const half = e => 0.5 * (+e.getAttribute('stroke-width') || 0) * Math.hypot(
+        e.getScreenCTM().a, e.getScreenCTM().b);
+    for (const e of document.querySelectorAll('#anim .body')) {
+        if (e.style.display === 'none') continue;
+        if (e.tagName === 'polygon')
+            out.push({pts: e.getAttribute('points').trim().split(/\s+/).map(
+                s => at(e, ...s.split(','))), r: half(e), closed: true});
+        else if (e.tagName === 'line')
+            out.push({pts: [at(e, e.getAttribute('x1'), e.getAttribute('y1')),
+                            at(e, e.getAttribute('x2'), e.getAttribute('y2'))], r: half(e), closed: false});
+        else
+            out.push({pts: [at(e, e.getAttribute('cx'), e.getAttribute('cy'))],
+                      r: +e.getAttribute('r') * Math.hypot(e.getScreenCTM().a, e.getScreenCTM().b),
+                      closed: false});
+    }
+    for (const g of document.querySelectorAll('#anim .slider')) {
+        if (g.style.display === 'none') continue;
+        const r = g.querySelector('rect'), x = +r.getAttribute('x'), y = +r.getAttribute('y'),
+              w = +r.getAttribute('width'), h = +r.getAttribute('height');
+        out.push({pts: [[x, y], [x + w, y], [x + w, y + h], [x, y + h]].map(q => at(r, ...q)),
+                  r: half(r), closed: true});
+    }
+    return out;
+}"""
+
+
+@pytest.mark.parametrize("example, size", [(e, s) for e in EXAMPLES for s in SIZES],
+                         ids=[f"{e}-{s[0]}x{s[1]}" for e in EXAMPLES for s in SIZES])
+def test_force_labels_sit_clear_of_every_body(browser, example_runs, example, size):
+    # forces on, at the first frame: no force label's box (its text as the browser lays it
+    # out) touches any body as drawn (a bar's thick line, a plate and its border, a dot, a
+    # slider's block), computed here from the drawn elements, not from the page's placer
+    path, _ = example_runs(example)
+    pg = Page(browser, path, width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#anim").scroll_into_view_if_needed()
+        p.check("#show-forces")
+        p.evaluate("() => { const s = document.getElementById('scrubber'); s.value = '0';"
+                   " s.dispatchEvent(new Event('input')); }")
+        labels = p.evaluate("""() => [...document.querySelectorAll('#anim .flabels text')]
+            .filter(e => e.style.display !== 'none' && e.getClientRects().length)
+            .map(e => { const r = e.getBoundingClientRect();
+                        return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
+        shapes = p.evaluate(_DRAWN_BODIES)
+        assert labels and shapes
+        on = [(text, n) for text, box in labels for n, sh in enumerate(shapes)
+              if _box_on_shape(box, sh)]
+        assert on == [], on
         assert pg.errors == []
     finally:
         pg.close()
@@ -1590,6 +1695,100 @@ def test_printed_report_leads_with_key_results_and_clips_nothing(browser, hoeken
 
 
 # ------------------------------------------------ the free-body view and its force polygon
+
+@pytest.mark.parametrize("example, size", [("spatial_slider_crank", (1440, 900)),
+                                           ("spatial_slider_crank", (390, 844)),
+                                           ("stewart", (1440, 900))],
+                         ids=["slider_crank-desktop", "slider_crank-phone", "stewart-desktop"])
+def test_spatial_free_body_view_balances_each_links_inertia_force(browser, tmp_path, example,
+                                                                    size):
+    # the spatial page's free-body view of each link: its table's joint rows are results.csv's
+    # reactions, signed, the weight m g; every row summed with the inertia force -m a_G (from
+    # the csv's kinematics alone: Newton-Euler, independent of the reactions) is zero; the
+    # polygon's sides are the forces as the 3-D view's camera sees them, head to tail, closed by
+    # their sum; turning the view turns the drawing
+    from test_free_body import spatial_m_a
+    out = _analyze(tmp_path, example, "--report")
+    csv = _csv_columns(out / "results.csv")
+    model = linkdyn.load(linkdyn.example_path(example))
+    pg = Page(browser, out / "report.html", width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#freebody").scroll_into_view_if_needed()
+        assert p.locator("#freebody").is_visible()
+        bodies = p.eval_on_selector_all("#fbody option", "os => os.map(o => o.textContent)")
+        assert bodies == [b.name for b in model.moving_bodies]
+        n = len(csv["t"])
+
+        def polygon_is_the_camera_view(rows):
+            cam = p.evaluate("window.__linkdynCamera")
+            az, el = cam["az"], cam["el"]
+            right = np.array([-np.sin(az), np.cos(az), 0.0])
+            up = np.array([-np.sin(el) * np.cos(az), -np.sin(el) * np.sin(az), np.cos(el)])
+            sc = float(p.get_attribute("#fbpoly", "data-scale"))
+            sides = p.eval_on_selector_all("#fbpoly line.fbside", """ls => ls.map(l =>
+                [l.dataset.label, +l.getAttribute('x1'), +l.getAttribute('y1'),
+                 +l.getAttribute('x2'), +l.getAttribute('y2')])""")
+            force = {r[0]: np.array(r[1:]) for r in rows}
+            assert [s[0] for s in sides] == [r[0] for r in rows[:-1]]
+            for (name, x1, y1, x2, y2), nxt in zip(sides, sides[1:] + [None]):
+                np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc],
+                                           [force[name] @ right, force[name] @ up], rtol=0,
+                                           atol=0.02 / sc)
+                if nxt:
+                    assert (nxt[1], nxt[2]) == pytest.approx((x2, y2), abs=0.011)
+            x1, y1, x2, y2 = p.eval_on_selector("#fbpoly line.fbsum", """l =>
+                ['x1', 'y1', 'x2', 'y2'].map(a => +l.getAttribute(a))""")
+            total = force["sum = m a_G"]
+            np.testing.assert_allclose([(x2 - x1) / sc, (y1 - y2) / sc],
+                                       [total @ right, total @ up], rtol=0, atol=0.02 / sc)
+            return cam
+
+        for n_b, body in enumerate(bodies):
+            p.select_option("#fbody", str(n_b))
+            b = model.body(body)
+            for k in (n // 6, n // 2, 5 * n // 6):
+                p.evaluate("k => { const s = document.getElementById('scrubber');"
+                           " s.value = String(k); s.dispatchEvent(new Event('input')); }", k)
+                rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+                    [r.dataset.label, +r.dataset.fx, +r.dataset.fy, +r.dataset.fz])""")
+                got = {r[0]: np.array(r[1:]) for r in rows}
+                scale = max(np.max(np.abs(f)) for f in got.values())
+                assert rows[-1][0] == "sum = m a_G" and "weight" in got, (body, k)
+                np.testing.assert_allclose(got["weight"], b.mass * np.asarray(model.gravity),
+                                           rtol=0, atol=1e-12 * scale)
+                joints = 0
+                for j in model.joints:
+                    if body in (j.body_a, j.body_b) and j.name in got:
+                        sign = 1.0 if j.body_b == body else -1.0
+                        want = sign * np.array([csv[f"F{c}_{j.name}"][k] for c in "xyz"])
+                        np.testing.assert_allclose(got[j.name], want, rtol=0, atol=1e-12 * scale)
+                        joints += 1
+                assert joints >= 1, (body, k)
+                inertia = -spatial_m_a(model, csv, body, k)
+                forces = [f for name, f in got.items() if name != "sum = m a_G"]
+                np.testing.assert_allclose(sum(forces) + inertia, 0.0, rtol=0, atol=1e-9 * scale,
+                                           err_msg=f"{body} {k}")
+                np.testing.assert_allclose(got["sum = m a_G"], sum(forces), rtol=0,
+                                           atol=1e-12 * scale)
+                cam0 = polygon_is_the_camera_view(rows)
+        # turning the 3-D view turns the free body's drawing with it
+        p.locator("#anim").scroll_into_view_if_needed()
+        box = p.locator("#anim").bounding_box()
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        p.mouse.move(x, y)
+        p.mouse.down()
+        p.mouse.move(x + 60, y + 25, steps=4)
+        p.mouse.up()
+        rows = p.eval_on_selector_all("#fbtable tbody tr", """rs => rs.map(r =>
+            [r.dataset.label, +r.dataset.fx, +r.dataset.fy, +r.dataset.fz])""")
+        cam1 = polygon_is_the_camera_view(rows)
+        assert abs(cam1["az"] - cam0["az"]) > 0.1
+        assert p.evaluate("document.documentElement.scrollWidth") <= size[0] + 1
+        assert pg.errors == []
+    finally:
+        pg.close()
+
 
 def _newton(model, csv, body, k):
     """m a_G of ``body`` at sample k from results.csv's columns alone: a named point P's

@@ -13,7 +13,14 @@ The forces on body b, global components (N), each at its point of application (m
 Couples have no force and are not listed: torques, a revolute driver's or friction's couple, a
 prismatic joint's moment. By Newton's law the forces sum to the mass times the mass centre's
 acceleration ``m a_G`` (:func:`mass_centre`), the force polygon's closing side; that the listed
-forces do is a check of the whole solution (``tests/test_free_body_view.py``).
+forces do is a check of the whole solution (``tests/test_report.py``, ``test_free_body_*``).
+
+A spatial solution (:class:`linkdyn.spatial.SpatialSolution`) has the same free body in three
+components, (T, 3): each joint's reaction force (the spatial reaction ``[F; M]`` by A on B,
+about B's point: its ``F``, signed as above) at B's joint point, a sliding driver's effort along
+its axis (:func:`spatial_effort_force`), the weight at G and each force, spring, damper and
+``joint_force`` (the spatial loads stage, :func:`linkdyn.spatial.dynamics.loads`, run on that
+load alone); couples again left out.
 """
 
 from __future__ import annotations
@@ -46,7 +53,12 @@ class Force:
 
 def mass_centre(sol, i: int) -> tuple[np.ndarray, np.ndarray]:
     """Position and acceleration (2, T) of body i's mass centre G (tree index), global, m and
-    m/s^2: ``r_G = r_i + d``, ``a_G = a_i + alpha perp(d) - w^2 d``, ``d = R_i c_i``."""
+    m/s^2: ``r_G = r_i + d``, ``a_G = a_i + alpha perp(d) - w^2 d``, ``d = R_i c_i``.
+    A spatial solution: (T, 3) each, ``i`` the plan's body index."""
+    if getattr(sol, "space", "planar") == "spatial":
+        from ..spatial.dynamics import point_of
+        r, _, a = point_of(sol.plan, sol.motion, sol.plan.topo.bodies[i], sol.plan.com[i])
+        return r, a
     kin = sol.kin
     lay, pose = kin.layout, kin.pose
     d = pose.rotate(i, lay.com[i])
@@ -63,8 +75,20 @@ def effort_wrench(sol, joint, effort) -> tuple[np.ndarray, np.ndarray]:
     return effort * p[0], effort[..., None] * last(p[1:])
 
 
+def spatial_effort_force(sol, joint: str) -> np.ndarray:
+    """A spatial sliding driver's effort as a force (T, 3) N, global, on its joint's second
+    body: the effort along the joint's axis (fixed in the first body); minus it on the
+    first. (An angular driver's effort is a couple: no force.)"""
+    from ..spatial import kinematics as sk
+    m, p = sol.model, sol.plan
+    j = [x.name for x in m.joints].index(joint)
+    pose = sk.joint_pose(p, sol.motion.tree, j, m.joints[j])
+    return sol.effort(joint)[:, None] * (pose.RA @ p.geometry[j].e)
+
+
 def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
-    """The forces on ``body`` (see the module docstring) and ``m a_G`` (T, 2) N.
+    """The forces on ``body`` (see the module docstring) and ``m a_G`` (T, 2) N ((T, 3) for
+    a spatial solution).
 
     Returns
     -------
@@ -75,6 +99,8 @@ def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
     m_a : ndarray (T, 2)
         The body's mass times its mass centre's acceleration, N: the sum of ``forces``.
     """
+    if getattr(sol, "space", "planar") == "spatial":
+        return _spatial_free_body(sol, body)
     from ..loads import labels, wrenches
 
     m = sol.model
@@ -125,3 +151,50 @@ def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
         w = wrenches(replace(m, loads=(ld,), gravity=nog), sol.kin).wrenches[i]
         add(label, "load", sol.point(owner, point), last(w[1:]), f"{owner}.{point}")
     return forces, lay.mass[i] * last(a_g)
+
+
+def _spatial_free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
+    """:func:`free_body` of a spatial solution: the forces (T, 3) and ``m a_G`` (T, 3)."""
+    from ..loads import labels
+    from ..spatial.dynamics import loads as spatial_loads
+
+    m, p = sol.model, sol.plan
+    i = p.topo.bodies.index(body)
+    shape = (len(sol.t), 3)
+    forces: list[Force] = []
+
+    def add(label, kind, at, f, where, sign=1.0):
+        f = np.broadcast_to(np.asarray(f, float), shape)
+        if np.any(f != 0):
+            forces.append(Force(label, kind, np.broadcast_to(at, shape), f, where, sign))
+
+    drivers = {d.joint for d in m.drivers}
+    for j in m.joints:
+        if body not in (j.body_a, j.body_b) or j.body_a == j.body_b:
+            continue
+        sign = 1.0 if j.body_b == body else -1.0
+        at, where = sol.point(j.body_b, j.point_b), f"{j.body_b}.{j.point_b}"
+        add(j.name, "joint", at, sign * sol.reaction(j.name)[:, :3], where, sign)
+        if j.name in drivers and not p.kinds[[x.name for x in m.joints].index(j.name)].angular:
+            add(f"driver {j.name}", "driver", at, sign * spatial_effort_force(sol, j.name),
+                where, sign)
+    r_g, a_g = mass_centre(sol, i)
+    weight = spatial_loads(replace(m, loads=()), p, sol.motion, sol.coords).w_ext[:, i, 3:]
+    add("weight", "weight", r_g, weight, "G")
+    nog = np.zeros(3)
+    for ld, label in zip(m.loads, labels(m)):
+        if ld.kind not in ("force", "spring", "damper", "joint_force"):
+            continue   # couples
+        if ld.kind == "joint_force":
+            j = m.joint(ld.joint)
+            if body not in (j.body_a, j.body_b):
+                continue
+            owner, point = j.body_b, j.point_b
+        elif body in (ld.body, ld.body2):
+            owner, point = body, (ld.point if ld.body == body else ld.point2)
+        else:
+            continue
+        w = spatial_loads(replace(m, loads=(ld,), gravity=nog), p, sol.motion,
+                          sol.coords).w_ext[:, i, 3:]
+        add(label, "load", sol.point(owner, point), w, f"{owner}.{point}")
+    return forces, p.mass[i] * a_g

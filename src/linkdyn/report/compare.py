@@ -126,7 +126,8 @@ def traced_paths(runs, per) -> dict:
 
 
 def _scaled(values, u) -> list:
-    return [None if v is None else float(u.value(v, "length")) for v in values]
+    """A track in the file's length unit, at 6 significant digits (drawn only)."""
+    return [None if v is None else float(f"{float(u.value(v, 'length')):.6g}") for v in values]
 
 
 # fields of a model file that do not make one design differ from another

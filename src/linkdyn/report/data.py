@@ -2,7 +2,8 @@
 animation's geometry, and the series and panels of the plots (deg for angles, else SI).
 
 The series keep every digit of the solution (results.csv's numbers at the page's frames); the
-page carries them packed (:func:`packed`), the drawing's point tracks at 6 significant digits.
+page carries them packed (:func:`carried`): float64 for every number it prints, float32 for what
+it only draws (the point tracks, the instant centres).
 """
 
 from __future__ import annotations
@@ -55,15 +56,46 @@ def _num(a, sig: int | None = None) -> list:
     return [float(s) if f else None for s, f in zip(txt.tolist(), ok)]
 
 
-def packed(series: dict) -> dict:
+def packed(series: dict, drawn: bool = False) -> dict:
     """``series`` as the page carries it: each list of floats (null for a gap) as the base64
     text of its little-endian float64 bytes (NaN for a gap), every digit kept in about 11
     characters a value (a decimal that round-trips takes 18 to 24); the page's script
-    unpacks it (``LD.unpack``, assets/common.js)."""
+    unpacks it (``LD.unpack``, assets/common.js).
+
+    ``drawn``: numbers the page only draws and never prints (the point tracks, the instant
+    centres), as float32 instead, behind the prefix ``f4:``: about 7 significant digits (a
+    ten-millionth of a metre on a mechanism a metre across, far below a pixel) in about 5.3
+    characters a value."""
+    dtype, head = ("<f4", "f4:") if drawn else ("<f8", "")
+
     def one(v):
-        a = np.array([np.nan if x is None else x for x in v], dtype="<f8")
-        return base64.b64encode(a.tobytes()).decode("ascii")
+        a = np.array([np.nan if x is None else x for x in v], dtype=dtype)
+        return head + base64.b64encode(a.tobytes()).decode("ascii")
     return {k: one(v) for k, v in series.items()}
+
+
+DRAWN = ("ic:",)   # series the page only draws (instant centres): carried as float32
+
+
+def carried(data: dict) -> dict:
+    """``data`` of :func:`page_data` (or the spatial page's) as the page carries it: the
+    series and times packed (:func:`packed`), every digit kept for what the page prints
+    (readouts, tables, exports); what it only draws as float32 (``drawn``): the series named
+    in ``DRAWN``, each moving point's track and the free-body view's mass-centre tracks (a
+    ground point, ``static``, stays as it is)."""
+    ser = data["series"]
+    series = {**packed({k: v for k, v in ser.items() if not k.startswith(DRAWN)}),
+              **packed({k: v for k, v in ser.items() if k.startswith(DRAWN)}, drawn=True)}
+
+    def pts(p):
+        if p.get("static"):
+            return p
+        return {**p, **packed({c: p[c] for c in "xyz" if c in p}, drawn=True)}
+    geom = {**data["geom"], "points": {k: pts(p) for k, p in data["geom"]["points"].items()}}
+    if geom.get("freebody"):
+        geom["freebody"] = [{**b, "com": b["com"] and packed(b["com"], drawn=True)}
+                            for b in geom["freebody"]]
+    return {**data, "series": series, "t": packed({"t": data["t"]})["t"], "geom": geom}
 
 
 def joint_roles(sol) -> dict[str, str]:
@@ -158,7 +190,8 @@ def traced_points(model) -> list[str]:
 
 def point_tracks(sol, idx, axes: str) -> tuple[dict, np.ndarray]:
     """Every named point at the page's frames ``idx``, m, global (``axes``: ``"xy"`` or
-    ``"xyz"``): a ground point once (``static``), a moving body's point per frame; and every
+    ``"xyz"``): a ground point once (``static``), a moving body's point per frame (every digit;
+    the page carries them as float32, :func:`carried`); and every
     finite position of the run (k, len(axes)), for the view's bounds."""
     m = sol.model
     points, seen = {}, []
@@ -171,7 +204,7 @@ def point_tracks(sol, idx, axes: str) -> tuple[dict, np.ndarray]:
         for name in b.points:
             p = np.asarray(sol.point(b.name, name))
             seen.append(p[np.all(np.isfinite(p), axis=1)])
-            points[f"{b.name}.{name}"] = {c: _num(p[idx, n], 6) for n, c in enumerate(axes)}
+            points[f"{b.name}.{name}"] = {c: _num(p[idx, n]) for n, c in enumerate(axes)}
     return points, np.concatenate(seen)
 
 
@@ -185,6 +218,39 @@ def body_entries(model, shape) -> list[dict]:
                        "shape": kind, "outline": [f"{b.name}.{p}" for p in outline],
                        "points": [f"{b.name}.{p}" for p in b.points]})
     return bodies
+
+
+def freebody_entries(sol, idx, add, axes: str) -> list[dict]:
+    """Each moving body's free-body diagram (:func:`linkdyn.design.free_body`) as the page's
+    free-body view reads it, planar (``axes = "xy"``) or spatial (``"xyz"``): a joint's force
+    is its sign times the joint's reaction series (``Fx:J``, ...); a weight constant over the
+    run its value; any other force (a load, a sliding driver's effort, a sliding joint's
+    friction) series of its own, added by ``add(key, values)``; ``com`` the mass centre's
+    track. The page draws them head to tail; their sum, the polygon's closing side, is
+    ``m a_G``."""
+    from ..design import free_body
+    out = []
+    for n, b in enumerate(sol.model.moving_bodies):
+        forces, _ = free_body(sol, b.name)
+        items, com = [], None
+        for f_n, f in enumerate(forces):
+            it = {"label": f.label, "kind": f.kind, "at": f.where}
+            fk = np.asarray(f.force, float)[idx]
+            if f.kind == "joint":
+                it.update({c: f"F{c}:{f.label}" for c in axes})
+                it["sign"] = f.sign
+            elif f.kind == "weight" and np.all(fk == fk[:1]):
+                it["value"] = [float(v) for v in fk[0]]
+            else:
+                it.update({c: add(f"fb:{b.name}:{f_n}:{c}", fk[:, n_])
+                           for n_, c in enumerate(axes)})
+                it["sign"] = 1.0
+            if f.where == "G":
+                com = {c: _num(np.asarray(f.at, float)[idx, n_]) for n_, c in enumerate(axes)}
+            items.append(it)
+        out.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
+                    "forces": items, "com": com})
+    return out
 
 
 def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None) -> dict:
@@ -481,30 +547,7 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
         c = np.mean([ground.points[p.split(".", 1)[1]] for p in pivots], axis=0)
         shaking = {"x": float(c[0]), "y": float(c[1]), "fx": "shake:Fx", "fy": "shake:Fy"}
 
-    # each moving body's free-body diagram (design.free_body): a joint's force is its sign
-    # times the joint's reaction series; a weight constant over the run its value; any other
-    # force (a load, a slider driver's effort, a sliding joint's friction) a series of its own.
-    # The page draws them head to tail; their sum, the polygon's closing side, is m a_G
-    from ..design import free_body
-    freebody = []
-    for n, b in enumerate(m.moving_bodies):
-        forces, _ = free_body(sol, b.name)
-        items, com = [], None
-        for f_n, f in enumerate(forces):
-            it = {"label": f.label, "kind": f.kind, "at": f.where}
-            fk = np.asarray(f.force, float)[idx]
-            if f.kind == "joint":
-                it.update({"x": f"Fx:{f.label}", "y": f"Fy:{f.label}", "sign": f.sign})
-            elif f.kind == "weight" and np.all(fk == fk[:1]):
-                it["value"] = [float(v) for v in fk[0]]
-            else:
-                it.update({"x": add(f"fb:{b.name}:{f_n}:x", fk[:, 0]),
-                           "y": add(f"fb:{b.name}:{f_n}:y", fk[:, 1]), "sign": 1.0})
-            if f.where == "G":
-                com = {c: _num(np.asarray(f.at, float)[idx, n_], 6) for n_, c in enumerate("xy")}
-            items.append(it)
-        freebody.append({"body": b.name, "color": BODY_COLORS[n % len(BODY_COLORS)],
-                         "forces": items, "com": com})
+    freebody = freebody_entries(sol, idx, add, "xy")
 
     # x axes: time, and the first driver's angle when it turns monotonically
     xaxes = [{"key": "t", "label": "t (s)"}]

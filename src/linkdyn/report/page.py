@@ -8,7 +8,7 @@ import json
 from importlib import resources
 from pathlib import Path
 
-from .data import MAX_FRAMES, packed, page_data
+from .data import MAX_FRAMES, carried, page_data
 from .keys import scales
 from .tables import key_results_html, model_html, summary_html
 
@@ -48,7 +48,7 @@ def render(sol, summary: dict, *, max_frames: int = MAX_FRAMES, title: str | Non
         title=title, desc=desc, note=html.escape(note), intro=intro,
         summary=summary_html(summary, sc), model=model_html(sol),
         key=key_results_html(data["key"]))
-    data = {**data, "series": packed(data["series"]), "t": packed({"t": data["t"]})["t"]}
+    data = carried(data)
     return html_page(title=title, kind="linkdyn report", body=body, data=data,
                      script=("view2d.js", "view3d.js", "freebody.js", "report.js"),
                      footer="recursive DeNOC kinematics and inverse dynamics")

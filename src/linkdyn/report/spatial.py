@@ -15,7 +15,8 @@ import numpy as np
 from ..model import GROUND
 from ..units import REPORT
 from .data import (BODY_COLORS, DEG, MAX_FRAMES, PALETTE, X_COLOR, Y_COLOR, M_COLOR, _num,
-                   body_entries, body_shape, frame_indices, point_tracks, traced_points)
+                   body_entries, body_shape, frame_indices, freebody_entries, point_tracks,
+                   traced_points)
 from .keys import NOISE, _k, is_noise, key_item
 
 Z_COLOR = M_COLOR
@@ -265,7 +266,9 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
                  "traces": traces, "ground": [p for p in points if p in used and
                                               p.startswith(f"{GROUND}.")],
                  "centre": [float(c) for c in centre], "radius": radius,
-                 "home": _home_view(allp), "fmax": fmax, "loads": drawn, "springs": springs},
+                 "home": _home_view(allp), "fmax": fmax, "loads": drawn, "springs": springs,
+                 # each link's free body (data.freebody_entries), drawn by freebody.js
+                 "freebody": freebody_entries(sol, idx, add, "xyz")},
     }
 
 

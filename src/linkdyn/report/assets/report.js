@@ -5,6 +5,7 @@
   var D = JSON.parse(document.getElementById("linkdyn-data").textContent);
   D.series = LD.unpack(D.series);
   D.t = LD.unpack({t: D.t}).t;
+  LD.unpackGeom(D.geom);
   var S = D.series, G = D.geom, T = D.t, N = T.length;
   var anim = document.getElementById("anim");
   var NS = anim.namespaceURI;
@@ -45,9 +46,10 @@
   // the mechanism drawn at a frame: in the plane or in space, by the data's dimension
   var view = (G.dim === 3 ? LD.view3d : LD.view2d)(D, anim, fmtS);
 
-  // the free-body view of a link (freebody.js; planar pages), drawn while on the screen
+  // the free-body view of a link (freebody.js; in space as the 3-D view's camera sees it),
+  // drawn while on the screen
   var fbSec = document.getElementById("freebody"), fbView = null, fbSeen = true;
-  if (fbSec && G.dim !== 3 && G.freebody && G.freebody.length) {
+  if (fbSec && G.freebody && G.freebody.length) {
     fbView = LD.freebody(D);
     if (typeof IntersectionObserver === "function") {
       new IntersectionObserver(function (es) {

@@ -99,6 +99,7 @@ LD.view2d = function (D, anim, fmtS) {
       node = el("circle", {r: 6, fill: b.color}, gBodies);
     else
       node = el("line", {stroke: b.color, "stroke-width": 9, "stroke-linecap": "round", opacity: 0.9}, gBodies);
+    node.setAttribute("class", "body"); node.setAttribute("data-body", b.name);
     var lab = el("text", {"font-size": 12, fill: b.color, "text-anchor": "middle", "font-style": "italic"}, gLabels);
     lab.textContent = b.name;
     return {b: b, node: node, lab: lab};
@@ -109,7 +110,7 @@ LD.view2d = function (D, anim, fmtS) {
   var sliders = G.joints.filter(function (j) { return j.kind === "prismatic" || j.kind === "slot"; }).map(function (j) {
     var slot = j.kind === "slot";
     var body = G.bodies.filter(function (b) { return b.name === (slot ? j.first : j.second); })[0];
-    var color = body ? body.color : "#888", g = el("g", {}, gSliders);
+    var color = body ? body.color : "#888", g = el("g", {"class": "slider"}, gSliders);
     el("rect", slot ? {x: -26, y: -7, width: 52, height: 14, rx: 7, fill: "none", stroke: color,
                        "stroke-width": 3}
                     : {x: -18, y: -9, width: 36, height: 18, rx: 2, fill: color,
@@ -420,7 +421,24 @@ LD.view2d = function (D, anim, fmtS) {
       loadArrows.concat(drvArrows).forEach(function (o) { if (o.tip) items.push({node: o.t, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader}); });
       if (shake && shake.tip) items.push({node: shake.t, x: shake.tip[0], y: shake.tip[1], fs: 11, r: 3, edge: true, leader: shake.leader});
     }
-    place(items, obst, textScale);
+    // the bodies as drawn at this frame (bars, plates, dots, slider blocks): a force's label
+    // keeps clear of them (LD.placer)
+    var shapes = [];
+    bodies.forEach(function (o) {
+      if (o.node.style.display === "none") return;
+      var pts = o.b.outline.map(function (id) { var p = P(id, k); return [X(p[0]), Y(p[1])]; });
+      if (o.b.shape === "polygon") shapes.push({pts: pts, r: 2, closed: true});
+      else if (o.b.shape === "dot") shapes.push({pts: pts.slice(0, 1), r: 6});
+      else shapes.push({pts: [pts[0], pts[pts.length - 1]], r: 4.5});
+    });
+    sliders.forEach(function (o) {
+      if (o.g.style.display === "none") return;
+      var p = P(o.j.b, k), a = -o.j.angle[k], c = Math.cos(a), s = Math.sin(a), x = X(p[0]), y = Y(p[1]);
+      var hw = o.j.kind === "slot" ? 27.5 : 19, hh = o.j.kind === "slot" ? 8.5 : 10;
+      shapes.push({pts: [[-hw, -hh], [hw, -hh], [hw, hh], [-hw, hh]].map(function (q) {
+        return [x + c * q[0] - s * q[1], y + s * q[0] + c * q[1]]; }), r: 0.5, closed: true});
+    });
+    place(items, obst, textScale, shapes);
     return best;
   }
 
