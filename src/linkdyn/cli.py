@@ -1053,7 +1053,8 @@ def equilibrium(model, as_json, at_start, allow_outside):
 def modes(model, as_json, report, outdir, at_start, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start,
+                      report=report)
     if report:
         from . import design, modal as eq_mod
         from .analysis import analyze as run
@@ -1076,11 +1077,12 @@ def modes(model, as_json, report, outdir, at_start, allow_outside):
             click.echo(f"wrote {', '.join(map(str, written))}")
 
 
-def _equilibrium(model, as_json, allow_outside, with_modes, at_start):
+def _equilibrium(model, as_json, allow_outside, with_modes, at_start, report=False):
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
-    not_yet(mech, "modes" if with_modes else "equilibrium")
+    if report:
+        not_yet(mech, "modes --report")
     eq = eq_mod.equilibrium(mech, search=not at_start)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
