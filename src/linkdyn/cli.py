@@ -665,7 +665,6 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
         for given, what in ((path_point or path_range, "--path-point and --path-range"),
-                            (table_units != "si", "--units model"),
                             (allow_singular, "--allow-singular")):
             if given:
                 not_yet(mech, f"analyze {what}")
@@ -673,7 +672,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
         text, summ, sol = spatial_cli.analyze(mech, t)
-        files = _results(SimpleNamespace(columns=sol.columns()), summ, "csv")
+        files = _results(_spatial_table(sol), summ, "csv", table_units)
         if report:
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
@@ -719,6 +718,12 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         written = _write_results(outdir, files, progress)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _spatial_table(sol) -> SimpleNamespace:
+    """A spatial solution's table as :func:`_results` reads a planar one's: ``columns``,
+    ``units`` (SI, of each column) and ``model`` (whose file's units ``--units model`` uses)."""
+    return SimpleNamespace(columns=sol.columns(), units=sol.units(), model=sol.model)
 
 
 def _results(sol, summ: dict, fmt: str, table_units: str = "si") -> dict:
@@ -970,7 +975,6 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
     for given, what in ((report, "--report"), (fmt != "csv", "--format parquet"),
-                        (table_units != "si", "--units model"),
                         (_backend(ctx, backend) == "compiled", "--backend compiled")):
         if given:
             not_yet(mech, f"simulate {what}")
@@ -995,7 +999,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
         summ, text = spatial_cli.simulation(sol, integration(sol))
-        sol = SimpleNamespace(columns=sol.columns())
+        sol = _spatial_table(sol)
     else:
         summ = simulation_summary(sol, design.summary(sol))
         text = summary_text(summ) + "\n" + speed_text(summ, mech)
