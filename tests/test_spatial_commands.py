@@ -1,6 +1,8 @@
 """Command-line options on spatial models that once exited with "not yet for spatial models"
 (issue 24): ``--units model`` of ``analyze`` and ``simulate``, checked against the SI table
-of the same run written by the same command."""
+of the same run written by the same command; ``export --to svg|dxf``, the projection on a
+named plane, read back by the SVG and DXF readers of test_export and checked against
+``analyze``'s results.csv."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from click.testing import CliRunner
 
 import linkdyn
 from linkdyn.cli import main
+from test_export import read_dxf, read_svg
 
 
 def table(path):
@@ -63,3 +66,108 @@ def test_simulate_units_model_writes_the_files_units(tmp_path):
     assert "work [J]" in model and "q_J1 [deg]" in model
     # the free crank starts at [initial] q = 20 deg
     assert model["q_J1 [deg]"][0] == pytest.approx(20.0, abs=1e-9)
+
+
+# ------------------------------------------------------------------ export --to svg|dxf
+
+AXES = {"xy": (0, 1), "xz": (0, 2), "zy": (2, 1)}
+
+
+@pytest.mark.parametrize("plane", [None, "xz", "zy"])
+def test_a_spatial_drawing_is_its_projection_on_the_plane(plane, tmp_path):
+    path = linkdyn.example_path("spatial_slider_crank")         # mm; a guide on the ground
+    model = linkdyn.load(path)
+    at = 0.01
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    runs = table(tmp_path / "out" / "results.csv")
+    pose = linkdyn.analyze(model, np.array([at])).columns()
+    a, b = (c for c in AXES[plane or "xy"])
+    name = plane or "xy"
+
+    def xy(body, point, cols):    # the point in the plane, mm
+        return np.array([cols[f"{'xyz'[k]}_{body}.{point}"] for k in (a, b)]) / 1e-3
+
+    def ground(point):
+        return np.asarray(model.body("ground").points[point])[[a, b]] / 1e-3
+    for fmt in ("svg", "dxf"):
+        out = tmp_path / f"d.{fmt}"
+        res = CliRunner().invoke(main, ["export", str(path), "--to", fmt, "--at", str(at),
+                                        "-o", str(out)] + (["--plane", plane] if plane else []))
+        assert res.exit_code == 0, res.output
+        assert f"projected on the {name} plane" in res.output
+        text = out.read_text()
+        # the file says which projection it holds
+        assert f"the projection of a spatial model on its {name} plane ({name[0]} right, " \
+               f"{name[1]} up)" in text
+        if fmt == "svg":
+            joints, paths, lines, _ = read_svg(out)
+            guides = lines["ground"]
+        else:
+            header, ents = read_dxf(out)
+            assert header["$INSUNITS"] == "4"
+            joints = [(float(e[10]), float(e[20])) for e in ents
+                      if e[0] == "CIRCLE" and e[8] == "JOINTS"]
+            joints = {j.name: min(joints, key=lambda c: np.hypot(*(
+                np.array(c) - (xy(j.body_b, j.point_b, pose)[:, 0] if j.body_b != "ground"
+                               else ground(j.point_b))))) for j in model.joints}
+            guides = [tuple(float(e[c]) for c in (10, 20, 11, 21)) for e in ents
+                      if e[0] == "LINE" and e[8] == "GROUND"]
+        # every joint at its second body's point at --at, projected
+        for j in model.joints:
+            want = (xy(j.body_b, j.point_b, pose)[:, 0] if j.body_b != "ground"
+                    else ground(j.point_b))
+            np.testing.assert_allclose(joints[j.name], want, rtol=0, atol=1e-9)
+        # the slider's fixed guide J4 (prismatic on the ground): a line through the travel of
+        # slider.C over the run, projected
+        travel = xy("slider", "C", runs).T
+        lo, hi = travel[np.argmin(travel @ (travel[-1] - travel[0]))], travel[np.argmax(
+            travel @ (travel[-1] - travel[0]))]
+        e = hi - lo
+
+        def on(p):    # p on the line through the travel, between beyond both ends
+            v = np.array(p) - lo
+            return abs(e[0] * v[1] - e[1] * v[0]) <= 1e-9 * (e @ e)
+        assert any(on(g[:2]) and on(g[2:]) and
+                   min((np.array(g[:2]) - lo) @ e, (np.array(g[2:]) - lo) @ e) < 0 and
+                   max((np.array(g[:2]) - lo) @ e, (np.array(g[2:]) - lo) @ e) > e @ e
+                   for g in guides)
+
+
+def test_the_drawing_of_a_spatial_model_traces_its_points(tmp_path):
+    path = linkdyn.example_path("stewart")
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    runs = table(tmp_path / "out" / "results.csv")
+    out = tmp_path / "s.svg"
+    res = CliRunner().invoke(main, ["export", str(path), "--to", "svg", "--plane", "zx",
+                                    "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    _, paths, _, _ = read_svg(out)
+    assert "platform.T" in paths
+    unit = linkdyn.load(path).length_unit
+    size = {"mm": 1e-3, "m": 1.0}[unit]
+    np.testing.assert_allclose(paths["platform.T"][:, 0], runs["z_platform.T"] / size,
+                               rtol=1e-15, atol=1e-12)
+    np.testing.assert_allclose(paths["platform.T"][:, 1], runs["x_platform.T"] / size,
+                               rtol=1e-15, atol=1e-12)
+
+
+def test_plane_refusals(tmp_path):
+    run = CliRunner().invoke
+    hoeken = str(linkdyn.example_path("hoeken"))
+    res = run(main, ["export", hoeken, "--to", "svg", "--plane", "xz", "-o",
+                     str(tmp_path / "h.svg")])
+    assert res.exit_code == 2 and "--plane" in res.output and "planar" in res.output
+    assert not (tmp_path / "h.svg").exists()
+    res = run(main, ["export", str(linkdyn.example_path("rsur")), "--to", "mjcf", "--plane",
+                     "xy", "-o", str(tmp_path / "r.xml")])
+    assert res.exit_code == 2 and "--plane" in res.output
+    res = run(main, ["export", hoeken, "--to", "svg", "--plane", "ab"])
+    assert res.exit_code == 2 and "--plane" in res.output
+    # a planar model's drawing in its own plane is as before: --plane xy changes nothing
+    plain, xy = tmp_path / "a.svg", tmp_path / "b.svg"
+    assert run(main, ["export", hoeken, "--to", "svg", "-o", str(plain)]).exit_code == 0
+    assert run(main, ["export", hoeken, "--to", "svg", "--plane", "xy", "-o",
+                      str(xy)]).exit_code == 0
+    assert plain.read_text() == xy.read_text() and "projection" not in plain.read_text()

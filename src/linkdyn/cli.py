@@ -1162,8 +1162,11 @@ def reproduce(name, outdir):
               help="File to write [default: the model's name with .xml, .svg or .dxf].")
 @click.option("--at", type=float, default=0.0, show_default=True,
               help="Time in s of the pose drawn (svg, dxf) or the MJCF's bodies are placed at.")
+@click.option("--plane", type=click.Choice(["xy", "yz", "zx", "xz", "yx", "zy"]),
+              help="svg, dxf of a spatial model: the plane it is projected on, its first axis "
+                   "drawn right, its second up [default: xy].")
 @_ALLOW_OUTSIDE
-def export(model, to, output, at, allow_outside):
+def export(model, to, output, at, plane, allow_outside):
     """Write MODEL as a MuJoCo model (MJCF) or its drawing (SVG, DXF) for CAD."""
     from . import io
     from .io.export import FORMATS, export as run
@@ -1172,9 +1175,7 @@ def export(model, to, output, at, allow_outside):
     out = Path(output) if output else Path(Path(model).stem + FORMATS[to])
     check_file(out)
     mech = io.load_model(model, allow_outside=allow_outside)
-    if to != "mjcf":
-        not_yet(mech, f"export --to {to}")
-    done = run(mech, to, at=at)
+    done = run(mech, to, at=at, plane=plane)
     write_file(out, done.text)
     for note in done.notes:
         click.echo(note)
