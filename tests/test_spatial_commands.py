@@ -171,3 +171,47 @@ def test_plane_refusals(tmp_path):
     assert run(main, ["export", hoeken, "--to", "svg", "--plane", "xy", "-o",
                       str(xy)]).exit_code == 0
     assert plain.read_text() == xy.read_text() and "projection" not in plain.read_text()
+
+
+# ------------------------------------------------------------------ simulate --report
+
+def page_data(text: str) -> dict:
+    """The data block of a report page, each packed series (base64 of little-endian float64)
+    unpacked."""
+    import base64
+    import json
+    D = json.loads(text.split('<script id="linkdyn-data" type="application/json">', 1)[1]
+                   .split("</script>", 1)[0])
+
+    def unpack(v):
+        return np.frombuffer(base64.b64decode(v), dtype="<f8") if isinstance(v, str) else v
+    D["series"] = {k: unpack(v) for k, v in D["series"].items()}
+    D["t"] = unpack(D["t"])
+    return D
+
+
+def test_simulate_report_of_a_spatial_model_draws_the_simulated_motion(tmp_path):
+    path = linkdyn.example_path("rsur_release")
+    res = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path), "--samples",
+                                    "21", "--duration", "0.2", "--report"])
+    assert res.exit_code == 0, res.output
+    assert "report.html" in res.output
+    assert not list(tmp_path.glob("plot_*"))           # a spatial page's figures: --plots
+    text = (tmp_path / "report.html").read_text("utf-8")
+    assert "http://" not in text and "https://" not in text
+    D = page_data(text)
+    cols = table(tmp_path / "results.csv")
+    assert D["geom"]["dim"] == 3
+    np.testing.assert_array_equal(D["t"], cols["t"])
+    # the drawn points are the simulated ones, at every frame
+    moving = [pid for pid, p in D["geom"]["points"].items() if not p.get("static")]
+    assert "coupler.C" in moving
+    for pid in moving:
+        for c in "xyz":
+            np.testing.assert_allclose(D["geom"]["points"][pid][c], cols[f"{c}_{pid}"],
+                                       rtol=1e-5, atol=1e-9)
+    # the summary shows the integration's figures
+    assert "<h3>Simulation</h3>" in text and "energy balance drift (relative)" in text
+    import json
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert "report.html" in summary["files"]

@@ -974,7 +974,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     check_outdir(outdir)
     rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
-    for given, what in ((report, "--report"), (fmt != "csv", "--format parquet"),
+    for given, what in ((fmt != "csv", "--format parquet"),
                         (_backend(ctx, backend) == "compiled", "--backend compiled")):
         if given:
             not_yet(mech, f"simulate {what}")
@@ -999,10 +999,11 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
         summ, text = spatial_cli.simulation(sol, integration(sol))
-        sol = _spatial_table(sol)
+        rows = _spatial_table(sol)
     else:
         summ = simulation_summary(sol, design.summary(sol))
         text = summary_text(summ) + "\n" + speed_text(summ, mech)
+        rows = sol
     sim = summ["simulation"]
     text = text + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
@@ -1015,12 +1016,13 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
         + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "
                   f"t = {sw['t_s']:.6g} s (a dead point of the previous ones)"
                   for sw in sim["coordinate_switches"]))
-    files = _results(sol, summ, fmt, table_units)
+    files = _results(rows, summ, fmt, table_units)
     if report:
         from . import plots as plots_mod
         from . import report as report_mod
         files.update(report_mod.outputs(sol, summ))
-        files.update(plots_mod.outputs(sol))
+        if mech.space != "spatial":   # a spatial page's figures: analyze --plots (below)
+            files.update(plots_mod.outputs(sol))
     written = _write_results(outdir, files)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
