@@ -225,3 +225,22 @@ def test_the_spatial_example_in_the_docs_is_what_the_command_prints(tmp_path):
     def steady(text):   # the residual is rounding: its digits are not the docs' to hold
         return [ln for ln in text.strip().splitlines() if "residual" not in ln]
     assert steady(out.output) == steady(block)
+
+
+def test_a_spring_sweep_of_a_spatial_model_on_one_set_up():
+    from linkdyn.modal import Linearization
+    planar = linkdyn.load(linkdyn.example_path("toggle_spring"))
+    start = linkdyn.simulate(planar, np.zeros(1), backend="numpy").columns
+    data, _ = spatial_of_planar("simulate/toggle_spring", start)
+    data["initial"] = {"q": {"J1": 0.0}}
+    base = model_from_dict(data)
+    lin = Linearization(base)
+    for k in (16e3, 20e3, 26e3):            # N/m
+        space = replace(base, loads=tuple(replace(ld, stiffness=k) if ld.kind == "spring"
+                                          else ld for ld in base.loads))
+        flat = replace(planar, loads=tuple(replace(ld, stiffness=k) if ld.kind == "spring"
+                                           else ld for ld in planar.loads))
+        once, own = lin.modes(space), modes(equilibrium(flat))
+        assert once.equilibrium.q[0] + float(start["q_J1"][0]) == pytest.approx(
+            own.equilibrium.q[0], abs=1e-10)
+        assert once.frequencies == pytest.approx(own.frequencies, rel=1e-9)

@@ -269,46 +269,140 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None,
         the stiffness is singular there (a neutral equilibrium: a mechanism with nothing to
         hold it, or a dead point).
     """
-    if not isinstance(model, Model):
-        from .errors import wrong_type
-        raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
-    src = model.source
-    st = stages(model)
-    part = st.partition(_held(model), free)
-    nd, nf = part.n_drivers, len(part.free)
-    free_rows = list(st.free_rows(part))
-    scale = _scales(part)
-    q_tree = st.start_state(part)
-    q_f = q_tree[free_rows].copy()
-    system = st.System(part, q_tree, np.zeros(len(q_tree)))
-    st.check_inertia(part, system, q_tree)
-    state = np.concatenate((q_f, np.zeros(nf), [0.0]))
-    if system.accept(0.0, state) is None:
-        raise AssemblyError("the mechanism does not close at its start", file=src,
-                            time=0.0, fix="Start the free joints ([initial] q) elsewhere")
-    lin = _linear(system, q_f, scale)
-    if search:
-        q_f, lin, it = _newton(system, part, q_f, lin, scale)
-    elif lin is None:
-        raise AssemblyError(
-            "the start cannot be linearized: a dead point, or a loop that does not close "
-            "beside it", file=src, time=0.0, fix="Start the free joints ([initial] q) elsewhere")
-    else:
-        it = 0
-    h, H, K, C, tau = lin
-    # every tree coordinate's value and its share of the free ones' changes        (F2)
-    names, rows = _coordinates(part)
-    q_now, S, dep = system.ref[1], system.ref[4], system.dep
-    shape_map = np.zeros((len(q_now), nf))
-    shape_map[free_rows] = np.eye(nf)
-    if S is not None and len(dep):
-        shape_map[dep] = S[:, nd:]
-    return Equilibrium(
-        model=model, free=part.free, q=q_f, iterations=it,
-        joint_q={n_: float(q_now[r]) for n_, r in zip(names, rows)},
-        residual=h, mass=H, stiffness=K, damping=C,
-        efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
-        shape_map=shape_map[rows], tree_joints=names)
+    return Linearization(model, free=free).equilibrium(search=search)
+
+
+class Linearization:
+    """The set-up of :func:`equilibrium` and :func:`modes` for one mechanism, made once: its
+    free coordinates (the partition), its start assembled, the forward dynamics' ``System``
+    and the check of its mass matrix. Each :meth:`equilibrium` then runs only Newton's method
+    (E1) and the linearization (E2); given another ``model`` of the same mechanism (the same
+    bodies, joints and drivers: other loads, springs, masses, gravity or dimensions, as a
+    designer sweeping a spring's stiffness has), it re-reads that model's numbers with the
+    same free coordinates and starts from the last equilibrium found, a continuation along the
+    sweep, instead of from the file's start.
+
+    Parameters
+    ----------
+    model : Model
+        A mechanism with at least one free degree of freedom (as for ``simulate``).
+    free : tuple of str, optional
+        The free joints (spatial: joint coordinates) (default: ``[initial]``'s, else chosen as
+        ``simulate`` chooses).
+
+    Raises
+    ------
+    ModelError, AssemblyError
+        As :func:`equilibrium`, for what the set-up finds.
+
+    Examples
+    --------
+    >>> lin = Linearization(model)                                   # doctest: +SKIP
+    >>> [modes(lin.equilibrium(with_spring(model, k))).frequencies for k in ks]  # doctest: +SKIP
+    """
+
+    def __init__(self, model: Model, *, free: tuple[str, ...] | None = None):
+        if not isinstance(model, Model):
+            from .errors import wrong_type
+            raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
+        self._setup(model, free, None)
+
+    def __repr__(self) -> str:
+        return f"<Linearization of {self.model.name!r}: free {', '.join(self.free)}>"
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        """The free joints (spatial: joint coordinates), in the order of every array."""
+        return self.part.free
+
+    def _setup(self, model: Model, free, q_tree) -> None:
+        """The partition of ``model`` (free coordinates ``free``), its System and its start:
+        the tree coordinates ``q_tree`` (n,), else its own assembled start."""
+        st = stages(model)
+        part = st.partition(_held(model), free)
+        if q_tree is None:
+            q_tree = st.start_state(part)
+        system = st.System(part, q_tree, np.zeros(len(q_tree)))
+        st.check_inertia(part, system, q_tree)
+        self.model, self.part, self.system = model, part, system
+        self.free_rows = list(st.free_rows(part))
+        self.scale = _scales(part)
+        self.q_tree = np.array(q_tree, float)
+
+    def _same(self, model: Model) -> None:
+        """Refuse a model that is not this mechanism (field ``model``)."""
+        def shape(m):
+            return (getattr(m, "space", "planar"), tuple(b.name for b in m.bodies),
+                    tuple((j.name, j.kind, j.body_a, j.body_b) for j in m.joints),
+                    tuple(d.joint for d in m.drivers))
+        if not isinstance(model, Model):
+            from .errors import wrong_type
+            raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
+        if shape(model) != shape(self.model):
+            raise ModelError(
+                f"this Linearization is set up for {self.model.name!r}: {model.name!r} has "
+                "other bodies, joints or drivers", file=model.source, field="model",
+                fix="Set up a new Linearization(model) for another mechanism")
+
+    def equilibrium(self, model: Model | None = None, *, search: bool = True) -> Equilibrium:
+        """The static equilibrium and the linearization about it (:func:`equilibrium`).
+
+        Parameters
+        ----------
+        model : Model, optional
+            The same mechanism with other numbers (loads, springs, masses, gravity,
+            dimensions); solved from the last equilibrium found. Default: the set-up's own
+            model, from its start (the last equilibrium found, after the first).
+        search : bool
+            False: no Newton step, the linearization at the start (:func:`equilibrium`).
+
+        Returns
+        -------
+        Equilibrium
+        """
+        if model is not None and model is not self.model:
+            self._same(model)
+            self._setup(model, self.part.free, self.q_tree)
+        model, part, system, scale = self.model, self.part, self.system, self.scale
+        src = model.source
+        nd, nf, free_rows = part.n_drivers, len(part.free), self.free_rows
+        q_tree = self.q_tree
+        q_f = q_tree[free_rows].copy()
+        system.set_reference(0.0, q_tree, np.zeros_like(q_tree))
+        state = np.concatenate((q_f, np.zeros(nf), [0.0]))
+        if system.accept(0.0, state) is None:
+            raise AssemblyError("the mechanism does not close at its start", file=src,
+                                time=0.0, fix="Start the free joints ([initial] q) elsewhere")
+        lin = _linear(system, q_f, scale)
+        if search:
+            q_f, lin, it = _newton(system, part, q_f, lin, scale)
+        elif lin is None:
+            raise AssemblyError(
+                "the start cannot be linearized: a dead point, or a loop that does not close "
+                "beside it", file=src, time=0.0,
+                fix="Start the free joints ([initial] q) elsewhere")
+        else:
+            it = 0
+        h, H, K, C, tau = lin
+        # every tree coordinate's value and its share of the free ones' changes      (F2)
+        names, rows = _coordinates(part)
+        q_now, S, dep = system.ref[1], system.ref[4], system.dep
+        shape_map = np.zeros((len(q_now), nf))
+        shape_map[free_rows] = np.eye(nf)
+        if S is not None and len(dep):
+            shape_map[dep] = S[:, nd:]
+        if search:
+            self.q_tree = np.array(q_now, float)       # the next solve's start
+        return Equilibrium(
+            model=model, free=part.free, q=q_f, iterations=it,
+            joint_q={n_: float(q_now[r]) for n_, r in zip(names, rows)},
+            residual=h, mass=H, stiffness=K, damping=C,
+            efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
+            shape_map=shape_map[rows], tree_joints=names)
+
+    def modes(self, model: Model | None = None, *, search: bool = True) -> "Modes":
+        """:func:`modes` about :meth:`equilibrium` (``model``, ``search`` as there)."""
+        return modes(self.equilibrium(model, search=search))
 
 
 def _newton(system, part, q_f: np.ndarray, lin, scale: np.ndarray):
