@@ -193,13 +193,55 @@ def test_the_commands_take_a_spatial_model(tmp_path):
     assert set(data["joint_q"]) == {"J1", "J4", "J3.1", "J3.2"}
 
 
+def toggle_in_space(damper: bool = False) -> tuple[dict, float]:
+    """The bundled toggle written as a spatial model (its design pose the planar start) and
+    the planar crank angle there (rad)."""
+    planar = linkdyn.load(linkdyn.example_path("toggle_spring"))
+    start = linkdyn.simulate(planar, np.zeros(1), backend="numpy").columns
+    data, _ = spatial_of_planar("simulate/toggle_spring", start)
+    data["initial"] = {"q": {"J1": 0.0}}
+    if not damper:
+        data["loads"] = [ld for ld in data["loads"] if ld["name"] != "damper"]
+    return data, float(start["q_J1"][0])
+
+
+def test_moving_a_spatial_model_in_its_mode_needs_no_effort_to_first_order(tmp_path):
+    from linkdyn.io.writer import dumps_toml
+    from linkdyn.modal import mode_motion
+    data, _ = toggle_in_space()
+    eq = equilibrium(model_from_dict(data))
+    md = modes(eq)
+    K = float(eq.stiffness[0, 0])
+
+    def relative_effort(m, swing):
+        """The free joint's peak effort along the motion, per the swing's stiffness effort."""
+        moving = mode_motion(m, 0, swing=swing)
+        sol = linkdyn.analyze(moving, np.linspace(0.0, moving.duration, 61))
+        assert np.ptp(sol.columns()["q_J1"]) == pytest.approx(2 * swing, rel=1e-3)
+        return float(np.max(np.abs(sol.columns()["tau_J1"]))) / (K * swing)
+    # in the mode: the effort is second order in the swing (halving it halves the ratio)
+    big, small = relative_effort(md, 0.02), relative_effort(md, 0.01)
+    assert small < 0.6 * big and small < 0.02
+    # the same shape 10 % too fast needs the stiffness effort's order, whatever the swing
+    off = replace(md, frequencies=md.frequencies * 1.1)
+    assert relative_effort(off, 0.01) > 0.1
+    # the command writes the mode's spatial page
+    path = tmp_path / "toggle.toml"
+    path.write_text(dumps_toml(data), "utf-8")
+    res = CliRunner().invoke(main, ["modes", str(path), "--report", "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    page = (tmp_path / "o" / "mode1.html").read_text("utf-8")
+    assert '"dim":3' in page and "mode 1 at" in page
+
+
 def test_what_the_commands_refuse_on_a_spatial_model(tmp_path):
-    # a swinging mode has no page yet: exit 2, nothing written
+    # a universal joint's coordinate has no driver to swing it: exit 2, nothing written
     path = tmp_path / "pendulum.toml"
     linkdyn.save(pendulum(), path)
     assert linkdyn.load(path).initial_q == pytest.approx({"J1.1": 0.3, "J1.2": -0.2})
     res = CliRunner().invoke(main, ["modes", str(path), "--report", "-o", str(tmp_path / "o")])
     assert res.exit_code == 2 and "not yet for spatial models" in res.output
+    assert "J1.1" in res.output and "Hz" not in res.output
     assert not (tmp_path / "o").exists()
     # a fully driven spatial mechanism has no free coordinate
     rsur = tmp_path / "rsur.toml"

@@ -1072,7 +1072,12 @@ def modes(model, as_json, report, outdir, at_start, allow_outside):
             # the mode's motion, analyzed and shown as linkdyn analyze --report shows a run
             moving = eq_mod.mode_motion(md, int(k))
             sol = run(moving, np.linspace(0.0, moving.duration, 121))
-            page = render(sol, design.summary(sol))
+            if moving.space == "spatial":
+                from .spatial import cli as spatial_cli
+                summ = spatial_cli.summary(sol)
+            else:
+                summ = design.summary(sol)
+            page = render(sol, summ)
             files[f"mode{k + 1}.html"] = lambda path, page=page: Path(path).write_text(
                 page, encoding="utf-8")
         if not files:
@@ -1087,9 +1092,9 @@ def _equilibrium(model, as_json, allow_outside, with_modes, at_start, report=Fal
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
-    if report:
-        not_yet(mech, "modes --report")
     eq = eq_mod.equilibrium(mech, search=not at_start)
+    if report:      # before anything is printed: what --report cannot animate
+        eq_mod.animatable(eq)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))

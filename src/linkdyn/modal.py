@@ -498,6 +498,29 @@ def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) ->
                  stable=stable)
 
 
+def animatable(eq: Equilibrium) -> None:
+    """Refuse to animate the modes about ``eq`` (:func:`mode_motion`) where no driver can move
+    its free coordinates: a spatial model's coordinate of a joint of two or more freedoms
+    (``J3.1`` of a universal joint; a driver drives a whole joint of one freedom).
+
+    Raises
+    ------
+    ModelError
+        Field ``--report``, "not yet for spatial models".
+    """
+    model = eq.model
+    if getattr(model, "space", "planar") != "spatial":
+        return
+    joints = {j.name for j in model.joints}
+    coupled = [c for c in eq.free if c not in joints]
+    if coupled:
+        raise ModelError(
+            f"a mode's motion (modes --report) is not yet for spatial models whose free "
+            f"coordinates are one of a joint's several ({', '.join(coupled)}): a driver "
+            "drives a whole joint of one freedom", file=model.source, field="--report",
+            fix="Drop --report: the frequencies and shapes are printed")
+
+
 #: The largest free coordinate's swing in an animated mode: rad, or this part of the size.
 MODE_SWING = 0.1
 
@@ -525,18 +548,14 @@ def mode_motion(md: Modes, k: int, *, swing: float = MODE_SWING) -> Model:
     """
     eq = md.equilibrium
     model, f, v = eq.model, float(md.frequencies[k]), md.shapes[:, k]
-    if getattr(model, "space", "planar") == "spatial":
-        raise ModelError("a mode's motion (modes --report) is not yet for spatial models",
-                         file=model.source, field="--report",
-                         fix="Drop --report: the frequencies and shapes are printed")
+    animatable(eq)
     if k not in md.oscillating:
         raise ModelError(f"mode {k + 1} does not swing ({f:g} Hz, damping ratio "
                          f"{md.damping_ratios[k]:g})", field="modes",
                          fix="Animate a mode with a damping ratio from 0 to below 1")
     top = int(np.argmax(np.abs(v)))
-    kinds = {j.name: j.kind for j in model.joints}
     size = float(point_spread(np.array([p for b in model.bodies for p in b.points.values()])))
-    angular = jk.get(kinds[eq.free[top]]).angular
+    angular = _angular(model, eq.free[top])
     a = swing * (1.0 if angular else size)
     w = float(2 * np.pi * f)
     # q_j(t) = q_eq_j + a v_j sin(w t)                                              (E3)
