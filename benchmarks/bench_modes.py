@@ -13,7 +13,13 @@ out), the least of ``--repeat`` runs of
 - the benchmark's own measure of efficiency: ``--executions`` (1000) linearizations at the
   published equilibrium with their eigenvalues (``equilibrium(search=False)``, then ``modes``).
   The published solutions report theirs on their own machines (EoM in MATLAB: 7.5 s on an
-  Intel Core i7-2600), so that comparison is only indicative.
+  Intel Core i7-2600), so that comparison is only indicative;
+- the same linearizations on one set-up (``linkdyn.modal.Linearization``: the partition, the
+  start and the forward dynamics' system made once), and their ratio to the above, same run;
+- a sweep of the spring's stiffness over ``--executions`` / 10 values (0.9 to 1.5 times the
+  file's), each equilibrium and its modes: a fresh ``equilibrium`` per value against one
+  ``Linearization`` continued along the sweep (each solve from the last equilibrium), after
+  checking both give the same equilibria (1e-12 rad).
 
 Usage: python benchmarks/bench_modes.py [--repeat R] [--executions N] [--clock wall|cpu]
 """
@@ -32,7 +38,9 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-from linkdyn.modal import equilibrium, modes  # noqa: E402
+from dataclasses import replace  # noqa: E402
+
+from linkdyn.modal import Linearization, equilibrium, modes  # noqa: E402
 from ratio import best_time  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -65,6 +73,31 @@ def main():
         for _ in range(args.executions):
             modes(equilibrium(published, search=False))
     runs = best_time(linearizations, max(1, args.repeat // 2), clock)
+
+    def linearizations_once():
+        lin = Linearization(published)
+        for _ in range(args.executions):
+            lin.modes(search=False)
+    once = best_time(linearizations_once, max(1, args.repeat // 2), clock)
+
+    base = next(ld.stiffness for ld in start.loads if ld.kind == "spring")
+    sweep = [replace(start, loads=tuple(replace(ld, stiffness=base * f) if ld.kind == "spring"
+                                        else ld for ld in start.loads))
+             for f in np.linspace(0.9, 1.5, max(2, args.executions // 10))]
+    lin = Linearization(start)
+    for m in sweep:   # the same answers both ways
+        assert abs(float(lin.equilibrium(m).q[0] - equilibrium(m).q[0])) < 1e-12
+
+    def fresh():
+        for m in sweep:
+            modes(equilibrium(m))
+
+    def continued():
+        lin = Linearization(start)
+        for m in sweep:
+            lin.modes(m)
+    sweep_fresh = best_time(fresh, max(1, args.repeat // 2), clock)
+    sweep_once = best_time(continued, max(1, args.repeat // 2), clock)
     print(f"IFToMM four-bar with a diagonal spring, {args.clock} clock, best of {args.repeat}")
     print(f"  equilibrium {theta!r} rad ({md.equilibrium.iterations} Newton steps), "
           f"eigenvalues +-{float(pair(md.eigenvalues)[0].imag)!r}i 1/s")
@@ -74,6 +107,10 @@ def main():
           f"{'met' if whole < TARGET else 'NOT met'})")
     print(f"  {args.executions} linearizations at the published equilibrium  {runs:8.3f} s "
           f"({runs / args.executions * 1e3:.2f} ms each)")
+    print(f"  the same on one Linearization  {once:8.3f} s ({once / runs:.2f} of the above)")
+    print(f"  spring sweep of {len(sweep)} stiffnesses, equilibrium + modes: fresh "
+          f"{sweep_fresh:.3f} s, one Linearization {sweep_once:.3f} s "
+          f"({sweep_once / sweep_fresh:.2f} of fresh)")
 
 
 if __name__ == "__main__":

@@ -88,6 +88,7 @@ def test_bench_cam():
 def test_bench_modes():
     out = run("bench_modes.py", "--repeat", "1", "--executions", "2")
     assert "accuracy" in out and "equilibrium + modes" in out and "2 linearizations" in out
+    assert "one Linearization" in out and "spring sweep of 2 stiffnesses" in out
 
 
 def test_bench_page():

@@ -375,3 +375,48 @@ def test_the_example_in_the_docs_is_what_the_command_prints(tmp_path):
     def steady(text):
         return [ln for ln in text.strip().splitlines() if "residual" not in ln]
     assert steady(out.output) == steady(block)
+
+
+# --- the set-up once: Linearization -------------------------------------------------------
+
+def with_spring(m: linkdyn.Model, k: float) -> linkdyn.Model:
+    from dataclasses import replace
+    return replace(m, loads=tuple(replace(ld, stiffness=k) if ld.kind == "spring" else ld
+                                  for ld in m.loads))
+
+
+def test_a_spring_sweep_on_one_set_up_is_each_models_own_equilibrium():
+    from linkdyn.modal import Linearization
+    base = linkdyn.load(linkdyn.example_path("toggle_spring"))
+    ks = [15e3, 18e3, 20e3, 24e3, 30e3]       # N/m
+    lin = Linearization(base)
+    steps_once, steps_fresh = 0, 0
+    for k in ks:
+        m = with_spring(base, k)
+        once, fresh = lin.equilibrium(m), equilibrium(m)
+        steps_once += once.iterations
+        steps_fresh += fresh.iterations
+        assert once.model is m and once.free == fresh.free
+        assert once.q == pytest.approx(fresh.q, abs=1e-12)
+        assert np.max(np.abs(once.residual)) < 1e-9
+        for a, b in ((once.stiffness, fresh.stiffness), (once.mass, fresh.mass)):
+            assert a == pytest.approx(b, rel=1e-8)
+        assert modes(once).frequencies == pytest.approx(modes(fresh).frequencies, rel=1e-8)
+    # each solve starts from the last equilibrium: a continuation along the sweep
+    assert steps_once < steps_fresh
+    # the set-up's own model again, and the linearization at its start (no Newton step)
+    assert lin.equilibrium(base).q == pytest.approx(equilibrium(base).q, abs=1e-12)
+    at = lin.equilibrium(search=False)
+    assert at.iterations == 0 and np.max(np.abs(at.residual)) < 1e-9
+
+
+def test_a_linearization_is_for_one_mechanism():
+    from linkdyn.errors import ModelError
+    from linkdyn.modal import Linearization
+    lin = Linearization(pendulum(-60.0))
+    assert lin.free == ("J1",)
+    assert lin.modes().frequencies[0] == pytest.approx(
+        math.sqrt(2.0 * G * 0.3 / (0.05 + 2.0 * 0.3 ** 2)) / (2 * math.pi), rel=1e-10)
+    with pytest.raises(ModelError) as err:
+        lin.equilibrium(linkdyn.load(linkdyn.example_path("toggle_spring")))
+    assert err.value.field == "model"

@@ -665,7 +665,6 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
         for given, what in ((path_point or path_range, "--path-point and --path-range"),
-                            (table_units != "si", "--units model"),
                             (allow_singular, "--allow-singular")):
             if given:
                 not_yet(mech, f"analyze {what}")
@@ -673,7 +672,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
         text, summ, sol = spatial_cli.analyze(mech, t)
-        files = _results(SimpleNamespace(columns=sol.columns()), summ, "csv")
+        files = _results(_spatial_table(sol), summ, "csv", table_units)
         if report:
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
@@ -719,6 +718,12 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
         written = _write_results(outdir, files, progress)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
+
+
+def _spatial_table(sol) -> SimpleNamespace:
+    """A spatial solution's table as :func:`_results` reads a planar one's: ``columns``,
+    ``units`` (SI, of each column) and ``model`` (whose file's units ``--units model`` uses)."""
+    return SimpleNamespace(columns=sol.columns(), units=sol.units(), model=sol.model)
 
 
 def _results(sol, summ: dict, fmt: str, table_units: str = "si") -> dict:
@@ -969,8 +974,7 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     check_outdir(outdir)
     rtol, atol = tolerances(rtol, atol, ("--rtol", "--atol"))
     mech = io.load_model(model, allow_outside=allow_outside)
-    for given, what in ((report, "--report"), (fmt != "csv", "--format parquet"),
-                        (table_units != "si", "--units model"),
+    for given, what in ((fmt != "csv", "--format parquet"),
                         (_backend(ctx, backend) == "compiled", "--backend compiled")):
         if given:
             not_yet(mech, f"simulate {what}")
@@ -995,10 +999,11 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
         summ, text = spatial_cli.simulation(sol, integration(sol))
-        sol = SimpleNamespace(columns=sol.columns())
+        rows = _spatial_table(sol)
     else:
         summ = simulation_summary(sol, design.summary(sol))
         text = summary_text(summ) + "\n" + speed_text(summ, mech)
+        rows = sol
     sim = summ["simulation"]
     text = text + (
         f"  simulation: free joints {', '.join(sim['free_joints'])}; {sim['method']} "
@@ -1011,12 +1016,13 @@ def simulate(ctx, model, outdir, duration, samples, rtol, atol, method, fmt, rep
         + "".join(f"\n  free coordinates switched to {', '.join(sw['free_joints'])} at "
                   f"t = {sw['t_s']:.6g} s (a dead point of the previous ones)"
                   for sw in sim["coordinate_switches"]))
-    files = _results(sol, summ, fmt, table_units)
+    files = _results(rows, summ, fmt, table_units)
     if report:
         from . import plots as plots_mod
         from . import report as report_mod
         files.update(report_mod.outputs(sol, summ))
-        files.update(plots_mod.outputs(sol))
+        if mech.space != "spatial":   # a spatial page's figures: analyze --plots (below)
+            files.update(plots_mod.outputs(sol))
     written = _write_results(outdir, files)
     click.echo(text)
     click.echo(f"wrote {', '.join(map(str, written))}")
@@ -1053,7 +1059,8 @@ def equilibrium(model, as_json, at_start, allow_outside):
 def modes(model, as_json, report, outdir, at_start, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start,
+                      report=report)
     if report:
         from . import design, modal as eq_mod
         from .analysis import analyze as run
@@ -1065,7 +1072,12 @@ def modes(model, as_json, report, outdir, at_start, allow_outside):
             # the mode's motion, analyzed and shown as linkdyn analyze --report shows a run
             moving = eq_mod.mode_motion(md, int(k))
             sol = run(moving, np.linspace(0.0, moving.duration, 121))
-            page = render(sol, design.summary(sol))
+            if moving.space == "spatial":
+                from .spatial import cli as spatial_cli
+                summ = spatial_cli.summary(sol)
+            else:
+                summ = design.summary(sol)
+            page = render(sol, summ)
             files[f"mode{k + 1}.html"] = lambda path, page=page: Path(path).write_text(
                 page, encoding="utf-8")
         if not files:
@@ -1076,12 +1088,13 @@ def modes(model, as_json, report, outdir, at_start, allow_outside):
             click.echo(f"wrote {', '.join(map(str, written))}")
 
 
-def _equilibrium(model, as_json, allow_outside, with_modes, at_start):
+def _equilibrium(model, as_json, allow_outside, with_modes, at_start, report=False):
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
-    not_yet(mech, "modes" if with_modes else "equilibrium")
     eq = eq_mod.equilibrium(mech, search=not at_start)
+    if report:      # before anything is printed: what --report cannot animate
+        eq_mod.animatable(eq)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))
@@ -1156,8 +1169,11 @@ def reproduce(name, outdir):
               help="File to write [default: the model's name with .xml, .svg or .dxf].")
 @click.option("--at", type=float, default=0.0, show_default=True,
               help="Time in s of the pose drawn (svg, dxf) or the MJCF's bodies are placed at.")
+@click.option("--plane", type=click.Choice(["xy", "yz", "zx", "xz", "yx", "zy"]),
+              help="svg, dxf of a spatial model: the plane it is projected on, its first axis "
+                   "drawn right, its second up [default: xy].")
 @_ALLOW_OUTSIDE
-def export(model, to, output, at, allow_outside):
+def export(model, to, output, at, plane, allow_outside):
     """Write MODEL as a MuJoCo model (MJCF) or its drawing (SVG, DXF) for CAD."""
     from . import io
     from .io.export import FORMATS, export as run
@@ -1166,9 +1182,7 @@ def export(model, to, output, at, allow_outside):
     out = Path(output) if output else Path(Path(model).stem + FORMATS[to])
     check_file(out)
     mech = io.load_model(model, allow_outside=allow_outside)
-    if to != "mjcf":
-        not_yet(mech, f"export --to {to}")
-    done = run(mech, to, at=at)
+    done = run(mech, to, at=at, plane=plane)
     write_file(out, done.text)
     for note in done.notes:
         click.echo(note)

@@ -16,6 +16,12 @@ generalized inertia), with the drivers held at their position at t = 0 and the l
   ``|s| / 2 pi``, damping ratio ``-Re s / |s|``; undamped (``C = 0``), the symmetric problem
   ``K v = w^2 H v``. Stable: every ``Re s < 0`` (undamped: every ``w^2 > 0``).
 
+Both spaces run the same Newton's method and eigen-solver: a spatial model (``space =
+"spatial"``) takes the stages of :mod:`linkdyn.spatial.forward` (its partition, start and
+``System.reduced``) through :func:`linkdyn.forward.stages`, as ``simulate`` does; its free
+coordinates and mode shapes are the named joint coordinates (``J1``, ``J3.1``, ``J2.s``; a
+spherical joint's have no names and no rows in the shapes).
+
 Everything is SI (rad, m, N m, N, kg m^2, Hz); the command line prints in the file's units.
 """
 
@@ -27,7 +33,7 @@ import numpy as np
 
 from . import joints as jk
 from .errors import AssemblyError, ModelError
-from .forward import Partition, start_state, System, check_inertia, partition
+from .forward import stages
 from .kinematics.positions import driver_values
 from .model import Driver, Model, point_spread
 from .motion import ExpressionMotion
@@ -57,11 +63,14 @@ class Equilibrium:
     ----------
     model : Model
     free : tuple[str, ...]
-        The free joints, in the order of every array below.
+        The free joints (spatial: joint coordinates, ``J1``, ``J3.1``), in the order of every
+        array below.
     q : ndarray (f,)
         Their coordinates at equilibrium, rad or m.
     joint_q : dict[str, float]
-        Every tree joint's coordinate there (drivers at their t = 0 value), rad or m.
+        Every tree joint's coordinate there (drivers at their t = 0 value), rad or m; of a
+        spatial model every named tree coordinate (``J1``, ``J3.1``; rotations from the
+        design pose).
     residual : ndarray (f,)
         ``h`` at the solution, N m or N (what an actuator in each free joint would still need).
     iterations : int
@@ -75,7 +84,7 @@ class Equilibrium:
         Each tree joint's coordinate change per unit change of each free coordinate (the
         closure's ``dq_dep/dq_f``), for the mode shapes of every joint.
     tree_joints : tuple[str, ...]
-        The joints of the rows of ``shape_map``.
+        The joints of the rows of ``shape_map`` (spatial: the named tree coordinates).
     """
 
     model: Model
@@ -144,11 +153,54 @@ class Modes:
         return np.nonzero((z >= 0) & (z < 1) & (self.frequencies > 0))[0]
 
 
-def _scales(part: Partition) -> np.ndarray:
-    """Size of a unit step of each free coordinate: 1 rad, or the mechanism's size in m."""
-    lay, topo = part.layout, part.layout.topo
-    return np.array([1.0 if jk.get(lay.kind[i]).angular else float(lay.size)
-                     for i in topo.driven[part.n_drivers:]])
+def _spatial(part) -> bool:
+    return getattr(part.model, "space", "planar") == "spatial"
+
+
+def _scales(part) -> np.ndarray:
+    """Size of a unit step of each free coordinate (nf,): 1 rad, or the mechanism's size in m."""
+    size = part.plan.size if _spatial(part) else part.layout.size
+    return np.where(stages(part.model).angular(part), 1.0, float(size))
+
+
+def _coordinates(part) -> tuple[tuple[str, ...], list[int]]:
+    """The named coordinates of the tree and their rows in the tree coordinates: each moving
+    body's joint (planar), each named joint coordinate ``J1``, ``J3.1`` (spatial)."""
+    if _spatial(part):
+        from .spatial.forward import coordinate_rows
+        from .spatial.reader import coordinate_names
+        rows = coordinate_rows(part.model, part.plan, coordinate_names(part.model.joints))
+        named = sorted(rows.items(), key=lambda kv: kv[1])
+        return tuple(n for n, _ in named), [r for _, r in named]
+    topo = part.layout.topo
+    return (tuple(part.model.joints[j].name for j in topo.tree_joint[1:]),
+            list(range(1, topo.n)))
+
+
+def _angular(model: Model, name: str) -> bool:
+    """Whether the coordinate ``name`` (a joint, or a spatial joint coordinate) is an angle."""
+    if getattr(model, "space", "planar") == "spatial":
+        from .spatial.reader import coordinate_names
+        return bool(coordinate_names(model.joints)[name][2])
+    return bool(jk.get(model.joint(name).kind).angular)
+
+
+def _forces(system, t, q, dqd):
+    """``h`` (nf, T), ``H`` (nf, nf, T), the drivers' efforts at ``qdd_f = 0`` (nd, T) and
+    whether each state closes clear of a singular position (T,), at the free coordinates
+    ``q`` and rates ``dqd`` (nf, T each), drivers held, by the space's ``System.reduced``."""
+    part, nd = system.part, system.nd
+    drivers = driver_values(part.model, t)
+    guess = system.guess(t, np.concatenate((drivers[0], q)))
+    if _spatial(part):
+        from .spatial import kinematics as sk
+        H, h, tau, m, _, err = system.reduced(t, q, dqd, guess)
+        dep, T = system.dep, len(t)
+        ok = (err <= sk.CLOSED) & (sk.rank_of(system.p, m.J[:T][:, :, dep], dep) == len(dep))
+        return h, H, tau[0, :, :nd].T, ok
+    H, h, tau, kin, _, dyn = system.reduced(t, q, dqd, guess, drivers)
+    ok = kin.valid[0] & (kin.pivot[0] > 1e-9) & (dyn.pivot[0] > 1e-9)
+    return h, H, tau[:nd, 0], ok
 
 
 def _held(model: Model) -> Model:
@@ -160,7 +212,7 @@ def _held(model: Model) -> Model:
                                         for d, v in zip(model.drivers, q0)))
 
 
-def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
+def _linear(system, q_f: np.ndarray, scale: np.ndarray):
     """``h``, ``H``, ``K``, ``C`` at ``(q_f, qd_f = 0)`` (E2), with the kinematics of the state:
     the state and its 8 f finite-difference neighbours in one batch."""
     nf = len(q_f)
@@ -173,11 +225,7 @@ def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
             dq[j, 1 + 4 * j + k] = s * DELTA * scale[j]
             dqd[j, 1 + 4 * nf + 4 * j + k] = s * DELTA * scale[j]
     t = np.zeros(dq.shape[1])
-    q = q_f[:, None] + dq
-    drivers = driver_values(system.part.model, t)
-    q_ind = np.concatenate((drivers[0], q))
-    H, h, tau, kin, _, dyn = system.reduced(t, q, dqd, system.guess(t, q_ind), drivers)
-    ok = kin.valid[0] & (kin.pivot[0] > 1e-9) & (dyn.pivot[0] > 1e-9)
+    h, H, tau, ok = _forces(system, t, q_f[:, None] + dq, dqd)
     if not np.all(ok):
         return None
 
@@ -188,7 +236,7 @@ def _linear(system: System, q_f: np.ndarray, scale: np.ndarray):
             a, b, c, d = (h[:, offset + 4 * j + k] for k in range(4))
             out[:, j] = (8.0 * (a - b) - (c - d)) / (12.0 * DELTA * scale[j])
         return out
-    return h[:, 0], H[:, :, 0], derivative(1), derivative(1 + 4 * nf), tau[:, 0, 0], kin
+    return h[:, 0], H[:, :, 0], derivative(1), derivative(1 + 4 * nf), tau[:, 0]
 
 
 def equilibrium(model: Model, *, free: tuple[str, ...] | None = None,
@@ -221,52 +269,143 @@ def equilibrium(model: Model, *, free: tuple[str, ...] | None = None,
         the stiffness is singular there (a neutral equilibrium: a mechanism with nothing to
         hold it, or a dead point).
     """
-    if not isinstance(model, Model):
-        from .errors import wrong_type
-        raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
-    src = model.source
-    part = partition(_held(model), free)
-    topo = part.layout.topo
-    nd, nf = part.n_drivers, len(part.free)
-    free_bodies = list(topo.driven[nd:])
-    scale = _scales(part)
-    q_tree = start_state(part)
-    q_f = q_tree[free_bodies].copy()
-    system = System(part, q_tree, np.zeros(topo.n))
-    check_inertia(part, system, q_tree)
-    state = np.concatenate((q_f, np.zeros(nf), [0.0]))
-    if system.accept(0.0, state) is None:
-        raise AssemblyError("the mechanism does not close at its start", file=src,
-                            time=0.0, fix="Start the free joints ([initial] q) elsewhere")
-    lin = _linear(system, q_f, scale)
-    if search:
-        q_f, lin, it = _newton(system, part, q_f, lin, scale)
-    elif lin is None:
-        raise AssemblyError(
-            "the start cannot be linearized: a dead point, or a loop that does not close "
-            "beside it", file=src, time=0.0, fix="Start the free joints ([initial] q) elsewhere")
-    else:
-        it = 0
-    h, H, K, C, tau, kin = lin
-    # every tree joint's coordinate and its share of the free ones' changes        (F2)
-    tree_joint = topo.tree_joint[1:]
-    names = tuple(model.joints[j].name for j in tree_joint)
-    q_now = system.ref[1]
-    S = system.ref[4]
-    ind, dep = list(topo.driven), list(topo.dependent)
-    shape_map = np.zeros((topo.n, nf))
-    shape_map[free_bodies] = np.eye(nf)
-    if S is not None and len(dep):
-        shape_map[dep] = S[:, nd:]
-    return Equilibrium(
-        model=model, free=part.free, q=q_f, iterations=it,
-        joint_q={n_: float(q_now[i]) for n_, i in zip(names, range(1, topo.n))},
-        residual=h, mass=H, stiffness=K, damping=C,
-        efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
-        shape_map=shape_map[1:], tree_joints=names)
+    return Linearization(model, free=free).equilibrium(search=search)
 
 
-def _newton(system: System, part: Partition, q_f: np.ndarray, lin, scale: np.ndarray):
+class Linearization:
+    """The set-up of :func:`equilibrium` and :func:`modes` for one mechanism, made once: its
+    free coordinates (the partition), its start assembled, the forward dynamics' ``System``
+    and the check of its mass matrix. Each :meth:`equilibrium` then runs only Newton's method
+    (E1) and the linearization (E2); given another ``model`` of the same mechanism (the same
+    bodies, joints and drivers: other loads, springs, masses, gravity or dimensions, as a
+    designer sweeping a spring's stiffness has), it re-reads that model's numbers with the
+    same free coordinates and starts from the last equilibrium found, a continuation along the
+    sweep, instead of from the file's start.
+
+    Parameters
+    ----------
+    model : Model
+        A mechanism with at least one free degree of freedom (as for ``simulate``).
+    free : tuple of str, optional
+        The free joints (spatial: joint coordinates) (default: ``[initial]``'s, else chosen as
+        ``simulate`` chooses).
+
+    Raises
+    ------
+    ModelError, AssemblyError
+        As :func:`equilibrium`, for what the set-up finds.
+
+    Examples
+    --------
+    >>> lin = Linearization(model)                                   # doctest: +SKIP
+    >>> [modes(lin.equilibrium(with_spring(model, k))).frequencies for k in ks]  # doctest: +SKIP
+    """
+
+    def __init__(self, model: Model, *, free: tuple[str, ...] | None = None):
+        if not isinstance(model, Model):
+            from .errors import wrong_type
+            raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
+        self._setup(model, free, None)
+
+    def __repr__(self) -> str:
+        return f"<Linearization of {self.model.name!r}: free {', '.join(self.free)}>"
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        """The free joints (spatial: joint coordinates), in the order of every array."""
+        return self.part.free
+
+    def _setup(self, model: Model, free, q_tree) -> None:
+        """The partition of ``model`` (free coordinates ``free``), its System and its start:
+        the tree coordinates ``q_tree`` (n,), else its own assembled start."""
+        st = stages(model)
+        part = st.partition(_held(model), free)
+        if q_tree is None:
+            q_tree = st.start_state(part)
+        system = st.System(part, q_tree, np.zeros(len(q_tree)))
+        st.check_inertia(part, system, q_tree)
+        self.model, self.part, self.system = model, part, system
+        self.free_rows = list(st.free_rows(part))
+        self.scale = _scales(part)
+        self.q_tree = np.array(q_tree, float)
+
+    def _same(self, model: Model) -> None:
+        """Refuse a model that is not this mechanism (field ``model``)."""
+        def shape(m):
+            return (getattr(m, "space", "planar"), tuple(b.name for b in m.bodies),
+                    tuple((j.name, j.kind, j.body_a, j.body_b) for j in m.joints),
+                    tuple(d.joint for d in m.drivers))
+        if not isinstance(model, Model):
+            from .errors import wrong_type
+            raise wrong_type("model", model, "a linkdyn Model (linkdyn.load(path))")
+        if shape(model) != shape(self.model):
+            raise ModelError(
+                f"this Linearization is set up for {self.model.name!r}: {model.name!r} has "
+                "other bodies, joints or drivers", file=model.source, field="model",
+                fix="Set up a new Linearization(model) for another mechanism")
+
+    def equilibrium(self, model: Model | None = None, *, search: bool = True) -> Equilibrium:
+        """The static equilibrium and the linearization about it (:func:`equilibrium`).
+
+        Parameters
+        ----------
+        model : Model, optional
+            The same mechanism with other numbers (loads, springs, masses, gravity,
+            dimensions); solved from the last equilibrium found. Default: the set-up's own
+            model, from its start (the last equilibrium found, after the first).
+        search : bool
+            False: no Newton step, the linearization at the start (:func:`equilibrium`).
+
+        Returns
+        -------
+        Equilibrium
+        """
+        if model is not None and model is not self.model:
+            self._same(model)
+            self._setup(model, self.part.free, self.q_tree)
+        model, part, system, scale = self.model, self.part, self.system, self.scale
+        src = model.source
+        nd, nf, free_rows = part.n_drivers, len(part.free), self.free_rows
+        q_tree = self.q_tree
+        q_f = q_tree[free_rows].copy()
+        system.set_reference(0.0, q_tree, np.zeros_like(q_tree))
+        state = np.concatenate((q_f, np.zeros(nf), [0.0]))
+        if system.accept(0.0, state) is None:
+            raise AssemblyError("the mechanism does not close at its start", file=src,
+                                time=0.0, fix="Start the free joints ([initial] q) elsewhere")
+        lin = _linear(system, q_f, scale)
+        if search:
+            q_f, lin, it = _newton(system, part, q_f, lin, scale)
+        elif lin is None:
+            raise AssemblyError(
+                "the start cannot be linearized: a dead point, or a loop that does not close "
+                "beside it", file=src, time=0.0,
+                fix="Start the free joints ([initial] q) elsewhere")
+        else:
+            it = 0
+        h, H, K, C, tau = lin
+        # every tree coordinate's value and its share of the free ones' changes      (F2)
+        names, rows = _coordinates(part)
+        q_now, S, dep = system.ref[1], system.ref[4], system.dep
+        shape_map = np.zeros((len(q_now), nf))
+        shape_map[free_rows] = np.eye(nf)
+        if S is not None and len(dep):
+            shape_map[dep] = S[:, nd:]
+        if search:
+            self.q_tree = np.array(q_now, float)       # the next solve's start
+        return Equilibrium(
+            model=model, free=part.free, q=q_f, iterations=it,
+            joint_q={n_: float(q_now[r]) for n_, r in zip(names, rows)},
+            residual=h, mass=H, stiffness=K, damping=C,
+            efforts={model.drivers[k].joint: float(tau[k]) for k in range(nd)},
+            shape_map=shape_map[rows], tree_joints=names)
+
+    def modes(self, model: Model | None = None, *, search: bool = True) -> "Modes":
+        """:func:`modes` about :meth:`equilibrium` (``model``, ``search`` as there)."""
+        return modes(self.equilibrium(model, search=search))
+
+
+def _newton(system, part, q_f: np.ndarray, lin, scale: np.ndarray):
     """Newton's method on ``h(q_f, 0) = 0`` (E1) from ``q_f``, whose :func:`_linear` is
     ``lin``: the equilibrium, its ``_linear`` and the steps taken."""
     src, nf = part.model.source, len(q_f)
@@ -277,7 +416,7 @@ def _newton(system: System, part: Partition, q_f: np.ndarray, lin, scale: np.nda
                 "no equilibrium found: Newton's method reached positions the mechanism cannot "
                 "take (a dead point or a loop that does not close)", file=src,
                 fix="Start the free joints ([initial] q) nearer the equilibrium")
-        h, H, K, C, tau, kin = lin
+        h, H, K, C, tau = lin
         with np.errstate(all="ignore"):
             try:
                 step = np.linalg.solve(K, -h)
@@ -359,6 +498,29 @@ def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) ->
                  stable=stable)
 
 
+def animatable(eq: Equilibrium) -> None:
+    """Refuse to animate the modes about ``eq`` (:func:`mode_motion`) where no driver can move
+    its free coordinates: a spatial model's coordinate of a joint of two or more freedoms
+    (``J3.1`` of a universal joint; a driver drives a whole joint of one freedom).
+
+    Raises
+    ------
+    ModelError
+        Field ``--report``, "not yet for spatial models".
+    """
+    model = eq.model
+    if getattr(model, "space", "planar") != "spatial":
+        return
+    joints = {j.name for j in model.joints}
+    coupled = [c for c in eq.free if c not in joints]
+    if coupled:
+        raise ModelError(
+            f"a mode's motion (modes --report) is not yet for spatial models whose free "
+            f"coordinates are one of a joint's several ({', '.join(coupled)}): a driver "
+            "drives a whole joint of one freedom", file=model.source, field="--report",
+            fix="Drop --report: the frequencies and shapes are printed")
+
+
 #: The largest free coordinate's swing in an animated mode: rad, or this part of the size.
 MODE_SWING = 0.1
 
@@ -386,14 +548,14 @@ def mode_motion(md: Modes, k: int, *, swing: float = MODE_SWING) -> Model:
     """
     eq = md.equilibrium
     model, f, v = eq.model, float(md.frequencies[k]), md.shapes[:, k]
+    animatable(eq)
     if k not in md.oscillating:
         raise ModelError(f"mode {k + 1} does not swing ({f:g} Hz, damping ratio "
                          f"{md.damping_ratios[k]:g})", field="modes",
                          fix="Animate a mode with a damping ratio from 0 to below 1")
     top = int(np.argmax(np.abs(v)))
-    kinds = {j.name: j.kind for j in model.joints}
     size = float(point_spread(np.array([p for b in model.bodies for p in b.points.values()])))
-    angular = jk.get(kinds[eq.free[top]]).angular
+    angular = _angular(model, eq.free[top])
     a = swing * (1.0 if angular else size)
     w = float(2 * np.pi * f)
     # q_j(t) = q_eq_j + a v_j sin(w t)                                              (E3)
@@ -422,11 +584,12 @@ def _text(names, q) -> str:
 # --- what a person reads: the file's units, each number with its unit ----------------------
 
 def _unit(model: Model, joint: str) -> tuple[str, float, bool]:
-    """The file's unit of joint ``joint``'s coordinate, its size in SI, and whether an angle
-    (:class:`linkdyn.units.Units`, the one formatter of what a person reads)."""
-    from .units import Units, coordinate
-    quantity = coordinate(model, joint)
-    return (*Units.of(model).unit(quantity), quantity == "angle")
+    """The file's unit of the coordinate ``joint`` (a joint, or a spatial joint coordinate),
+    its size in SI, and whether an angle (:class:`linkdyn.units.Units`, the one formatter of
+    what a person reads)."""
+    from .units import Units
+    angular = _angular(model, joint)
+    return (*Units.of(model).unit("angle" if angular else "length"), angular)
 
 
 def as_dict(eq: Equilibrium, md: Modes | None = None) -> dict:
@@ -456,7 +619,7 @@ def text(eq: Equilibrium, md: Modes | None = None) -> str:
         tag = "  (free)" if j in eq.free else ""
         lines.append(f"  {j} = {eq.joint_q[j] / si:.6g} {unit}{tag}")
     for j, v in eq.efforts.items():
-        unit = "N m" if jk.get(m.joint(j).kind).angular else "N"
+        unit = "N m" if _angular(m, j) else "N"
         lines.append(f"  holding effort of the driver at {j}: {v:.6g} {unit}")
     res = ", ".join(f"{v:.2e} {'N m' if _unit(m, j)[2] else 'N'}"
                     for j, v in zip(eq.free, eq.residual))

@@ -19,6 +19,12 @@ frame (x right, y up):
 unit, y flipped by one ``scale(1 -1)`` group), :func:`dxf` as ASCII DXF R12 (``LINE``,
 ``CIRCLE``, ``POLYLINE``/``VERTEX``; ``$INSUNITS`` names the unit). Coordinates are written
 with round-trip precision.
+
+A spatial model (``space = "spatial"``) is drawn as its projection on a named plane of the
+global axes, ``plane`` (default ``"xy"``): its first axis drawn to the right, its second up
+(``"xy"`` the view from +z, ``"xz"`` the one from -y, ...), every point, outline (of the
+projected points), guide and path projected so; the files say which plane they show (an SVG
+comment, a DXF ``999`` comment).
 """
 
 from __future__ import annotations
@@ -29,11 +35,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import joints as jk
+from ..errors import ModelError
 from ..model import GROUND, Model
 from .units import LENGTH_UNITS
 
 #: DXF ``$INSUNITS`` code of each length unit.
 DXF_UNITS = {"in": 1, "mm": 4, "cm": 5, "m": 6}
+
+#: The planes a spatial model is projected on: the global axes drawn right and up.
+PLANES = {"xy": (0, 1), "yz": (1, 2), "zx": (2, 0), "xz": (0, 2), "yx": (1, 0), "zy": (2, 1)}
 
 
 @dataclass(frozen=True)
@@ -57,6 +67,9 @@ class Drawing:
         ``BODY.POINT`` -> its path over the run.
     radius : float
         Joint circle radius (2% of the drawing's size), in ``unit``.
+    plane : str or None
+        The plane of the global axes a spatial model is projected on (``"xy"``: x right, y
+        up); None for a planar model, drawn in its own plane.
     """
 
     unit: str
@@ -66,9 +79,18 @@ class Drawing:
     pivots: dict
     paths: dict
     radius: float
+    plane: str | None = None
+
+    def describe(self) -> str:
+        """What the drawing shows, as its files say: its time, unit and plane."""
+        view = "" if self.plane is None else (
+            f"; the projection of a spatial model on its {self.plane} plane ({self.plane[0]} "
+            f"right, {self.plane[1]} up)")
+        return f"linkdyn export at t = {self.at!r} s; coordinates in {self.unit}{view}"
 
 
-def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Drawing:
+def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None,
+            plane: str | None = None) -> Drawing:
     """The drawing of ``model`` at the time ``at`` and its traced paths over the times ``t``.
 
     Parameters
@@ -76,6 +98,9 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
     model : Model
     at : float
         Time of the pose drawn, s.
+    plane : str, optional
+        A spatial model's projection plane, a key of :data:`PLANES` (default ``"xy"``); a
+        planar model is drawn in its plane (only None or ``"xy"``).
     t : array_like (T,), optional
         Times of the paths, s; default the run ``linkdyn analyze`` solves
         (:func:`linkdyn.sampling.times` with no options).
@@ -84,6 +109,8 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
 
     Raises
     ------
+    ModelError
+        An unknown ``plane``, or another plane than xy for a planar model (field ``--plane``).
     AssemblyError
         The mechanism cannot be assembled at ``at`` or during the run.
     """
@@ -95,16 +122,23 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
         sol = analyze(model, np.array([float(at)]))
     if run is None:
         run = analyze(model, times(model, None, None, None) if t is None else t)
+    spatial = model.space == "spatial"
+    axes = _axes(plane, spatial)
     scale = 1.0 / LENGTH_UNITS[model.length_unit]         # m -> the file's unit
 
-    def where(body, point):  # (2,) at ``at``
+    def full(body, point):  # (2,) or (3,) at ``at``, global, in the file's unit
         if body == GROUND:
             return np.asarray(model.body(GROUND).points[point], float) * scale
         return np.asarray(sol.point(body, point)[-1], float) * scale
 
+    def where(body, point):  # (2,) drawn: in the plane
+        return full(body, point)[..., axes]
+
     lines = {}
     for b in model.moving_bodies:
-        shape, outline = body_shape(b.points)
+        # a planar body's outline from its own points; a spatial one's projection's
+        shape, outline = body_shape({p: where(b.name, p) for p in b.points} if spatial
+                                    else b.points)
         P = np.array([where(b.name, p) for p in outline])
         lines[b.name] = [np.vstack([P, P[:1]]) if shape == "polygon" else P] if len(P) > 1 else []
     joints = {j.name: where(j.body_b, j.point_b) for j in model.joints}
@@ -113,7 +147,7 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
         for body, point in ((j.body_a, j.point_a), (j.body_b, j.point_b)):
             if body == GROUND:
                 pivots[f"{GROUND}.{point}"] = where(GROUND, point)
-    paths = {pid: np.asarray(run.point(*pid.split(".", 1)), float) * scale
+    paths = {pid: (np.asarray(run.point(*pid.split(".", 1)), float) * scale)[:, axes]
              for pid in traced_points(model)}
     every = [x[None] for x in (*joints.values(), *pivots.values())]
     every += [P for ps in lines.values() for P in ps] + list(paths.values())
@@ -123,16 +157,45 @@ def drawing(model: Model, *, at: float = 0.0, t=None, sol=None, run=None) -> Dra
     # a ground pivot's triangle: apex at the pivot, base 2.5 r below it
     lines[GROUND] = [np.array([c, c + (-1.5 * r, -2.5 * r), c + (1.5 * r, -2.5 * r), c])
                      for c in pivots.values()]
-    # a fixed guide (a joint with an axis on the ground): the line o + s e over the travel of
-    # the sliding point during the run, s = (r_B - o) . e, 2 r beyond each end
+    # a fixed guide (a joint that slides, on the ground): the line o + s e over the travel of
+    # the sliding point during the run, s = (r_B - o) . e, 2 r beyond each end (e the axis,
+    # global: the ground's frame is the global one), drawn in the plane
     for j in model.joints:
-        if j.body_a == GROUND and "axis" in jk.get(j.kind).keys:
-            o = where(GROUND, j.point_a)
+        if j.body_a == GROUND and _slides(j.kind, spatial):
+            o = full(GROUND, j.point_a)
             e = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
             travel = (np.asarray(run.point(j.body_b, j.point_b)) * scale - o) @ e
             lo, hi = float(np.min(travel)) - 2 * r, float(np.max(travel)) + 2 * r
-            lines[GROUND].append(np.array([o + lo * e, o + hi * e]))
-    return Drawing(model.length_unit, float(sol.t[-1]), lines, joints, pivots, paths, r)
+            lines[GROUND].append(np.array([o + lo * e, o + hi * e])[:, axes])
+    return Drawing(model.length_unit, float(sol.t[-1]), lines, joints, pivots, paths, r,
+                   plane=PLANES_NAME.get(axes) if spatial else None)
+
+
+#: Each projection's name by its axes.
+PLANES_NAME = {v: k for k, v in PLANES.items()}
+
+
+def _axes(plane: str | None, spatial: bool) -> tuple[int, int]:
+    """The global axes drawn right and up for ``plane`` (:data:`PLANES`)."""
+    if plane is None:
+        return (0, 1)
+    if plane not in PLANES:
+        raise ModelError(f"unknown plane '{plane}'", field="--plane",
+                         fix="Give --plane " + ", ".join(PLANES))
+    if not spatial and plane != "xy":
+        raise ModelError(f"a planar model is drawn in its own plane (xy), not {plane}",
+                         field="--plane", fix="Drop --plane")
+    return PLANES[plane]
+
+
+def _slides(kind: str, spatial: bool) -> bool:
+    """Whether a joint of ``kind`` slides along its axis (a guide when on the ground): planar
+    kinds with an axis (prismatic, slot), spatial ones with a length coordinate (prismatic,
+    cylindrical)."""
+    if spatial:
+        from ..spatial import joints as sj
+        return any(not ang for _, ang in sj.get(kind).coordinates_named)
+    return "axis" in jk.get(kind).keys
 
 
 def _n(x) -> str:
@@ -165,7 +228,7 @@ def svg(d: Drawing) -> str:
     out = ['<?xml version="1.0" encoding="UTF-8"?>',
            f'<svg xmlns="http://www.w3.org/2000/svg" width="{_n(w * mm)}mm" '
            f'height="{_n(h * mm)}mm" viewBox="{_n(lo[0])} {_n(-hi[1])} {_n(w)} {_n(h)}">',
-           f"<!-- linkdyn export at t = {d.at!r} s; coordinates in {d.unit} -->",
+           f"<!-- {_xml(d.describe())} -->",
            f'<g transform="scale(1 -1)" fill="none" stroke="black" stroke-width="{stroke}">']
     for layer, polys in d.lines.items():
         out.append(f'<g id="layer-{_xml(layer)}">')
@@ -203,6 +266,8 @@ def dxf(d: Drawing) -> str:
     layers = ([layer_name(n) for n in d.lines] + ["JOINTS"]
               + [layer_name(f"path-{pid}") for pid in d.paths])
     layers = list(dict.fromkeys(layers))
+    if d.plane is not None:       # a DXF comment: the projection a spatial model's drawing is
+        put((999, d.describe()))
     put((0, "SECTION"), (2, "HEADER"), (9, "$ACADVER"), (1, "AC1009"),
         (9, "$INSUNITS"), (70, DXF_UNITS[d.unit]), (0, "ENDSEC"))
     put((0, "SECTION"), (2, "TABLES"), (0, "TABLE"), (2, "LTYPE"), (70, 1),

@@ -26,7 +26,7 @@ class Exported:
     notes: tuple[str, ...] = ()
 
 
-def export(model: Model, to: str, *, at: float = 0.0) -> Exported:
+def export(model: Model, to: str, *, at: float = 0.0, plane: str | None = None) -> Exported:
     """``model`` as a ``to`` file at the time ``at``.
 
     Parameters
@@ -38,12 +38,16 @@ def export(model: Model, to: str, *, at: float = 0.0) -> Exported:
         the model file's length unit).
     at : float
         Time, s.
+    plane : str, optional
+        The drawing of a spatial model: the plane of the global axes it is projected on
+        (:data:`linkdyn.io.drawing.PLANES`, default ``"xy"``: x right, y up).
 
     Raises
     ------
     ModelError
         An unknown format or ``at`` not finite (field ``--to``, ``--at``); a joint MJCF
-        cannot close (naming it).
+        cannot close (naming it); a ``plane`` with MJCF, unknown, or not xy for a planar
+        model (field ``--plane``).
     AssemblyError
         The mechanism cannot be assembled at ``at`` (or, for a drawing, during the run).
     """
@@ -54,6 +58,9 @@ def export(model: Model, to: str, *, at: float = 0.0) -> Exported:
         raise ModelError(f"--at must be a finite time in s, got {at}", field="--at",
                          fix="Give --at a time in s, e.g. --at 0")
     if to == "mjcf":
+        if plane is not None:
+            raise ModelError("--plane is the projection of a drawing (svg, dxf); an MJCF "
+                             "keeps every axis", field="--plane", fix="Drop --plane")
         from .mjcf import mjcf
         out = mjcf(model, at=at)
         notes = tuple(f"left out of the MJCF (MuJoCo cannot hold it): {x}" for x in out.omitted)
@@ -63,7 +70,8 @@ def export(model: Model, to: str, *, at: float = 0.0) -> Exported:
             f"MJCF in SI units; {frame}; "
             "cut joints closed by connect: " + (", ".join(out.cut) or "none"),))
     from . import drawing
-    d = drawing.drawing(model, at=at)
+    d = drawing.drawing(model, at=at, plane=plane)
     text = drawing.svg(d) if to == "svg" else drawing.dxf(d)
-    return Exported(text, (f"drawing at t = {d.at:g} s in {d.unit}; paths of "
+    view = "" if d.plane is None else f", projected on the {d.plane} plane"
+    return Exported(text, (f"drawing at t = {d.at:g} s in {d.unit}{view}; paths of "
                            + (", ".join(d.paths) or "no traced point"),))

@@ -131,6 +131,10 @@ def model_to_dict(model: Model, *, table_files: dict[str, str] | None = None) ->
         out["bodies"], out["joints"] = _bodies(model, L), _joints(model, L, A)
 
     def scale_of(joint: str) -> float:
+        # a spatial [initial] names joint coordinates (J3.1, J2.s), a driver its joint
+        ang = _spatial.angular(model, joint) if spatial else None
+        if ang is not None:
+            return A if ang else L
         return A if kinds.get(model.joint(joint).kind).angular else L
 
     out["drivers"] = [{"joint": d.joint, "motion": _motion_dict(d.motion, scale_of(d.joint),

@@ -43,6 +43,16 @@ class Redundancy:
                 int(self.basis.shape[2]), "undetermined_components": list(self.components)}
 
 
+#: The SI unit of the results' columns by their prefix (``omega_x_<body>``: ``omega``) or
+#: whole name.
+_COLUMN_UNITS = {
+    "t": "s", "quat": "1", "omega": "rad/s", "alpha": "rad/s^2", "tau": "N m", "force": "N",
+    **{f"F{c}": "N" for c in "xyz"}, **{f"M{c}": "N m" for c in "xyz"},
+    **{c: "m" for c in "xyz"}, **{f"v{c}": "m/s" for c in "xyz"},
+    **{f"a{c}": "m/s^2" for c in "xyz"},
+    "kinetic_energy": "J", "potential_energy": "J", "work": "J"}
+
+
 class SpatialSolution:
     """Kinematics, efforts and reactions of a spatial model at the times ``t`` (SI, global).
 
@@ -163,6 +173,25 @@ class SpatialSolution:
     def columns(self) -> dict:
         """The results table: column name -> (T,) array (docs/conventions.md)."""
         return dict(self._columns)
+
+    def units(self) -> dict:
+        """The SI unit of every column of :meth:`columns` (``'rad'``, ``'m/s'``, ``'N m'``,
+        ``'1'`` for a quaternion's components), for ``--units model``
+        (:func:`linkdyn.units.model_columns`)."""
+        angular = {f"{j.name}{suffix}": ang for j in self.model.joints
+                   for suffix, ang in self.plan.kinds[
+                       [x.name for x in self.model.joints].index(j.name)].coordinates_named}
+        out = {}
+        for name in self._columns:
+            # every column but t and the energies is <prefix>_<rest>, the prefix one of
+            # _COLUMN_UNITS or q, qd, qdd of a joint coordinate
+            prefix, _, rest = name.partition("_")
+            if prefix in ("q", "qd", "qdd") and rest in angular:
+                base = "rad" if angular[rest] else "m"
+                out[name] = base + {"q": "", "qd": "/s", "qdd": "/s^2"}[prefix]
+            else:
+                out[name] = _COLUMN_UNITS.get(name, _COLUMN_UNITS.get(prefix, ""))
+        return out
 
     def to_dataframe(self):
         import pandas as pd

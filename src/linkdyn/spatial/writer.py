@@ -54,3 +54,13 @@ def joints(model, num, vec) -> list[dict]:
             entry[key] = vec(getattr(j, key))
         out.append(entry)
     return out
+
+
+def angular(model, name: str) -> bool | None:
+    """Whether the joint coordinate ``name`` (``J1``, ``J3.1``, ``J2.s``, as ``[initial]``
+    names it) is an angle; None when no joint of ``model`` has it."""
+    for j in model.joints:
+        for suffix, ang in sj.get(j.kind).coordinates_named:
+            if f"{j.name}{suffix}" == name:
+                return bool(ang)
+    return None

@@ -1,0 +1,217 @@
+"""Command-line options on spatial models that once exited with "not yet for spatial models"
+(issue 24): ``--units model`` of ``analyze`` and ``simulate``, checked against the SI table
+of the same run written by the same command; ``export --to svg|dxf``, the projection on a
+named plane, read back by the SVG and DXF readers of test_export and checked against
+``analyze``'s results.csv."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import linkdyn
+from linkdyn.cli import main
+from test_export import read_dxf, read_svg
+
+
+def table(path):
+    names = path.read_text().splitlines()[0].split(",")
+    return dict(zip(names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2).T))
+
+
+#: Each unit of a mm, deg file in SI, written out here
+SIZE = {"s": 1.0, "1": 1.0, "N": 1.0, "N m": 1.0, "J": 1.0, "mm": 1e-3, "mm/s": 1e-3,
+        "mm/s^2": 1e-3, "deg": math.pi / 180, "deg/s": math.pi / 180,
+        "deg/s^2": math.pi / 180}
+
+
+def both(tmp_path, args):
+    """The SI table and the --units model table of one command."""
+    out = {}
+    for units in ("si", "model"):
+        res = CliRunner().invoke(main, [*args, "-o", str(tmp_path / units), "--units", units])
+        assert res.exit_code == 0, res.output
+        out[units] = table(tmp_path / units / "results.csv")
+    return out["si"], out["model"]
+
+
+def check_scaled(si, model):
+    """Every model-units column is its SI column over its unit's size, in the same order."""
+    assert len(si) == len(model)
+    for (name, v), (head, w) in zip(si.items(), model.items()):
+        base, unit = head[:-1].split(" [")
+        assert base == name
+        np.testing.assert_allclose(w * SIZE[unit], v, rtol=1e-14, atol=0, err_msg=head)
+
+
+def test_analyze_units_model_writes_the_files_units(tmp_path):
+    path = linkdyn.example_path("spatial_slider_crank")         # a mm, deg file
+    si, model = both(tmp_path, ["analyze", str(path), "--samples", "7"])
+    check_scaled(si, model)
+    # each quantity in its unit: angles deg, the slider's travel mm, forces N
+    for head in ("q_J1 [deg]", "qd_J1 [deg/s]", "q_J3.1 [deg]", "q_J4 [mm]", "qd_J4 [mm/s]",
+                 "omega_x_crank [deg/s]", "alpha_z_crank [deg/s^2]", "quat_w_crank [1]",
+                 "x_crank.B [mm]", "vz_crank.B [mm/s]", "ax_crank.B [mm/s^2]", "tau_J1 [N m]",
+                 "Fx_J2 [N]", "Mx_J1 [N m]", "kinetic_energy [J]", "t [s]"):
+        assert head in model, head
+
+
+def test_simulate_units_model_writes_the_files_units(tmp_path):
+    path = linkdyn.example_path("rsur_release")
+    si, model = both(tmp_path, ["simulate", str(path), "--samples", "3", "--duration", "0.02"])
+    check_scaled(si, model)
+    assert "work [J]" in model and "q_J1 [deg]" in model
+    # the free crank starts at [initial] q = 20 deg
+    assert model["q_J1 [deg]"][0] == pytest.approx(20.0, abs=1e-9)
+
+
+# ------------------------------------------------------------------ export --to svg|dxf
+
+AXES = {"xy": (0, 1), "xz": (0, 2), "zy": (2, 1)}
+
+
+@pytest.mark.parametrize("plane", [None, "xz", "zy"])
+def test_a_spatial_drawing_is_its_projection_on_the_plane(plane, tmp_path):
+    path = linkdyn.example_path("spatial_slider_crank")         # mm; a guide on the ground
+    model = linkdyn.load(path)
+    at = 0.01
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    runs = table(tmp_path / "out" / "results.csv")
+    pose = linkdyn.analyze(model, np.array([at])).columns()
+    a, b = (c for c in AXES[plane or "xy"])
+    name = plane or "xy"
+
+    def xy(body, point, cols):    # the point in the plane, mm
+        return np.array([cols[f"{'xyz'[k]}_{body}.{point}"] for k in (a, b)]) / 1e-3
+
+    def ground(point):
+        return np.asarray(model.body("ground").points[point])[[a, b]] / 1e-3
+    for fmt in ("svg", "dxf"):
+        out = tmp_path / f"d.{fmt}"
+        res = CliRunner().invoke(main, ["export", str(path), "--to", fmt, "--at", str(at),
+                                        "-o", str(out)] + (["--plane", plane] if plane else []))
+        assert res.exit_code == 0, res.output
+        assert f"projected on the {name} plane" in res.output
+        text = out.read_text()
+        # the file says which projection it holds
+        assert f"the projection of a spatial model on its {name} plane ({name[0]} right, " \
+               f"{name[1]} up)" in text
+        if fmt == "svg":
+            joints, paths, lines, _ = read_svg(out)
+            guides = lines["ground"]
+        else:
+            header, ents = read_dxf(out)
+            assert header["$INSUNITS"] == "4"
+            joints = [(float(e[10]), float(e[20])) for e in ents
+                      if e[0] == "CIRCLE" and e[8] == "JOINTS"]
+            joints = {j.name: min(joints, key=lambda c: np.hypot(*(
+                np.array(c) - (xy(j.body_b, j.point_b, pose)[:, 0] if j.body_b != "ground"
+                               else ground(j.point_b))))) for j in model.joints}
+            guides = [tuple(float(e[c]) for c in (10, 20, 11, 21)) for e in ents
+                      if e[0] == "LINE" and e[8] == "GROUND"]
+        # every joint at its second body's point at --at, projected
+        for j in model.joints:
+            want = (xy(j.body_b, j.point_b, pose)[:, 0] if j.body_b != "ground"
+                    else ground(j.point_b))
+            np.testing.assert_allclose(joints[j.name], want, rtol=0, atol=1e-9)
+        # the slider's fixed guide J4 (prismatic on the ground): a line through the travel of
+        # slider.C over the run, projected
+        travel = xy("slider", "C", runs).T
+        lo, hi = travel[np.argmin(travel @ (travel[-1] - travel[0]))], travel[np.argmax(
+            travel @ (travel[-1] - travel[0]))]
+        e = hi - lo
+
+        def on(p):    # p on the line through the travel, between beyond both ends
+            v = np.array(p) - lo
+            return abs(e[0] * v[1] - e[1] * v[0]) <= 1e-9 * (e @ e)
+        assert any(on(g[:2]) and on(g[2:]) and
+                   min((np.array(g[:2]) - lo) @ e, (np.array(g[2:]) - lo) @ e) < 0 and
+                   max((np.array(g[:2]) - lo) @ e, (np.array(g[2:]) - lo) @ e) > e @ e
+                   for g in guides)
+
+
+def test_the_drawing_of_a_spatial_model_traces_its_points(tmp_path):
+    path = linkdyn.example_path("stewart")
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    runs = table(tmp_path / "out" / "results.csv")
+    out = tmp_path / "s.svg"
+    res = CliRunner().invoke(main, ["export", str(path), "--to", "svg", "--plane", "zx",
+                                    "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    _, paths, _, _ = read_svg(out)
+    assert "platform.T" in paths
+    unit = linkdyn.load(path).length_unit
+    size = {"mm": 1e-3, "m": 1.0}[unit]
+    np.testing.assert_allclose(paths["platform.T"][:, 0], runs["z_platform.T"] / size,
+                               rtol=1e-15, atol=1e-12)
+    np.testing.assert_allclose(paths["platform.T"][:, 1], runs["x_platform.T"] / size,
+                               rtol=1e-15, atol=1e-12)
+
+
+def test_plane_refusals(tmp_path):
+    run = CliRunner().invoke
+    hoeken = str(linkdyn.example_path("hoeken"))
+    res = run(main, ["export", hoeken, "--to", "svg", "--plane", "xz", "-o",
+                     str(tmp_path / "h.svg")])
+    assert res.exit_code == 2 and "--plane" in res.output and "planar" in res.output
+    assert not (tmp_path / "h.svg").exists()
+    res = run(main, ["export", str(linkdyn.example_path("rsur")), "--to", "mjcf", "--plane",
+                     "xy", "-o", str(tmp_path / "r.xml")])
+    assert res.exit_code == 2 and "--plane" in res.output
+    res = run(main, ["export", hoeken, "--to", "svg", "--plane", "ab"])
+    assert res.exit_code == 2 and "--plane" in res.output
+    # a planar model's drawing in its own plane is as before: --plane xy changes nothing
+    plain, xy = tmp_path / "a.svg", tmp_path / "b.svg"
+    assert run(main, ["export", hoeken, "--to", "svg", "-o", str(plain)]).exit_code == 0
+    assert run(main, ["export", hoeken, "--to", "svg", "--plane", "xy", "-o",
+                      str(xy)]).exit_code == 0
+    assert plain.read_text() == xy.read_text() and "projection" not in plain.read_text()
+
+
+# ------------------------------------------------------------------ simulate --report
+
+def page_data(text: str) -> dict:
+    """The data block of a report page, each packed series (base64 of little-endian float64)
+    unpacked."""
+    import base64
+    import json
+    D = json.loads(text.split('<script id="linkdyn-data" type="application/json">', 1)[1]
+                   .split("</script>", 1)[0])
+
+    def unpack(v):
+        return np.frombuffer(base64.b64decode(v), dtype="<f8") if isinstance(v, str) else v
+    D["series"] = {k: unpack(v) for k, v in D["series"].items()}
+    D["t"] = unpack(D["t"])
+    return D
+
+
+def test_simulate_report_of_a_spatial_model_draws_the_simulated_motion(tmp_path):
+    path = linkdyn.example_path("rsur_release")
+    res = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path), "--samples",
+                                    "21", "--duration", "0.2", "--report"])
+    assert res.exit_code == 0, res.output
+    assert "report.html" in res.output
+    assert not list(tmp_path.glob("plot_*"))           # a spatial page's figures: --plots
+    text = (tmp_path / "report.html").read_text("utf-8")
+    assert "http://" not in text and "https://" not in text
+    D = page_data(text)
+    cols = table(tmp_path / "results.csv")
+    assert D["geom"]["dim"] == 3
+    np.testing.assert_array_equal(D["t"], cols["t"])
+    # the drawn points are the simulated ones, at every frame
+    moving = [pid for pid, p in D["geom"]["points"].items() if not p.get("static")]
+    assert "coupler.C" in moving
+    for pid in moving:
+        for c in "xyz":
+            np.testing.assert_allclose(D["geom"]["points"][pid][c], cols[f"{c}_{pid}"],
+                                       rtol=1e-5, atol=1e-9)
+    # the summary shows the integration's figures
+    assert "<h3>Simulation</h3>" in text and "energy balance drift (relative)" in text
+    import json
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert "report.html" in summary["files"]
