@@ -215,3 +215,21 @@ def test_simulate_report_of_a_spatial_model_draws_the_simulated_motion(tmp_path)
     import json
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert "report.html" in summary["files"]
+
+
+def test_the_design_summary_of_a_spatial_run_is_analyzes():
+    """``linkdyn.design.summary`` of a spatial solution: the summary ``linkdyn analyze`` writes
+    (not an AttributeError), its peak efforts the largest |effort| of the run's own table."""
+    import numpy as np
+
+    import linkdyn
+    from linkdyn import design
+
+    m = linkdyn.load(linkdyn.example_path("rsur"))
+    sol = linkdyn.analyze(m, np.linspace(0.0, 1.0, 41))
+    s = design.summary(sol)
+    assert s["space"] == "spatial" and s["mobility"] == 1
+    cols = sol.columns()
+    for name, peak in s["peak_effort"].items():
+        assert peak == np.max(np.abs(cols[name]))
+    assert s["peak_effort"]

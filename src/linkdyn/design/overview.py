@@ -92,7 +92,14 @@ def summary(sol, *, fluctuation: float = 0.02, path_point: str | None = None,
     default_range : (float, float) or None
         A range used only if it fits (such as the model's ``[analysis] path_range``); the whole
         run otherwise, or when None.
+
+    A spatial solution (``space = "spatial"``) gets ``linkdyn analyze``'s spatial summary
+    (:func:`linkdyn.spatial.cli.summary`: mobility, redundancy, peak efforts and reactions);
+    the options above apply to planar runs only.
     """
+    if getattr(sol.model, "space", "planar") == "spatial":
+        from ..spatial.cli import summary as spatial_summary
+        return spatial_summary(sol)
     if not fluctuation > 0:
         raise ModelError(f"the coefficient of speed fluctuation must be positive, got "
                          f"{fluctuation}", field="--fluctuation", fix="Give e.g. 0.02")
