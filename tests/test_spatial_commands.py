@@ -233,3 +233,28 @@ def test_the_design_summary_of_a_spatial_run_is_analyzes():
     for name, peak in s["peak_effort"].items():
         assert peak == np.max(np.abs(cols[name]))
     assert s["peak_effort"]
+
+
+def test_a_spatial_run_writes_the_parquet_table_asked_for(tmp_path):
+    """``analyze --format parquet`` of a spatial model writes results.parquet (it wrote
+    results.csv before), the same columns and numbers as the csv table."""
+    import numpy as np
+    import pandas as pd
+    import pytest
+    from click.testing import CliRunner
+
+    import linkdyn
+    from linkdyn.cli import main
+
+    pytest.importorskip("pyarrow", reason="--format parquet needs the parquet extra")
+    model = tmp_path / "rsur.toml"
+    model.write_text(linkdyn.example_path("rsur").read_text("utf-8"), "utf-8")
+    for fmt in ("csv", "parquet"):
+        res = CliRunner().invoke(main, ["analyze", str(model), "--samples", "31", "--format",
+                                        fmt, "-o", str(tmp_path / fmt)])
+        assert res.exit_code == 0, res.output
+    csv = pd.read_csv(tmp_path / "csv" / "results.csv")
+    assert not (tmp_path / "parquet" / "results.csv").exists()
+    table = pd.read_parquet(tmp_path / "parquet" / "results.parquet")
+    assert list(table.columns) == list(csv.columns)
+    assert np.array_equal(table.to_numpy(), csv.to_numpy())

@@ -399,7 +399,7 @@ def write_parquet(sol, path: Path, units: str = "si") -> None:
     except ImportError:
         raise ModelError("--format parquet needs pyarrow", field="--format",
                          fix="pip install 'linkdyn[parquet]', or use --format csv") from None
-    if units == "si":
+    if units == "si" and hasattr(sol, "to_dataframe"):   # a planar solution's frame
         sol.to_dataframe().reset_index().to_parquet(path, index=False)  # t as a column
         return
     pq.write_table(pa.table({k: np.asarray(v, float) for k, v in _columns(sol, units).items()}),
@@ -672,7 +672,7 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
         text, summ, sol = spatial_cli.analyze(mech, t)
-        files = _results(_spatial_table(sol), summ, "csv", table_units)
+        files = _results(_spatial_table(sol), summ, fmt, table_units)
         if report:
             from . import report as report_mod
             files.update(report_mod.outputs(sol, summ))
