@@ -227,6 +227,14 @@ def contact(sol) -> dict:
             "lost_samples": int(np.sum(lost)),
             "lost_from_s": float(t[lost][0]) if np.any(lost) else None,
             "lost_to_s": float(t[lost][-1]) if np.any(lost) else None}
+    for name, hz in contact_stress(sol, forces).items():
+        k = int(np.nanargmax(hz["p_max_Pa"])) if np.any(np.isfinite(hz["p_max_Pa"])) else 0
+        out[name]["stress"] = {
+            "max_pressure_Pa": float(hz["p_max_Pa"][k]), "max_time_s": float(t[k]),
+            "max_cam_angle_rad": float(hz["cam_angle_rad"][k]),
+            "half_width_m": float(hz["half_width_m"][k]), "force_N": float(forces[name][k]),
+            "cam_radius_m": float(hz["cam_radius_m"][k]),
+            "effective_radius_m": float(hz["effective_radius_m"][k])}
     if not prescribed(sol):
         return out
     if any(c["lost_samples"] for c in out.values()):
@@ -234,6 +242,40 @@ def contact(sol) -> dict:
             out[name]["springs"] = fix
     for name, jump in jump_speeds(sol, forces).items():
         out[name].update(jump)
+    return out
+
+
+def contact_stress(sol, forces: dict | None = None) -> dict:
+    """The Hertz line contact of every cam joint with a roller whose numbers ask for it
+    (``roller_width`` > 0, :meth:`linkdyn.joints.cam.Cam.stressed`), by joint name, each (T,)
+    over the run: ``p_max_Pa`` the contact's peak pressure, ``half_width_m`` its half-width
+    ``b`` (:func:`linkdyn.cams.hertz_line`, 0 where the follower would leave the cam),
+    ``cam_angle_rad`` the contact's cam angle, ``cam_radius_m`` the profile's radius of
+    curvature there (negative concave) and ``effective_radius_m`` ``R``. ``forces``: the
+    signed contact forces (:func:`contact_forces`; computed if None). One design only."""
+    from ..cams import hertz_line
+    from ..kinematics.recursion import cut_frame
+
+    m, topo = sol.model, sol.topology
+    cuts = [(k, m.joints[j]) for k, j in enumerate(topo.cut)
+            if getattr(jk.get(m.joints[j].kind), "stressed", None)
+            and jk.get(m.joints[j].kind).stressed(m.joints[j].numbers)]
+    if not cuts or sol.batched:
+        return {}
+    forces = contact_forces(sol, sol.dyn, sol.reactions) if forces is None else forces
+    lay, pose = sol.kin.layout, sol.kin.pose
+    out = {}
+    for k, joint in cuts:
+        c = lay.cuts[k]
+        r_pa, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
+                                    pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        x = joint.numbers
+        theta, r_cam, r_roller = jk.get(joint.kind).contact_radii(x, jk.frame(r_pa, r_pb, e_a))
+        b, p, R = hertz_line(forces[joint.name], r_cam, r_roller, x["roller_width"],
+                             x["cam_modulus"], x["cam_poisson"], x["roller_modulus"],
+                             x["roller_poisson"])
+        out[joint.name] = {"p_max_Pa": p, "half_width_m": b, "cam_angle_rad": theta + 0 * p,
+                           "cam_radius_m": r_cam + 0 * p, "effective_radius_m": R}
     return out
 
 
