@@ -377,6 +377,51 @@ def test_no_jump_speed_when_a_load_depends_on_time():
     assert "jump_speed_rad_s" not in contact(linkdyn.analyze(pulsed, t))["K"]
 
 
+def test_simulate_finds_the_jump_speed_of_a_follower_speeding_up():
+    # the translating follower and its spring (no gravity, no damper) on a free camshaft with a
+    # large flywheel, sped up by a constant torque, 0.1 % of the speed a turn, from just below
+    # the closed-form jump speed w_j^2 = min k (s + c0) / (-m s''): the run's contact force
+    # first crosses zero at the cam's speed w_j, to within the speed gained over two turns, and
+    # at the cam angle simulate names the closed form's ratio is that speed squared
+    from linkdyn.forward import simulate
+    from linkdyn.model import Load
+
+    model = still(cam_follower())
+    theta = np.linspace(0.0, 2 * math.pi, 36001)
+    _, d0, s, s1, s2, _ = design(model, theta)
+    spring, m = model.loads[0], model.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+
+    def ratio(s, s2):   # k (s + c0) / (-m s''), the speed squared where the force is zero
+        return np.where(s2 < 0, spring.stiffness * (s + c0) / (-m * np.minimum(s2, -1e-300)),
+                        np.inf)
+
+    wj = math.sqrt(np.min(ratio(s, s2)))
+    inertia, gain = 1.0, 1e-3               # kg m^2; the speed's gain over a turn
+    torque = gain * wj * wj * inertia / (2 * math.pi)
+    free = dataclasses.replace(
+        model, drivers=(), initial_q={"J1": 0.0}, initial_qd={"J1": (1 - 2 * gain) * wj},
+        bodies=tuple(dataclasses.replace(b, inertia=inertia) if b.name == "cam" else b
+                     for b in model.bodies),
+        loads=model.loads + (Load("torque", "cam", value=lambda t: np.full(np.shape(t),
+                                                                           torque)),))
+    t = np.linspace(0.0, 4 * 2 * math.pi / wj, 481)
+    c = contact(simulate(free, t, backend="numpy"))["K"]
+    leave = c["leaves"]
+    assert "jump_speed_rad_s" not in c and "springs" not in c    # no prescribed speed
+    # in the first turn past w_j, or the next if its dip below zero, a few degrees wide, falls
+    # between two of the samples (3 deg apart)
+    assert wj <= leave["cam_speed_rad_s"] <= (1 + 2 * gain) * wj
+    # the cam angle where it goes: next to the closed form's least ratio, and the ratio there
+    # is the speed squared (to the angle interpolated between samples 3 deg apart, and the
+    # camshaft's own acceleration, a term s' alpha / (s'' w^2) of 2e-4 here)
+    least = theta[np.argmin(ratio(s, s2))]
+    assert abs(leave["cam_angle_rad"] - least) <= math.radians(2.0)
+    _, _, s, s1, s2, _ = design(model, np.array([leave["cam_angle_rad"]]))
+    assert ratio(s, s2)[0] == pytest.approx(leave["cam_speed_rad_s"] ** 2, rel=3e-3)
+    assert c["lost_samples"] > 0 and leave["time_s"] <= c["lost_from_s"]
+
+
 @pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
 def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
     model = build()

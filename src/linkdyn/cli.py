@@ -511,6 +511,12 @@ def summary_text(s: dict) -> str:
                  f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
                  "follower would leave the cam; stiffen its spring or raise the preload"
                  if c["lost_samples"] else "; never lost"))
+        if c.get("leaves"):   # where the contact force first crosses zero
+            x = c["leaves"]
+            echo(f"    the contact force crosses zero at t = {num(x['time_s'], '.6g')} s, cam "
+                 f"angle {shown(x['cam_angle_rad'], 'angle', 5)}, cam speed "
+                 f"{num(x['cam_speed_rad_s'], '.6g', 30 / np.pi)} rpm: the follower would leave "
+                 "the cam there (the joint holds it on; its flight is not modelled)")
         if c.get("stress"):   # a roller's Hertz line contact
             h = c["stress"]
             echo(f"    contact stress (Hertz, line contact) peak "

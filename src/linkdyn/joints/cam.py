@@ -297,6 +297,11 @@ class Cam(JointKind):
                 return f"{body}_poisson must be above -1 and below 0.5 (steel's is 0.3)"
         return None
 
+    def cam_angle(self, numbers: dict, f):
+        """The contact's cam angle (rad, within one turn) for the cut's frame ``f`` (arrays
+        of the batch shape): where on the cam the follower touches."""
+        return np.mod(contact(self.own(numbers), f)[0], TWO_PI)
+
     def stressed(self, numbers: dict) -> bool:
         """Whether the joint's numbers ask for its contact stress (a roller with a width)."""
         return numbers.get("roller_width", 0.0) > 0
