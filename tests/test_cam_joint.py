@@ -534,3 +534,30 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
         assert np.all(np.isfinite(b)) and a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))
+
+
+def test_the_compiled_newton_closes_the_samples_as_numpys():
+    # the samples of a mechanism whose loops are not all dyads, closed on the compiled backend
+    # by compiled_nodes.newton_close (the kinematics kernel's Newton): numpy's state.close's
+    # coordinates to rounding; a sample from a guess too far for Newton's method is left open
+    # (above ACCEPT) for numpy's damped restart, which analyze then runs on it alone
+    pytest.importorskip("numba", reason="the compiled Newton needs numba (the fast extra)")
+    from linkdyn.kinematics import compile_layout, compiled_nodes
+    from linkdyn.kinematics.positions import ACCEPT, follow
+    from linkdyn.kinematics.state import close
+    model = linkdyn.load(linkdyn.example_path("cam_fourbar"))
+    lay = compile_layout(model)
+    t = np.linspace(0.0, 0.2, 201)
+    q_ind = lay.driver_values(t)[0]
+    branch = follow([model], lay, t, newton_nodes=compiled_nodes.follow)
+    guess = branch.guess(lay, t)
+    ref, ref_err, _ = close(lay, q_ind, guess, branch.modes)
+    got, err = compiled_nodes.newton_close(lay, q_ind, guess)
+    assert np.all(ref_err <= ACCEPT) and np.all(err <= ACCEPT)
+    assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
+    far = guess.copy()
+    far[list(lay.topo.dependent), 7] += 2.5    # rad: no nearby guess
+    _, err = compiled_nodes.newton_close(lay, q_ind, far)
+    assert not err[7] <= ACCEPT and np.all(np.delete(err, 7) <= ACCEPT)
+    sol = linkdyn.analyze(model, t, backend="compiled")
+    assert np.all(sol.valid)
