@@ -106,6 +106,67 @@ def test_contact_force_and_camshaft_torque_of_a_spring_loaded_roller_follower():
     assert c["lost_samples"] == 0 and c["min_force_N"] == pytest.approx(np.min(closed), rel=1e-9)
 
 
+def with_numbers(model, name="K", **numbers):
+    """``model`` with more numbers on its joint ``name``."""
+    return dataclasses.replace(model, joints=tuple(
+        dataclasses.replace(j, numbers={**j.numbers, **numbers}) if j.name == name else j
+        for j in model.joints))
+
+
+def test_the_contact_stress_of_the_roller_is_hertz_line_contact_by_hand():
+    # a steel cam and a bronze roller 8 mm wide: at each sample the contact force by the
+    # follower's equation of motion, the profile's radius by C2-C4 written out, and the
+    # half-width and peak pressure by Shigley's form of Hertz's two cylinders (diameters d),
+    # b = sqrt(2 F / (pi L) ((1 - v1^2)/E1 + (1 - v2^2)/E2) / (1/d1 + 1/d2)), p = 2 F/(pi b L)
+    from linkdyn.design.overview import contact_stress
+
+    E1, v1, E2, v2, L = 206e9, 0.3, 110e9, 0.34, 8 * MM
+    model = with_numbers(still(cam_follower()), roller_width=L, cam_modulus=E1,
+                         cam_poisson=v1, roller_modulus=E2, roller_poisson=v2)
+    t = np.linspace(0.0, 2 * math.pi / W, 73)[:-1] + 2e-4
+    sol = linkdyn.analyze(model, t)
+    cam, d0, s, s1, s2, phi = design(model, W * t)
+    e, rf = cam.offset, cam.roller_radius
+    spring = model.loads[0]
+    force = (model.body("follower").mass * W * W * s2
+             + spring.stiffness * (s + spring.free_length - (0.2 - d0))) / np.cos(phi)
+    # C2: P' = (d0 + s, s' - e), P'' = (2 s' - e, s'' - d0 - s); C4: |P'|^3 / (P'' x P')
+    p1x, p1y, p2x, p2y = d0 + s, s1 - e, 2 * s1 - e, s2 - d0 - s
+    rho = np.hypot(p1x, p1y) ** 3 / (p2x * p1y - p2y * p1x) - rf
+    b = np.sqrt(2 * force / (math.pi * L) * ((1 - v1 ** 2) / E1 + (1 - v2 ** 2) / E2)
+                / (1 / (2 * rho) + 1 / (2 * rf)))
+    p = 2 * force / (math.pi * b * L)
+    hz = contact_stress(sol)["K"]
+    assert np.max(np.abs(hz["cam_radius_m"] - rho)) <= 1e-9 * np.max(np.abs(rho))
+    assert np.max(np.abs(hz["cam_angle_rad"] - np.mod(W * t, 2 * math.pi))) <= 1e-12
+    assert np.max(np.abs(hz["half_width_m"] - b)) <= 1e-9 * np.max(b)
+    assert np.max(np.abs(hz["p_max_Pa"] - p)) <= 1e-9 * np.max(p)
+    # the summary's peak and where it is
+    k = int(np.argmax(p))
+    peak = contact(sol)["K"]["stress"]
+    assert peak["max_pressure_Pa"] == pytest.approx(p[k], rel=1e-9)
+    assert peak["max_time_s"] == t[k] and peak["force_N"] == pytest.approx(force[k], rel=1e-9)
+    assert peak["half_width_m"] == pytest.approx(b[k], rel=1e-9)
+    # no roller_width, no stress
+    assert "stress" not in contact(linkdyn.analyze(still(cam_follower()), t[:5]))["K"]
+
+
+def test_hertz_line_contact_against_its_closed_form():
+    # two equal steel cylinders (R1 = R2 = R: R_eff = R/2, E* = E / (2 (1 - v^2))): b =
+    # sqrt(4 F R_eff / (pi L E*)) = sqrt(4 F R (1 - v^2) / (pi L E)), p = sqrt(F E* / (pi L
+    # R_eff)) = sqrt(F E / (pi L R (1 - v^2))); a concave cam of radius -2 R under a roller R
+    # has R_eff = 2 R; no force, no contact
+    R, L, E, v, F = 0.01, 0.008, 206e9, 0.3, 500.0
+    b, p, Re = cams.hertz_line(np.array([F, -1.0]), R, R, L, E, v, E, v)
+    assert Re[0] == pytest.approx(R / 2, rel=1e-15)
+    assert b[0] == pytest.approx(math.sqrt(4 * F * R * (1 - v * v) / (math.pi * L * E)),
+                                 rel=1e-14)
+    assert p[0] == pytest.approx(math.sqrt(F * E / (math.pi * L * R * (1 - v * v))),
+                                 rel=1e-14)
+    assert b[1] == 0 and p[1] == 0
+    assert cams.hertz_line(F, -2 * R, R, L, E, v, E, v)[2] == pytest.approx(2 * R, rel=1e-15)
+
+
 def rocker_closed_form(model, t):
     """An oscillating roller follower at the times ``t`` by its cam angle ``theta = W t`` alone:
     the arm's angle ``g0 - s``, the unit normal n of the pitch curve (C2), the contact force's
@@ -316,6 +377,51 @@ def test_no_jump_speed_when_a_load_depends_on_time():
     assert "jump_speed_rad_s" not in contact(linkdyn.analyze(pulsed, t))["K"]
 
 
+def test_simulate_finds_the_jump_speed_of_a_follower_speeding_up():
+    # the translating follower and its spring (no gravity, no damper) on a free camshaft with a
+    # large flywheel, sped up by a constant torque, 0.1 % of the speed a turn, from just below
+    # the closed-form jump speed w_j^2 = min k (s + c0) / (-m s''): the run's contact force
+    # first crosses zero at the cam's speed w_j, to within the speed gained over two turns, and
+    # at the cam angle simulate names the closed form's ratio is that speed squared
+    from linkdyn.forward import simulate
+    from linkdyn.model import Load
+
+    model = still(cam_follower())
+    theta = np.linspace(0.0, 2 * math.pi, 36001)
+    _, d0, s, s1, s2, _ = design(model, theta)
+    spring, m = model.loads[0], model.body("follower").mass
+    c0 = spring.free_length - (0.2 - d0)
+
+    def ratio(s, s2):   # k (s + c0) / (-m s''), the speed squared where the force is zero
+        return np.where(s2 < 0, spring.stiffness * (s + c0) / (-m * np.minimum(s2, -1e-300)),
+                        np.inf)
+
+    wj = math.sqrt(np.min(ratio(s, s2)))
+    inertia, gain = 1.0, 1e-3               # kg m^2; the speed's gain over a turn
+    torque = gain * wj * wj * inertia / (2 * math.pi)
+    free = dataclasses.replace(
+        model, drivers=(), initial_q={"J1": 0.0}, initial_qd={"J1": (1 - 2 * gain) * wj},
+        bodies=tuple(dataclasses.replace(b, inertia=inertia) if b.name == "cam" else b
+                     for b in model.bodies),
+        loads=model.loads + (Load("torque", "cam", value=lambda t: np.full(np.shape(t),
+                                                                           torque)),))
+    t = np.linspace(0.0, 4 * 2 * math.pi / wj, 481)
+    c = contact(simulate(free, t, backend="numpy"))["K"]
+    leave = c["leaves"]
+    assert "jump_speed_rad_s" not in c and "springs" not in c    # no prescribed speed
+    # in the first turn past w_j, or the next if its dip below zero, a few degrees wide, falls
+    # between two of the samples (3 deg apart)
+    assert wj <= leave["cam_speed_rad_s"] <= (1 + 2 * gain) * wj
+    # the cam angle where it goes: next to the closed form's least ratio, and the ratio there
+    # is the speed squared (to the angle interpolated between samples 3 deg apart, and the
+    # camshaft's own acceleration, a term s' alpha / (s'' w^2) of 2e-4 here)
+    least = theta[np.argmin(ratio(s, s2))]
+    assert abs(leave["cam_angle_rad"] - least) <= math.radians(2.0)
+    _, _, s, s1, s2, _ = design(model, np.array([leave["cam_angle_rad"]]))
+    assert ratio(s, s2)[0] == pytest.approx(leave["cam_speed_rad_s"] ** 2, rel=3e-3)
+    assert c["lost_samples"] > 0 and leave["time_s"] <= c["lost_from_s"]
+
+
 @pytest.mark.parametrize("build", [cam_follower, rocker_cam, flat_follower, rocker_flat])
 def test_the_joint_coordinate_has_the_rates_of_its_finite_differences(build):
     model = build()
@@ -428,3 +534,30 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
         assert np.all(np.isfinite(b)) and a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))
+
+
+def test_the_compiled_newton_closes_the_samples_as_numpys():
+    # the samples of a mechanism whose loops are not all dyads, closed on the compiled backend
+    # by compiled_nodes.newton_close (the kinematics kernel's Newton): numpy's state.close's
+    # coordinates to rounding; a sample from a guess too far for Newton's method is left open
+    # (above ACCEPT) for numpy's damped restart, which analyze then runs on it alone
+    pytest.importorskip("numba", reason="the compiled Newton needs numba (the fast extra)")
+    from linkdyn.kinematics import compile_layout, compiled_nodes
+    from linkdyn.kinematics.positions import ACCEPT, follow
+    from linkdyn.kinematics.state import close
+    model = linkdyn.load(linkdyn.example_path("cam_fourbar"))
+    lay = compile_layout(model)
+    t = np.linspace(0.0, 0.2, 201)
+    q_ind = lay.driver_values(t)[0]
+    branch = follow([model], lay, t, newton_nodes=compiled_nodes.follow)
+    guess = branch.guess(lay, t)
+    ref, ref_err, _ = close(lay, q_ind, guess, branch.modes)
+    got, err = compiled_nodes.newton_close(lay, q_ind, guess)
+    assert np.all(ref_err <= ACCEPT) and np.all(err <= ACCEPT)
+    assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
+    far = guess.copy()
+    far[list(lay.topo.dependent), 7] += 2.5    # rad: no nearby guess
+    _, err = compiled_nodes.newton_close(lay, q_ind, far)
+    assert not err[7] <= ACCEPT and np.all(np.delete(err, 7) <= ACCEPT)
+    sol = linkdyn.analyze(model, t, backend="compiled")
+    assert np.all(sol.valid)

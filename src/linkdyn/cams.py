@@ -37,6 +37,12 @@ angle from the follower point's direction of motion ``F' = dF/ds`` to N; a flat 
 the pressure angle from the face point's velocity ``-J (Q - A)`` (the arm turning clockwise as
 s grows) to n.
 
+Contact stress (C7, :func:`hertz_line`): a roller of width L on the profile is a Hertz line
+contact of two cylinders, the profile's radius of curvature at the contact and the roller's:
+the contact's half-width ``b = sqrt(4 F R / (pi L E*))`` and its peak pressure ``p_max = 2 F /
+(pi b L)`` for the contact force F, ``1/R = 1/rho + 1/R_f``, ``1/E* = (1 - nu_1^2)/E_1 + (1 -
+nu_2^2)/E_2``.
+
 Everything is SI (m, rad, s); :func:`linkdyn.io.camfile.text` prints in the file's units, and
 :func:`linkdyn.io.camfile.read` reads a cam file (this module imports no reader: the cam joint,
 :mod:`linkdyn.joints.cam`, checks its design by :func:`profile`).
@@ -223,6 +229,30 @@ def profile(cam: Cam, n: int = 721) -> CamProfile:
     return CamProfile(cam, theta, *svaj, phi, rho_p, rho_p - rf, _turn(theta, x, y),
                       _turn(theta, x - rf * nx / size, y - rf * ny / size),
                       (rho_p > 0) & (rho_p < rf))
+
+
+def hertz_line(force, r_cam, r_roller, width, e_cam, nu_cam, e_roller, nu_roller):
+    """Hertz line contact of a roller on a cam (two cylinders with parallel axes, C7): the
+    contact's half-width ``b`` (m), its peak pressure ``p_max`` (Pa) and the effective radius
+    ``R`` (m), each of the shape of ``force``.
+
+    ``1/R = 1/r_cam + 1/r_roller`` (``r_cam`` the profile's radius of curvature at the contact,
+    negative where it is concave), ``1/E* = (1 - nu_cam^2)/e_cam + (1 - nu_roller^2)/e_roller``,
+
+        ``b = sqrt(4 F R / (pi L E*))``,  ``p_max = 2 F / (pi b L)``,
+
+    with ``F`` the contact force (N) and ``L`` the ``width`` (m) of the roller in contact.
+    Where the force is not positive (the follower would leave the cam) there is no contact: ``b``
+    and ``p_max`` are 0."""
+    force = np.asarray(force, float)
+    with np.errstate(divide="ignore"):
+        R = 1.0 / (1.0 / np.asarray(r_cam, float) + 1.0 / np.asarray(r_roller, float))
+    e_star = 1.0 / ((1.0 - nu_cam ** 2) / e_cam + (1.0 - nu_roller ** 2) / e_roller)
+    f = np.where(force > 0, force, 0.0)
+    b = np.sqrt(4.0 * f * R / (math.pi * width * e_star))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.where(f > 0, 2.0 * f / (math.pi * b * width), 0.0)
+    return b, p, R + 0.0 * force
 
 
 def joins(cam: Cam) -> tuple[np.ndarray, np.ndarray]:

@@ -511,6 +511,21 @@ def summary_text(s: dict) -> str:
                  f"{num(c['lost_from_s'], '.4g')} .. {num(c['lost_to_s'], '.4g')} s: the "
                  "follower would leave the cam; stiffen its spring or raise the preload"
                  if c["lost_samples"] else "; never lost"))
+        if c.get("leaves"):   # where the contact force first crosses zero
+            x = c["leaves"]
+            echo(f"    the contact force crosses zero at t = {num(x['time_s'], '.6g')} s, cam "
+                 f"angle {shown(x['cam_angle_rad'], 'angle', 5)}, cam speed "
+                 f"{num(x['cam_speed_rad_s'], '.6g', 30 / np.pi)} rpm: the follower would leave "
+                 "the cam there (the joint holds it on; its flight is not modelled)")
+        if c.get("stress"):   # a roller's Hertz line contact
+            h = c["stress"]
+            echo(f"    contact stress (Hertz, line contact) peak "
+                 f"{shown(h['max_pressure_Pa'], 'pressure', 6)} at t = "
+                 f"{num(h['max_time_s'], '.4g')} s, cam angle "
+                 f"{shown(h['max_cam_angle_rad'], 'angle', 4)}: force "
+                 f"{shown(h['force_N'], 'force', 6)}, half-width "
+                 f"{shown(h['half_width_m'], 'length', 4)}, profile radius "
+                 f"{shown(h['cam_radius_m'], 'length', 6)}")
         if c.get("jump_speed_rad_s") is not None:   # the constant speed where it is first lost
             echo(f"    at constant speed the follower would leave the cam from "
                  f"{num(c['jump_speed_rad_s'], '.6g', 30 / np.pi)} rpm (first at t = "

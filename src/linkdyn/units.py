@@ -32,7 +32,7 @@ __all__ = ["Units", "QUANTITIES", "REPORT", "coordinate", "joint_units", "model_
 # the quantities a value may be: how its unit is made from the file's length L and angle A
 QUANTITIES = ("length", "angle", "angular_rate", "angular_acceleration", "velocity",
               "acceleration", "force", "torque", "mass", "inertia", "energy", "power", "time",
-              "stiffness", "angular_stiffness", "damping", "angular_damping", "number")
+              "stiffness", "angular_stiffness", "damping", "angular_damping", "pressure", "number")
 
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*\Z")
 
@@ -74,7 +74,8 @@ class Units:
             "inertia": (f"kg {L}^2", l * l), "energy": ("J", 1.0), "power": ("W", 1.0),
             "time": ("s", 1.0), "stiffness": (f"N/{L}", 1.0 / l),
             "angular_stiffness": (f"N m/{A}", 1.0 / a), "damping": (f"N s/{L}", 1.0 / l),
-            "angular_damping": (f"N m s/{A}", 1.0 / a), "number": ("", 1.0)}
+            "angular_damping": (f"N m s/{A}", 1.0 / a),
+            "pressure": (f"N/{L}^2", 1.0 / (l * l)), "number": ("", 1.0)}
         if quantity not in table:
             raise KeyError(f"unknown quantity {quantity!r}; one of {', '.join(QUANTITIES)}")
         return table[quantity]

@@ -234,6 +234,16 @@ def contact(sol) -> dict:
             "lost_samples": int(np.sum(lost)),
             "lost_from_s": float(t[lost][0]) if np.any(lost) else None,
             "lost_to_s": float(t[lost][-1]) if np.any(lost) else None}
+    for name, leave in leaves(sol, forces).items():
+        out[name]["leaves"] = leave
+    for name, hz in contact_stress(sol, forces).items():
+        k = int(np.nanargmax(hz["p_max_Pa"])) if np.any(np.isfinite(hz["p_max_Pa"])) else 0
+        out[name]["stress"] = {
+            "max_pressure_Pa": float(hz["p_max_Pa"][k]), "max_time_s": float(t[k]),
+            "max_cam_angle_rad": float(hz["cam_angle_rad"][k]),
+            "half_width_m": float(hz["half_width_m"][k]), "force_N": float(forces[name][k]),
+            "cam_radius_m": float(hz["cam_radius_m"][k]),
+            "effective_radius_m": float(hz["effective_radius_m"][k])}
     if not prescribed(sol):
         return out
     if any(c["lost_samples"] for c in out.values()):
@@ -244,12 +254,100 @@ def contact(sol) -> dict:
     return out
 
 
+def contact_stress(sol, forces: dict | None = None) -> dict:
+    """The Hertz line contact of every cam joint with a roller whose numbers ask for it
+    (``roller_width`` > 0, :meth:`linkdyn.joints.cam.Cam.stressed`), by joint name, each (T,)
+    over the run: ``p_max_Pa`` the contact's peak pressure, ``half_width_m`` its half-width
+    ``b`` (:func:`linkdyn.cams.hertz_line`, 0 where the follower would leave the cam),
+    ``cam_angle_rad`` the contact's cam angle, ``cam_radius_m`` the profile's radius of
+    curvature there (negative concave) and ``effective_radius_m`` ``R``. ``forces``: the
+    signed contact forces (:func:`contact_forces`; computed if None). One design only."""
+    from ..cams import hertz_line
+
+    def stressed(joint):
+        kind = jk.get(joint.kind)
+        return kind.one_sided and getattr(kind, "stressed", None) and kind.stressed(
+            joint.numbers)
+
+    frames = one_sided_frames(sol, stressed)
+    if not frames:
+        return {}
+    forces = contact_forces(sol, sol.dyn, sol.reactions) if forces is None else forces
+    out = {}
+    for joint, f in frames:
+        x = joint.numbers
+        theta, r_cam, r_roller = jk.get(joint.kind).contact_radii(x, f)
+        b, p, R = hertz_line(forces[joint.name], r_cam, r_roller, x["roller_width"],
+                             x["cam_modulus"], x["cam_poisson"], x["roller_modulus"],
+                             x["roller_poisson"])
+        out[joint.name] = {"p_max_Pa": p, "half_width_m": b, "cam_angle_rad": theta + 0 * p,
+                           "cam_radius_m": r_cam + 0 * p, "effective_radius_m": R}
+    return out
+
+
+def one_sided_frames(sol, which=None) -> list:
+    """``(joint, frame)`` of every one-sided cut joint of a one-design run (``which(joint)``
+    true, if given): the cut's frame ``(e_a, d, e_b)`` over the run (each component (T,),
+    :func:`linkdyn.joints.frame`), as its kind's steps take it."""
+    from ..kinematics.recursion import cut_frame
+
+    if sol.batched:
+        return []
+    m, topo = sol.model, sol.topology
+    lay, pose = sol.kin.layout, sol.kin.pose
+    out = []
+    for k, j in enumerate(topo.cut):
+        joint = m.joints[j]
+        if not jk.get(joint.kind).one_sided or (which is not None and not which(joint)):
+            continue
+        c = lay.cuts[k]
+        r_pa, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
+                                    pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        out.append((joint, jk.frame(r_pa, r_pb, e_a)))
+    return out
+
+
+def leaves(sol, forces: dict) -> dict:
+    """Where each one-sided joint's contact force first crosses zero from above (or is below
+    zero at the first sample), by joint name: ``time_s`` (between the two samples by linear
+    interpolation of the force), ``cam_angle_rad`` (the contact's cam angle there, within one
+    turn) and ``cam_speed_rad_s`` (the cam body's angular velocity relative to the follower's
+    there). The joint holds the follower on (a bilateral constraint): from there on the run
+    is that of a follower kept on the cam, which a real one would leave; its flight is not
+    modelled. Joints whose force never turns negative are left out."""
+    t = np.asarray(sol.t, float)
+    out = {}
+    for joint, f in one_sided_frames(sol):
+        x = forces[joint.name]
+        scale = np.nanmax(np.abs(x), initial=0.0)
+        below = np.isfinite(x) & (x < -ROUNDING * scale)
+        if not np.any(below):
+            continue
+        k = int(np.argmax(below))
+        kind = jk.get(joint.kind)
+        theta = np.unwrap(kind.cam_angle(joint.numbers, f) + 0.0 * x)
+        w = (np.asarray(sol.omega(joint.body_a), float)
+             - np.asarray(sol.omega(joint.body_b), float)) + 0.0 * x
+        if k == 0 or not np.isfinite(x[k - 1]):
+            u, k0 = 0.0, k
+        else:   # the zero of the line through (t[k-1], x[k-1]) and (t[k], x[k])
+            u, k0 = x[k - 1] / (x[k - 1] - x[k]), k - 1
+        k1 = min(k0 + 1, len(t) - 1)
+
+        def at(y):
+            return float(y[k0] + u * (y[k1] - y[k0]))
+
+        out[joint.name] = {"time_s": at(t), "cam_angle_rad": float(np.mod(at(theta), TWO_PI)),
+                           "cam_speed_rad_s": at(w)}
+    return out
+
+
 def prescribed(sol) -> bool:
     """Whether the run's motion is prescribed (an ``analyze``, not a ``simulate``) and its
     loads free of friction: then every contact force is affine in each load and, at one
     driver angle, a quadratic in the driver's speed."""
     from ..motion import Free
-    return (not getattr(sol, "friction", None)
+    return (not getattr(sol, "friction", None) and not getattr(sol, "free", ())
             and not any(isinstance(d.motion, Free) for d in sol.model.drivers))
 
 

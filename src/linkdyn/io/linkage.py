@@ -326,7 +326,9 @@ def _number(r: _Reader, x: jk.Number, value: Any, field: str, body_a: str):
     default), in SI: a length or an angle converted from the file's units, a direction made a
     unit vector."""
     scale, unit = {"angle": (r.angle, r.angle_name),
-                   "length": (r.length, r.length_name)}.get(x.unit, (1.0, ""))
+                   "length": (r.length, r.length_name),
+                   "pressure": (1.0 / r.length ** 2, f"N/{r.length_name}^2")}.get(x.unit,
+                                                                                  (1.0, ""))
     if value is None:
         return x.value()
     if x.choices:   # given by name: its place in the choices

@@ -241,7 +241,7 @@ def _joints(model: Model, L: float, A: float) -> list[dict]:
         else:
             entry["connect"] = [f"{j.body_a}.{j.point_a}", f"{j.body_b}.{j.point_b}"]
         for x in (x for x in jk.get(j.kind).numbers if not x.derived):   # in the file's units
-            scale = {"angle": A, "length": L}.get(x.unit, 1.0)
+            scale = {"angle": A, "length": L, "pressure": 1.0 / L ** 2}.get(x.unit, 1.0)
             v = j.numbers[x.name]
             entry[x.name] = (x.choices[int(v)] if x.choices else
                              _vec(v, scale) if x.shape else _num(v / scale))

@@ -58,7 +58,8 @@ class Number:
     shape : tuple
         ``()`` a number, ``(2,)`` a vector ``[x, y]``.
     unit : str
-        ``'angle'`` or ``'length'`` (converted from the file's ``[units]``), else ``''``
+        ``'angle'``, ``'length'`` or ``'pressure'`` (converted from the file's ``[units]``:
+        a pressure in N per its length unit squared, N/mm^2 = MPa in a mm file), else ``''``
         (written as it is, SI).
     default : float or tuple
         Its value where the file does not give it.

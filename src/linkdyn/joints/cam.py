@@ -55,6 +55,20 @@ DWELL = Number("dwell", (), "angle", 0.0, doc="cam angle of the dwell at the top
 FALL = Number("fall", (), "angle", 0.0, doc="cam angle of the return")
 LAW = Number("law", (), "", float(laws.CODES["cycloidal"]), design=False,
              choices=tuple(laws.LAWS), doc="motion law")
+#: a roller's contact stress (Hertz line contact, :func:`linkdyn.cams.hertz_line`): the width
+#: of the contact along the roller's axis and both bodies' elastic constants; a width of 0 (the
+#: default) asks for no stress
+ROLLER_WIDTH = Number("roller_width", (), "length", 0.0, design=False,
+                      doc="the roller's width in contact with the cam, L (0: no contact stress)")
+CAM_MODULUS = Number("cam_modulus", (), "pressure", 0.0, design=False,
+                     doc="the cam's Young's modulus E_1")
+CAM_POISSON = Number("cam_poisson", (), "", 0.3, design=False,
+                     doc="the cam's Poisson ratio nu_1")
+ROLLER_MODULUS = Number("roller_modulus", (), "pressure", 0.0, design=False,
+                        doc="the roller's Young's modulus E_2")
+ROLLER_POISSON = Number("roller_poisson", (), "", 0.3, design=False,
+                        doc="the roller's Poisson ratio nu_2")
+HERTZ = (ROLLER_WIDTH, CAM_MODULUS, CAM_POISSON, ROLLER_MODULUS, ROLLER_POISSON)
 
 #: Newton's iterations for the contact's cam angle, at most. The polar angle's rate along the
 #: pitch curve is ``beta_theta = e s' / rho^2 - 1``; a cam with ``|e s'| <= STEEP rho^2``
@@ -172,7 +186,7 @@ class Cam(JointKind):
     freedoms = 2
     tree = False
     angular = False
-    numbers = (BASE_RADIUS, ROLLER_RADIUS, OFFSET, LIFT, RISE, DWELL, FALL, LAW)
+    numbers = (BASE_RADIUS, ROLLER_RADIUS, OFFSET, LIFT, RISE, DWELL, FALL, LAW) + HERTZ
     row_units = ("m",)
     reaction = ("Fx", "Fy")
     multipliers = (("radial contact force", "N"),)
@@ -262,7 +276,46 @@ class Cam(JointKind):
             return "the offset must be less than base_radius + roller_radius"
         if not numbers["lift"] > 0:
             return "lift must be positive"
-        return self.refuse_lift(numbers) or self.refuse_curve(numbers)
+        return (self.refuse_hertz(numbers) or self.refuse_lift(numbers)
+                or self.refuse_curve(numbers))
+
+    def refuse_hertz(self, numbers: dict) -> str | None:
+        """Why the contact stress's numbers make no Hertz line contact (None: they do, or no
+        ``roller_width`` asks for it)."""
+        width = numbers.get("roller_width", 0.0)
+        if width == 0:
+            return None
+        if not width > 0:
+            return "roller_width must be positive (or 0: no contact stress)"
+        if not numbers["roller_radius"] > 0:
+            return "a contact stress needs a roller: give roller_radius > 0 with roller_width"
+        for body in ("cam", "roller"):
+            if not numbers[f"{body}_modulus"] > 0:
+                return (f"{body}_modulus must be positive with roller_width (e.g. steel's "
+                        "206000 N/mm^2 in a mm file)")
+            if not -1.0 < numbers[f"{body}_poisson"] < 0.5:
+                return f"{body}_poisson must be above -1 and below 0.5 (steel's is 0.3)"
+        return None
+
+    def cam_angle(self, numbers: dict, f):
+        """The contact's cam angle (rad, within one turn) for the cut's frame ``f`` (arrays
+        of the batch shape): where on the cam the follower touches."""
+        return np.mod(contact(self.own(numbers), f)[0], TWO_PI)
+
+    def stressed(self, numbers: dict) -> bool:
+        """Whether the joint's numbers ask for its contact stress (a roller with a width)."""
+        return numbers.get("roller_width", 0.0) > 0
+
+    def contact_radii(self, numbers: dict, f):
+        """Where the roller touches the cam, for the follower point ``f[1]`` in the cut's
+        frame ``f`` (arrays of the batch shape): the contact's cam angle (rad, within one
+        turn) and the radii of curvature there of the cam's profile (m, positive convex, C4 of
+        :mod:`linkdyn.cams`: the pitch curve's radius less the roller's) and of the roller."""
+        nums = self.own(numbers)
+        theta, s = contact(nums, f)[:2]
+        rho_p = pitch_curve(nums, s)[1]
+        rf = numbers["roller_radius"]
+        return np.mod(theta, TWO_PI), rho_p - rf, rf + 0.0 * rho_p
 
     def refuse_lift(self, numbers: dict) -> str | None:
         """Why the rise, dwell, fall and law make no lift (None: they do)."""

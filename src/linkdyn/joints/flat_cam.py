@@ -160,6 +160,10 @@ class FlatCam(Cam):
         return (x["base_radius"], zero, zero + math.pi / 2, x["lift"], x["rise"], x["dwell"],
                 x["fall"], x["law"], zero + TRANSLATING)
 
+    def cam_angle(self, numbers: dict, f):
+        """The contact's cam angle (rad, within one turn) for the cut's frame ``f``."""
+        return np.mod(contact(self.own(numbers), f)[0], TWO_PI)
+
     def refuse(self, numbers: dict) -> str | None:
         """Why a flat-faced cam's numbers make no cam (None: they do)."""
         if not numbers["base_radius"] > 0:

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Number
-from .cam import (BASE_RADIUS, DWELL, FALL, LAW, OSCILLATING, RISE, ROLLER_RADIUS, Cam)
+from .cam import (BASE_RADIUS, DWELL, FALL, HERTZ, LAW, OSCILLATING, RISE, ROLLER_RADIUS, Cam)
 
 PIVOT = Number("pivot", (), "length", 0.0,
                doc="the follower's pivot from the cam's centre, a (rocker_cam)")
@@ -48,7 +48,7 @@ def start_angle(numbers: dict):
 class RockerCam(Cam):
     name = "rocker_cam"
     angular = True
-    numbers = (BASE_RADIUS, ROLLER_RADIUS, PIVOT, ARM, SWING, RISE, DWELL, FALL, LAW)
+    numbers = (BASE_RADIUS, ROLLER_RADIUS, PIVOT, ARM, SWING, RISE, DWELL, FALL, LAW) + HERTZ
 
     def own(self, numbers: dict, zero=0.0) -> tuple:
         """The cut steps' numbers: ``(a, L, g0, swing, rise, dwell, fall, law, 1)``."""
@@ -71,7 +71,8 @@ class RockerCam(Cam):
                     "roller_radius < pivot + arm")
         return (self.refuse_swing(numbers, start_angle(numbers), "arm",
                                   "shorten the swing or lengthen the arm")
-                or self.refuse_lift(numbers) or self.refuse_curve(numbers))
+                or self.refuse_hertz(numbers) or self.refuse_lift(numbers)
+                or self.refuse_curve(numbers))
 
     steep_fix = "shorten the swing, or move the pivot further from the cam"
 

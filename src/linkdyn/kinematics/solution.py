@@ -94,7 +94,9 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run
               ) -> KinematicSolution:
     """:func:`solve`'s state stage by the compiled kernel ``run`` for the whole batch: it
     closes every sample in closed form from its nearest node (every loop a dyad), or takes the
-    coordinates :func:`.state.close` closed, then the rates and accelerations."""
+    coordinates :func:`.state.close` closed (a mechanism of dyads) or
+    :func:`.compiled_nodes.newton_close` (Newton's method in a kernel; :func:`.state.close`
+    for the samples it leaves open), then the rates and accelerations."""
     out = None  # the compiled kernel's arrays
     if branch.nodes is not None and lay.dyads is not None:
         lo, hi = branch.span
@@ -105,8 +107,19 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run
         if np.any(unclosed) and np.any(
                 unclosed & np.all(np.isfinite(out["q"]), axis=0).reshape(err.shape)):
             out = None   # some sample needs the damped Newton retry of the numpy path
-    if out is None:   # the loops closed by numpy: the kernel does the rest
+    if out is None and branch.modes is not None and lay.dyads is not None:
+        # the dyads closed by numpy in closed form (with its damped retry)
         q, err, _ = close(lay, q_ind, branch.guess(lay, t), branch.modes)
+        how = {"q": q}
+        out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
+    elif out is None:   # Newton's method in the kernel; numpy's (damped) for what it leaves
+        guess = branch.guess(lay, t)
+        q, err = compiled_nodes.newton_close(lay, q_ind, guess)
+        retry = ~(err <= ACCEPT)
+        if np.any(retry):
+            q_r, err_r, _ = close(lay, np.broadcast_to(q_ind, q_ind.shape[:1] + err.shape)[
+                :, retry], np.broadcast_to(guess, q.shape)[:, retry], branch.modes)
+            q[:, retry], err[retry] = q_r, err_r
         how = {"q": q}
         out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
     # the branch ends at the first sample past the last node that does not close
