@@ -91,6 +91,87 @@ def test_a_sweep_of_a_point_coordinate_gives_each_design_analyzed_alone(tmp_path
     assert [p.unit for p in sp.params] == ["", "rad", "mm", "N"]
 
 
+# the designs of test_a_batched_spatial_sweep_is_each_design_analyzed_alone: the crank pin out of
+# the crank's plane and the crank's length (120 mm: the loop cannot close over a whole turn), the
+# coupler's mass, the load on the rocker, gravity and the crank's speed (other continuation nodes)
+BATCH = {"bodies.crank.points.B[2]": [-8.0, 0.0, 8.0, 0.0, 3.0, -5.0, 6.0],
+         "bodies.crank.points.B[0]": [40.0, 42.0, 38.0, 120.0, 45.0, 35.0, 40.0],
+         "bodies.coupler.mass": [0.55, 0.8, 0.3, 0.55, 0.55, 1.2, 0.55],
+         "loads[0].value[2]": [-20.0, -20.0, 5.0, -20.0, -35.0, -20.0, 0.0],
+         "mechanism.gravity[2]": [-9.81, -9.81, -9.81, -9.81, 0.0, -3.0, -9.81],
+         "drivers[0].motion.rpm": [60.0, 60.0, 60.0, 60.0, 60.0, 60.0, 150.0]}
+
+
+def test_a_batched_spatial_sweep_is_each_design_analyzed_alone(tmp_path):
+    """rsur's designs solved as one batch (every stage over all designs' samples, each design's
+    own continuation and Newton masks): each valid row's metrics are those of its own file,
+    written out and analyzed alone, to 1e-12 of their scale; the design that cannot close has
+    the message linkdyn.analyze raises for its file (without the file name)."""
+    from linkdyn.spatial.shaking import shaking_force
+
+    t = np.linspace(0.0, 1.0, 61)
+    df = linkdyn.sweep(linkdyn.example_path("rsur"), BATCH, t)
+    assert list(df["valid"]) == [True, True, True, False, True, True, True]
+    data = tomllib.loads(linkdyn.example_path("rsur").read_text())
+    for k in range(len(df)):
+        data["bodies"][1]["points"]["B"][2] = BATCH["bodies.crank.points.B[2]"][k]
+        data["bodies"][1]["points"]["B"][0] = BATCH["bodies.crank.points.B[0]"][k]
+        data["bodies"][2]["mass"] = BATCH["bodies.coupler.mass"][k]
+        data["loads"][0]["value"][2] = BATCH["loads[0].value[2]"][k]
+        data["mechanism"]["gravity"][2] = BATCH["mechanism.gravity[2]"][k]
+        data["drivers"][0]["motion"]["rpm"] = BATCH["drivers[0].motion.rpm"][k]
+        src = tmp_path / f"d{k}.toml"
+        src.write_text(dumps_toml(data))
+        if not df["valid"][k]:
+            with pytest.raises(linkdyn.AssemblyError) as err:
+                linkdyn.analyze(linkdyn.load(src), t)
+            assert str(err.value) == f"{src}: {df['reason'][k]}"
+            assert all(np.isnan(df[c][k]) for c in df.columns if c.startswith(("peak", "rms")))
+            continue
+        alone = linkdyn.analyze(linkdyn.load(src), t)
+        tau = alone.effort("J1")
+        expect = {"peak_tau_J1": np.max(np.abs(tau)), "rms_tau_J1": np.sqrt(np.mean(tau ** 2)),
+                  "peak_shaking_force": np.max(np.linalg.norm(shaking_force(alone), axis=1))}
+        for j in ("J1", "J2", "J3", "J4"):
+            expect[f"peak_F_{j}"] = np.max(np.linalg.norm(alone.reaction(j)[:, :3], axis=1))
+        for name, v in expect.items():
+            assert abs(df[name][k] - v) <= 1e-12 * abs(v), (k, name)
+    # the parameters reached the models: the coupler's mass, the speed
+    assert len(set(np.round(df["peak_tau_J1"][df["valid"]], 9))) == 6
+
+
+def test_a_spatial_optimize_finds_the_design_of_the_per_design_path(monkeypatch):
+    """linkdyn.optimize of rsur's crank pin height scores its designs by the batch; scored
+    instead by each design's own linkdyn.analyze (the per-design path, written here), the
+    same seeded search ends at the same design with the same objective."""
+    from linkdyn.studies import optimize as opt
+    from linkdyn.studies import runner
+
+    bounds = {"bodies.crank.points.B[2]": (-10.0, 10.0)}
+    t = np.linspace(0.0, 1.0, 25)
+    kw = dict(minimize="peak_F_J2", popsize=4, maxiter=4, polish=False)
+    batched = linkdyn.optimize(linkdyn.example_path("rsur"), bounds, t, **kw)
+
+    def alone(task, values):
+        values = np.atleast_2d(values)
+        out = {"valid": np.ones(len(values), bool), "reason": np.full(len(values), "", object)}
+        for name in task.metrics:
+            out[name] = np.full(len(values), np.nan)
+        for k, v in enumerate(values):
+            sol = linkdyn.analyze(task.space.model(v), task.t)
+            for name in task.metrics:
+                j = name[len("peak_F_"):]
+                out[name][k] = np.max(np.linalg.norm(sol.reaction(j)[:, :3], axis=1))
+        return out
+    monkeypatch.setattr(opt, "evaluate", alone)
+    monkeypatch.setattr(runner, "evaluate", alone)
+    single = linkdyn.optimize(linkdyn.example_path("rsur"), bounds, t, **kw)
+    path = "bodies.crank.points.B[2]"
+    assert batched.values[path] == pytest.approx(single.values[path], rel=1e-9, abs=1e-9)
+    assert batched.metrics["peak_F_J2"] == pytest.approx(single.metrics["peak_F_J2"], rel=1e-12)
+    assert batched.history == pytest.approx(single.history, rel=1e-12)
+
+
 def test_peak_torque_metric_of_spatial_designs(tmp_path):
     """A crank about +x under gravity with a load at its tip: tau = cos(phi) (m g c + F L), so
     the sweep's peak_tau_J1 over the mass centre's coordinate c is |m g c + F L| (closed form),
