@@ -34,10 +34,15 @@ class Loads:
     work_power: np.ndarray = None
 
 
+def mass_centres(p: Plan, m: Motion) -> np.ndarray:
+    """Mass centres (T, n, 3), global."""
+    return m.tree.o + sa.matvec(m.tree.R, p.com)
+
+
 def mass_frames(model, p: Plan, m: Motion):
     """Mass centres (T, n, 3) and spatial inertias about O (T, n, 6, 6), global."""
     R = m.tree.R
-    c = m.tree.o + sa.matvec(R, p.com)
+    c = mass_centres(p, m)
     Ic = R @ p.inertia @ np.swapaxes(R, -1, -2)
     return c, sa.inertia_about_origin(np.broadcast_to(p.mass, c.shape[:-1]), c, Ic)
 
@@ -83,7 +88,7 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
     batch's rows (``Plan.row``) every number of a load is each row's design's."""
     T, n = m.q.shape[0], p.topo.n
     w = np.zeros((T, n, 6))
-    c, _ = mass_frames(model, p, m)
+    c = mass_centres(p, m)
     g = _number(p, model, lambda x: np.asarray(x.gravity, float))[..., None, :]
     # gravity: m g at the mass centre
     w += sa.force_wrench(p.mass[..., None] * g, c)

@@ -48,9 +48,10 @@ CHUNK_SAMPLES = (1_000_000, 10_000_000)
 # 5e4 where each batch's fixed Python costs (assembly, continuation nodes, metrics) take over,
 # 1.1-1.6 s at 2.5e5 and 4-6.5 s at 1e6)
 BATCH_SAMPLES = 150_000
-# a spatial model's design-samples solved at once (its stages hold more per sample: 6-D twists,
-# each body's screws, the closure Jacobian)
-SPATIAL_BATCH_SAMPLES = 50_000
+# a spatial model's design-samples times its bodies solved at once (its stages hold more per
+# sample and body: 6-D twists, screws, spatial inertias, the closure Jacobian): about 300 MB of
+# arrays for the RSUR four-bar's 4 bodies (38,000 design-samples)
+SPATIAL_BATCH_BODY_SAMPLES = 150_000
 
 
 # --- the designs ------------------------------------------------------------------------------
@@ -323,13 +324,14 @@ def evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
 
 def _fill_each(task: Task, models, idx, valid, reason, out) -> None:
     """Validity, reasons and metrics of the designs ``idx`` of a spatial model, solved together
-    by :func:`linkdyn.spatial.analyze_designs` (batches of at most ``SPATIAL_BATCH_SAMPLES``
-    design-samples); a design's reason is the message :func:`linkdyn.spatial.analyze` raises
-    for it alone."""
+    by :func:`linkdyn.spatial.analyze_designs` (batches of at most ``SPATIAL_BATCH_BODY_SAMPLES``
+    design-samples times bodies); a design's reason is the message
+    :func:`linkdyn.spatial.analyze` raises for it alone."""
     from .. import spatial
 
     idx = np.asarray(idx, dtype=int)
-    size = max(1, SPATIAL_BATCH_SAMPLES // max(len(task.t), 1))
+    bodies = len(models[idx[0]].bodies) if len(idx) else 1
+    size = max(1, SPATIAL_BATCH_BODY_SAMPLES // (max(len(task.t), 1) * bodies))
     for part in np.array_split(idx, -(-len(idx) // size)):
         sol, kept, errors = spatial.analyze_designs([models[k] for k in part], task.t)
         for k, e in zip(part, errors):
