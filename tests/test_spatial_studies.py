@@ -140,6 +140,80 @@ def test_a_batched_spatial_sweep_is_each_design_analyzed_alone(tmp_path):
     assert len(set(np.round(df["peak_tau_J1"][df["valid"]], 9))) == 6
 
 
+def _each_kind_as_tree_and_cut():
+    from test_spatial import rscr, slider_crank
+    out = [(name, linkdyn.load(linkdyn.example_path(name))) for name in spatial_example_names()]
+    for name, data, cut in (("slider_crank", slider_crank(), None), ("rscr", rscr(), None),
+                            ("slider_crank_cut_universal", slider_crank(), ["J3"]),
+                            ("rscr_cut_cylindrical", rscr(), ["J3"])):
+        if cut:
+            data["topology"] = {"cut": cut}
+        out.append((name, linkdyn.io.model_from_dict(data)))
+    return out
+
+
+def test_a_batch_of_every_spatial_model_is_each_design_alone():
+    """Every bundled spatial model that analyze takes, and the slider-crank and RSCR with each
+    joint kind as a tree and as a cut joint: two designs in one batch (the second's coupler
+    bodies heavier) give each design's efforts, reactions and kinetic energy
+    alone, to 1e-12 of each one's scale."""
+    from dataclasses import replace
+
+    from linkdyn import spatial
+    t = np.linspace(0.0, 0.2, 5)
+    done = 0
+    for name, m in _each_kind_as_tree_and_cut():
+        try:
+            alone = [linkdyn.analyze(m, t)]
+        except linkdyn.LinkdynError:      # a model for simulate (free coordinates)
+            continue
+        heavy = replace(m, bodies=[replace(b, mass=2.0 * b.mass, inertia=3.0 * b.inertia)
+                                   for b in m.bodies])
+        alone.append(linkdyn.analyze(heavy, t))
+        sol, kept, errors = spatial.analyze_designs([m, heavy], t)
+        assert list(kept) == [0, 1] and errors == [None, None] and sol.batch == (2, 5), name
+        for k, one in enumerate(alone):
+            rows = slice(5 * k, 5 * k + 5)
+            for got, ref in ((sol.dynamics.tau[rows], one.dynamics.tau),
+                             (sol.dynamics.reactions[rows], one.dynamics.reactions),
+                             (sol.dynamics.kinetic_energy[rows], one.dynamics.kinetic_energy),
+                             (sol.motion.q[rows], one.motion.q)):
+                scale = max(float(np.max(np.abs(ref), initial=0.0)), 1e-300)
+                np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * scale, err_msg=name)
+        done += 1
+    assert done >= 10
+
+
+def test_a_design_at_a_dead_centre_in_a_batch_keeps_its_message():
+    """A slider-crank driven by its slider from the crank pin's height y: at y = 0 crank and
+    rod are in line at t = 0 (a dead centre, exit 3 alone); solved in one batch with designs
+    off the line, it is invalid with the message analyze raises for it alone, and the others
+    have the metrics they have alone."""
+    import copy
+
+    from test_spatial import DEAD_CENTRE as data
+
+    t = np.linspace(0.0, 0.2, 5)
+    ys = [0.02, 0.0, -0.03]
+    df = linkdyn.sweep(data, {"bodies.crank.points.A[1]": ys, "bodies.rod.points.A[1]": ys}, t)
+    assert list(df["valid"]) == [True, False, True]
+    for k, y in enumerate(ys):
+        one = copy.deepcopy(data)
+        one["bodies"][1]["points"]["A"][1] = one["bodies"][2]["points"]["A"][1] = y
+        if k == 1:
+            with pytest.raises(linkdyn.AssemblyError, match="singular position") as err:
+                linkdyn.analyze(linkdyn.io.model_from_dict(one), t)
+            err.value.file = ""
+            assert df["reason"][k] == str(err.value)
+            continue
+        alone = linkdyn.analyze(linkdyn.io.model_from_dict(one), t)
+        force = alone.effort("J4")
+        assert df["peak_force_J4"][k] == pytest.approx(np.max(np.abs(force)), rel=1e-12, abs=0)
+        for j in ("J1", "J2", "J3", "J4"):
+            v = np.max(np.linalg.norm(alone.reaction(j)[:, :3], axis=1))
+            assert df[f"peak_F_{j}"][k] == pytest.approx(v, rel=1e-12, abs=0), j
+
+
 def test_a_spatial_optimize_finds_the_design_of_the_per_design_path(monkeypatch):
     """linkdyn.optimize of rsur's crank pin height scores its designs by the batch; scored
     instead by each design's own linkdyn.analyze (the per-design path, written here), the

@@ -34,7 +34,7 @@ class Cylindrical(base.SpatialKind):
         # no travel across e; B's copy of the axis on A's
         t = self._perp(g, pose)
         r1, p1 = base.sliding(pose, t)
-        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), pose.RB @ (sa.matvec(sa.transpose(g.R0), g.e)), t)
+        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), sa.matvec(pose.RB, sa.matvec(sa.transpose(g.R0), g.e)), t)
         return np.concatenate([r1, r2], -1), np.concatenate([p1, p2], -2)
 
     def closure_rate(self, g, pose, m):

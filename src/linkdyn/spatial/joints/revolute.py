@@ -33,7 +33,7 @@ class Revolute(base.SpatialKind):
     def closure(self, g, pose):
         # coincident points; B's copy of the axis on A's: t_k . (e_A x e_B) = 0
         r1, p1 = base.coincident(pose)
-        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), pose.RB @ (sa.matvec(sa.transpose(g.R0), g.e)), self._couples(g, pose))
+        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), sa.matvec(pose.RB, sa.matvec(sa.transpose(g.R0), g.e)), self._couples(g, pose))
         return np.concatenate([r1, r2], -1), np.concatenate([p1, p2], -2)
 
     def closure_rate(self, g, pose, m):
