@@ -154,9 +154,10 @@ def _each_kind_as_tree_and_cut():
 
 def test_a_batch_of_every_spatial_model_is_each_design_alone():
     """Every bundled spatial model that analyze takes, and the slider-crank and RSCR with each
-    joint kind as a tree and as a cut joint: two designs in one batch (the second's coupler
-    bodies heavier) give each design's efforts, reactions and kinetic energy
-    alone, to 1e-12 of each one's scale."""
+    joint kind as a tree and as a cut joint: two designs in one batch (the second's bodies
+    heavier, its springs and dampers stiffer; a damper added beside each spring) give each
+    design's efforts, reactions, kinetic energy and coordinates alone, to 1e-12 of each one's
+    scale."""
     from dataclasses import replace
 
     from linkdyn import spatial
@@ -167,8 +168,15 @@ def test_a_batch_of_every_spatial_model_is_each_design_alone():
             alone = [linkdyn.analyze(m, t)]
         except linkdyn.LinkdynError:      # a model for simulate (free coordinates)
             continue
+        springs = [ld for ld in m.loads if ld.kind == "spring"]
+        if springs:      # a damper beside each spring, and other constants in the second design
+            m = replace(m, loads=list(m.loads) + [replace(ld, kind="damper", name="", damping=3.0)
+                                                  for ld in springs])
+            alone = [linkdyn.analyze(m, t)]
         heavy = replace(m, bodies=[replace(b, mass=2.0 * b.mass, inertia=3.0 * b.inertia)
-                                   for b in m.bodies])
+                                   for b in m.bodies],
+                        loads=[replace(ld, stiffness=2.0 * ld.stiffness, damping=2.0 * ld.damping,
+                                       free_length=0.9 * ld.free_length) for ld in m.loads])
         alone.append(linkdyn.analyze(heavy, t))
         sol, kept, errors = spatial.analyze_designs([m, heavy], t)
         assert list(kept) == [0, 1] and errors == [None, None] and sol.batch == (2, 5), name
