@@ -269,7 +269,7 @@ def joint_coordinates(model, p: Plan, m: "Motion") -> dict:
         ang = np.array([x for _, x in kind.coordinates_named])
         if p.row is None:
             q[:, ang] = np.unwrap(q[:, ang], axis=0)
-        else:                          # each design's samples apart
+        elif np.any(ang):              # each design's samples apart
             T = int(np.sum(p.row == p.row[0]))
             q[:, ang] = np.unwrap(q[:, ang].reshape(-1, T, int(np.sum(ang))),
                                   axis=1).reshape(len(q), -1)
