@@ -26,6 +26,12 @@ Usage: python benchmarks/bench_sweep.py [--designs N] [--samples T] [--no-ceilin
        python benchmarks/bench_sweep.py --kernels   (one batch's compiled stages, CPU time: the
        kinematics kernel then the dynamics stage, as ``analyze`` runs them, against the sweep
        kernel that fuses them, ``linkdyn.dynamics.compiled.sweep``)
+       python benchmarks/bench_sweep.py --spatial [--designs N] [--samples T]   (a spatial
+       sweep: the RSUR four-bar's crank pin and crank length and the coupler's far end varied,
+       default 200 designs x 360 samples, its designs solved as one batch,
+       ``linkdyn.spatial.analyze_designs``, against a Python loop of ``linkdyn.spatial.analyze``
+       over the same designs, what spatial sweeps did before: the same-run ratio of the two,
+       each the shorter of two alternating runs, CPU time, one core)
 """
 
 from __future__ import annotations
@@ -80,6 +86,57 @@ def child(designs: int, samples: int, workers: int, per_design: int = 0) -> dict
     return {"designs": designs, "samples": samples, "workers": workers, "seconds": seconds,
             "rate": designs * samples / seconds, "cpu": cpu, "cpu_rate": designs * samples / cpu,
             "valid": int(df.valid.sum()), "peak_bytes": max(rss)}
+
+
+SPATIAL_BOX = {"bodies.crank.points.B[0]": (36.0, 44.0), "bodies.crank.points.B[2]": (-8.0, 8.0),
+               "bodies.coupler.points.C[2]": (148.0, 156.0)}
+SPATIAL_METRICS = ("peak_tau_J1", "rms_tau_J1", "peak_F_J2", "peak_F_J4", "peak_shaking_force")
+
+
+def spatial(designs: int, samples: int) -> dict:
+    """CPU seconds of a spatial sweep of the RSUR four-bar: its designs as one batch (the
+    runner's chunk, ``evaluate``) and one after another (``linkdyn.spatial.analyze`` per
+    design, then its metrics), alternately, twice each; and the largest difference of a
+    metric between the two, relative to the metric's largest value."""
+    from linkdyn import spatial as sp_mod
+    from linkdyn.studies import Task, space
+    from linkdyn.studies import metrics as metrics_mod
+    from linkdyn.studies.runner import evaluate
+
+    path = linkdyn.example_path("rsur")
+    sp = space(path, list(SPATIAL_BOX))
+    t = np.linspace(0.0, 1.0, samples)                  # one crank turn at 60 rpm
+    task = Task(sp, t, SPATIAL_METRICS)
+    values = sample(list(SPATIAL_BOX.values()), "sobol", designs, seed=0)
+
+    def batched():
+        return evaluate(task, values)
+
+    def loop():
+        out = {name: np.full(designs, np.nan) for name in SPATIAL_METRICS}
+        for k, v in enumerate(values):
+            try:
+                sol = sp_mod.analyze(sp.model(v), t)
+            except linkdyn.LinkdynError:
+                continue
+            for name, x in metrics_mod.evaluate(sol, SPATIAL_METRICS).items():
+                out[name][k] = x
+        return out
+    evaluate(task, values[:2])                           # imports
+    seconds = {"batch": [], "loop": []}
+    for _ in range(2):
+        for name, f in (("batch", batched), ("loop", loop)):
+            c0 = _cpu()
+            res = f()
+            seconds[name].append(_cpu() - c0)
+            if name == "batch":
+                got = res
+            else:
+                ref = res
+    worst = max(float(np.nanmax(np.abs(got[n] - ref[n])) / np.nanmax(np.abs(ref[n])))
+                for n in SPATIAL_METRICS)
+    return {"batch": min(seconds["batch"]), "loop": min(seconds["loop"]),
+            "valid": int(np.sum(got["valid"])), "worst": worst}
 
 
 def _cpu() -> float:
@@ -230,8 +287,22 @@ def main():
                     help="only one chunk's stages, CPU time, minimum of five runs")
     ap.add_argument("--kernels", action="store_true",
                     help="only one batch's compiled stages against the sweep kernel, CPU time")
+    ap.add_argument("--spatial", action="store_true",
+                    help="a spatial sweep (RSUR, default 200 designs): batched against the loop")
     ap.add_argument("--child", nargs=4, type=int, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.spatial:
+        D = args.designs if "--designs" in sys.argv else 200
+        r = spatial(D, args.samples)
+        print(f"RSUR spatial sweep: {D} Sobol designs x {args.samples} samples, crank pin, crank "
+              f"length and coupler end varied, metrics {', '.join(SPATIAL_METRICS)}; CPU s, each "
+              f"the shorter of 2 alternating runs (load average {os.getloadavg()[0]:.2f})")
+        print(f"  designs as one batch {r['batch']:.3g} s ({D * args.samples / r['batch']:.4g} "
+              f"design-samples/s), a loop of spatial.analyze {r['loop']:.3g} s "
+              f"({D * args.samples / r['loop']:.4g}): the batch runs {r['loop'] / r['batch']:.3g}x "
+              f"faster; {r['valid']} valid; largest metric difference {r['worst']:.2g} of its "
+              f"largest value")
+        return
     if args.child:
         print(json.dumps(child(*args.child)))
         return

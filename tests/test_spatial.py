@@ -571,26 +571,30 @@ def test_cli_check_and_analyze_on_a_spatial_model(tmp_path):
         assert res.exit_code == 2 and "not yet for spatial models" in res.output, command
 
 
+# a slider-crank driven by its slider, crank and rod in line at t = 0 (a dead centre)
+DEAD_CENTRE = {"mechanism": {"space": "spatial"},
+        "bodies": [{"name": "ground", "points": {"O": [0, 0, 0]}},
+                   {"name": "crank", "points": {"O": [0, 0, 0], "A": [0.1, 0, 0]},
+                    "mass": 1.0, "inertia": [0.001, 0.001, 0.001]},
+                   {"name": "rod", "points": {"A": [0.1, 0, 0], "B": [0.4, 0, 0]},
+                    "mass": 1.0, "inertia": [0.001, 0.001, 0.001]},
+                   {"name": "slider", "points": {"B": [0.4, 0, 0]},
+                    "mass": 1.0, "inertia": [0.001, 0.001, 0.001]}],
+        "joints": [{"name": "J1", "type": "revolute", "connect": ["ground.O", "crank.O"],
+                    "axis": [0, 0, 1]},
+                   {"name": "J2", "type": "revolute", "connect": ["crank.A", "rod.A"],
+                    "axis": [0, 0, 1]},
+                   {"name": "J3", "type": "revolute", "connect": ["rod.B", "slider.B"],
+                    "axis": [0, 0, 1]},
+                   {"name": "J4", "type": "prismatic", "connect": ["ground.O", "slider.B"],
+                    "axis": [1, 0, 0]}],
+        "drivers": [{"joint": "J4", "motion": {"kind": "expression", "q": "0.4 - t**2"}}]}
+
+
 def test_a_dead_centre_is_a_singular_position():
     """A slider-crank driven by its slider from the dead centre (crank and rod in line): the
     dependent joints' Jacobian has lost rank there (exit 3 at t = 0)."""
-    data = {"mechanism": {"space": "spatial"},
-            "bodies": [{"name": "ground", "points": {"O": [0, 0, 0]}},
-                       {"name": "crank", "points": {"O": [0, 0, 0], "A": [0.1, 0, 0]},
-                        "mass": 1.0, "inertia": [0.001, 0.001, 0.001]},
-                       {"name": "rod", "points": {"A": [0.1, 0, 0], "B": [0.4, 0, 0]},
-                        "mass": 1.0, "inertia": [0.001, 0.001, 0.001]},
-                       {"name": "slider", "points": {"B": [0.4, 0, 0]},
-                        "mass": 1.0, "inertia": [0.001, 0.001, 0.001]}],
-            "joints": [{"name": "J1", "type": "revolute", "connect": ["ground.O", "crank.O"],
-                        "axis": [0, 0, 1]},
-                       {"name": "J2", "type": "revolute", "connect": ["crank.A", "rod.A"],
-                        "axis": [0, 0, 1]},
-                       {"name": "J3", "type": "revolute", "connect": ["rod.B", "slider.B"],
-                        "axis": [0, 0, 1]},
-                       {"name": "J4", "type": "prismatic", "connect": ["ground.O", "slider.B"],
-                        "axis": [1, 0, 0]}],
-            "drivers": [{"joint": "J4", "motion": {"kind": "expression", "q": "0.4 - t**2"}}]}
+    data = DEAD_CENTRE
     with pytest.raises(AssemblyError, match="singular position") as err:
         linkdyn.analyze(model_from_dict(data), np.linspace(0.0, 0.2, 5))
     assert "at t = 0 s" in str(err.value) and "q_J4 = 0.4" in str(err.value)

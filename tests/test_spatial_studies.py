@@ -91,6 +91,176 @@ def test_a_sweep_of_a_point_coordinate_gives_each_design_analyzed_alone(tmp_path
     assert [p.unit for p in sp.params] == ["", "rad", "mm", "N"]
 
 
+# the designs of test_a_batched_spatial_sweep_is_each_design_analyzed_alone: the crank pin out of
+# the crank's plane and the crank's length (120 mm: the loop cannot close over a whole turn), the
+# coupler's mass, the load on the rocker, gravity and the crank's speed (other continuation nodes)
+BATCH = {"bodies.crank.points.B[2]": [-8.0, 0.0, 8.0, 0.0, 3.0, -5.0, 6.0],
+         "bodies.crank.points.B[0]": [40.0, 42.0, 38.0, 120.0, 45.0, 35.0, 40.0],
+         "bodies.coupler.mass": [0.55, 0.8, 0.3, 0.55, 0.55, 1.2, 0.55],
+         "loads[0].value[2]": [-20.0, -20.0, 5.0, -20.0, -35.0, -20.0, 0.0],
+         "mechanism.gravity[2]": [-9.81, -9.81, -9.81, -9.81, 0.0, -3.0, -9.81],
+         "drivers[0].motion.rpm": [60.0, 60.0, 60.0, 60.0, 60.0, 60.0, 150.0]}
+
+
+def test_a_batched_spatial_sweep_is_each_design_analyzed_alone(tmp_path):
+    """rsur's designs solved as one batch (every stage over all designs' samples, each design's
+    own continuation and Newton masks): each valid row's metrics are those of its own file,
+    written out and analyzed alone, to 1e-12 of their scale; the design that cannot close has
+    the message linkdyn.analyze raises for its file (without the file name)."""
+    from linkdyn.spatial.shaking import shaking_force
+
+    t = np.linspace(0.0, 1.0, 61)
+    df = linkdyn.sweep(linkdyn.example_path("rsur"), BATCH, t)
+    assert list(df["valid"]) == [True, True, True, False, True, True, True]
+    data = tomllib.loads(linkdyn.example_path("rsur").read_text())
+    for k in range(len(df)):
+        data["bodies"][1]["points"]["B"][2] = BATCH["bodies.crank.points.B[2]"][k]
+        data["bodies"][1]["points"]["B"][0] = BATCH["bodies.crank.points.B[0]"][k]
+        data["bodies"][2]["mass"] = BATCH["bodies.coupler.mass"][k]
+        data["loads"][0]["value"][2] = BATCH["loads[0].value[2]"][k]
+        data["mechanism"]["gravity"][2] = BATCH["mechanism.gravity[2]"][k]
+        data["drivers"][0]["motion"]["rpm"] = BATCH["drivers[0].motion.rpm"][k]
+        src = tmp_path / f"d{k}.toml"
+        src.write_text(dumps_toml(data))
+        if not df["valid"][k]:
+            with pytest.raises(linkdyn.AssemblyError) as err:
+                linkdyn.analyze(linkdyn.load(src), t)
+            assert str(err.value) == f"{src}: {df['reason'][k]}"
+            assert all(np.isnan(df[c][k]) for c in df.columns if c.startswith(("peak", "rms")))
+            continue
+        alone = linkdyn.analyze(linkdyn.load(src), t)
+        tau = alone.effort("J1")
+        expect = {"peak_tau_J1": np.max(np.abs(tau)), "rms_tau_J1": np.sqrt(np.mean(tau ** 2)),
+                  "peak_shaking_force": np.max(np.linalg.norm(shaking_force(alone), axis=1))}
+        for j in ("J1", "J2", "J3", "J4"):
+            expect[f"peak_F_{j}"] = np.max(np.linalg.norm(alone.reaction(j)[:, :3], axis=1))
+        for name, v in expect.items():
+            assert abs(df[name][k] - v) <= 1e-12 * abs(v), (k, name)
+    # the parameters reached the models: the coupler's mass, the speed
+    assert len(set(np.round(df["peak_tau_J1"][df["valid"]], 9))) == 6
+
+
+def _each_kind_as_tree_and_cut():
+    import copy
+
+    from test_spatial import DEAD_CENTRE, rscr, slider_crank
+    out = [(name, linkdyn.load(linkdyn.example_path(name))) for name in spatial_example_names()]
+    off = copy.deepcopy(DEAD_CENTRE)          # the crank pin off the slider's line, the crank
+    off["bodies"][1]["points"]["A"][1] = off["bodies"][2]["points"]["A"][1] = 0.02   # driven
+    off["drivers"] = [{"joint": "J1", "motion": {"kind": "constant_speed", "rpm": 60.0}}]
+    for name, data, cut in (("slider_crank", slider_crank(), None), ("rscr", rscr(), None),
+                            ("slider_crank_cut_universal", slider_crank(), ["J3"]),
+                            ("rscr_cut_cylindrical", rscr(), ["J3"]),
+                            ("planar_slider_crank_cut_prismatic", off, ["J4"])):
+        if cut:
+            data["topology"] = {"cut": cut}
+        out.append((name, linkdyn.io.model_from_dict(data)))
+    return out
+
+
+def test_a_batch_of_every_spatial_model_is_each_design_alone():
+    """Every bundled spatial model that analyze takes, and the slider-crank and RSCR with each
+    joint kind as a tree and as a cut joint: two designs in one batch (the second's bodies
+    heavier, its springs and dampers stiffer; a damper added beside each spring) give each
+    design's efforts, reactions, kinetic energy and coordinates alone, to 1e-12 of each one's
+    scale."""
+    from dataclasses import replace
+
+    from linkdyn import spatial
+    t = np.linspace(0.0, 0.2, 5)
+    done = []
+    for name, m in _each_kind_as_tree_and_cut():
+        try:
+            alone = [linkdyn.analyze(m, t)]
+        except linkdyn.LinkdynError:      # a model for simulate (free coordinates)
+            continue
+        springs = [ld for ld in m.loads if ld.kind == "spring"]
+        if springs:      # a damper beside each spring, and other constants in the second design
+            m = replace(m, loads=list(m.loads) + [replace(ld, kind="damper", name="", damping=3.0)
+                                                  for ld in springs])
+            alone = [linkdyn.analyze(m, t)]
+        heavy = replace(m, bodies=[replace(b, mass=2.0 * b.mass, inertia=3.0 * b.inertia)
+                                   for b in m.bodies],
+                        loads=[replace(ld, stiffness=2.0 * ld.stiffness, damping=2.0 * ld.damping,
+                                       free_length=0.9 * ld.free_length) for ld in m.loads])
+        alone.append(linkdyn.analyze(heavy, t))
+        sol, kept, errors = spatial.analyze_designs([m, heavy], t)
+        assert list(kept) == [0, 1] and errors == [None, None] and sol.batch == (2, 5), name
+        for k, one in enumerate(alone):
+            rows = slice(5 * k, 5 * k + 5)
+            for got, ref in ((sol.dynamics.tau[rows], one.dynamics.tau),
+                             (sol.dynamics.reactions[rows], one.dynamics.reactions),
+                             (sol.dynamics.kinetic_energy[rows], one.dynamics.kinetic_energy),
+                             (sol.motion.q[rows], one.motion.q)):
+                scale = max(float(np.max(np.abs(ref), initial=0.0)), 1e-300)
+                np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * scale, err_msg=name)
+        done.append(name)
+    assert {"rsur", "stewart", "spatial_slider_crank", "slider_crank_cut_universal",
+            "rscr_cut_cylindrical", "planar_slider_crank_cut_prismatic"} <= set(done)
+
+
+def test_a_design_at_a_dead_centre_in_a_batch_keeps_its_message():
+    """A slider-crank driven by its slider from the crank pin's height y: at y = 0 crank and
+    rod are in line at t = 0 (a dead centre, exit 3 alone); solved in one batch with designs
+    off the line, it is invalid with the message analyze raises for it alone, and the others
+    have the metrics they have alone."""
+    import copy
+
+    from test_spatial import DEAD_CENTRE as data
+
+    t = np.linspace(0.0, 0.2, 5)
+    ys = [0.02, 0.0, -0.03]
+    df = linkdyn.sweep(data, {"bodies.crank.points.A[1]": ys, "bodies.rod.points.A[1]": ys}, t)
+    assert list(df["valid"]) == [True, False, True]
+    for k, y in enumerate(ys):
+        one = copy.deepcopy(data)
+        one["bodies"][1]["points"]["A"][1] = one["bodies"][2]["points"]["A"][1] = y
+        if k == 1:
+            with pytest.raises(linkdyn.AssemblyError, match="singular position") as err:
+                linkdyn.analyze(linkdyn.io.model_from_dict(one), t)
+            err.value.file = ""
+            assert df["reason"][k] == str(err.value)
+            continue
+        alone = linkdyn.analyze(linkdyn.io.model_from_dict(one), t)
+        force = alone.effort("J4")
+        assert df["peak_force_J4"][k] == pytest.approx(np.max(np.abs(force)), rel=1e-12, abs=0)
+        for j in ("J1", "J2", "J3", "J4"):
+            v = np.max(np.linalg.norm(alone.reaction(j)[:, :3], axis=1))
+            assert df[f"peak_F_{j}"][k] == pytest.approx(v, rel=1e-12, abs=0), j
+
+
+def test_a_spatial_optimize_finds_the_design_of_the_per_design_path(monkeypatch):
+    """linkdyn.optimize of rsur's crank pin height scores its designs by the batch; scored
+    instead by each design's own linkdyn.analyze (the per-design path, written here), the
+    same seeded search ends at the same design with the same objective."""
+    from linkdyn.studies import optimize as opt
+    from linkdyn.studies import runner
+
+    bounds = {"bodies.crank.points.B[2]": (-10.0, 10.0)}
+    t = np.linspace(0.0, 1.0, 25)
+    kw = dict(minimize="peak_F_J2", popsize=4, maxiter=4, polish=False)
+    batched = linkdyn.optimize(linkdyn.example_path("rsur"), bounds, t, **kw)
+
+    def alone(task, values):
+        values = np.atleast_2d(values)
+        out = {"valid": np.ones(len(values), bool), "reason": np.full(len(values), "", object)}
+        for name in task.metrics:
+            out[name] = np.full(len(values), np.nan)
+        for k, v in enumerate(values):
+            sol = linkdyn.analyze(task.space.model(v), task.t)
+            for name in task.metrics:
+                j = name[len("peak_F_"):]
+                out[name][k] = np.max(np.linalg.norm(sol.reaction(j)[:, :3], axis=1))
+        return out
+    monkeypatch.setattr(opt, "evaluate", alone)
+    monkeypatch.setattr(runner, "evaluate", alone)
+    single = linkdyn.optimize(linkdyn.example_path("rsur"), bounds, t, **kw)
+    path = "bodies.crank.points.B[2]"
+    assert batched.values[path] == pytest.approx(single.values[path], rel=1e-9, abs=1e-9)
+    assert batched.metrics["peak_F_J2"] == pytest.approx(single.metrics["peak_F_J2"], rel=1e-12)
+    assert batched.history == pytest.approx(single.history, rel=1e-12)
+
+
 def test_peak_torque_metric_of_spatial_designs(tmp_path):
     """A crank about +x under gravity with a load at its tip: tau = cos(phi) (m g c + F L), so
     the sweep's peak_tau_J1 over the mass centre's coordinate c is |m g c + F L| (closed form),

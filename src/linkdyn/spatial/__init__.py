@@ -16,7 +16,7 @@ from . import dynamics as sd
 from . import kinematics as sk
 from .solution import Redundancy, SpatialSolution
 
-__all__ = ["analyze", "SpatialSolution", "Redundancy", "check"]
+__all__ = ["analyze", "analyze_designs", "SpatialSolution", "Redundancy", "check"]
 
 
 def analyze(model, t) -> SpatialSolution:
@@ -39,6 +39,44 @@ def analyze(model, t) -> SpatialSolution:
     dyn = sd.solve(model, p, motion, applied)
     return SpatialSolution(model, p, motion, coords, applied, dyn, sk.redundant_rows(model, p,
                                                                                   motion.J[0]))
+
+
+def analyze_designs(models, t):
+    """:func:`analyze` of D designs of one spatial model (the same bodies, joints, kinds and
+    drivers; other numbers) as one batch: every stage runs on all designs' samples at once
+    (:func:`~.kinematics.designs`, :func:`~.kinematics.solve_designs`), each design's Newton
+    solves converging on their own.
+
+    Parameters
+    ----------
+    models : sequence of Model
+        The D designs.
+    t : array_like (T,)
+        Times, s.
+
+    Returns
+    -------
+    solution : SpatialSolution or None
+        The designs ``kept`` solved together (``batch = (len(kept), T)``; None if no design
+        assembles).
+    kept : ndarray of int
+        The designs solved (those that assemble; one that passes a singular position is
+        kept too, its error given).
+    errors : list
+        Per design None, or the AssemblyError or ModelError :func:`analyze` raises for it.
+    """
+    t = np.asarray(t, float)
+    models = list(models)
+    p = sk.designs(models, len(t))
+    motion, kept, errors = sk.solve_designs(models, p, t)
+    if not len(kept):
+        return None, kept, errors
+    pr = sk.take(p, (kept[:, None] * len(t) + np.arange(len(t))).ravel())
+    coords = sk.joint_coordinates(models[0], pr, motion)
+    applied = sd.loads(models[0], pr, motion, coords)
+    dyn = sd.solve(models[0], pr, motion, applied)
+    return (SpatialSolution(models[0], pr, motion, coords, applied, dyn, (),
+                            batch=(len(kept), len(t))), kept, errors)
 
 
 def check(model) -> dict:

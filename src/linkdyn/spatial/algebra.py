@@ -67,6 +67,11 @@ def matvec(m: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.einsum("...ij,...j->...i", m, x)
 
 
+def transpose(m: np.ndarray) -> np.ndarray:
+    """``m^T`` (..., l, k) of ``m`` (..., k, l)."""
+    return np.swapaxes(m, -1, -2)
+
+
 def crm(v: np.ndarray) -> np.ndarray:
     """The twist cross operator (..., 6, 6): ``crm(V) U = V x U`` (rate of a twist ``U``
     carried by a body moving with ``V``): ``[[w]x, 0], [[v]x, [w]x]]``."""

@@ -34,31 +34,65 @@ class Loads:
     work_power: np.ndarray = None
 
 
+def mass_centres(p: Plan, m: Motion) -> np.ndarray:
+    """Mass centres (T, n, 3), global."""
+    return m.tree.o + sa.matvec(m.tree.R, p.com)
+
+
 def mass_frames(model, p: Plan, m: Motion):
     """Mass centres (T, n, 3) and spatial inertias about O (T, n, 6, 6), global."""
     R = m.tree.R
-    c = m.tree.o + np.einsum("tnij,nj->tni", R, p.com)
+    c = mass_centres(p, m)
     Ic = R @ p.inertia @ np.swapaxes(R, -1, -2)
     return c, sa.inertia_about_origin(np.broadcast_to(p.mass, c.shape[:-1]), c, Ic)
 
 
 def point_of(p: Plan, m: Motion, body: str, r_local: np.ndarray):
-    """A body point's position, velocity and acceleration (T, 3) each, global."""
+    """A body point's position, velocity and acceleration (T, 3) each, global (``r_local``
+    (3,), or (N, 3) at a batch's rows)."""
     i = p.topo.bodies.index(body)
-    r = m.tree.o[:, i] + m.tree.R[:, i] @ r_local
+    r = m.tree.o[:, i] + sa.matvec(m.tree.R[:, i], r_local)
     return r, sa.point_velocity(m.V[:, i], r), sa.point_acceleration(m.V[:, i], m.A[:, i], r)
+
+
+def _number(p: Plan, model, f):
+    """``f(model)``; at a batch's rows (``Plan.row``) each row's design's, (N, ...)."""
+    if p.row is None:
+        return f(model)
+    return np.asarray([f(x) for x in p.models], float)[p.row]
+
+
+def _value(p: Plan, model, k: int, t: np.ndarray, motion):
+    """The value of load ``k`` at the times ``t`` (T,) (``motion``: the joints' coordinates
+    and rates, for formulas in ``q_``/``qd_``); at a batch's rows each design's own, on its
+    rows (``t`` then the rows' times)."""
+    def one(mod, sl):
+        v = mod.loads[k].value
+        if v is None:
+            return None
+        if getattr(v, "state_variables", ()):
+            return v(t[sl], tuple([None if x is None else x[sl] for x in part]
+                                  for part in motion))
+        return v(t[sl])
+    if p.row is None:
+        return one(model, slice(None))
+    edges = np.flatnonzero(np.diff(p.row)) + 1
+    blocks = zip(np.concatenate([[0], edges]), np.concatenate([edges, [len(p.row)]]))
+    parts = [one(p.models[p.row[a]], slice(a, b)) for a, b in blocks]
+    return None if parts[0] is None else np.concatenate(parts)
 
 
 def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
     """Gravity and every load of ``model`` as wrenches on the bodies. ``coords``: the joints'
-    coordinates (:func:`kinematics.joint_coordinates`), for formulas in ``q_``/``qd_``."""
+    coordinates (:func:`kinematics.joint_coordinates`), for formulas in ``q_``/``qd_``. At a
+    batch's rows (``Plan.row``) every number of a load is each row's design's."""
     T, n = m.q.shape[0], p.topo.n
     w = np.zeros((T, n, 6))
-    c, _ = mass_frames(model, p, m)
-    g = np.asarray(model.gravity, float)
+    c = mass_centres(p, m)
+    g = _number(p, model, lambda x: np.asarray(x.gravity, float))[..., None, :]
     # gravity: m g at the mass centre
-    w += sa.force_wrench(p.mass[None, :, None] * g, c)
-    pe = -np.einsum("n,tni,i->t", p.mass, c, g)
+    w += sa.force_wrench(p.mass[..., None] * g, c)
+    pe = -np.sum(p.mass * np.sum(c * g, -1), -1)
     names = [jt.name for jt in model.joints]
     # the joints' coordinates and rates, for formulas in q_/qd_ (when a load has one)
     motion = (([coords[x][0][:, 0] if coords[x][0].shape[1] == 1 else None for x in names],
@@ -66,27 +100,34 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
               if any(getattr(ld.value, "state_variables", ()) for ld in model.loads) else None)
     conservative = w.copy()            # gravity's and the springs' wrenches
     idx = p.topo.bodies.index
-    for load in model.loads:
-        value = (load.value(m.t, motion) if load.value is not None
-                 and getattr(load.value, "state_variables", ()) else
-                 load.value(m.t) if load.value is not None else None)
+    for k, load in enumerate(model.loads):
+        value = _value(p, model, k, m.t, motion)
         b = idx(load.body)
+
+        def point(x, k=k, which="point"):     # a load's end point on its body, body frame
+            ld = x.loads[k]
+            return (x.body(ld.body).points[ld.point] if which == "point"
+                    else x.body(ld.body2).points[ld.point2])
         if load.kind == "force":           # F at the point: [r x F; F]
-            r, _, _ = point_of(p, m, load.body, model.body(load.body).points[load.point])
+            r, _, _ = point_of(p, m, load.body, _number(p, model, point))
             w[:, b] += sa.force_wrench(value, r)
         elif load.kind == "torque":        # a couple [T; 0]
             w[:, b] += sa.free_vector(value, True)
         elif load.kind in ("spring", "damper"):
-            r1, v1, _ = point_of(p, m, load.body, model.body(load.body).points[load.point])
-            r2, v2, _ = point_of(p, m, load.body2, model.body(load.body2).points[load.point2])
+            r1, v1, _ = point_of(p, m, load.body, _number(p, model, point))
+            r2, v2, _ = point_of(p, m, load.body2,
+                                 _number(p, model, lambda x: point(x, which="point2")))
             d = r2 - r1
             length = np.linalg.norm(d, axis=-1)
             u = d / np.where(length > 0, length, 1.0)[:, None]
             if load.kind == "spring":      # tension k (l - l0) pulls the ends together
-                tension = load.stiffness * (length - load.free_length)
-                pe = pe + 0.5 * load.stiffness * (length - load.free_length) ** 2
+                stiffness = _number(p, model, lambda x, k=k: x.loads[k].stiffness)
+                stretch = length - _number(p, model, lambda x, k=k: x.loads[k].free_length)
+                tension = stiffness * stretch
+                pe = pe + 0.5 * stiffness * stretch ** 2
             else:                          # c dl/dt
-                tension = load.damping * np.sum(u * (v2 - v1), -1)
+                tension = (_number(p, model, lambda x, k=k: x.loads[k].damping)
+                           * np.sum(u * (v2 - v1), -1))
             w[:, b] += sa.force_wrench(tension[:, None] * u, r1)
             w[:, idx(load.body2)] -= sa.force_wrench(tension[:, None] * u, r2)
             if load.kind == "spring":
@@ -96,7 +137,7 @@ def loads(model, p: Plan, m: Motion, coords: dict) -> Loads:
             j = names.index(load.joint)
             jt = model.joints[j]
             pose = sk.joint_pose(p, m.tree, j, jt)
-            e = pose.RA @ p.geometry[j].e
+            e = sa.matvec(pose.RA, p.geometry[j].e)
             unit = (sa.free_vector(e, True) if p.kinds[j].angular
                     else sa.force_wrench(e, pose.rq))
             w[:, idx(jt.body_b)] += value[:, None] * unit
@@ -130,8 +171,17 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
     w_star, w_tilde, Q, ke = generalized(model, p, m, applied)
     nd = len(p.driven)
     M, x, rank = efforts(p, m, Q)
-    r = int(np.max(rank))
+    # the rank of [E_d, J^T]: the largest over each design's samples
+    if p.row is None:
+        r_row = np.full(T, int(np.max(rank, initial=0)))
+    else:
+        top = np.zeros(len(p.models), int)
+        np.maximum.at(top, p.row, rank)
+        r_row = top[p.row]
+    r = int(np.min(r_row, initial=M.shape[2]))
     N = sa.null_space(M, r)                          # (T, nd + rows, k)
+    # a batch's designs of a higher rank: their extra columns zero (no part in z)
+    N = N * ((r + np.arange(N.shape[2])) >= r_row[:, None])[:, None, :]
     R0 = reactions(model, p, m, w_tilde, x[:, :nd], x[:, nd:])
     if N.shape[2]:
         # the reactions of each null column (no inertia, no load): R(x_p) + G z
@@ -222,14 +272,14 @@ def reactions(model, p: Plan, m: Motion, w_tilde, tau, lam) -> np.ndarray:
         if j in driven:
             jt = model.joints[j]
             pose = sk.joint_pose(p, m.tree, j, jt)
-            e = pose.RA @ p.geometry[j].e
+            e = sa.matvec(pose.RA, p.geometry[j].e)
             unit = (sa.free_vector(e, True) if p.kinds[j].angular
                     else sa.force_wrench(e, pose.rq))             # the effort's wrench on B
             f = f - s * tau[..., driven[j], None] * unit[ex]
         out[..., j, :] = s * f
     # [n_O; f] -> [F; M about B's point]
     for j, jt in enumerate(model.joints):
-        rq = m.tree.o[:, idx(jt.body_b)] + m.tree.R[:, idx(jt.body_b)] @ p.geometry[j].q
+        rq = m.tree.o[:, idx(jt.body_b)] + sa.matvec(m.tree.R[:, idx(jt.body_b)], p.geometry[j].q)
         F, M = sa.wrench_about(out[..., j, :], rq[ex])
         out[..., j, :] = np.concatenate([F, M], -1)
     return out

@@ -10,7 +10,7 @@ Redundant closure rows (a planar loop in space) are fine: every solve is least s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -30,7 +30,8 @@ LENGTH_STEP = 0.1    # of the mechanism's size, continuation step of a sliding d
 
 @dataclass(frozen=True)
 class Plan:
-    """The numeric form of a spatial model that the stages read (one design).
+    """The numeric form of a spatial model that the stages read: one design, or the rows of
+    a batch of designs (:func:`designs`: every design's numbers repeated over its samples).
 
     Attributes
     ----------
@@ -57,6 +58,14 @@ class Plan:
         Closure rows that are lengths (else angles).
     length_coordinate : ndarray of bool (n_q,)
         Tree coordinates that are lengths (else angles).
+    row : ndarray of int (N,) or None
+        A batch's rows: the design (index in ``models``) of each row. Then the per-design
+        numbers (``geometry``'s arrays, ``q0``, ``mass``, ``com``, ``inertia``, ``size``) have
+        a leading row axis (N, ...), the stages' arrays the same rows (a design's samples one
+        after another, design after design); None for one design (its numbers broadcast over
+        the samples).
+    models : tuple[Model, ...] or None
+        A batch's designs, for the numbers the stages read from the model (loads, gravity).
     """
 
     topo: object
@@ -73,6 +82,8 @@ class Plan:
     size: float
     length_row: np.ndarray
     length_coordinate: np.ndarray
+    row: np.ndarray | None = None
+    models: tuple | None = None
 
 
 def plan(model) -> Plan:
@@ -112,6 +123,47 @@ def plan(model) -> Plan:
                 np.array(lengths, dtype=bool))
 
 
+_PER_DESIGN = ("q0", "mass", "com", "inertia", "size")
+
+
+def designs(models, T: int) -> Plan:
+    """The batch :class:`Plan` of D designs of one model (the same bodies, joints, kinds and
+    drivers; other numbers) at T samples each: every design's :func:`plan`, its numbers
+    repeated over its T rows (``Plan.row``). A ModelError where a design's topology differs
+    from the first's."""
+    plans = [plan(m) for m in models]
+    first = plans[0]
+    for m, q in zip(models[1:], plans[1:]):
+        if (q.topo.tree_joint != first.topo.tree_joint or q.topo.cut != first.topo.cut
+                or q.topo.parent != first.topo.parent or q.topo.sign != first.topo.sign
+                or q.cols != first.cols or q.kinds != first.kinds):
+            raise ModelError("a design's joints form another tree than the first design's",
+                             file=m.source, field="joints",
+                             fix="Vary numbers only, not the joints' kinds or connections")
+    row = np.repeat(np.arange(len(plans)), T)
+    geometry = tuple(sj.Geometry(*(np.stack([getattr(q.geometry[j], f.name) for q in plans])[row]
+                                   for f in fields(sj.Geometry)))
+                     for j in range(len(first.geometry)))
+    per = {k: np.stack([np.asarray(getattr(q, k), float) for q in plans])[row]
+           for k in _PER_DESIGN}
+    return replace(first, geometry=geometry, row=row, models=tuple(models), **per)
+
+
+def take(p: Plan, idx) -> Plan:
+    """The batch plan ``p`` at its rows ``idx`` (int array); one design's plan as it is."""
+    if p.row is None:
+        return p
+    geometry = tuple(sj.Geometry(*(getattr(g, f.name)[idx] for f in fields(sj.Geometry)))
+                     for g in p.geometry)
+    return replace(p, geometry=geometry, row=p.row[idx],
+                   **{k: getattr(p, k)[idx] for k in _PER_DESIGN})
+
+
+def _size(p: Plan) -> np.ndarray:
+    """The size (..., 1): (1,) for one design, (N, 1) for a batch's rows."""
+    return np.asarray(p.size, float)[..., None]
+
+
 # ---------------------------------------------------------------- the tree
 @dataclass(frozen=True)
 class Tree:
@@ -142,15 +194,15 @@ def poses(p: Plan, q: np.ndarray) -> Tree:
         Rrel, d = kind.relative(g, qi)
         if s > 0:        # child B: R_B = R_A R_rel, r_Bq = r_Ap + R_A d
             RA = R[:, par]
-            rp = o[:, par] + RA @ g.p
+            rp = o[:, par] + sa.matvec(RA, g.p)
             RB = RA @ Rrel
             rq = rp + sa.matvec(RA, d)
-            R[:, i], o[:, i] = RB, rq - RB @ g.q
+            R[:, i], o[:, i] = RB, rq - sa.matvec(RB, g.q)
         else:            # child A: R_A = R_B R_rel^T, r_Ap = r_Bq - R_A d
             RB = R[:, par]
-            rq = o[:, par] + RB @ g.q
+            rq = o[:, par] + sa.matvec(RB, g.q)
             RA = RB @ np.swapaxes(Rrel, -1, -2)
-            R[:, i], o[:, i] = RA, rq - sa.matvec(RA, d) - RA @ g.p
+            R[:, i], o[:, i] = RA, rq - sa.matvec(RA, d) - sa.matvec(RA, g.p)
         c[:, i] = rq
         S.append(s * kind.screws(g, RA, RB, rq, qi))
     return Tree(R, o, c, S)
@@ -160,8 +212,8 @@ def joint_pose(p: Plan, tree: Tree, j: int, model_joint) -> sj.Pose:
     """A joint's :class:`~linkdyn.spatial.joints.Pose` at the samples."""
     a, b = p.topo.bodies.index(model_joint.body_a), p.topo.bodies.index(model_joint.body_b)
     g = p.geometry[j]
-    return sj.Pose(tree.R[:, a], tree.R[:, b], tree.o[:, a] + tree.R[:, a] @ g.p,
-                   tree.o[:, b] + tree.R[:, b] @ g.q)
+    return sj.Pose(tree.R[:, a], tree.R[:, b], tree.o[:, a] + sa.matvec(tree.R[:, a], g.p),
+                   tree.o[:, b] + sa.matvec(tree.R[:, b], g.q))
 
 
 def twists(p: Plan, tree: Tree, qd: np.ndarray) -> np.ndarray:
@@ -215,7 +267,12 @@ def joint_coordinates(model, p: Plan, m: "Motion") -> dict:
         RAt = np.swapaxes(pose.RA, -1, -2)
         q = kind.coordinates(g, RAt @ pose.RB, sa.matvec(RAt, pose.rq - pose.rp))
         ang = np.array([x for _, x in kind.coordinates_named])
-        q[:, ang] = np.unwrap(q[:, ang], axis=0)
+        if p.row is None:
+            q[:, ang] = np.unwrap(q[:, ang], axis=0)
+        elif np.any(ang):              # each design's samples apart
+            T = int(np.sum(p.row == p.row[0]))
+            q[:, ang] = np.unwrap(q[:, ang].reshape(-1, T, int(np.sum(ang))),
+                                  axis=1).reshape(len(q), -1)
         S = kind.screws(g, pose.RA, pose.RB, pose.rq, q)
         St = np.swapaxes(S, -1, -2)
         qd, _, _ = sa.lstsq(St, m.V[:, b] - m.V[:, a], 1e-12)
@@ -262,7 +319,7 @@ def closure_bias(model, p: Plan, tree: Tree, V: np.ndarray) -> np.ndarray:
 
 def scaled(p: Plan, g: np.ndarray) -> np.ndarray:
     """The residual with its length rows divided by the mechanism's size (dimensionless)."""
-    return g / np.where(p.length_row, p.size, 1.0)
+    return g / np.where(p.length_row, _size(p), 1.0)
 
 
 def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndarray, np.ndarray]:
@@ -273,20 +330,22 @@ def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndar
     q = q.copy()
     dep = p.dependent
     err = np.full(len(q), np.inf)
-    active = np.arange(len(q))
+    active, pa = np.arange(len(q)), p
     for _ in range(iterations):
-        g, _, J = closure(model, p, poses(p, q[active]))
-        before, err[active] = err[active], np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
+        g, _, J = closure(model, pa, poses(pa, q[active]))
+        before, err[active] = err[active], np.max(np.abs(scaled(pa, g)), axis=1, initial=0.0)
         at_rounding = (err[active] == 0) | ((err[active] < CLOSED)
                                            & (err[active] > 0.5 * before))
-        active, g, J = active[~at_rounding], g[~at_rounding], J[~at_rounding]
+        if np.any(at_rounding):
+            active, g, J = active[~at_rounding], g[~at_rounding], J[~at_rounding]
+            pa = take(p, active)
         if not len(active):
             break
         step, _, _ = sa.lstsq(J[:, :, dep], g, 1e-12)
         q[np.ix_(active, dep)] -= step
     else:
-        g, _, _ = closure(model, p, poses(p, q[active]))
-        err[active] = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
+        g, _, _ = closure(model, pa, poses(pa, q[active]))
+        err[active] = np.max(np.abs(scaled(pa, g)), axis=1, initial=0.0)
     return q, err
 
 
@@ -299,7 +358,8 @@ def rank_of(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
     if J.shape[1] == 0 or J.shape[2] == 0:
         return np.zeros(len(J), dtype=int)
     lengths = p.length_coordinate if cols is None else p.length_coordinate[cols]
-    Jn = (J / np.where(p.length_row, p.size, 1.0)[:, None]) * np.where(lengths, p.size, 1.0)
+    Jn = ((J / np.where(p.length_row, _size(p), 1.0)[..., None])
+          * np.where(lengths, _size(p), 1.0)[..., None, :])
     s = np.linalg.svd(Jn, compute_uv=False)
     return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
 
@@ -332,20 +392,35 @@ def driver_motion(model, t: np.ndarray):
     return tuple(np.stack([np.broadcast_to(o[k], t.shape) for o in out], -1) for k in range(3))
 
 
-def _steps(p: Plan, a: np.ndarray, b: np.ndarray) -> int:
-    """Continuation steps from driver values ``a`` to ``b`` (n_drivers,)."""
-    if not len(a):
-        return 1
-    scale = np.array([ANGLE_STEP if p.kinds[p.topo.tree_joint[i]].angular
-                      else LENGTH_STEP * p.size for i in p.topo.driven])
-    return max(1, int(np.ceil(np.max(np.abs(b - a) / scale))))
+def _scale(p: Plan) -> np.ndarray:
+    """Each design's continuation step of each driver (D, n_drivers): ``ANGLE_STEP`` for an
+    angle, ``LENGTH_STEP`` times the design's size for a length (one design: D = 1)."""
+    angular = np.array([p.kinds[p.topo.tree_joint[i]].angular for i in p.topo.driven], bool)
+    return np.where(angular, ANGLE_STEP, LENGTH_STEP * np.atleast_1d(p.size)[:, None])
+
+
+def _steps(scale: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Continuation steps (...) from driver values ``a`` to ``b`` (..., n_drivers), each
+    driver's step ``scale``."""
+    if not a.shape[-1]:
+        return np.ones(a.shape[:-1], dtype=int)
+    return np.maximum(1, np.ceil(np.max(np.abs(b - a) / scale, -1))).astype(int)
+
+
+def _nodes(scale: np.ndarray, qi: np.ndarray) -> list:
+    """The continuation nodes of one design's driver values ``qi`` (T, n_drivers): the first
+    sample, each sample where the drivers have moved by more than a step from the last node,
+    and the last sample."""
+    nodes = [0]
+    for k in range(1, len(qi)):
+        if _steps(scale, qi[nodes[-1]], qi[k]) > 1 or k == len(qi) - 1:
+            nodes.append(k)
+    return nodes
 
 
 def assemble(model, p: Plan, t: np.ndarray, qi: np.ndarray) -> np.ndarray:
     """Coordinates (T, n_q) closing the loops at every sample, on the branch the design pose
-    picks: continuation from the design pose to the first sample, then from node to node
-    along the samples (a node where the drivers have moved by a step), each sample then
-    solved from its node's solution, all samples together.
+    picks (:func:`assemble_designs` of this one design).
 
     Raises
     ------
@@ -355,58 +430,138 @@ def assemble(model, p: Plan, t: np.ndarray, qi: np.ndarray) -> np.ndarray:
     ModelError
         A mobility from the closure Jacobian's rank that differs from the number of drivers.
     """
-    T = len(t)
-    q = np.tile(p.q0, (T, 1))
-    q[:, p.driven] = qi
-    here = p.q0.copy()
-    # design pose -> first sample, then node to node
-    nodes = [0]
-    for k in range(1, T):
-        if _steps(p, qi[nodes[-1]], qi[k]) > 1 or k == T - 1:
-            nodes.append(k)
-    start, previous, last = p.q0[p.driven], None, None
-    for k in nodes:
-        n = _steps(p, start, qi[k])
-        for u in np.linspace(0, 1, n + 1)[1:]:
-            guess = here.copy()
-            guess[p.driven] = start + u * (qi[k] - start)
-            if last is not None:     # secant predictor from the last two solutions
-                ratio = _ratio(guess[p.driven] - here[p.driven], here[p.driven] - last[p.driven])
-                guess[p.dependent] += ratio * (here[p.dependent] - last[p.dependent])
-            sol, err = newton(model, p, guess[None])
-            if err[0] > CLOSED:
-                if previous is None:
-                    raise _fail(model, t[0], guess[p.driven], "the mechanism cannot be "
-                                "assembled from its design pose", "Check the geometry, or give "
-                                "a design pose nearer the first sample's")
-                _first_open(model, p, t, qi, previous, k, here)
-            last, here = here, sol[0]
-        if previous is None:
-            _check_mobility(model, p, here)
-        q[k] = here
-        start, previous = qi[k], k
+    q, errors = assemble_designs([model], p, t, qi)
+    if errors[0] is not None:
+        raise errors[0]
+    return q
+
+
+def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
+    """Close the loops of D designs at the T samples ``t``, all designs together: continuation
+    from each design's pose to its first sample, then from node to node along the samples (a
+    node where its drivers have moved by a step), each sample then solved from its nodes'
+    solutions, every design's samples in one Newton solve.
+
+    Parameters
+    ----------
+    models : sequence of Model
+        The D designs (one: ``p`` is its plan; more: ``p`` their batch plan, :func:`designs`).
+    qi : ndarray (D T, n_drivers)
+        The drivers' coordinates, design after design.
+
+    Returns
+    -------
+    q : ndarray (D T, n_q)
+        The tree coordinates (NaN for a design that fails).
+    errors : list
+        Per design None, or the AssemblyError or ModelError :func:`assemble` raises for it
+        alone (each design's continuation is its own: its nodes, its steps).
+    """
+    D, T = len(models), len(t)
+    model, dep, drv = models[0], p.dependent, p.driven
+    pd = take(p, np.arange(D) * T)                      # one row per design
+    q0 = np.broadcast_to(pd.q0, (D, p.n_q))
+    scale = np.broadcast_to(_scale(pd), (D, len(drv)))
+    Q = qi.reshape(D, T, len(drv))
+    # each design's nodes: one list per distinct (driver history, step)
+    keys, group = np.unique(np.concatenate([Q.reshape(D, T * len(drv)), scale, np.zeros((D, 1))],
+                                           1), axis=0, return_inverse=True)
+    group = np.ravel(group)
+    lists = [_nodes(scale[int(np.argmax(group == g))], Q[int(np.argmax(group == g))])
+             for g in range(len(keys))]
+    K = max(len(x) for x in lists)
+    node = np.full((D, K), -1)
+    for g, x in enumerate(lists):
+        node[group == g, :len(x)] = x
+    errors = [None] * D
+    alive = np.ones(D, bool)
+    q = np.repeat(q0, T, axis=0)
+    q[:, drv] = qi
+    here, last = q0.copy(), q0.copy()
+    has_last = np.zeros(D, bool)
+    start, previous = q0[:, drv].copy(), np.full(D, -1)
+    for i in range(K):
+        idx = np.flatnonzero(alive & (node[:, i] >= 0))
+        k = node[idx, i]
+        target = Q[idx, k]
+        n = _steps(scale[idx], start[idx], target)
+        for step in range(int(np.max(n, initial=0))):
+            sub = np.flatnonzero(alive[idx] & (step < n))
+            dd = idx[sub]
+            if not len(dd):
+                break
+            u = (step + 1) / n[sub]
+            guess = here[dd].copy()
+            guess[:, drv] = start[dd] + u[:, None] * (target[sub] - start[dd])
+            # secant predictor from the last two solutions
+            new, old = guess[:, drv] - here[dd][:, drv], here[dd][:, drv] - last[dd][:, drv]
+            den = np.sum(old * old, 1)
+            ratio = np.where(has_last[dd] & (den > 0), np.sum(new * old, 1)
+                             / np.where(den > 0, den, 1.0), 0.0)
+            guess[:, dep] += ratio[:, None] * (here[dd][:, dep] - last[dd][:, dep])
+            sol, err = newton(model, take(pd, dd), guess)
+            bad = err > CLOSED
+            for j in np.flatnonzero(bad):             # the designs that stop here: their error
+                d = int(dd[j])
+                if previous[d] < 0:
+                    errors[d] = _fail(models[d], t[0], guess[j, drv], "the mechanism cannot be "
+                                      "assembled from its design pose", "Check the geometry, or "
+                                      "give a design pose nearer the first sample's")
+                else:
+                    try:
+                        _first_open(models[d], take(pd, [d]), t, Q[d], int(previous[d]),
+                                    int(node[d, i]), here[d])
+                    except AssemblyError as e:
+                        errors[d] = e
+                alive[d] = False
+            ok = dd[~bad]
+            last[ok], here[ok], has_last[ok] = here[ok], sol[~bad], True
+        done = idx[alive[idx]]
+        first = done[previous[done] < 0]
+        if len(first):                                  # at the assembly: the mobility
+            for d, e in zip(first, _mobility_errors([models[d] for d in first],
+                                                    take(pd, first), here[first])):
+                if e is not None:
+                    errors[d], alive[d] = e, False
+            done = idx[alive[idx]]
+        q[done * T + node[done, i]] = here[done]
+        start[done], previous[done] = Q[done, node[done, i]], node[done, i]
     # every sample from its nodes' solutions: between the node at or before it and the next,
     # in proportion to the drivers' travel
-    nodes = np.asarray(nodes)
-    a = nodes[np.searchsorted(nodes, np.arange(T), side="right") - 1]
-    b = nodes[np.minimum(np.searchsorted(nodes, np.arange(T), side="left"), len(nodes) - 1)]
-    span = qi[b] - qi[a]
-    u = np.sum((qi - qi[a]) * span, 1) / np.where(np.sum(span * span, 1) > 0,
-                                                  np.sum(span * span, 1), 1.0)
-    guess = q[a] + u[:, None] * (q[b] - q[a])
-    guess[:, p.driven] = qi
-    q, err = newton(model, p, guess)
-    bad = np.flatnonzero(err > CLOSED)
-    if len(bad):
-        k = int(bad[0])
-        raise _fail(model, t[k], qi[k], "the loops stop closing",
-                    "Check the driver's range: the mechanism cannot reach this driver value")
-    return q
+    guess = np.full_like(q, np.nan)
+    for g, x in enumerate(lists):
+        ds = np.flatnonzero(alive & (group == g))
+        if not len(ds):
+            continue
+        x = np.asarray(x)
+        a = x[np.searchsorted(x, np.arange(T), side="right") - 1]
+        b = x[np.minimum(np.searchsorted(x, np.arange(T), side="left"), len(x) - 1)]
+        qiD, qD = Q[ds], q.reshape(D, T, -1)[ds]
+        span = qiD[:, b] - qiD[:, a]
+        s2 = np.sum(span * span, -1)
+        u = np.sum((qiD - qiD[:, a]) * span, -1) / np.where(s2 > 0, s2, 1.0)
+        gD = qD[:, a] + u[..., None] * (qD[:, b] - qD[:, a])
+        gD[..., drv] = qiD
+        guess.reshape(D, T, -1)[ds] = gD
+    rows = np.flatnonzero(np.repeat(alive, T))
+    q = np.full_like(q, np.nan)
+    if len(rows):
+        q[rows], err = newton(model, take(p, rows), guess[rows])
+        bad = np.zeros(D * T, bool)
+        bad[rows] = err > CLOSED
+        for d in np.flatnonzero(np.any(bad.reshape(D, T), 1)):
+            k = int(np.argmax(bad.reshape(D, T)[d]))
+            errors[d] = _fail(models[d], t[k], Q[d, k], "the loops stop closing",
+                              "Check the driver's range: the mechanism cannot reach this "
+                              "driver value")
+            q[d * T:(d + 1) * T] = np.nan
+    return q, errors
 
 
 def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
     """Raise the AssemblyError of the first sample after node ``previous`` (solved: ``here``)
-    up to node ``k`` where the loops stop closing, following them sample by sample."""
+    up to node ``k`` where the loops stop closing, following them sample by sample (``p``:
+    this design's plan, one row)."""
     for m in range(previous + 1, k + 1):
         guess = here.copy()
         guess[p.driven] = qi[m]
@@ -424,24 +579,21 @@ def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
                 "driver value")
 
 
-def _ratio(new: np.ndarray, old: np.ndarray) -> float:
-    """How far ``new`` goes along ``old`` (driver steps): ``new . old / old . old``, 0 for none."""
-    den = float(old @ old)
-    return float(new @ old) / den if den > 0 else 0.0
-
-
-def _check_mobility(model, p: Plan, q: np.ndarray) -> None:
-    """At the assembly: the mobility from the closure Jacobian's rank, ``n_q - rank J``, must
-    equal the number of drivers (exit 2 otherwise)."""
-    _, _, J = closure(model, p, poses(p, q[None]))
-    mob = p.n_q - int(rank_of(p, J)[0])
-    if mob != len(model.drivers):
-        raise ModelError(
+def _mobility_errors(models, p: Plan, q: np.ndarray) -> list:
+    """At the assembly ``q`` (D, n_q) of designs ``models`` (``p``: their plan, a row each):
+    the mobility from the closure Jacobian's rank, ``n_q - rank J``, must equal the number
+    of drivers; per design None or the ModelError (exit 2)."""
+    _, _, J = closure(models[0], p, poses(p, q))
+    out = []
+    for model, mob in zip(models, p.n_q - rank_of(p, J)):
+        mob = int(mob)
+        out.append(None if mob == len(model.drivers) else ModelError(
             f"the mechanism has mobility {mob} (from the closure Jacobian's rank at the "
             f"assembly; Grübler–Kutzbach gives {p.topo.mobility}) but "
             f"{len(model.drivers)} driver(s)", file=model.source, field="drivers",
             fix="Give one driver per degree of freedom" if mob > len(model.drivers) else
-            "Remove drivers, or check the joints and axes")
+            "Remove drivers, or check the joints and axes"))
+    return out
 
 
 @dataclass(frozen=True)
@@ -467,16 +619,57 @@ class Motion:
 def solve(model, p: Plan, t: np.ndarray) -> Motion:
     """Positions, rates and accelerations at the times ``t`` (T,): the drivers' motion gives
     the independent coordinates; the dependent ones close the loops (:func:`assemble`), then
-    :func:`motion_at`; exit 3 where ``J_dep`` loses rank."""
-    qi, qdi, qddi = driver_motion(model, t)
-    q = assemble(model, p, t, qi)
-    m = motion_at(model, p, t, q, qdi, qddi)
-    dep = p.dependent
-    singular = rank_of(p, m.J[:, :, dep], dep) < len(dep)
-    if np.any(singular):
-        k = int(np.argmax(singular))
-        raise _fail(model, t[k], qi[k], SINGULAR, SINGULAR_FIX)
+    :func:`motion_at`; exit 3 where ``J_dep`` loses rank (:func:`solve_designs` of this one
+    design)."""
+    m, _, errors = solve_designs([model], p, t)
+    if errors[0] is not None:
+        raise errors[0]
     return m
+
+
+def solve_designs(models, p: Plan, t: np.ndarray):
+    """:func:`solve` of D designs at once (``p``: their batch plan, :func:`designs`, or the
+    one design's plan).
+
+    Returns
+    -------
+    motion : Motion
+        The kinematics at the rows of the designs ``kept`` (each design's T samples, design
+        after design; ``t`` (T,) for one design, the rows' times for a batch).
+    kept : ndarray of int
+        The designs that assemble (a design that passes a singular position is kept, its
+        error given).
+    errors : list
+        Per design None, or the AssemblyError or ModelError :func:`solve` raises for it alone.
+    """
+    D, T = len(models), len(t)
+    qi, qdi, qddi = driver_motions(models, t)
+    q, errors = assemble_designs(models, p, t, qi)
+    kept = np.array([d for d in range(D) if errors[d] is None], dtype=int)
+    rows = (kept[:, None] * T + np.arange(T)).ravel()
+    m = motion_at(models[0], take(p, rows), t if p.row is None else np.tile(t, len(kept)),
+                  q[rows], qdi[rows], qddi[rows])
+    dep = p.dependent
+    singular = (rank_of(take(p, rows), m.J[:, :, dep], dep) < len(dep)).reshape(len(kept), T)
+    for j in np.flatnonzero(np.any(singular, 1)):
+        k = int(np.argmax(singular[j]))
+        d = int(kept[j])
+        errors[d] = _fail(models[d], t[k], qi[d * T + k], SINGULAR, SINGULAR_FIX)
+    return m, kept, errors
+
+
+def driver_motions(models, t: np.ndarray):
+    """The drivers' ``(q, qd, qdd)`` of D designs, each (D T, n_drivers), design after design
+    (:func:`driver_motion` once where every design has the first one's drivers)."""
+    first = driver_motion(models[0], t)
+    try:
+        same = all(m.drivers == models[0].drivers for m in models[1:])
+    except ValueError:      # drivers holding arrays: not comparable as a whole
+        same = False
+    if same:
+        return tuple(np.tile(x, (len(models), 1)) for x in first)
+    each = [first] + [driver_motion(m, t) for m in models[1:]]
+    return tuple(np.concatenate([e[k] for e in each]) for k in range(3))
 
 
 def motion_at(model, p: Plan, t: np.ndarray, q: np.ndarray, qdi: np.ndarray,

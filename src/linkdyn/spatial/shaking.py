@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import GROUND
+from . import algebra as sa
 from . import kinematics as sk
 
 
@@ -30,7 +31,7 @@ def shaking_force(sol) -> np.ndarray:
         # by A on B: the reaction, and a prismatic driver's effort along its axis
         f = np.array(sol.dynamics.reactions[:, j, :3])
         if jt.name in drivers and p.kinds[j].effort == "force":
-            e = sk.joint_pose(p, sol.motion.tree, j, jt).RA @ p.geometry[j].e
+            e = sa.matvec(sk.joint_pose(p, sol.motion.tree, j, jt).RA, p.geometry[j].e)
             f += sol.dynamics.tau[:, drivers[jt.name], None] * e
         out += f if jt.body_b == GROUND else -f
     return out

@@ -58,10 +58,15 @@ class SpatialSolution:
 
     Every per-sample array has the samples first. ``columns()`` gives the results table;
     the methods give the same numbers as arrays.
+
+    Of a batch of designs (:func:`linkdyn.spatial.analyze_designs`) the arrays' rows are each
+    design's samples, design after design: ``batch`` is then ``(D, T)`` (reshape a row array
+    to it for each design's), ``model`` the first design's; None for one design.
     """
 
     def __init__(self, model, plan: sk.Plan, motion: sk.Motion, coords: dict,
-                 applied: sd.Loads, dyn: sd.Dynamics, redundant_rows: tuple):
+                 applied: sd.Loads, dyn: sd.Dynamics, redundant_rows: tuple, batch=None):
+        self.batch = batch
         self.model, self.plan, self.motion = model, plan, motion
         self.coords, self.loads, self.dynamics = coords, applied, dyn
         self.t = motion.t

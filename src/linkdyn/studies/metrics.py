@@ -280,17 +280,23 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
 def _spatial(sol, wanted) -> dict[str, float]:
     """Metrics of one spatial run (:class:`linkdyn.spatial.SpatialSolution`): each driver's
     peak and RMS effort, each joint's peak force magnitude ``|(Fx, Fy, Fz)|`` and the peak
-    shaking force (:func:`linkdyn.spatial.shaking.shaking_force`)."""
+    shaking force (:func:`linkdyn.spatial.shaking.shaking_force`); of a batch of D designs
+    (``sol.batch``) each (D,)."""
     from ..spatial.shaking import shaking_force
 
     m, out = sol.model, {}
+    shape = sol.batch or (len(sol.t),)
+
+    def per(x):                          # (N,) rows -> (D, T), or (T,)
+        return np.reshape(x, shape)
     for d in m.drivers:
         col = _effort(m, d.joint)
-        out[f"peak_{col}"], out[f"rms_{col}"] = peak(sol.effort(d.joint)), rms(sol.effort(d.joint))
+        tau = per(sol.effort(d.joint))
+        out[f"peak_{col}"], out[f"rms_{col}"] = peak(tau), rms(tau)
     for j in m.joints:
-        out[f"peak_F_{j.name}"] = peak(np.linalg.norm(sol.reaction(j.name)[:, :3], axis=-1))
+        out[f"peak_F_{j.name}"] = peak(per(np.linalg.norm(sol.reaction(j.name)[:, :3], axis=-1)))
     if "peak_shaking_force" in wanted:
-        out["peak_shaking_force"] = peak(np.linalg.norm(shaking_force(sol), axis=-1))
+        out["peak_shaking_force"] = peak(per(np.linalg.norm(shaking_force(sol), axis=-1)))
     return {w: out[w] for w in wanted}
 
 

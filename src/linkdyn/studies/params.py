@@ -76,8 +76,9 @@ class Space:
 
     @property
     def spatial(self) -> bool:
-        """A spatial model (``[mechanism] space = "spatial"``): its designs are solved one at
-        a time (:func:`linkdyn.studies.runner.evaluate_models`), not by the vectorized map."""
+        """A spatial model (``[mechanism] space = "spatial"``): its designs are built by the
+        loader, each its model, and solved as one batch
+        (:func:`linkdyn.studies.runner.evaluate_models`), not by the planar vectorized map."""
         mech = self.data.get("mechanism", {})
         return isinstance(mech, dict) and mech.get("space") == "spatial"
 

@@ -2,8 +2,8 @@
 
 A sweep is a table of designs (one row of parameter values each, in the file's units), cut into
 chunks. A chunk builds its designs' models, solves them as one batch (``linkdyn.analyze`` over a
-design axis; a spatial model's designs one after another by ``linkdyn.spatial.analyze``, the
-per-design path :func:`evaluate_models`), keeps only the metrics (:mod:`.metrics`) and drops the time histories, so memory is
+design axis; a spatial model's designs by ``linkdyn.spatial.analyze_designs``, every stage on
+all designs' samples at once, in :func:`evaluate_models`), keeps only the metrics (:mod:`.metrics`) and drops the time histories, so memory is
 bounded by the chunk whatever the number of designs. Chunks run in this process, in local worker
 processes, or on a Dask cluster, with the same results. With an output directory each finished
 chunk is written at once (``chunks/chunk-<k>.parquet``), so a killed sweep resumes without
@@ -48,6 +48,10 @@ CHUNK_SAMPLES = (1_000_000, 10_000_000)
 # 5e4 where each batch's fixed Python costs (assembly, continuation nodes, metrics) take over,
 # 1.1-1.6 s at 2.5e5 and 4-6.5 s at 1e6)
 BATCH_SAMPLES = 150_000
+# a spatial model's design-samples times its bodies solved at once (its stages hold more per
+# sample and body: 6-D twists, screws, spatial inertias, the closure Jacobian): about 300 MB of
+# arrays for the RSUR four-bar's 4 bodies (38,000 design-samples)
+SPATIAL_BATCH_BODY_SAMPLES = 150_000
 
 
 # --- the designs ------------------------------------------------------------------------------
@@ -143,7 +147,7 @@ class Task:
 
     def with_builder(self, lo, hi) -> Task:
         """This task with the builder of designs ranging over ``lo``..``hi`` (P,), file units
-        (none for a spatial model, whose designs are solved one at a time)."""
+        (none for a spatial model: its designs are built by the loader, then solved as one batch)."""
         if self.space.spatial:
             return self
         return replace(self, builder=vectorize.derive(self.space, lo, hi))
@@ -319,19 +323,27 @@ def evaluate_models(task: Task, values) -> dict[str, np.ndarray]:
 
 
 def _fill_each(task: Task, models, idx, valid, reason, out) -> None:
-    """Validity, reasons and metrics of the designs ``idx`` of a spatial model, each solved
-    alone by :func:`linkdyn.spatial.analyze` (the message it raises is the design's reason)."""
+    """Validity, reasons and metrics of the designs ``idx`` of a spatial model, solved together
+    by :func:`linkdyn.spatial.analyze_designs` (batches of at most ``SPATIAL_BATCH_BODY_SAMPLES``
+    design-samples times bodies); a design's reason is the message
+    :func:`linkdyn.spatial.analyze` raises for it alone."""
     from .. import spatial
 
-    for k in idx:
-        try:
-            sol = spatial.analyze(models[k], task.t)
-        except (AssemblyError, ModelError) as e:
-            reason[k] = _reason(e)
+    idx = np.asarray(idx, dtype=int)
+    bodies = len(models[idx[0]].bodies) if len(idx) else 1
+    size = max(1, SPATIAL_BATCH_BODY_SAMPLES // (max(len(task.t), 1) * bodies))
+    for part in np.array_split(idx, -(-len(idx) // size)):
+        sol, kept, errors = spatial.analyze_designs([models[k] for k in part], task.t)
+        for k, e in zip(part, errors):
+            if e is not None:
+                reason[k] = _reason(e)
+        if sol is None:
             continue
-        valid[k] = True
+        good = np.array([errors[j] is None for j in kept], bool)
+        rows = part[kept]
+        valid[rows] = good
         for name, v in metrics_mod.evaluate(sol, task.metrics).items():
-            out[name][k] = v
+            out[name][rows] = np.where(good, v, np.nan)
 
 
 def _run_chunk(task: Task, k: int, values, outdir: str | None):

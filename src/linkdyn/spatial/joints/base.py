@@ -77,7 +77,7 @@ def perpendiculars(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def turned(R: np.ndarray, u: np.ndarray) -> np.ndarray:
     """The body-frame vector ``u`` (3,) in global components: ``R u`` (..., 3)."""
-    return R @ u
+    return sa.matvec(R, u)
 
 
 # ---------------------------------------------------------------- closure rows
@@ -122,7 +122,7 @@ def aligned_rate(m: Rates, t: np.ndarray):
 def locked(pose: Pose, R0: np.ndarray):
     """No relative rotation: residual ``vee(R_B R0^T R_A^T)`` (the small rotation of B from
     its place), rows: couples along the global axes ``[x_k; 0]`` (constant)."""
-    g = sa.vee(pose.RB @ R0.T @ np.swapaxes(pose.RA, -1, -2))
+    g = sa.vee(pose.RB @ sa.transpose(R0) @ sa.transpose(pose.RA))
     axes = np.broadcast_to(np.eye(3), g.shape[:-1] + (3, 3))
     return g, sa.free_vector(axes, True)
 

@@ -21,20 +21,20 @@ class Cylindrical(base.SpatialKind):
         return sa.rotation(g.e, q[..., 1]) @ g.R0, q[..., :1] * g.e
 
     def screws(self, g, RA, RB, c, q):
-        e = RA @ g.e
+        e = sa.matvec(RA, g.e)
         return np.stack([sa.free_vector(e, False), sa.line_screw(e, c)], -2)
 
     def coordinates(self, g, R_rel, d):
-        return np.stack([d @ g.e, sa.angle_about(R_rel @ g.R0.T, g.e)], -1)
+        return np.stack([sa.dot(d, g.e), sa.angle_about(R_rel @ sa.transpose(g.R0), g.e)], -1)
 
     def _perp(self, g, pose):
-        return np.stack([pose.RA @ g.t1, pose.RA @ g.t2], -2)
+        return np.stack([sa.matvec(pose.RA, g.t1), sa.matvec(pose.RA, g.t2)], -2)
 
     def closure(self, g, pose):
         # no travel across e; B's copy of the axis on A's
         t = self._perp(g, pose)
         r1, p1 = base.sliding(pose, t)
-        r2, p2 = base.aligned(pose.RA @ g.e, pose.RB @ (g.R0.T @ g.e), t)
+        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), sa.matvec(pose.RB, sa.matvec(sa.transpose(g.R0), g.e)), t)
         return np.concatenate([r1, r2], -1), np.concatenate([p1, p2], -2)
 
     def closure_rate(self, g, pose, m):

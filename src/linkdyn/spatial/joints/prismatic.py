@@ -24,13 +24,13 @@ class Prismatic(base.SpatialKind):
 
     def screws(self, g, RA, RB, c, q):
         # s = [0; e], e fixed in A
-        return sa.free_vector(RA @ g.e, False)[..., None, :]
+        return sa.free_vector(sa.matvec(RA, g.e), False)[..., None, :]
 
     def coordinates(self, g, R_rel, d):
-        return (d @ g.e)[..., None]
+        return (sa.dot(d, g.e))[..., None]
 
     def _forces(self, g, pose):
-        return np.stack([pose.RA @ g.t1, pose.RA @ g.t2], -2)
+        return np.stack([sa.matvec(pose.RA, g.t1), sa.matvec(pose.RA, g.t2)], -2)
 
     def closure(self, g, pose):
         # no travel across e; no relative rotation

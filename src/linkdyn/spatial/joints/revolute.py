@@ -22,18 +22,18 @@ class Revolute(base.SpatialKind):
 
     def screws(self, g, RA, RB, c, q):
         # s = [e; c x e], e fixed in A
-        return sa.line_screw(RA @ g.e, c)[..., None, :]
+        return sa.line_screw(sa.matvec(RA, g.e), c)[..., None, :]
 
     def coordinates(self, g, R_rel, d):
-        return sa.angle_about(R_rel @ g.R0.T, g.e)[..., None]
+        return sa.angle_about(R_rel @ sa.transpose(g.R0), g.e)[..., None]
 
     def _couples(self, g, pose):
-        return np.stack([pose.RA @ g.t1, pose.RA @ g.t2], -2)
+        return np.stack([sa.matvec(pose.RA, g.t1), sa.matvec(pose.RA, g.t2)], -2)
 
     def closure(self, g, pose):
         # coincident points; B's copy of the axis on A's: t_k . (e_A x e_B) = 0
         r1, p1 = base.coincident(pose)
-        r2, p2 = base.aligned(pose.RA @ g.e, pose.RB @ (g.R0.T @ g.e), self._couples(g, pose))
+        r2, p2 = base.aligned(sa.matvec(pose.RA, g.e), sa.matvec(pose.RB, sa.matvec(sa.transpose(g.R0), g.e)), self._couples(g, pose))
         return np.concatenate([r1, r2], -1), np.concatenate([p1, p2], -2)
 
     def closure_rate(self, g, pose, m):

@@ -33,7 +33,7 @@ class Spherical(base.SpatialKind):
 
     def coordinates(self, g, R_rel, d):
         # Rx Ry Rz: [0,2] = s2, [1,2] = -s1 c2, [2,2] = c1 c2, [0,1] = -c2 s3, [0,0] = c2 c3
-        n = R_rel @ g.R0.T
+        n = R_rel @ sa.transpose(g.R0)
         return np.stack([np.arctan2(-n[..., 1, 2], n[..., 2, 2]),
                          np.arcsin(np.clip(n[..., 0, 2], -1, 1)),
                          np.arctan2(-n[..., 0, 1], n[..., 0, 0])], -1)
