@@ -15,6 +15,7 @@ from click.testing import CliRunner
 import linkdyn
 from linkdyn.cli import main
 from test_export import read_dxf, read_svg
+from test_report import page_blob
 
 
 def table(path):
@@ -175,21 +176,6 @@ def test_plane_refusals(tmp_path):
 
 # ------------------------------------------------------------------ simulate --report
 
-def page_data(text: str) -> dict:
-    """The data block of a report page, each packed series (base64 of little-endian float64)
-    unpacked."""
-    import base64
-    import json
-    D = json.loads(text.split('<script id="linkdyn-data" type="application/json">', 1)[1]
-                   .split("</script>", 1)[0])
-
-    def unpack(v):
-        return np.frombuffer(base64.b64decode(v), dtype="<f8") if isinstance(v, str) else v
-    D["series"] = {k: unpack(v) for k, v in D["series"].items()}
-    D["t"] = unpack(D["t"])
-    return D
-
-
 def test_simulate_report_of_a_spatial_model_draws_the_simulated_motion(tmp_path):
     path = linkdyn.example_path("rsur_release")
     res = CliRunner().invoke(main, ["simulate", str(path), "-o", str(tmp_path), "--samples",
@@ -199,7 +185,7 @@ def test_simulate_report_of_a_spatial_model_draws_the_simulated_motion(tmp_path)
     assert not list(tmp_path.glob("plot_*"))           # a spatial page's figures: --plots
     text = (tmp_path / "report.html").read_text("utf-8")
     assert "http://" not in text and "https://" not in text
-    D = page_data(text)
+    D = page_blob(text)   # the drawn points float32, as the page carries them
     cols = table(tmp_path / "results.csv")
     assert D["geom"]["dim"] == 3
     np.testing.assert_array_equal(D["t"], cols["t"])
