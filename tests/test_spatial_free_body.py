@@ -264,3 +264,12 @@ def test_the_cli_simulates_it_with_readable_columns(tmp_path):
     head = (out / "results.csv").read_text().splitlines()[0].split(",")
     for c in ("x", "y", "z", "rx", "ry", "rz"):
         assert f"q_puck_{c}" in head
+
+
+def test_the_written_model_holds_the_chain_and_reads_back_the_same():
+    from linkdyn.io.writer import model_to_dict
+    model = read(hanging(Z0))
+    again = linkdyn.model_from_dict(model_to_dict(model))
+    assert [b.name for b in again.bodies] == [b.name for b in model.bodies]
+    assert [j.name for j in again.joints] == [j.name for j in model.joints]
+    assert equilibrium(again).q == pytest.approx(equilibrium(model).q, abs=1e-14)
