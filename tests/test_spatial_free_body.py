@@ -273,3 +273,17 @@ def test_the_written_model_holds_the_chain_and_reads_back_the_same():
     assert [b.name for b in again.bodies] == [b.name for b in model.bodies]
     assert [j.name for j in again.joints] == [j.name for j in model.joints]
     assert equilibrium(again).q == pytest.approx(equilibrium(model).q, abs=1e-14)
+
+
+def test_its_modes_are_the_closed_forms():
+    # about the equilibrium (spring length L = l0 + m g / (3 k)): bounce 3 k / m; sway as a
+    # pendulum of length L, g / L (twice); tilt about x or y, k sum(y_i^2) / I = 3 k a^2 / (2 I);
+    # yaw as a trifilar pendulum, m g a^2 / (I_zz L)
+    from linkdyn.modal import modes
+    length = L0 + STRETCH
+    w2 = [3 * K / M, G / length, G / length, 3 * K * A ** 2 / (2 * INERTIA[0]),
+          3 * K * A ** 2 / (2 * INERTIA[1]), M * G * A ** 2 / (INERTIA[2] * length)]
+    md = modes(equilibrium(read(hanging(Z0))))
+    assert md.stable
+    assert np.sort(md.frequencies) == pytest.approx(np.sort(np.sqrt(w2)) / (2 * math.pi),
+                                                    rel=1e-9)
