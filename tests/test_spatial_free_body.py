@@ -10,7 +10,8 @@ Checked against means that share no code with the expansion:
   z_eq) cos(w t)``, ``w = sqrt(3 k / m)``, ``z_eq`` the springs' static stretch ``m g / (3 k)``
   below their free length; its energy (recomputed here from results.csv's points, quaternion
   and angular velocity) is constant; the same model written by hand with the explicit chain
-  gives the same table; ``equilibrium`` gives the static stretch;
+  gives the same table; ``equilibrium`` gives the static stretch and ``modes`` the six
+  closed-form frequencies (bounce, sway, tilt, yaw);
 - a torque-free body spun about a tilted principal axis keeps its angular momentum
   ``R I R^T omega`` (and spins steadily about that axis);
 - what cannot be represented is refused with exit 2 naming the field.
