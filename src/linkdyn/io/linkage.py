@@ -127,24 +127,54 @@ def _bodies(r: _Reader, entries: Any) -> dict[str, Body]:
     return read_bodies(r, entries, PLANAR)
 
 
-def free_bodies(r: _Reader, bodies: Any, joints: Any) -> tuple[Any, Any]:
-    """The ``[[bodies]]`` and ``[[joints]]`` entries with each free body (``free = "P"``: joined
-    to nothing but loads) on its three planar freedoms.
+@dataclass(frozen=True)
+class FreeChain:
+    """How a space writes a free body (``free = "P"``) as joints: the global axes of its
+    translations and of its turns, in order, each one joint named ``<body>_<suffix>``; read by
+    :func:`free_bodies`."""
 
-    A free body ``B`` with ``free = "P"`` hangs from the ground by two massless carriages and three
-    joints: the prismatic joint ``B_x`` (the ground's new point ``B_origin`` at the origin to the
-    carriage ``B_x``, along the ground's x axis), the prismatic joint ``B_y`` (carriage ``B_x`` to
-    carriage ``B_y``, along y) and the revolute joint ``B_phi`` (carriage ``B_y`` to ``B.P``). So
-    ``q_B_x``, ``q_B_y`` are the global coordinates of P and ``q_B_phi`` the body's angle. The
+    slides: tuple[tuple[str, list], ...]          # (suffix, global axis) of each translation
+    turns: tuple[tuple[str, list | None], ...]    # (suffix, global axis or None) of each turn
+    carriage: Callable[..., dict]                 # (r, field, entry, point) -> a carriage's keys
+    example: str                                  # the fix of a bad ``free``
+
+
+def _planar_carriage(r: _Reader, f: str, entry: dict, point: str) -> dict:
+    return {"points": {"O": [0.0, 0.0]}, "mass": 0.0, "inertia": 0.0}
+
+
+PLANAR_FREE = FreeChain(
+    slides=(("x", [1.0, 0.0]), ("y", [0.0, 1.0])), turns=(("phi", None),),
+    carriage=_planar_carriage,
+    example='Write e.g. free = "C": the point whose x and y are the free coordinates')
+
+
+def free_bodies(r: _Reader, bodies: Any, joints: Any, chain: FreeChain = PLANAR_FREE
+                ) -> tuple[Any, Any]:
+    """The ``[[bodies]]`` and ``[[joints]]`` entries with each free body (``free = "P"``: joined
+    to nothing but loads) on its freedoms, written as joints through massless carriages.
+
+    Planar (``chain = PLANAR_FREE``): a free body ``B`` with ``free = "P"`` hangs from the
+    ground by two massless carriages and three joints: the prismatic joint ``B_x`` (the ground's
+    new point ``B_origin`` at the origin to the carriage ``B_x``, along the ground's x axis), the
+    prismatic joint ``B_y`` (carriage ``B_x`` to carriage ``B_y``, along y) and the revolute
+    joint ``B_phi`` (carriage ``B_y`` to ``B.P``). So ``q_B_x``, ``q_B_y`` are the global
+    coordinates of P and ``q_B_phi`` the body's angle. Spatial (``spatial.reader.FREE``): the
+    same with the prismatic joints ``B_x``, ``B_y``, ``B_z`` and the revolute joints ``B_rx``,
+    ``B_ry``, ``B_rz`` about the carriages' x, y, z axes (five carriages, ``B_x`` ... ``B_ry``).
+    Each joint but the last ends on the carriage of its own name; the last ends on ``B.P``. The
     carriages have no mass or inertia: they add no term to the equations of motion (the free
-    coordinates' mass matrix is the body's own, regular when its mass and inertia are above zero).
-    Written out (``linkdyn.io.writer``), the model holds the carriages as bodies and joints.
+    coordinates' mass matrix is the body's own, regular when its mass and inertia are above
+    zero). Written out (``linkdyn.io.writer``), the model holds the carriages as bodies and
+    joints.
     """
     if not isinstance(bodies, list) or not any(isinstance(e, dict) and "free" in e
                                                for e in bodies):
         return bodies, joints
     names = {e.get("name") for e in bodies if isinstance(e, dict)}
     out, carriages, links, origins = [], [], [], {}
+    steps = [(s, "prismatic", u) for s, u in chain.slides] + \
+        [(s, "revolute", u) for s, u in chain.turns]
     for i, entry in enumerate(bodies):
         if not (isinstance(entry, dict) and "free" in entry):
             out.append(entry)
@@ -157,22 +187,24 @@ def free_bodies(r: _Reader, bodies: Any, joints: Any) -> tuple[Any, Any]:
         if not (isinstance(point, str) and isinstance(pts, dict) and point in pts):
             r.fail(f"{f}.free", f"expected the name of one of the body's points, got "
                    f"{_quote(point) if isinstance(point, str) else _type_name(point)}",
-                   'Write e.g. free = "C": the point whose x and y are the free coordinates')
-        for taken in (f"{name}_x", f"{name}_y"):
+                   chain.example)
+        for taken in (f"{name}_{s}" for s, _, _ in steps[:-1]):
             if taken in names:
                 r.fail(f"{f}.free", f"the free body's carriage would be named '{taken}', the name "
                        "of another body", f"Rename body '{taken}'")
         out.append({k: v for k, v in entry.items() if k != "free"})
         origins[f"{name}_origin"] = f"{f}.free"
-        # ground -> B_x (along x) -> B_y (along y) -> B (turning about P)
-        for axis, (u, first) in {"x": ([1.0, 0.0], f"{GROUND}.{name}_origin"),
-                                 "y": ([0.0, 1.0], f"{name}_x.O")}.items():
-            carriages.append({"name": f"{name}_{axis}", "points": {"O": [0.0, 0.0]},
-                              "mass": 0.0, "inertia": 0.0})
-            links.append({"name": f"{name}_{axis}", "type": "prismatic", "axis": u,
-                          "connect": [first, f"{name}_{axis}.O"]})
-        links.append({"name": f"{name}_phi", "type": "revolute",
-                      "connect": [f"{name}_y.O", f"{name}.{point}"]})
+        carriage = chain.carriage(r, f, entry, point)
+        # ground -> B_x -> ... -> the last carriage -> B (at P)
+        first = f"{GROUND}.{name}_origin"
+        for k, (suffix, kind, axis) in enumerate(steps):
+            last = k == len(steps) - 1
+            end = f"{name}.{point}" if last else f"{name}_{suffix}.O"
+            if not last:
+                carriages.append({"name": f"{name}_{suffix}", **carriage})
+            links.append({"name": f"{name}_{suffix}", "type": kind, "connect": [first, end],
+                          **({"axis": axis} if axis is not None else {})})
+            first = end
     for k, entry in enumerate(out):
         if isinstance(entry, dict) and entry.get("name") == GROUND \
                 and isinstance(entry.get("points"), dict):
@@ -181,7 +213,8 @@ def free_bodies(r: _Reader, bodies: Any, joints: Any) -> tuple[Any, Any]:
                     r.fail(field, f"the free body's origin would be the ground's point "
                            f"'{origin}', which the ground has", f"Rename the ground's point "
                            f"'{origin}'")
-            out[k] = dict(entry, points={**entry["points"], **{o: [0.0, 0.0] for o in origins}})
+            out[k] = dict(entry, points={**entry["points"],
+                                         **{o: [0.0] * r.dim for o in origins}})
     given = joints if joints is not None else []
     return out + carriages, (given + links if isinstance(given, list) else given)
 

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..io.drivers import _drivers
-from ..io.linkage import BodyForm, _reference, mass_and_com, read_bodies
+from ..io.linkage import BodyForm, FreeChain, _reference, free_bodies, mass_and_com, read_bodies
 from ..io.loads import _loads
 from ..io.options import _analysis, _topology
 from ..io.reader import _Reader, _entry_field
@@ -24,7 +24,7 @@ from .model import Body, Joint
 
 SECTIONS = ("mechanism", "units", "bodies", "joints", "drivers", "loads", "topology", "analysis",
             "initial")
-BODY_KEYS = ("name", "points", "mass", "com", "inertia", "origin", "rotation")
+BODY_KEYS = ("name", "points", "mass", "com", "inertia", "origin", "rotation", "free")
 JOINT_KEYS = ("name", "type", "connect", "axis", "axis2")
 PERPENDICULAR = 1e-6   # |axis . axis2| of a universal joint's unit axes at the design pose
 
@@ -43,8 +43,10 @@ def read(r: _Reader, data: dict, mech: dict, source: str) -> Model:
     gravity = r.vector(mech.get("gravity", [0.0, 0.0, 0.0]), "mechanism.gravity", "m/s^2")
     description = r.string(mech.get("description", ""), "mechanism.description", empty=True)
     _units(r, data.get("units", {}))
-    bodies = read_bodies(r, data.get("bodies"), FORM)
-    joints = _joints(r, data.get("joints", []), bodies)
+    body_entries, joint_entries = free_bodies(r, data.get("bodies"), data.get("joints", []),
+                                              FREE)
+    bodies = read_bodies(r, body_entries, FORM)
+    joints = _joints(r, joint_entries, bodies)
     drivers = _drivers(r, data.get("drivers", []), joints)
     for entry in data.get("loads", []) if isinstance(data.get("loads"), list) else []:
         if isinstance(entry, dict) and entry.get("kind") == "friction":
@@ -89,6 +91,26 @@ FORM = BodyForm(
     inertia_fix="Add inertia = [Ixx, Iyy, Izz] ({unit}, about the mass centre, body frame) "
                 "or the full tensor",
     body=Body, moving=_moving)
+
+
+def _carriage(r: _Reader, f: str, entry: dict, point: str) -> dict:
+    """A free body's massless carriage, posed at the design pose with its origin at the body's
+    point ``point`` and the global frame's axes (so the free coordinates are P's global
+    coordinates and the turns about the global axes, from the design pose)."""
+    L = r.length_name
+    at = r.vector(entry.get("origin", [0.0, 0.0, 0.0]), f"{f}.origin", L)
+    rot = r.vector(entry.get("rotation", [0.0, 0.0, 0.0]), f"{f}.rotation", r.angle_name)
+    local = r.vector(entry["points"][point], f"{f}.points.{point}", L)
+    where = at + sa.rotation_vector(rot * r.angle) @ local      # file's length unit
+    return {"points": {"O": [0.0, 0.0, 0.0]}, "mass": 0.0, "inertia": [0.0, 0.0, 0.0],
+            "origin": [float(x) for x in where]}
+
+
+FREE = FreeChain(
+    slides=(("x", [1.0, 0.0, 0.0]), ("y", [0.0, 1.0, 0.0]), ("z", [0.0, 0.0, 1.0])),
+    turns=(("rx", [1.0, 0.0, 0.0]), ("ry", [0.0, 1.0, 0.0]), ("rz", [0.0, 0.0, 1.0])),
+    carriage=_carriage,
+    example='Write e.g. free = "C": the point whose x, y and z are the free coordinates')
 
 
 def _inertia(r: _Reader, value: Any, field: str) -> np.ndarray:
