@@ -51,6 +51,7 @@ from .brief import brief_repr
 from . import backend as backend_mod, friction as friction_mod, joints as jk, loads as loads_mod
 from . import reactions as reactions_mod
 from .analysis import SINGULAR, Solution, blame_loads, stage_functions, times_argument
+from .balance import Balance, energy_drift
 from .dynamics import denoc
 from .errors import ArgumentError, AssemblyError, ModelError, quiet, wrong_type
 from .kinematics.layout import Layout, compile_layout
@@ -1200,51 +1201,6 @@ def _blame_loads(system: System, last) -> None:
                                           drivers=dict(zip((d.joint for d in part.inner.drivers),
                                                            q_ind[:, 0].tolist())),
                                           units=joint_units(part.model)))
-
-
-class Balance:
-    """The energy balance ``T + V - E0 - W`` (F9) gathered at the end of each accepted step:
-    a snap between two output samples (a stiff spring letting go) shows here where the
-    samples would miss it."""
-
-    def __init__(self):
-        self.residual, self.kinetic, self.work = 0.0, 0.0, 0.0
-        self.potential = (np.inf, -np.inf)
-
-    def add(self, ke: float, pe: float, e0: float, w: float) -> None:
-        """One step's end: kinetic and potential energy, the energy at t = 0 and the work
-        done since (J)."""
-        self.residual = max(self.residual, abs(ke + pe - e0 - w))
-        self.kinetic, self.work = max(self.kinetic, abs(ke)), max(self.work, abs(w))
-        self.potential = (min(self.potential[0], pe), max(self.potential[1], pe))
-
-    def summary(self) -> dict:
-        """``residual``, ``kinetic``, ``work``: the largest of each, J; ``potential``: the
-        range of the potential energy, J (0 without a step)."""
-        span = self.potential[1] - self.potential[0] if np.isfinite(self.potential[0]) else 0.0
-        return dict(residual=self.residual, kinetic=self.kinetic, work=self.work,
-                    potential=float(span))
-
-
-def energy_drift(kinetic, potential, work, steps: dict | None = None) -> float:
-    """Energy balance (F9) of a simulation: the largest ``|E - E(0) - W|`` relative to the
-    largest energy of the run (kinetic, potential variation, or work).
-
-    Parameters
-    ----------
-    kinetic, potential, work : ndarray (T,)
-        At the output samples, J.
-    steps : dict, optional
-        The same at every step's end (:meth:`Balance.summary`), which the samples may miss.
-    """
-    e = kinetic + potential - (kinetic[0] + potential[0]) - work
-    residual = float(np.max(np.abs(e)))
-    scale = max(float(np.max(np.abs(kinetic))), float(np.ptp(potential)),
-                float(np.max(np.abs(work))))
-    if steps:
-        residual = max(residual, steps["residual"])
-        scale = max(scale, steps["kinetic"], steps["potential"], steps["work"])
-    return residual / scale if scale > 0 else 0.0
 
 
 def energy_projection(system, t, y, e0) -> np.ndarray | None:

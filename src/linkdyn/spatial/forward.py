@@ -20,6 +20,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..balance import energy_drift
 from ..brief import brief_repr
 from ..errors import AssemblyError, ModelError
 from ..model import GROUND, Driver
@@ -450,8 +451,7 @@ class SpatialSimulation(SpatialSolution):
     @cached_property
     def energy_drift(self) -> float:
         """Energy balance (F9): largest ``|E - E(0) - W|`` at the samples and the steps' ends,
-        relative to the largest energy (:func:`linkdyn.forward.energy_drift`)."""
-        from ..forward import energy_drift
+        relative to the largest energy (:func:`linkdyn.balance.energy_drift`)."""
         return energy_drift(self.kinetic_energy(), self.potential_energy(), self.work,
                             self.stats.get("energy_steps"))
 
