@@ -39,13 +39,13 @@ if os.environ.get("CI", "").strip().lower() in ("true", "1", "yes"):
     settings.load_profile("ci-derandomized")
 
 # files whose every test runs compiled code: the compiled backend, the sweep kernel or the
-# benchmark scripts (a file of compiled tests left out compiles the kernels a second time, on
-# another worker, at the same time)
+# benchmark scripts (a compiled test left out may run before the kernels are in the cache, and
+# compile them a second time, on another worker, at the same time)
 NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel", "test_backend")
 # a parametrized test whose id has the "compiled" backend among its parameters
 COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
 # a test whose name says it runs the compiled backend, or compares the backends ("both_backends",
-# "backends_agree": a test left out compiles the kernels on another worker, at the same time)
+# "backends_agree": a test left out may compile the kernels on another worker, at the same time)
 COMPILED_NAME = re.compile(r"compiled|backends")
 # files whose tests share a costly module-scoped fixture: all on one worker, so that it runs once
 # (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU; test_report:
