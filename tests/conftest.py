@@ -1,21 +1,24 @@
 """Suite-wide set-up: how pytest-xdist spreads the tests, and fixtures several files read.
 
-``make test`` runs the suite on every core (``pytest -n auto --dist loadgroup``). The tests that
-run the compiled (numba) backend all go to one worker, in collection order: on a fresh clone
-the first of them compiles the kernels once (about 230 s of CPU measured in a full run on a
-shared 2-core machine: analyze's kernels, the sweep's, simulate's right-hand side, friction's)
-and writes them to numba's on-disk cache, and the rest load them from there, while the other
-workers run the numpy, CLI and browser tests one test at a time as each worker frees up.
-Spread over several workers, each worker would compile the same kernels at the same time. A
-test that runs compiled code must say so in its name or parameters (:func:`uses_numba`),
-``backend="auto"`` included where its work is large enough to switch to compiled: a test left
-out compiles on another worker, cold, at the same time. The grouping is a scheduler of its own
-(xdist's ``xdist_group`` mark sets ``item._nodeid``, which pytest 9.2 no longer reads). Without
-xdist (``pytest`` alone) none of this applies.
+``make test`` runs the suite on every core (``pytest -n auto --dist loadgroup``). On a fresh
+clone numba's cache is cold: the compiled (numba) kernels of every stage must compile once
+(analyze's kernels, the sweep's, simulate's right-hand side, friction's), and two workers that
+compile the same kernels at the same time each pay for it. So the scheduler below hands one
+worker a compiled test first; before it runs, that worker compiles every stage's kernels on
+bundled examples (:func:`numba_kernels`, under a file lock) and numba writes them to its
+on-disk cache, while the other workers run the numpy, CLI and browser tests. The other
+compiled tests come last in the queue and spread over every worker, each loading the kernels
+from the cache (a worker that reaches one while the kernels still compile waits on the lock
+instead of compiling them again). A test that runs compiled code must say so in its name or
+parameters (:func:`uses_numba`), ``backend="auto"`` included where its work is large enough to
+switch to compiled: a test left out may compile on another worker, cold, at the same time. The
+grouping is a scheduler of its own (xdist's ``xdist_group`` mark sets ``item._nodeid``, which
+pytest 9.2 no longer reads). Without xdist (``pytest`` alone) none of this applies.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from contextlib import contextmanager, nullcontext
@@ -35,15 +38,14 @@ if os.environ.get("CI", "").strip().lower() in ("true", "1", "yes"):
     settings.register_profile("ci-derandomized", derandomize=True)
     settings.load_profile("ci-derandomized")
 
-NUMBA_GROUP = "numba"
 # files whose every test runs compiled code: the compiled backend, the sweep kernel or the
-# benchmark scripts (a file of compiled tests left out compiles the kernels a second time, on
-# another worker, at the same time)
+# benchmark scripts (a compiled test left out may run before the kernels are in the cache, and
+# compile them a second time, on another worker, at the same time)
 NUMBA_FILES = ("test_compiled", "test_benchmarks", "test_sweep_kernel", "test_backend")
 # a parametrized test whose id has the "compiled" backend among its parameters
 COMPILED_PARAM = re.compile(r"\[(.*-)?compiled(-.*)?\]$")
 # a test whose name says it runs the compiled backend, or compares the backends ("both_backends",
-# "backends_agree": a test left out compiles the kernels on another worker, at the same time)
+# "backends_agree": a test left out may compile the kernels on another worker, at the same time)
 COMPILED_NAME = re.compile(r"compiled|backends")
 # files whose tests share a costly module-scoped fixture: all on one worker, so that it runs once
 # (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU; test_report:
@@ -61,21 +63,77 @@ def uses_numba(nodeid: str) -> bool:
 
 @pytest.hookimpl(tryfirst=True, optionalhook=True)   # before xdist's own choice of scheduler
 def pytest_xdist_make_scheduler(config, log):
-    """Under ``--dist loadgroup``: the numba tests as one unit of work, each file of
-    :data:`SHARED_FIXTURE_FILES` one unit, every other test a unit of its own (xdist hands out
-    the largest unit first)."""
+    """Under ``--dist loadgroup``: each file of :data:`SHARED_FIXTURE_FILES` one unit of work,
+    every other test a unit of its own; the first compiled test at the head of the queue (its
+    worker compiles the kernels, :func:`numba_kernels`), the other compiled tests at its end,
+    after the largest units (xdist's order otherwise)."""
     if config.getvalue("dist") != "loadgroup":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
-    class NumbaOnOneWorker(LoadScopeScheduling):
+    class CompileFirst(LoadScopeScheduling):
+        _ordered = False
+
         def _split_scope(self, nodeid: str) -> str:
-            if uses_numba(nodeid):
-                return NUMBA_GROUP
             path = nodeid.partition("::")[0]
             return path if Path(path).stem in SHARED_FIXTURE_FILES else nodeid
 
-    return NumbaOnOneWorker(config, log)
+        def _assign_work_unit(self, node) -> None:
+            if not self._ordered:   # the first assignment: the queue is complete
+                self._ordered = True
+                units = list(self.workqueue.items())
+                compiled = [u for u in units if uses_numba(u[0])]
+                rest = [u for u in units if not uses_numba(u[0])]
+                self.workqueue.clear()
+                self.workqueue.update(compiled[:1] + rest + compiled[1:])
+            super()._assign_work_unit(node)
+
+    return CompileFirst(config, log)
+
+
+def compile_kernels() -> None:
+    """Run every stage of the compiled backend once on bundled examples, so that numba compiles
+    their kernels and writes them to its on-disk cache: analyze's (kinematics with its
+    continuation, dynamics, reactions, joint friction), simulate's right-hand side and the
+    sweep's fused kernel."""
+    import numpy as np
+
+    from linkdyn.friction import joint_friction
+
+    hoeken = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, 1.0, 20)
+    linkdyn.analyze(hoeken, t, backend="compiled").reactions
+    rough = dataclasses.replace(hoeken, loads=hoeken.loads + tuple(
+        joint_friction(hoeken, j.name, 0.15, 0.008) for j in hoeken.joints[:2]))
+    linkdyn.analyze(rough, t, backend="compiled").reactions
+    motor = linkdyn.load(linkdyn.example_path("hoeken_motor"))
+    linkdyn.simulate(motor, np.linspace(0.0, 0.05, 6), backend="compiled")
+    linkdyn.sweep(hoeken, {"bodies.ground.points.O4[0]": np.linspace(85.0, 95.0, 4)}, t,
+                  metrics=["peak_tau_J1"], backend="compiled")
+
+
+@pytest.fixture(scope="session")
+def numba_kernels(tmp_path_factory) -> None:
+    """Under xdist: the compiled kernels in numba's on-disk cache before a worker's first
+    compiled test (:func:`compile_kernels`, run once per session by the first worker that
+    gets here; the others wait on the lock, then load them from the cache)."""
+    session = tmp_path_factory.getbasetemp().parent      # under xdist: every worker's base
+    with _one_at_a_time(session / "numba-kernels.lock"):
+        done = session / "numba-kernels.done"
+        if not done.exists():
+            try:
+                import numba  # noqa: F401
+            except ImportError:   # the compiled tests skip themselves
+                return
+            compile_kernels()
+            done.touch()
+
+
+@pytest.fixture(autouse=True)
+def _kernels_first(request) -> None:
+    """A compiled test under xdist takes :func:`numba_kernels` first."""
+    if os.environ.get("PYTEST_XDIST_WORKER") is not None and uses_numba(request.node.nodeid):
+        request.getfixturevalue("numba_kernels")
 
 
 @contextmanager

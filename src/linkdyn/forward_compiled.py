@@ -34,9 +34,27 @@ from .kinematics import compiled as kc
 from .kinematics.positions import ACCEPT, driver_values
 
 try:  # optional: the numpy path is complete without it
-    from numba.typed import List
+    from numba.core import types as nbtypes
+    from numba.experimental import structref
 except ImportError:  # pragma: no cover - depends on the environment
-    List = None
+    structref = None
+
+if structref is not None:
+    @structref.register
+    class HeldType(nbtypes.StructRef):
+        """numba's type of :class:`Held`: one field, ``item``."""
+
+        def preprocess_fields(self, fields):
+            return tuple((name, nbtypes.unliteral(t)) for name, t in fields)
+
+    class Held(structref.StructRefProxy):
+        """The arguments :func:`rhs_kernel` takes at every call, in one object (``item``, read
+        by compiled code only): a call unboxes it, not each of its seventy arrays. A numba
+        ``StructRef``: its code compiles in a few seconds, a typed ``List`` of the same item
+        in about forty."""
+
+    structref.define_constructor(Held, HeldType, ["item"])
+    structref.define_boxing(HeldType, Held)
 
 #: The work arrays of :func:`rhs_kernel`, shaped as the batch kernels' for a block of one
 #: sample (design axis 1, block 1; :func:`work`): the kinematics' ``q``, ``phi``, ``c``, ``s``,
@@ -61,12 +79,12 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, unit, o_y, o_state, o_J, o_e):
 
     Parameters
     ----------
-    held : numba typed List
-        Of one item, ``(L, T, W)``: the partition's layout as the kernels read it
+    held : Held
+        Its ``item``, ``(L, T, W)``: the partition's layout as the kernels read it
         (:attr:`.kinematics.layout.Layout.view`, one design; ``L.driven`` the independent tree
         bodies, drivers' then free, ``L.dependent`` the dependent ones), its loads
-        (:data:`linkdyn.compiled.loads.Table`) and the work arrays (:data:`Work`), held in a
-        list so that a call passes one object, not their seventy arrays (:class:`Kernel`).
+        (:data:`linkdyn.compiled.loads.Table`) and the work arrays (:data:`Work`), held in
+        one object so that a call passes it, not their seventy arrays (:class:`Kernel`).
     t, y : float, (2 nf + 1,)
         The state.
     drv : float (3, nd)
@@ -93,7 +111,7 @@ def rhs_kernel(held, t0, t, y, drv, ext, ref, S, unit, o_y, o_state, o_J, o_e):
         did not close the loops (the state's outputs not written: the caller takes the numpy
         path).
     """
-    L, T, W = held[0]
+    L, T, W = held.item
     ind, dep, drivers = L.driven, L.dependent, L.tree_joint
     n, m, k_ind, nc = L.parent.shape[0], dep.shape[0], ind.shape[0], L.cut_a.shape[0]
     nd = drv.shape[1]
@@ -258,18 +276,22 @@ def work(lay, n_drivers: int, n_vars: int, n_code: int) -> Work:
 
 @njit
 def _hold(item):
-    """``item`` in a numba typed List of one item, made by compiled code: the list's methods
-    for the item's type are compiled with this function, and cached on disk with it (a list
-    made by Python compiles them again in every process)."""
-    held = List()
-    held.append(item)
-    return held
+    """``item`` in a :class:`Held`, made by compiled code (its constructor is compiled with
+    this function, and cached on disk with it)."""
+    return Held(item)
+
+
+class _Plain:
+    """:class:`Held` without numba."""
+
+    def __init__(self, item):
+        self.item = item
 
 
 def _held(item):
     """``item`` held for :func:`rhs_kernel` (:func:`_hold`; the kernel then unboxes one object
-    per call, not each of its arrays); a plain list without numba."""
-    return _hold(item) if List is not None else [item]
+    per call, not each of its arrays); a plain object without numba."""
+    return _hold(item) if structref is not None else _Plain(item)
 
 
 class Kernel:
