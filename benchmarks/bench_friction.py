@@ -16,7 +16,9 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import cProfile  # noqa: E402
 import dataclasses  # noqa: E402
+import pstats  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -32,6 +34,27 @@ def with_friction(mech, mu=0.15, radius=0.008):
     extra = tuple(joint_friction(mech, j.name, mu, radius) for j in mech.joints)
     return dataclasses.replace(mech, loads=mech.loads + extra)
 
+
+
+#: the parts of the friction run's time (function names of the profile), in the order run
+PARTS = (("kinematics", "kinematics/solution.py", "solve"),
+         ("applied loads", "linkdyn/loads.py", "wrenches"),
+         ("friction kernel", "friction_compiled.py", "_kernel"),
+         ("friction loads", "friction.py", "with_efforts"),
+         ("friction outputs", "friction.py", "friction_of"))
+
+
+def split(fn, clock):
+    """The time of ``fn()`` on ``clock`` (s) and the share of each of :data:`PARTS` in it,
+    by the profiler (its own cost is in the whole, not in the parts)."""
+    prof = cProfile.Profile(clock)
+    prof.runcall(fn)
+    stats = pstats.Stats(prof).stats
+    total = max((v[3] for v in stats.values()), default=0.0)
+    parts = {name: sum(v[3] for (path, _, func), v in stats.items()
+                       if path.replace("\\", "/").endswith(where) and func == fn_name)
+             for name, where, fn_name in PARTS}
+    return total, parts
 
 
 def main():
@@ -52,6 +75,12 @@ def main():
           f"(Newton {sol.friction.iterations} iterations)")
     ratio = tp / tf
     print(verdict(ratio, TARGET_RATIO))
+    total, parts = split(lambda: linkdyn.analyze(rubbing, t, backend=args.backend), clock)
+    print(f"  split of one friction run ({1e3 * total:.1f} ms under the profiler):")
+    for name, x in parts.items():
+        print(f"    {name:20s} {1e3 * x:8.1f} ms  {x / total:6.1%}")
+    rest = total - sum(parts.values())
+    print(f"    {'the rest':20s} {1e3 * rest:8.1f} ms  {rest / total:6.1%}")
 
 
 if __name__ == "__main__":
