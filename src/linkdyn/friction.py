@@ -18,9 +18,10 @@ linear in the applied wrenches, so every reaction force is affine in the k frict
 
 ``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
 in friction joint l. The friction equations ``f = g(F(f))`` are then a k x k system per sample,
-solved by Newton's method from the frictionless solution ``f = 0`` (:func:`newton_update`, one
-step written once for both backends). On numpy (:func:`solve`) ``F0`` and ``A`` come from runs
-of the dynamics and reactions stages on the same kinematics, Newton's method steps every
+solved by Newton's method from the frictionless solution ``f = 0`` (:func:`residuals` and
+:func:`newton_step`, written once for both backends). On numpy (:func:`solve`) ``F0`` and
+``A`` come from runs of the dynamics and reactions stages on the same kinematics, Newton's
+method steps every
 sample at once, and a last run of the stages with the converged efforts gives the efforts,
 multipliers and reactions; on the compiled backend :func:`linkdyn.friction_compiled.solve`
 does the same in one kernel, a block of samples at a time. The reactions exclude the friction,
@@ -413,7 +414,8 @@ def equations(friction_rows, F, qd, sense=None):
 
 def newton(friction_rows, F0, A, qd, sense=None):
     """The friction efforts ``f`` (k, ...) that solve ``f = g(F0 + A f)`` (T9)-(T10), by
-    Newton's method (:func:`newton_update`) from the frictionless solution ``f = 0``, every
+    Newton's method (:func:`residuals`, :func:`newton_step`) from the frictionless solution
+    ``f = 0``, every
     sample at once.
 
     Parameters
@@ -491,8 +493,9 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage, kernel=None):
     dynamics, reactions_stage : callable
         The backend's stages (:func:`linkdyn.analysis.stage_functions`).
     kernel : callable, optional
-        On the compiled backend :func:`linkdyn.friction_compiled.solve`, which runs the 1 + k
-        cases and Newton's method in one kernel (the same steps), given ``(model, kin,
+        On the compiled backend :func:`linkdyn.friction_compiled.solve`, which runs the stages
+        under the applied loads and under each unit effort, and Newton's method, in one kernel
+        (the same steps), given ``(model, kin,
         applied, units, rows, qd)`` as prepared here.
 
     Returns

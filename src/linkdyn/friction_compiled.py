@@ -1,17 +1,18 @@
-"""Compiled friction solve: the k + 1 right-hand sides of the stages on one block's kinematics,
-and friction's Newton's method per sample, in one kernel.
+"""Compiled friction solve: the stages under the applied loads and under each unit friction
+effort on one block's kinematics, and friction's Newton's method per sample, in one kernel.
 
 The method is :func:`linkdyn.friction.solve`'s (docs/theory.md, "Friction that grows with the
 joint load"): at a fixed state every reaction, multiplier and effort is affine in the k friction
-efforts, ``R = R0 + sum_l (R_l - R0) f_l``, ``R0`` under the applied loads and ``R_l`` under
-those plus a unit effort in friction load l. For each block of samples, :func:`_kernel` copies
-the block's kinematics once into block-local scratch and runs the stages of
-:mod:`linkdyn.dynamics.compiled` on it for the ``1 + k`` cases (its Newton–Euler, backward
-recursion, multipliers and reactions steps, unchanged: only the applied wrenches differ), then
-solves each sample's friction equations by :func:`linkdyn.friction.newton_update` (the step the
-numpy path iterates) and writes ``R0 + sum_l (R_l - R0) f_l`` for every joint, multiplier and
-effort: no kinematics is copied per case and no stage runs again with the converged efforts.
-"""
+efforts, ``y = y0 + sum_l dy_l f_l``, ``y0`` under the applied loads and ``dy_l`` the response
+to a unit effort in friction load l alone. For each block of samples, :func:`_kernel` runs the
+stages of :mod:`linkdyn.dynamics.compiled` (its Newton–Euler, backward recursion, multipliers
+and reactions steps, unchanged) under the applied loads straight into the outputs, then on a
+block-local copy of the kinematics from ``w_star = -unit`` for each unit effort (no Newton–Euler
+step: ``w_star`` is affine in the applied wrench, the motion's share is the first case's), then
+solves each sample's friction equations by :func:`linkdyn.friction.residuals` and
+:func:`linkdyn.friction.newton_step` (the steps the numpy path runs over arrays) and adds
+``sum_l dy_l f_l`` to every joint, multiplier and effort, a block at a time: no stage runs
+again with the converged efforts."""
 
 from __future__ import annotations
 
