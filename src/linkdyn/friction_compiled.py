@@ -96,12 +96,12 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
     on_c, tree = np.zeros((kf, nj, 3, 1, B)), np.zeros((n, 3, 1, B))
     wc, zero = np.zeros((n, 3, B)), np.zeros(B)
     on_rows, o_rows = on_c.reshape((kf, nj * 3, 1, B)), o_on.reshape((nj * 3, D, T))
-    # each sample's friction equations: their rates' terms and efforts over the block
-    cs_b, vs_b, f_b = np.zeros((kf, B)), np.zeros((kf, B)), np.zeros((kf, B))
-    F0, A = np.zeros((kf, 2)), np.zeros((kf, kf, 2))
-    cs, vs, ps = np.zeros(kf), np.zeros(kf), np.zeros(kf)
-    f, old, res, dg = np.zeros(kf), np.zeros(kf), np.zeros(kf), np.zeros((kf, 2))
-    K, x = np.zeros((kf, kf + 1)), np.zeros(kf)
+    # the block's friction equations sample by sample (each sample's numbers contiguous): the
+    # forces F0, their responses A, the rates' terms, the efforts and residuals
+    Fs, As = np.zeros((B, kf, 2)), np.zeros((B, kf, kf, 2))
+    Cs, Vs, Xs, Rs = np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf))
+    f_b, ps = np.zeros((kf, B)), np.zeros(kf)
+    old, dg, K, x = np.zeros(kf), np.zeros((kf, 2)), np.zeros((kf, kf + 1)), np.zeros(kf)
     for d in range(D):
         dp = d if L.mass.shape[1] > 1 else 0
         dq = d if fp.shape[2] > 1 else 0
@@ -144,24 +144,34 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
                 cd._cut_wrenches(L, z, dp, z, nb, cb, sb, rb, lam, zero, wc, on_c[case])
                 cd._tree_reactions(L, z, dp, z, nb, z, z, no, cb, sb, rb, eb, tau_b, wc,
                                    wstar, tree, on_c[case])
-            # what the friction law reads of the rates: a(qd) sense and the viscous effort
+            # each sample's friction equations (T10): the friction joints' forces under the
+            # applied loads and their responses to each unit effort; what the friction law
+            # reads of the rates, a(qd) sense and the viscous effort
             for j in range(kf):
+                jj = fj[j]
+                for a in range(2):
+                    y0 = o_on[jj, 1 + a, d, k0:k0 + nb]
+                    for k in range(nb):
+                        Fs[k, j, a] = y0[k]
+                    for n in range(kf):
+                        dy = on_c[n, jj, 1 + a, 0]
+                        for k in range(nb):
+                            As[k, j, n, a] = dy[k]
                 arm, arm_s, st, sp, vis = fp[j, 0, dq], fp[j, 1, dq], fp[j, 2, dq], \
                     fp[j, 3, dq], fp[j, 4, dq]
                 for k in range(nb):
                     q = qd[j, d, k0 + k]
-                    cs_b[j, k] = sliding_arm(arm, arm_s, st, q, np.tanh(q / sp))
-                    vs_b[j, k] = vis * q
+                    Cs[k, j] = sliding_arm(arm, arm_s, st, q, np.tanh(q / sp))
+                    Vs[k, j] = vis * q
             for k in range(nb):
-                kk = k0 + k
-                _sample(o_on, on_c, k, fj, d, kk, F0, A)
-                for j in range(kf):
-                    cs[j], vs[j] = cs_b[j, k], vs_b[j, k]
-                _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_res,
-                        o_big, d, kk)
-                for j in range(kf):
-                    f_b[j, k] = f[j]
-                    o_f[j, d, kk] = f[j]
+                _solved(Xs[k], old, Fs[k], As[k], Cs[k], Vs[k], ps, Rs[k], dg, K, x, o_its,
+                        o_state, o_big, d, k0 + k)
+            for j in range(kf):
+                o_fj, o_rj = o_f[j, d, k0:k0 + nb], o_res[j, d, k0:k0 + nb]
+                for k in range(nb):
+                    f_b[j, k] = Xs[k, j]
+                    o_fj[k] = Xs[k, j]
+                    o_rj[k] = Rs[k, j]
             # y = y0 + sum_l dy_l f_l, for every joint, multiplier and effort
             _combine(on_rows, f_b, o_rows, d, k0, nb)
             _combine(lam_c, f_b, o_lam, d, k0, nb)
@@ -181,28 +191,16 @@ def _combine(cases, f, out, d, k0, nb):
                 y[k] += dy[k] * fn[k]
 
 
-@inline
-def _sample(on, on_c, k, fj, d, kk, F0, A):
-    """Sample k's friction equations (T10): ``F0`` the friction joints' forces under the
-    applied loads (``on`` (joints, 3, D, T) at design d, sample kk), ``A`` their response to
-    each unit effort (``on_c`` (k, joints, 3, 1, block) at block sample k)."""
-    for j in range(fj.shape[0]):
-        jj = fj[j]
-        F0[j, 0], F0[j, 1] = on[jj, 1, d, kk], on[jj, 2, d, kk]
-        for n in range(fj.shape[0]):
-            A[j, n, 0] = on_c[n, jj, 1, 0, k]
-            A[j, n, 1] = on_c[n, jj, 2, 0, k]
-
-
 #: :func:`_solved`'s outcome of a sample: not iterated (its forces are not finite), solved, locked
 NOT_ITERATED, SOLVED, LOCKED = 0, 1, 2
 
 
 @inline
-def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_res, o_big, d, kk):
+def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_big, d, kk):
     """Newton's method on one sample's friction equations from ``f = 0``, as
     :func:`linkdyn.friction.newton` drives it (the same steps, stop and lock rules); ``f`` NaN
-    where it locks. A state whose forces are not finite is not iterated."""
+    where it locks, ``res`` its residuals. A state whose forces are not finite is not
+    iterated."""
     kf = f.shape[0]
     finite, open_ = True, True
     for j in range(kf):
@@ -236,8 +234,6 @@ def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_res, o_b
         for j in range(kf):
             f[j] = np.nan
     o_its[d, kk], o_state[d, kk], o_big[d, kk] = its, state, big_g
-    for j in range(kf):
-        o_res[j, d, kk] = res[j]
 
 
 def solve(model, kin, applied, units, friction_rows, qd):
