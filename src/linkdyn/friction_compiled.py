@@ -153,10 +153,10 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
                     y0 = o_on[jj, 1 + a, d, k0:k0 + nb]
                     for k in range(nb):
                         Fs[k, j, a] = y0[k]
-                    for n in range(kf):
-                        dy = on_c[n, jj, 1 + a, 0]
+                    for l in range(kf):
+                        dy = on_c[l, jj, 1 + a, 0]
                         for k in range(nb):
-                            As[k, j, n, a] = dy[k]
+                            As[k, j, l, a] = dy[k]
                 arm, arm_s, st, sp, vis = fp[j, 0, dq], fp[j, 1, dq], fp[j, 2, dq], \
                     fp[j, 3, dq], fp[j, 4, dq]
                 for k in range(nb):
