@@ -16,7 +16,9 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import cProfile  # noqa: E402
 import dataclasses  # noqa: E402
+import pstats  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -32,6 +34,31 @@ def with_friction(mech, mu=0.15, radius=0.008):
     extra = tuple(joint_friction(mech, j.name, mu, radius) for j in mech.joints)
     return dataclasses.replace(mech, loads=mech.loads + extra)
 
+
+
+#: the parts of the friction run's time (function names of the profile), in the order run
+PARTS = (("kinematics", "kinematics/solution.py", "solve"),
+         ("applied loads", "linkdyn/loads.py", "wrenches"),
+         ("friction kernel", "friction_compiled.py", "_kernel"),
+         ("friction loads", "friction.py", "with_efforts"),
+         ("friction outputs", "friction.py", "friction_of"))
+
+
+def split(fn, clock, repeat):
+    """The time of ``fn()`` on ``clock`` (s) and the time of each of :data:`PARTS` in it, by
+    the profiler: the least of ``repeat`` runs of each (the profiler's own cost is in the
+    whole, not in the parts)."""
+    total, parts = float("inf"), {name: float("inf") for name, _, _ in PARTS}
+    for _ in range(repeat):
+        prof = cProfile.Profile(clock)
+        prof.runcall(fn)
+        stats = pstats.Stats(prof).stats
+        total = min(total, max((v[3] for v in stats.values()), default=0.0))
+        for name, where, fn_name in PARTS:
+            parts[name] = min(parts[name], sum(
+                v[3] for (path, _, func), v in stats.items()
+                if path.replace("\\", "/").endswith(where) and func == fn_name))
+    return total, parts
 
 
 def main():
@@ -52,6 +79,14 @@ def main():
           f"(Newton {sol.friction.iterations} iterations)")
     ratio = tp / tf
     print(verdict(ratio, TARGET_RATIO))
+    total, parts = split(lambda: linkdyn.analyze(rubbing, t, backend=args.backend), clock,
+                         args.repeat)
+    print(f"  split of a friction run ({1e3 * total:.1f} ms under the profiler, each the "
+          f"least of {args.repeat}):")
+    for name, x in parts.items():
+        print(f"    {name:20s} {1e3 * x:8.1f} ms  {x / total:6.1%}")
+    rest = max(total - sum(parts.values()), 0.0)
+    print(f"    {'the rest':20s} {1e3 * rest:8.1f} ms  {rest / total:6.1%}")
 
 
 if __name__ == "__main__":

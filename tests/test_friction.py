@@ -370,6 +370,20 @@ def test_backends_agree_with_friction(name):
     check(b.friction.effort, a.friction.effort, 1e-12, what="friction")
 
 
+@pytest.mark.parametrize("name", ["hoeken-loaded", "stephenson"])
+def test_backends_agree_with_friction_over_many_samples(name):
+    """Over more samples than the compiled kernel takes at once (it works a block of samples
+    at a time, its scratch reused from block to block): every reaction's whole wrench (the
+    moment too), the efforts and the friction agree with numpy's at every sample."""
+    model = FRICTION_MODELS[name]()
+    t = times(model, 2500)
+    a, b = analyze(model, t, backend="numpy"), analyze(model, t, backend="compiled")
+    check(b.dyn.tau, a.dyn.tau, 1e-12, what="tau")
+    check(np.asarray(b.reactions.on_second), np.asarray(a.reactions.on_second), 1e-12,
+          what="reactions")
+    check(b.friction.effort, a.friction.effort, 1e-12, what="friction")
+
+
 def test_backends_agree_where_friction_locks():
     """The wedge pushed up its incline on both backends: the same pushes below the lock, and
     beyond mu = tan(alpha) the same samples locked at the same joint."""

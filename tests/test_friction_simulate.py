@@ -233,7 +233,7 @@ def test_friction_newton_step_matches_lapack():
     """One step of friction's Newton's method (the elimination both backends run per sample):
     its residual, step and determinant against the friction law written out here and
     numpy.linalg (random J: row swaps at most samples)."""
-    from linkdyn.friction import newton_update
+    from linkdyn.friction import newton_step, residuals
     rng = np.random.default_rng(7)
     k, n = 4, 50
     F0, A = rng.normal(size=(k, 2, n)), rng.normal(size=(k, k, 2, n))
@@ -245,8 +245,11 @@ def test_friction_newton_step_matches_lapack():
     J = np.eye(k)[..., None] + np.einsum("jn,jcn,jlcn->jln", c / size, F, A)
     r = f - g
     new = f.copy()
-    big_r, big_g, det = newton_update(F0, A, c, v, pre, new, np.zeros((k, n)),
-                                      np.zeros((k, k + 1, n)), np.zeros((k, n)))
+    res, dg = np.zeros((k, n)), np.zeros((k, 2, n))
+    big_r, big_g = residuals(F0, A, c, v, pre, new, res, dg)
+    np.testing.assert_allclose(res, r, rtol=1e-14, atol=1e-14 * np.max(np.abs(r)))
+    np.testing.assert_array_equal(new, f)   # the residuals leave the efforts as they are
+    det = newton_step(A, dg, new, res, np.zeros((k, k + 1, n)), np.zeros((k, n)))
     Jn = np.moveaxis(J, -1, 0)
     ref = np.linalg.det(Jn)
     np.testing.assert_allclose(det, ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(ref)))

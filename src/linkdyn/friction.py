@@ -18,9 +18,10 @@ linear in the applied wrenches, so every reaction force is affine in the k frict
 
 ``F0`` the frictionless reactions and ``A_jl`` the response of joint j's force to a unit effort
 in friction joint l. The friction equations ``f = g(F(f))`` are then a k x k system per sample,
-solved by Newton's method from the frictionless solution ``f = 0`` (:func:`newton_update`, one
-step written once for both backends). On numpy (:func:`solve`) ``F0`` and ``A`` come from runs
-of the dynamics and reactions stages on the same kinematics, Newton's method steps every
+solved by Newton's method from the frictionless solution ``f = 0`` (:func:`residuals` and
+:func:`newton_step`, written once for both backends). On numpy (:func:`solve`) ``F0`` and
+``A`` come from runs of the dynamics and reactions stages on the same kinematics, Newton's
+method steps every
 sample at once, and a last run of the stages with the converged efforts gives the efforts,
 multipliers and reactions; on the compiled backend :func:`linkdyn.friction_compiled.solve`
 does the same in one kernel, a block of samples at a time. The reactions exclude the friction,
@@ -29,7 +30,7 @@ as they exclude a driver's effort: the friction is an applied load.
 A load that depends on the reactions answers one question (the interface the load registry
 should carry, :data:`linkdyn.loads.REACTION_KINDS`): given the joint's reaction force and the
 state, its effort and the effort's derivative with respect to that force (:func:`coulomb`); its
-wrench is an effort inside the joint (:func:`linkdyn.loads.add_joint_effort`).
+wrench is an effort inside the joint (:func:`linkdyn.loads.joint_effort_units`).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from . import joints as jk
-from .loads import Loads, add_joint_effort, joint_effort_units
+from .loads import Loads, joint_effort_units
 from .model import Load, Model, default_transition_speed
 from .steps import select, step
 
@@ -201,9 +202,11 @@ def bigger(a, b):
 
 
 @step(inline=True)
-def newton_update(F0, A, c, v, preload, f, r, K, x):
-    """One step of Newton's method on the friction equations ``f = g(F0 + A f)`` (T9)-(T10)
-    at the efforts ``f``, in place: ``f <- f - J^-1 r``, ``r = f - g``, ``J = I - (dg/dF) A``.
+def residuals(F0, A, c, v, preload, f, r, dg):
+    """The residuals of the friction equations ``f = g(F0 + A f)`` (T9)-(T10) at the efforts
+    ``f``: ``r = f - g`` and each load's ``dg/dF`` at its force, in place; the first half of a
+    step of Newton's method (:func:`newton_step` the second), which stops here when ``r`` is
+    small enough, without forming the Jacobian.
 
     Every entry is a float (one sample, in a compiled sample loop) or an array over the
     samples (numpy), so the same lines serve both backends.
@@ -217,18 +220,18 @@ def newton_update(F0, A, c, v, preload, f, r, K, x):
     c, v, preload : (k,)
         Each load's :func:`sliding_arm`, viscous effort (N m or N) and preload (N).
     f : (k,)
-        The efforts, N m or N; updated.
-    r, K, x : (k,), (k, k + 1), (k,)
-        Work: ``r`` receives the residuals at the given ``f``.
+        The efforts, N m or N.
+    r, dg : (k,), (k, 2)
+        Receive the residuals and ``dg_j/dF_j``.
 
     Returns
     -------
-    (big_r, big_g, det)
-        The largest ``|r|`` and ``|g|`` and ``det J``, at the given ``f``.
+    (big_r, big_g)
+        The largest ``|r|`` and ``|g|`` at ``f``.
     """
     k = len(f)
-    big_r, big_g, det = 0.0, 0.0, 1.0
-    # F_j = F0_j + sum_l A_jl f_l;  r_j = f_j - g_j(F_j);  J_jl = delta_jl - dg_j/dF_j . A_jl
+    big_r, big_g = 0.0, 0.0
+    # F_j = F0_j + sum_l A_jl f_l;  r_j = f_j - g_j(F_j)
     for j in range(k):
         fx, fy = F0[j, 0], F0[j, 1]
         for n in range(k):
@@ -236,11 +239,25 @@ def newton_update(F0, A, c, v, preload, f, r, K, x):
             fy = fy + A[j, n, 1] * f[n]
         g, (gx, gy) = dry_at(c[j], v[j], preload[j], fx, fy)
         r[j] = f[j] - g
-        K[j, k] = f[j] - g
+        dg[j, 0] = gx
+        dg[j, 1] = gy
         big_r = bigger(np.abs(f[j] - g), big_r)
         big_g = bigger(np.abs(g), big_g)
+    return big_r, big_g
+
+
+@step(inline=True)
+def newton_step(A, dg, f, r, K, x):
+    """The step of Newton's method on the friction equations from :func:`residuals`' ``r``
+    and ``dg`` at ``f``, in place: ``f <- f - J^-1 r``, ``J = I - (dg/dF) A``
+    (``J_jl = delta_jl - dg_j/dF_j . A_jl``); ``K`` (k, k + 1) and ``x`` (k,) work. Returns
+    ``det J``. Entries floats or arrays over the samples, as in :func:`residuals`."""
+    k = len(f)
+    det = 1.0
+    for j in range(k):
+        K[j, k] = r[j]
         for n in range(k):
-            K[j, n] = (1.0 if j == n else 0.0) - (gx * A[j, n, 0] + gy * A[j, n, 1])
+            K[j, n] = (1.0 if j == n else 0.0) - (dg[j, 0] * A[j, n, 0] + dg[j, 1] * A[j, n, 1])
     # J x = r by elimination with partial pivoting (each swap changes det's sign)
     for col in range(k):
         for i in range(col + 1, k):
@@ -264,7 +281,7 @@ def newton_update(F0, A, c, v, preload, f, r, K, x):
         x[j] = acc / K[j, j]
     for j in range(k):
         f[j] = f[j] - x[j]
-    return big_r, big_g, det
+    return det
 
 
 def capacity(row: Row, F):
@@ -326,14 +343,22 @@ def with_efforts(applied: Loads, kin, friction_rows, efforts) -> Loads:
     wrenches on the moving bodies, the ground's share in ``on_ground``, their power in
     ``power`` and, if ``applied`` keeps each load's value and power, the friction loads' (their
     effort and its power)."""
-    # (add_joint_effort makes new arrays of the bodies it loads: the others are not copied)
-    w = [np.broadcast_to(x, (3,) + kin.shape) for x in applied.wrenches]
-    w[0] = np.zeros((3,) + kin.shape)
+    # each body a friction load acts on gets one new array, accumulated in place; the others
+    # are not copied
+    shape = (3,) + kin.shape
+    w = [np.broadcast_to(x, shape) for x in applied.wrenches]
+    w[0] = np.zeros(shape)
+    own = {0}
     power = applied.power
     qd = kin.joint_motion[1]
     values, powers = list(applied.values), list(applied.powers)
     for row, x in zip(friction_rows, efforts):
-        add_joint_effort(w, kin, row.body, row.body2, row.point, row.axis, x)
+        for body, u in zip((row.body, row.body2),
+                           joint_effort_units(kin, row.body, row.body2, row.point, row.axis)):
+            if body not in own:
+                w[body] = np.array(w[body])
+                own.add(body)
+            w[body] += u * x
         p = x * qd[row.joint]
         power = power + p
         if values and powers:
@@ -389,7 +414,8 @@ def equations(friction_rows, F, qd, sense=None):
 
 def newton(friction_rows, F0, A, qd, sense=None):
     """The friction efforts ``f`` (k, ...) that solve ``f = g(F0 + A f)`` (T9)-(T10), by
-    Newton's method (:func:`newton_update`) from the frictionless solution ``f = 0``, every
+    Newton's method (:func:`residuals`, :func:`newton_step`) from the frictionless solution
+    ``f = 0``, every
     sample at once.
 
     Parameters
@@ -423,26 +449,28 @@ def newton(friction_rows, F0, A, qd, sense=None):
                            _sense(r, qd[j], None if sense is None else sense[j]))
         v[j], pre[j] = r.viscous * qd[j], r.preload
     f, res = np.zeros((k,) + shape), np.zeros((k,) + shape)
-    K, x = np.zeros((k, k + 1) + shape), np.zeros((k,) + shape)
+    dg, K, x = np.zeros((k, 2) + shape), np.zeros((k, k + 1) + shape), np.zeros((k,) + shape)
     # a state whose forces are not finite is not iterated (nor locked)
     finite_state = np.all(np.isfinite(F0), axis=(0, 1)) if k else np.ones(shape, bool)
     done = ~(finite_state & (np.all(np.isfinite(A), axis=(0, 1, 2)) if k else True))
     converged, det = np.zeros(shape, bool), np.ones(shape)
     iterations, scale = np.zeros(shape, int), 0.0
     for _ in range(MAX_ITERATIONS + 1):
-        new = f.copy()
-        with np.errstate(divide="ignore", invalid="ignore"):   # a singular J: not finite
-            big_r, big_g, d = newton_update(F0, A, c, v, pre, new, res, K, x)
+        big_r, big_g = residuals(F0, A, c, v, pre, f, res, dg)
         scale = np.maximum(scale, np.nanmax(big_g, axis=-1, keepdims=True, initial=0.0))
         # converged: every residual at most TOL of the sample's largest friction effort
         now = ~done & (big_r <= TOL * np.maximum(big_g, 1e-300))
-        converged, det = converged | now, np.where(now, d, det)
+        converged = converged | now
         done = done | now
         if np.all(done):
             break
+        new = f.copy()
+        with np.errstate(divide="ignore", invalid="ignore"):   # a singular J: not finite
+            d = newton_step(A, dg, new, res, K, x)
         # a singular J (a fold of the friction equations) ends that sample's iterations
         done = done | ~np.all(np.isfinite(new), axis=0)
-        f = np.where(done, f, new)
+        # det J of the last step taken: its sign at the solution, a step before it
+        f, det = np.where(done, f, new), np.where(done, det, d)
         iterations = iterations + ~done
     # a solution not reached from the frictionless one (J no longer positive) locks too
     locked = finite_state & ~(converged & (det > 0))
@@ -465,8 +493,9 @@ def solve(models, kin, applied: Loads, dynamics, reactions_stage, kernel=None):
     dynamics, reactions_stage : callable
         The backend's stages (:func:`linkdyn.analysis.stage_functions`).
     kernel : callable, optional
-        On the compiled backend :func:`linkdyn.friction_compiled.solve`, which runs the 1 + k
-        cases and Newton's method in one kernel (the same steps), given ``(model, kin,
+        On the compiled backend :func:`linkdyn.friction_compiled.solve`, which runs the stages
+        under the applied loads and under each unit effort, and Newton's method, in one kernel
+        (the same steps), given ``(model, kin,
         applied, units, rows, qd)`` as prepared here.
 
     Returns

@@ -1,17 +1,18 @@
-"""Compiled friction solve: the k + 1 right-hand sides of the stages on one block's kinematics,
-and friction's Newton's method per sample, in one kernel.
+"""Compiled friction solve: the stages under the applied loads and under each unit friction
+effort on one block's kinematics, and friction's Newton's method per sample, in one kernel.
 
 The method is :func:`linkdyn.friction.solve`'s (docs/theory.md, "Friction that grows with the
 joint load"): at a fixed state every reaction, multiplier and effort is affine in the k friction
-efforts, ``R = R0 + sum_l (R_l - R0) f_l``, ``R0`` under the applied loads and ``R_l`` under
-those plus a unit effort in friction load l. For each block of samples, :func:`_kernel` copies
-the block's kinematics once into block-local scratch and runs the stages of
-:mod:`linkdyn.dynamics.compiled` on it for the ``1 + k`` cases (its Newton–Euler, backward
-recursion, multipliers and reactions steps, unchanged: only the applied wrenches differ), then
-solves each sample's friction equations by :func:`linkdyn.friction.newton_update` (the step the
-numpy path iterates) and writes ``R0 + sum_l (R_l - R0) f_l`` for every joint, multiplier and
-effort: no kinematics is copied per case and no stage runs again with the converged efforts.
-"""
+efforts, ``y = y0 + sum_l dy_l f_l``, ``y0`` under the applied loads and ``dy_l`` the response
+to a unit effort in friction load l alone. For each block of samples, :func:`_kernel` runs the
+stages of :mod:`linkdyn.dynamics.compiled` (its Newton–Euler, backward recursion, multipliers
+and reactions steps, unchanged) under the applied loads straight into the outputs, then on a
+block-local copy of the kinematics from ``w_star = -unit`` for each unit effort (no Newton–Euler
+step: ``w_star`` is affine in the applied wrench, the motion's share is the first case's), then
+solves each sample's friction equations by :func:`linkdyn.friction.residuals` and
+:func:`linkdyn.friction.newton_step` (the steps the numpy path runs over arrays) and adds
+``sum_l dy_l f_l`` to every joint, multiplier and effort, a block at a time: no stage runs
+again with the converged efforts."""
 
 from __future__ import annotations
 
@@ -22,8 +23,8 @@ import numpy as np
 from .compiled import inline, njit
 from .dynamics import compiled as cd
 from .dynamics.denoc import DynamicSolution
-from .friction import (MAX_ITERATIONS, TOL, friction_of, newton_update, sliding_arm,
-                       with_efforts)
+from .friction import (MAX_ITERATIONS, TOL, friction_of, newton_step, residuals,
+                       sliding_arm, with_efforts)
 from .reactions import Reactions
 
 
@@ -37,15 +38,19 @@ def _copy(x, d, k0, nb, out):
 
 
 @inline
-def _wrenches(w, d, k0, nb, out, add):
-    """The block's wrenches of ``w`` (n, 3, D, Tw) (one sample when Tw = 1: the same at every
-    sample) into ``out`` (n, 3, 1, block), added to it if ``add``."""
-    one = w.shape[3] == 1
-    for i in range(w.shape[0]):
+def _unit(u, d, k0, nb, wstar, wtilde):
+    """``w_star = w_tilde = -u`` on the moving bodies over the block from sample ``k0``, ``u``
+    (n, 3, D, Tu) a unit effort's wrenches (Tu = 1: the same at every sample); the ground's
+    ``w_tilde`` zero: the stages' start for the response to the effort alone (``w_star = M td
+    + ... - w_ext`` is affine in ``w_ext``, the motion's share is the applied loads' case)."""
+    one = u.shape[3] == 1
+    for i in range(1, u.shape[0]):
         for j in range(3):
             for k in range(nb):
-                x = w[i, j, d, 0 if one else k0 + k]
-                out[i, j, 0, k] = out[i, j, 0, k] + x if add else x
+                x = -u[i, j, d, 0 if one else k0 + k]
+                wstar[i, j, 0, k] = x
+                wtilde[i, j, 0, k] = x
+    wtilde[0, :, 0, :nb] = 0.0
 
 
 @njit
@@ -58,7 +63,15 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
     preload per design; ``qd`` (k, D, T) its joint's rate. Outputs: ``o_f`` (k, D, T) the
     efforts (NaN where locked), ``o_its`` the iterations, ``o_state`` (:func:`_solved`),
     ``o_res`` (k, D, T) the residuals and ``o_big`` the largest friction effort at the
-    solution."""
+    solution.
+
+    Per block: the stages under the applied loads write the outputs directly (as
+    :func:`linkdyn.dynamics.compiled.solve` and ``reactions`` do); the response of every
+    reaction, multiplier and effort to a unit effort in each friction load alone (the stages
+    from ``w_star = -unit``: no Newton–Euler, the motion's share is in the first case) goes to
+    block scratch; each sample's Newton's method reads the friction joints' rows of both; then
+    ``y = y0 + sum_l dy_l f_l`` over the block, in place.
+    """
     n, nr, nv, nj, kf = L.parent.shape[0], J.shape[0], L.driven.shape[0], o_on.shape[0], \
         fj.shape[0]
     m = L.dependent.shape[0]
@@ -67,101 +80,115 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
     # the block's place and keep=False as run-time values, not literals: the stages of
     # linkdyn.dynamics.compiled then reuse their compilations for its kernels
     z, no = np.int64(0), np.bool_(False)
-    # one block's kinematics, shared by the 1 + k cases
+    # one block's kinematics, for the unit efforts' cases
     cb, sb = np.zeros((n, 1, B)), np.zeros((n, 1, B))
     rb, eb = np.zeros((n, 2, 1, B)), np.zeros((n, 2, 1, B))
-    twb, tdb = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B))
     Jb = np.zeros((nr, max(n - 1, 1), 1, B))
     # each case's stages over the block
-    wb, dummy = np.zeros((n, 3, 1, B)), np.zeros((1, 1, 1, 1))
+    w_const = np.zeros((n, 3, 1, B))
     wstar, wtilde, Q = np.zeros((n, 3, 1, B)), np.zeros((n, 3, 1, B)), np.zeros((n, 1, B))
     Am, lam, piv, ke = np.zeros((m, m + 1, B)), np.zeros((max(m, 1), B)), np.zeros(B), \
         np.zeros(B)
-    lam_c, tau_c = np.zeros((kf + 1, max(nr, 1), 1, B)), np.zeros((kf + 1, max(nv, 1), 1, B))
+    # the unit efforts' responses: multipliers, efforts, reactions (joint j's component a is
+    # row 3 j + a)
+    lam_c, tau_c = np.zeros((kf, max(nr, 1), 1, B)), np.zeros((kf, max(nv, 1), 1, B))
     piv_c, tau_b = np.zeros((1, B)), np.zeros((max(nv, 1), B))
-    on_c, tree = np.zeros((kf + 1, nj, 3, 1, B)), np.zeros((n, 3, 1, B))
+    on_c, tree = np.zeros((kf, nj, 3, 1, B)), np.zeros((n, 3, 1, B))
     wc, zero = np.zeros((n, 3, B)), np.zeros(B)
-    # the reactions' rows flat: joint j's component a is row 3 j + a
-    on_rows, o_rows = on_c.reshape((kf + 1, nj * 3, 1, B)), o_on.reshape((nj * 3, D, T))
-    # one sample's friction equations
-    F0, A = np.zeros((kf, 2)), np.zeros((kf, kf, 2))
-    cs, vs, ps = np.zeros(kf), np.zeros(kf), np.zeros(kf)
-    f, old, res, K, x = np.zeros(kf), np.zeros(kf), np.zeros(kf), np.zeros((kf, kf + 1)), \
-        np.zeros(kf)
+    on_rows, o_rows = on_c.reshape((kf, nj * 3, 1, B)), o_on.reshape((nj * 3, D, T))
+    # the block's friction equations sample by sample (each sample's numbers contiguous): the
+    # forces F0, their responses A, the rates' terms, the efforts and residuals
+    Fs, As = np.zeros((B, kf, 2)), np.zeros((B, kf, kf, 2))
+    Cs, Vs, Xs, Rs = np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf))
+    f_b, ps = np.zeros((kf, B)), np.zeros(kf)
+    old, dg, K, x = np.zeros(kf), np.zeros((kf, 2)), np.zeros((kf, kf + 1)), np.zeros(kf)
     for d in range(D):
         dp = d if L.mass.shape[1] > 1 else 0
         dq = d if fp.shape[2] > 1 else 0
+        cd._constant(w_ext, d, w_const)
+        for j in range(kf):
+            ps[j] = fp[j, 5, dq]
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
+            # the applied loads: the dynamics (w_star, w_tilde, Q, lam, tau), then the
+            # reactions, into the outputs at the block's samples
+            wtilde[0, :, 0, :nb] = 0.0
+            cd._newton_euler(L, d, dp, k0, nb, z, z, c, s, tw, twd, w_ext, w_const, ke, wstar,
+                             wtilde)
+            o_ke[d, k0:k0 + nb] = ke[:nb]
+            cd._composite(L, r, d, k0, nb, z, z, wtilde)
+            cd._generalized(L, d, k0, nb, z, z, e, wtilde, Q)
+            cd._multipliers(L, d, k0, nb, J, Q[:, 0, 0:nb], Am, lam, piv, o_lam, o_tau,
+                            o_pivot)
+            for a in range(nv):
+                tau_b[a, :nb] = o_tau[a, d, k0:k0 + nb]
+            cd._cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on)
+            cd._tree_reactions(L, d, dp, k0, nb, z, z, no, c, s, r, e, tau_b, wc, wstar, tree,
+                               o_on)
+            # each unit effort alone, on the block's kinematics
             _copy(c, d, k0, nb, cb[:, 0])
             _copy(s, d, k0, nb, sb[:, 0])
             for i in range(n):
                 _copy(r[i], d, k0, nb, rb[i, :, 0])
                 _copy(e[i], d, k0, nb, eb[i, :, 0])
-                _copy(tw[i], d, k0, nb, twb[i, :, 0])
-                _copy(twd[i], d, k0, nb, tdb[i, :, 0])
             for a in range(nr):
                 _copy(J[a], d, k0, nb, Jb[a, :, 0])
-            # case 0 the applied loads, case 1 + l those and a unit effort in friction load l:
-            # the dynamics (w_star, w_tilde, Q, lam, tau), then the reactions
-            for case in range(kf + 1):
-                _wrenches(w_ext, d, k0, nb, wb, False)
-                if case > 0:
-                    _wrenches(units[case - 1], d, k0, nb, wb, True)
-                wtilde[0, :, 0, :nb] = 0.0
-                cd._newton_euler(L, z, dp, z, nb, z, z, cb, sb, twb, tdb, dummy, wb, ke,
-                                 wstar, wtilde)
+            for case in range(kf):
+                _unit(units[case], d, k0, nb, wstar, wtilde)
                 cd._composite(L, rb, z, z, nb, z, z, wtilde)
                 cd._generalized(L, z, z, nb, z, z, eb, wtilde, Q)
                 cd._multipliers(L, z, z, nb, Jb, Q[:, 0, 0:nb], Am, lam, piv, lam_c[case],
                                 tau_c[case], piv_c)
-                if case == 0:
-                    o_ke[d, k0:k0 + nb] = ke[:nb]
-                    o_pivot[d, k0:k0 + nb] = piv_c[0, :nb]
                 for a in range(nv):
                     tau_b[a, :nb] = tau_c[case, a, 0, :nb]
                 cd._cut_wrenches(L, z, dp, z, nb, cb, sb, rb, lam, zero, wc, on_c[case])
                 cd._tree_reactions(L, z, dp, z, nb, z, z, no, cb, sb, rb, eb, tau_b, wc,
                                    wstar, tree, on_c[case])
+            # each sample's friction equations (T10): the friction joints' forces under the
+            # applied loads and their responses to each unit effort; what the friction law
+            # reads of the rates, a(qd) sense and the viscous effort
+            for j in range(kf):
+                jj = fj[j]
+                for a in range(2):
+                    y0 = o_on[jj, 1 + a, d, k0:k0 + nb]
+                    for k in range(nb):
+                        Fs[k, j, a] = y0[k]
+                    for l in range(kf):
+                        dy = on_c[l, jj, 1 + a, 0]
+                        for k in range(nb):
+                            As[k, j, l, a] = dy[k]
+                arm, arm_s, st, sp, vis = fp[j, 0, dq], fp[j, 1, dq], fp[j, 2, dq], \
+                    fp[j, 3, dq], fp[j, 4, dq]
+                for k in range(nb):
+                    q = qd[j, d, k0 + k]
+                    Cs[k, j] = sliding_arm(arm, arm_s, st, q, np.tanh(q / sp))
+                    Vs[k, j] = vis * q
             for k in range(nb):
-                _sample(on_c, k, fj, fp, dq, qd, d, k0 + k, F0, A, cs, vs, ps)
-                kk = k0 + k
-                _solved(f, old, F0, A, cs, vs, ps, res, K, x, o_its, o_state, o_res, o_big,
-                        d, kk)
-                # R = R0 + sum_l (R_l - R0) f_l, for every joint, multiplier and effort
-                for j in range(kf):
-                    o_f[j, d, kk] = f[j]
-                _combine(on_rows, k, f, o_rows, d, kk)
-                _combine(lam_c, k, f, o_lam, d, kk)
-                _combine(tau_c, k, f, o_tau, d, kk)
+                _solved(Xs[k], old, Fs[k], As[k], Cs[k], Vs[k], ps, Rs[k], dg, K, x, o_its,
+                        o_state, o_big, d, k0 + k)
+            for j in range(kf):
+                o_fj, o_rj = o_f[j, d, k0:k0 + nb], o_res[j, d, k0:k0 + nb]
+                for k in range(nb):
+                    f_b[j, k] = Xs[k, j]
+                    o_fj[k] = Xs[k, j]
+                    o_rj[k] = Rs[k, j]
+            # y = y0 + sum_l dy_l f_l, for every joint, multiplier and effort
+            _combine(on_rows, f_b, o_rows, d, k0, nb)
+            _combine(lam_c, f_b, o_lam, d, k0, nb)
+            _combine(tau_c, f_b, o_tau, d, k0, nb)
 
 
 @inline
-def _combine(cases, k, f, out, d, kk):
-    """``y = y0 + sum_l (y_l - y0) f_l`` (T10) of every row of ``cases`` (1 + k, rows, 1,
-    block) at block sample k, the values under the 1 + k cases, into ``out`` (rows, D, T) at
-    sample ``kk`` of design d."""
+def _combine(cases, f, out, d, k0, nb):
+    """``y = y0 + sum_l dy_l f_l`` (T10) of every row of ``out`` (rows, D, T), ``y0`` there
+    at the block's samples of design d (updated in place), ``dy_l`` of the unit efforts'
+    ``cases`` (k, rows, 1, block), ``f`` (k, block) the block's efforts."""
     for a in range(out.shape[0]):
-        y0 = cases[0, a, 0, k]
-        y = y0
+        y = out[a, d, k0:k0 + nb]
         for n in range(f.shape[0]):
-            y += (cases[1 + n, a, 0, k] - y0) * f[n]
-        out[a, d, kk] = y
-
-
-@inline
-def _sample(on_c, k, fj, fp, dq, qd, d, kk, F0, A, cs, vs, ps):
-    """Sample k's friction equations from the block's cases: ``F0``, ``A`` (T10), each load's
-    sliding arm, viscous effort and preload at its rate ``qd[:, d, kk]``."""
-    for j in range(fj.shape[0]):
-        jj = fj[j]
-        F0[j, 0], F0[j, 1] = on_c[0, jj, 1, 0, k], on_c[0, jj, 2, 0, k]
-        for n in range(fj.shape[0]):
-            A[j, n, 0] = on_c[1 + n, jj, 1, 0, k] - F0[j, 0]
-            A[j, n, 1] = on_c[1 + n, jj, 2, 0, k] - F0[j, 1]
-        q = qd[j, d, kk]
-        cs[j] = sliding_arm(fp[j, 0, dq], fp[j, 1, dq], fp[j, 2, dq], q, np.tanh(q / fp[j, 3, dq]))
-        vs[j], ps[j] = fp[j, 4, dq] * q, fp[j, 5, dq]
+            dy, fn = cases[n, a, 0], f[n]
+            for k in range(nb):
+                y[k] += dy[k] * fn[k]
 
 
 #: :func:`_solved`'s outcome of a sample: not iterated (its forces are not finite), solved, locked
@@ -169,10 +196,11 @@ NOT_ITERATED, SOLVED, LOCKED = 0, 1, 2
 
 
 @inline
-def _solved(f, old, F0, A, cs, vs, ps, res, K, x, o_its, o_state, o_res, o_big, d, kk):
+def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_big, d, kk):
     """Newton's method on one sample's friction equations from ``f = 0``, as
-    :func:`linkdyn.friction.newton` drives it (the same step, stop and lock rules); ``f`` NaN
-    where it locks. A state whose forces are not finite is not iterated."""
+    :func:`linkdyn.friction.newton` drives it (the same steps, stop and lock rules); ``f`` NaN
+    where it locks, ``res`` its residuals. A state whose forces are not finite is not
+    iterated."""
     kf = f.shape[0]
     finite, open_ = True, True
     for j in range(kf):
@@ -183,27 +211,29 @@ def _solved(f, old, F0, A, cs, vs, ps, res, K, x, o_its, o_state, o_res, o_big, 
     its, ok, det, big_g = 0, False, 1.0, np.nan
     if finite and open_:
         for _ in range(MAX_ITERATIONS + 1):
-            old[:] = f
-            big_r, big_g, det = newton_update(F0, A, cs, vs, ps, f, res, K, x)
-            if big_r <= TOL * max(big_g, 1e-300):   # converged at the efforts before the step
-                f[:] = old
+            big_r, big_g = residuals(F0, A, cs, vs, ps, f, res, dg)
+            if big_r <= TOL * max(big_g, 1e-300):   # converged: no Jacobian formed
                 ok = True
                 break
+            for j in range(kf):
+                old[j] = f[j]
+            det_step = newton_step(A, dg, f, res, K, x)
             f_ok = True
             for j in range(kf):
                 f_ok = f_ok and np.isfinite(f[j])
             if not f_ok:                               # a singular J: a fold, it ends here
-                f[:] = old
+                for j in range(kf):
+                    f[j] = old[j]
                 break
+            det = det_step
             its += 1
     state = NOT_ITERATED
     if finite:   # locked: no solution reached from f = 0 (J no longer positive there)
         state = SOLVED if ok and det > 0 else LOCKED
     if state == LOCKED:
-        f[:] = np.nan
+        for j in range(kf):
+            f[j] = np.nan
     o_its[d, kk], o_state[d, kk], o_big[d, kk] = its, state, big_g
-    for j in range(kf):
-        o_res[j, d, kk] = res[j]
 
 
 def solve(model, kin, applied, units, friction_rows, qd):
@@ -218,8 +248,9 @@ def solve(model, kin, applied, units, friction_rows, qd):
     """
     dyn, react, f, iterations, state, res, big_g = _run(kin, applied, units, friction_rows, qd)
     locked = state == LOCKED
-    lock_joint = np.where(locked, np.argmax(np.nan_to_num(np.abs(res), nan=np.inf), axis=0),
-                          -1)
+    # the load with the largest residual where it locks (a NaN residual the largest)
+    lock_joint = (np.where(locked, np.argmax(np.nan_to_num(np.abs(res), nan=np.inf), axis=0),
+                           -1) if locked.any() else np.full(locked.shape, -1))
     # the residual at the solution, relative to the largest friction effort of the run
     scale = np.nanmax(big_g, axis=-1, keepdims=True, initial=0.0)
     big_r = np.where(locked, np.nan, np.max(np.abs(res), axis=0, initial=0.0))
