@@ -1024,9 +1024,6 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
             # a motion approaching a position it cannot pass (a singular position of the
             # mechanism) has accelerations growing without bound: its steps collapse
             J = None if solver.status == "failed" else system.accept(solver.t, solver.y)
-            if J is not None:
-                # the balance at the step's end, where no output sample may fall       (F9)
-                balance.add(*system.energies(solver.t, solver.y), e0, solver.y[-1])
             # stuck: the last STUCK steps together advance less than MIN_STEP of the time
             # reached (not of the duration: a long run is not a stuck one; and a few short
             # steps are not either, as an implicit method's first ones on a stiff spring)
@@ -1129,6 +1126,10 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                     system.shift(sp.free_rows(part), whole)
                     system.accept(solver.t, solver.y)
             y, t_now = solver.y, solver.t
+            if J is not None:
+                # the balance at the step's end, where the integration goes on from (after
+                # the projection of F11): a snap between two output samples shows here   (F9)
+                balance.add(*system.energies(t_now, y), e0, y[-1])
             if nfev + system.nfev >= pays:
                 # "auto": numpy's evaluations so far would have paid for the compiled start-up
                 be = be.reconsider(backend_mod.Work(1 + nf, work.bodies, nfev + system.nfev,
