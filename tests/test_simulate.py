@@ -654,10 +654,10 @@ def test_radau_keeps_the_energy_over_many_turns(method, backend):
 
 
 def test_the_energy_balance_sees_between_the_samples():
-    """The summary's energy balance (F9) holds the step ends too: the toggle by the two methods
-    that do not project (LSODA, BDF) with only its two end samples reports at least the largest
-    |KE + PE - E(0) - W| that 3001 samples of the same run show, computed here from the
-    columns (the steps do not depend on the samples asked for)."""
+    """The summary's energy balance (F9) holds the step ends too: the toggle by LSODA (not
+    projected) with only its two end samples reports at least the largest |KE + PE - E(0) - W|
+    that 601 samples of the same run show, computed here from the columns (the steps do not
+    depend on the samples asked for; the end samples alone show 8 % less)."""
     m = linkdyn.load(linkdyn.example_path("toggle_spring"))
 
     def drift_at_samples(s):
@@ -666,10 +666,10 @@ def test_the_energy_balance_sees_between_the_samples():
                     np.max(np.abs(s.work)))
         return np.max(np.abs(e)) / scale
 
-    for method in ("LSODA", "BDF"):
-        run = dict(method=method, rtol=1e-6, atol=1e-8, backend="numpy")
-        ends = simulate(m, np.array([0.0, 0.3]), **run)
-        dense = simulate(m, np.linspace(0.0, 0.3, 3001), **run)
-        assert ends.stats["steps"] == dense.stats["steps"] > 100
-        assert ends.energy_drift >= 0.999 * drift_at_samples(dense) > 1e-7, method
-        assert dense.energy_drift == pytest.approx(drift_at_samples(dense), rel=1e-3), method
+    run = dict(method="LSODA", rtol=1e-6, atol=1e-8, backend="numpy")
+    ends = simulate(m, np.array([0.0, 0.3]), **run)
+    dense = simulate(m, np.linspace(0.0, 0.3, 601), **run)
+    assert ends.stats["steps"] == dense.stats["steps"] > 100
+    assert ends.energy_drift >= 0.999 * drift_at_samples(dense) > 1e-7
+    assert drift_at_samples(ends) < 0.95 * drift_at_samples(dense)   # what the samples miss
+    assert dense.energy_drift == pytest.approx(drift_at_samples(dense), rel=1e-3)
