@@ -101,7 +101,7 @@ def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
     """
     if getattr(sol, "space", "planar") == "spatial":
         return _spatial_free_body(sol, body)
-    from ..loads import labels, wrenches
+    from ..loads import wrenches
 
     m = sol.model
     i = sol.body_index(body)
@@ -136,26 +136,30 @@ def free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
     add("weight", "weight", last(r_g), last(weight[1:]), "G")
     # each applied load alone (without gravity), at its point on b
     nog = np.zeros(2)
-    for ld, label in zip(m.loads, labels(m)):
-        if ld.kind not in ("force", "spring", "damper", "joint_force"):
-            continue   # couples, and friction (above, from the reactions' solve)
-        if ld.kind == "joint_force":
-            j = m.joint(ld.joint)
-            if body not in (j.body_a, j.body_b):
-                continue
-            owner, point = j.body_b, j.point_b
-        elif body in (ld.body, ld.body2):
-            owner, point = body, (ld.point if ld.body == body else ld.point2)
-        else:
-            continue
+    for ld, label, owner, point in _on(m, body):   # (friction: above, from the reactions)
         w = wrenches(replace(m, loads=(ld,), gravity=nog), sol.kin).wrenches[i]
         add(label, "load", sol.point(owner, point), last(w[1:]), f"{owner}.{point}")
     return forces, lay.mass[i] * last(a_g)
 
 
+def _on(m, body: str):
+    """The loads of ``m`` that act as a force on ``body`` (forces, springs, dampers, a
+    ``joint_force`` of a joint of it; not couples, not friction), each with its label and the
+    body and point it acts at: ``(load, label, owner, point)``."""
+    from ..loads import labels
+    for ld, label in zip(m.loads, labels(m)):
+        if ld.kind not in ("force", "spring", "damper", "joint_force"):
+            continue
+        if ld.kind == "joint_force":
+            j = m.joint(ld.joint)
+            if body in (j.body_a, j.body_b):
+                yield ld, label, j.body_b, j.point_b
+        elif body in (ld.body, ld.body2):
+            yield ld, label, body, (ld.point if ld.body == body else ld.point2)
+
+
 def _spatial_free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
     """:func:`free_body` of a spatial solution: the forces (T, 3) and ``m a_G`` (T, 3)."""
-    from ..loads import labels
     from ..spatial.dynamics import loads as spatial_loads
 
     m, p = sol.model, sol.plan
@@ -182,18 +186,7 @@ def _spatial_free_body(sol, body: str) -> tuple[list[Force], np.ndarray]:
     weight = spatial_loads(replace(m, loads=()), p, sol.motion, sol.coords).w_ext[:, i, 3:]
     add("weight", "weight", r_g, weight, "G")
     nog = np.zeros(3)
-    for ld, label in zip(m.loads, labels(m)):
-        if ld.kind not in ("force", "spring", "damper", "joint_force"):
-            continue   # couples
-        if ld.kind == "joint_force":
-            j = m.joint(ld.joint)
-            if body not in (j.body_a, j.body_b):
-                continue
-            owner, point = j.body_b, j.point_b
-        elif body in (ld.body, ld.body2):
-            owner, point = body, (ld.point if ld.body == body else ld.point2)
-        else:
-            continue
+    for ld, label, owner, point in _on(m, body):
         w = spatial_loads(replace(m, loads=(ld,), gravity=nog), p, sol.motion,
                           sol.coords).w_ext[:, i, 3:]
         add(label, "load", sol.point(owner, point), w, f"{owner}.{point}")
