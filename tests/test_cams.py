@@ -32,6 +32,20 @@ def cam(follower="roller", offset=0.005, roller=0.010, base=0.040, rise="cycloid
                     offset if follower != "flat" else 0.0, W)
 
 
+def run_cam(path, tmp_path):
+    """``linkdyn cam PATH -o tmp_path/out``, in process: click's result."""
+    return CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+
+
+def refused(res, tmp_path, *words):
+    """The run ``res`` of :func:`run_cam` refused its file: exit 2, no traceback, its message
+    holding each of ``words`` (the field and the fix), nothing written."""
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    for w in words:
+        assert w in res.output, res.output
+    assert not (tmp_path / "out").exists()
+
+
 def test_svaj_of_a_cycloidal_rise_is_its_closed_form():
     p = cams.profile(cam(), 3601)
     on = (p.theta >= math.radians(60)) & (p.theta < math.radians(160))   # the jerk jumps at 160
@@ -146,7 +160,7 @@ def doc_file() -> str:
 def test_the_command_prints_in_the_files_units_and_writes_the_table(tmp_path):
     path = tmp_path / "cam.toml"
     path.write_text(doc_file(), "utf-8")
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     design, n = camfile.read(path)
     p = cams.profile(design, n)
@@ -178,7 +192,7 @@ def test_the_joins_jump_by_the_laws_closed_forms(tmp_path):
     # the command says so, in the file's units
     path = tmp_path / "cam.toml"
     path.write_text(doc_file().replace('law = "cycloidal"', 'law = "harmonic"'), "utf-8")
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     assert (f"ACCELERATION JUMPS at cam angles 60, 160 deg (by up to {a * 1000:.6g} mm/s^2)"
             in res.output)
@@ -195,10 +209,7 @@ def test_the_joins_jump_by_the_laws_closed_forms(tmp_path):
 def test_a_bad_cam_file_is_named_with_its_fix(tmp_path, edit, field, words):
     path = tmp_path / "cam.toml"
     path.write_text(doc_file().replace(*edit), "utf-8")
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
-    assert res.exit_code == 2 and "Traceback" not in res.output
-    assert field in res.output and words in res.output
-    assert not (tmp_path / "out").exists()
+    refused(run_cam(path, tmp_path), tmp_path, field, words)
 
 
 TABLE = """[units]
@@ -245,7 +256,7 @@ def test_a_table_of_points_gives_the_periodic_spline_through_them(tmp_path):
     eps = 1e-7
     left, right = (design.motion.svaj(knots + x)[3] * W ** 3 for x in (-eps, eps))
     assert jump[3] == pytest.approx(right - left, abs=1e-9 * np.max(np.abs(p.j)))
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     assert "displacement, velocity and acceleration continuous at every join" in res.output
 
@@ -262,9 +273,7 @@ def test_a_bad_table_is_named_with_its_fix(tmp_path, angles, lifts, field, words
                         "180, 270], lift = [0, 1, 2, 1] }\n\n[[cam.segments]]", 1), "utf-8")
     else:
         table_file(path, angles, lifts)
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
-    assert res.exit_code == 2 and "Traceback" not in res.output
-    assert field in res.output and words in res.output
+    refused(run_cam(path, tmp_path), tmp_path, field, words)
 
 
 FORMULA = """[units]
@@ -304,7 +313,7 @@ def test_a_lift_by_a_formula_is_the_built_in_laws_to_rounding(tmp_path):
     theta, jump = cams.joins(design)
     assert theta == pytest.approx([0.0])
     assert np.max(np.abs(jump[:3])) <= 1e-12 * np.max(np.abs(laws_.a))
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     assert "lift 20 mm" in res.output and "continuous" in res.output
 
@@ -317,7 +326,7 @@ def test_a_formula_that_jumps_where_the_cycle_closes_is_reported(tmp_path):
     design, _ = camfile.read(path)
     _, jump = cams.joins(design)
     assert jump[0] == pytest.approx([-H])
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     assert "DISPLACEMENT JUMPS at cam angles 0 deg (by up to 20 mm)" in res.output
 
@@ -331,10 +340,7 @@ def test_a_formula_that_jumps_where_the_cycle_closes_is_reported(tmp_path):
 def test_a_bad_formula_is_named_with_its_fix(tmp_path, lift, words):
     path = tmp_path / "cam.toml"
     path.write_text(FORMULA.replace("LIFT", lift.replace('"', "'")), "utf-8")
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
-    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
-    assert "cam.formula" in res.output and words in res.output, res.output
-    assert not (tmp_path / "out").exists()
+    refused(run_cam(path, tmp_path), tmp_path, "cam.formula", words)
 
 
 OSCILLATING = """[units]
@@ -497,7 +503,7 @@ def test_a_textbook_valve_cam_gives_its_printed_answers(tmp_path):
     block = DOC.read_text("utf-8").split("## A textbook problem", 1)[1]
     path = tmp_path / "valve.toml"
     path.write_text(block.split("```toml\n", 1)[1].split("```", 1)[0], "utf-8")
-    res = CliRunner().invoke(main, ["cam", str(path), "-o", str(tmp_path / "out")])
+    res = run_cam(path, tmp_path)
     assert res.exit_code == 0, res.output
     rows = list(csv.DictReader((tmp_path / "out" / "cam.csv").open()))
     deg = np.degrees([float(r["theta_rad"]) for r in rows])
