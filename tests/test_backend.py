@@ -4,8 +4,10 @@ runs, and every wrong choice a user error naming the field and the fix."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -136,6 +138,30 @@ def test_the_compiled_backend_without_numba_says_how_to_install_it(tmp_path):
 
 
 @numba
+@numba
+@pytest.mark.parametrize("user_folder", [False, True])
+def test_the_kernels_caches_are_looked_for_where_numba_writes_them(tmp_path, user_folder):
+    """numba writes a kernel's cache in ``__pycache__`` beside its source file, or, with
+    ``NUMBA_CACHE_DIR`` set, in that folder's own subfolder per source folder (named after the
+    source folder): linkdyn looks for the cached stages, and drops stale caches, in the same
+    folders, one per source folder of the package."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    if user_folder:
+        env["NUMBA_CACHE_DIR"] = str(tmp_path)
+    code = "from linkdyn import compiled; print(*compiled.cache_dirs(), sep='\\n')"
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    found = res.stdout.split("\n")[:-1]
+    sources = sorted({p.parent for p in Path(linkdyn.__file__).parent.rglob("*.py")})
+    assert len(found) == len(sources) > 3
+    if user_folder:
+        assert all(Path(f).parent == tmp_path for f in found)
+        names = sorted(Path(f).name.rsplit("_", 1)[0] for f in found)
+        assert names == sorted(s.name for s in sources)
+    else:
+        assert sorted(found) == sorted(str(s / "__pycache__") for s in sources)
+
+
 def test_the_command_line_says_when_it_compiles_cold(monkeypatch, tmp_path):
     """Before kernels that numba's cache does not hold compile, one line on stderr naming
     them and that they are cached afterwards; none once they are cached."""

@@ -235,9 +235,10 @@ _held: set[str] = set()   # stages this process found in the cache or recorded t
 
 
 def _cache_files() -> list[str]:
-    """numba's cache index files of the package's kernels (relative paths)."""
-    return sorted(os.path.relpath(os.path.join(d, f), _ROOT)
-                  for d, _, fs in os.walk(_ROOT) for f in fs if f.endswith(".nbi"))
+    """numba's cache index files of the package's kernels, where numba writes them
+    (:func:`linkdyn.compiled.cache_dirs`: beside the sources, or ``NUMBA_CACHE_DIR``'s folder)."""
+    return sorted(os.path.join(d, f) for d in _compiled.cache_dirs() if os.path.isdir(d)
+                  for f in os.listdir(d) if f.endswith(".nbi"))
 
 
 def _record() -> dict[str, list[str]]:
@@ -258,7 +259,7 @@ def cached(stage: str) -> bool:
     if stage in _held:
         return True
     files = _record().get(stage)
-    if bool(files) and all(os.path.exists(os.path.join(_ROOT, f)) for f in files):
+    if bool(files) and all(os.path.exists(f) for f in files):
         _held.add(stage)
     return stage in _held
 

@@ -121,13 +121,48 @@ def choose(cond, a, b):
     return a if cond else b
 
 
-def _drop_stale_caches() -> None:
-    """Delete the kernels' on-disk caches when any source file of the package has changed
-    since they were written (numba checks only each kernel's own file, not the steps it
-    calls), and the record of which stages they hold (:data:`CACHE_RECORD`). The package's
-    files' sizes and modification times are the stamp."""
+def _source_dirs() -> list[str]:
+    """The package's folders that hold Python sources (each one a cache folder for numba)."""
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    files = sorted(os.path.join(d, f) for d, _, fs in os.walk(root) for f in fs
+    return sorted(d for d, _, fs in os.walk(root) if any(f.endswith(".py") for f in fs))
+
+
+def cache_dirs(every: bool = False) -> list[str]:
+    """The folders where numba keeps the package's kernels, one per source folder: the one its
+    own cache locators choose for that folder's files (``NUMBA_CACHE_DIR``'s mirror of the folder
+    when that is set, else the ``__pycache__`` beside the sources, else the user's cache folder).
+    With ``every``, each source folder's every candidate (a cache written under one setting is
+    still there under another). Empty without numba."""
+    if numba is None:  # pragma: no cover
+        return []
+    from numba.core import caching, config
+
+    # numba's order of locators (numba.core.caching._CacheImpl), the ones a source file can use
+    classes = [caching.InTreeCacheLocator, caching.UserWideCacheLocator]
+    if config.CACHE_DIR:
+        classes.insert(0, caching.UserProvidedCacheLocator)
+    out = []
+    for d in _source_dirs():
+        source = os.path.join(d, next(f for f in sorted(os.listdir(d)) if f.endswith(".py")))
+        if every:
+            out += [cls(cache_dirs, source).get_cache_path() for cls in classes]
+            continue
+        for cls in classes:
+            locator = cls.from_function(cache_dirs, source)
+            if locator is not None:
+                out.append(locator.get_cache_path())
+                break
+    return sorted(set(out))
+
+
+def _drop_stale_caches() -> None:
+    """Delete the kernels' on-disk caches (in every folder numba may have written them,
+    :func:`cache_dirs`) when any source file of the package has changed since they were
+    written (numba checks only each kernel's own file, not the steps it calls), and the record
+    of which stages they hold (:data:`CACHE_RECORD`). The package's files' sizes and
+    modification times are the stamp."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    files = sorted(os.path.join(d, f) for d in _source_dirs() for f in os.listdir(d)
                    if f.endswith(".py"))
     stamp = hashlib.sha256("\n".join(
         f"{os.path.relpath(f, root)} {os.stat(f).st_size} {os.stat(f).st_mtime_ns}"
@@ -140,10 +175,13 @@ def _drop_stale_caches() -> None:
     except OSError:
         pass
     try:
-        for d, _, fs in os.walk(root):
-            for f in fs:
-                if f.endswith((".nbi", ".nbc")) or f == CACHE_RECORD:
+        for d in cache_dirs(every=True):
+            for f in os.listdir(d) if os.path.isdir(d) else ():
+                if f.endswith((".nbi", ".nbc")):
                     os.remove(os.path.join(d, f))
+        record = os.path.join(root, "__pycache__", CACHE_RECORD)
+        if os.path.exists(record):
+            os.remove(record)
         os.makedirs(os.path.dirname(path), exist_ok=True)
         with open(path, "w") as fh:
             fh.write(stamp)
