@@ -149,7 +149,15 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     """CPU seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
     parameter arrays, the batching and the chunk's assembly at t = 0 (``runner._batches``), the
     solve (``analyze_layout``), the metrics and reasons, the rest (the loader's checks on the
-    arrays); with ``repeat``, each the minimum of that many runs of the chunk."""
+    arrays); with ``repeat``, each the minimum of that many runs of the chunk. Inside the solve,
+    ``branch`` (the continuation nodes followed, ``kinematics.positions.follow``, their closing
+    kernel included) and ``kernel`` (the compiled kinematics and dynamics: the sweep kernel
+    ``dynamics.compiled.sweep``, or the stages' kernels when the layout has other loads),
+    parts of ``solve``, not added to the total again."""
+    from linkdyn import analysis
+    from linkdyn.dynamics import compiled as dc
+    from linkdyn.kinematics import compiled as kc
+    from linkdyn.kinematics import solution as ks
     from linkdyn.studies import Task, space
     from linkdyn.studies import runner
     from linkdyn.studies.metrics import check_names
@@ -161,6 +169,7 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     task = Task(sp, t, tuple(check_names(sp.model(), METRICS))).with_builder(
         *np.array(list(BOX.values())).T)
     clock = {"batches": 0.0, "solve": 0.0, "metrics": 0.0}
+    inner = {"branch": 0.0, "kernel": 0.0}   # parts of the solve
 
     def timed(f, key):
         def g(*a, **k):
@@ -170,14 +179,28 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
             finally:
                 clock[key] += time.process_time() - t0
         return g
+    def part(f, key):
+        def g(*a, **k):
+            t0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                inner[key] += time.process_time() - t0
+        return g
     solve, fill, batches = runner.analyze_layout, runner._fill, runner._batches
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
     runner._batches = timed(batches, "batches")
+    parts = [(ks, "follow", "branch"), (dc, "sweep", "kernel"), (kc, "run", "kernel"),
+             (analysis.compiled_dynamics, "solve", "kernel")]
+    saved = [getattr(mod, name) for mod, name, _ in parts]
+    for mod, name, key in parts:
+        setattr(mod, name, part(getattr(mod, name), key))
     try:
         runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
         runs = []
         for _ in range(repeat):
             clock.update(batches=0.0, solve=0.0, metrics=0.0)
+            inner.update(branch=0.0, kernel=0.0)
             t0 = time.process_time()
             Z = task.builder.numbers(values)
             task.builder.stacked(Z)
@@ -186,9 +209,11 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
             runner.evaluate(task, values)
             total = time.process_time() - t0
             runs.append({"layouts": layouts, **clock, "rest": total - sum(clock.values()),
-                         "total": total})
+                         "total": total, **inner})
     finally:
         runner.analyze_layout, runner._fill, runner._batches = solve, fill, batches
+        for (mod, name, _), f in zip(parts, saved):
+            setattr(mod, name, f)
     return {k: min(r[k] for r in runs) for k in runs[0]}
 
 
@@ -321,6 +346,14 @@ def main():
               f"{os.getloadavg()[0]:.2f}): " + ", ".join(f"{k} {v:.3g}" for k, v in st.items()))
         rate = chunk * args.samples / st["total"]
         print(f"  {rate:.4g} design-samples per CPU second; " + projection(rate))
+        ns = {k: v / (chunk * args.samples) * 1e9 for k, v in st.items()}
+        print("  CPU ns per design-sample: " + ", ".join(
+            f"{k} {ns[k]:.0f}" for k in ("layouts", "batches", "solve", "metrics", "rest",
+                                          "total"))
+              + f"; of the solve: the branch (continuation nodes) {ns['branch']:.0f}, the "
+              f"compiled kinematics and dynamics {ns['kernel']:.0f}, the rest of the solve "
+              f"(the solution's arrays, finiteness, Python) "
+              f"{ns['solve'] - ns['branch'] - ns['kernel']:.0f}")
         return
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     D, T = args.designs, args.samples
