@@ -968,6 +968,26 @@ def test_spatial_force_labels_sit_clear_of_every_body(browser, spatial_pages, ex
         pg.close()
 
 
+def test_a_cams_contact_stress_is_a_key_result(example_runs):
+    # the summary's contact.<joint>.stress (a roller's Hertz line contact) on the report page:
+    # its peak pressure, in the file's N/mm^2, at the frame of its time, equal to
+    # sqrt(F E* / (pi L R)) with F the joint's |F| from results.csv at that frame, E* and L the
+    # model file's numbers and R the contact's effective radius the summary reports there
+    path, csv = example_runs("cam_follower")
+    D = _page_data(path)
+    model = linkdyn.load(linkdyn.example_path("cam_follower"))
+    sol = linkdyn.analyze(model, csv["t"])
+    h = design.summary(sol)["contact"]["K"]["stress"]
+    key = {it["label"]: it for it in D["key"]}["contact stress K"]
+    assert key["unit"] == "N/mm^2"
+    k = key["frame"]
+    assert D["t"][k] == pytest.approx(h["max_time_s"], abs=1e-12)
+    F = np.hypot(csv["Fx_K"], csv["Fy_K"])[int(np.argmin(np.abs(csv["t"] - D["t"][k])))]
+    e_star = 206000.0 / (2 * (1 - 0.3 ** 2))            # N/mm^2, steel on steel
+    R, L = h["effective_radius_m"] * 1e3, 8.0           # mm
+    assert key["value"] == pytest.approx(np.sqrt(F * e_star / (np.pi * L * R)), rel=1e-4)
+
+
 def _hover(p, at, fx=0.57, fy=0.5):
     """Hover panel ``at`` at a fraction of its plot; the tooltip's frame and locator."""
     panel = p.locator("#plots .panel").nth(at)
