@@ -13,7 +13,7 @@ Prints, in ns per sample:
 and the speed of filling fresh memory against memory already touched, which is what separates
 the kernels' own time from the end-to-end throughput of ``make bench``.
 
-Usage: python benchmarks/bench_kernels.py [--samples N]   (needs numba: pip install 'linkdyn[fast]')
+Usage: python benchmarks/bench_kernels.py [--samples N] [--clock wall|cpu]   (needs numba: pip install 'linkdyn[fast]')
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 
 import math  # noqa: E402
+import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -34,6 +35,7 @@ from linkdyn import compiled  # noqa: E402
 from linkdyn.dynamics import compiled as dc  # noqa: E402
 from linkdyn.kinematics import compiled as kc  # noqa: E402
 
+import bench_hoeken  # noqa: E402
 from bench_hoeken import best_time, one_core  # noqa: E402
 
 
@@ -104,7 +106,10 @@ def _atan2_loop(y, x, out):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--samples", type=int, default=300_000)
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="cpu: this process's CPU time (a shared machine's other jobs left out)")
     args = ap.parse_args()
+    bench_hoeken.CLOCK = time.process_time if args.clock == "cpu" else time.perf_counter
     one_core()
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     T = args.samples
@@ -112,7 +117,8 @@ def main():
     linkdyn.analyze(mech, t[:1000], backend="compiled")   # compile once
     kernels = kernel_arguments(mech, t)
     kin_kernel, kin_args = kernels["kinematics"]
-    print(f"Hoeken four-bar, {T} samples, one core, best of 5, outputs already touched")
+    print(f"Hoeken four-bar, {T} samples, one core, best of 5 ({args.clock} clock), outputs "
+          "already touched")
     for name, (kernel, args) in kernels.items():
         per = best_time(lambda: kernel(*args), 5)
         print(f"{name + ' kernel':18s} {per / T * 1e9:7.1f} ns/sample")

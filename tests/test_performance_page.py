@@ -12,7 +12,8 @@ the figure from the command's output, and its kind:
 
 That every marked figure has its command, and every command is on the page, is checked always;
 running the commands is marked ``bench`` (``make bench``, ``pytest -m bench``): they time the
-whole machine for minutes.
+whole machine for minutes. Where a script's default size runs for many minutes, the page's
+command (and so this test) runs a smaller one, which the page names.
 """
 
 from __future__ import annotations
@@ -45,6 +46,47 @@ PAGE_PLAY = "benchmarks/bench_page.py"
 FRICTION = "benchmarks/bench_friction.py --samples 100000"
 CEILING = "benchmarks/bench_ceiling.py --clock cpu"
 HOEKEN = "benchmarks/bench_hoeken.py --samples 1000000 --clock cpu"
+
+KERNELS = "benchmarks/bench_kernels.py --clock cpu"
+INVERSE = "benchmarks/bench_inverse.py"
+CHUNK = "benchmarks/bench_sweep.py --chunk-only --designs 20000"
+SWEEP_KERNELS = "benchmarks/bench_sweep.py --kernels"
+SIMULATE = ("benchmarks/bench_simulate.py --duration 2 --windows 20 --chain-duration 0.3 "
+            "--tols 1e-4,1e-8,1e-10 --samples 11 --repeat 50 --turns 10 --turn-tols 1e-8 --best 2")
+AUTO = "benchmarks/bench_auto.py --windows 20 --chain-duration 0.3 --press-duration 1.0"
+
+
+def _simulate_rows() -> dict[str, Figure]:
+    """The work-precision table's figures: each row of a model's table (Hoeken's first, then
+    the chain's), its wall time a timing, its steps, right-hand sides, energy drift and error
+    exact (the same arithmetic on any run)."""
+    out = {}
+    rows = {"4": "linkdyn compiled DOP853 rtol 0.0001", "8": "linkdyn compiled DOP853 rtol 1e-08",
+            "10": "linkdyn compiled DOP853 rtol 1e-10"}
+    for model, head in (("hoeken", r"Hoeken \+ flywheel"), ("chain", r"parallelogram chain")):
+        for tag, row in rows.items():
+            lead = head + r".*?" + re.escape(row) + r"\s+"
+            for at, what, kind in ((0, "wall", "timing"), (2, "steps", "exact"),
+                                   (3, "rhs", "exact"), (4, "drift", "exact"),
+                                   (5, "error", "exact")):
+                # the row's columns: wall s, CPU s, steps, RHS, energy drift, error
+                parts = [NUMBER, NUMBER, r"\d+", r"\d+", NUMBER, NUMBER]
+                parts[at] = "(" + parts[at] + ")"
+                out[f"simulate.{model}_{tag}_{what}"] = Figure(
+                    SIMULATE, lead + r"\s+".join(parts), kind)
+        for tag, dt in (("mj3", "0.001"), ("mj4", "0.0001")):
+            lead = head + r".*?MuJoCo RK4 dt " + re.escape(dt) + r"\s+"
+            out[f"simulate.{model}_{tag}_wall"] = Figure(SIMULATE, lead + "(" + NUMBER + ")",
+                                                         "timing")
+            out[f"simulate.{model}_{tag}_steps"] = Figure(
+                SIMULATE, lead + NUMBER + r"\s+" + NUMBER + r"\s+(\d+)", "exact")
+            out[f"simulate.{model}_{tag}_error"] = Figure(
+                SIMULATE, lead + NUMBER + r"\s+" + NUMBER + r"\s+\d+\s+(" + NUMBER + ")",
+                "exact")
+        out[f"simulate.{model}_numpy_8_wall"] = Figure(
+            SIMULATE, head + r".*?linkdyn DOP853 rtol 1e-08\s+(" + NUMBER + ")", "timing")
+    return out
+
 
 FIGURES = {
     # equilibrium and modes of the IFToMM four-bar with a spring
@@ -83,6 +125,74 @@ FIGURES = {
                                        + ")", "timing"),
     "hoeken.handwritten": Figure(HOEKEN, r"closed form for this one four-bar in numpy: ("
                                  + NUMBER + ")/s", "timing"),
+    # where the compiled kernels' time goes
+    "kernels.kinematics": Figure(KERNELS, r"kinematics kernel\s+(" + NUMBER + ") ns", "timing"),
+    "kernels.dynamics": Figure(KERNELS, r"dynamics kernel\s+(" + NUMBER + ") ns", "timing"),
+    "kernels.block512": Figure(KERNELS, r"blocks of\s+512\s+(" + NUMBER + ")", "timing"),
+    "kernels.block1024": Figure(KERNELS, r"blocks of\s+1024\s+(" + NUMBER + ")", "timing"),
+    "kernels.block2048": Figure(KERNELS, r"blocks of\s+2048\s+(" + NUMBER + ")", "timing"),
+    "kernels.dyad": Figure(KERNELS, r"close the dyads\s+(" + NUMBER + ")", "timing"),
+    "kernels.place": Figure(KERNELS, r"place the bodies\s+(" + NUMBER + ")", "timing"),
+    "kernels.twists": Figure(KERNELS, r"\btwists\s+(" + NUMBER + ")", "timing"),
+    "kernels.factor": Figure(KERNELS, r"factor J_dep \(once per sample\)\s+(" + NUMBER + ")",
+                             "timing"),
+    "kernels.arctan2": Figure(KERNELS, r"compiled\.arctan2 over an array\s+(" + NUMBER + ")",
+                              "timing"),
+    "kernels.atan2": Figure(KERNELS, r"math\.atan2 over an array\s+(" + NUMBER + ")", "timing"),
+    "kernels.fresh": Figure(KERNELS, r"fresh (" + NUMBER + ") GB/s", "timing"),
+    "kernels.touched": Figure(KERNELS, r"already touched (" + NUMBER + ") GB/s", "timing"),
+    # the full inverse dynamics against code written for this one four-bar
+    "inverse.c_scalar": Figure(INVERSE, r"C, scalar \([^)]*\)\s+(" + NUMBER + ") ns", "timing"),
+    "inverse.c_vector": Figure(INVERSE, r"C, vectorized \([^)]*\)\s+(" + NUMBER + ") ns",
+                               "timing"),
+    "inverse.c_vector_ratio": Figure(INVERSE, r"C, vectorized \([^)]*\)\s+" + NUMBER
+                                     + r" ns/sample\s+ratio\s+(" + NUMBER + ")", "timing"),
+    "inverse.numpy_hand": Figure(INVERSE, r"numpy, hand-written, chunks of 8192\s+(" + NUMBER
+                                 + ") ns", "timing"),
+    "inverse.numpy_hand_ratio": Figure(INVERSE, r"numpy, hand-written, chunks of 8192\s+"
+                                       + NUMBER + r" ns/sample\s+ratio\s+(" + NUMBER + ")",
+                                       "timing"),
+    "inverse.compiled": Figure(INVERSE, r"linkdyn compiled\s+(" + NUMBER + ") ns", "timing"),
+    "inverse.compiled_ratio": Figure(INVERSE, r"linkdyn compiled\s+" + NUMBER
+                                     + r" ns/sample\s+ratio\s+(" + NUMBER + ")", "timing"),
+    "inverse.batch": Figure(INVERSE, r"x 360 samples in one batch\s+(" + NUMBER + ") ns",
+                            "timing"),
+    "inverse.batch_ratio": Figure(INVERSE, r"x 360 samples in one batch\s+" + NUMBER
+                                  + r" ns/sample\s+ratio\s+(" + NUMBER + ")", "timing"),
+    "inverse.numpy": Figure(INVERSE, r"linkdyn numpy\s+(" + NUMBER + ") ns", "timing"),
+    "inverse.numpy_ratio": Figure(INVERSE, r"linkdyn numpy\s+" + NUMBER
+                                  + r" ns/sample\s+ratio\s+(" + NUMBER + ")", "timing"),
+    "inverse.kin_kernel": Figure(INVERSE, r"by stage[^\n]*\n\s+kinematics\s+(" + NUMBER + ")",
+                                 "timing"),
+    "inverse.dyn_kernel": Figure(INVERSE, r"dynamics and reactions\s+(" + NUMBER + ") ns",
+                                 "timing"),
+    "inverse.rest": Figure(INVERSE, r"the rest of analyze \([^)]*\) (" + NUMBER + ")", "timing"),
+    "inverse.user": Figure(INVERSE, r"linkdyn compiled\s+user\s+(" + NUMBER + ")", "timing"),
+    "inverse.system": Figure(INVERSE, r"linkdyn compiled\s+user\s+" + NUMBER + r", system\s+("
+                             + NUMBER + ")", "timing"),
+    # a sweep's chunk and its kernels
+    "sweep.chunk": Figure(CHUNK, r"\btotal (" + NUMBER + ")", "timing"),
+    "sweep.solve": Figure(CHUNK, r"\bsolve (" + NUMBER + ")", "timing"),
+    "sweep.metrics": Figure(CHUNK, r"\bmetrics (" + NUMBER + ")", "timing"),
+    "sweep.rate": Figure(CHUNK, r"(" + NUMBER + ") design-samples per CPU second", "timing"),
+    "sweep.projected": Figure(CHUNK, r"at this rate: (" + NUMBER + ") s", "timing"),
+    "sweep.two_stages": Figure(SWEEP_KERNELS, r"then dynamics stage (\d+(?:\.\d+)?)", "timing"),
+    "sweep.fused": Figure(SWEEP_KERNELS, r"sweep kernel \(fused\) (" + NUMBER + ")", "timing"),
+    # forward dynamics
+    **_simulate_rows(),
+    "simulate.turns_free": Figure(SIMULATE, r"crank turns.*?\n\s+1e-08\s+no\s+\d+\s+" + NUMBER
+                                  + r"\s+\d+\s+\d+\s+(" + NUMBER + ")", "exact"),
+    "simulate.turns_projected": Figure(SIMULATE, r"crank turns.*?\n\s+1e-08\s+yes\s+\d+\s+"
+                                       + NUMBER + r"\s+\d+\s+\d+\s+(" + NUMBER + ")", "exact"),
+    "simulate.rhs_numpy": Figure(SIMULATE, r"numpy:\s+(" + NUMBER + ") us", "timing"),
+    "simulate.rhs_compiled": Figure(SIMULATE, r"compiled:\s+(" + NUMBER + ") us", "timing"),
+    # auto against the better explicit choice
+    "auto.chain": Figure(AUTO, r"parallelogram chain.*?auto / compiled \(wall\): (" + NUMBER
+                         + ")", "timing"),
+    "auto.press": Figure(AUTO, r"press.*?auto / compiled \(wall\): (" + NUMBER + ")", "timing"),
+    "auto.chain_after": Figure(AUTO, r"parallelogram chain.*?\n\s+auto\s.*?compiled after (\d+)",
+                               "exact"),
+    "auto.press_after": Figure(AUTO, r"press.*?\n\s+auto\s.*?compiled after (\d+)", "exact"),
 }
 
 
@@ -123,8 +233,11 @@ def _run(command: str) -> str:
     return done.stdout
 
 
+COMMANDS = sorted({f.command for f in FIGURES.values()})
+
+
 @pytest.mark.bench
-@pytest.mark.parametrize("command", sorted({f.command for f in FIGURES.values()}))
+@pytest.mark.parametrize("command", COMMANDS, ids=[c.replace(",", " ") for c in COMMANDS])
 def test_the_pages_figures_are_what_its_command_prints(command):
     out = _run(command)
     marked = page_figures()

@@ -853,6 +853,9 @@ _DRAWN_BODIES = r"""() => {
         if (e.tagName === 'polygon')
             out.push({pts: e.getAttribute('points').trim().split(/\s+/).map(
                 s => at(e, ...s.split(','))), r: half(e), closed: true});
+        else if (e.tagName === 'polyline')   // the 3-D view's bars: their points joined
+            out.push({pts: e.getAttribute('points').trim().split(/\s+/).map(
+                s => at(e, ...s.split(','))), r: half(e), closed: false});
         else if (e.tagName === 'line')
             out.push({pts: [at(e, e.getAttribute('x1'), e.getAttribute('y1')),
                             at(e, e.getAttribute('x2'), e.getAttribute('y2'))], r: half(e), closed: false});
@@ -860,6 +863,12 @@ _DRAWN_BODIES = r"""() => {
             out.push({pts: [at(e, e.getAttribute('cx'), e.getAttribute('cy'))],
                       r: +e.getAttribute('r') * Math.hypot(e.getScreenCTM().a, e.getScreenCTM().b),
                       closed: false});
+    }
+    for (const e of document.querySelectorAll('#anim .joint .block')) {   // 3-D: a prismatic
+        // joint's block, a cylindrical one's sleeve, on its second body
+        if (e.closest('.joint').style.display === 'none' || !e.hasAttribute('x1')) continue;
+        out.push({pts: [at(e, e.getAttribute('x1'), e.getAttribute('y1')),
+                        at(e, e.getAttribute('x2'), e.getAttribute('y2'))], r: half(e), closed: false});
     }
     for (const g of document.querySelectorAll('#anim .slider')) {
         if (g.style.display === 'none') continue;
@@ -898,6 +907,85 @@ def test_force_labels_sit_clear_of_every_body(browser, example_runs, example, si
         assert pg.errors == []
     finally:
         pg.close()
+
+
+SPATIAL = sorted(p.stem for p in linkdyn.example_path("rsur").parent.glob("*.toml"))
+
+
+@pytest.fixture(scope="module")
+def spatial_pages(tmp_path_factory):
+    """Each bundled spatial example's report.html: ``analyze --report``, or for a model with
+    free coordinates (no driver for each freedom) ``simulate --report``, run once."""
+    cache = {}
+
+    def get(example):
+        if example not in cache:
+            folder = tmp_path_factory.mktemp(example)
+            model = folder / f"{example}.toml"
+            model.write_text(linkdyn.example_path(example).read_text("utf-8"), "utf-8")
+            out = folder / "out"
+            res = CliRunner().invoke(main, ["analyze", str(model), "-o", str(out), "--report"])
+            if res.exit_code == 2 and "mobility" in res.output:
+                res = CliRunner().invoke(main, ["simulate", str(model), "-o", str(out), "--report"])
+            assert res.exit_code == 0, res.output
+            cache[example] = out / "report.html"
+        return cache[example]
+    return get
+
+
+@pytest.mark.parametrize("example, size", [(e, s) for e in SPATIAL for s in SIZES],
+                         ids=[f"{e}-{s[0]}x{s[1]}" for e in SPATIAL for s in SIZES])
+def test_spatial_force_labels_sit_clear_of_every_body(browser, spatial_pages, example, size):
+    # the 3-D view as the planar one above: forces on, at the first frame, every force drawn
+    # has its label (none drops out), and no label's box touches a body as drawn (a bar's
+    # thick polyline, a plate, a dot, a prismatic block or a cylindrical sleeve), computed
+    # from the drawn elements in client px
+    pg = Page(browser, spatial_pages(example), width=size[0], height=size[1])
+    p = pg.page
+    try:
+        p.locator("#anim").scroll_into_view_if_needed()
+        p.check("#show-forces")
+        p.evaluate("() => { const s = document.getElementById('scrubber'); s.value = '0';"
+                   " s.dispatchEvent(new Event('input')); }")
+        labels = p.evaluate("""() => [...document.querySelectorAll('#anim .flabels text')]
+            .filter(e => e.style.display !== 'none' && e.getClientRects().length)
+            .map(e => { const r = e.getBoundingClientRect();
+                        return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
+        arrows = p.evaluate("[...document.querySelectorAll('#anim .farrow')]"
+                            ".filter(a => a.style.display !== 'none').length")
+        shapes = p.evaluate(_DRAWN_BODIES)
+        assert shapes and len(labels) == arrows > 0, (len(labels), arrows)
+        view = p.evaluate("(() => { const r = document.getElementById('anim')"
+                          ".getBoundingClientRect(); return [r.left, r.top, r.right, r.bottom]; })()")
+        for text, box in labels:   # inside the view
+            assert box[0] >= view[0] - 0.5 and box[2] <= view[2] + 0.5, text
+            assert box[1] >= view[1] - 0.5 and box[3] <= view[3] + 0.5, text
+        on = [(text, n) for text, box in labels for n, sh in enumerate(shapes)
+              if _box_on_shape(box, sh)]
+        assert on == [], on
+        assert pg.errors == []
+    finally:
+        pg.close()
+
+
+def test_a_cams_contact_stress_is_a_key_result(example_runs):
+    # the summary's contact.<joint>.stress (a roller's Hertz line contact) on the report page:
+    # its peak pressure, in the file's N/mm^2, at the frame of its time, equal to
+    # sqrt(F E* / (pi L R)) with F the joint's |F| from results.csv at that frame, E* and L the
+    # model file's numbers and R the contact's effective radius the summary reports there
+    path, csv = example_runs("cam_follower")
+    D = _page_data(path)
+    model = linkdyn.load(linkdyn.example_path("cam_follower"))
+    sol = linkdyn.analyze(model, csv["t"])
+    h = design.summary(sol)["contact"]["K"]["stress"]
+    key = {it["label"]: it for it in D["key"]}["contact stress K"]
+    assert key["unit"] == "N/mm^2"
+    k = key["frame"]
+    assert D["t"][k] == pytest.approx(h["max_time_s"], abs=1e-12)
+    F = np.hypot(csv["Fx_K"], csv["Fy_K"])[int(np.argmin(np.abs(csv["t"] - D["t"][k])))]
+    e_star = 206000.0 / (2 * (1 - 0.3 ** 2))            # N/mm^2, steel on steel
+    R, L = h["effective_radius_m"] * 1e3, 8.0           # mm
+    assert key["value"] == pytest.approx(np.sqrt(F * e_star / (np.pi * L * R)), rel=1e-4)
 
 
 def _hover(p, at, fx=0.57, fy=0.5):

@@ -119,6 +119,19 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
                     add("Joint loads", f"guide moment {j.name}", M, _k(np.abs(M), np.nanargmax),
                         "N m", signed=True, scale=sc["N m"])
 
+    # a cam's contact stress (summary "contact.<joint>.stress": a roller's Hertz line contact),
+    # at the sample of its peak
+    for name, c in (summary.get("contact") or {}).items():
+        h = c.get("stress") if isinstance(c, dict) else None
+        if not isinstance(h, dict) or h.get("max_pressure_Pa") is None:
+            continue
+        t = np.asarray(sol.t, float).reshape(-1)
+        items.append({"group": "Joint loads", "label": f"contact stress {name}",
+                      "value": REPORT.value(float(h["max_pressure_Pa"]), "pressure"),
+                      "unit": REPORT.unit("pressure")[0], "signed": False,
+                      "k": int(np.argmin(np.abs(t - float(h["max_time_s"])))),
+                      "note": "peak Hertz pressure, roller on the cam (line contact)"})
+
     # motion quality of every four-bar loop: transmission angle, mechanical advantage
     for fb in design.four_bars(m):
         which = f"{fb.coupler}/{fb.output}"
@@ -209,7 +222,8 @@ _SENSES = (("max torque", "min"), ("min torque", "min"), ("RMS torque", "min"),
            ("peak |F|", "min"), ("side load", "min"), ("guide moment", "min"),
            ("min transmission angle", "max"), ("min mechanical advantage", "max"),
            ("peak shaking force", "min"), ("max shaking moment", "min"),
-           ("min shaking moment", "min"), ("flywheel on", "min"), ("straightness of", "min"))
+           ("min shaking moment", "min"), ("flywheel on", "min"), ("straightness of", "min"),
+           ("contact stress", "min"))
 
 
 def key_sense(label: str) -> str | None:

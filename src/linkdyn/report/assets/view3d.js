@@ -104,7 +104,7 @@ LD.view3d = function (D, anim, fmtS) {
       : b.shape === "dot" ? el("circle", {r: 6, fill: b.color}, gBodies)
       : el("polyline", {fill: "none", stroke: b.color, "stroke-width": 8, "stroke-linecap": "round",
                         "stroke-linejoin": "round", opacity: 0.9}, gBodies);
-    node.setAttribute("data-body", b.name);
+    node.setAttribute("data-body", b.name); node.setAttribute("class", "body");
     var lab = el("text", {"font-size": 12, fill: b.color, "font-style": "italic", "text-anchor": "middle"}, gLabels);
     lab.textContent = b.name;
     return {b: b, node: node, lab: lab};
@@ -122,10 +122,10 @@ LD.view3d = function (D, anim, fmtS) {
     var second = bodyOf(j.second), color = second ? second.color : "#888";
     if (j.kind === "revolute" || j.kind === "cylindrical")
       parts.pin = el("line", {stroke: "#37474f", "stroke-width": j.kind === "revolute" ? 7 : 4, "stroke-linecap": "butt"}, g);
-    if (j.kind === "cylindrical") parts.sleeve = el("line", {stroke: color, "stroke-width": 11, opacity: 0.8}, g);
+    if (j.kind === "cylindrical") parts.sleeve = el("line", {"class": "block", stroke: color, "stroke-width": 11, opacity: 0.8}, g);
     if (j.kind === "prismatic") {
       parts.rail = el("line", {stroke: "#9aa3ab", "stroke-width": 2, "stroke-dasharray": "5 4"}, g);
-      parts.block = el("line", {stroke: color, "stroke-width": 14, opacity: 0.9}, g);
+      parts.block = el("line", {"class": "block", stroke: color, "stroke-width": 14, opacity: 0.9}, g);
     }
     if (j.kind === "universal") {
       parts.cross1 = el("line", {stroke: "#37474f", "stroke-width": 4, "stroke-linecap": "round"}, g);
@@ -355,7 +355,27 @@ LD.view3d = function (D, anim, fmtS) {
         items.push({node: node, x: o.tip[0], y: o.tip[1], fs: 11, r: 3, edge: true, leader: o.leader});
       }
     });
-    place(items, obst, textScale);
+    // the bodies as drawn at this frame (a bar's thick line, a plate with its border, a dot)
+    // and the blocks and sleeves on their second bodies: a force's label keeps clear of them
+    // (LD.placer), as on the planar view; viewBox units, as the strokes are
+    var shapes = [];
+    bodies.forEach(function (o) {
+      if (o.node.style.display === "none") return;
+      var sp = o.b.outline.map(function (id) { return proj(P(id, k)); });
+      if (o.b.shape === "polygon") shapes.push({pts: sp, r: 2, closed: true});
+      else if (o.b.shape === "dot") shapes.push({pts: sp.slice(0, 1), r: 6});
+      else shapes.push({pts: sp, r: 4});
+    });
+    joints.forEach(function (o) {
+      if (!o.s) return;
+      [[o.parts.block, 7], [o.parts.sleeve, 5.5]].forEach(function (b) {
+        var line = b[0];
+        if (!line || !line.hasAttribute("x1")) return;
+        shapes.push({pts: [[+line.getAttribute("x1"), +line.getAttribute("y1")],
+                           [+line.getAttribute("x2"), +line.getAttribute("y2")]], r: b[1]});
+      });
+    });
+    place(items, obst, textScale, shapes);
     return best;
   }
 
