@@ -176,6 +176,10 @@ FIGURES = {
     "sweep.metrics": Figure(CHUNK, r"\bmetrics (" + NUMBER + ")", "timing"),
     "sweep.rate": Figure(CHUNK, r"(" + NUMBER + ") design-samples per CPU second", "timing"),
     "sweep.projected": Figure(CHUNK, r"at this rate: (" + NUMBER + ") s", "timing"),
+    "sweep.total_ns": Figure(CHUNK, r"CPU ns per design-sample:.*\btotal (\d+)", "timing"),
+    "sweep.kernel_ns": Figure(CHUNK, r"compiled kinematics and dynamics (\d+)", "timing"),
+    "sweep.branch_ns": Figure(CHUNK, r"the branch \(continuation nodes\) (\d+)", "timing"),
+    "sweep.metrics_ns": Figure(CHUNK, r"CPU ns per design-sample:.*\bmetrics (\d+)", "timing"),
     "sweep.two_stages": Figure(SWEEP_KERNELS, r"then dynamics stage (\d+(?:\.\d+)?)", "timing"),
     "sweep.fused": Figure(SWEEP_KERNELS, r"sweep kernel \(fused\) (" + NUMBER + ")", "timing"),
     # forward dynamics
