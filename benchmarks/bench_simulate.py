@@ -298,6 +298,78 @@ def rhs_time(model, repeat=200, h=2e-3, fast=False):
     return best
 
 
+def spatial_rhs(model, repeat=20, h=2e-3):
+    """Where one right-hand side of a spatial model's ``simulate`` spends its time (CPU time of
+    this process, best of three rounds of ``repeat``), at a state an integrator would ask for
+    (``h`` after the accepted start, one Euler step away): the whole evaluation, then its
+    stages called alone with the same inputs as :meth:`linkdyn.spatial.forward.System.reduced`
+    calls them: Newton's closure of the loops from the extrapolated guess (and one of its
+    iterations: the tree's poses and the closure's rows and Jacobian), the kinematics of the
+    1 + nf cases (rates and accelerations), and the loads and DeNOC efforts. Returns
+    ``{stage: seconds}`` and how many times Newton's method evaluates the closure there (its
+    steps and the last check)."""
+    from linkdyn.spatial import dynamics as sd
+    from linkdyn.spatial import forward as sf
+    from linkdyn.spatial import kinematics as sk
+
+    part = sf.partition(model)
+    q0 = sf.start_state(part)
+    system = sf.System(part, q0, np.zeros(len(q0)))
+    nf = len(part.free)
+    y = np.concatenate((q0[part.free_rows], np.full(nf, 3.0), [0.0]))
+    system.accept(0.0, y)
+    y1 = y + h * system(0.0, y)
+    tt = np.array([h])
+    q_ind = np.concatenate((sk.driver_motion(part.model, tt)[0][0], y1[:nf]))[:, None]
+    guess = system.guess(tt, q_ind)
+    p, inner = system.p, system.model
+    q = guess.T.copy()
+    q[:, system.ind[system.nd:]] = y1[:nf]
+    closed, _ = sk.newton(inner, p, q)
+    K = 1 + nf
+    unit = np.repeat(np.eye(nf + 1)[:, 1:], 1, axis=0)
+    qd = np.tile(np.concatenate((sk.driver_motion(part.model, tt)[1], y1[None, nf:2 * nf]), 1),
+                 (K, 1))
+    qdd = np.concatenate((np.tile(sk.driver_motion(part.model, tt)[2], (K, 1)), unit), 1)
+    m = sk.motion_at(inner, p, np.tile(tt, K), np.tile(closed, (K, 1)), qd, qdd)
+    coords = sk.joint_coordinates(inner, p, m) if any(
+        getattr(ld.value, "state_variables", ()) for ld in inner.loads) else {}
+    calls = [0]
+    plain = sk.closure
+
+    def counted(*args):
+        calls[0] += 1
+        return plain(*args)
+
+    sk.closure = counted
+    try:
+        sk.newton(inner, p, q)
+    finally:
+        sk.closure = plain
+
+    def stages():
+        applied = sd.loads(inner, p, m, coords)
+        _, _, Q, _ = sd.generalized(inner, p, m, applied)
+        sd.efforts(p, m, Q)
+
+    work = {"whole right-hand side": lambda: system(h, y1),
+            "Newton's closure": lambda: sk.newton(inner, p, q),
+            "  one iteration: poses + closure": lambda: sk.closure(inner, p, sk.poses(p, q)),
+            "rates and accelerations (motion_at)":
+                lambda: sk.motion_at(inner, p, np.tile(tt, K), np.tile(closed, (K, 1)), qd, qdd),
+            "loads, DeNOC, efforts": stages}
+    out = {}
+    for name, run in work.items():
+        best = math.inf
+        for _ in range(3):
+            start = time.process_time()
+            for _ in range(repeat):
+                run()
+            best = min(best, (time.process_time() - start) / repeat)
+        out[name] = best
+    return out, calls[0]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=2.0, help="Hoeken run-up, s")
@@ -335,6 +407,14 @@ def main():
         table("double-wishbone quarter car dropped (spatial: springs, damper)",
               linkdyn.load(linkdyn.example_path("quarter_car")), ts, "JL", stols, steps,
               a.spatial_ref, best=a.best)
+        for example in ("rsur_release", "quarter_car"):
+            parts, evaluations = spatial_rhs(linkdyn.load(linkdyn.example_path(example)),
+                                             max(1, a.repeat // 10))
+            whole = parts["whole right-hand side"]
+            print(f"\none right-hand side of {example} (numpy, CPU time; Newton's method "
+                  f"evaluates the closure {evaluations} times from the extrapolated guess):")
+            for name, sec in parts.items():
+                print(f"  {name:38s} {sec * 1e3:8.3f} ms  {sec / whole:6.0%}")
         if a.only == "spatial":
             return
     hoeken = linkdyn.load(linkdyn.example_path("hoeken_motor"))
