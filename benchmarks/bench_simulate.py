@@ -17,8 +17,8 @@ and trajectory error: the largest deviation of the free coordinate from the refe
 output samples, relative to its range. The energy drift is the same measure for both tools
 (:func:`linkdyn.balance.energy_drift`: the largest ``|E - E(0) - W|`` over the run relative to
 its largest energy, ``W`` the work of the motor and the dampers); linkdyn's from its own
-balance (samples and steps), MuJoCo's at every step from its ``energy`` (gravity and the
-tendon springs) and the work integrated by the trapezoidal rule. The closure is the largest
+balance (samples and steps), MuJoCo's at every second step from its ``energy`` (gravity and
+the tendon springs) and the work integrated by Simpson's rule. The closure is the largest
 loop error relative to the mechanism's size: linkdyn's ``closure_residual``, MuJoCo's
 largest ``|efc_pos|`` of its connect rows at every step. The spatial models run on numpy (the
 compiled backend does not take them yet). Then the energy drift of Hoeken's four-bar spinning freely (no drivers, no
@@ -127,8 +127,8 @@ def mujoco_run(model, ref, t, dt, free, motor=None):
 def mujoco_balance(model, ref, t, dt, free, size, motor=None):
     """The same MuJoCo run as :func:`mujoco_run`, untimed, with its energy balance and closure
     at every step: :func:`linkdyn.balance.energy_drift` of MuJoCo's kinetic and potential energy
-    (gravity, tendon springs) and the work of the motor and the tendon dampers (trapezoidal
-    rule), and the largest ``|efc_pos|`` of the equality rows over ``size`` (m)."""
+    (gravity, tendon springs) and the work of the motor and the tendon dampers (Simpson's rule
+    at every second step; the trapezoidal rule for an odd number of steps), and the largest ``|efc_pos|`` of the equality rows over ``size`` (m)."""
     import mujoco
     from linkdyn.balance import energy_drift
 
@@ -152,7 +152,12 @@ def mujoco_balance(model, ref, t, dt, free, size, motor=None):
         mujoco.mj_step(m, d)
         rows.append(state())
     ke, pe, power, closure = (np.array(x) for x in zip(*rows))
-    work = np.concatenate(([0.0], np.cumsum(0.5 * dt * (power[1:] + power[:-1]))))
+    if steps % 2 == 0:   # Simpson's rule over pairs of steps, at every second step (O(dt^4))
+        pairs = dt / 3 * (power[:-2:2] + 4 * power[1:-1:2] + power[2::2])
+        work = np.concatenate(([0.0], np.cumsum(pairs)))
+        ke, pe = ke[::2], pe[::2]
+    else:
+        work = np.concatenate(([0.0], np.cumsum(0.5 * dt * (power[1:] + power[:-1]))))
     return energy_drift(ke, pe, work), float(np.max(closure)) / size
 
 
