@@ -67,11 +67,23 @@ def test_bench_sweep():
 def test_bench_simulate():
     out = run("bench_simulate.py", "--duration", "0.1", "--windows", "2", "--chain-duration",
               "0.05", "--tols", "1e-4", "--steps", "1e-3", "--samples", "3", "--repeat", "2",
-              "--turns", "1", "--turn-tols", "1e-4")
+              "--turns", "1", "--turn-tols", "1e-4", "--only", "planar")
     assert out.count("  linkdyn DOP853 rtol 0.0001") == 2 and out.count("MuJoCo RK4 dt") == 2
     assert out.count("  linkdyn compiled DOP853 rtol 0.0001") == 2
     assert "one right-hand side of Hoeken" in out and "  compiled: " in out
     assert "Hoeken spinning freely (with the flywheel of hoeken_motor), 1 crank turns" in out
+
+
+def test_bench_simulate_spatial():
+    # the spatial models side by side with MuJoCo (linkdyn's MJCF export), a short run
+    out = run("bench_simulate.py", "--only", "spatial", "--spatial-duration", "0.01",
+              "--spatial-tols", "1e-4", "--spatial-ref", "1e-6", "--steps", "1e-3",
+              "--samples", "3", "--best", "1")
+    assert out.count("  linkdyn DOP853 rtol 0.0001") == 2
+    assert "RSUR four-bar released" in out and "quarter car" in out
+    if "MuJoCo not installed" not in out:
+        assert out.count("MuJoCo RK4 dt 0.001") == 2
+    assert "Hoeken" not in out
 
 
 def test_bench_friction():

@@ -565,8 +565,7 @@ def test_cli_check_and_analyze_on_a_spatial_model(tmp_path):
     model = linkdyn.load(path)
     with pytest.raises(ModelError, match="not yet for spatial models"):
         linkdyn.analyze([model, model], [0.0])
-    for command in (["simulate", str(path), "--format", "parquet"], ["analyze", str(path), "--path-point", "coupler.P"],
-                    ["analyze", str(path), "--allow-singular"]):
+    for command in (["simulate", str(path), "--format", "parquet"], ["analyze", str(path), "--path-point", "coupler.P"]):
         res = run(main, command)
         assert res.exit_code == 2 and "not yet for spatial models" in res.output, command
 

@@ -6,6 +6,7 @@ named plane, read back by the SVG and DXF readers of test_export and checked aga
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -244,3 +245,74 @@ def test_a_spatial_run_writes_the_parquet_table_asked_for(tmp_path):
     table = pd.read_parquet(tmp_path / "parquet" / "results.parquet")
     assert list(table.columns) == list(csv.columns)
     assert np.array_equal(table.to_numpy(), csv.to_numpy())
+
+
+# a parallelogram four-bar in space (every axis +z), its crank turned at pi rad/s from 90 deg:
+# at t = 0.5 s (crank at 180 deg) every link lies on the ground's line, a change point where
+# the dependent joints' Jacobian loses rank
+CHANGE_POINT = {
+    "mechanism": {"space": "spatial", "gravity": [0.0, -9.81, 0.0]},
+    "units": {"length": "m", "angle": "rad"},
+    "bodies": [
+        {"name": "ground", "points": {"O": [0, 0, 0], "D": [2, 0, 0]}},
+        {"name": "crank", "points": {"O": [0, 0, 0], "A": [0, 1, 0]}, "mass": 1.0,
+         "com": [0, 0.5, 0], "inertia": [0.1, 0.1, 0.1]},
+        {"name": "coupler", "points": {"A": [0, 1, 0], "B": [2, 1, 0]}, "mass": 2.0,
+         "com": [1, 1, 0], "inertia": [0.1, 0.7, 0.7]},
+        {"name": "rocker", "points": {"D": [2, 0, 0], "B": [2, 1, 0]}, "mass": 1.0,
+         "com": [2, 0.5, 0], "inertia": [0.1, 0.1, 0.1]}],
+    "joints": [
+        {"name": "J1", "type": "revolute", "connect": ["ground.O", "crank.O"], "axis": [0, 0, 1]},
+        {"name": "J2", "type": "revolute", "connect": ["crank.A", "coupler.A"], "axis": [0, 0, 1]},
+        {"name": "J3", "type": "revolute", "connect": ["coupler.B", "rocker.B"], "axis": [0, 0, 1]},
+        {"name": "J4", "type": "revolute", "connect": ["ground.D", "rocker.D"], "axis": [0, 0, 1]}],
+    "drivers": [{"joint": "J1", "motion": {"kind": "expression", "q": "pi*t"}}],
+    "analysis": {"duration": 1.0, "samples": 21}}
+
+
+def test_allow_singular_keeps_a_spatial_run_through_a_singular_position(tmp_path):
+    """``analyze --allow-singular`` on a spatial model: the samples at the change point are NaN
+    rows named in the summary, every other row the run without them (and the closed form of the
+    parallelogram: the coupler translates, the kinetic energy is constant, so the driving torque
+    is the rate of the potential energy over the crank speed, ``tau = -3 g sin(pi t)``); without
+    the flag, exit 3 naming the time and driver value."""
+    from linkdyn.io.writer import dumps_toml
+
+    path = tmp_path / "change_point.toml"
+    path.write_text(dumps_toml(CHANGE_POINT))
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "refused")])
+    assert res.exit_code == 3, res.output
+    assert "singular position" in res.output and "at t = 0.5 s (q_J1 = 1.5708 rad)" in res.output
+    assert "Traceback" not in res.output and not (tmp_path / "refused").exists()
+
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(out), "--allow-singular"])
+    assert res.exit_code == 0, res.output
+    assert "1 samples at a singular position are written as NaN rows (t = 0.5 s)" in res.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["invalid_samples"] == 1 and summary["invalid_times_s"] == [0.5]
+    rows = table(out / "results.csv")
+    t = np.linspace(0.0, 1.0, 21)
+    np.testing.assert_array_equal(rows["t"], t)
+    bad = t == 0.5
+    assert all(np.all(np.isnan(v[bad])) for k, v in rows.items() if k != "t")
+    assert all(np.all(np.isfinite(v[~bad])) for v in rows.values())
+    # the other rows: the run without the singular sample, column by column
+    alone = linkdyn.analyze(linkdyn.load(path), t[~bad]).columns()
+    assert list(alone) == list(rows)
+    for name, v in alone.items():
+        scale = max(float(np.max(np.abs(v))), 1.0)
+        np.testing.assert_allclose(rows[name][~bad], v, rtol=0, atol=1e-9 * scale, err_msg=name)
+    np.testing.assert_allclose(rows["tau_J1"][~bad], -3 * 9.81 * np.sin(np.pi * t[~bad]),
+                               rtol=0, atol=1e-9 * 3 * 9.81)
+    # the peaks of the summary are those of the rows solved
+    assert summary["peak_effort"]["tau_J1"] == pytest.approx(np.max(np.abs(alone["tau_J1"])))
+    # the report of a run with gaps: not yet (exit 2, nothing written)
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "page"),
+                                    "--allow-singular", "--report"])
+    assert res.exit_code == 2 and "not yet for spatial models" in res.output, res.output
+    assert not (tmp_path / "page").exists()
+    # the API: valid flags the gap, the arrays are NaN there
+    sol = linkdyn.analyze(linkdyn.load(path), t, allow_singular=True)
+    np.testing.assert_array_equal(sol.valid, ~bad)
+    assert np.all(np.isnan(sol.reaction("J2")[bad])) and np.all(np.isnan(sol.point("coupler", "B")[bad]))

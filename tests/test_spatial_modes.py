@@ -234,15 +234,52 @@ def test_moving_a_spatial_model_in_its_mode_needs_no_effort_to_first_order(tmp_p
     assert '"dim":3' in page and "mode 1 at" in page
 
 
+def test_a_mode_of_a_universal_joints_coordinates_moves_as_its_closed_form(tmp_path):
+    """``modes --report`` where the free coordinates are a universal joint's two rotations
+    (``J1.1``, ``J1.2``): each mode's motion drives those coordinates by name. The body hung
+    by the joint swings about one axis at a time, a compound pendulum: the coordinate follows
+    ``a sin(w t)`` and the effort that moves it so is the closed form
+    ``I_O theta'' + m g d sin(theta) = m g d (sin(theta) - theta)`` (``w^2 = m g d / I_O``),
+    third order in the swing; the other coordinate stays at 0 and needs no effort."""
+    from linkdyn.modal import MODE_SWING, mode_motion
+
+    m, d, Ixx, Iyy = 2.0, 0.4, 0.01, 0.03
+    model = pendulum(mass=m, com=(0.0, 0.0, -d), inertia=f"[{Ixx}, {Iyy}, 0.02]")
+    md = modes(equilibrium(model))
+    for k, (coord, other, I) in enumerate((("J1.2", "J1.1", Iyy), ("J1.1", "J1.2", Ixx))):
+        w = 2 * math.pi * float(md.frequencies[k])
+        assert w == pytest.approx(math.sqrt(m * G * d / (I + m * d * d)), rel=1e-10)
+        moving = mode_motion(md, k)
+        t = np.linspace(0.0, moving.duration, 61)
+        cols = linkdyn.analyze(moving, t).columns()
+        theta = MODE_SWING * np.sin(w * t)
+        np.testing.assert_allclose(cols[f"q_{coord}"], theta, rtol=0, atol=1e-13)
+        np.testing.assert_allclose(cols[f"q_{other}"], 0.0, rtol=0, atol=1e-13)
+        tau = m * G * d * (np.sin(theta) - theta)
+        np.testing.assert_allclose(cols[f"tau_{coord}"], tau, rtol=0,
+                                   atol=1e-9 * np.max(np.abs(tau)))
+        np.testing.assert_allclose(cols[f"tau_{other}"], 0.0, rtol=0,
+                                   atol=1e-9 * np.max(np.abs(tau)))
+    # the command writes both modes' pages
+    path = tmp_path / "pendulum.toml"
+    linkdyn.save(model, path)
+    res = CliRunner().invoke(main, ["modes", str(path), "--report", "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    for k in (1, 2):
+        page = (tmp_path / "o" / f"mode{k}.html").read_text("utf-8")
+        assert '"dim":3' in page and f"mode {k} at" in page
+    # a driver naming no joint coordinate: exit 2 naming the field
+    from linkdyn.model import Driver
+    from linkdyn.motion import ExpressionMotion
+    with pytest.raises(linkdyn.errors.ModelError, match="J1.3"):
+        linkdyn.analyze(replace(model, drivers=(Driver("J1.3", ExpressionMotion("0.1")),)),
+                        np.zeros(1))
+
+
 def test_what_the_commands_refuse_on_a_spatial_model(tmp_path):
-    # a universal joint's coordinate has no driver to swing it: exit 2, nothing written
     path = tmp_path / "pendulum.toml"
     linkdyn.save(pendulum(), path)
     assert linkdyn.load(path).initial_q == pytest.approx({"J1.1": 0.3, "J1.2": -0.2})
-    res = CliRunner().invoke(main, ["modes", str(path), "--report", "-o", str(tmp_path / "o")])
-    assert res.exit_code == 2 and "not yet for spatial models" in res.output
-    assert "J1.1" in res.output and "Hz" not in res.output
-    assert not (tmp_path / "o").exists()
     # a fully driven spatial mechanism has no free coordinate
     rsur = tmp_path / "rsur.toml"
     rsur.write_text(linkdyn.example_path("rsur").read_text("utf-8"), "utf-8")

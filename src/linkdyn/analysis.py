@@ -678,13 +678,13 @@ def analyze_layout(models, layout, t, *, backend: str | None = None, designs=Non
 
 
 @quiet
-def _spatial(model, t, backend):
+def _spatial(model, t, backend, allow_singular=False):
     """``analyze`` of a spatial model (:func:`linkdyn.spatial.analyze`, numpy only)."""
     if backend == "compiled":
         raise ModelError("the compiled backend is not yet for spatial models", field="backend",
                          fix="Use backend='numpy' (or leave it unset)")
     from . import spatial
-    return spatial.analyze(model, t)
+    return spatial.analyze(model, t, allow_singular=allow_singular)
 
 
 @quiet
@@ -729,7 +729,7 @@ def analyze(model, t, *, allow_singular: bool = False, backend: str | None = Non
     asked = backend
     model, t, backend = _arguments(model, t, allow_singular, backend)
     if isinstance(model, Model) and model.space == "spatial":
-        return _spatial(model, t, asked)
+        return _spatial(model, t, asked, allow_singular)
     if not isinstance(model, Model) and any(m.space == "spatial" for m in model):
         raise ModelError("batches of designs are not yet for spatial models", field="model",
                          fix="Analyze each spatial model alone")

@@ -679,14 +679,14 @@ def analyze(ctx, model, outdir, samples, duration, cycles, fmt, report, allow_si
     mech = io.load_model(model, allow_outside=allow_outside)
     if mech.space == "spatial":
         from .spatial import cli as spatial_cli
-        for given, what in ((path_point or path_range, "--path-point and --path-range"),
-                            (allow_singular, "--allow-singular")):
-            if given:
-                not_yet(mech, f"analyze {what}")
+        if path_point or path_range:
+            not_yet(mech, "analyze --path-point and --path-range")
         if _backend(ctx, backend) == "compiled":
             not_yet(mech, "the compiled backend")
         t = sample_times(mech, samples, duration, cycles)
-        text, summ, sol = spatial_cli.analyze(mech, t)
+        text, summ, sol = spatial_cli.analyze(mech, t, allow_singular)
+        if (report or plots_) and summ["invalid_samples"]:
+            not_yet(mech, "a report or plots of a run with gaps (--allow-singular)")
         files = _results(_spatial_table(sol), summ, fmt, table_units)
         if report:
             from . import report as report_mod
@@ -1074,8 +1074,7 @@ def equilibrium(model, as_json, at_start, allow_outside):
 def modes(model, as_json, report, outdir, at_start, allow_outside):
     """The small vibrations of MODEL about its static equilibrium: natural frequencies (Hz),
     damping ratios and mode shapes of the free joints and every tree joint."""
-    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start,
-                      report=report)
+    md = _equilibrium(model, as_json, allow_outside, with_modes=True, at_start=at_start)
     if report:
         from . import design, modal as eq_mod
         from .analysis import analyze as run
@@ -1103,13 +1102,11 @@ def modes(model, as_json, report, outdir, at_start, allow_outside):
             click.echo(f"wrote {', '.join(map(str, written))}")
 
 
-def _equilibrium(model, as_json, allow_outside, with_modes, at_start, report=False):
+def _equilibrium(model, as_json, allow_outside, with_modes, at_start):
     from . import io, modal as eq_mod
 
     mech = io.load_model(model, allow_outside=allow_outside)
     eq = eq_mod.equilibrium(mech, search=not at_start)
-    if report:      # before anything is printed: what --report cannot animate
-        eq_mod.animatable(eq)
     md = eq_mod.modes(eq) if with_modes else None
     if as_json:
         click.echo(json.dumps(json_safe(eq_mod.as_dict(eq, md)), indent=2))

@@ -498,36 +498,15 @@ def modes(model: Model | Equilibrium, *, free: tuple[str, ...] | None = None) ->
                  stable=stable)
 
 
-def animatable(eq: Equilibrium) -> None:
-    """Refuse to animate the modes about ``eq`` (:func:`mode_motion`) where no driver can move
-    its free coordinates: a spatial model's coordinate of a joint of two or more freedoms
-    (``J3.1`` of a universal joint; a driver drives a whole joint of one freedom).
-
-    Raises
-    ------
-    ModelError
-        Field ``--report``, "not yet for spatial models".
-    """
-    model = eq.model
-    if getattr(model, "space", "planar") != "spatial":
-        return
-    joints = {j.name for j in model.joints}
-    coupled = [c for c in eq.free if c not in joints]
-    if coupled:
-        raise ModelError(
-            f"a mode's motion (modes --report) is not yet for spatial models whose free "
-            f"coordinates are one of a joint's several ({', '.join(coupled)}): a driver "
-            "drives a whole joint of one freedom", file=model.source, field="--report",
-            fix="Drop --report: the frequencies and shapes are printed")
-
-
 #: The largest free coordinate's swing in an animated mode: rad, or this part of the size.
 MODE_SWING = 0.1
 
 
 def mode_motion(md: Modes, k: int, *, swing: float = MODE_SWING) -> Model:
     """The model moving in mode ``k`` (E3), for its report page: every free joint driven by
-    ``q_j(t) = q_eq_j + a v_j sin(w t)`` over one period, the drivers held at t = 0.
+    ``q_j(t) = q_eq_j + a v_j sin(w t)`` over one period, the drivers held at t = 0. A spatial
+    model's free coordinate of a joint of several freedoms (``J3.1`` of a universal joint) is
+    driven by its name: :func:`linkdyn.spatial.analyze` prescribes that coordinate alone.
 
     Parameters
     ----------
@@ -548,7 +527,6 @@ def mode_motion(md: Modes, k: int, *, swing: float = MODE_SWING) -> Model:
     """
     eq = md.equilibrium
     model, f, v = eq.model, float(md.frequencies[k]), md.shapes[:, k]
-    animatable(eq)
     if k not in md.oscillating:
         raise ModelError(f"mode {k + 1} does not swing ({f:g} Hz, damping ratio "
                          f"{md.damping_ratios[k]:g})", field="modes",

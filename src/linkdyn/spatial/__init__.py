@@ -19,26 +19,91 @@ from .solution import Redundancy, SpatialSolution
 __all__ = ["analyze", "analyze_designs", "SpatialSolution", "Redundancy", "check"]
 
 
-def analyze(model, t) -> SpatialSolution:
+def analyze(model, t, allow_singular: bool = False) -> SpatialSolution:
     """Kinematics, inverse dynamics and reactions of the spatial ``model`` at the times ``t``
     (T,) s (numpy backend).
+
+    ``allow_singular``: the samples at a singular position (the dependent joints' Jacobian
+    loses rank, :func:`~.kinematics.singular_samples`) are kept as gaps, as ``linkdyn.analyze``
+    keeps a planar model's: ``SpatialSolution.valid`` False and every per-sample array NaN
+    there (``t`` kept), the other samples as the run without them gives them.
 
     Raises
     ------
     AssemblyError
-        Where the loops cannot be closed or a singular position is passed (time and driver
-        values named).
+        Where the loops cannot be closed or (unless ``allow_singular``) a singular position is
+        passed (time and driver values named); with ``allow_singular`` too where every sample
+        is singular.
     ModelError
         A mobility (from the closure Jacobian's rank) other than the number of drivers.
     """
     t = np.asarray(t, float)
-    p = sk.plan(model)
-    motion = sk.solve(model, p, t)
+    shown, model, p, moved = _coordinate_drivers(model)
+    motion, kept, errors = sk.solve_designs([model], p, t)
+    valid = np.ones(len(t), bool)
+    if errors[0] is not None:
+        # a run that passes a singular position is kept (``kept``); one that stops closing is not
+        if not (allow_singular and len(kept)):
+            raise errors[0]
+        valid = ~sk.singular_samples(p, motion)
+        if not np.any(valid):
+            raise errors[0]
     coords = sk.joint_coordinates(model, p, motion)
     applied = sd.loads(model, p, motion, coords)
     dyn = sd.solve(model, p, motion, applied)
-    return SpatialSolution(model, p, motion, coords, applied, dyn, sk.redundant_rows(model, p,
-                                                                                  motion.J[0]))
+    first = int(np.argmax(valid))        # the first regular sample: the redundant rows there
+    sol = SpatialSolution(shown, p, motion, coords, applied, dyn,
+                          sk.redundant_rows(model, p, motion.J[first]), first=first,
+                          moved=moved)
+    return sol if np.all(valid) else sol.gaps(valid)
+
+
+def _coordinate_drivers(model):
+    """The model :func:`analyze` solves where some drivers name one coordinate of a joint of
+    several freedoms (``J3.1`` of a universal joint, ``J2.s`` of a cylindrical one: a mode's
+    motion, :func:`linkdyn.modal.mode_motion`), as ``simulate`` keeps its free coordinates:
+    those joints in the tree (:func:`.forward.partition`'s placeholder drivers, here with the
+    coordinates' motions), the plan's driven coordinates the drivers' then those.
+
+    Returns
+    -------
+    shown : Model
+        ``model`` with the drivers of whole joints only (the solution's model).
+    inner : Model
+        The model the stages solve: those drivers, then one per named coordinate on its joint.
+    plan : Plan
+        ``inner``'s, its ``driven`` the drivers' coordinates then the named ones.
+    moved : tuple[str, ...]
+        The named coordinates, in ``inner``'s order (their efforts follow the drivers').
+
+    Raises
+    ------
+    ModelError
+        A driver naming neither a joint nor a joint coordinate.
+    """
+    from dataclasses import replace
+
+    from ..errors import ModelError
+    from .forward import _partition
+    from .reader import coordinate_names
+
+    joints = {j.name for j in model.joints}
+    whole = tuple(d for d in model.drivers if d.joint in joints)
+    named = tuple(d for d in model.drivers if d.joint not in joints)
+    if not named:
+        return model, model, sk.plan(model), ()
+    known = coordinate_names(model.joints)
+    for d in named:
+        if d.joint not in known:
+            raise ModelError(f"driver of '{d.joint}': no joint or joint coordinate has that "
+                             "name", file=model.source, field="drivers",
+                             fix=f"Name a joint or one of {', '.join(known)}")
+    shown = replace(model, drivers=whole)
+    part = _partition(shown, tuple(d.joint for d in named))
+    held = part.inner.drivers[len(whole):]
+    inner = replace(part.inner, drivers=whole + tuple(
+        replace(h, motion=d.motion, description=d.description) for h, d in zip(held, named)))
+    return shown, inner, part.plan, tuple(d.joint for d in named)
 
 
 def analyze_designs(models, t):

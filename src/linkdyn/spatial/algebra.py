@@ -170,10 +170,13 @@ def quaternion(r: np.ndarray) -> np.ndarray:
         q = np.where((k == j)[..., None], np.stack(comps, -1) / (2 * s[..., None]), q)
     q /= np.linalg.norm(q, axis=-1, keepdims=True)
     # continuity: flip where the sign jumps from the previous sample; w >= 0 at the first
-    if q.ndim == 2 and len(q):
-        flips = np.sum(q[1:] * q[:-1], -1) < 0
-        sign = np.concatenate([[1.0 if q[0, 0] >= 0 else -1.0], np.where(flips, -1.0, 1.0)])
-        q *= np.cumprod(sign)[:, None]
+    # (over the finite samples: a gap, NaN, is skipped)
+    ok = np.all(np.isfinite(q), -1) if q.ndim == 2 else None
+    if q.ndim == 2 and np.any(ok):
+        f = q[ok]
+        flips = np.sum(f[1:] * f[:-1], -1) < 0
+        sign = np.concatenate([[1.0 if f[0, 0] >= 0 else -1.0], np.where(flips, -1.0, 1.0)])
+        q[ok] = f * np.cumprod(sign)[:, None]
     return q
 
 

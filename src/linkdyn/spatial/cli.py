@@ -63,13 +63,15 @@ def summary(sol) -> dict:
     """``summary.json`` of a spatial run: mobility, redundancy, peak efforts and reactions."""
     info = sol.plan
     cols = sol.columns()
-    rank = int(sk.rank_of(info, sol.motion.J[:1])[0])
+    valid = getattr(sol, "valid", np.ones(len(sol.t), bool))
+    first = int(np.argmax(valid))       # the first sample solved (allow_singular: gaps)
+    rank = int(sk.rank_of(info, sol.motion.J[first:first + 1])[0])
     peaks = {}
     for j in sol.model.joints:
-        r = sol.reaction(j.name)
+        r = sol.reaction(j.name)[valid]
         peaks[j.name] = {"force": float(np.max(np.linalg.norm(r[:, :3], axis=1))),
                          "moment": float(np.max(np.linalg.norm(r[:, 3:], axis=1)))}
-    efforts = {name: float(np.max(np.abs(cols[name]))) for name in cols
+    efforts = {name: float(np.max(np.abs(cols[name][valid]))) for name in cols
                if name.startswith(("tau_", "force_"))}
     return {"model": sol.model.name, "space": "spatial", "samples": int(len(sol.t)),
             "duration": float(sol.t[-1] - sol.t[0]),
@@ -77,7 +79,9 @@ def summary(sol) -> dict:
             "cut_joints": [sol.model.joints[j].name for j in info.topo.cut],
             "redundancy": sol.redundancy.describe() if sol.redundancy else None,
             "peak_effort": efforts, "peak_reaction": peaks,
-            "peak_kinetic_energy": float(np.max(sol.kinetic_energy()))}
+            "peak_kinetic_energy": float(np.max(sol.kinetic_energy()[valid])),
+            "invalid_samples": int(np.sum(~valid)),
+            "invalid_times_s": [float(x) for x in np.asarray(sol.t)[~valid]]}
 
 
 def text(s: dict) -> str:
@@ -93,13 +97,20 @@ def text(s: dict) -> str:
         lines.append(f"peak |{name}|: {v:.6g} {'N m' if name.startswith('tau') else 'N'}")
     for name, v in s["peak_reaction"].items():
         lines.append(f"peak reaction {name}: |F| {v['force']:.6g} N, |M| {v['moment']:.6g} N m")
+    if s.get("invalid_samples"):
+        times = ", ".join(f"{x:.6g}" for x in s["invalid_times_s"][:10])
+        more = " ..." if len(s["invalid_times_s"]) > 10 else ""
+        lines.append(f"WARNING: {s['invalid_samples']} samples at a singular position are "
+                     f"written as NaN rows (t = {times}{more} s)")
     return "\n".join(lines)
 
 
-def analyze(mech, t):
+def analyze(mech, t, allow_singular: bool = False):
     """Solve ``mech`` at ``t``: the printed summary, the summary (``summary.json``'s content)
-    and the solution (its ``columns()`` the results table; the report draws it)."""
-    sol = run(mech, t)
+    and the solution (its ``columns()`` the results table; the report draws it).
+    ``allow_singular``: samples at a singular position become NaN rows, named in the summary
+    (:func:`linkdyn.spatial.analyze`)."""
+    sol = run(mech, t, allow_singular=allow_singular)
     s = summary(sol)
     return text(s), s, sol
 

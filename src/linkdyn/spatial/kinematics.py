@@ -649,13 +649,20 @@ def solve_designs(models, p: Plan, t: np.ndarray):
     rows = (kept[:, None] * T + np.arange(T)).ravel()
     m = motion_at(models[0], take(p, rows), t if p.row is None else np.tile(t, len(kept)),
                   q[rows], qdi[rows], qddi[rows])
-    dep = p.dependent
-    singular = (rank_of(take(p, rows), m.J[:, :, dep], dep) < len(dep)).reshape(len(kept), T)
+    singular = singular_samples(take(p, rows), m).reshape(len(kept), T)
     for j in np.flatnonzero(np.any(singular, 1)):
         k = int(np.argmax(singular[j]))
         d = int(kept[j])
         errors[d] = _fail(models[d], t[k], qi[d * T + k], SINGULAR, SINGULAR_FIX)
     return m, kept, errors
+
+
+def singular_samples(p: Plan, m: Motion) -> np.ndarray:
+    """The samples (T,) bool of ``m`` at a singular position: the dependent coordinates'
+    closure Jacobian ``J_dep`` loses rank there (:func:`rank_of`), so their rates and
+    accelerations are not determined by the drivers'."""
+    dep = p.dependent
+    return rank_of(p, m.J[:, :, dep], dep) < len(dep)
 
 
 def driver_motions(models, t: np.ndarray):

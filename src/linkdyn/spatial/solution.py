@@ -3,6 +3,8 @@ with the result columns of docs/conventions.md ("Spatial mechanisms")."""
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -65,21 +67,61 @@ class SpatialSolution:
     """
 
     def __init__(self, model, plan: sk.Plan, motion: sk.Motion, coords: dict,
-                 applied: sd.Loads, dyn: sd.Dynamics, redundant_rows: tuple, batch=None):
+                 applied: sd.Loads, dyn: sd.Dynamics, redundant_rows: tuple, batch=None,
+                 first: int = 0, moved: tuple = ()):
         self.batch = batch
+        #: the joint coordinates driven beyond the model's drivers (``J3.1``: a mode's motion),
+        #: their efforts after the drivers' in ``dynamics.tau``
+        self.moved = tuple(moved)
         self.model, self.plan, self.motion = model, plan, motion
         self.coords, self.loads, self.dynamics = coords, applied, dyn
         self.t = motion.t
         self.space = "spatial"
+        #: (T,) bool: the samples solved; False at a singular position kept by
+        #: ``allow_singular`` (:meth:`gaps`), whose numbers are NaN
+        self.valid = np.ones(len(self.t), bool)
         labels = tuple(f"{c}_{j.name}" for j in model.joints
                        for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz"))
         basis = dyn.undetermined
         comps = ()
         if basis.shape[2]:
-            weight = np.linalg.norm(basis[0], axis=1)
+            # the components at the sample ``first`` (the first one solved)
+            weight = np.linalg.norm(basis[first], axis=1)
             comps = tuple(lab for lab, w in zip(labels, weight) if w > 1e-9)
         self.redundancy = (Redundancy(redundant_rows, labels, basis, comps)
                            if redundant_rows or basis.shape[2] else None)
+
+    def gaps(self, valid: np.ndarray) -> "SpatialSolution":
+        """This solution with the samples not ``valid`` (T,) as gaps: every per-sample array
+        of its stages NaN there (the times kept), ``valid`` set; the samples of
+        ``linkdyn.analyze(..., allow_singular=True)`` it could not solve."""
+        bad = ~np.asarray(valid, bool)
+        T = len(self.t)
+
+        def blank(x, name=""):
+            if isinstance(x, np.ndarray):
+                if name == "t" or not x.ndim or x.shape[0] != T or x.dtype.kind not in "fc":
+                    return x
+                x = x.copy()
+                x[bad] = np.nan
+                return x
+            if dataclasses.is_dataclass(x) and not isinstance(x, type):
+                return dataclasses.replace(x, **{f.name: blank(getattr(x, f.name), f.name)
+                                                 for f in dataclasses.fields(x)})
+            if isinstance(x, (list, tuple)):
+                return type(x)(blank(v) for v in x)
+            if isinstance(x, dict):
+                return {k: blank(v) for k, v in x.items()}
+            return x
+        out = copy.copy(self)
+        out.__dict__.pop("_columns", None)
+        out.motion, out.coords = blank(self.motion), blank(self.coords)
+        out.loads, out.dynamics = blank(self.loads), blank(self.dynamics)
+        if self.redundancy is not None:
+            out.redundancy = dataclasses.replace(self.redundancy,
+                                                 basis=blank(self.redundancy.basis))
+        out.valid = ~bad
+        return out
 
     # ------------------------------------------------------------ arrays
     def _body(self, body: str) -> int:
@@ -116,7 +158,7 @@ class SpatialSolution:
 
     def effort(self, joint: str) -> np.ndarray:
         """A driver's effort (T,): N m about its axis or N along it, on B, minus on A."""
-        k = [d.joint for d in self.model.drivers].index(joint)
+        k = ([d.joint for d in self.model.drivers] + list(self.moved)).index(joint)
         return self.dynamics.tau[:, k]
 
     def reaction(self, joint: str) -> np.ndarray:
@@ -159,6 +201,11 @@ class SpatialSolution:
         for d in m.drivers:
             kind = self.plan.kinds[[x.name for x in m.joints].index(d.joint)]
             out[f"{kind.effort}_{d.joint}"] = self.effort(d.joint)
+        if self.moved:              # a coordinate's effort: a torque about, a force along it
+            from .reader import coordinate_names
+            angular = {c: a for c, (_, _, a) in coordinate_names(m.joints).items()}
+            for c in self.moved:
+                out[f"{'tau' if angular[c] else 'force'}_{c}"] = self.effort(c)
         for j in m.joints:
             couple = not self.plan.kinds[[x.name for x in m.joints].index(j.name)].couple_free
             for c, v in zip(("Fx", "Fy", "Fz", "Mx", "My", "Mz")[:6 if couple else 3],
