@@ -25,6 +25,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,38 +52,51 @@ KERNELS = "benchmarks/bench_kernels.py --clock cpu"
 INVERSE = "benchmarks/bench_inverse.py"
 CHUNK = "benchmarks/bench_sweep.py --chunk-only --designs 20000"
 SWEEP_KERNELS = "benchmarks/bench_sweep.py --kernels"
-SIMULATE = ("benchmarks/bench_simulate.py --duration 2 --windows 20 --chain-duration 0.3 "
+SIMULATE = ("benchmarks/bench_simulate.py --only planar --duration 2 --windows 20 --chain-duration 0.3 "
             "--tols 1e-4,1e-8,1e-10 --samples 11 --repeat 50 --turns 10 --turn-tols 1e-8 --best 2")
+SPATIAL = ("benchmarks/bench_simulate.py --only spatial --spatial-duration 0.5 --samples 11 "
+           "--steps 1e-3,1e-4 --best 2 --repeat 100")
 AUTO = "benchmarks/bench_auto.py --windows 20 --chain-duration 0.3 --press-duration 1.0"
 
 
 def _simulate_rows() -> dict[str, Figure]:
-    """The work-precision table's figures: each row of a model's table (Hoeken's first, then
-    the chain's), its wall time a timing, its steps, right-hand sides, energy drift and error
-    exact (the same arithmetic on any run)."""
+    """The work-precision tables' figures: each row of a model's table (the planar Hoeken's and
+    the chain's, the spatial RSUR's and quarter car's), its time a timing (wall on the planar
+    tables, CPU on the spatial ones), its steps, right-hand sides, energy drift, closure and
+    error exact (the same arithmetic on any run)."""
     out = {}
-    rows = {"4": "linkdyn compiled DOP853 rtol 0.0001", "8": "linkdyn compiled DOP853 rtol 1e-08",
-            "10": "linkdyn compiled DOP853 rtol 1e-10"}
+    # a row's columns: wall s, CPU s, steps, RHS (blank for MuJoCo), energy drift, closure, error
+    columns = {"wall": 0, "cpu": 1, "steps": 2, "rhs": 3, "drift": 4, "closure": 5, "error": 6}
+
+    def row(key, command, lead, what, mujoco=False):
+        parts = [NUMBER, NUMBER, r"\d+", r"\d+", NUMBER, NUMBER, NUMBER]
+        if mujoco:
+            del parts[3]
+        at = columns[what] - (mujoco and columns[what] > 3)
+        parts[at] = "(" + parts[at] + ")"
+        out[key] = Figure(command, lead + r"\s+".join(parts),
+                          "timing" if what in ("wall", "cpu") else "exact")
+
+    tables = (
+        (SIMULATE, "linkdyn compiled DOP853", ("hoeken", r"Hoeken \+ flywheel"),
+         ("chain", r"parallelogram chain"), ("0.0001", "1e-08", "1e-10"),
+         ("wall", "steps", "rhs", "drift", "error"), ("wall", "steps", "error")),
+        (SPATIAL, "linkdyn DOP853", ("rsur", r"RSUR four-bar released"),
+         ("car", r"quarter car dropped"), ("0.0001", "1e-06", "1e-08"),
+         ("cpu", "steps", "rhs", "drift", "closure", "error"),
+         ("cpu", "steps", "drift", "closure", "error")))
+    for command, solver, *models, tols, mine, theirs in tables:
+        for model, head in models:
+            for tol in tols:
+                tag = str(round(-np.log10(float(tol))))
+                lead = head + r".*?" + re.escape(f"{solver} rtol {tol}") + r"\s+"
+                for what in mine:
+                    row(f"simulate.{model}_{tag}_{what}", command, lead, what)
+            for tag, dt in (("mj3", "0.001"), ("mj4", "0.0001")):
+                lead = head + r".*?MuJoCo RK4 dt " + re.escape(dt) + r"\s+"
+                for what in theirs:
+                    row(f"simulate.{model}_{tag}_{what}", command, lead, what, mujoco=True)
     for model, head in (("hoeken", r"Hoeken \+ flywheel"), ("chain", r"parallelogram chain")):
-        for tag, row in rows.items():
-            lead = head + r".*?" + re.escape(row) + r"\s+"
-            for at, what, kind in ((0, "wall", "timing"), (2, "steps", "exact"),
-                                   (3, "rhs", "exact"), (4, "drift", "exact"),
-                                   (5, "error", "exact")):
-                # the row's columns: wall s, CPU s, steps, RHS, energy drift, error
-                parts = [NUMBER, NUMBER, r"\d+", r"\d+", NUMBER, NUMBER]
-                parts[at] = "(" + parts[at] + ")"
-                out[f"simulate.{model}_{tag}_{what}"] = Figure(
-                    SIMULATE, lead + r"\s+".join(parts), kind)
-        for tag, dt in (("mj3", "0.001"), ("mj4", "0.0001")):
-            lead = head + r".*?MuJoCo RK4 dt " + re.escape(dt) + r"\s+"
-            out[f"simulate.{model}_{tag}_wall"] = Figure(SIMULATE, lead + "(" + NUMBER + ")",
-                                                         "timing")
-            out[f"simulate.{model}_{tag}_steps"] = Figure(
-                SIMULATE, lead + NUMBER + r"\s+" + NUMBER + r"\s+(\d+)", "exact")
-            out[f"simulate.{model}_{tag}_error"] = Figure(
-                SIMULATE, lead + NUMBER + r"\s+" + NUMBER + r"\s+\d+\s+(" + NUMBER + ")",
-                "exact")
         out[f"simulate.{model}_numpy_8_wall"] = Figure(
             SIMULATE, head + r".*?linkdyn DOP853 rtol 1e-08\s+(" + NUMBER + ")", "timing")
     return out
