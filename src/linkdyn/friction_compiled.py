@@ -10,7 +10,8 @@ and reactions steps, unchanged) under the applied loads straight into the output
 block-local copy of the kinematics from ``w_star = -unit`` for each unit effort (no Newton–Euler
 step: ``w_star`` is affine in the applied wrench, the motion's share is the first case's), then
 solves each sample's friction equations by :func:`linkdyn.friction.residuals` and
-:func:`linkdyn.friction.newton_step` (the steps the numpy path runs over arrays) and adds
+:func:`linkdyn.friction.newton_step` (the steps the numpy path runs over arrays; from the
+previous sample's solution, else from ``f = 0``) and adds
 ``sum_l dy_l f_l`` to every joint, multiplier and effort, a block at a time: no stage runs
 again with the converged efforts."""
 
@@ -102,7 +103,10 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
     Cs, Vs, Xs, Rs = np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf)), np.zeros((B, kf))
     f_b, ps = np.zeros((kf, B)), np.zeros(kf)
     old, dg, K, x = np.zeros(kf), np.zeros((kf, 2)), np.zeros((kf, kf + 1)), np.zeros(kf)
+    prev = np.zeros(kf)
     for d in range(D):
+        # the previous sample's solution, Newton's start (none at a design's first sample)
+        warm, det0 = False, 1.0
         dp = d if L.mass.shape[1] > 1 else 0
         dq = d if fp.shape[2] > 1 else 0
         cd._constant(w_ext, d, w_const)
@@ -164,8 +168,11 @@ def _kernel(L, c, s, r, e, tw, twd, J, w_ext, units, fj, fp, qd, o_on, o_lam, o_
                     Cs[k, j] = sliding_arm(arm, arm_s, st, q, np.tanh(q / sp))
                     Vs[k, j] = vis * q
             for k in range(nb):
-                _solved(Xs[k], old, Fs[k], As[k], Cs[k], Vs[k], ps, Rs[k], dg, K, x, o_its,
-                        o_state, o_big, d, k0 + k)
+                warm, det0 = _solved(Xs[k], old, Fs[k], As[k], Cs[k], Vs[k], ps, Rs[k], dg, K,
+                                     x, o_its, o_state, o_big, d, k0 + k, prev, warm, det0)
+                if warm:
+                    for j in range(kf):
+                        prev[j] = Xs[k, j]
             for j in range(kf):
                 o_fj, o_rj = o_f[j, d, k0:k0 + nb], o_res[j, d, k0:k0 + nb]
                 for k in range(nb):
@@ -196,37 +203,33 @@ NOT_ITERATED, SOLVED, LOCKED = 0, 1, 2
 
 
 @inline
-def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_big, d, kk):
-    """Newton's method on one sample's friction equations from ``f = 0``, as
-    :func:`linkdyn.friction.newton` drives it (the same steps, stop and lock rules); ``f`` NaN
-    where it locks, ``res`` its residuals. A state whose forces are not finite is not
-    iterated."""
+def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_big, d, kk, start,
+            warm, det0):
+    """Newton's method on one sample's friction equations, as :func:`linkdyn.friction.newton`
+    drives it (the same steps, stop and lock rules), from the previous sample's solution
+    ``start`` when ``warm`` (``det0`` the determinant of its last Jacobian), and from ``f = 0``
+    again if that start does not reach a solution; ``f`` NaN where it locks, ``res`` its
+    residuals. A state whose forces are not finite is not iterated. Returns whether it is
+    solved and the determinant of its last Jacobian (the next sample's ``warm`` and ``det0``).
+    """
     kf = f.shape[0]
     finite, open_ = True, True
     for j in range(kf):
-        f[j], res[j] = 0.0, np.nan
         finite = finite and np.isfinite(F0[j, 0]) and np.isfinite(F0[j, 1])
         for n in range(kf):
             open_ = open_ and np.isfinite(A[j, n, 0]) and np.isfinite(A[j, n, 1])
     its, ok, det, big_g = 0, False, 1.0, np.nan
     if finite and open_:
-        for _ in range(MAX_ITERATIONS + 1):
-            big_r, big_g = residuals(F0, A, cs, vs, ps, f, res, dg)
-            if big_r <= TOL * max(big_g, 1e-300):   # converged: no Jacobian formed
-                ok = True
-                break
-            for j in range(kf):
-                old[j] = f[j]
-            det_step = newton_step(A, dg, f, res, K, x)
-            f_ok = True
-            for j in range(kf):
-                f_ok = f_ok and np.isfinite(f[j])
-            if not f_ok:                               # a singular J: a fold, it ends here
-                for j in range(kf):
-                    f[j] = old[j]
-                break
-            det = det_step
-            its += 1
+        if warm:
+            its, ok, det, big_g = _iterate(f, old, F0, A, cs, vs, ps, res, dg, K, x, start,
+                                           True, det0)
+        if not (ok and det > 0):
+            more, ok, det, big_g = _iterate(f, old, F0, A, cs, vs, ps, res, dg, K, x, start,
+                                            False, 1.0)
+            its += more
+    else:
+        for j in range(kf):
+            f[j], res[j] = 0.0, np.nan
     state = NOT_ITERATED
     if finite:   # locked: no solution reached from f = 0 (J no longer positive there)
         state = SOLVED if ok and det > 0 else LOCKED
@@ -234,6 +237,36 @@ def _solved(f, old, F0, A, cs, vs, ps, res, dg, K, x, o_its, o_state, o_big, d, 
         for j in range(kf):
             f[j] = np.nan
     o_its[d, kk], o_state[d, kk], o_big[d, kk] = its, state, big_g
+    return state == SOLVED, det
+
+
+@inline
+def _iterate(f, old, F0, A, cs, vs, ps, res, dg, K, x, start, warm, det):
+    """Newton's method from ``start`` if ``warm``, else from ``f = 0``, ``det`` the
+    determinant to report if the start is already a solution. Returns the steps taken, whether
+    it converged, the last step's Jacobian's determinant and the largest friction effort."""
+    kf = f.shape[0]
+    for j in range(kf):
+        f[j], res[j] = (start[j] if warm else 0.0), np.nan
+    its, ok, big_g = 0, False, np.nan
+    for _ in range(MAX_ITERATIONS + 1):
+        big_r, big_g = residuals(F0, A, cs, vs, ps, f, res, dg)
+        if big_r <= TOL * max(big_g, 1e-300):   # converged: no Jacobian formed
+            ok = True
+            break
+        for j in range(kf):
+            old[j] = f[j]
+        det_step = newton_step(A, dg, f, res, K, x)
+        f_ok = True
+        for j in range(kf):
+            f_ok = f_ok and np.isfinite(f[j])
+        if not f_ok:                               # a singular J: a fold, it ends here
+            for j in range(kf):
+                f[j] = old[j]
+            break
+        det = det_step
+        its += 1
+    return its, ok, det, big_g
 
 
 def solve(model, kin, applied, units, friction_rows, qd):
