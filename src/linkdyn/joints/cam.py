@@ -135,11 +135,11 @@ def pitch_point(code, nums, s):
 
 
 @step
-def contact(nums, f):
-    """The contact on the pitch curve of the follower point ``d`` (``f[1]``) in the frame of
-    the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s', s'')`` there, the
-    pitch point's radius ``rho`` and ``rho_theta``, ``rho_theta_theta``, ``beta_theta``,
-    ``beta_theta_theta`` (beta: its polar angle)."""
+def locate(nums, f):
+    """The contact's cam angle ``theta`` (rad) on the pitch curve of the follower point ``d``
+    (``f[1]``) in the frame of the cam (axis ``f[0]``): where the pitch point's polar angle is
+    ``d``'s. The cut's one search for it (:meth:`Cam.locate`, where its frame is made); the
+    other steps read it as ``f[3]`` (:func:`contact`)."""
     code = nums[8]
     ea, d = f[0], f[1]
     psi = atan2(ea[0] * d[1] - ea[1] * d[0], ea[0] * d[0] + ea[1] * d[1])
@@ -156,6 +156,16 @@ def contact(nums, f):
         theta = theta - dt
         if settled(dt, SETTLED):
             break
+    return theta
+
+
+@step
+def contact(nums, f):
+    """The contact on the pitch curve at the cam angle ``theta`` = ``f[3]`` (:func:`locate`'s):
+    ``theta``, the lift ``(s, s', s'')`` there, the pitch point's radius ``rho`` and
+    ``rho_theta``, ``rho_theta_theta``, ``beta_theta``, ``beta_theta_theta`` (beta: its polar
+    angle)."""
+    code, theta = nums[8], f[3]
     s = lift(nums, theta)
     x, y, xt, yt, xtt, ytt = pitch_point(code, nums, s)
     r2 = x * x + y * y
@@ -194,6 +204,8 @@ class Cam(JointKind):
     dyad = None
     #: the contact can only push (lam >= 0); where lam < 0 the follower would leave the cam
     one_sided = True
+    #: the contact's cam angle, the frame's ``t`` (:func:`locate`)
+    locate = staticmethod(locate)
 
     # nums = (base_radius, roller_radius, offset, lift, rise, dwell, fall, law)
 

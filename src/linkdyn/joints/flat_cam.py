@@ -75,11 +75,11 @@ def support(code, nums, s):
 
 
 @step
-def contact(nums, f):
-    """The contact of the face (normal ``n``: the second body's +y axis, ``f[2]`` turned a
-    quarter turn) with the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s',
-    s'')`` there, ``H``, ``H_nu``, ``H_nu_nu`` (the support function and its rates in the
-    normal's angle nu), ``nu_theta`` and ``n``."""
+def locate(nums, f):
+    """The contact's cam angle ``theta`` (rad) of the face (normal ``n``: the second body's +y
+    axis, ``f[2]`` turned a quarter turn) with the cam (axis ``f[0]``): where the face's
+    normal has the angle ``n`` has in the cam's frame. The cut's one search for it
+    (:meth:`FlatCam.locate`); the other steps read it as ``f[3]`` (:func:`contact`)."""
     code = nums[8]
     ea, eb = f[0], f[2]
     n = (-eb[1], eb[0])
@@ -94,6 +94,17 @@ def contact(nums, f):
         theta = theta - dt
         if settled(dt, SETTLED):
             break
+    return theta
+
+
+@step
+def contact(nums, f):
+    """The contact of the face with the cam at the cam angle ``theta`` = ``f[3]``
+    (:func:`locate`'s): ``theta``, the lift ``(s, s', s'')`` there, ``H``, ``H_nu``,
+    ``H_nu_nu`` (the support function and its rates in the normal's angle nu), ``nu_theta``
+    and the face's normal ``n``."""
+    code, theta, eb = nums[8], f[3], f[2]
+    n = (-eb[1], eb[0])
     s = lift(nums, theta)
     u = support(code, nums, s)
     return theta, s, u[1], u[2], u[3], u[4], u[5], n
@@ -111,6 +122,8 @@ class FlatCam(Cam):
     numbers = (BASE_RADIUS, LIFT, RISE, DWELL, FALL, LAW)
     reaction = ("Fx", "Fy", "M")
     multipliers = (("contact force", "N"),)
+    #: the contact's cam angle, the frame's ``t`` (:func:`locate`)
+    locate = staticmethod(locate)
 
     @staticmethod
     @step
