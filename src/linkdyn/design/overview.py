@@ -303,7 +303,7 @@ def one_sided_frames(sol, which=None) -> list:
         c = lay.cuts[k]
         r_pa, r_pb, e_a = cut_frame(jk.CODES[c.kind], c.own, pose.c[c.a], pose.s[c.a],
                                     pose.r[c.a], pose.c[c.b], pose.s[c.b], pose.r[c.b], c.pa,
-                                    c.pb, c.axis)
+                                    c.pb, c.axis, np.nan)
         out.append((joint, jk.frame(r_pa, r_pb, e_a)))
     return out
 

@@ -242,8 +242,9 @@ class JointKind:
         return None
 
     #: ``locate(nums, f) -> t``: a higher pair's contact parameter at the frame ``f`` (whose
-    #: ``t`` it does not read), the one place it is searched for (a cam's Newton iterations);
-    #: the other cut steps read it as ``f[3]``. None: no contact to find (``t`` = 0).
+    #: ``t`` is a start guess, NaN: none, as one sample's float), the one place it is searched
+    #: for (a cam's Newton iterations); the other cut steps read it as ``f[3]``. None: no
+    #: contact to find (``t`` = 0).
     locate = None
 
     #: ``fit(nums, f) -> (misfit, wanted, what)``: for a kind whose rows hold less than its
@@ -311,7 +312,7 @@ class JointKind:
     def frame_at(self, nums, e_a, d, e_b) -> tuple:
         """The frame ``(e_a, d, e_b, t)`` of one sample (each vector (2,)), its contact's
         parameter ``t`` found by the kind's ``locate``."""
-        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float), 0.0)
+        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float), np.nan)
         return f[:3] + (0.0 if self.locate is None else float(self.locate(nums, f)),)
 
     def _tree_only(self):

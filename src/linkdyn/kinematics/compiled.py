@@ -247,9 +247,11 @@ def _cut_frames(L, d, w, kw, nb, c, s, r, P):
         pa, pb = _cut_points(L, ci, d)
         axis = (L.cut_axis[ci, 0, d], L.cut_axis[ci, 1, d])
         P_c, code, nums = P[ci], L.cut_kind[ci], cut_numbers(L, ci, d)
+        t0 = P_c[8, 0]   # the contact's search starts from the last sample's (or a stale one)
         for k in range(nb):
             r_pa, r_pb, e_a = cut_frame(code, nums, c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k],
-                                        s_b[k], (rx_b[k], ry_b[k]), pa, pb, axis)
+                                        s_b[k], (rx_b[k], ry_b[k]), pa, pb, axis, t0)
+            t0 = e_a[4]
             P_c[0, k], P_c[1, k], P_c[2, k] = r_pa[0], r_pa[1], r_pb[0]
             P_c[3, k], P_c[4, k], P_c[5, k] = r_pb[1], e_a[0], e_a[1]
             P_c[6, k], P_c[7, k], P_c[8, k] = e_a[2], e_a[3], e_a[4]
