@@ -147,8 +147,22 @@ def test_the_contact_stress_of_the_roller_is_hertz_line_contact_by_hand():
     assert peak["max_pressure_Pa"] == pytest.approx(p[k], rel=1e-9)
     assert peak["max_time_s"] == t[k] and peak["force_N"] == pytest.approx(force[k], rel=1e-9)
     assert peak["half_width_m"] == pytest.approx(b[k], rel=1e-9)
+    # the report page: a panel of the peak pressure over the cycle (the page's frames of the
+    # by-hand p) and the key result of its peak, at its sample
+    from linkdyn import report
+    data = report.page_data(sol)
+    panel, = [x for x in data["plots"] if x["title"].startswith("Contact stress at K")]
+    at = [int(np.argmin(np.abs(t - x))) for x in data["series"]["t"]]
+    shown = np.array(data["series"][panel["series"][0]["key"]], float)
+    assert np.max(np.abs(shown - p[at])) <= 1e-6 * np.max(p)
+    key, = [x for x in data["key"] if x["label"] == "peak contact stress K"]
+    assert key["value"] == pytest.approx(p[k], rel=1e-9) and key["t"] == t[k]
     # no roller_width, no stress
-    assert "stress" not in contact(linkdyn.analyze(still(cam_follower()), t[:5]))["K"]
+    plain = linkdyn.analyze(still(cam_follower()), t[:5])
+    assert "stress" not in contact(plain)["K"]
+    data = report.page_data(plain)
+    assert not [x for x in data["plots"] if x["title"].startswith("Contact stress")]
+    assert not [x for x in data["key"] if x["label"].startswith("peak contact stress")]
 
 
 def test_hertz_line_contact_against_its_closed_form():

@@ -119,6 +119,13 @@ def key_results(sol, summary: dict | None = None) -> list[dict]:
                     add("Joint loads", f"guide moment {j.name}", M, _k(np.abs(M), np.nanargmax),
                         "N m", signed=True, scale=sc["N m"])
 
+    # a roller's contact stress on its cam (Hertz line contact): its peak over the run
+    from ..design.overview import contact_stress
+    for name, hz in contact_stress(sol).items():
+        p = hz["p_max_Pa"]
+        add("Joint loads", f"peak contact stress {name}", p, _k(p, np.nanargmax), "Pa",
+            note="Hertz line contact of the roller on the cam")
+
     # motion quality of every four-bar loop: transmission angle, mechanical advantage
     for fb in design.four_bars(m):
         which = f"{fb.coupler}/{fb.output}"
