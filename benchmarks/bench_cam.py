@@ -5,8 +5,8 @@ on one backend, in the same run (a ratio: the machine's speed cancels out).
 
 Prints samples per second of each, their ratio (issue 26's target: at least 0.5 on the
 compiled backend), and the kinematics' share of each run (where a cam's contact is solved:
-the closure's Newton iterations, each evaluating the cam's steps, whose own Newton iterations
-find the contact's cam angle).
+the closure's Newton iterations, each finding the contact's cam angle once per pose by the
+cam's ``locate``, its own Newton iterations, for the cam's steps that read it).
 
 Usage: python benchmarks/bench_cam.py [--samples N] [--repeat R] [--backend B]
        [--clock wall|cpu]

@@ -147,8 +147,24 @@ def test_the_contact_stress_of_the_roller_is_hertz_line_contact_by_hand():
     assert peak["max_pressure_Pa"] == pytest.approx(p[k], rel=1e-9)
     assert peak["max_time_s"] == t[k] and peak["force_N"] == pytest.approx(force[k], rel=1e-9)
     assert peak["half_width_m"] == pytest.approx(b[k], rel=1e-9)
+    # the report page: a panel of the peak pressure over the cycle (the page's frames of the
+    # by-hand p) and the key result of its peak, at its sample
+    from linkdyn import report
+    from linkdyn.design import summary
+    data = report.page_data(sol, summary=summary(sol))
+    panel, = [x for x in data["plots"] if x["title"].startswith("Contact stress at K")]
+    at = [int(np.argmin(np.abs(t - x))) for x in data["series"]["t"]]
+    shown = np.array(data["series"][panel["series"][0]["key"]], float)
+    assert panel["unit"] == "N/mm^2"                     # the page's lengths are in mm
+    assert np.max(np.abs(shown * 1e6 - p[at])) <= 1e-6 * np.max(p)
+    key, = [x for x in data["key"] if x["label"] == "contact stress K"]
+    assert key["value"] * 1e6 == pytest.approx(p[k], rel=1e-9) and key["t"] == t[k]
     # no roller_width, no stress
-    assert "stress" not in contact(linkdyn.analyze(still(cam_follower()), t[:5]))["K"]
+    plain = linkdyn.analyze(still(cam_follower()), t[:5])
+    assert "stress" not in contact(plain)["K"]
+    data = report.page_data(plain, summary=summary(plain))
+    assert not [x for x in data["plots"] if x["title"].startswith("Contact stress")]
+    assert not [x for x in data["key"] if x["label"].startswith("contact stress")]
 
 
 def test_hertz_line_contact_against_its_closed_form():
@@ -534,6 +550,29 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
         assert np.all(np.isfinite(b)) and a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))
+
+
+@pytest.mark.parametrize("name", ["cam_fourbar", "cam_flat_rocker"])
+def test_the_contact_found_from_the_last_samples_or_from_rest_is_numpys(name):
+    # the compiled backend starts each sample's contact search (the kind's locate) from the
+    # contact of the sample before, kept when the pitch point's polar angle misses by little;
+    # with the samples scrambled they lie far apart and the search starts from s = 0. Either
+    # way the contacts, and all that reads them, are numpy's (always from s = 0) to rounding
+    pytest.importorskip("numba", reason="the compiled backend needs numba (the fast extra)")
+    model = linkdyn.load(linkdyn.example_path(name))
+    t = np.linspace(0.0, 2 * math.pi / model.drivers[0].motion.speed, 1201)
+    scrambled = np.random.default_rng(26).permutation(t)
+    back = np.argsort(scrambled)
+    a = linkdyn.analyze(model, t, backend="numpy")
+    b = linkdyn.analyze(model, t, backend="compiled")
+    c = linkdyn.analyze(model, scrambled, backend="compiled")
+    names = [k for k in a.columns if k.split("_")[0] in ("q", "qdd", "Fx", "Fy", "tau")]
+    assert "q_K" in names and "Fx_K" in names
+    for k in names:
+        x = np.asarray(a.columns[k])
+        big = max(np.max(np.abs(x)), 1e-3)
+        for y in (np.asarray(b.columns[k]), np.asarray(c.columns[k])[back]):
+            assert np.max(np.abs(x - y)) <= 1e-10 * big, k
 
 
 def test_the_compiled_newton_closes_the_samples_as_numpys():

@@ -146,8 +146,9 @@ def _cuts(kin: KinematicSolution, lam: np.ndarray) -> list:
     lay, pose = kin.layout, kin.pose
     out = []
     for k, c in enumerate(lay.cuts):
-        r_pa, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
-                                    pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        r_pa, r_pb, e_a = cut_frame(jk.CODES[c.kind], c.own, pose.c[c.a], pose.s[c.a],
+                                    pose.r[c.a], pose.c[c.b], pose.s[c.b], pose.r[c.b], c.pa,
+                                    c.pb, c.axis, np.nan)
         out.append((c,) + cut_wrench(jk.CODES[c.kind], c.own, e_a,
                                      _multipliers(lam, lay.topo.row_slice(k)), r_pa, r_pb,
                                      pose.r[c.a], pose.r[c.b]))

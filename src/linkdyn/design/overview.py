@@ -287,7 +287,7 @@ def contact_stress(sol, forces: dict | None = None) -> dict:
 
 def one_sided_frames(sol, which=None) -> list:
     """``(joint, frame)`` of every one-sided cut joint of a one-design run (``which(joint)``
-    true, if given): the cut's frame ``(e_a, d, e_b)`` over the run (each component (T,),
+    true, if given): the cut's frame ``(e_a, d, e_b, t)`` over the run (each component (T,),
     :func:`linkdyn.joints.frame`), as its kind's steps take it."""
     from ..kinematics.recursion import cut_frame
 
@@ -301,8 +301,9 @@ def one_sided_frames(sol, which=None) -> list:
         if not jk.get(joint.kind).one_sided or (which is not None and not which(joint)):
             continue
         c = lay.cuts[k]
-        r_pa, r_pb, e_a = cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a], pose.c[c.b],
-                                    pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis)
+        r_pa, r_pb, e_a = cut_frame(jk.CODES[c.kind], c.own, pose.c[c.a], pose.s[c.a],
+                                    pose.r[c.a], pose.c[c.b], pose.s[c.b], pose.r[c.b], c.pa,
+                                    c.pb, c.axis, np.nan)
         out.append((joint, jk.frame(r_pa, r_pb, e_a)))
     return out
 

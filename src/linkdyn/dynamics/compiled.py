@@ -181,9 +181,12 @@ def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
         lam_c = (lam[row, :nb], lam[row + 1, :nb] if rows > 1 else zero[:nb],
                  lam[row + 2, :nb] if rows > 2 else zero[:nb])
         on_c = screw_views(o_on, L.cut_joint[cc], d, ks)
+        t0 = np.nan   # the contact's search starts from the last sample's
         for k in range(nb):
             x_a, x_b = (r_a[0][k], r_a[1][k]), (r_b[0][k], r_b[1][k])
-            r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b, pa, pb, axis)
+            r_pa, r_pb, e_a = cut_frame(code, nums, c_a[k], s_a[k], x_a, c_b[k], s_b[k], x_b,
+                                        pa, pb, axis, t0)
+            t0 = e_a[4]
             on, w_b, w_a = cut_wrench(code, nums, e_a, (lam_c[0][k], lam_c[1][k], lam_c[2][k]),
                                       r_pa, r_pb, x_a, x_b)
             wc_b[0][k], wc_b[1][k], wc_b[2][k] = plus((wc_b[0][k], wc_b[1][k], wc_b[2][k]), w_b)

@@ -13,7 +13,7 @@ from __future__ import annotations
 from . import (cam, coupling, distance, flat_cam, gear, prismatic, rack, revolute,
                rocker_cam, rocker_flat_cam, slot)
 from ..steps import by_kind
-from .base import WIDTH, JointKind, Number, frame, line_motion
+from .base import WIDTH, JointKind, Number, frame, line_motion, no_contact
 
 #: A free body's freedoms in the plane (Grübler–Kutzbach's ``3 (n - 1)``).
 BODY_FREEDOMS = 3
@@ -66,6 +66,9 @@ selected = _dispatch("selected")
 selected_rate = _dispatch("selected_rate")
 wrench = _dispatch("wrench")
 coordinate = _dispatch("coordinate")
+#: a higher pair's contact parameter (the kinds that define ``locate``; 0 for every other code)
+locate = by_kind([(CODES[name], kind.locate) for name, kind in REGISTRY.items()
+                  if kind.locate is not None] + [(0, no_contact)])
 
 
 class UnknownJointKind(ValueError):

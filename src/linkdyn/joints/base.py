@@ -16,12 +16,15 @@ on b at P, ``S^T lam`` and any part that does no work) and ``coordinate`` (the j
 coordinate, rate and acceleration from its bodies' motion: a cut joint's ``q`` is an output,
 not an unknown).
 
-Every cut step (protocol version 3) takes first the cut's own numbers ``nums`` and its frame
+Every cut step (protocol version 4) takes first the cut's own numbers ``nums`` and its frame
 ``f``: ``nums`` is the tuple of the kind's scalar numbers (shape ``()``, in its declaration
-order, :attr:`JointKind.scalars`) padded with zeros to :data:`WIDTH`; ``f = (e_a, d, e_b)``
-holds the axis ``e_a`` (the kind's ``axis`` fixed in a, global; ``(1, 0)`` turned with a for a
-kind without one), ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m), and
-``e_b``, the second body's x axis (global), :func:`frame`. A step that needs the frame's motion
+order, :attr:`JointKind.scalars`) padded with zeros to :data:`WIDTH`; ``f = (e_a, d, e_b,
+t)`` holds the axis ``e_a`` (the kind's ``axis`` fixed in a, global; ``(1, 0)`` turned with a
+for a kind without one), ``d = r_Pb - r_Pa``, the second body's cut point from the first's
+(m), ``e_b``, the second body's x axis (global), and ``t``, the contact's parameter of a
+higher pair (a cam's: the cam angle where the follower touches), found once per frame by the
+kind's ``locate`` step where the frame is made (:func:`linkdyn.kinematics.recursion.cut_frame`)
+and read by every other cut step; 0 for a kind without a contact to find (:func:`frame`). A step that needs the frame's motion
 takes ``fd = (w_a, d', w_b)``: ``e_a`` turns at a's angular velocity ``w_a``, ``e_b`` at b's
 ``w_b``, ``d'`` is the rate of ``d`` (m/s). So a kind may depend on both cut points (a gear's
 line of centres), on both bodies' angles (a flat-faced cam follower's face) and on any number
@@ -102,11 +105,19 @@ WIDTH = 9
 
 @step
 def frame(r_pa, r_pb, axes):
-    """A cut's frame ``(e_a, d, e_b)`` as the cut steps take it: its axis ``e_a`` (global),
-    ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m), and the second
-    body's x axis ``e_b`` (global), from the cut points and ``axes = (e_ax, e_ay, e_bx, e_by)``
-    (:func:`linkdyn.kinematics.recursion.cut_frame`)."""
-    return (axes[0], axes[1]), (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), (axes[2], axes[3])
+    """A cut's frame ``(e_a, d, e_b, t)`` as the cut steps take it: its axis ``e_a``
+    (global), ``d = r_Pb - r_Pa``, the second body's cut point from the first's (m), the
+    second body's x axis ``e_b`` (global) and the contact's parameter ``t`` (the kind's
+    ``locate``; 0 for a kind without one), from the cut points and ``axes = (e_ax, e_ay, e_bx,
+    e_by, t)`` (:func:`linkdyn.kinematics.recursion.cut_frame`)."""
+    return ((axes[0], axes[1]), (r_pb[0] - r_pa[0], r_pb[1] - r_pa[1]), (axes[2], axes[3]),
+            axes[4])
+
+
+@step
+def no_contact(nums, f):
+    """The ``locate`` of a kind without a contact to find (every lower pair, a gear's): 0."""
+    return 0.0
 
 
 #: a slider's or a slot's axis: a unit direction fixed in the joint's first body, in its frame
@@ -230,6 +241,12 @@ class JointKind:
         the reader's message (exit 2); None: they are."""
         return None
 
+    #: ``locate(nums, f) -> t``: a higher pair's contact parameter at the frame ``f`` (whose
+    #: ``t`` is a start guess, NaN: none, as one sample's float), the one place it is searched
+    #: for (a cam's Newton iterations); the other cut steps read it as ``f[3]``. None: no
+    #: contact to find (``t`` = 0).
+    locate = None
+
     #: ``fit(nums, f) -> (misfit, wanted, what)``: for a kind whose rows hold less than its
     #: geometry needs (a gear's centre distance, held by the tree, not by its row), how far
     #: the assembled frame is from it (m, the batch shape), the value wanted (m) and what is
@@ -249,8 +266,8 @@ class JointKind:
     #   plus_motion(s, e, x, rate) -> x + p_i rate
     #   plus_motion_rate(s, e, w_axis, x, rate) -> x + pd_i rate (w_axis: angular velocity
     #       of the body carrying the axis)
-    # The cut steps (protocol 3) take the cut's numbers ``nums`` (WIDTH-tuple) and frame
-    # ``f = (e_a, d, e_b)`` first (module docstring); ``fd = (w_a, d', w_b)`` is its rate:
+    # The cut steps (protocol 4) take the cut's numbers ``nums`` (WIDTH-tuple) and frame
+    # ``f = (e_a, d, e_b, t)`` first (module docstring); ``fd = (w_a, d', w_b)`` is its rate:
     #   residual(nums, f, phi_a, phi_b) -> rows   position closure (cut joint)
     #   selected(nums, f, x) -> S x                   x: relative twist of b to a at the cut
     #   selected_rate(nums, f, fd, x) -> (dS/dt) x
@@ -281,16 +298,22 @@ class JointKind:
         numbers (:meth:`own`), ``e_a`` (2,) its global axis, ``d`` (2,) the second body's cut
         point from the first's, ``e_b`` (2,) the second body's x axis; the cut rows of the
         identity's columns."""
-        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float))
+        f = self.frame_at(nums, e_a, d, e_b)
         return np.asarray(self.cut_rows(nums, f, np.eye(3))).reshape(self.rows, 3)
 
     def contact(self, nums, e_a, d, e_b, lam) -> np.ndarray:
         """The constraint wrench (3,) ``[n, fx, fy]`` of the multipliers ``lam`` (rows,) on the
         second body about its cut point at one sample (the kind's ``wrench``; ``S^T lam`` for
         a lower pair), for the dense reference."""
-        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float))
+        f = self.frame_at(nums, e_a, d, e_b)
         lam = tuple(float(x) for x in lam) + (0.0,) * (3 - len(lam))
         return np.array([float(x) for x in self.wrench(nums, f, lam)])
+
+    def frame_at(self, nums, e_a, d, e_b) -> tuple:
+        """The frame ``(e_a, d, e_b, t)`` of one sample (each vector (2,)), its contact's
+        parameter ``t`` found by the kind's ``locate``."""
+        f = (np.asarray(e_a, float), np.asarray(d, float), np.asarray(e_b, float), np.nan)
+        return f[:3] + (0.0 if self.locate is None else float(self.locate(nums, f)),)
 
     def _tree_only(self):
         if self.place is None:

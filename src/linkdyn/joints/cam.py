@@ -40,7 +40,6 @@ import math
 import numpy as np
 
 from .. import laws
-from ..planar import wrapped
 from ..steps import atan2, by_kind, select, settled, step
 from .base import JointKind, Number
 
@@ -78,6 +77,10 @@ HERTZ = (ROLLER_WIDTH, CAM_MODULUS, CAM_POISSON, ROLLER_MODULUS, ROLLER_POISSON)
 #: quadratically, the error left is of its square, rounding (the fourth step, usually)
 ITERATIONS = 6
 SETTLED = 1e-9
+#: a start guess for the contact (the frame's ``t`` given to :func:`locate`: the last sample's
+#: contact, on the compiled backend) is kept if the pitch point's polar angle there misses by
+#: at most this (rad); else the iterations start from ``s = 0`` (the cold start)
+WARM = 0.05
 STEEP = 0.5
 TWO_PI = 2.0 * math.pi
 #: the follower's motion, ``nums[8]``: along a line, or an arm swinging about a pivot
@@ -135,27 +138,56 @@ def pitch_point(code, nums, s):
 
 
 @step
-def contact(nums, f):
-    """The contact on the pitch curve of the follower point ``d`` (``f[1]``) in the frame of
-    the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s', s'')`` there, the
-    pitch point's radius ``rho`` and ``rho_theta``, ``rho_theta_theta``, ``beta_theta``,
-    ``beta_theta_theta`` (beta: its polar angle)."""
+def wrap(angle):
+    """``angle`` (rad) less whole turns, into [-pi, pi) (by a floor: for the contact's
+    iterations, whose misses are never near half a turn once they converge)."""
+    return angle - TWO_PI * np.floor((angle + math.pi) / TWO_PI)
+
+
+@step
+def newton_start(g, miss, it):
+    """The contact iterations' start rule: whether the start guess ``g`` (NaN: none) is
+    dropped (:data:`WARM`) at iteration ``it`` with the polar miss ``miss`` there, and the
+    iterations go back to the cold start; only the first iteration may drop it."""
+    return (it == 0) & (g == g) & (np.abs(miss) > WARM)
+
+
+@step
+def locate(nums, f):
+    """The contact's cam angle ``theta`` (rad) on the pitch curve of the follower point ``d``
+    (``f[1]``) in the frame of the cam (axis ``f[0]``): where the pitch point's polar angle is
+    ``d``'s. The cut's one search for it (:meth:`Cam.locate`, where its frame is made; ``f[3]``
+    a start guess, NaN: none); the other steps read it as the frame's ``f[3]``
+    (:func:`contact`)."""
     code = nums[8]
-    ea, d = f[0], f[1]
+    ea, d, g = f[0], f[1], f[3]
     psi = atan2(ea[0] * d[1] - ea[1] * d[0], ea[0] * d[0] + ea[1] * d[1])
-    # Newton on beta(theta) = atan2(F(s(theta))) - theta = psi (mod 2 pi), from s = 0, with
+    # Newton on beta(theta) = atan2(F(s(theta))) - theta = psi (mod 2 pi), from the guess in
+    # the cold start's turn, or from s = 0 (the cold start), with
     # beta_theta = (F x F') s' / |F|^2 - 1
     p = follower_point(code, nums, 0.0)
-    theta = atan2(p[1], p[0]) - psi
-    for _ in range(ITERATIONS):
+    cold = atan2(p[1], p[0]) - psi
+    theta = select(g == g, cold + wrap(g - cold), cold)
+    for it in range(ITERATIONS + 1):
         s = lift(nums, theta)
         p = follower_point(code, nums, s[0])
-        miss = atan2(p[1], p[0]) - theta - psi
+        miss = wrap(atan2(p[1], p[0]) - theta - psi)
         bt = (p[0] * p[3] - p[1] * p[2]) * s[1] / (p[0] * p[0] + p[1] * p[1]) - 1.0
-        dt = wrapped(miss) / bt
+        far = newton_start(g, miss, it)
+        dt = select(far, theta - cold, miss / bt)
         theta = theta - dt
-        if settled(dt, SETTLED):
+        if settled(select(far, 1.0, dt), SETTLED):
             break
+    return theta
+
+
+@step
+def contact(nums, f):
+    """The contact on the pitch curve at the cam angle ``theta`` = ``f[3]`` (:func:`locate`'s):
+    ``theta``, the lift ``(s, s', s'')`` there, the pitch point's radius ``rho`` and
+    ``rho_theta``, ``rho_theta_theta``, ``beta_theta``, ``beta_theta_theta`` (beta: its polar
+    angle)."""
+    code, theta = nums[8], f[3]
     s = lift(nums, theta)
     x, y, xt, yt, xtt, ytt = pitch_point(code, nums, s)
     r2 = x * x + y * y
@@ -194,6 +226,8 @@ class Cam(JointKind):
     dyad = None
     #: the contact can only push (lam >= 0); where lam < 0 the follower would leave the cam
     one_sided = True
+    #: the contact's cam angle, the frame's ``t`` (:func:`locate`)
+    locate = staticmethod(locate)
 
     # nums = (base_radius, roller_radius, offset, lift, rise, dwell, fall, law)
 

@@ -34,10 +34,9 @@ import math
 
 import numpy as np
 
-from ..planar import wrapped
-from ..steps import atan2, by_kind, settled, step
+from ..steps import atan2, by_kind, select, settled, step
 from .cam import (BASE_RADIUS, DWELL, FALL, ITERATIONS, LAW, LIFT, OSCILLATING, RISE, SETTLED,
-                  STEEP, TRANSLATING, TWO_PI, Cam, lift)
+                  STEEP, TRANSLATING, TWO_PI, Cam, lift, newton_start, wrap)
 
 
 @step
@@ -75,25 +74,42 @@ def support(code, nums, s):
 
 
 @step
-def contact(nums, f):
-    """The contact of the face (normal ``n``: the second body's +y axis, ``f[2]`` turned a
-    quarter turn) with the cam (axis ``f[0]``): its cam angle ``theta``, the lift ``(s, s',
-    s'')`` there, ``H``, ``H_nu``, ``H_nu_nu`` (the support function and its rates in the
-    normal's angle nu), ``nu_theta`` and ``n``."""
-    code = nums[8]
+def locate(nums, f):
+    """The contact's cam angle ``theta`` (rad) of the face (normal ``n``: the second body's +y
+    axis, ``f[2]`` turned a quarter turn) with the cam (axis ``f[0]``): where the face's
+    normal has the angle ``n`` has in the cam's frame. The cut's one search for it
+    (:meth:`FlatCam.locate`; ``f[3]`` a start guess, NaN: none, kept as the translating cam's,
+    :func:`linkdyn.joints.cam.locate`); the other steps read it as the frame's ``f[3]``
+    (:func:`contact`)."""
+    code, g = nums[8], f[3]
     ea, eb = f[0], f[2]
     n = (-eb[1], eb[0])
     nu = atan2(ea[0] * n[1] - ea[1] * n[0], ea[0] * n[0] + ea[1] * n[1])
-    # Newton on alpha(s(theta)) - theta = nu (mod 2 pi), from s = 0: nu_theta = -k s' - 1
+    # Newton on alpha(s(theta)) - theta = nu (mod 2 pi), from the guess or from s = 0:
+    # nu_theta = -k s' - 1
     p = face_line(code, nums, 0.0)
-    theta = p[0] - nu
-    for _ in range(ITERATIONS):
+    cold = p[0] - nu
+    theta = select(g == g, cold + wrap(g - cold), cold)
+    for it in range(ITERATIONS + 1):
         s = lift(nums, theta)
         p = face_line(code, nums, s[0])
-        dt = wrapped(p[0] - theta - nu) / (-p[4] * s[1] - 1.0)
+        miss = wrap(p[0] - theta - nu)
+        far = newton_start(g, miss, it)
+        dt = select(far, theta - cold, miss / (-p[4] * s[1] - 1.0))
         theta = theta - dt
-        if settled(dt, SETTLED):
+        if settled(select(far, 1.0, dt), SETTLED):
             break
+    return theta
+
+
+@step
+def contact(nums, f):
+    """The contact of the face with the cam at the cam angle ``theta`` = ``f[3]``
+    (:func:`locate`'s): ``theta``, the lift ``(s, s', s'')`` there, ``H``, ``H_nu``,
+    ``H_nu_nu`` (the support function and its rates in the normal's angle nu), ``nu_theta``
+    and the face's normal ``n``."""
+    code, theta, eb = nums[8], f[3], f[2]
+    n = (-eb[1], eb[0])
     s = lift(nums, theta)
     u = support(code, nums, s)
     return theta, s, u[1], u[2], u[3], u[4], u[5], n
@@ -111,6 +127,8 @@ class FlatCam(Cam):
     numbers = (BASE_RADIUS, LIFT, RISE, DWELL, FALL, LAW)
     reaction = ("Fx", "Fy", "M")
     multipliers = (("contact force", "N"),)
+    #: the contact's cam angle, the frame's ``t`` (:func:`locate`)
+    locate = staticmethod(locate)
 
     @staticmethod
     @step

@@ -236,31 +236,34 @@ def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
 
 @njit
 def _cut_frames(L, d, w, kw, nb, c, s, r, P):
-    """Every cut's points on its bodies a and b and its axis (fixed in a), global, once the
-    loops are closed (:func:`.recursion.cut_frame`), for the steps that follow: ``P``
-    (n_cut, 8, block) rows ``[r_Pa (2), r_Pb (2), e_a (2), e_b (2)]`` (design d's numbers, the poses
-    at ``w``, ``kw``)."""
+    """Every cut's points on its bodies a and b, its axis (fixed in a), global, and its
+    contact, once the loops are closed (:func:`.recursion.cut_frame`), for the steps that
+    follow: ``P`` (n_cut, 9, block) rows ``[r_Pa (2), r_Pb (2), e_a (2), e_b (2), t]``
+    (design d's numbers, the poses at ``w``, ``kw``)."""
     ks = slice(kw, kw + nb)
     for ci in range(len(L.cut_a)):
         c_a, s_a, rx_a, ry_a = _body(c, s, r, L.cut_a[ci], w, ks)
         c_b, s_b, rx_b, ry_b = _body(c, s, r, L.cut_b[ci], w, ks)
         pa, pb = _cut_points(L, ci, d)
         axis = (L.cut_axis[ci, 0, d], L.cut_axis[ci, 1, d])
-        P_c = P[ci]
+        P_c, code, nums = P[ci], L.cut_kind[ci], cut_numbers(L, ci, d)
+        t0 = P_c[8, 0]   # the contact's search starts from the last sample's (or a stale one)
         for k in range(nb):
-            r_pa, r_pb, e_a = cut_frame(c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k], s_b[k],
-                                        (rx_b[k], ry_b[k]), pa, pb, axis)
+            r_pa, r_pb, e_a = cut_frame(code, nums, c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k],
+                                        s_b[k], (rx_b[k], ry_b[k]), pa, pb, axis, t0)
+            t0 = e_a[4]
             P_c[0, k], P_c[1, k], P_c[2, k] = r_pa[0], r_pa[1], r_pb[0]
             P_c[3, k], P_c[4, k], P_c[5, k] = r_pb[1], e_a[0], e_a[1]
-            P_c[6, k], P_c[7, k] = e_a[2], e_a[3]
+            P_c[6, k], P_c[7, k], P_c[8, k] = e_a[2], e_a[3], e_a[4]
 
 
 @inline
 def _frame(P_c, k):
     """A cut's points and axis, sample k of the block, from its rows ``P_c`` = ``P[ci]``
-    (:func:`_cut_frames`): ``r_Pa``, ``r_Pb``, each ``(x, y)``, and the axes ``(e_a, e_b)``."""
+    (:func:`_cut_frames`): ``r_Pa``, ``r_Pb``, each ``(x, y)``, and the axes and contact
+    ``(e_a, e_b, t)``."""
     return ((P_c[0, k], P_c[1, k]), (P_c[2, k], P_c[3, k]),
-            (P_c[4, k], P_c[5, k], P_c[6, k], P_c[7, k]))
+            (P_c[4, k], P_c[5, k], P_c[6, k], P_c[7, k], P_c[8, k]))
 
 
 @njit
@@ -526,7 +529,7 @@ def scratch(n, nc, nd, n_rows, block):
     factors of ``J_dep``, the solution, the pivots and the nearest nodes (:func:`block`)."""
     B = block
     return (np.ones((n, B)), np.zeros((n, B)), np.zeros((5, B)), np.zeros((5, B)),
-            np.zeros((n_rows, B)), np.zeros((nc, 8, B)), np.zeros((nd, nd, B)),
+            np.zeros((n_rows, B)), np.zeros((nc, 9, B)), np.zeros((nd, nd, B)),
             np.zeros((max(nd, 1), B)), np.zeros(B), np.zeros((nd, B), np.int64),
             np.zeros(B, np.int64))
 

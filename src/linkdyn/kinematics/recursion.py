@@ -19,6 +19,7 @@ functions below call them on whole arrays, one body or cut at a time; the compil
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,19 +125,24 @@ def child_twist_rate(code, s, e, t_p, td_p, t_i, r_p, r_i, rate, accel):
 
 
 @step
-def cut_frame(c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis):
-    """A cut's points on its bodies a and b and its axes, global.
+def cut_frame(cut, nums, c_a, s_a, r_a, c_b, s_b, r_b, pa, pb, axis, t0):
+    """A cut's points on its bodies a and b, its axes, global, and its contact.
 
+    ``cut``, ``nums``: the cut's kind and numbers (:meth:`~linkdyn.joints.JointKind.own`);
     ``c_*``, ``s_*``, ``r_*``: the bodies' cosines, sines and reference points; ``pa``, ``pb``
-    the cut points relative to O_a, O_b and ``axis`` in a, in the bodies' frames (m).
-    Returns ``r_Pa``, ``r_Pb`` (m), each ``(x, y)``, and the axes ``(e_ax, e_ay, e_bx, e_by)``:
-    the axis ``e_a`` fixed in a and b's x axis ``e_b`` (:func:`linkdyn.joints.frame`).
+    the cut points relative to O_a, O_b and ``axis`` in a, in the bodies' frames (m);
+    ``t0``: a start for the contact's search (one sample's float: a nearby sample's contact;
+    NaN: none). Returns ``r_Pa``, ``r_Pb`` (m), each ``(x, y)``, and ``(e_ax, e_ay, e_bx, e_by, t)``: the
+    axis ``e_a`` fixed in a, b's x axis ``e_b`` and the contact's parameter ``t`` of a higher
+    pair, found here once by the kind's ``locate`` for every step that reads the frame
+    (:func:`linkdyn.joints.frame`).
     """
     # r_Pa = r_a + R_a pa,  r_Pb = r_b + R_b pb,  e_a = R_a axis,  e_b = R_b (1, 0)
     ua, ub = turned(c_a, s_a, pa), turned(c_b, s_b, pb)
     e_a = turned(c_a, s_a, axis)
-    return ((r_a[0] + ua[0], r_a[1] + ua[1]), (r_b[0] + ub[0], r_b[1] + ub[1]),
-            (e_a[0], e_a[1], c_b, s_b))
+    r_pa, r_pb = (r_a[0] + ua[0], r_a[1] + ua[1]), (r_b[0] + ub[0], r_b[1] + ub[1])
+    t = jk.locate(cut, nums, frame(r_pa, r_pb, (e_a[0], e_a[1], c_b, s_b, t0)))
+    return r_pa, r_pb, (e_a[0], e_a[1], c_b, s_b, t)
 
 
 @step
@@ -234,9 +240,10 @@ def forward_positions(lay: Layout, q: np.ndarray) -> Pose:
 
 def _cut_frames(lay: Layout, pose: Pose, c: Cut):
     """Cut point positions on both bodies and the cut's axis, global, (2, ...) each."""
-    return tuple(_stack(x) for x in cut_frame(pose.c[c.a], pose.s[c.a], pose.r[c.a],
-                                               pose.c[c.b], pose.s[c.b], pose.r[c.b],
-                                               c.pa, c.pb, c.axis))
+    return tuple(_stack(x) for x in cut_frame(jk.CODES[c.kind], c.own, pose.c[c.a],
+                                               pose.s[c.a], pose.r[c.a], pose.c[c.b],
+                                               pose.s[c.b], pose.r[c.b], c.pa, c.pb, c.axis,
+                                               math.nan))
 
 
 def _rows(parts, n: int, shape) -> np.ndarray:

@@ -459,6 +459,14 @@ def page_data(sol, *, max_frames: int = MAX_FRAMES, summary: dict | None = None)
               [{"key": add("shake:M", ws[..., 0]), "label": "M", "color": M_COLOR}], "N m")
     except Exception:  # pragma: no cover - a design helper must never break the report
         pass
+    # a roller's Hertz line contact on its cam: the peak pressure over the cycle
+    from ..design.overview import contact_stress
+    for name, hz in contact_stress(sol).items():
+        panel("Design", f"Contact stress at {name} (Hertz peak pressure, roller on cam)",
+              REPORT.unit("pressure")[0],
+              [{"key": add(f"hertz:{name}", REPORT.value(hz["p_max_Pa"], "pressure")),
+                "label": "p_max",
+                "color": jcolor[name]}])
     energy = [{"key": add("ke", cols["kinetic_energy"]), "label": "kinetic",
                "color": PALETTE[0]}]
     if "potential_energy" in cols:
