@@ -51,6 +51,61 @@ COMPILED_NAME = re.compile(r"compiled|backends")
 # (test_simstats: the loaded five-bar simulated, 1201 samples over 1.5 s: 30 s CPU; test_report:
 # its Chromium and each example's page, made again on each worker that runs its tests)
 SHARED_FIXTURE_FILES = ("test_simstats", "test_report")
+# the tests that take longest, each "file stem::test name" (every parametrization of it) with
+# its seconds on one worker of a full run (pytest --durations, 2 workers, numba cache warm):
+# queued before the other tests of their kind (numpy ones after the shared-fixture files,
+# compiled ones at the head of the compiled tail), longest first, so that none of them starts
+# last on one worker while the other has nothing left to run. Only the order depends on it: a
+# test missing from here, or a figure out of date, still runs, perhaps later than it could.
+HEAVY = {
+    "test_cam_joint::test_both_backends_run_the_cam_follower": 20.0,
+    "test_robustness::test_a_mutated_example_solves_finitely_or_names_the_field_or_time": 17.0,
+    "test_compiled::test_bundled_examples[cam_flat_rocker]": 17.0,
+    "test_bad_input_simulate::test_a_mutated_simulation_runs_finitely_or_names_the_field": 11.0,
+    "test_simulate::test_the_energy_balance_sees_between_the_samples": 10.7,
+    "test_cam_joint::test_simulate_finds_the_jump_speed_of_a_follower_speeding_up": 10.4,
+    "test_spatial_free_body::test_a_hanging_body_bounces_as_the_mass_spring_closed_form": 8.3,
+    "test_bad_input_simulate::test_outputs_leave_unrelated_files_and_lookalike_folders": 7.9,
+    "test_spatial_studies::test_a_spatial_optimize_finds_the_design_of_the_per_design_path": 6.0,
+    "test_bad_input_simulate::test_an_earlier_runs_report_is_removed_and_the_users_report": 5.5,
+    ("test_bad_input_simulate::test_simulate_names_a_load_that_is_not_finite_not_the_"
+     "mechanism[log"): 5.5,
+    "test_equilibrium::test_a_small_motion_simulated_about_the_equilibrium_swings_at_the": 4.9,
+    "test_simulate::test_cli_simulate_writes_results_and_summary": 4.7,
+    "test_simulate::test_a_dead_point_of_the_free_coordinate_is_passed_by_switching": 4.4,
+    "test_simulate::test_stiff_toggle_implicit_methods_agree": 4.0,
+    "test_simulate::test_energy_kept_at_the_tolerance_shrinks_with_it": 4.0,
+    "test_simulate::test_radau_keeps_the_energy_over_many_turns[Radau-compiled]": 3.9,
+    "test_bad_input_simulate::test_simulate_tolerances_succeed_finitely_or_name_the_option": 3.8,
+    "test_freed_yoke::test_freed_yoke_follows_its_equation_of_motion[numpy]": 3.7,
+    "test_studies_inputs::test_an_earlier_runs_report_is_removed_and_a_users_file_of_its": 3.7,
+    "test_cli::test_bad_input_in_a_subprocess": 3.6,
+    "test_spatial_simulate::test_a_dead_point_of_the_free_coordinate_is_passed_by_switching": 3.5,
+    "test_studies::test_a_sweep_killed_by_sigkill_resumes_from_its_chunks": 3.5,
+    "test_writer::test_every_example_round_trips[cam_fourbar]": 3.5,
+}
+
+
+def weight(nodeid: str) -> float:
+    """The seconds :data:`HEAVY` gives the test ``nodeid`` (the longest entry whose key begins
+    its "file stem::name"), 0 for a test not in it."""
+    path, _, name = nodeid.partition("::")
+    key = f"{Path(path).stem}::{name}"
+    return max((s for k, s in HEAVY.items() if key.startswith(k)), default=0.0)
+
+
+def queue_order(units: list[str]) -> list[str]:
+    """The order in which the work units ``units`` (each a node id, or the path of a file of
+    :data:`SHARED_FIXTURE_FILES`) are handed out: the first compiled test (its worker compiles
+    the kernels), the shared-fixture files, the other numpy tests, then the other compiled
+    tests; within each, the :data:`HEAVY` ones first, longest first (the sort is stable:
+    otherwise xdist's order)."""
+    compiled = [u for u in units if uses_numba(u)]
+    rest = [u for u in units if not uses_numba(u)]
+    shared = [u for u in rest if "::" not in u]
+    rest = [u for u in rest if "::" in u]
+    by_weight = lambda us: sorted(us, key=lambda u: -weight(u))   # noqa: E731
+    return compiled[:1] + shared + by_weight(rest) + by_weight(compiled[1:])
 
 
 def uses_numba(nodeid: str) -> bool:
@@ -64,9 +119,9 @@ def uses_numba(nodeid: str) -> bool:
 @pytest.hookimpl(tryfirst=True, optionalhook=True)   # before xdist's own choice of scheduler
 def pytest_xdist_make_scheduler(config, log):
     """Under ``--dist loadgroup``: each file of :data:`SHARED_FIXTURE_FILES` one unit of work,
-    every other test a unit of its own; the first compiled test at the head of the queue (its
-    worker compiles the kernels, :func:`numba_kernels`), the other compiled tests at its end,
-    after the largest units (xdist's order otherwise)."""
+    every other test a unit of its own, handed out in :func:`queue_order`: the first compiled
+    test at the head of the queue (its worker compiles the kernels, :func:`numba_kernels`),
+    the other compiled tests at its end, the heaviest of each kind first."""
     if config.getvalue("dist") != "loadgroup":
         return None
     from xdist.scheduler import LoadScopeScheduling
@@ -81,11 +136,9 @@ def pytest_xdist_make_scheduler(config, log):
         def _assign_work_unit(self, node) -> None:
             if not self._ordered:   # the first assignment: the queue is complete
                 self._ordered = True
-                units = list(self.workqueue.items())
-                compiled = [u for u in units if uses_numba(u[0])]
-                rest = [u for u in units if not uses_numba(u[0])]
+                units = dict(self.workqueue)
                 self.workqueue.clear()
-                self.workqueue.update(compiled[:1] + rest + compiled[1:])
+                self.workqueue.update((u, units[u]) for u in queue_order(list(units)))
             super()._assign_work_unit(node)
 
     return CompileFirst(config, log)
