@@ -80,15 +80,13 @@ def inner(fn):
 
 
 def inline(fn):
-    """A small helper of the kernels (a view of an entity's rows, a sample's tuple), compiled
-    as a function of its own that the compiler (LLVM) inlines into its callers, as it does the
-    steps. Not numba's ``inline="always"``, which copies and types the helper's code again at
-    every call site (slower to compile, and no faster to run). Callable from Python too (its
-    arguments are a few arrays: its wrappers are cheap); a helper that takes the layout's view
-    is an :func:`inner`."""
+    """A small helper of the kernels, compiled into its callers (no call, no reference counting
+    of its array arguments per sample); callable from Python too. A helper that takes the
+    layout's view is an :func:`inner` instead (inlined, it would be typed again at every call
+    site with its ninety arrays)."""
     if numba is None:  # pragma: no cover
         return fn
-    return numba.njit(**OPTIONS)(fn)
+    return numba.njit(inline="always", **OPTIONS)(fn)
 
 
 _FROM_PYTHON: dict = {}
