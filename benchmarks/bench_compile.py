@@ -2,7 +2,8 @@
 
 Runs in a child process with numba's cache pointed at an empty temporary folder
 (``NUMBA_CACHE_DIR``), so every kernel compiles from scratch and the project's own cache is
-left as it is. Prints the seconds each stage's first call takes: the kinematics (its kernel
+left as it is. Prints the CPU seconds (the process's user + system time, which a loaded
+machine does not inflate) and the wall seconds each stage's first call takes: the kinematics (its kernel
 and the continuation nodes), the dynamics, the reactions, the ``simulate`` right-hand side
 and the fused sweep kernel. These are the figures behind the suite's cold start (the compiled
 worker of ``make test``) and a user's first compiled run.
@@ -27,27 +28,29 @@ from linkdyn.dynamics import compiled as dc
 m = linkdyn.load(linkdyn.example_path("hoeken"))
 t = np.linspace(0.0, 1.0, 50)
 out = []
-t0 = time.perf_counter()
-kin = kinematics.solve(m, t, backend="compiled")
-out.append(("kinematics", time.perf_counter() - t0))
+
+
+def stage(name, run):
+    c0, t0 = time.process_time(), time.perf_counter()
+    result = run()
+    out.append((name, time.process_time() - c0, time.perf_counter() - t0))
+    return result
+
+
+kin = stage("kinematics", lambda: kinematics.solve(m, t, backend="compiled"))
 applied = loads.wrenches(m, kin)
-t0 = time.perf_counter()
-dyn = dc.solve(kin, applied)
-out.append(("dynamics", time.perf_counter() - t0))
-t0 = time.perf_counter()
-dc.reactions(kin, applied, dyn)
-out.append(("reactions", time.perf_counter() - t0))
+dyn = stage("dynamics", lambda: dc.solve(kin, applied))
+stage("reactions", lambda: dc.reactions(kin, applied, dyn))
 motor = linkdyn.load(linkdyn.example_path("hoeken_motor"))
-t0 = time.perf_counter()
-linkdyn.simulate(motor, np.linspace(0.0, 0.2, 11), backend="compiled")
-out.append(("simulate right-hand side", time.perf_counter() - t0))
-t0 = time.perf_counter()
-linkdyn.sweep(m, {"bodies.ground.points.O4[0]": np.linspace(85.0, 95.0, 64)}, t,
-              metrics=["peak_tau_J1"], backend="compiled")
-out.append(("fused sweep", time.perf_counter() - t0))
-for name, s in out:
-    print(f"{name:26s} {s:7.1f} s")
-print(f"{'all':26s} {sum(s for _, s in out):7.1f} s")
+stage("simulate right-hand side",
+      lambda: linkdyn.simulate(motor, np.linspace(0.0, 0.2, 11), backend="compiled"))
+stage("fused sweep", lambda: linkdyn.sweep(
+    m, {"bodies.ground.points.O4[0]": np.linspace(85.0, 95.0, 64)}, t,
+    metrics=["peak_tau_J1"], backend="compiled"))
+print(f"{'stage':26s} {'CPU':>7s}   {'wall':>7s}")
+for name, cpu, wall in out:
+    print(f"{name:26s} {cpu:7.1f} s {wall:7.1f} s", flush=True)
+print(f"{'all':26s} {sum(c for _, c, _ in out):7.1f} s {sum(w for _, _, w in out):7.1f} s")
 """
 
 

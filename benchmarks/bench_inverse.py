@@ -396,6 +396,7 @@ def dynamics_steps(args):
     blocks), each a function of a block ``(k0, nb)`` of design 0 on the arguments of the real
     call, with scratch of their own: ``(table, block)``."""
     from linkdyn.dynamics import compiled as dc
+    from linkdyn.compiled import from_python as py   # a kernel's helper, callable from Python
     (L, c, s, r, e, tw, twd, J, w_ext, o_wstar, o_wtilde, o_Q, o_lam, o_tau, o_ke, o_pivot,
      *rest) = args
     block = rest[-2]
@@ -408,16 +409,16 @@ def dynamics_steps(args):
     wc, tree, tau_b, zero = (np.zeros((n, 3, B)), np.zeros((n, 3, 1, B)),
                              np.zeros((max(n_drv, 1), B)), np.zeros(B))
     table = {
-        "Newton-Euler w_star": lambda k0, nb: dc._newton_euler(
+        "Newton-Euler w_star": lambda k0, nb: py(dc._newton_euler)(
             L, 0, 0, k0, nb, 0, 0, c, s, tw, twd, w_ext, w_const, ke, ws, wt),
-        "composite w_tilde": lambda k0, nb: dc._composite(L, r, 0, k0, nb, 0, 0, wt),
-        "generalized forces Q": lambda k0, nb: dc._generalized(L, 0, k0, nb, 0, 0, e, wt, Q),
-        "multipliers and efforts": lambda k0, nb: dc._multipliers(
+        "composite w_tilde": lambda k0, nb: py(dc._composite)(L, r, 0, k0, nb, 0, 0, wt),
+        "generalized forces Q": lambda k0, nb: py(dc._generalized)(L, 0, k0, nb, 0, 0, e, wt, Q),
+        "multipliers and efforts": lambda k0, nb: py(dc._multipliers)(
             L, 0, k0, nb, J, Q[:, 0, 0:nb], A, lam, piv, o_lam, o_tau, o_pivot)}
     if o_on.shape[0]:
-        table["cut-joint wrenches"] = lambda k0, nb: dc._cut_wrenches(
+        table["cut-joint wrenches"] = lambda k0, nb: py(dc._cut_wrenches)(
             L, 0, 0, k0, nb, c, s, r, lam, zero, wc, o_on)
-        table["tree reactions"] = lambda k0, nb: dc._tree_reactions(
+        table["tree reactions"] = lambda k0, nb: py(dc._tree_reactions)(
             L, 0, 0, k0, nb, 0, 0, False, c, s, r, e, tau_b, wc, ws, tree, o_on)
     return table, block
 

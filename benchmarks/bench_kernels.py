@@ -38,6 +38,8 @@ from linkdyn.kinematics import compiled as kc  # noqa: E402
 import bench_hoeken  # noqa: E402
 from bench_hoeken import best_time, one_core  # noqa: E402
 
+py = compiled.from_python   # a kernel's helper alone, callable from Python
+
 
 def kernel_arguments(mech, t):
     """The kernels ``linkdyn.analyze`` calls and their arguments (outputs included):
@@ -70,24 +72,25 @@ def steps(args):
     (L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, block) = args
     n, nc, nd = len(L.parent), len(L.cut_a), len(L.dependent)
     cq, sq, up, low, rhs, P, A, sol, col, perm, _ = kc.scratch(n, nc, nd, J.shape[0], block)
-    kc._cut_frames(L, 0, 0, 0, block, c, s, r, P)   # the first block's, for every block
+    py(kc._cut_frames)(L, 0, 0, 0, block, c, s, r, P)   # the first block's, for every block
     closed = [x.copy() for x in (q, phi, c, s, r, e)]   # the close step turns a copy
     return {
-        "place the bodies": lambda k0, nb: kc._place(L, 0, 0, k0, nb, q, cq, sq, phi, c, s, r,
+        "place the bodies": lambda k0, nb: py(kc._place)(L, 0, 0, k0, nb, q, cq, sq, phi, c, s, r,
                                                      e),
-        "close the dyads": lambda k0, nb: kc._close(L, X.modes, 0, 0, k0, nb, *closed, up, low),
-        "cut frames": lambda k0, nb: kc._cut_frames(L, 0, 0, k0, nb, c, s, r, P),
-        "closure residual": lambda k0, nb: kc._residual(L, 0, k0, 0, k0, nb, phi, P, err, rhs),
-        "closure Jacobian": lambda k0, nb: kc._jacobian(L, 0, 0, k0, nb, r, e, P, J),
-        "factor J_dep (once per sample)": lambda k0, nb: kc._factor_dep(L.dependent, J, 0, k0,
+        "close the dyads": lambda k0, nb: py(kc._close)(L, X.modes, 0, 0, k0, nb, *closed, up, low),
+        "cut frames": lambda k0, nb: py(kc._cut_frames)(L, 0, 0, k0, nb, c, s, r, P),
+        "closure residual": lambda k0, nb: py(kc._residual)(L, 0, k0, 0, k0, nb, phi, P, err, rhs),
+        "closure Jacobian": lambda k0, nb: py(kc._jacobian)(L, 0, 0, k0, nb, r, e, P, J),
+        "factor J_dep (once per sample)": lambda k0, nb: py(kc._factor_dep)(L.dependent, J, 0, k0,
                                                                         nb, A, perm, col),
-        "one J_dep solve (two per sample)": lambda k0, nb: kc._solve_dep(
+        "one J_dep solve (two per sample)": lambda k0, nb: py(kc._solve_dep)(
             L.dependent, A, perm, col, 0, k0, nb, rhs, qd, sol),
-        "twists": lambda k0, nb: kc._twists(L, 0, k0, nb, r, e, qd, tw),
-        "twist rates (two passes per sample)": lambda k0, nb: kc._twist_rates(L, 0, k0, nb, r, e,
-                                                                              tw, qd, qdd, td),
-        "closure bias": lambda k0, nb: kc._bias(L, 0, 0, k0, nb, r, tw, td, P, rhs),
-        "cut-joint motion": lambda k0, nb: kc._cut_motion(L, 0, 0, k0, nb, phi, r, tw, td, P, cut),
+        "twists": lambda k0, nb: py(kc._twists)(L, 0, k0, nb, r, e, qd, tw),
+        "twist rates (two passes per sample)": lambda k0, nb: py(kc._twist_rates)(
+            L, 0, k0, nb, r, e, tw, qd, qdd, td),
+        "closure bias": lambda k0, nb: py(kc._bias)(L, 0, 0, k0, nb, r, tw, td, P, rhs),
+        "cut-joint motion": lambda k0, nb: py(kc._cut_motion)(L, 0, 0, k0, nb, phi, r, tw, td, P,
+                                                              cut),
     }, block
 
 

@@ -56,6 +56,7 @@ SIMULATE = ("benchmarks/bench_simulate.py --only planar --duration 2 --windows 2
             "--tols 1e-4,1e-8,1e-10 --samples 11 --repeat 50 --turns 10 --turn-tols 1e-8 --best 2")
 SPATIAL = ("benchmarks/bench_simulate.py --only spatial --spatial-duration 0.5 --samples 11 "
            "--steps 1e-3,1e-4 --best 2 --repeat 100")
+COMPILE = "benchmarks/bench_compile.py"
 AUTO = "benchmarks/bench_auto.py --windows 20 --chain-duration 0.3 --press-duration 1.0"
 
 
@@ -184,6 +185,11 @@ FIGURES = {
     "inverse.user": Figure(INVERSE, r"linkdyn compiled\s+user\s+(" + NUMBER + ")", "timing"),
     "inverse.system": Figure(INVERSE, r"linkdyn compiled\s+user\s+" + NUMBER + r", system\s+("
                              + NUMBER + ")", "timing"),
+    # the first compilation of every stage's kernels, CPU seconds
+    **{f"compile.{key}": Figure(COMPILE, r"\n" + stage + r"\s+(" + NUMBER + ") s", "timing")
+       for key, stage in (("kinematics", "kinematics"), ("dynamics", "dynamics"),
+                          ("reactions", "reactions"), ("rhs", "simulate right-hand side"),
+                          ("sweep", "fused sweep"), ("all", "all"))},
     # a sweep's chunk and its kernels
     "sweep.chunk": Figure(CHUNK, r"\btotal (" + NUMBER + ")", "timing"),
     "sweep.solve": Figure(CHUNK, r"\bsolve (" + NUMBER + ")", "timing"),

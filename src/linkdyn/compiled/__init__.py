@@ -14,8 +14,10 @@ axis last, ``D`` (1 for a single mechanism), and per-sample arrays shaped ``(...
 Choose the path with ``backend=`` (``"auto"``, ``"numpy"``, ``"compiled"``) or the environment
 variable ``LINKDYN_BACKEND``; :mod:`linkdyn.backend` resolves it, ``"auto"`` by the work to be
 done and by whether numba's on-disk cache (beside the modules) already holds the kernels: their
-first compilation takes about a minute of CPU, loading them from the cache a fraction of a
-second.
+first compilation takes about three minutes of CPU (docs/performance.md, "The first
+compilation"), loading them from the cache a fraction of a second. The helpers that take the
+layout's view and that only kernels call are compiled without Python's and C's wrappers
+(:func:`inner`), the kernels that Python calls with them (:func:`njit`).
 
 The equations themselves are the steps of :mod:`linkdyn.steps` (registered here with numba),
 which the numpy solvers call on whole arrays. numba caches each kernel on disk by its own file
@@ -48,19 +50,57 @@ GROUND, REV, PRI = 0, jk.CODES["revolute"], jk.CODES["prismatic"]
 CODES = dict(jk.CODES)
 
 
+#: numba's options of every compiled function of the package: ``error_model="numpy"`` (a
+#: division by zero gives inf or NaN as in numpy, no exception check per division)
+OPTIONS = dict(nogil=True, error_model="numpy")
+#: the options of a function that only compiled code calls: without the wrappers that let
+#: Python (``no_cpython_wrapper``) or C (``no_cfunc_wrapper``) call it. A wrapper unboxes each
+#: argument: for the layout's view (a named tuple of about ninety arrays) that is most of a
+#: small helper's compilation (about 2 s of CPU each, 0.15 s without), for nothing, since
+#: only the kernels call the helpers.
+INNER = dict(OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+
+
 def njit(fn):
-    """Compile ``fn`` in nopython mode, cached on disk (identity without numba)."""
+    """Compile ``fn`` in nopython mode, cached on disk (identity without numba): a kernel,
+    callable from Python and from compiled code."""
     if numba is None:  # pragma: no cover
         return fn
-    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    return numba.njit(cache=True, **OPTIONS)(fn)
+
+
+def inner(fn):
+    """Compile ``fn``, a helper that only compiled code calls, in nopython mode, cached on
+    disk, without the wrappers that let Python or C call it (:data:`INNER`; called from
+    Python it would crash the process): for the helpers that take the layout's view
+    (identity without numba)."""
+    if numba is None:  # pragma: no cover
+        return fn
+    return numba.njit(cache=True, **INNER)(fn)
 
 
 def inline(fn):
-    """A helper of the kernels, compiled into its callers (no call, no reference counting of
-    its array arguments per sample)."""
+    """A small helper of the kernels, compiled into its callers (no call, no reference counting
+    of its array arguments per sample); callable from Python too. A helper that takes the
+    layout's view is an :func:`inner` instead (inlined, it would be typed again at every call
+    site with its ninety arrays)."""
     if numba is None:  # pragma: no cover
         return fn
-    return numba.njit(inline="always", error_model="numpy")(fn)
+    return numba.njit(inline="always", **OPTIONS)(fn)
+
+
+_FROM_PYTHON: dict = {}
+
+
+def from_python(fn):
+    """``fn``, an :func:`inner` helper, compiled once more with the wrappers, so that Python
+    can call it: for the benchmarks that time one helper of a kernel alone (the same code; the
+    kernels call ``fn`` itself)."""
+    if numba is None:  # pragma: no cover
+        return fn
+    if fn not in _FROM_PYTHON:
+        _FROM_PYTHON[fn] = numba.njit(**OPTIONS)(fn.py_func)
+    return _FROM_PYTHON[fn]
 
 
 # atan u = u + u^3 S(u^2) for |u| <= tan(pi/8): the coefficients of S, lowest power first, a

@@ -23,7 +23,7 @@ import numpy as np
 from .. import expr
 from ..loads import body_point, damper_force, force_at, spring_force, weight
 from ..planar import turned
-from . import inline, njit, screw_views, vector_views
+from . import inline, inner, njit, screw_views, vector_views
 
 #: the load kinds' codes in :data:`Table` (``kind``)
 LOAD_KINDS = {"force": 0, "torque": 1, "joint_torque": 2, "joint_force": 3, "spring": 4,
@@ -153,7 +153,7 @@ def _point(B, k, p):
     return body_point(c[k], s[k], (r[0][k], r[1][k]), (t[0][k], t[1][k], t[2][k]), p)
 
 
-@njit
+@inner
 def weights(L, g, dp, nb, c, s, r, w, pe):
     """Every body's weight ``m_i g`` at its mass centre as a wrench about O_i
     (:func:`~linkdyn.loads.weight`, :func:`~linkdyn.loads.force_at`, as
@@ -174,7 +174,7 @@ def weights(L, g, dp, nb, c, s, r, w, pe):
             pe[k] += pe_k
 
 
-@njit
+@inner
 def applied(L, T, dp, nb, c, s, r, tw, x, reg, w, pe, power):
     """The applied wrenches ``w`` (n, 3, 1, block) about each O_i of gravity and the loads of
     the table ``T`` (:data:`Table`) over one block, as :func:`linkdyn.loads.wrenches`: their

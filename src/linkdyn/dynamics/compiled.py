@@ -32,7 +32,7 @@ from functools import cached_property
 import numpy as np
 
 from .. import joints as jk
-from ..compiled import eliminate, inline, njit, screw_views, vector_views
+from ..compiled import eliminate, inline, inner, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
 from ..compiled.loads import weights
@@ -52,7 +52,7 @@ BLOCK = 1024
 
 # --- the dynamics stage -----------------------------------------------------------------------
 
-@njit
+@inner
 def _composite(L, r, d, k0, nb, di, ki, w):
     """The backward recursion :func:`~linkdyn.dynamics.denoc.plus_child` (``w_p += A(r_i -
     r_p)^T w_i``), leaves first, in place on the wrenches ``w`` (n, 3, ., .) of a block, taken at
@@ -68,7 +68,7 @@ def _composite(L, r, d, k0, nb, di, ki, w):
                 (r_i[0][k], r_i[1][k]), (r_p[0][k], r_p[1][k]))
 
 
-@njit
+@inner
 def _newton_euler(L, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke, o_wstar,
                   o_wtilde):
     """:func:`~linkdyn.dynamics.denoc.newton_euler_wrench` of every body over a block into
@@ -100,7 +100,7 @@ def _newton_euler(L, d, dp, k0, nb, di, ki, c, s, tw, twd, w_ext, w_const, ke, o
             ke[k] += ke_k
 
 
-@njit
+@inner
 def _generalized(L, d, k0, nb, di, ki, e, o_wtilde, o_Q):
     """:func:`~linkdyn.dynamics.denoc.generalized_force` ``Q_i = p_i . w_tilde_i`` into ``o_Q``
     (the ground's row stays as allocated, zero)."""
@@ -115,7 +115,7 @@ def _generalized(L, d, k0, nb, di, ki, e, o_wtilde, o_Q):
                                          (wtilde_i[0][k], wtilde_i[1][k], wtilde_i[2][k]))
 
 
-@njit
+@inner
 def _multipliers(L, d, k0, nb, J, Q, A, lam, piv, o_lam, o_tau, o_pivot):
     """``J_dep^T lam = Q_dep``, then ``tau = Q_drv - J_drv^T lam`` (eq. 27) cut by cut
     (:func:`~linkdyn.dynamics.denoc.less_cut`), a block at a time; ``Q`` (n, block) the block's
@@ -158,7 +158,7 @@ def _multipliers(L, d, k0, nb, J, Q, A, lam, piv, o_lam, o_tau, o_pivot):
 
 # --- the reactions stage ----------------------------------------------------------------------
 
-@njit
+@inner
 def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
     """:func:`~linkdyn.reactions.cut_wrench` of every cut joint over a block: ``S^T lam`` summed
     on both bodies about their O into ``wc`` (n, 3, block), and the cut joints' reactions
@@ -194,7 +194,7 @@ def _cut_wrenches(L, d, dp, k0, nb, c, s, r, lam, zero, wc, o_on):
             on_c[0][k], on_c[1][k], on_c[2][k] = on
 
 
-@njit
+@inner
 def _tree_reactions(L, d, dp, k0, nb, di, ki, keep, c, s, r, e, tau, wc, ws, o_tree, o_on):
     """``R_i`` by the backward recursion of ``w_star - w_cut`` (reactions.tree_wrenches) and
     the reaction of every tree joint from it (reactions.solve): the driver's effort removed by

@@ -36,7 +36,8 @@ from collections import namedtuple
 import numpy as np
 
 from .. import joints as jk
-from ..compiled import PRI, factor, inline, njit, screw_views, substitute, vector_views
+from ..compiled import (PRI, factor, inline, inner, njit, screw_views, substitute,
+                        vector_views)
 from ..planar import turned
 from . import dyads as dy
 from .layout import DYAD_SHAPES, Layout, fixed
@@ -91,7 +92,7 @@ def _pose(phi, c, s, r, e, i, d, ks):
     return phi[i, d, ks], c[i, d, ks], s[i, d, ks], rx_i, ry_i, ex_i, ey_i
 
 
-@njit
+@inner
 def _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
     """Poses of all bodies (:func:`.recursion.child_pose`) of design d of the layout's view
     ``L`` into the work arrays at ``w``, ``kw``; ``cq``, ``sq`` (n, block): cosine and sine of
@@ -112,7 +113,7 @@ def _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e):
             rx_i[k], ry_i[k], ex_i[k], ey_i[k] = o[0], o[1], ax[0], ax[1]
 
 
-@njit
+@inner
 def _rotate(L, root, rot, d, k0, nb, phi, c, s, r, e):
     """Turn body ``root`` and every body beyond it, sample k by the turn ``rot[:, k]`` =
     ``[angle, cos, sin, centre x, centre y]`` (dyads.turned_pose)."""
@@ -157,7 +158,7 @@ def _turns(out, k, rot):
     out[4, k] = rot[4]
 
 
-@inline
+@inner
 def cut_numbers(L, ci, d):
     """Cut ci's numbers as its kind's cut steps take them (``nums``, ``L.cut_own``), design d:
     a tuple of :data:`linkdyn.joints.WIDTH` floats."""
@@ -169,13 +170,13 @@ def cut_numbers(L, ci, d):
 assert jk.WIDTH == 9, "cut_numbers gathers WIDTH numbers"
 
 
-@inline
+@inner
 def _cut_points(L, ci, d):
     """Cut ci's points on its bodies a and b (relative to O_a, O_b), design d."""
     return ((L.cut_pa[ci, 0, d], L.cut_pa[ci, 1, d]), (L.cut_pb[ci, 0, d], L.cut_pb[ci, 1, d]))
 
 
-@njit
+@inner
 def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
     """Close every loop dyad by dyad (dyads.solve): each dyad's shape step (dyads.split,
     chain, slide, swing) gives the two turns of the samples, one sample loop per shape
@@ -234,7 +235,7 @@ def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
             q_l[k] += L.sign[jl] * low[0, k]
 
 
-@njit
+@inner
 def _cut_frames(L, d, w, kw, nb, c, s, r, P):
     """Every cut's points on its bodies a and b, its axis (fixed in a), global, and its
     contact, once the loops are closed (:func:`.recursion.cut_frame`), for the steps that
@@ -266,7 +267,7 @@ def _frame(P_c, k):
             (P_c[4, k], P_c[5, k], P_c[6, k], P_c[7, k], P_c[8, k]))
 
 
-@njit
+@inner
 def _residual(L, d, k0, w, kw, nb, phi, P, err, g):
     """Loop-closure residual (the kinds' ``residual`` steps) into ``g`` (n_rows, block), and
     its rows in metres relative to the layout's size, max over the cut rows
@@ -297,7 +298,7 @@ def _residual(L, d, k0, w, kw, nb, phi, P, err, g):
                 G2[k] = x[2]
 
 
-@njit
+@inner
 def _jacobian(L, d, w, kw, nb, r, e, P, J):
     """Loop-closure Jacobian J (n_rows, n - 1): each cut's rows of each tree joint's rate
     (:func:`.recursion.jacobian_column`, eqs. 20-24); the columns of joints that move both
@@ -331,7 +332,7 @@ def _jacobian(L, d, w, kw, nb, r, e, P, J):
                     J2[k] = x[2]
 
 
-@njit
+@inner
 def _twists(L, d, k0, nb, r, e, rate, tw):
     """Twists of every body (:func:`.recursion.child_twist`, eq. 2); ``rate`` (n, D, T)."""
     ks = slice(k0, k0 + nb)
@@ -359,7 +360,7 @@ def _motion(tw, td, r, i, d, ks):
     return w_i, vx_i, vy_i, al_i, ax_i, ay_i, rx_i, ry_i
 
 
-@njit
+@inner
 def _twist_rates(L, d, k0, nb, r, e, tw, qd, qdd, td):
     """Twist rates of every body (:func:`.recursion.child_twist_rate`)."""
     ks = slice(k0, k0 + nb)
@@ -376,7 +377,7 @@ def _twist_rates(L, d, k0, nb, r, e, tw, qd, qdd, td):
                 (rx_i[k], ry_i[k]), qd_i[k], qdd_i[k])
 
 
-@njit
+@inner
 def _bias(L, d, w, kw, nb, r, tw, td, P, bias):
     """Rate of the cut rows ``d/dt (S x)`` for the twist rates ``td``
     (:func:`.recursion.cut_bias`); ``bias`` (n_rows, block). Design d's cut numbers, the
@@ -404,7 +405,7 @@ def _bias(L, d, w, kw, nb, r, tw, td, P, bias):
                 B2[k] = x[2]
 
 
-@njit
+@inner
 def _factor_dep(dep, J, d, k0, nb, A, perm, col):
     """LU-factor ``J_dep`` for the samples of a block into ``A`` (n_dep, n_dep, block) and
     ``perm``; the relative pivots into ``col`` (block,)."""
@@ -417,7 +418,7 @@ def _factor_dep(dep, J, d, k0, nb, A, perm, col):
     factor(A, nd, nb, perm, col)
 
 
-@njit
+@inner
 def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
     """``J_dep x_dep = rhs`` (``rhs`` (2 n_cut, block)) from :func:`_factor_dep`, into
     ``x[dep]``; ``sol`` scratch."""
@@ -428,7 +429,7 @@ def _solve_dep(dep, A, perm, col, d, k0, nb, rhs, x, sol):
             x_m[k] = sol_m[k]
 
 
-@njit
+@inner
 def _cut_motion(L, d, w, kw, nb, phi, r, tw, td, P, out):
     """Coordinate, rate and acceleration of every cut joint (:func:`.recursion.cut_coordinate`);
     ``out`` (n_cut, 3, D, T). Design d's cut numbers, the arrays at design
@@ -450,7 +451,7 @@ def _cut_motion(L, d, w, kw, nb, phi, r, tw, td, P, out):
                 (al_b[k], ax_b[k], ay_b[k]), (rx_b[k], ry_b[k]), r_pa, r_pb)
 
 
-@njit
+@inner
 def _finite(d, k0, w, kw, nb, qd, qdd, fin):
     """``fin`` (D, T) at design d, samples from ``k0``: whether every rate and acceleration
     of the sample (``qd``, ``qdd`` at ``w``, ``kw``) is finite."""
@@ -462,7 +463,7 @@ def _finite(d, k0, w, kw, nb, qd, qdd, fin):
             fin_d[k] = fin_d[k] & math.isfinite(qd_i[k]) & math.isfinite(qdd_i[k])
 
 
-@inline
+@inner
 def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
     """Joint i's coordinates over a block copied from ``q_from``, and the cosine and sine of
     ``s q_i`` for an angular joint (the ``turn`` of :func:`.recursion.child_pose`)."""
@@ -475,7 +476,7 @@ def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
             cq_i[k], sq_i[k] = math.cos(x), math.sin(x)
 
 
-@njit
+@inner
 def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
     """Close the loops of the samples ``k0`` .. ``k0 + nb`` of design d by Newton's method on
     the dependent coordinates from the guess in ``q`` (n, D, T) (its independent rows already
@@ -534,7 +535,7 @@ def scratch(n, nc, nd, n_rows, block):
             np.zeros(B, np.int64))
 
 
-@njit
+@inner
 def _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs):
     """The right-hand side of the dependent rates, ``rhs[:nd, :nb] = -J_drv qd_drv`` (eqs. 4-5):
     ``J`` (n_rows, n - 1, ., .) at design ``w``, samples ``kws`` (a slice), the drivers' rates
@@ -560,7 +561,7 @@ Inputs = namedtuple("Inputs", ("t_s", "nodes", "lo", "hi", "Qn", "cQ", "sQ", "mo
                                "q_drv", "qd_drv", "qdd_drv"), module=__name__)
 
 
-@njit
+@inner
 def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     """Positions, rates and accelerations of the samples ``k0`` .. ``k0 + nb`` of design d
     (the layout's view ``L``, the inputs ``X``, as in :func:`kernel`): the per-sample arrays
