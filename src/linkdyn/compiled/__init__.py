@@ -30,6 +30,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import warnings
 
 import numpy as np
 
@@ -40,6 +41,11 @@ try:  # optional: the numpy path is complete without it
     import numba
 except ImportError:  # pragma: no cover - depends on the environment
     numba = None
+else:
+    # numba's "internal pedantic check" of its IR after it inlines a step (``@step(inline=True)``,
+    # friction's Newton step) names variables out of scope that the compiled code never reads:
+    # a note for numba's developers, printed at a user's first compilation; not shown
+    warnings.filterwarnings("ignore", category=numba.core.errors.NumbaIRAssumptionWarning)
 
 # beside the stamp of the sources: which stages' kernels numba's cache holds (linkdyn.backend)
 CACHE_RECORD = "numba-stages.json"
