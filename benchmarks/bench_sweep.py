@@ -171,21 +171,13 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     clock = {"batches": 0.0, "solve": 0.0, "metrics": 0.0}
     inner = {"branch": 0.0, "kernel": 0.0}   # parts of the solve
 
-    def timed(f, key):
+    def timed(f, key, into=clock):
         def g(*a, **k):
             t0 = time.process_time()
             try:
                 return f(*a, **k)
             finally:
-                clock[key] += time.process_time() - t0
-        return g
-    def part(f, key):
-        def g(*a, **k):
-            t0 = time.process_time()
-            try:
-                return f(*a, **k)
-            finally:
-                inner[key] += time.process_time() - t0
+                into[key] += time.process_time() - t0
         return g
     solve, fill, batches = runner.analyze_layout, runner._fill, runner._batches
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
@@ -194,7 +186,7 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
              (analysis.compiled_dynamics, "solve", "kernel")]
     saved = [getattr(mod, name) for mod, name, _ in parts]
     for mod, name, key in parts:
-        setattr(mod, name, part(getattr(mod, name), key))
+        setattr(mod, name, timed(getattr(mod, name), key, inner))
     try:
         runner.evaluate(task, values[:250_000 // samples + 1])   # the kernels' first load
         runs = []

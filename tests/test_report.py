@@ -881,6 +881,25 @@ _DRAWN_BODIES = r"""() => {
 }"""
 
 
+def _labels_on_bodies(labels, shapes) -> list:
+    """Each ``(label text, body index)`` where a label's box touches a drawn body's shape."""
+    return [(text, n) for text, box in labels for n, sh in enumerate(shapes)
+            if _box_on_shape(box, sh)]
+
+
+def _force_labels_at_the_first_frame(p):
+    """Forces on, the first frame shown: each force label drawn, ``[text, [left, top, right,
+    bottom]]`` in client px (its text as the browser lays it out)."""
+    p.locator("#anim").scroll_into_view_if_needed()
+    p.check("#show-forces")
+    p.evaluate("() => { const s = document.getElementById('scrubber'); s.value = '0';"
+               " s.dispatchEvent(new Event('input')); }")
+    return p.evaluate("""() => [...document.querySelectorAll('#anim .flabels text')]
+        .filter(e => e.style.display !== 'none' && e.getClientRects().length)
+        .map(e => { const r = e.getBoundingClientRect();
+                    return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
+
+
 @pytest.mark.parametrize("example, size", [(e, s) for e in EXAMPLES for s in SIZES],
                          ids=[f"{e}-{s[0]}x{s[1]}" for e in EXAMPLES for s in SIZES])
 def test_force_labels_sit_clear_of_every_body(browser, example_runs, example, size):
@@ -891,18 +910,10 @@ def test_force_labels_sit_clear_of_every_body(browser, example_runs, example, si
     pg = Page(browser, path, width=size[0], height=size[1])
     p = pg.page
     try:
-        p.locator("#anim").scroll_into_view_if_needed()
-        p.check("#show-forces")
-        p.evaluate("() => { const s = document.getElementById('scrubber'); s.value = '0';"
-                   " s.dispatchEvent(new Event('input')); }")
-        labels = p.evaluate("""() => [...document.querySelectorAll('#anim .flabels text')]
-            .filter(e => e.style.display !== 'none' && e.getClientRects().length)
-            .map(e => { const r = e.getBoundingClientRect();
-                        return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
+        labels = _force_labels_at_the_first_frame(p)
         shapes = p.evaluate(_DRAWN_BODIES)
         assert labels and shapes
-        on = [(text, n) for text, box in labels for n, sh in enumerate(shapes)
-              if _box_on_shape(box, sh)]
+        on = _labels_on_bodies(labels, shapes)
         assert on == [], on
         assert pg.errors == []
     finally:
@@ -943,14 +954,7 @@ def test_spatial_force_labels_sit_clear_of_every_body(browser, spatial_pages, ex
     pg = Page(browser, spatial_pages(example), width=size[0], height=size[1])
     p = pg.page
     try:
-        p.locator("#anim").scroll_into_view_if_needed()
-        p.check("#show-forces")
-        p.evaluate("() => { const s = document.getElementById('scrubber'); s.value = '0';"
-                   " s.dispatchEvent(new Event('input')); }")
-        labels = p.evaluate("""() => [...document.querySelectorAll('#anim .flabels text')]
-            .filter(e => e.style.display !== 'none' && e.getClientRects().length)
-            .map(e => { const r = e.getBoundingClientRect();
-                        return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
+        labels = _force_labels_at_the_first_frame(p)
         arrows = p.evaluate("[...document.querySelectorAll('#anim .farrow')]"
                             ".filter(a => a.style.display !== 'none').length")
         shapes = p.evaluate(_DRAWN_BODIES)
@@ -960,8 +964,7 @@ def test_spatial_force_labels_sit_clear_of_every_body(browser, spatial_pages, ex
         for text, box in labels:   # inside the view
             assert box[0] >= view[0] - 0.5 and box[2] <= view[2] + 0.5, text
             assert box[1] >= view[1] - 0.5 and box[3] <= view[3] + 0.5, text
-        on = [(text, n) for text, box in labels for n, sh in enumerate(shapes)
-              if _box_on_shape(box, sh)]
+        on = _labels_on_bodies(labels, shapes)
         assert on == [], on
         assert pg.errors == []
     finally:
