@@ -10,11 +10,16 @@ in numba's on-disk cache (the first compiled run, untimed, puts them there):
      torque-speed line on the crank with a flywheel, and a pressing force on the slider over
      part of its stroke.
 
+Each pair is timed twice: in this process, where the first run has loaded the kernels (``auto``
+then has no start-up left to weigh, ``linkdyn.backend.IN_PROCESS``, and runs compiled from the
+first evaluation), and each run in a fresh child process, as one command of the command line
+runs (the kernels loaded from numba's cache during the run; ``auto`` starts on numpy and
+switches once numpy's evaluations would have paid for that load, by the cost model's constants).
+
 Printed: each run's wall and CPU time, its right-hand sides, the backend it ended on and the
 evaluation after which ``auto`` switched to compiled (``Simulation.stats``), and the ratio
-auto / compiled (wall). The ratio is the figure: about 1 once ``auto`` loads cached kernels
-quickly; at 1fa002c, where ``auto`` switched after a fixed 20,000 evaluations, the 40-window
-chain ran about 60 times longer on ``auto``.
+auto / compiled (wall) of each pair. At 1fa002c, where ``auto`` switched after a fixed 20,000
+evaluations, the 40-window chain ran about 60 times longer on ``auto``.
 
 Usage: python benchmarks/bench_auto.py [--windows N] [--chain-duration T] [--press-duration T]
        [--rtol R] [--skip-chain] [--skip-press]
@@ -28,7 +33,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import argparse  # noqa: E402
+import json  # noqa: E402
 import math  # noqa: E402
+import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
 import tomllib  # noqa: E402
@@ -69,19 +76,38 @@ def timed(run):
     return out, time.perf_counter() - w, time.process_time() - c
 
 
-def compare(name, model, t, rtol):
-    atol = rtol * 1e-2
-    linkdyn.simulate(model, t[:2] * 0.01, rtol=rtol, atol=atol, backend="compiled")  # cache
-    rows = {}
-    for backend in ("compiled", "auto"):
-        sim, wall, cpu = timed(lambda: linkdyn.simulate(model, t, rtol=rtol, atol=atol,
-                                                        backend=backend))
-        st = sim.stats
-        rows[backend] = wall
-        print(f"  {backend:9s} {wall:8.2f} s wall {cpu:8.2f} s CPU  {st['rhs_evaluations']:7d} "
-              f"right-hand sides; ran {st.get('backend', '?')}, compiled after "
-              f"{st.get('compiled_after', '?')} evaluations", flush=True)
-    print(f"  auto / compiled (wall): {rows['auto'] / rows['compiled']:.2f}", flush=True)
+def run(name, size, duration, rtol, backend):
+    """One ``simulate`` of model ``name`` ("chain" of ``size`` windows, or "press"), timed:
+    (wall s, CPU s, its stats)."""
+    model = chain(size) if name == "chain" else press()
+    t = np.linspace(0.0, duration, 21 if name == "chain" else 61)
+    sim, wall, cpu = timed(lambda: linkdyn.simulate(model, t, rtol=rtol, atol=rtol * 1e-2,
+                                                    backend=backend))
+    return wall, cpu, {k: sim.stats[k] for k in ("rhs_evaluations", "backend", "compiled_after")}
+
+
+def in_child(*args):
+    """:func:`run` in a fresh Python process (its kernels loaded from numba's cache)."""
+    code = ("import json, sys; sys.path.insert(0, sys.argv[1]); import bench_auto as b; "
+            "print(json.dumps(b.run(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), "
+            "float(sys.argv[5]), sys.argv[6])))")
+    out = subprocess.run([sys.executable, "-c", code, str(Path(__file__).parent),
+                          *map(str, args)], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def compare(name, size, duration, rtol):
+    run(name, size, duration * 0.01, rtol, "compiled")   # kernels in the cache and this process
+    for where, timer in (("this process", run), ("fresh process", in_child)):
+        rows = {}
+        for backend in ("compiled", "auto"):
+            wall, cpu, st = timer(name, size, duration, rtol, backend)
+            rows[backend] = wall
+            print(f"  {backend:9s} {wall:8.2f} s wall {cpu:8.2f} s CPU  "
+                  f"{st['rhs_evaluations']:7d} right-hand sides; ran {st['backend']}, compiled "
+                  f"after {st['compiled_after']} evaluations ({where})", flush=True)
+        print(f"  {where}: auto / compiled (wall): {rows['auto'] / rows['compiled']:.2f}",
+              flush=True)
 
 
 def main():
@@ -96,10 +122,10 @@ def main():
     os.environ.pop("LINKDYN_BACKEND", None)
     if not a.skip_chain:
         print(f"{a.windows}-window parallelogram chain, {a.chain_duration} s, rtol {a.rtol}")
-        compare("chain", chain(a.windows), np.linspace(0.0, a.chain_duration, 21), a.rtol)
+        compare("chain", a.windows, a.chain_duration, a.rtol)
     if not a.skip_press:
         print(f"slider-crank press, {a.press_duration} s, rtol {a.rtol}")
-        compare("press", press(), np.linspace(0.0, a.press_duration, 61), a.rtol)
+        compare("press", 0, a.press_duration, a.rtol)
 
 
 if __name__ == "__main__":

@@ -66,6 +66,7 @@ def test_the_estimates_grow_with_the_work_and_count_the_compilation():
 @numba
 def test_auto_picks_compiled_for_much_work_and_numpy_for_little(monkeypatch):
     monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
+    monkeypatch.setattr(backend, "IN_PROCESS", set())   # as in a process that has run none
     kinds = [j.kind for j in linkdyn.load(HOEKEN).joints]
     assert backend.choose("auto", backend.Work(10**9, 3), kinds).compiled
     assert not backend.choose("auto", backend.Work(100, 3), kinds).compiled
@@ -76,9 +77,10 @@ def test_auto_picks_compiled_for_much_work_and_numpy_for_little(monkeypatch):
 
 
 @numba
-def test_an_open_ended_run_switches_once_numpy_has_spent_the_start_up():
+def test_an_open_ended_run_switches_once_numpy_has_spent_the_start_up(monkeypatch):
     """``reconsider`` (simulate's): numpy until the evaluations made would have paid for the
     compiled start-up, compiled from there on, never back; explicit choices never change."""
+    monkeypatch.setattr(backend, "IN_PROCESS", set())   # as in a process that has run none
     work = backend.Work(2, 3, 0, backend.SIMULATION)
     auto = backend.choose("auto", work)
     pays = auto.pays_after(work)
@@ -93,6 +95,38 @@ def test_an_open_ended_run_switches_once_numpy_has_spent_the_start_up():
         fixed = backend.choose(name, work)
         assert fixed.reconsider(at).compiled == (name == "compiled")
         assert fixed.pays_after(work) == np.inf
+
+
+@numba
+def test_auto_runs_compiled_once_this_process_has_loaded_the_kernels(monkeypatch):
+    """Kernels a process has run have no start-up left: "auto" then runs even a small analysis
+    and a short simulation compiled from their first evaluation (with the start-up still to
+    pay it ran numpy), with the numbers of numpy."""
+    monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
+    monkeypatch.setattr(backend, "IN_PROCESS", set())
+    small = backend.Work(100, 3)
+    rhs = backend.Work(2, 3, 0, backend.SIMULATION)
+    assert not backend.choose("auto", small).compiled
+    assert not backend.choose("auto", rhs).compiled
+    model = linkdyn.load(HOEKEN)
+    t = np.linspace(0.0, 1.0, 7)
+    ref = linkdyn.analyze(model, t, backend="numpy")
+    assert ref.kin.arrays is None                       # numpy kept no kernel arrays
+    linkdyn.analyze(model, t, backend="compiled")       # the analysis kernels now loaded
+    assert set(backend.ANALYSIS) <= backend.IN_PROCESS
+    assert backend.choose("auto", small).compiled
+    auto = linkdyn.analyze(model, t)
+    assert auto.kin.arrays is not None
+    for key, col in ref.columns.items():
+        scale = max(1.0, float(np.max(np.abs(col))))
+        assert np.max(np.abs(auto.columns[key] - col)) <= 1e-12 * scale, key
+    # simulate: numpy's right-hand side until its own kernel has run here, then compiled at once
+    motor = linkdyn.load(linkdyn.example_path("hoeken_motor"))
+    ts = np.linspace(0.0, 0.05, 3)
+    assert linkdyn.simulate(motor, ts).stats["backend"] == "numpy"
+    linkdyn.simulate(motor, ts, backend="compiled")
+    sim = linkdyn.simulate(motor, ts)
+    assert sim.stats["backend"] == "compiled" and sim.stats["compiled_after"] == 0
 
 
 @numba

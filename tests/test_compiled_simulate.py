@@ -246,22 +246,34 @@ def test_energy_projection_with_a_driver_keeps_the_integrated_balance():
         assert np.max(np.abs(s.columns[key] - x)) <= 1e-5 * np.max(np.abs(x)), key
 
 
-def test_auto_backend_switches_once_the_compiled_start_up_has_paid(monkeypatch):
-    """``backend="auto"``: numpy's right-hand side first, the compiled one once the evaluations
-    made would have paid for its start-up (here made cheap: the cost model's start-up
-    constants set small), never before; the same motion as numpy throughout."""
+@pytest.mark.parametrize("by", ["estimate", "clock"])
+def test_auto_backend_switches_once_the_compiled_start_up_has_paid(monkeypatch, by):
+    """``backend="auto"``: numpy's right-hand side first, the compiled one once numpy's
+    evaluations have paid for its start-up, by the cost model's estimate (its start-up set at
+    4 s of CPU, which this run never spends, and numpy's evaluations made dear: the switch at
+    the end of the step that reaches the evaluation the estimate names) or by the clock (the
+    estimate never pays: numpy's evaluations made free; the start-up set at 20 ms of CPU,
+    which this run spends), never back; the same motion as numpy throughout."""
     from linkdyn import backend
 
     monkeypatch.delenv("LINKDYN_BACKEND", raising=False)
     t = np.linspace(0.0, 1.0, 5)
+    monkeypatch.setattr(backend, "IN_PROCESS", set())   # as in a process that has run none
     ref = simulate(hoeken_motor(), t, rtol=1e-9, atol=1e-11, backend="numpy")
     assert ref.stats["backend"] == "numpy" and ref.stats["compiled_after"] is None
-    monkeypatch.setattr(backend, "LOAD", dict.fromkeys(backend.LOAD, 1e-3))
-    monkeypatch.setattr(backend, "COMPILE", dict.fromkeys(backend.COMPILE, 1e-3))
-    auto = simulate(hoeken_motor(), t, rtol=1e-9, atol=1e-11, backend="auto")
-    assert auto.stats["backend"] == "compiled"
+    start = 1.0 if by == "estimate" else 5e-3           # s a stage, four stages
+    monkeypatch.setattr(backend, "LOAD", dict.fromkeys(backend.LOAD, start))
+    monkeypatch.setattr(backend, "COMPILE", dict.fromkeys(backend.COMPILE, start))
+    monkeypatch.setattr(backend, "NUMPY_PASS", 0.05 if by == "estimate" else 0.0)
+    monkeypatch.setattr(backend, "NUMPY_SAMPLE", 0.0)
     work = backend.Work(2, len(hoeken_motor().bodies) - 1, 0, backend.SIMULATION)
     pays = backend.choose("auto", work).pays_after(work)
-    assert 0 < pays <= auto.stats["compiled_after"] < auto.stats["rhs_evaluations"]
+    assert (pays < 100) if by == "estimate" else (pays == np.inf)
+    auto = simulate(hoeken_motor(), t, rtol=1e-9, atol=1e-11, backend="auto")
+    assert auto.stats["backend"] == "compiled"
+    after = auto.stats["compiled_after"]
+    assert 0 < after < auto.stats["rhs_evaluations"]
+    if by == "estimate":   # at the end of the step that reached it
+        assert pays <= after
     x = ref.columns["q_J1"]
     assert np.max(np.abs(auto.columns["q_J1"] - x)) <= 1e-7 * np.ptp(x)

@@ -211,12 +211,21 @@ FIGURES = {
     "simulate.rhs_numpy": Figure(SIMULATE, r"numpy:\s+(" + NUMBER + ") us", "timing"),
     "simulate.rhs_compiled": Figure(SIMULATE, r"compiled:\s+(" + NUMBER + ") us", "timing"),
     # auto against the better explicit choice
-    "auto.chain": Figure(AUTO, r"parallelogram chain.*?auto / compiled \(wall\): (" + NUMBER
-                         + ")", "timing"),
-    "auto.press": Figure(AUTO, r"press.*?auto / compiled \(wall\): (" + NUMBER + ")", "timing"),
-    "auto.chain_after": Figure(AUTO, r"parallelogram chain.*?\n\s+auto\s.*?compiled after (\d+)",
-                               "exact"),
-    "auto.press_after": Figure(AUTO, r"press.*?\n\s+auto\s.*?compiled after (\d+)", "exact"),
+    "auto.chain": Figure(AUTO, r"parallelogram chain.*?this process: auto / compiled \(wall\): ("
+                         + NUMBER + ")", "timing"),
+    "auto.press": Figure(AUTO, r"press.*?this process: auto / compiled \(wall\): (" + NUMBER + ")",
+                         "timing"),
+    "auto.chain_fresh": Figure(AUTO, r"parallelogram chain.*?fresh process: auto / compiled "
+                               r"\(wall\): (" + NUMBER + ")", "timing"),
+    "auto.press_fresh": Figure(AUTO, r"press.*?fresh process: auto / compiled \(wall\): ("
+                               + NUMBER + ")", "timing"),
+    "auto.chain_here_after": Figure(AUTO, r"parallelogram chain.*?\n\s+auto\s[^\n]*?compiled "
+                                    r"after (\d+) evaluations \(this process\)", "exact"),
+    # in a fresh process: where the estimate or the clock (a timing) switched
+    "auto.chain_after": Figure(AUTO, r"parallelogram chain.*?\n\s+auto\s[^\n]*?compiled after "
+                               r"(\d+) evaluations \(fresh process\)", "timing"),
+    "auto.press_after": Figure(AUTO, r"press.*?\n\s+auto\s[^\n]*?compiled after (\d+) "
+                               r"evaluations \(fresh process\)", "timing"),
 }
 
 

@@ -13,13 +13,15 @@ designs included) x ``bodies`` (moving) x ``evaluations`` (:class:`Work`):
 - numpy: ``evaluations * bodies * (NUMPY_PASS + NUMPY_SAMPLE * samples)``: each stage is a
   Python loop over the bodies whose every pass costs Python's overhead plus its arithmetic
   over the samples;
-- compiled: the start-up of the stages' kernels, :data:`LOAD` s each when numba's on-disk cache
-  holds them (:func:`cached`), else their first compilation, :data:`COMPILE` s each; then
+- compiled: the start-up of the stages' kernels, none for a stage whose kernels this process
+  has already run (:data:`IN_PROCESS`), :data:`LOAD` s each when numba's on-disk cache holds
+  them (:func:`cached`), else their first compilation, :data:`COMPILE` s each; then
   ``evaluations * (COMPILED_CALL + bodies * COMPILED_SAMPLE * samples)``;
 
 and takes the smaller (compiled on a tie). A run whose number of evaluations is not known in advance
 (``simulate``) starts on numpy and switches once the numpy time spent would have paid for the
-compiled start-up (:meth:`Backend.reconsider`; at most twice the better choice's time). The
+compiled start-up, by the estimate or by the clock (:meth:`Backend.reconsider`; at most about
+twice the better choice's time). The
 constants are measured (docs/performance.md, "How auto chooses"); results agree between the
 backends to rounding whichever is chosen.
 
@@ -59,7 +61,9 @@ COMPILED_CALL = 1e-5     # one evaluation's call into the compiled code
 COMPILED_SAMPLE = 1e-7   # one moving body of one sample in the compiled kernels
 # each stage's kernels loaded from numba's cache, and compiled the first time (CPU time)
 LOAD = {"kinematics": 0.5, "dynamics": 0.05, "reactions": 0.05, "sweep": 0.5, "rhs": 0.25}
-COMPILE = {"kinematics": 60.0, "dynamics": 12.0, "reactions": 12.0, "sweep": 45.0, "rhs": 17.0}
+COMPILE = {"kinematics": 80.0, "dynamics": 24.0, "reactions": 8.0, "sweep": 21.0, "rhs": 42.0}
+# the stages whose kernels have run in this process (:func:`mark_cached`): loaded, no start-up
+IN_PROCESS: set[str] = set()
 
 log = logging.getLogger("linkdyn")
 
@@ -97,8 +101,10 @@ class Work:
 
     def compiled_seconds(self, cache: bool | None = None) -> float:
         """Estimated wall time on the compiled kernels, s, their start-up included (loaded if
-        ``cache``, else compiled; default: as :func:`cached` finds each stage)."""
-        start = sum(LOAD[s] if (cached(s) if cache is None else cache) else COMPILE[s]
+        ``cache``, else compiled; default: none for a stage this process has run
+        (:data:`IN_PROCESS`), else as :func:`cached` finds it)."""
+        start = sum(0.0 if cache is None and s in IN_PROCESS
+                    else LOAD[s] if (cached(s) if cache is None else cache) else COMPILE[s]
                     for s in self.stages)
         return start + self.evaluations * (COMPILED_CALL
                                            + self.bodies * COMPILED_SAMPLE * self.samples)
@@ -146,13 +152,27 @@ class Backend:
         gain = one.numpy_seconds() - replace(one, stages=()).compiled_seconds()
         return math.ceil(start / gain) if gain > 0 else math.inf
 
-    def reconsider(self, work: Work) -> Backend:
+    def start_up(self, work: Work) -> float:
+        """The compiled start-up of ``work``'s stages, s (:meth:`Work.compiled_seconds` of no
+        evaluation), against which an open-ended run weighs the time it has spent on numpy
+        (``inf``: never switches, as for an explicit choice or a backend already compiled)."""
+        if self.requested != "auto" or self.compiled or not self.can_compile:
+            return math.inf
+        return replace(work, evaluations=0).compiled_seconds()
+
+    def reconsider(self, work: Work, spent: float = 0.0) -> Backend:
         """This backend for the work done so far (``"auto"`` only; explicit choices stay): an
         open-ended run switches to compiled once numpy's time for ``work`` would have paid for
-        the compiled start-up, which bounds the run at about twice the better choice's time
-        whatever its length. Never back to numpy."""
+        the compiled start-up, by the cost model, or once ``spent`` (the run's measured
+        seconds on numpy) has reached that start-up (:meth:`start_up`), which bounds the run
+        at about twice the better choice's time whatever its length and the machine's load.
+        Never back to numpy."""
         if self.requested != "auto" or self.compiled or not self.can_compile:
             return self
+        if spent >= self.start_up(work):
+            chosen = Backend("compiled", "auto", work, True)
+            announce(chosen)
+            return chosen
         return _auto(work)
 
 
@@ -266,8 +286,9 @@ def cached(stage: str) -> bool:
 
 def mark_cached(stage: str) -> None:
     """Record that ``stage``'s kernels have run compiled (so numba's cache now holds them),
-    with the cache files present. Nothing happens if the cache is not beside the package (a
-    read-only installation)."""
+    with the cache files present (nothing is written if the cache is not beside the package:
+    a read-only installation), and that this process has them loaded (:data:`IN_PROCESS`)."""
+    IN_PROCESS.add(stage)
     if cached(stage):
         return
     files = _cache_files()

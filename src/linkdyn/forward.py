@@ -41,6 +41,7 @@ from __future__ import annotations
 import itertools
 import numbers
 import os
+import time
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
@@ -882,7 +883,9 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         array stages, or one compiled function per evaluation (:mod:`linkdyn.forward_compiled`,
         with numba installed); ``'auto'`` starts on numpy and switches to compiled once the
         evaluations made would have paid for the compiled code's start-up (loading it from
-        numba's cache, or its first compilation: :meth:`linkdyn.backend.Backend.pays_after`).
+        numba's cache, or its first compilation: :meth:`linkdyn.backend.Backend.pays_after`),
+        or once the run's CPU time so far has reached that start-up (a loaded machine, or
+        numpy's evaluations dearer than the cost model says), whichever comes first.
         The outputs are computed by the same backend's stages: once the compiled right-hand
         side runs, it gives their free accelerations and closed positions, and the compiled
         kinematics, dynamics and reactions kernels the rest.
@@ -921,6 +924,8 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
         # the compiled right-hand side knows no friction: numpy's stages throughout (F13)
         be, work = sp.backend(model, "numpy", nf)
     pays = be.pays_after(work) if not rubbing else np.inf
+    # "auto": numpy's CPU seconds so far against the compiled start-up, measured from here
+    start_up, clock0 = (be.start_up(work) if not rubbing else np.inf), time.process_time()
     fast = be.compiled
     compiled_after = 0 if fast else None
     q0 = sp.start_state(part)
@@ -1130,11 +1135,13 @@ def simulate(model: Model, t, *, rtol: float = 1e-8, atol: float = 1e-10,
                 # the balance at the step's end, where the integration goes on from (after
                 # the projection of F11): a snap between two output samples shows here   (F9)
                 balance.add(*system.energies(t_now, y), e0, y[-1])
-            if nfev + system.nfev >= pays:
-                # "auto": numpy's evaluations so far would have paid for the compiled start-up
+            spent = time.process_time() - clock0
+            if nfev + system.nfev >= pays or spent >= start_up:
+                # "auto": numpy's evaluations so far have paid for the compiled start-up, by
+                # the cost model or by the clock
                 be = be.reconsider(backend_mod.Work(1 + nf, work.bodies, nfev + system.nfev,
-                                                    work.stages))
-                pays = be.pays_after(work)
+                                                    work.stages), spent)
+                pays, start_up = be.pays_after(work), be.start_up(work)
                 if be.compiled:
                     fast, compiled_after = True, nfev + system.nfev
                     system.use_compiled()
