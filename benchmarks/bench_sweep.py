@@ -66,7 +66,7 @@ def child(designs: int, samples: int, workers: int, per_design: int = 0) -> dict
     from dataclasses import replace
 
     from linkdyn.studies import Task, run, space
-    from linkdyn.studies.metrics import check_names
+    from linkdyn.studies.metrics import Reduced, check_names
 
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     t = np.linspace(0.0, mech.drivers[0].period, samples)
@@ -149,18 +149,21 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
     """CPU seconds of one worker's chunk of ``designs`` designs by stage: the layouts from the
     parameter arrays, the batching and the chunk's assembly at t = 0 (``runner._batches``), the
     solve (``analyze_layout``), the metrics and reasons, the rest (the loader's checks on the
-    arrays); with ``repeat``, each the minimum of that many runs of the chunk. Inside the solve,
-    ``branch`` (the continuation nodes followed, ``kinematics.positions.follow``, their closing
-    kernel included) and ``kernel`` (the compiled kinematics and dynamics: the sweep kernel
-    ``dynamics.compiled.sweep``, or the stages' kernels when the layout has other loads),
-    parts of ``solve``, not added to the total again."""
+    arrays); with ``repeat``, each the minimum of that many runs of the chunk. The solve is
+    the metrics-only sweep's (``kinematics.solution.reduced``; its metrics from the kernel's
+    reductions and path, ``metrics.Reduced.values``), and ``analyze_layout`` where the solution
+    is kept (a design with an invalid sample, or metrics the kernel does not reduce). Inside
+    the solve, ``branch`` (the continuation nodes followed, ``kinematics.positions.follow``,
+    their closing kernel included) and ``kernel`` (the compiled kinematics and dynamics: the
+    sweep kernel ``dynamics.compiled.sweep``, or the stages' kernels when the layout has other
+    loads), parts of ``solve``, not added to the total again."""
     from linkdyn import analysis
     from linkdyn.dynamics import compiled as dc
     from linkdyn.kinematics import compiled as kc
     from linkdyn.kinematics import solution as ks
     from linkdyn.studies import Task, space
     from linkdyn.studies import runner
-    from linkdyn.studies.metrics import check_names
+    from linkdyn.studies.metrics import Reduced, check_names
 
     mech = linkdyn.load(linkdyn.example_path("hoeken"))
     t = np.linspace(0.0, mech.drivers[0].period, samples)
@@ -180,8 +183,10 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
                 into[key] += time.process_time() - t0
         return g
     solve, fill, batches = runner.analyze_layout, runner._fill, runner._batches
+    reduce_, values_of = runner.reduced, Reduced.values   # the metrics-only sweep's
     runner.analyze_layout, runner._fill = timed(solve, "solve"), timed(fill, "metrics")
     runner._batches = timed(batches, "batches")
+    runner.reduced, Reduced.values = timed(reduce_, "solve"), timed(values_of, "metrics")
     parts = [(ks, "follow", "branch"), (dc, "sweep", "kernel"), (kc, "run", "kernel"),
              (analysis.compiled_dynamics, "solve", "kernel")]
     saved = [getattr(mod, name) for mod, name, _ in parts]
@@ -204,6 +209,7 @@ def stages(designs: int, samples: int, repeat: int = 1) -> dict:
                          "total": total, **inner})
     finally:
         runner.analyze_layout, runner._fill, runner._batches = solve, fill, batches
+        runner.reduced, Reduced.values = reduce_, values_of
         for (mod, name, _), f in zip(parts, saved):
             setattr(mod, name, f)
     return {k: min(r[k] for r in runs) for k in runs[0]}
@@ -214,8 +220,9 @@ def kernels(samples: int, repeat: int = 5) -> dict:
     ``runner.BATCH_SAMPLES`` design-samples), its branch already followed: the kinematics kernel
     (``kinematics.compiled.run``) then the dynamics stage (``dynamics.compiled.solve``), against
     the sweep kernel (``dynamics.compiled.sweep``, both fused, writing only the joints' motion and
-    the poses of the kinematics), each with the solution built from its arrays; the minimum of
-    ``repeat`` alternating runs."""
+    the poses of the kinematics), each with the solution built from its arrays, and the sweep
+    kernel keeping the metrics only (``sweep(..., metrics=)``), with the metrics from its
+    reductions and path; the minimum of ``repeat`` alternating runs."""
     from linkdyn import loads as loads_mod
     from linkdyn.dynamics import compiled as dc
     from linkdyn.kinematics import compiled as kc
@@ -241,6 +248,7 @@ def kernels(samples: int, repeat: int = 5) -> dict:
     finally:
         dc.sweep = sweep
     (lay, tt, *state), how = seen[0]
+    how = {k: v for k, v in how.items() if k != "metrics"}
     model, D = sp.model(), lay.designs
 
     def stages():
@@ -252,9 +260,14 @@ def kernels(samples: int, repeat: int = 5) -> dict:
         out = sweep(lay, tt, *state, **how)
         kin = _from_kernel(model, lay, tt, out, out["err"].reshape(D, samples), lambda: None)
         dc.swept(kin, loads_mod.wrenches(None, kin))
-    best = {"stages": np.inf, "fused": np.inf}
+    spec, keep, _ = runner._metrics_only(task, lay, runner._backend(task, D * samples, lay))
+
+    def metrics_only():
+        out = sweep(lay, tt, *state, metrics=keep, **how)
+        spec.values(model, out["reduced"], out["path"], state[0], samples)
+    best = {"stages": np.inf, "fused": np.inf, "metrics": np.inf}
     for _ in range(repeat):
-        for name, f in (("stages", stages), ("fused", fused)):
+        for name, f in (("stages", stages), ("fused", fused), ("metrics", metrics_only)):
             t0 = time.process_time()
             f()
             best[name] = min(best[name], (time.process_time() - t0) / (D * samples))
@@ -328,7 +341,9 @@ def main():
         print(f"one batch of {k['designs']} designs x {args.samples} samples, CPU ns per "
               f"design-sample (each the minimum of 5 alternating runs; load average "
               f"{os.getloadavg()[0]:.2f}): kinematics kernel then dynamics stage "
-              f"{k['stages'] * 1e9:.0f}, sweep kernel (fused) {k['fused'] * 1e9:.0f}")
+              f"{k['stages'] * 1e9:.0f}, sweep kernel (fused) {k['fused'] * 1e9:.0f}, "
+              f"sweep kernel keeping the metrics only (their reductions and the path point; "
+              f"the metrics from them) {k['metrics'] * 1e9:.0f}")
         return
     if args.chunk_only:
         chunk = min(args.designs, default_chunk(args.designs, args.samples))

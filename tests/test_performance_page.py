@@ -202,6 +202,8 @@ FIGURES = {
     "sweep.metrics_ns": Figure(CHUNK, r"CPU ns per design-sample:.*\bmetrics (\d+)", "timing"),
     "sweep.two_stages": Figure(SWEEP_KERNELS, r"then dynamics stage (\d+(?:\.\d+)?)", "timing"),
     "sweep.fused": Figure(SWEEP_KERNELS, r"sweep kernel \(fused\) (" + NUMBER + ")", "timing"),
+    "sweep.metrics_only": Figure(SWEEP_KERNELS, r"keeping the metrics only \([^)]*\) (" + NUMBER
+                                 + ")", "timing"),
     # forward dynamics
     **_simulate_rows(),
     "simulate.turns_free": Figure(SIMULATE, r"crank turns.*?\n\s+1e-08\s+no\s+\d+\s+" + NUMBER

@@ -150,3 +150,102 @@ def test_a_sweep_without_reactions_runs_the_sweep_kernel():
     sol = analysis.analyze_layout(loaded, compile_designs(loaded), t, backend="compiled",
                                   reactions=False)
     assert not isinstance(sol.kin, Swept)
+
+
+# --- the metrics-only sweep ---------------------------------------------------------------------
+
+def _recorded(monkeypatch):
+    """Calls of the sweep kernel with ``metrics`` (the metrics-only form), counted."""
+    calls = []
+    real = compiled.sweep
+
+    def sweep(*args, metrics=None, **kw):
+        if metrics is not None:
+            calls.append(metrics)
+        return real(*args, metrics=metrics, **kw)
+    monkeypatch.setattr(compiled, "sweep", sweep)
+    return calls
+
+
+def _analyzed(model, t, wanted, **path):
+    """Each metric of ``model`` alone, by analyze and :func:`linkdyn.studies.metrics.evaluate`
+    (None if analyze refuses it)."""
+    try:
+        sol = linkdyn.analyze(model, t, backend="numpy")
+    except linkdyn.AssemblyError:
+        return None
+    return linkdyn.studies.metrics.evaluate(sol, wanted, **path)
+
+
+def _same_metrics(df, models, t, wanted, **path):
+    """Every row of the sweep table ``df`` is analyze's metrics of its design within 1e-12 of
+    the metric's largest value, invalid where analyze refuses the design."""
+    ref = [_analyzed(m, t, wanted, **path) for m in models]
+    assert df.valid.tolist() == [r is not None for r in ref]
+    for name in wanted:
+        want = np.array([np.nan if r is None else float(r[name]) for r in ref])
+        got = df[name].to_numpy(float)
+        assert np.array_equal(np.isnan(got), np.isnan(want)), name
+        scale = np.nanmax(np.abs(want))
+        assert scale > 0 and np.nanmax(np.abs(got - want)) <= 1e-12 * scale, name
+
+
+HOEKEN_BOX = {"bodies.ground.points.O4[0]": [89.5, 60.0, 120.0, 75.0, 50.3, 150.0],
+              "bodies.coupler.points.O3[0]": [114.3, 90.0, 140.0, 130.0, 83.7, 60.0]}
+
+
+@pytest.mark.parametrize("path_range", [None, (0.5, 2.5)])
+def test_a_metrics_only_sweep_gives_analyzes_metrics_of_each_design(path_range, monkeypatch):
+    """A sweep of Hoeken designs (one that cannot be assembled, one that stops closing) whose
+    metrics are the driver's peak and rms effort and the path's deviation runs the kernel's
+    metrics-only form, several blocks of samples with a partial last one, and gives each
+    design's metrics as analyze does."""
+    monkeypatch.setattr(kc, "BLOCK", 7)
+    monkeypatch.setattr(compiled, "BLOCK", 7)
+    calls = _recorded(monkeypatch)
+    wanted = ["peak_tau_J1", "rms_tau_J1", "path_deviation"]
+    t = np.linspace(0.0, 4.0 / 3.0, 45)
+    df = linkdyn.sweep(linkdyn.example_path("hoeken"), HOEKEN_BOX, t, wanted,
+                       backend="compiled", path_range=path_range)
+    assert calls and calls[0].point == ("coupler", "P") and not df.valid[4] and not df.valid[5]
+    assert "cannot be assembled" in df.reason[4] and "stop closing" in df.reason[5]
+    space = linkdyn.studies.space(linkdyn.example_path("hoeken"), list(HOEKEN_BOX))
+    models = [space.model(v) for v in np.array(list(HOEKEN_BOX.values())).T]
+    _same_metrics(df, models, t, wanted, path_range=path_range)
+
+
+def test_the_peak_at_the_last_sample_and_a_negative_peak(monkeypatch):
+    """Hoeken's largest |effort| is a negative torque: a run that ends at that sample has its
+    peak there (a kernel that left out the last sample, or took the largest effort instead of
+    the largest |effort|, would miss it); and the block boundary falls just before it."""
+    monkeypatch.setattr(kc, "BLOCK", 3)
+    monkeypatch.setattr(compiled, "BLOCK", 3)
+    calls = _recorded(monkeypatch)
+    model = hoeken_design(38.1)
+    full = np.linspace(0.0, 4.0 / 3.0, 61)
+    tau = linkdyn.analyze(model, full, backend="numpy").dyn.tau[:, 0]
+    k = int(np.argmax(np.abs(tau)))
+    assert tau[k] < 0 and k % 3 == 0 and np.max(np.abs(tau[:k])) < np.abs(tau[k])
+    t = full[:k + 1]
+    df = linkdyn.sweep(model, {"bodies.crank.mass": [model.body("crank").mass] * 2}, t,
+                       ["peak_tau_J1", "rms_tau_J1"], backend="compiled")
+    assert calls and df.valid.all()
+    assert np.allclose(df.peak_tau_J1, -tau[k], rtol=1e-12, atol=0)
+    assert np.allclose(df.rms_tau_J1, np.sqrt(np.mean(tau[:k + 1] ** 2)), rtol=1e-12, atol=0)
+
+
+def test_two_drivers_reduce_their_own_columns(monkeypatch):
+    """The five-bar's two drivers: each effort metric is its own driver's (a kernel that read
+    the other column would give the other's numbers), with a path point of a distal link."""
+    calls = _recorded(monkeypatch)
+    path = "bodies.crank2.points.B[0]"
+    values = {path: [40.0, 45.0, 35.0]}
+    wanted = ["peak_tau_J1", "rms_tau_J5", "peak_tau_J5", "rms_tau_J1", "path_deviation"]
+    source = linkdyn.example_path("fivebar")
+    t = np.linspace(0.0, 1.0, 37)
+    df = linkdyn.sweep(source, values, t, wanted, backend="compiled", path_point="link3.P")
+    assert calls and [k for k, _ in calls[0].efforts] == [0, 1, 1, 0]
+    space = linkdyn.studies.space(source, [path])
+    models = [space.model([v]) for v in values[path]]
+    _same_metrics(df, models, t, wanted, path_point="link3.P")
+    assert not np.allclose(df.peak_tau_J1, df.peak_tau_J5)

@@ -9,6 +9,7 @@ from ..errors import ModelError, quiet
 from .. import joints as jk
 from ..model import GROUND
 from ..planar import dot, perp
+from .reduce import plus_square, root_mean
 from .energy import driver_energy, load_energy
 from .fourbar import (four_bars, link_travel, mechanical_advantage, stops, transmission_angle,
                       transmission_worst, travel_words)
@@ -22,7 +23,9 @@ ROUNDING = 1e-12
 
 def peak(x):
     """Largest |x| over the last (time) axis, finite samples only: (...,) for x (..., T); NaN
-    where no sample is finite. The ``peak`` of every summary entry and of the sweep metrics."""
+    where no sample is finite. The ``peak`` of every summary entry and of the sweep metrics.
+    Its reduction one sample at a time, from 0, is :func:`.reduce.larger_magnitude` (the
+    sweep kernel's, :func:`linkdyn.dynamics.compiled.sweep`)."""
     x = np.abs(np.asarray(x, float))
     ok = np.any(np.isfinite(x), axis=-1)
     out = np.max(np.where(np.isfinite(x), x, -np.inf), axis=-1)
@@ -30,11 +33,14 @@ def peak(x):
 
 
 def rms(x):
-    """Root mean square over the last (time) axis, finite samples only: (...,) for x (..., T)."""
+    """Root mean square over the last (time) axis, finite samples only: (...,) for x (..., T):
+    :func:`.reduce.root_mean` of the sum of :func:`.reduce.plus_square` over the samples (the
+    sweep kernel sums the same step one sample at a time)."""
     x = np.asarray(x, float)
     ok = np.isfinite(x)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sqrt(np.sum(np.where(ok, x, 0.0) ** 2, axis=-1) / np.sum(ok, axis=-1))
+        return root_mean(np.sum(plus_square(0.0, np.where(ok, x, 0.0)), axis=-1),
+                         np.sum(ok, axis=-1))
 
 
 def _peak(t, x):

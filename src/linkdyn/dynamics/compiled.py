@@ -27,6 +27,9 @@ at the same samples.
 """
 from __future__ import annotations
 
+import math
+from collections import namedtuple
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -36,8 +39,9 @@ from ..compiled import eliminate, inline, inner, njit, screw_views, vector_views
 from ..kinematics import KinematicSolution
 from ..kinematics import compiled as kc
 from ..compiled.loads import weights
+from ..design.reduce import larger_magnitude, plus_square
 from ..loads import Loads
-from ..planar import last
+from ..planar import last, turned
 from ..kinematics.compiled import cut_numbers
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
@@ -354,9 +358,25 @@ def _keep(x, out, d, k0, nb):
             o_i[k] = x_i[k]
 
 
+#: the reductions of the metrics-only sweep (:data:`Reduce`): ``peak`` (the running largest
+#: |x|, :func:`~linkdyn.design.reduce.larger_magnitude`) and the sum of squares of ``rms``
+#: (:func:`~linkdyn.design.reduce.plus_square`)
+PEAK, SQUARES = 0, 1
+
+#: What the metrics-only sweep keeps of each design (:func:`sweep` with ``metrics=``): the
+#: reductions over its samples ``kind`` (n_red,) (:data:`PEAK`, :data:`SQUARES`) of the
+#: drivers' efforts ``col`` (n_red,), into ``out`` (n_red, D); the path ``xy`` (2, D, T) of the
+#: point ``point`` (2, D) of body ``body`` (no design: no path); ``ok`` (D,) whether every
+#: sample of the design is valid as :func:`linkdyn.analysis.analyze_layout` counts it (closed
+#: within ``accept``, the pivots of ``J_dep`` above ``singular``, every joint's motion, effort
+#: and the kinetic energy finite).
+Reduce = namedtuple("Reduce", ("kind", "col", "out", "body", "point", "xy", "ok", "accept",
+                               "singular"), module=__name__)
+
+
 @njit
 def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam, o_tau, o_ke,
-           o_pivot, block):
+           o_pivot, block, R):
     """The kinematics of every sample (:func:`linkdyn.kinematics.compiled.block` on one
     block's scratch), then its dynamics (the stages of :func:`_dynamics`, on the same block,
     under the weights of :func:`linkdyn.compiled.loads.weights`): only ``KEPT`` of the
@@ -364,10 +384,16 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
     and pivot reach the outputs (component-first, batch ``(D, T)`` last; written in place).
     ``L``: the layout's view, ``X`` the kinematics kernel's inputs
     (:func:`linkdyn.kinematics.compiled.inputs`).
+
+    Outputs without designs (``q`` (n, 0, 0), ...): the metrics only, :data:`Reduce` ``R``
+    (else its arrays are empty): each design's reductions taken as its blocks are solved, its
+    path point and its validity, nothing else per sample.
     """
     n, nc, m, nv, n_rows = len(L.parent), len(L.cut_a), len(L.dependent), len(L.driven), \
         o_lam.shape[0]
     D, T = L.size.shape[0], X.t_s.shape[0]
+    keep = q.shape[1] > 0   # every sample's outputs, else the metrics of R
+    n_red, path = R.kind.shape[0], R.xy.shape[1] > 0
     gravity = L.gravity
     B = block
     # the work arrays' place as an int64, not a literal 0: the callees then reuse the
@@ -381,6 +407,7 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
             np.zeros((n, 3, 1, B)))
     q_w, phi_w, c_w, s_w, r_w, e_w, J_w, qd_w, qdd_w, tw_w, td_w = work
     cut_w = np.zeros((nc, 3, 1, B))
+    err_w, piv_w, fin_w = np.zeros((1, B)), np.zeros((1, B)), np.zeros((1, B), np.bool_)
     # the dynamics of one block (as _dynamics without its internals), its applied wrenches
     w_b = np.zeros((n, 3, 1, B))
     A = np.zeros((m, m + 1, B))
@@ -391,32 +418,96 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
         dp = d if L.mass.shape[1] > 1 else 0
         dg = d if gravity.shape[1] > 1 else 0
         g = (gravity[0, dg], gravity[1, dg])
+        ok, total = True, 0.0   # the design's samples valid; the sum of its outputs
+        for a in range(n_red):
+            R.out[a, d] = 0.0
         for k0 in range(0, T, B):
             nb = min(B, T - k0)
-            kc.block(L, X, d, k0, nb, work, z, z, err, pivot, fin, tmp)
+            kc.block(L, X, d, k0, nb, work, z, z, err_w, piv_w, fin_w, tmp)
             kc._cut_motion(L, d, z, z, nb, phi_w, r_w, tw_w, td_w, tmp[5], cut_w)
-            for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
-                           (qdd_w, qdd)):
-                _keep(x, out, d, k0, nb)
-            for i in range(n):
-                _keep(r_w[i], r[i], d, k0, nb)
-            for i in axes:
-                _keep(e_w[i], e[i], d, k0, nb)
-            for ci in range(nc):
-                _keep(cut_w[ci], cut[ci], d, k0, nb)
+            if keep:
+                for x, out in ((q_w, q), (phi_w, phi), (c_w, c), (s_w, s), (qd_w, qd),
+                               (qdd_w, qdd)):
+                    _keep(x, out, d, k0, nb)
+                for i in range(n):
+                    _keep(r_w[i], r[i], d, k0, nb)
+                for i in axes:
+                    _keep(e_w[i], e[i], d, k0, nb)
+                for ci in range(nc):
+                    _keep(cut_w[ci], cut[ci], d, k0, nb)
+                for k in range(nb):
+                    err[d, k0 + k], pivot[d, k0 + k] = err_w[0, k], piv_w[0, k]
+                    fin[d, k0 + k] = fin_w[0, k]
             # the dynamics of the block (the ground's w_tilde only accumulates)
             if g[0] != 0.0 or g[1] != 0.0:   # else no applied wrench: w_b stays zero
                 weights(L, g, dp, nb, c_w, s_w, r_w, w_b, pe_b)
             wtilde[0, :, 0, :nb] = 0.0
             _newton_euler(L, z, dp, z, nb, z, z, c_w, s_w, tw_w, td_w, w_b, w_b, ke, wstar,
                           wtilde)
-            o_ke[d, k0:k0 + nb] = ke[:nb]
             _composite(L, r_w, z, z, nb, z, z, wtilde)
             _generalized(L, z, z, nb, z, z, e_w, wtilde, Q)
             _multipliers(L, z, z, nb, J_w, Q[:, 0, 0:nb], A, lam, piv, lam_b, tau_b, pivot_b)
-            _keep(lam_b, o_lam, d, k0, nb)
-            _keep(tau_b, o_tau, d, k0, nb)
-            o_pivot[d, k0:k0 + nb] = pivot_b[0, :nb]
+            if keep:
+                o_ke[d, k0:k0 + nb] = ke[:nb]
+                _keep(lam_b, o_lam, d, k0, nb)
+                _keep(tau_b, o_tau, d, k0, nb)
+                o_pivot[d, k0:k0 + nb] = pivot_b[0, :nb]
+                continue
+            ok = ok and _valid(R, nb, err_w, piv_w, fin_w, pivot_b)
+            total += _total(nb, q_w, cut_w, tau_b, ke)
+            for a in range(n_red):   # each metric's reduction, one sample at a time
+                acc, x = R.out[a, d], tau_b[R.col[a], 0]
+                if R.kind[a] == PEAK:
+                    for k in range(nb):
+                        acc = larger_magnitude(acc, x[k])
+                else:
+                    for k in range(nb):
+                        acc = plus_square(acc, x[k])
+                R.out[a, d] = acc
+            if path:   # the path point, as KinematicSolution.point
+                i = R.body
+                dq = d if R.point.shape[1] > 1 else 0
+                p = (R.point[0, dq], R.point[1, dq])
+                c_i, s_i, rx, ry = c_w[i, 0], s_w[i, 0], r_w[i, 0, 0], r_w[i, 1, 0]
+                x_o, y_o = R.xy[0, d, k0:k0 + nb], R.xy[1, d, k0:k0 + nb]
+                for k in range(nb):
+                    u = turned(c_i[k], s_i[k], p)
+                    x_o[k], y_o[k] = rx[k] + u[0], ry[k] + u[1]
+        if not keep:
+            R.ok[d] = ok and math.isfinite(total)
+
+
+@inline
+def _valid(R, nb, err, piv, fin, dyn_piv):
+    """Whether every sample of a block is valid (closed within ``R.accept``, ``J_dep``'s
+    pivots of the kinematics and the dynamics above ``R.singular``, rates and accelerations
+    finite: :func:`linkdyn.analysis.analyze_layout`'s ``valid`` before the outputs' check)."""
+    good = True
+    for k in range(nb):
+        good = good and (err[0, k] <= R.accept and fin[0, k] and piv[0, k] > R.singular
+                         and dyn_piv[0, k] > R.singular)
+    return good
+
+
+@inline
+def _total(nb, q, cut, tau, ke):
+    """The sum of a block's joint coordinates, cut joints' motion, efforts and kinetic
+    energy: finite when every one of them is (the outputs :func:`linkdyn.analysis._finite`
+    checks; the rates and accelerations are in :func:`_valid`)."""
+    total = 0.0
+    for k in range(nb):
+        total += ke[k]
+    for i in range(1, q.shape[0]):
+        for k in range(nb):
+            total += q[i, 0, k]
+    for ci in range(cut.shape[0]):
+        for j in range(3):
+            for k in range(nb):
+                total += cut[ci, j, 0, k]
+    for a in range(tau.shape[0]):
+        for k in range(nb):
+            total += tau[a, 0, k]
+    return total
 
 
 def fusable(lay) -> bool:
@@ -427,34 +518,77 @@ def fusable(lay) -> bool:
     return not lay.loads
 
 
-def sweep(lay, t, q_drv, qd_drv, qdd_drv, **closing) -> dict:
+def sweep(lay, t, q_drv, qd_drv, qdd_drv, *, metrics=None, **closing) -> dict:
     """The kinematics of :func:`linkdyn.kinematics.compiled.run` (same arguments) fused with
     the dynamics of :func:`solve` in one kernel (:func:`_sweep`), for a layout without
     applied loads but gravity (:func:`fusable`): the loops are closed, the rates and
     accelerations solved and the dynamics done a block of samples at a time, and only ``KEPT``
     of the kinematics (no twists, twist rates or Jacobian) is written per sample.
 
+    ``metrics``: a :class:`Metrics`, to keep only what a sweep's metrics read (nothing of
+    the above per sample).
+
     Returns
     -------
     dict
         ``run``'s outputs named in ``KEPT`` (``e``: the rows of the joints with a slider axis,
         the others zero), ``pivot``, ``err``, ``finite``, and the dynamics' ``lam``
-        (n_rows, D, T), ``tau`` (n_drivers, D, T), ``ke`` and ``dyn_pivot`` (D, T).
+        (n_rows, D, T), ``tau`` (n_drivers, D, T), ``ke`` and ``dyn_pivot`` (D, T). With
+        ``metrics``: ``ok`` (D,) every sample of the design valid, ``reduced`` (n_red, D) the
+        reductions of ``metrics.efforts`` (peak: the largest |effort|; rms: the sum of squares)
+        and ``path`` (2, D, T) the point ``metrics.point`` (none: (2, 0, 0)), m.
     """
     args = kc.inputs(lay, t, q_drv, qd_drv, qdd_drv, **closing)
     topo, L = lay.topo, lay.view
     n, nc, D, T = topo.n, topo.n_loops, max(lay.designs, 1), len(t)
+    at = (0, 0) if metrics else (D, T)   # per sample, or nothing
     shapes = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
               "qd": (n,), "qdd": (n,), "cut": (nc, 3), "pivot": (), "err": ()}
     # every number of these is written (the ground's rows too), but e's rows without an axis
-    out = {k: (np.zeros if k == "e" else np.empty)(shape + (D, T)) for k, shape in shapes.items()}
-    out["finite"] = np.empty((D, T), np.bool_)
-    dyn = {"lam": np.empty((topo.n_rows, D, T)), "tau": np.empty((len(L.driven), D, T)),
-           "ke": np.empty((D, T)), "dyn_pivot": np.empty((D, T))}
+    out = {k: (np.zeros if k == "e" else np.empty)(shape + at) for k, shape in shapes.items()}
+    out["finite"] = np.empty(at, np.bool_)
+    dyn = {"lam": np.empty((topo.n_rows,) + at), "tau": np.empty((len(L.driven),) + at),
+           "ke": np.empty(at), "dyn_pivot": np.empty(at)}
     axes = np.array([i for i in range(1, n) if "axis" in jk.get(lay.kind[i]).keys], np.int64)
-    _sweep(L, args, axes, *out.values(), *dyn.values(), min(BLOCK, T))
+    R = _reduce(lay, metrics, D, T)
+    _sweep(L, args, axes, *out.values(), *dyn.values(), min(BLOCK, T), R)
+    if metrics:
+        return {"ok": R.ok, "reduced": R.out, "path": R.xy}
     out.update(dyn)
     return out
+
+
+@dataclass(frozen=True)
+class Metrics:
+    """What a metrics-only :func:`sweep` keeps: ``efforts``, pairs ``(driver, how)`` (the
+    driver's index in the model's drivers, ``'peak'`` or ``'rms'``); ``point``, ``(body,
+    point)`` names of the path point, or None; the thresholds of a valid sample, ``accept``
+    (the closure residual, :data:`linkdyn.kinematics.positions.ACCEPT`) and ``singular`` (the
+    relative pivot, :data:`linkdyn.analysis.SINGULAR`)."""
+
+    efforts: tuple
+    point: tuple | None
+    accept: float
+    singular: float
+
+
+def _reduce(lay, metrics: Metrics | None, D: int, T: int) -> Reduce:
+    """The kernel's :data:`Reduce` for ``metrics`` (None: every array empty)."""
+    if metrics is None:
+        return Reduce(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, D)),
+                      np.int64(0), np.zeros((2, 1)), np.zeros((2, 0, 0)),
+                      np.zeros(0, np.bool_), 0.0, 0.0)
+    kind = np.array([PEAK if how == "peak" else SQUARES for _, how in metrics.efforts],
+                    np.int64)
+    col = np.array([k for k, _ in metrics.efforts], np.int64)
+    body, point, xy = 0, np.zeros((2, 1)), np.zeros((2, 0, 0))
+    if metrics.point is not None:
+        body = lay.topo.bodies.index(metrics.point[0])
+        p = np.asarray(lay.points[body][metrics.point[1]], float)
+        point = np.ascontiguousarray(np.reshape(p, (2, -1)))
+        xy = np.empty((2, D, T))
+    return Reduce(kind, col, np.zeros((len(kind), D)), np.int64(body), point, xy,
+                  np.zeros(D, np.bool_), float(metrics.accept), float(metrics.singular))
 
 
 def swept(kin: KinematicSolution, loads: Loads) -> DynamicSolution:

@@ -271,9 +271,9 @@ def _frame(P_c, k):
 def _residual(L, d, k0, w, kw, nb, phi, P, err, g):
     """Loop-closure residual (the kinds' ``residual`` steps) into ``g`` (n_rows, block), and
     its rows in metres relative to the layout's size, max over the cut rows
-    (:func:`.positions.scaled_error`), into ``err`` (D, T) at design d, samples from ``k0``;
-    the angles ``phi`` at ``w``, ``kw``."""
-    err_d = err[d, k0:k0 + nb]
+    (:func:`.positions.scaled_error`), into ``err`` at ``w``, samples from ``kw`` (as the angles
+    ``phi``); design d's numbers."""
+    err_d = err[w, kw:kw + nb]
     err_d[:] = 0.0
     size = L.size
     last = g.shape[0] - 1
@@ -453,9 +453,9 @@ def _cut_motion(L, d, w, kw, nb, phi, r, tw, td, P, out):
 
 @inner
 def _finite(d, k0, w, kw, nb, qd, qdd, fin):
-    """``fin`` (D, T) at design d, samples from ``k0``: whether every rate and acceleration
-    of the sample (``qd``, ``qdd`` at ``w``, ``kw``) is finite."""
-    fin_d = fin[d, k0:k0 + nb]
+    """``fin`` at ``w``, samples from ``kw`` (as ``qd``, ``qdd``): whether every rate and
+    acceleration of the sample is finite."""
+    fin_d = fin[w, kw:kw + nb]
     fin_d[:] = True
     for i in range(len(qd)):
         qd_i, qdd_i = qd[i, w, kw:kw + nb], qdd[i, w, kw:kw + nb]
@@ -567,8 +567,8 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     (the layout's view ``L``, the inputs ``X``, as in :func:`kernel`): the per-sample arrays
     ``work`` = ``(q, phi, c, s, r, e, J, qd, qdd, tw, td)`` written at design ``w``, samples
     from ``kw`` (the outputs themselves, ``w, kw = d, k0``, or one block's scratch, ``0,
-    0``); ``err``, ``pivot``, ``fin`` (D, T) at d, ``k0``; ``tmp`` the block's scratch
-    (:func:`scratch`)."""
+    0``); ``err``, ``pivot``, ``fin`` ((D, T), or (1, block)) at the same place; ``tmp`` the
+    block's scratch (:func:`scratch`)."""
     q, phi, c, s, r, e, J, qd, qdd, tw, td = work
     cq, sq, up, low, rhs, P, A, sol, col, perm, node = tmp
     dep, drv, nodes = L.dependent, L.driven, X.nodes
@@ -608,7 +608,7 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
         _factor_dep(dep, J, w, kw, nb, A, perm, col)
         _solve_dep(dep, A, perm, col, w, kw, nb, rhs, qd, sol)
     for k in range(nb):
-        pivot[d, k0 + k] = col[k] if nd else 1.0
+        pivot[w, kw + k] = col[k] if nd else 1.0
     _twists(L, w, kw, nb, r, e, qd, tw)
     # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)          (eqs. 6-7)
     _twist_rates(L, w, kw, nb, r, e, tw, qd, qdd, td)

@@ -90,6 +90,35 @@ def solve(model, t, layout: Layout | None = None, backend: str | None = None,
     return kin if ended is None else blanked(kin, ended, np.where(ended, np.inf, kin.residual))
 
 
+def reduced(models, lay: Layout, t, start, run) -> dict | None:
+    """A batch's metrics by the sweep kernel's metrics-only form (``run``:
+    :func:`linkdyn.dynamics.compiled.sweep` with its ``metrics``), on the branch :func:`solve`
+    follows on the compiled backend, where every sample closes in closed form from its
+    nearest node (a mechanism of dyads); None otherwise (``solve`` then).
+
+    Returns
+    -------
+    dict
+        ``run``'s outputs, its ``ok`` (D,) also False for a design whose branch was not
+        followed, and ``q_drv`` (n_drivers, D, T) the drivers' coordinates, rad or m.
+    """
+    t = np.asarray(t, dtype=float)
+    q_ind, qd_ind, qdd_ind = lay.driver_values(t)
+    branch = follow(models, lay, t, False, start, nodes=compiled_nodes.close,
+                    newton_nodes=compiled_nodes.follow)
+    if branch.nodes is None or lay.dyads is None:
+        return None
+    lo, hi = branch.span
+    out = run(lay, t, q_ind, qd_ind, qdd_ind, nodes=branch.nodes, Q=branch.Q,
+              modes=branch.modes, lo=lo, hi=hi)
+    out["ok"] = out["ok"] & np.reshape(branch.followed, -1)
+    D = max(lay.designs, 1)
+    out["q_drv"] = np.broadcast_to(np.reshape(q_ind, (len(q_ind), -1, len(t))),
+                                   (len(q_ind), D, len(t)))
+    mark_cached("sweep")
+    return out
+
+
 def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run=kc.run
               ) -> KinematicSolution:
     """:func:`solve`'s state stage by the compiled kernel ``run`` for the whole batch: it

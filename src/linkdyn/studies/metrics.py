@@ -52,12 +52,15 @@ ranks by :func:`cost`, the metric signed so that smaller is better.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..design import four_bars, shaking_force, transmission_angle
 from ..design.energy import driver_power, energy_fluctuation, first_cycle, flywheel_inertia
 from ..design.fourbar import transmission_worst
 from ..design.overview import contact_forces, peak, rms
+from ..design.reduce import root_mean
 from ..design.path import (_in_range, _parse_point, default_path_point, line_fit, max_deviation,
                            travel)
 from ..errors import ModelError
@@ -277,6 +280,52 @@ def evaluate(sol, wanted=None, *, models=None, path_point=None, path_range=None,
     return {w: out[w] for w in wanted}
 
 
+@dataclass(frozen=True)
+class Reduced:
+    """How a sweep's kernel gives the metrics ``wanted`` while it walks each design's samples
+    (:func:`reduced`; :func:`linkdyn.dynamics.compiled.sweep` with ``metrics``): each effort
+    metric ``(name, driver index, 'peak' or 'rms')`` reduced by the steps of its definition
+    (:func:`~linkdyn.design.reduce.larger_magnitude`, :func:`~linkdyn.design.reduce.plus_square`),
+    and the path point ``(body, point)`` of ``path_deviation`` (or None), whose per-sample
+    path the kernel keeps for :func:`~linkdyn.design.path.line_fit`, over ``q_range``."""
+
+    efforts: tuple
+    point: tuple | None = None
+    q_range: tuple | None = None
+
+    def values(self, model: Model, reduced, path, q_drv, samples: int) -> dict:
+        """The metrics (each (D,), SI) from the kernel's ``reduced`` (n_efforts, D), ``path``
+        (2, D, T), the drivers' coordinates ``q_drv`` (n_drivers, D, T) and the number of
+        samples: the numbers :func:`evaluate` gives of the designs' solution."""
+        out = {}
+        for a, (name, _, how) in enumerate(self.efforts):
+            out[name] = reduced[a] if how == "peak" else root_mean(reduced[a], samples)
+        if self.point is not None:
+            out["path_deviation"] = _deviation(model, np.moveaxis(path, 0, -1),
+                                               q_drv[0] if len(q_drv) else None, self.q_range)
+        return out
+
+
+def reduced(model: Model, wanted, *, path_point=None, path_range=None) -> Reduced | None:
+    """The :class:`Reduced` of the metrics ``wanted`` of a planar ``model``, or None when one
+    of them is not a driver's ``peak_``/``rms_`` effort or ``path_deviation`` (the sweep then
+    keeps the solution and :func:`evaluate` reads it)."""
+    if model.space == "spatial":
+        return None
+    cols = {_effort(model, d.joint): k for k, d in enumerate(model.drivers)}
+    efforts, point, q_range = [], None, None
+    for w in wanted:
+        how, _, col = w.partition("_")
+        if how in ("peak", "rms") and col in cols:
+            efforts.append((w, cols[col], how))
+        elif w == "path_deviation":
+            name, q_range = path_spec(model, path_point, path_range)
+            point = tuple(name.split("."))
+        else:
+            return None
+    return Reduced(tuple(efforts), point, q_range)
+
+
 def _spatial(sol, wanted) -> dict[str, float]:
     """Metrics of one spatial run (:class:`linkdyn.spatial.SpatialSolution`): each driver's
     peak and RMS effort, each joint's peak force magnitude ``|(Fx, Fy, Fz)|`` and the peak
@@ -310,11 +359,18 @@ def _path_deviation(sol, path_point, path_range):
     m = sol.model
     point, q_range = path_spec(m, path_point, path_range)
     body, name = point.split(".")
-    xy = sol.point(body, name)
+    q = None
+    if q_range is not None and m.drivers:
+        q = sol.kin.q[..., [j.name for j in m.joints].index(m.drivers[0].joint)]
+    return _deviation(m, sol.point(body, name), q, q_range)
+
+
+def _deviation(m: Model, xy, q, q_range):
+    """``path_deviation`` of the path ``xy`` (..., T, 2) over the samples where the first
+    driver's coordinate ``q`` (..., T) lies in ``q_range`` (None: every sample)."""
     sel = np.ones(xy.shape[:-1], bool)
     if q_range is not None and m.drivers:
-        k = [j.name for j in m.joints].index(m.drivers[0].joint)
-        sel = _in_range(m, sol.kin.q[..., k], q_range)
+        sel = _in_range(m, q, q_range)
     c, u, dev = line_fit(xy, sel)
     dev = np.where(np.sum(np.isfinite(dev), axis=-1)[..., None] >= 3, dev, np.nan)
     return max_deviation(dev)

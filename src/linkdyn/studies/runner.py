@@ -21,6 +21,7 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +31,9 @@ from .. import backend as backend_mod
 from ..analysis import SINGULAR, analyze, analyze_layout, failure, layout_stages
 from ..errors import AssemblyError, ModelError
 from ..kinematics import driver_values
-from ..kinematics.positions import assemble, not_assembled
+from ..dynamics import compiled as compiled_dynamics
+from ..kinematics.positions import ACCEPT, assemble, not_assembled
+from ..kinematics.solution import reduced
 from . import checks, files
 from .files import _pandas
 from . import metrics as metrics_mod
@@ -213,17 +216,52 @@ def evaluate(task: Task, values) -> dict[str, np.ndarray]:
         reason[k] = _reason(_not_assembled(task.space.model(values[k]), builder.layout))
     # the backend chosen once for the chunk, so that a small last batch runs it too
     backend = _backend(task, D * len(task.t), builder.layout)
+    spec = _metrics_only(task, builder.layout, backend)
     at = 0   # the batch's columns of ``start``, the chunk's assembly
     for idx in batches:
+        cols = slice(at, at + len(idx))
+        at += len(idx)
+        if spec is not None:   # the kernel keeps the metrics only
+            sub = lay if len(idx) == D else lay.take(idx)
+            got = reduced(builder.guess_models({k: g[idx] for k, g in guesses.items()},
+                                               len(idx)), sub, task.t, start[:, cols],
+                          partial(compiled_dynamics.sweep, metrics=spec[1]))
+            if got is not None:
+                ok = got["ok"]
+                metric = spec[0].values(spec[2], got["reduced"], got["path"], got["q_drv"],
+                                        len(task.t))
+                valid[idx] = ok
+                for name, v in metric.items():
+                    out[name][idx] = np.where(ok, v, np.nan)
+                if np.all(ok):
+                    continue
+                # a design with a sample that is not valid: solved again, kept, for its
+                # reason (and its metrics NaN) as analyze gives them
+                idx, cols = idx[~ok], np.arange(cols.start, cols.stop)[~ok]
         sub = lay if len(idx) == D else lay.take(idx)
         sol = analyze_layout(builder.guess_models({k: g[idx] for k, g in guesses.items()},
                                                   len(idx)), sub, task.t, backend=backend,
                              designs=Designs(task.space, values[idx]),
                              reactions=metrics_mod.reads_reactions(task.metrics),
-                             start=start[:, at:at + len(idx)])
-        at += len(idx)
+                             start=start[:, cols])
         _fill(task, sol, idx, valid, reason, out)
     return {"valid": valid, "reason": reason, **out}
+
+
+def _metrics_only(task: Task, layout, backend) -> tuple | None:
+    """``(Reduced, dynamics.compiled.Metrics, the study's model)`` when the sweep kernel can keep the task's
+    metrics only (:func:`.metrics.reduced`; the compiled backend, the sweep kernel's layout:
+    :func:`linkdyn.dynamics.compiled.fusable`), else None (the solution is kept and
+    :func:`.metrics.evaluate` reads it)."""
+    if not backend.compiled or not compiled_dynamics.fusable(layout):
+        return None
+    model = task.space.model()
+    spec = metrics_mod.reduced(model, task.metrics, path_point=task.path_point,
+                               path_range=task.path_range)
+    if spec is None:
+        return None
+    return spec, compiled_dynamics.Metrics(tuple((k, how) for _, k, how in spec.efforts),
+                                           spec.point, ACCEPT, SINGULAR), model
 
 
 def _backend(task: Task, samples: int, layout=None, runs: bool = True) -> backend_mod.Backend:
