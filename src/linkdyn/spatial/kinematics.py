@@ -16,12 +16,14 @@ import numpy as np
 
 from .. import topology as topology_mod
 from ..errors import AssemblyError, ModelError
+from ..kinematics.positions import singular
 from . import algebra as sa
 from . import joints as sj
 
 RANK = 1e-9          # a singular value below this fraction of the largest counts as zero
 CLOSED = 1e-10       # closure: a residual row below this (times the size for a length) is closed
-SINGULAR = "the mechanism passes a singular position (the dependent joints' Jacobian loses rank)"
+SINGULAR = ("the mechanism passes a singular position (the dependent joints' Jacobian loses "
+            "rank there, or within the closure's resolution)")
 SINGULAR_FIX = ("Limit the driver's range, or change the geometry so the loops do not reach a "
                 "dead-centre or locked position")
 ANGLE_STEP = 0.3     # rad, continuation step of an angular driver
@@ -351,17 +353,38 @@ def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndar
 
 def rank_of(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
     """The numerical rank (T,) of each closure Jacobian (T, rows, k) (its columns ``cols`` of
-    the tree coordinates, default all): of ``J`` made dimensionless (length rows over the
-    mechanism's size, length columns times it), counting singular values above ``RANK``
-    times the largest or 1, whichever is larger (a Jacobian of round-off alone, a wholly
-    redundant loop, has rank 0)."""
+    the tree coordinates, default all): of ``J`` made dimensionless (:func:`_singular_values`),
+    counting singular values above ``RANK`` times the largest or 1, whichever is larger (a
+    Jacobian of round-off alone, a wholly redundant loop, has rank 0)."""
     if J.shape[1] == 0 or J.shape[2] == 0:
         return np.zeros(len(J), dtype=int)
+    s = _singular_values(p, J, cols)
+    return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
+
+
+def conditioning(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
+    """The conditioning (T,) of each closure Jacobian (T, rows, k) (its columns ``cols``):
+    made dimensionless (:func:`_singular_values`), its k-th singular value over its largest
+    or 1, whichever is larger (0 where it has fewer rows than columns; 1 without columns):
+    ~0 where its columns lose rank, what :func:`~linkdyn.kinematics.positions.singular`
+    weighs against the closure residual."""
+    k = J.shape[2]
+    if k == 0:
+        return np.ones(len(J))
+    if J.shape[1] < k:
+        return np.zeros(len(J))
+    s = _singular_values(p, J, cols)
+    return s[:, k - 1] / np.maximum(s[:, 0], 1.0)
+
+
+def _singular_values(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
+    """The singular values (T, min(rows, k)) of the closure Jacobians ``J`` (T, rows, k) (the
+    tree coordinates ``cols``, default all) made dimensionless: length rows over the
+    mechanism's size, length columns times it."""
     lengths = p.length_coordinate if cols is None else p.length_coordinate[cols]
     Jn = ((J / np.where(p.length_row, _size(p), 1.0)[..., None])
           * np.where(lengths, _size(p), 1.0)[..., None, :])
-    s = np.linalg.svd(Jn, compute_uv=False)
-    return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
+    return np.linalg.svd(Jn, compute_uv=False)
 
 
 # ---------------------------------------------------------------- following the drivers
@@ -567,8 +590,8 @@ def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
         guess[p.driven] = qi[m]
         sol, err = newton(model, p, guess[None])
         if err[0] > CLOSED:
-            jd = closure(model, p, poses(p, here[None]))[2][:, :, p.dependent]
-            if rank_of(p, jd, p.dependent)[0] < len(p.dependent):     # stuck at a singular position
+            g, _, J = closure(model, p, poses(p, here[None]))
+            if _singular(p, J, g)[0]:                   # stuck at a singular position
                 raise _fail(model, t[m - 1], qi[m - 1], SINGULAR, SINGULAR_FIX)
             raise _fail(model, t[m], qi[m], "the loops stop closing",
                         "Check the geometry and the driver's range: the mechanism cannot "
@@ -658,11 +681,22 @@ def solve_designs(models, p: Plan, t: np.ndarray):
 
 
 def singular_samples(p: Plan, m: Motion) -> np.ndarray:
-    """The samples (T,) bool of ``m`` at a singular position: the dependent coordinates'
-    closure Jacobian ``J_dep`` loses rank there (:func:`rank_of`), so their rates and
-    accelerations are not determined by the drivers'."""
+    """The samples (T,) bool of ``m`` at a singular position, or within the closure's
+    resolution of one: the dependent coordinates' closure Jacobian ``J_dep`` loses rank there,
+    so their rates and accelerations are not determined by the drivers' (its
+    :func:`conditioning` weighed against the sample's closure residual by
+    :func:`linkdyn.kinematics.positions.singular`, the planar test)."""
+    return _singular(p, m.J, residual=m.residual)
+
+
+def _singular(p: Plan, J: np.ndarray, g: np.ndarray | None = None,
+              residual: np.ndarray | None = None) -> np.ndarray:
+    """:func:`singular_samples` of the closure Jacobians ``J`` (T, rows, n_q) closed to the
+    residual rows ``g`` (T, rows) or the scaled ``residual`` (T,)."""
+    if residual is None:
+        residual = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
     dep = p.dependent
-    return rank_of(p, m.J[:, :, dep], dep) < len(dep)
+    return singular(conditioning(p, J[:, :, dep], dep), residual)
 
 
 def driver_motions(models, t: np.ndarray):
