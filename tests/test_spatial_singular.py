@@ -30,6 +30,22 @@ def table(path):
     return dict(zip(names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2).T))
 
 
+def same_as_alone(rows: dict, alone, kept, size: float) -> None:
+    """The rows ``kept`` of a run with gaps equal the solution ``alone`` of those samples
+    alone, column by column, to 1e-9 of the column's peak; a column of rounding alone (the
+    out-of-plane reactions of a planar motion) to 1e-15 of its unit's largest (a moment's: of
+    the largest force times the mechanism's ``size``, m)."""
+    cols, units = alone.columns(), alone.units()
+    assert list(cols) == list(rows)
+    family = {}
+    for k, v in cols.items():
+        family[units[k]] = max(family.get(units[k], 0.0), float(np.max(np.abs(v))))
+    family["N m"] = max(family.get("N m", 0.0), family.get("N", 0.0) * size)
+    for name, v in cols.items():
+        scale = max(float(np.max(np.abs(v))), 1e-6 * family[units[name]], 1e-300)
+        np.testing.assert_allclose(rows[name][kept], v, rtol=0, atol=1e-9 * scale, err_msg=name)
+
+
 # ------------------------------------------------ the bundled slider-crank driven by its slider
 # its guide: S + s e (mm), its crank: radius 30 mm about +z at the origin, its rod B-C
 S, E, CRANK = np.array([0.0, 40.0, 60.0]), np.array([0.8, 0.0, 0.6]), 30.0
@@ -92,11 +108,7 @@ def test_allow_singular_makes_the_dead_centre_a_gap(tmp_path):
     rows = table(out / "results.csv")
     assert all(np.all(np.isnan(v[bad])) for k, v in rows.items() if k != "t")
     assert all(np.all(np.isfinite(v[~bad])) for v in rows.values())
-    alone = linkdyn.analyze(linkdyn.load(path), t[~bad]).columns()
-    assert list(alone) == list(rows)
-    for name, v in alone.items():
-        scale = max(float(np.max(np.abs(v))), 1e-300)
-        np.testing.assert_allclose(rows[name][~bad], v, rtol=0, atol=1e-9 * scale, err_msg=name)
+    same_as_alone(rows, linkdyn.analyze(linkdyn.load(path), t[~bad]), ~bad, 0.12)
     # the slider's force stays that of a mechanism away from its dead centre: tens of newtons
     assert np.max(np.abs(rows["force_J4"][~bad])) < 100.0
 
@@ -111,8 +123,8 @@ def inline(delta: float) -> dict:
     L - delta + delta (t - 1)^3``: at rest (s' = s'' = 0) at t = 1 s, ``delta`` short of the
     outer dead centre, and at the dead centre itself at t = 2 s."""
     c, s = np.cos(np.pi / 3), np.sin(np.pi / 3)
-    a = [R * c, R * s, 0.0]
-    x0 = R * c + np.sqrt(L * L - R * R * s * s)
+    a = [float(R * c), float(R * s), 0.0]
+    x0 = float(R * c + np.sqrt(L * L - R * R * s * s))
 
     def body(name, points):
         return {"name": name, "points": points, "mass": 1.0, "inertia": [0.001, 0.002, 0.003]}
@@ -179,3 +191,36 @@ def test_the_bundled_spatial_examples_run_clean(name):
     model = linkdyn.load(EXAMPLES / f"{name}.toml")
     sol = linkdyn.analyze(model, times(model, None, None, None))
     assert np.all(sol.valid)
+
+
+def test_allow_singular_writes_gaps_where_the_loops_stop_closing(tmp_path):
+    """The slider pushed past the dead centre (s from R + L - 0.02 m at 0.041 m/s: out of reach
+    from t ~ 0.49 s): exit 3 naming the first sample that does not close (t = 0.5 s, its
+    slider value); with ``--allow-singular`` that sample and every later one are NaN rows, as
+    a planar branch that ends, and the others are the run without them to 1e-9 of each
+    column's peak."""
+    from linkdyn.io.writer import dumps_toml
+
+    data = inline(0.0)
+    data["drivers"][0]["motion"]["q"] = f"{R + L - 0.02!r} + 0.041*t"
+    data["analysis"] = {"duration": 1.0, "samples": 11}
+    path = tmp_path / "past_dead_centre.toml"
+    path.write_text(dumps_toml(data))
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(tmp_path / "refused")])
+    assert res.exit_code == 3 and "Traceback" not in res.output, res.output
+    assert "the loops stop closing" in res.output
+    assert "at t = 0.5 s (q_J4 = 0.4005 m)" in res.output, res.output
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(out), "--allow-singular"])
+    assert res.exit_code == 0, res.output
+    assert "6 samples that do not close or sit at a singular position" in res.output
+    t = np.linspace(0.0, 1.0, 11)
+    bad = t >= 0.5
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["invalid_samples"] == 6
+    np.testing.assert_allclose(summary["invalid_times_s"], t[bad], atol=1e-12)
+    rows = table(out / "results.csv")
+    np.testing.assert_array_equal(rows["t"], t)
+    assert all(np.all(np.isnan(v[bad])) for k, v in rows.items() if k != "t")
+    assert all(np.all(np.isfinite(v[~bad])) for v in rows.values())
+    same_as_alone(rows, linkdyn.analyze(linkdyn.load(path), t[~bad]), ~bad, R + L)
