@@ -5,7 +5,10 @@ smallest singular value of ~1e-8 of its largest), is flagged by the closure's re
 (``kinematics.positions.singular``: exit 3 naming the time and the slider's value; with
 ``--allow-singular`` a gap), while a sample near the dead centre keeps its numbers, checked
 against the slider-crank's statics by virtual work. The old rank test (1e-9 of the largest)
-let the dead centre through with a slider force of ~1e13 N at exit 0."""
+let the dead centre through with a slider force of ~1e13 N at exit 0. Planar ``analyze``
+applies the same test (a geared five-bar stretched by its crank, closed by Newton's method);
+and a spatial run whose loops stop closing writes gaps past the branch's end with
+``--allow-singular``, as a planar one (issue 24, "Left")."""
 
 from __future__ import annotations
 
@@ -224,3 +227,45 @@ def test_allow_singular_writes_gaps_where_the_loops_stop_closing(tmp_path):
     assert all(np.all(np.isnan(v[bad])) for k, v in rows.items() if k != "t")
     assert all(np.all(np.isfinite(v[~bad])) for v in rows.values())
     same_as_alone(rows, linkdyn.analyze(linkdyn.load(path), t[~bad]), ~bad, R + L)
+
+
+# ------------------------------------------------ the same test on planar models
+def stretched_fivebar(tmp_path) -> Path:
+    """The bundled geared five-bar with 45 mm links: its crank pins 80 to 94.3 mm apart, the
+    two links stretch in line (a dead centre of the crank as driver) where they are 90 mm
+    apart, at sin^2(theta) = 0.68; the crank driven there, theta* sin(t), at t = pi/2 of
+    [0, pi]. Its loops are closed by Newton's method (a gear joint: no closed form), which
+    leaves the relative pivot of J_dep at ~1e-7 (numpy) and ~1e-8 (compiled), above the old
+    fixed threshold 1e-10: a driving torque of ~1e9 N m on one backend and ~1e11 on the other
+    at exit 0."""
+    src = (Path(linkdyn.__file__).with_name("examples") / "geared_fivebar.toml").read_text()
+    th = float(np.degrees(np.arcsin(np.sqrt(0.68))))
+    for old, new in [("A = [0.0, 0.0], P = [90.0, 0.0]", "A = [0.0, 0.0], P = [45.0, 0.0]"),
+                     ("P = [0.0, 0.0], B = [90.0, 0.0]", "P = [0.0, 0.0], B = [45.0, 0.0]"),
+                     ("com = [45.0, 0.0]", "com = [22.5, 0.0]"),
+                     ("link1 = 63.6, link2 = -63.6", "link1 = 27.27, link2 = -27.27"),
+                     ('{ kind = "constant_speed", rpm = 60.0, start = 0.0 }',
+                      f'{{ kind = "expression", q = "{th!r}*sin(t)" }}'),
+                     ("duration = 1.0 ", "duration = 3.141592653589793 "),
+                     ("samples = 361", "samples = 21")]:
+        assert old in src, old
+        src = src.replace(old, new)
+    path = tmp_path / "stretched.toml"
+    path.write_text(src)
+    return path
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_a_planar_dead_centre_closed_by_newton_is_flagged(tmp_path, backend):
+    """Planar ``analyze`` applies the same test (its relative pivots against the closure
+    residual): the stretched sample is singular, exit 3 naming its time and crank angle; with
+    ``allow_singular`` it alone is invalid and its neighbours keep a torque of a few N m."""
+    path = stretched_fivebar(tmp_path)
+    model = linkdyn.load(path)
+    t = np.linspace(0.0, np.pi, 21)
+    with pytest.raises(linkdyn.AssemblyError, match="singular") as err:
+        linkdyn.analyze(model, t, backend=backend)
+    assert "at t = 1.5708 s (q_J1 = 55.5501 deg)" in str(err.value), str(err.value)
+    sol = linkdyn.analyze(model, t, backend=backend, allow_singular=True)
+    np.testing.assert_array_equal(sol.valid, np.arange(21) != 10)
+    assert np.max(np.abs(sol.columns["tau_J1"][sol.valid])) < 20.0
