@@ -288,7 +288,8 @@ def test_allow_singular_keeps_a_spatial_run_through_a_singular_position(tmp_path
     out = tmp_path / "out"
     res = CliRunner().invoke(main, ["analyze", str(path), "-o", str(out), "--allow-singular"])
     assert res.exit_code == 0, res.output
-    assert "1 samples at a singular position are written as NaN rows (t = 0.5 s)" in res.output
+    assert ("1 samples that do not close or sit at a singular position are written as NaN rows "
+            "(t = 0.5 s)") in res.output
     summary = json.loads((out / "summary.json").read_text())
     assert summary["invalid_samples"] == 1 and summary["invalid_times_s"] == [0.5]
     rows = table(out / "results.csv")

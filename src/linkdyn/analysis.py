@@ -21,9 +21,18 @@ from .errors import (AssemblyError, InvalidValue, ModelError, quiet, quiet_numer
                      wrong_type)
 from . import joints as jk
 from .model import Model
+from .kinematics.positions import singular
 from .units import joint_units
 
-SINGULAR = 1e-10  # relative pivot of J_dep below which a position counts as singular
+SINGULAR = 1e-10  # relative pivot of J_dep below which forward dynamics' state is singular
+
+
+def regular(kin, dyn) -> np.ndarray:
+    """The samples (...) bool that ``analyze`` solves: closed (``kin.valid``) and neither at
+    nor within the closure's resolution of a singular position: the smaller relative pivot of
+    ``J_dep`` (kinematics) and ``J_dep^T`` (dynamics) weighed against the sample's closure
+    residual by :func:`.kinematics.positions.singular`, the test of spatial models too."""
+    return kin.valid & ~singular(np.minimum(kin.pivot, dyn.pivot), kin.residual)
 
 
 @dataclass(frozen=True)
@@ -611,17 +620,17 @@ def _stages(model, t, backend: backend_mod.Backend, layout=None, reactions: bool
         applied, dyn, react, fr = friction_mod.solve(models, kin, applied, dynamics,
                                                      reactions_stage, friction_compiled.solve
                                                      if backend.compiled else None)
-        valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR) & ~fr.locked
+        valid = regular(kin, dyn) & ~fr.locked
         return kin, applied, dyn, react, valid, fr
     if reactions and backend.compiled and not swept:   # both stages in one kernel
         dyn, react = compiled_dynamics.inverse(kin, applied)
         backend_mod.mark_cached("dynamics")
         backend_mod.mark_cached("reactions")
-        valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
+        valid = regular(kin, dyn)
         return kin, applied, dyn, react, valid, fr
     dyn = compiled_dynamics.swept(kin, applied) if swept else dynamics(kin, applied)
     react = partial(reactions_stage, models[0], kin, applied, dyn)
-    valid = kin.valid & (kin.pivot > SINGULAR) & (dyn.pivot > SINGULAR)
+    valid = regular(kin, dyn)
     return kin, applied, dyn, react() if reactions else react, valid, fr
 
 

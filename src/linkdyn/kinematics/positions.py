@@ -28,6 +28,39 @@ TOL = 1e-12          # closure residual target, relative to the mechanism's size
 ACCEPT = 1e-10       # largest residual accepted as closed
 STEP_ANGLE = 0.1     # rad of driver travel between continuation nodes
 STEP_LENGTH = 0.02   # fraction of the mechanism's size between continuation nodes
+RESOLUTION = 100.0   # a position is singular where J_dep's conditioning is at or below this
+#                      times the square root of its closure residual (:func:`singular`)
+
+
+def singular(conditioning, residual):
+    """Where closed positions are singular: at a singular position or within the closure's
+    resolution of one (..., bool).
+
+    Parameters
+    ----------
+    conditioning : array_like (...)
+        The dependent joints' Jacobian ``J_dep`` made dimensionless (lengths over the
+        mechanism's size): its smallest singular value relative to its largest (or an
+        estimate of it, a relative pivot); 0 or NaN where it has lost rank.
+    residual : array_like (...)
+        The scaled closure residual the positions were closed to (dimensionless; machine
+        epsilon is taken where it is smaller: rounding closes no better).
+
+    Notes
+    -----
+    Near a singular position (a dead centre of the drivers) the loops close as ``g ~ a d^2 -
+    b (s* - s)``, ``d`` the dependent coordinates' distance from the singular configuration,
+    ``s*`` the driver's value there, and the smallest singular value is ``sigma ~ 2 a d``. A
+    residual ``r`` cannot tell apart positions within ``d ~ sqrt(r / a)`` of the singular one,
+    where ``sigma ~ 2 sqrt(a r)``; and the rates, efforts and reactions of a position closed to
+    ``r`` are off by about ``r / sigma^2`` of their size. So ``sigma <= RESOLUTION sqrt(r)``
+    is singular: a sample at the singular position, or as close to it as Newton's method can
+    resolve (``a`` up to ``RESOLUTION^2 / 4``), is flagged, and every sample kept has its
+    numbers to about ``1 / RESOLUTION^2`` relative at worst (at ``r`` = rounding, ``sigma``
+    above about ``1.5e-6``), to rounding over ``sigma^2`` in general.
+    """
+    r = np.maximum(np.asarray(residual, float), np.finfo(float).eps)
+    return ~(np.asarray(conditioning, float) > RESOLUTION * np.sqrt(r))     # NaN: singular
 
 
 @step

@@ -24,16 +24,18 @@ def analyze(model, t, allow_singular: bool = False) -> SpatialSolution:
     (T,) s (numpy backend).
 
     ``allow_singular``: the samples at a singular position (the dependent joints' Jacobian
-    loses rank, :func:`~.kinematics.singular_samples`) are kept as gaps, as ``linkdyn.analyze``
+    loses rank there or within the closure's resolution, :func:`~.kinematics.singular_samples`)
+    are kept as gaps, and so are the samples from the one where the loops stop closing on (the
+    branch ends there), as ``linkdyn.analyze``
     keeps a planar model's: ``SpatialSolution.valid`` False and every per-sample array NaN
     there (``t`` kept), the other samples as the run without them gives them.
 
     Raises
     ------
     AssemblyError
-        Where the loops cannot be closed or (unless ``allow_singular``) a singular position is
-        passed (time and driver values named); with ``allow_singular`` too where every sample
-        is singular.
+        Where the mechanism cannot be assembled, or (unless ``allow_singular``) its loops stop
+        closing or it passes a singular position (time and driver values named); with
+        ``allow_singular`` too where no sample is kept.
     ModelError
         A mobility (from the closure Jacobian's rank) other than the number of drivers.
     """
@@ -42,7 +44,8 @@ def analyze(model, t, allow_singular: bool = False) -> SpatialSolution:
     motion, kept, errors = sk.solve_designs([model], p, t)
     valid = np.ones(len(t), bool)
     if errors[0] is not None:
-        # a run that passes a singular position is kept (``kept``); one that stops closing is not
+        # a run that passes a singular position or stops closing is kept (``kept``); one that
+        # does not assemble is not
         if not (allow_singular and len(kept)):
             raise errors[0]
         valid = ~sk.singular_samples(p, motion)
@@ -125,8 +128,9 @@ def analyze_designs(models, t):
         The designs ``kept`` solved together (``batch = (len(kept), T)``; None if no design
         assembles).
     kept : ndarray of int
-        The designs solved (those that assemble; one that passes a singular position is
-        kept too, its error given).
+        The designs solved (those that assemble; one that passes a singular position or whose
+        loops stop closing along the run is kept too, its error given: its samples are not
+        all the run's).
     errors : list
         Per design None, or the AssemblyError or ModelError :func:`analyze` raises for it.
     """

@@ -100,16 +100,16 @@ def text(s: dict) -> str:
     if s.get("invalid_samples"):
         times = ", ".join(f"{x:.6g}" for x in s["invalid_times_s"][:10])
         more = " ..." if len(s["invalid_times_s"]) > 10 else ""
-        lines.append(f"WARNING: {s['invalid_samples']} samples at a singular position are "
-                     f"written as NaN rows (t = {times}{more} s)")
+        lines.append(f"WARNING: {s['invalid_samples']} samples that do not close or sit at a "
+                     f"singular position are written as NaN rows (t = {times}{more} s)")
     return "\n".join(lines)
 
 
 def analyze(mech, t, allow_singular: bool = False):
     """Solve ``mech`` at ``t``: the printed summary, the summary (``summary.json``'s content)
     and the solution (its ``columns()`` the results table; the report draws it).
-    ``allow_singular``: samples at a singular position become NaN rows, named in the summary
-    (:func:`linkdyn.spatial.analyze`)."""
+    ``allow_singular``: samples at a singular position, or past the sample where the loops stop
+    closing, become NaN rows, named in the summary (:func:`linkdyn.spatial.analyze`)."""
     sol = run(mech, t, allow_singular=allow_singular)
     s = summary(sol)
     return text(s), s, sol

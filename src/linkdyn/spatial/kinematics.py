@@ -16,12 +16,14 @@ import numpy as np
 
 from .. import topology as topology_mod
 from ..errors import AssemblyError, ModelError
+from ..kinematics.positions import singular
 from . import algebra as sa
 from . import joints as sj
 
 RANK = 1e-9          # a singular value below this fraction of the largest counts as zero
 CLOSED = 1e-10       # closure: a residual row below this (times the size for a length) is closed
-SINGULAR = "the mechanism passes a singular position (the dependent joints' Jacobian loses rank)"
+SINGULAR = ("the mechanism passes a singular position (the dependent joints' Jacobian loses "
+            "rank there, or within the closure's resolution)")
 SINGULAR_FIX = ("Limit the driver's range, or change the geometry so the loops do not reach a "
                 "dead-centre or locked position")
 ANGLE_STEP = 0.3     # rad, continuation step of an angular driver
@@ -351,17 +353,38 @@ def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndar
 
 def rank_of(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
     """The numerical rank (T,) of each closure Jacobian (T, rows, k) (its columns ``cols`` of
-    the tree coordinates, default all): of ``J`` made dimensionless (length rows over the
-    mechanism's size, length columns times it), counting singular values above ``RANK``
-    times the largest or 1, whichever is larger (a Jacobian of round-off alone, a wholly
-    redundant loop, has rank 0)."""
+    the tree coordinates, default all): of ``J`` made dimensionless (:func:`_singular_values`),
+    counting singular values above ``RANK`` times the largest or 1, whichever is larger (a
+    Jacobian of round-off alone, a wholly redundant loop, has rank 0)."""
     if J.shape[1] == 0 or J.shape[2] == 0:
         return np.zeros(len(J), dtype=int)
+    s = _singular_values(p, J, cols)
+    return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
+
+
+def conditioning(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
+    """The conditioning (T,) of each closure Jacobian (T, rows, k) (its columns ``cols``):
+    made dimensionless (:func:`_singular_values`), its k-th singular value over its largest
+    or 1, whichever is larger (0 where it has fewer rows than columns; 1 without columns):
+    ~0 where its columns lose rank, what :func:`~linkdyn.kinematics.positions.singular`
+    weighs against the closure residual."""
+    k = J.shape[2]
+    if k == 0:
+        return np.ones(len(J))
+    if J.shape[1] < k:
+        return np.zeros(len(J))
+    s = _singular_values(p, J, cols)
+    return s[:, k - 1] / np.maximum(s[:, 0], 1.0)
+
+
+def _singular_values(p: Plan, J: np.ndarray, cols=None) -> np.ndarray:
+    """The singular values (T, min(rows, k)) of the closure Jacobians ``J`` (T, rows, k) (the
+    tree coordinates ``cols``, default all) made dimensionless: length rows over the
+    mechanism's size, length columns times it."""
     lengths = p.length_coordinate if cols is None else p.length_coordinate[cols]
     Jn = ((J / np.where(p.length_row, _size(p), 1.0)[..., None])
           * np.where(lengths, _size(p), 1.0)[..., None, :])
-    s = np.linalg.svd(Jn, compute_uv=False)
-    return np.sum(s > RANK * np.maximum(s[:, :1], 1.0), axis=1)
+    return np.linalg.svd(Jn, compute_uv=False)
 
 
 # ---------------------------------------------------------------- following the drivers
@@ -452,7 +475,9 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
     Returns
     -------
     q : ndarray (D T, n_q)
-        The tree coordinates (NaN for a design that fails).
+        The tree coordinates: NaN for a design that fails, and for a design whose loops stop
+        closing along the run at the samples from there on (its branch ends: the samples
+        before it are closed, as a planar model's branch, ``positions.Branch.ended``).
     errors : list
         Per design None, or the AssemblyError or ModelError :func:`assemble` raises for it
         alone (each design's continuation is its own: its nodes, its steps).
@@ -475,6 +500,7 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
         node[group == g, :len(x)] = x
     errors = [None] * D
     alive = np.ones(D, bool)
+    end = np.full(D, T)         # each design's first sample whose loops do not close (T: none)
     q = np.repeat(q0, T, axis=0)
     q[:, drv] = qi
     here, last = q0.copy(), q0.copy()
@@ -507,12 +533,10 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
                     errors[d] = _fail(models[d], t[0], guess[j, drv], "the mechanism cannot be "
                                       "assembled from its design pose", "Check the geometry, or "
                                       "give a design pose nearer the first sample's")
+                    end[d] = 0
                 else:
-                    try:
-                        _first_open(models[d], take(pd, [d]), t, Q[d], int(previous[d]),
-                                    int(node[d, i]), here[d])
-                    except AssemblyError as e:
-                        errors[d] = e
+                    errors[d], end[d] = _first_open(models[d], take(pd, [d]), t, Q[d],
+                                                    int(previous[d]), int(node[d, i]), here[d])
                 alive[d] = False
             ok = dd[~bad]
             last[ok], here[ok], has_last[ok] = here[ok], sol[~bad], True
@@ -522,28 +546,31 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
             for d, e in zip(first, _mobility_errors([models[d] for d in first],
                                                     take(pd, first), here[first])):
                 if e is not None:
-                    errors[d], alive[d] = e, False
+                    errors[d], alive[d], end[d] = e, False, 0
             done = idx[alive[idx]]
         q[done * T + node[done, i]] = here[done]
         start[done], previous[done] = Q[done, node[done, i]], node[done, i]
     # every sample from its nodes' solutions: between the node at or before it and the next,
-    # in proportion to the drivers' travel
+    # in proportion to the drivers' travel (a branch that ends: from the last node it reached)
     guess = np.full_like(q, np.nan)
     for g, x in enumerate(lists):
-        ds = np.flatnonzero(alive & (group == g))
+        ds = np.flatnonzero((end > 0) & (group == g))
         if not len(ds):
             continue
         x = np.asarray(x)
         a = x[np.searchsorted(x, np.arange(T), side="right") - 1]
         b = x[np.minimum(np.searchsorted(x, np.arange(T), side="left"), len(x) - 1)]
+        b = np.where(b[None] > previous[ds, None], a[None], b[None])     # (designs, T)
         qiD, qD = Q[ds], q.reshape(D, T, -1)[ds]
-        span = qiD[:, b] - qiD[:, a]
+        qa, qb = qD[:, a], np.take_along_axis(qD, b[..., None], 1)
+        span = np.take_along_axis(qiD, b[..., None], 1) - qiD[:, a]
         s2 = np.sum(span * span, -1)
         u = np.sum((qiD - qiD[:, a]) * span, -1) / np.where(s2 > 0, s2, 1.0)
-        gD = qD[:, a] + u[..., None] * (qD[:, b] - qD[:, a])
+        gD = qa + u[..., None] * (qb - qa)
         gD[..., drv] = qiD
         guess.reshape(D, T, -1)[ds] = gD
-    rows = np.flatnonzero(np.repeat(alive, T))
+    closing = np.arange(T)[None] < end[:, None]              # (D, T): the samples to close
+    rows = np.flatnonzero(closing)
     q = np.full_like(q, np.nan)
     if len(rows):
         q[rows], err = newton(model, take(p, rows), guess[rows])
@@ -551,32 +578,35 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
         bad[rows] = err > CLOSED
         for d in np.flatnonzero(np.any(bad.reshape(D, T), 1)):
             k = int(np.argmax(bad.reshape(D, T)[d]))
-            errors[d] = _fail(models[d], t[k], Q[d, k], "the loops stop closing",
-                              "Check the driver's range: the mechanism cannot reach this "
-                              "driver value")
-            q[d * T:(d + 1) * T] = np.nan
+            if k < end[d]:
+                errors[d] = _fail(models[d], t[k], Q[d, k], "the loops stop closing",
+                                  "Check the driver's range: the mechanism cannot reach this "
+                                  "driver value")
+                end[d] = k
+        q[~(np.arange(T)[None] < end[:, None]).ravel()] = np.nan    # past each branch's end
     return q, errors
 
 
 def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
-    """Raise the AssemblyError of the first sample after node ``previous`` (solved: ``here``)
-    up to node ``k`` where the loops stop closing, following them sample by sample (``p``:
-    this design's plan, one row)."""
+    """The AssemblyError of the first sample after node ``previous`` (solved: ``here``) up to
+    node ``k`` where the loops stop closing, following them sample by sample (``p``: this
+    design's plan, one row), and that sample's index (the branch's end: the samples before it
+    close)."""
     for m in range(previous + 1, k + 1):
         guess = here.copy()
         guess[p.driven] = qi[m]
         sol, err = newton(model, p, guess[None])
         if err[0] > CLOSED:
-            jd = closure(model, p, poses(p, here[None]))[2][:, :, p.dependent]
-            if rank_of(p, jd, p.dependent)[0] < len(p.dependent):     # stuck at a singular position
-                raise _fail(model, t[m - 1], qi[m - 1], SINGULAR, SINGULAR_FIX)
-            raise _fail(model, t[m], qi[m], "the loops stop closing",
-                        "Check the geometry and the driver's range: the mechanism cannot "
-                        "reach this driver value (a limit position lies before it)")
+            g, _, J = closure(model, p, poses(p, here[None]))
+            if _singular(p, J, g)[0]:                   # stuck at a singular position
+                return _fail(model, t[m - 1], qi[m - 1], SINGULAR, SINGULAR_FIX), m
+            return _fail(model, t[m], qi[m], "the loops stop closing",
+                         "Check the geometry and the driver's range: the mechanism cannot "
+                         "reach this driver value (a limit position lies before it)"), m
         here = sol[0]
-    raise _fail(model, t[k], qi[k], "the loops stop closing",
-                "Check the geometry and the driver's range: the mechanism cannot reach this "
-                "driver value")
+    return _fail(model, t[k], qi[k], "the loops stop closing",
+                 "Check the geometry and the driver's range: the mechanism cannot reach this "
+                 "driver value"), k
 
 
 def _mobility_errors(models, p: Plan, q: np.ndarray) -> list:
@@ -637,19 +667,30 @@ def solve_designs(models, p: Plan, t: np.ndarray):
         The kinematics at the rows of the designs ``kept`` (each design's T samples, design
         after design; ``t`` (T,) for one design, the rows' times for a batch).
     kept : ndarray of int
-        The designs that assemble (a design that passes a singular position is kept, its
-        error given).
+        The designs that assemble (a design that passes a singular position, or whose loops
+        stop closing along the run, is kept, its error given; the samples where its loops do
+        not close have an infinite ``Motion.residual``, their other numbers those of the
+        design pose at the drivers' values, for :func:`singular_samples` to flag).
     errors : list
         Per design None, or the AssemblyError or ModelError :func:`solve` raises for it alone.
     """
     D, T = len(models), len(t)
     qi, qdi, qddi = driver_motions(models, t)
     q, errors = assemble_designs(models, p, t, qi)
-    kept = np.array([d for d in range(D) if errors[d] is None], dtype=int)
+    closed = np.all(np.isfinite(q), 1).reshape(D, T)
+    kept = np.array([d for d in range(D) if errors[d] is None
+                     or (isinstance(errors[d], AssemblyError) and closed[d, 0])], dtype=int)
     rows = (kept[:, None] * T + np.arange(T)).ravel()
-    m = motion_at(models[0], take(p, rows), t if p.row is None else np.tile(t, len(kept)),
-                  q[rows], qdi[rows], qddi[rows])
-    singular = singular_samples(take(p, rows), m).reshape(len(kept), T)
+    pr = take(p, rows)
+    q, shut = q[rows], closed[kept].ravel()
+    if not np.all(shut):       # past a branch's end: the design pose at the drivers' values
+        q[~shut] = np.broadcast_to(pr.q0, q.shape)[~shut]
+        q[np.ix_(~shut, p.driven)] = qi[rows][~shut]
+    m = motion_at(models[0], pr, t if p.row is None else np.tile(t, len(kept)),
+                  q, qdi[rows], qddi[rows])
+    if not np.all(shut):
+        m = replace(m, residual=np.where(shut, m.residual, np.inf))
+    singular = singular_samples(pr, m).reshape(len(kept), T) & closed[kept]
     for j in np.flatnonzero(np.any(singular, 1)):
         k = int(np.argmax(singular[j]))
         d = int(kept[j])
@@ -658,11 +699,22 @@ def solve_designs(models, p: Plan, t: np.ndarray):
 
 
 def singular_samples(p: Plan, m: Motion) -> np.ndarray:
-    """The samples (T,) bool of ``m`` at a singular position: the dependent coordinates'
-    closure Jacobian ``J_dep`` loses rank there (:func:`rank_of`), so their rates and
-    accelerations are not determined by the drivers'."""
+    """The samples (T,) bool of ``m`` at a singular position, or within the closure's
+    resolution of one: the dependent coordinates' closure Jacobian ``J_dep`` loses rank there,
+    so their rates and accelerations are not determined by the drivers' (its
+    :func:`conditioning` weighed against the sample's closure residual by
+    :func:`linkdyn.kinematics.positions.singular`, the planar test)."""
+    return _singular(p, m.J, residual=m.residual)
+
+
+def _singular(p: Plan, J: np.ndarray, g: np.ndarray | None = None,
+              residual: np.ndarray | None = None) -> np.ndarray:
+    """:func:`singular_samples` of the closure Jacobians ``J`` (T, rows, n_q) closed to the
+    residual rows ``g`` (T, rows) or the scaled ``residual`` (T,)."""
+    if residual is None:
+        residual = np.max(np.abs(scaled(p, g)), axis=1, initial=0.0)
     dep = p.dependent
-    return rank_of(p, m.J[:, :, dep], dep) < len(dep)
+    return singular(conditioning(p, J[:, :, dep], dep), residual)
 
 
 def driver_motions(models, t: np.ndarray):

@@ -77,8 +77,9 @@ class SpatialSolution:
         self.coords, self.loads, self.dynamics = coords, applied, dyn
         self.t = motion.t
         self.space = "spatial"
-        #: (T,) bool: the samples solved; False at a singular position kept by
-        #: ``allow_singular`` (:meth:`gaps`), whose numbers are NaN
+        #: (T,) bool: the samples solved; False at a singular position, or past the sample
+        #: where the loops stop closing, kept by ``allow_singular`` (:meth:`gaps`), whose
+        #: numbers are NaN
         self.valid = np.ones(len(self.t), bool)
         labels = tuple(f"{c}_{j.name}" for j in model.joints
                        for c in ("Fx", "Fy", "Fz", "Mx", "My", "Mz"))
