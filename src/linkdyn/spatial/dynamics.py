@@ -179,7 +179,8 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
         np.maximum.at(top, p.row, rank)
         r_row = top[p.row]
     r = int(np.min(r_row, initial=M.shape[2]))
-    N = sa.null_space(M, r)                          # (T, nd + rows, k)
+    # (T, nd + rows, k); none where [E_d, J^T] has full column rank everywhere
+    N = (sa.null_space(M, r) if r < M.shape[2] else np.zeros(M.shape[:1] + (M.shape[2], 0)))
     # a batch's designs of a higher rank: their extra columns zero (no part in z)
     N = N * ((r + np.arange(N.shape[2])) >= r_row[:, None])[:, None, :]
     R0 = reactions(model, p, m, w_tilde, x[:, :nd], x[:, nd:])
@@ -189,7 +190,7 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
         G = reactions(model, p, m, zero, np.swapaxes(N[:, :nd], 1, 2),
                       np.swapaxes(N[:, nd:], 1, 2))              # (T, k, nj, 6)
         G = np.swapaxes(G.reshape(T, N.shape[2], -1), 1, 2)       # (T, 6 nj, k)
-        z, _, _ = sa.lstsq(G, -R0.reshape(T, -1), 1e-10)
+        z, _ = sa.lstsq(G, -R0.reshape(T, -1), 1e-10)
         x = x + np.einsum("tik,tk->ti", N, z)
         R0 = R0 + np.einsum("tik,tk->ti", G, z).reshape(R0.shape)
         basis = _range(G)
@@ -203,15 +204,15 @@ def generalized(model, p: Plan, m: Motion, applied: Loads):
     (T, n_q) of the tree coordinates and the kinetic energy (T,), J."""
     T, n = m.q.shape[0], p.topo.n
     _, I = mass_frames(model, p, m)
-    IV = np.einsum("tnij,tnj->tni", I, m.V)
+    IV = sa.matvec(I, m.V)
     # w* = I_O A + crf(V) I_O V - w_ext
-    w_star = np.einsum("tnij,tnj->tni", I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
+    w_star = sa.matvec(I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
     w_star[:, 0] = 0.0
     w_tilde = composite(p, w_star)
     # Q = S^T w~ for every tree coordinate
     Q = np.zeros((T, p.n_q))
     for i in range(1, n):
-        Q[:, p.cols[i]] = np.einsum("tks,ts->tk", m.tree.S[i], w_tilde[:, i])
+        Q[:, p.cols[i]] = sa.matvec(m.tree.S[i], w_tilde[:, i])
     return w_star, w_tilde, Q, 0.5 * np.einsum("tni,tni->t", m.V, IV)
 
 
@@ -222,7 +223,7 @@ def efforts(p: Plan, m: Motion, Q: np.ndarray):
     T, nd = m.q.shape[0], len(p.driven)
     M = np.concatenate([np.broadcast_to(np.eye(p.n_q)[:, p.driven], (T, p.n_q, nd)),
                         np.swapaxes(m.J, 1, 2)], 2)
-    x, rank, _ = sa.lstsq(M, Q, 1e-10)
+    x, rank = sa.lstsq(M, Q, 1e-10)
     return M, x, rank
 
 
