@@ -39,12 +39,20 @@ def mass_centres(p: Plan, m: Motion) -> np.ndarray:
     return m.tree.o + sa.matvec(m.tree.R, p.com)
 
 
-def mass_frames(model, p: Plan, m: Motion):
-    """Mass centres (T, n, 3) and spatial inertias about O (T, n, 6, 6), global."""
+def inertia_times(p: Plan, m: Motion, *X):
+    """Each body's spatial inertia about O times each twist (or twist rate) of ``X``, each
+    (T, n, 6), global: ``I_O X = [I_c x_w + c x h; h]``, ``h = m (x_v + x_w x c)`` (the
+    product :func:`~.algebra.inertia_about_origin`'s 6 x 6 matrix gives, without forming it;
+    ``I_c x_w = R (I (R^T x_w))``, the centroidal tensor in the body frame)."""
     R = m.tree.R
     c = mass_centres(p, m)
-    Ic = R @ p.inertia @ np.swapaxes(R, -1, -2)
-    return c, sa.inertia_about_origin(np.broadcast_to(p.mass, c.shape[:-1]), c, Ic)
+    mass = np.broadcast_to(p.mass, c.shape[:-1])[..., None]
+    out = []
+    for x in X:
+        h = mass * (x[..., 3:] + sa.cross(x[..., :3], c))
+        Iw = sa.matvec(R, sa.matvec(p.inertia, sa.matvec(sa.transpose(R), x[..., :3])))
+        out.append(np.concatenate([Iw + sa.cross(c, h), h], -1))
+    return out
 
 
 def point_of(p: Plan, m: Motion, body: str, r_local: np.ndarray):
@@ -203,16 +211,15 @@ def generalized(model, p: Plan, m: Motion, applied: Loads):
     """Every body's wrench ``w*`` and composite ``w~`` (T, n, 6), the generalized forces ``Q``
     (T, n_q) of the tree coordinates and the kinetic energy (T,), J."""
     T, n = m.q.shape[0], p.topo.n
-    _, I = mass_frames(model, p, m)
-    IV = sa.matvec(I, m.V)
+    IV, IA = inertia_times(p, m, m.V, m.A)
     # w* = I_O A + crf(V) I_O V - w_ext
-    w_star = sa.matvec(I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
+    w_star = IA + sa.cross_wrench(m.V, IV) - applied.w_ext
     w_star[:, 0] = 0.0
     w_tilde = composite(p, w_star)
     # Q = S^T w~ for every tree coordinate
     Q = np.zeros((T, p.n_q))
     for i in range(1, n):
-        Q[:, p.cols[i]] = sa.matvec(m.tree.S[i], w_tilde[:, i])
+        Q[:, p.cols[i]] = np.einsum("tks,ts->tk", m.tree.S[i], w_tilde[:, i])
     return w_star, w_tilde, Q, 0.5 * np.einsum("tni,tni->t", m.V, IV)
 
 

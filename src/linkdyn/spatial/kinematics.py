@@ -220,7 +220,7 @@ def twists(p: Plan, tree: Tree, qd: np.ndarray) -> np.ndarray:
     """Every body's twist (T, n, 6): ``V_i = V_parent + S_i qd_i``."""
     V = np.zeros(qd.shape[:1] + (p.topo.n, 6))
     for i in range(1, p.topo.n):
-        V[:, i] = V[:, p.topo.parent[i]] + sa.matvec(sa.transpose(tree.S[i]), qd[:, p.cols[i]])
+        V[:, i] = V[:, p.topo.parent[i]] + np.einsum("tks,tk->ts", tree.S[i], qd[:, p.cols[i]])
     return V
 
 
@@ -234,8 +234,7 @@ def twist_rates(p: Plan, tree: Tree, V: np.ndarray, qd: np.ndarray,
         par, s = p.topo.parent[i], p.topo.sign[i]
         bias = chain_bias(tree.S[i] * s, qd[:, p.cols[i]],         # unsigned screws, A to B
                           V[:, par] if s > 0 else V[:, i])          # from V_A
-        A[:, i] = (A[:, par] + sa.matvec(sa.transpose(tree.S[i]), qdd[:, p.cols[i]])
-                   + s * bias)
+        A[:, i] = A[:, par] + np.einsum("tks,tk->ts", tree.S[i], qdd[:, p.cols[i]]) + s * bias
     return A
 
 
