@@ -252,48 +252,63 @@ class Solver:
         return x[..., 0] if vec else x
 
 
+def _block(n: int) -> int:
+    """Samples per block of the eliminations: a block's n x n matrices stay in the cache."""
+    return int(np.clip((1 << 18) // (n * n), 256, 8192))
+
+
 def _lu(A: np.ndarray):
-    """Gaussian elimination with partial pivoting of the N systems ``A`` (N, n, n), the
-    samples on the last axis: returns the factors ``L\\U`` (n, n, N), the row swapped with
-    row j at step j (n, N) and the pivots' magnitudes (n, N)."""
+    """Gaussian elimination with partial pivoting of the N systems ``A`` (N, n, n), block by
+    block of samples (each block's matrices turned to samples-last, (n, n, K), so that every
+    step is a pass over the samples): returns the factors ``L\\U`` (n, n, N), the row swapped
+    with row j at step j (n, N) and the pivots' magnitudes (n, N)."""
     n, N = A.shape[-1], len(A)
-    F = np.moveaxis(A, 0, -1).copy()                       # (n, n, N), a copy
+    F = np.empty((n, n, N))
     perm = np.empty((n, N), dtype=np.intp)
     piv = np.empty((n, N))
-    every = np.arange(N)
+    step = _block(n)
     with np.errstate(divide="ignore", invalid="ignore"):
-        for j in range(n):
-            p = j + np.argmax(np.abs(F[j:, j]), axis=0)
-            perm[j] = p
-            row = F[p, :, every].T                           # (n, N): row p of each system
-            F[p, :, every] = F[j].T
-            F[j] = row
-            d = F[j, j]
-            piv[j] = np.abs(d)
-            if j + 1 < n:
-                l = F[j + 1:, j] / np.where(d == 0, 1.0, d)
-                F[j + 1:, j] = l
-                F[j + 1:, j + 1:] -= l[:, None, :] * F[j, None, j + 1:]
+        for a in range(0, N, step):
+            G = np.moveaxis(A[a:a + step], 0, -1).copy()   # (n, n, K)
+            every = np.arange(G.shape[-1])
+            for j in range(n):
+                p = j + np.argmax(np.abs(G[j:, j]), axis=0)
+                perm[j, a:a + step] = p
+                row = G[p, :, every].T                       # (n, K): row p of each system
+                G[p, :, every] = G[j].T
+                G[j] = row
+                d = G[j, j]
+                piv[j, a:a + step] = np.abs(d)
+                if j + 1 < n:
+                    l = G[j + 1:, j] / np.where(d == 0, 1.0, d)
+                    G[j + 1:, j] = l
+                    G[j + 1:, j + 1:] -= l[:, None, :] * G[j, None, j + 1:]
+            F[..., a:a + step] = G
     return F, perm, piv
 
 
 def _lu_solve(F: np.ndarray, perm: np.ndarray, B: np.ndarray) -> np.ndarray:
     """The solutions (N, n, k) of the factored systems (:func:`_lu`) for ``B`` (N, n, k)."""
     n, N = F.shape[0], F.shape[-1]
-    X = np.moveaxis(B, 0, -1).copy()                       # (n, k, N), a copy
-    every = np.arange(N)
+    out = np.empty(B.shape)
+    step = _block(n)
     with np.errstate(divide="ignore", invalid="ignore"):
-        for j in range(n):                                 # the row swaps, in their order
-            row = X[perm[j], :, every].T
-            X[perm[j], :, every] = X[j].T
-            X[j] = row
-        for j in range(n - 1):                             # L y = P b
-            X[j + 1:] -= F[j + 1:, j, None, :] * X[j, None]
-        for j in range(n - 1, -1, -1):
-            if j + 1 < n:
-                X[j] -= np.einsum("in,ikn->kn", F[j, j + 1:], X[j + 1:])
-            X[j] /= F[j, j]
-    return np.moveaxis(X, -1, 0)
+        for a in range(0, N, step):
+            G, P = F[..., a:a + step], perm[:, a:a + step]
+            Y = np.moveaxis(B[a:a + step], 0, -1).copy()   # (n, k, K)
+            every = np.arange(Y.shape[-1])
+            for j in range(n):                             # the row swaps, in their order
+                row = Y[P[j], :, every].T
+                Y[P[j], :, every] = Y[j].T
+                Y[j] = row
+            for j in range(n - 1):                         # L y = P b
+                Y[j + 1:] -= G[j + 1:, j, None, :] * Y[j, None]
+            for j in range(n - 1, -1, -1):                 # U x = y
+                if j + 1 < n:
+                    Y[j] -= np.einsum("in,ikn->kn", G[j, j + 1:], Y[j + 1:])
+                Y[j] /= G[j, j]
+            out[a:a + step] = np.moveaxis(Y, -1, 0)
+    return out
 
 
 def lstsq(a: np.ndarray, b: np.ndarray, rcond: float = 1e-10):
