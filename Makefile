@@ -53,6 +53,7 @@ bench: $(VENV)/.installed-bench $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bench_friction.py
 	$(BIN)/python benchmarks/bench_modes.py
 	$(BIN)/python benchmarks/bench_page.py
+	$(BIN)/python benchmarks/bench_spatial.py
 
 accuracy: $(VENV)/.installed-fast
 	$(BIN)/python benchmarks/accuracy.py

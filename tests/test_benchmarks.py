@@ -86,6 +86,16 @@ def test_bench_simulate_spatial():
     assert "Hoeken" not in out
 
 
+def test_bench_spatial():
+    # its check: Pinocchio's points, actuator forces and accelerations are linkdyn's (1e-10)
+    out = run("bench_spatial.py", "--samples", "300", "--repeat", "1", "--pinocchio-samples",
+              "20")
+    assert "[RSUR four-bar]" in out and "[Stewart platform (6-UPS)]" in out
+    assert out.count("reactions (minimum norm)") == 2
+    if "Pinocchio: not installed" not in out:
+        assert "agrees with linkdyn" in out and "ratio to the inverse loop" in out
+
+
 def test_bench_friction():
     out = run("bench_friction.py", "--samples", "2000", "--repeat", "1")
     assert "ratio" in out

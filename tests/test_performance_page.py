@@ -57,7 +57,40 @@ SIMULATE = ("benchmarks/bench_simulate.py --only planar --duration 2 --windows 2
 SPATIAL = ("benchmarks/bench_simulate.py --only spatial --spatial-duration 0.5 --samples 11 "
            "--steps 1e-3,1e-4 --best 2 --repeat 100")
 COMPILE = "benchmarks/bench_compile.py"
+SPATIAL_ID = "benchmarks/bench_spatial.py --samples 20000 --repeat 3"
 AUTO = "benchmarks/bench_auto.py --windows 20 --chain-duration 0.3 --press-duration 1.0"
+
+
+def _spatial_rows() -> dict[str, Figure]:
+    """bench_spatial.py's figures: each model's rate and its time by stage (timings), the
+    Stewart platform's Pinocchio loops and ratio (timings), and how far Pinocchio's numbers
+    are from linkdyn's (exact: the same arithmetic on any run)."""
+    heads = {"rsur": r"\[RSUR four-bar\]", "stewart": r"\[Stewart platform \(6-UPS\)\]"}
+    stages = {"closing": r"closing the loops \(continuation, Newton\)",
+              "motion": r"poses, J, twists, twist rates", "singular": r"singular-position test",
+              "coordinates": r"cut joints' coordinates and rates", "loads": r"loads",
+              "wstar": r"dynamics: w\*, composite wrenches, Q",
+              "efforts": r"dynamics: efforts and multipliers",
+              "reactions": r"reactions \(minimum norm\)"}
+    out = {}
+    for model, head in heads.items():
+        out[f"spatial.{model}_rate"] = Figure(
+            SPATIAL_ID, head + r".*?linkdyn\.analyze \(numpy\)\s+" + NUMBER + r" s\s+(" + NUMBER
+            + ") samples/s", "timing")
+        for key, label in stages.items():
+            out[f"spatial.{model}_{key}"] = Figure(
+                SPATIAL_ID, head + r".*?" + label + r"\s+(\d+)\n", "timing")
+    for key, label in (("pinocchio_inverse", r"inverse \(rnea, Jc, \[S, Jc\^T\] solve\)"),
+                       ("pinocchio_forward", r"forward \(constraintDynamics\)")):
+        out[f"spatial.{key}"] = Figure(SPATIAL_ID, label + r"\s+(" + NUMBER + ") samples/s",
+                                       "timing")
+    out["spatial.ratio"] = Figure(SPATIAL_ID, r"ratio to the inverse loop\s+(" + NUMBER + ")",
+                                  "timing")
+    for key, label in (("agree_points", "points"), ("agree_forces", "actuator forces"),
+                       ("agree_accelerations", "accelerations")):
+        out[f"spatial.{key}"] = Figure(SPATIAL_ID, r"agrees with linkdyn:.*?" + label + r" ("
+                                       + NUMBER + ")", "exact")
+    return out
 
 
 def _simulate_rows() -> dict[str, Figure]:
@@ -204,6 +237,8 @@ FIGURES = {
     "sweep.fused": Figure(SWEEP_KERNELS, r"sweep kernel \(fused\) (" + NUMBER + ")", "timing"),
     "sweep.metrics_only": Figure(SWEEP_KERNELS, r"keeping the metrics only \([^)]*\) (" + NUMBER
                                  + ")", "timing"),
+    # spatial inverse dynamics (numpy) beside Pinocchio
+    **_spatial_rows(),
     # forward dynamics
     **_simulate_rows(),
     "simulate.turns_free": Figure(SIMULATE, r"crank turns.*?\n\s+1e-08\s+no\s+\d+\s+" + NUMBER

@@ -39,12 +39,20 @@ def mass_centres(p: Plan, m: Motion) -> np.ndarray:
     return m.tree.o + sa.matvec(m.tree.R, p.com)
 
 
-def mass_frames(model, p: Plan, m: Motion):
-    """Mass centres (T, n, 3) and spatial inertias about O (T, n, 6, 6), global."""
+def inertia_times(p: Plan, m: Motion, *X):
+    """Each body's spatial inertia about O times each twist (or twist rate) of ``X``, each
+    (T, n, 6), global: ``I_O X = [I_c x_w + c x h; h]``, ``h = m (x_v + x_w x c)`` (the
+    product :func:`~.algebra.inertia_about_origin`'s 6 x 6 matrix gives, without forming it;
+    ``I_c x_w = R (I (R^T x_w))``, the centroidal tensor in the body frame)."""
     R = m.tree.R
     c = mass_centres(p, m)
-    Ic = R @ p.inertia @ np.swapaxes(R, -1, -2)
-    return c, sa.inertia_about_origin(np.broadcast_to(p.mass, c.shape[:-1]), c, Ic)
+    mass = np.broadcast_to(p.mass, c.shape[:-1])[..., None]
+    out = []
+    for x in X:
+        h = mass * (x[..., 3:] + sa.cross(x[..., :3], c))
+        Iw = sa.matvec(R, sa.matvec(p.inertia, sa.matvec(sa.transpose(R), x[..., :3])))
+        out.append(np.concatenate([Iw + sa.cross(c, h), h], -1))
+    return out
 
 
 def point_of(p: Plan, m: Motion, body: str, r_local: np.ndarray):
@@ -179,7 +187,8 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
         np.maximum.at(top, p.row, rank)
         r_row = top[p.row]
     r = int(np.min(r_row, initial=M.shape[2]))
-    N = sa.null_space(M, r)                          # (T, nd + rows, k)
+    # (T, nd + rows, k); none where [E_d, J^T] has full column rank everywhere
+    N = (sa.null_space(M, r) if r < M.shape[2] else np.zeros(M.shape[:1] + (M.shape[2], 0)))
     # a batch's designs of a higher rank: their extra columns zero (no part in z)
     N = N * ((r + np.arange(N.shape[2])) >= r_row[:, None])[:, None, :]
     R0 = reactions(model, p, m, w_tilde, x[:, :nd], x[:, nd:])
@@ -189,7 +198,7 @@ def solve(model, p: Plan, m: Motion, applied: Loads) -> Dynamics:
         G = reactions(model, p, m, zero, np.swapaxes(N[:, :nd], 1, 2),
                       np.swapaxes(N[:, nd:], 1, 2))              # (T, k, nj, 6)
         G = np.swapaxes(G.reshape(T, N.shape[2], -1), 1, 2)       # (T, 6 nj, k)
-        z, _, _ = sa.lstsq(G, -R0.reshape(T, -1), 1e-10)
+        z, _ = sa.lstsq(G, -R0.reshape(T, -1), 1e-10)
         x = x + np.einsum("tik,tk->ti", N, z)
         R0 = R0 + np.einsum("tik,tk->ti", G, z).reshape(R0.shape)
         basis = _range(G)
@@ -202,10 +211,9 @@ def generalized(model, p: Plan, m: Motion, applied: Loads):
     """Every body's wrench ``w*`` and composite ``w~`` (T, n, 6), the generalized forces ``Q``
     (T, n_q) of the tree coordinates and the kinetic energy (T,), J."""
     T, n = m.q.shape[0], p.topo.n
-    _, I = mass_frames(model, p, m)
-    IV = np.einsum("tnij,tnj->tni", I, m.V)
+    IV, IA = inertia_times(p, m, m.V, m.A)
     # w* = I_O A + crf(V) I_O V - w_ext
-    w_star = np.einsum("tnij,tnj->tni", I, m.A) + sa.cross_wrench(m.V, IV) - applied.w_ext
+    w_star = IA + sa.cross_wrench(m.V, IV) - applied.w_ext
     w_star[:, 0] = 0.0
     w_tilde = composite(p, w_star)
     # Q = S^T w~ for every tree coordinate
@@ -222,7 +230,7 @@ def efforts(p: Plan, m: Motion, Q: np.ndarray):
     T, nd = m.q.shape[0], len(p.driven)
     M = np.concatenate([np.broadcast_to(np.eye(p.n_q)[:, p.driven], (T, p.n_q, nd)),
                         np.swapaxes(m.J, 1, 2)], 2)
-    x, rank, _ = sa.lstsq(M, Q, 1e-10)
+    x, rank = sa.lstsq(M, Q, 1e-10)
     return M, x, rank
 
 

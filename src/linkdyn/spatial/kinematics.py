@@ -277,9 +277,10 @@ def joint_coordinates(model, p: Plan, m: "Motion") -> dict:
                                   axis=1).reshape(len(q), -1)
         S = kind.screws(g, pose.RA, pose.RB, pose.rq, q)
         St = np.swapaxes(S, -1, -2)
-        qd, _, _ = sa.lstsq(St, m.V[:, b] - m.V[:, a], 1e-12)
+        solver = sa.Solver(St, 1e-12)
+        qd = solver.solve(m.V[:, b] - m.V[:, a])
         rhs = m.A[:, b] - m.A[:, a] - chain_bias(S, qd, m.V[:, a])
-        qdd, _, _ = sa.lstsq(St, rhs, 1e-12)
+        qdd = solver.solve(rhs)
         out[jt.name] = (q, qd, qdd)
     return out
 
@@ -343,7 +344,7 @@ def newton(model, p: Plan, q: np.ndarray, iterations: int = 30) -> tuple[np.ndar
             pa = take(p, active)
         if not len(active):
             break
-        step, _, _ = sa.lstsq(J[:, :, dep], g, 1e-12)
+        step, _ = sa.lstsq(J[:, :, dep], g, 1e-12)
         q[np.ix_(active, dep)] -= step
     else:
         g, _, _ = closure(model, pa, poses(pa, q[active]))
@@ -433,11 +434,17 @@ def _steps(scale: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def _nodes(scale: np.ndarray, qi: np.ndarray) -> list:
     """The continuation nodes of one design's driver values ``qi`` (T, n_drivers): the first
     sample, each sample where the drivers have moved by more than a step from the last node,
-    and the last sample."""
-    nodes = [0]
-    for k in range(1, len(qi)):
-        if _steps(scale, qi[nodes[-1]], qi[k]) > 1 or k == len(qi) - 1:
-            nodes.append(k)
+    and the last sample (each next node searched in windows of samples, not one by one)."""
+    nodes, T = [0], len(qi)
+    while nodes[-1] < T - 1:
+        last, width = nodes[-1], 64
+        while True:
+            ahead = qi[last + 1:last + 1 + width]
+            moved = np.flatnonzero(_steps(scale, qi[last], ahead) > 1)
+            if len(moved) or last + width >= T - 1:
+                nodes.append(last + 1 + int(moved[0]) if len(moved) else T - 1)
+                break
+            width *= 2
     return nodes
 
 
@@ -489,9 +496,13 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
     scale = np.broadcast_to(_scale(pd), (D, len(drv)))
     Q = qi.reshape(D, T, len(drv))
     # each design's nodes: one list per distinct (driver history, step)
-    keys, group = np.unique(np.concatenate([Q.reshape(D, T * len(drv)), scale, np.zeros((D, 1))],
-                                           1), axis=0, return_inverse=True)
-    group = np.ravel(group)
+    if D == 1:
+        keys, group = np.zeros(1), np.zeros(1, int)
+    else:
+        keys, group = np.unique(np.concatenate([Q.reshape(D, T * len(drv)), scale,
+                                                np.zeros((D, 1))], 1), axis=0,
+                                return_inverse=True)
+        group = np.ravel(group)
     lists = [_nodes(scale[int(np.argmax(group == g))], Q[int(np.argmax(group == g))])
              for g in range(len(keys))]
     K = max(len(x) for x in lists)
@@ -550,8 +561,9 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
             done = idx[alive[idx]]
         q[done * T + node[done, i]] = here[done]
         start[done], previous[done] = Q[done, node[done, i]], node[done, i]
-    # every sample from its nodes' solutions: between the node at or before it and the next,
-    # in proportion to the drivers' travel (a branch that ends: from the last node it reached)
+    # every sample's guess from its nodes' solutions: between the node at or before it and the
+    # next, in proportion to the drivers' travel (a branch that ends: from the last node it
+    # reached)
     guess = np.full_like(q, np.nan)
     for g, x in enumerate(lists):
         ds = np.flatnonzero((end > 0) & (group == g))
@@ -561,30 +573,73 @@ def assemble_designs(models, p: Plan, t: np.ndarray, qi: np.ndarray):
         a = x[np.searchsorted(x, np.arange(T), side="right") - 1]
         b = x[np.minimum(np.searchsorted(x, np.arange(T), side="left"), len(x) - 1)]
         b = np.where(b[None] > previous[ds, None], a[None], b[None])     # (designs, T)
-        qiD, qD = Q[ds], q.reshape(D, T, -1)[ds]
-        qa, qb = qD[:, a], np.take_along_axis(qD, b[..., None], 1)
-        span = np.take_along_axis(qiD, b[..., None], 1) - qiD[:, a]
-        s2 = np.sum(span * span, -1)
-        u = np.sum((qiD - qiD[:, a]) * span, -1) / np.where(s2 > 0, s2, 1.0)
-        gD = qa + u[..., None] * (qb - qa)
-        gD[..., drv] = qiD
-        guess.reshape(D, T, -1)[ds] = gD
-    closing = np.arange(T)[None] < end[:, None]              # (D, T): the samples to close
-    rows = np.flatnonzero(closing)
-    q = np.full_like(q, np.nan)
-    if len(rows):
-        q[rows], err = newton(model, take(p, rows), guess[rows])
-        bad = np.zeros(D * T, bool)
-        bad[rows] = err > CLOSED
-        for d in np.flatnonzero(np.any(bad.reshape(D, T), 1)):
-            k = int(np.argmax(bad.reshape(D, T)[d]))
-            if k < end[d]:
-                errors[d] = _fail(models[d], t[k], Q[d, k], "the loops stop closing",
-                                  "Check the driver's range: the mechanism cannot reach this "
-                                  "driver value")
-                end[d] = k
-        q[~(np.arange(T)[None] < end[:, None]).ravel()] = np.nan    # past each branch's end
+        guess.reshape(D, T, -1)[ds] = _between(Q[ds], q.reshape(D, T, -1)[ds], drv, a, b)
+    # then the samples before each branch's end level by level (:func:`_levels`): a coarse set
+    # from those guesses, then each sample halfway between two closed ones from them (the same
+    # rule: nearer, so Newton takes fewer steps), from its nodes where either did not close
+    out = np.full((D, T, p.n_q), np.nan)
+    err = np.full((D, T), np.inf)
+    live = np.flatnonzero(end > 0)
+    for k, lo, hi in _levels(T) if len(live) else ():
+        g = guess.reshape(D, T, -1)[live][:, k]
+        if lo is not None:
+            near = (err[live][:, lo] <= CLOSED) & (err[live][:, hi] <= CLOSED)
+            g = np.where(near[..., None], _between(Q[live], out[live], drv, lo, hi, k), g)
+        dl, kl = np.nonzero(k[None] < end[live, None])     # the samples before the branch's end
+        if not len(dl):
+            continue
+        sol, e = newton(model, take(p, live[dl] * T + k[kl]), g[dl, kl])
+        out[live[dl], k[kl]] = sol
+        err[live[dl], k[kl]] = e
+    q = out.reshape(D * T, -1)
+    bad = (np.arange(T)[None] < end[:, None]) & (err > CLOSED)
+    for d in np.flatnonzero(np.any(bad, 1)):
+        k = int(np.argmax(bad[d]))
+        errors[d] = _fail(models[d], t[k], Q[d, k], "the loops stop closing",
+                          "Check the driver's range: the mechanism cannot reach this "
+                          "driver value")
+        end[d] = k
+    q[~(np.arange(T)[None] < end[:, None]).ravel()] = np.nan    # past each branch's end
     return q, errors
+
+
+def _between(qi: np.ndarray, q: np.ndarray, drv, a, b, at=None) -> np.ndarray:
+    """Guesses (D, K, n_q) at the samples ``at`` (K,) (default every sample) from the closed
+    coordinates ``q`` (D, T, n_q) at the samples ``a`` and ``b`` (K,) or (D, K) around them, in
+    proportion to the drivers' travel ``qi`` (D, T, n_drivers) from a towards b (the drivers'
+    own coordinates exact)."""
+    D = qi.shape[0]
+    at = np.arange(qi.shape[1]) if at is None else at
+    a, b, at = (np.broadcast_to(i, (D, np.shape(i)[-1])) for i in (a, b, at))
+
+    def pick(x, i):   # x[d, i[d, k]]
+        return np.take_along_axis(x, i[..., None], 1)
+
+    span = pick(qi, b) - pick(qi, a)
+    s2 = np.sum(span * span, -1)
+    u = np.sum((pick(qi, at) - pick(qi, a)) * span, -1) / np.where(s2 > 0, s2, 1.0)
+    qa = pick(q, a)
+    out = qa + u[..., None] * (pick(q, b) - qa)
+    out[..., drv] = pick(qi, at)
+    return out
+
+
+def _levels(T: int, first: int = 32):
+    """The order :func:`assemble_designs` closes T samples in: ``(k, lo, hi)`` per level, the
+    samples ``k`` (K,) and the closed samples around each (None at the first level: every
+    ``S``-th sample and the last, ``S`` the power of two that makes about ``first`` of them),
+    then at strides S/2, S/4, ..., 1 the samples halfway between closed ones (``lo = k - s``,
+    ``hi = k + s`` or the last sample)."""
+    if T < 1:
+        return
+    S = 1 << max(0, int(np.log2(max(T / first, 1.0))))
+    yield np.unique(np.r_[np.arange(0, T, S), T - 1]), None, None
+    s = S // 2
+    while s >= 1:
+        k = np.arange(s, T - 1, 2 * s)
+        if len(k):
+            yield k, k - s, np.minimum(k + s, T - 1)
+        s //= 2
 
 
 def _first_open(model, p: Plan, t, qi, previous: int, k: int, here: np.ndarray):
@@ -742,14 +797,15 @@ def motion_at(model, p: Plan, t: np.ndarray, q: np.ndarray, qdi: np.ndarray,
     dep = p.dependent
     qd = np.zeros_like(q)
     qd[:, p.driven] = qdi
-    qd[:, dep], _, _ = sa.lstsq(J[:, :, dep], -np.einsum("trk,tk->tr", J, qd), 1e-12)
+    solver = sa.Solver(J[:, :, dep], 1e-12)           # J_dep factored once, solved twice
+    qd[:, dep] = solver.solve(-np.einsum("trk,tk->tr", J, qd))
     V = twists(p, tree, qd)
     qdd = np.zeros_like(q)
     qdd[:, p.driven] = qddi
     A0 = twist_rates(p, tree, V, qd, qdd)
     # phi . (A_B - A_A) + gamma with qdd_dep = 0, then J_dep qdd_dep = -that
     rho = _relative(model, p, phi, A0) + closure_bias(model, p, tree, V)
-    qdd[:, dep], _, _ = sa.lstsq(J[:, :, dep], -rho, 1e-12)
+    qdd[:, dep] = solver.solve(-rho)
     A = twist_rates(p, tree, V, qd, qdd)
     return Motion(t, q, qd, qdd, tree, V, A, phi, J, np.max(np.abs(scaled(p, g)), axis=1,
                                                              initial=0.0))
