@@ -36,8 +36,9 @@ def table(path):
 def same_as_alone(rows: dict, alone, kept, size: float) -> None:
     """The rows ``kept`` of a run with gaps equal the solution ``alone`` of those samples
     alone, column by column, to 1e-9 of the column's peak; a column of rounding alone (the
-    out-of-plane reactions of a planar motion) to 1e-15 of its unit's largest (a moment's: of
-    the largest force times the mechanism's ``size``, m)."""
+    out-of-plane reactions of a planar motion) to 1e-14 of its unit's largest (a moment's: of
+    the largest force times the mechanism's ``size``, m): a few units of rounding, which
+    Newton's solution of a sample leaves different from different guesses."""
     cols, units = alone.columns(), alone.units()
     assert list(cols) == list(rows)
     family = {}
@@ -45,7 +46,7 @@ def same_as_alone(rows: dict, alone, kept, size: float) -> None:
         family[units[k]] = max(family.get(units[k], 0.0), float(np.max(np.abs(v))))
     family["N m"] = max(family.get("N m", 0.0), family.get("N", 0.0) * size)
     for name, v in cols.items():
-        scale = max(float(np.max(np.abs(v))), 1e-6 * family[units[name]], 1e-300)
+        scale = max(float(np.max(np.abs(v))), 1e-5 * family[units[name]], 1e-300)
         np.testing.assert_allclose(rows[name][kept], v, rtol=0, atol=1e-9 * scale, err_msg=name)
 
 
