@@ -6,6 +6,8 @@ else SI.
 
 - :func:`outputs`: ``plot_joints``, ``plot_efforts``, ``plot_reactions``, ``plot_multipliers``
   (when a loop is cut), ``plot_paths``, each as PNG and SVG.
+  A curve against time is drawn by its envelope at the axes' pixel columns (``_curve``: peaks
+  and gaps kept); a figure is laid out once for all its formats (``_save``).
 - :func:`reproduce`: the seed paper's Figs. 5-7 for its worked example (Hoeken's linkage), with
   their data as CSV, a ``README.txt`` and ``reproduce.json`` saying what each figure shows.
 """
