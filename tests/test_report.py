@@ -639,6 +639,11 @@ def test_report_acceptance(browser, example_runs, example, size):
     pg = Page(browser, path, width=size[0], height=size[1])
     p = pg.page
     try:
+        # first, on the page as it opens: its force labels sit clear of every body (what
+        # test_force_labels_sit_clear_of_every_body checks on the pages this test does not
+        # load), then forces off again
+        _check_force_labels_clear_of_bodies(p)
+        p.uncheck("#show-forces")
         D = _page_data(path)
         n = len(D["t"])
         assert n == len(csv["t"])  # the default runs are short: one frame per sample
@@ -900,21 +905,29 @@ def _force_labels_at_the_first_frame(p):
                     return [e.textContent, [r.left, r.top, r.right, r.bottom]]; })""")
 
 
-@pytest.mark.parametrize("example, size", [(e, s) for e in EXAMPLES for s in SIZES],
-                         ids=[f"{e}-{s[0]}x{s[1]}" for e in EXAMPLES for s in SIZES])
+def _check_force_labels_clear_of_bodies(p):
+    """Forces on, at the first frame: no force label's box (its text as the browser lays it
+    out) touches any body as drawn (a bar's thick line, a plate and its border, a dot, a
+    slider's block), computed here from the drawn elements, not from the page's placer."""
+    labels = _force_labels_at_the_first_frame(p)
+    shapes = p.evaluate(_DRAWN_BODIES)
+    assert labels and shapes
+    on = _labels_on_bodies(labels, shapes)
+    assert on == [], on
+
+
+# every example at both sizes; the pages test_report_acceptance loads are checked there, on
+# the same fresh page (one load serves both)
+LABEL_CASES = [(e, s) for e in EXAMPLES for s in SIZES if (e, s) not in CASES]
+
+
+@pytest.mark.parametrize("example, size", LABEL_CASES,
+                         ids=[f"{e}-{s[0]}x{s[1]}" for e, s in LABEL_CASES])
 def test_force_labels_sit_clear_of_every_body(browser, example_runs, example, size):
-    # forces on, at the first frame: no force label's box (its text as the browser lays it
-    # out) touches any body as drawn (a bar's thick line, a plate and its border, a dot, a
-    # slider's block), computed here from the drawn elements, not from the page's placer
     path, _ = example_runs(example)
     pg = Page(browser, path, width=size[0], height=size[1])
-    p = pg.page
     try:
-        labels = _force_labels_at_the_first_frame(p)
-        shapes = p.evaluate(_DRAWN_BODIES)
-        assert labels and shapes
-        on = _labels_on_bodies(labels, shapes)
-        assert on == [], on
+        _check_force_labels_clear_of_bodies(pg.page)
         assert pg.errors == []
     finally:
         pg.close()

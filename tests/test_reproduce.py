@@ -70,6 +70,65 @@ def test_plots_without_a_cut_joint_skip_the_multipliers():
         assert ax.get_ylabel() and ax.get_legend() is not None
 
 
+def _curves(ax):
+    """The curves of ``ax`` (not its zero line)."""
+    return [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2]
+
+
+def _grey(fig):
+    from PIL import Image
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=fig.dpi)
+    return np.asarray(Image.open(buf).convert("L"), float)
+
+
+def test_a_long_run_is_drawn_at_the_pixel_resolution_with_its_peaks():
+    """A run of more samples than the axes has pixel columns is drawn by fewer points, a
+    subsequence of the samples that keeps every peak and both ends, and its image is the image
+    of the curve through every sample, but for anti-aliasing's shades."""
+    from linkdyn import plots
+    m = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, 4.0, 40001)
+    sol = linkdyn.analyze(m, t)
+    fig = plots.fig_efforts(sol)
+    curve, = _curves(fig.axes[0])
+    x, y = curve.get_data()
+    tau = sol.dyn.tau[:, 0]
+    width = fig.get_figwidth() * fig.dpi          # pixel columns of the whole figure
+    assert 3 * 4 < len(x) <= 5 * width < len(t) / 8
+    k = np.searchsorted(t, x)
+    assert np.array_equal(t[k], x) and np.all(np.diff(k) > 0)   # samples, in their order
+    assert np.array_equal(y, tau[k])
+    assert (y.max(), y.min()) == (tau.max(), tau.min()) and (k[0], k[-1]) == (0, len(t) - 1)
+    drawn = _grey(fig)
+    curve.set_data(t, tau)   # the same curve through every sample
+    full = _grey(fig)
+    assert drawn.shape == full.shape
+    # anti-aliasing shades a pixel a little differently; no pixel turns from curve to paper
+    # (a change of about 200 of 255 grey levels) or back
+    assert np.abs(drawn - full).max() <= 40
+
+
+def test_a_gap_in_a_long_run_stays_a_gap_in_its_figure():
+    """Samples of no value (NaN: a singular position kept by --allow-singular) break the
+    curve: no drawn segment joins the samples on either side of them."""
+    from types import SimpleNamespace
+
+    from linkdyn import plots
+    m = linkdyn.load(linkdyn.example_path("hoeken"))
+    t = np.linspace(0.0, 4.0, 40001)
+    tau = np.sin(7.0 * t) + 0.1 * np.cos(300.0 * t)
+    tau[20000:20003] = np.nan
+    fig = plots.fig_efforts(SimpleNamespace(model=m, t=t, dyn=SimpleNamespace(tau=tau[:, None])))
+    x, y = _curves(fig.axes[0])[0].get_data()
+    assert len(x) < len(t) / 4 and np.isnan(y).any()
+    before, after = t[19999], t[20003]
+    finite = np.flatnonzero(np.isfinite(y))
+    runs = np.split(finite, np.flatnonzero(np.diff(finite) > 1) + 1)   # the drawn pieces
+    assert all(x[r[-1]] <= before or x[r[0]] >= after for r in runs)
+    assert np.nanmax(y) == np.nanmax(tau) and np.nanmin(y) == np.nanmin(tau)
+
+
 def test_report_flag_adds_the_plots_and_exactly_one_html_file(hoeken_report_run):
     out = hoeken_report_run   # analyze hoeken.toml -o out --report (tests/conftest.py)
     files = set(os.listdir(out))

@@ -6,6 +6,8 @@ else SI.
 
 - :func:`outputs`: ``plot_joints``, ``plot_efforts``, ``plot_reactions``, ``plot_multipliers``
   (when a loop is cut), ``plot_paths``, each as PNG and SVG.
+  A curve against time is drawn by its envelope at the axes' pixel columns (``_curve``: peaks
+  and gaps kept); a figure is laid out once for all its formats (``_save``).
 - :func:`reproduce`: the seed paper's Figs. 5-7 for its worked example (Hoeken's linkage), with
   their data as CSV, a ``README.txt`` and ``reproduce.json`` saying what each figure shows.
 """
@@ -23,7 +25,7 @@ from . import joints as jk
 from .model import GROUND
 
 DEG = 180.0 / math.pi
-MAX_POINTS = 20000  # samples drawn per curve; longer runs are strided for the figures
+MAX_POINTS = 20000  # points drawn per traced path (x against y); longer runs are strided
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2",
            "#17becf", "#bcbd22", "#7f7f7f")
 DPI = 120
@@ -32,6 +34,67 @@ DPI = 120
 def _figure(w: float, h: float):
     from matplotlib.figure import Figure
     return Figure(figsize=(w, h), dpi=DPI, layout="constrained")
+
+
+def _save(fig, path, ext: str | None = None) -> None:
+    """Save ``fig`` as ``ext`` (by default the path's suffix) at :data:`DPI`.
+
+    The constrained layout is computed once, at the first save, and then kept: otherwise each
+    ``savefig`` lays the figure out again and draws it twice (once to measure it), which is
+    most of a figure's cost; the second format of a figure is drawn once, in the same layout.
+    """
+    engine = fig.get_layout_engine()
+    if engine is not None:
+        import matplotlib
+        engine.execute(fig)
+        with matplotlib.rc_context({"figure.autolayout": False,
+                                    "figure.constrained_layout.use": False}):
+            fig.set_layout_engine(None)   # the positions just computed stay
+    fig.savefig(path, format=ext, dpi=DPI)
+
+
+def _envelope(x: np.ndarray, y: np.ndarray, columns: int):
+    """``(x, y)`` reduced to what a line drawn through every sample shows at ``columns`` pixel
+    columns: the samples cut into ``columns`` runs of equal length, of each its first, last,
+    lowest and highest sample (peaks kept exactly) and its first NaN (a gap stays a gap).
+
+    Parameters
+    ----------
+    x, y : (n,) arrays
+        A curve, ``x`` increasing (time, or a crank angle), in any units.
+    columns : int
+        Pixel columns: runs at most ``columns`` long are returned whole.
+
+    Returns
+    -------
+    x, y : (m,) arrays, ``m <= 5 columns``, a subsequence of the samples in their order.
+    """
+    x, y = np.asarray(x), np.asarray(y)
+    n = len(y)
+    if n <= 4 * columns:
+        return x, y
+    w = -(-n // columns)                       # samples per column
+    yy = np.full(columns * w, np.nan)
+    yy[:n] = y
+    yy = yy.reshape(columns, w)
+    gap = np.isnan(yy)
+    start = np.arange(columns) * w
+    picks = np.stack([start, np.minimum(start + w - 1, n - 1),
+                      start + np.where(gap, np.inf, yy).argmin(axis=1),
+                      start + np.where(gap, -np.inf, yy).argmax(axis=1),
+                      start + gap.argmax(axis=1)], axis=1)
+    k = np.unique(picks[picks < n])
+    return x[k], y[k]
+
+
+def _curve(ax, x, y, **style):
+    """``ax.plot`` of the curve ``y(x)`` (``x`` increasing) by its :func:`_envelope` at the
+    axes' pixel columns: its share of the figure's width at :data:`DPI` (the layout's margins
+    only make the drawn axes narrower)."""
+    spec = ax.get_subplotspec()
+    share = 1.0 if spec is None else len(spec.colspan) / spec.get_gridspec().ncols
+    columns = math.ceil(ax.figure.get_figwidth() * share * DPI)
+    return ax.plot(*_envelope(x, y, columns), **style)
 
 
 def _style(ax, xlabel: str = "", ylabel: str = "", title: str = "") -> None:
@@ -66,7 +129,7 @@ def outputs(sol, formats: tuple[str, ...] = ("png", "svg")) -> dict:
         def write(path: Path) -> None:
             if name not in cache:
                 cache[name] = builders[name](sol)
-            cache[name].savefig(path, format=ext, dpi=DPI)
+            _save(cache[name], path, ext)
             if ext == formats[-1]:
                 cache.pop(name, None)  # drawn in every format: free it
         return write
@@ -98,7 +161,7 @@ def panel_outputs(data: dict, formats: tuple[str, ...] = ("png", "svg")) -> dict
         for ax, spec in zip(axes, specs):
             for ser in spec["series"]:
                 y = np.array([np.nan if v is None else v for v in data["series"][ser["key"]]])
-                ax.plot(t, y, lw=1.4, color=ser["color"], label=ser["label"])
+                _curve(ax, t, y, lw=1.4, color=ser["color"], label=ser["label"])
             _style(ax, "t (s)", spec["unit"], spec["title"])
             ax.legend(fontsize=7, ncols=min(len(spec["series"]), 4), loc="best")
         for ax in axes[len(specs):]:
@@ -111,7 +174,7 @@ def panel_outputs(data: dict, formats: tuple[str, ...] = ("png", "svg")) -> dict
     def writer(title, specs, ext):
         def write(path: Path) -> None:   # each figure drawn once, saved in every format
             fig = cache.pop(title, None) or build(title, specs)
-            fig.savefig(path, format=ext, dpi=DPI)
+            _save(fig, path, ext)
             if ext != formats[-1]:
                 cache[title] = fig
         return write
@@ -137,8 +200,7 @@ def figures(sol) -> dict:
 def fig_joints(sol):
     """Joint coordinates, rates and accelerations vs time (revolute in deg, rad/s, rad/s^2;
     prismatic in m, m/s, m/s^2)."""
-    m, k = sol.model, _stride(len(sol.t))
-    t = sol.t[k]
+    m, t = sol.model, sol.t
     groups = [g for g in ([j for j in m.joints if jk.get(j.kind).angular],
                           [j for j in m.joints if not jk.get(j.kind).angular]) if g]
     fig = _figure(6.4 * len(groups), 8.0)
@@ -150,9 +212,9 @@ def fig_joints(sol):
         for r, (key, wr, wp, units) in enumerate(rows):
             ax = axes[r, c]
             for j in js:
-                y = sol.columns[f"{key}_{j.name}"][k] * (DEG if (rev and key == "q") else 1.0)
-                ax.plot(t, y, lw=1.5, color=PALETTE[m.joints.index(j) % len(PALETTE)],
-                        label=j.name)
+                y = sol.columns[f"{key}_{j.name}"] * (DEG if (rev and key == "q") else 1.0)
+                _curve(ax, t, y, lw=1.5, color=PALETTE[m.joints.index(j) % len(PALETTE)],
+                       label=j.name)
             word = wr if rev else wp
             _style(ax, "t (s)" if r == 2 else "", f"{units[0 if rev else 1]}",
                    f"Joint {word}s ({'angular' if rev else 'linear'})")
@@ -163,8 +225,7 @@ def fig_joints(sol):
 
 def fig_efforts(sol):
     """Driver torques (N m) and forces (N) vs time."""
-    m, k = sol.model, _stride(len(sol.t))
-    t = sol.t[k]
+    m, t = sol.model, sol.t
     groups = [(u, [(n, d) for n, d in enumerate(m.drivers)
                    if jk.get(m.joint(d.joint).kind).angular == (u == "N m")]) for u in ("N m", "N")]
     groups = [g for g in groups if g[1]]
@@ -172,9 +233,9 @@ def fig_efforts(sol):
     axes = np.atleast_1d(fig.subplots(max(len(groups), 1), 1, sharex=True, squeeze=False)[:, 0])
     for ax, (unit, ds) in zip(axes, groups):
         for n, d in ds:
-            ax.plot(t, sol.dyn.tau[k, n], lw=1.6,
-                    color=PALETTE[[j.name for j in m.joints].index(d.joint) % len(PALETTE)],
-                    label=f"{d.joint} ({d.description})" if d.description else d.joint)
+            _curve(ax, t, sol.dyn.tau[:, n], lw=1.6,
+                   color=PALETTE[[j.name for j in m.joints].index(d.joint) % len(PALETTE)],
+                   label=f"{d.joint} ({d.description})" if d.description else d.joint)
         _style(ax, "t (s)", unit, f"Driver {'torque' if unit == 'N m' else 'force'}")
         ax.legend(fontsize=8)
     fig.suptitle(f"{m.name}: driver efforts (on the driven joint's second body)", fontsize=11)
@@ -183,27 +244,27 @@ def fig_efforts(sol):
 
 def fig_reactions(sol):
     """|F| of every joint, then Fx, Fy per joint (by the joint's first body on its second)."""
-    m, k = sol.model, _stride(len(sol.t))
-    t = sol.t[k]
+    m, t = sol.model, sol.t
     nj = len(m.joints)
     ncol = 3 if nj > 4 else 2
     nrow = 1 + math.ceil(nj / ncol)
     fig = _figure(4.2 * ncol, 2.5 * nrow + 0.4)
     gs = fig.add_gridspec(nrow, ncol)
     ax0 = fig.add_subplot(gs[0, :])
-    F = sol.reactions.force[k]
+    F = sol.reactions.force
     for n, j in enumerate(m.joints):
-        ax0.plot(t, np.linalg.norm(F[:, n], axis=-1), lw=1.5, color=PALETTE[n % len(PALETTE)],
-                 label=j.name)
+        _curve(ax0, t, np.linalg.norm(F[:, n], axis=-1), lw=1.5,
+               color=PALETTE[n % len(PALETTE)], label=j.name)
     _style(ax0, "t (s)", "N", "Reaction force magnitude |F|")
     ax0.legend(fontsize=8, ncols=min(nj, 7))
     for n, j in enumerate(m.joints):
         ax = fig.add_subplot(gs[1 + n // ncol, n % ncol], sharex=ax0)
-        ax.plot(t, F[:, n, 0], lw=1.4, color=PALETTE[0], label="Fx")
-        ax.plot(t, F[:, n, 1], lw=1.4, color=PALETTE[3], label="Fy")
+        _curve(ax, t, F[:, n, 0], lw=1.4, color=PALETTE[0], label="Fx")
+        _curve(ax, t, F[:, n, 1], lw=1.4, color=PALETTE[3], label="Fy")
         if "M" in jk.get(j.kind).reaction:
             ax2 = ax.twinx()
-            ax2.plot(t, sol.reactions.moment[k, n], lw=1.2, ls="--", color=PALETTE[2], label="M")
+            _curve(ax2, t, sol.reactions.moment[:, n], lw=1.2, ls="--", color=PALETTE[2],
+                   label="M")
             ax2.set_ylabel("M (N m)", color=PALETTE[2])
             ax2.legend(fontsize=8, loc="lower right")
         _style(ax, "t (s)", "N", f"{j.name}: {j.body_a} on {j.body_b}")
@@ -215,8 +276,7 @@ def fig_reactions(sol):
 def fig_multipliers(sol):
     """The cut-joint multipliers lam (reactions at the cut joints), one panel per cut joint."""
     from .report import multiplier_labels
-    m, k = sol.model, _stride(len(sol.t))
-    t = sol.t[k]
+    m, t = sol.model, sol.t
     labels = multiplier_labels(sol)
     cuts = list(dict.fromkeys(lbl[0] for lbl in labels))
     fig = _figure(7.0, 2.6 * len(cuts) + 0.6)
@@ -228,13 +288,13 @@ def fig_multipliers(sol):
         moments = [(n, lbl) for n, lbl in comps if lbl[2] != "N"]
         # forces on the panel's axis, moments (N m) on a twin axis
         for (n, lbl), col in zip(forces, (PALETTE[0], PALETTE[3])):
-            ax.plot(t, sol.dyn.lam[k, n], lw=1.5, color=col,
-                    label=f"λ {lbl[1]}" + (" (N)" if moments else ""))
+            _curve(ax, t, sol.dyn.lam[:, n], lw=1.5, color=col,
+                   label=f"λ {lbl[1]}" + (" (N)" if moments else ""))
         if moments:
             ax2 = ax.twinx()
             for n, lbl in moments:
-                ax2.plot(t, sol.dyn.lam[k, n], lw=1.3, ls="--", color=PALETTE[3],
-                         label=f"λ {lbl[1]} ({lbl[2]})")
+                _curve(ax2, t, sol.dyn.lam[:, n], lw=1.3, ls="--", color=PALETTE[3],
+                       label=f"λ {lbl[1]} ({lbl[2]})")
             ax2.set_ylabel(moments[0][1][2])
             ax2.legend(fontsize=8, loc="lower right")
         unit = "N"
@@ -407,7 +467,7 @@ def reproduce_hoeken():
         def write(path: Path) -> None:
             _, paper, caption, panels = specs[key]
             fig = _paper_figure(sol, x, panels, f"{paper} (seed paper) reproduced: {caption}")
-            fig.savefig(path, dpi=DPI)
+            _save(fig, path)
         return write
 
     def csv_writer(key):
@@ -425,7 +485,7 @@ def reproduce_hoeken():
         ax.set_title("Fig. 4 (seed paper) counterpart: Hoeken's mechanism at crank angles 0, 90, "
                      "180, 270 deg\n(latest darkest) and the path of the coupler point P",
                      fontsize=9, loc="left")
-        fig.savefig(path, dpi=DPI)
+        _save(fig, path)
 
     meta = {
         "reproduces": "worked example (Section 6) of the seed paper on recursive DeNOC "
@@ -470,7 +530,7 @@ def _paper_figure(sol, x, panels, title):
     axes = np.atleast_1d(fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0])
     for r, (ax, (ptitle, unit, series)) in enumerate(zip(axes, panels)):
         for k, (label, col, scale) in enumerate(series):
-            ax.plot(x, cols[col] * scale, lw=1.6, color=PALETTE[k], label=label)
+            _curve(ax, x, cols[col] * scale, lw=1.6, color=PALETTE[k], label=label)
         _style(ax, "crank angle θ1 (deg)" if r == n - 1 else "", unit, ptitle)
         ax.set_xlim(0, 360)
         ax.set_xticks(np.arange(0, 361, 45))
