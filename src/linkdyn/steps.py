@@ -74,22 +74,20 @@ def settled(dx, tol) -> bool:
 
 def by_kind(steps: list):
     """One step ``f(code, *args)`` that calls ``steps[k](*args)`` for the ``(code, step)``
-    pair whose code matches (the last pair's step when none does): one flat chain of
-    comparisons, so that numba compiles every branch with the same argument types (all
-    branches must return the same kind of tuple) and each kind's step once, called from this
-    one function (a chain of nested dispatchers would compile and optimize each kind's step
-    again at every level below it)."""
-    *first, (_, last) = steps
-    ns = {f"f{j}": fn for j, (_, fn) in enumerate(first)}
-    ns.update({f"c{j}": code for j, (code, _) in enumerate(first)}, last=last)
-    lines = ["def call(kind, *args):"]
-    for j in range(len(first)):
-        lines += [f"    if kind == c{j}:", f"        return f{j}(*args)"]
-    lines.append("    return last(*args)")
-    exec(compile("\n".join(lines) + "\n", f"<by_kind {last.__name__}>", "exec"), ns)
-    call = ns["call"]
-    call.__name__ = call.__qualname__ = f"by_kind_{last.__name__}"
-    call.__module__ = __name__
+    pair whose code matches: a chain of comparisons, so that numba compiles every branch with
+    the same argument types (all branches must return the same kind of tuple)."""
+    (code, fn), rest = steps[0], steps[1:]
+    if not rest:
+        def call(kind, *args):
+            return fn(*args)
+    else:
+        other = by_kind(rest)
+
+        def call(kind, *args):
+            if kind == code:
+                return fn(*args)
+            return other(kind, *args)
+    call.__name__ = call.__qualname__ = f"by_kind_{fn.__name__}"
     return step(call)
 
 

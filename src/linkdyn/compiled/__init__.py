@@ -61,9 +61,8 @@ CODES = dict(jk.CODES)
 OPTIONS = dict(nogil=True, error_model="numpy")
 #: the options of a function that only compiled code calls: without the wrappers that let
 #: Python (``no_cpython_wrapper``) or C (``no_cfunc_wrapper``) call it. A wrapper unboxes each
-#: argument: for the layout's view (a named tuple of about ninety arrays) that is most of a
-#: small helper's compilation (about 2 s of CPU each, 0.15 s without), for nothing, since
-#: only the kernels call the helpers.
+#: argument: for many arrays that is most of a small helper's compilation, for nothing,
+#: since only the kernels call the helpers.
 INNER = dict(OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 
 
@@ -88,8 +87,8 @@ def inner(fn):
 def inline(fn):
     """A small helper of the kernels, compiled into its callers (no call, no reference counting
     of its array arguments per sample); callable from Python too. A helper that takes the
-    layout's view is an :func:`inner` instead (inlined, it would be typed again at every call
-    site with its ninety arrays)."""
+    layout's view is an :func:`inner` instead (inlined, it would be typed and lowered again
+    at every call site)."""
     if numba is None:  # pragma: no cover
         return fn
     return numba.njit(inline="always", **OPTIONS)(fn)
