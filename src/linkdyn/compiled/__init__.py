@@ -61,9 +61,8 @@ CODES = dict(jk.CODES)
 OPTIONS = dict(nogil=True, error_model="numpy")
 #: the options of a function that only compiled code calls: without the wrappers that let
 #: Python (``no_cpython_wrapper``) or C (``no_cfunc_wrapper``) call it. A wrapper unboxes each
-#: argument: for the layout's view (a named tuple of about ninety arrays) that is most of a
-#: small helper's compilation (about 2 s of CPU each, 0.15 s without), for nothing, since
-#: only the kernels call the helpers.
+#: argument: for many arrays that is most of a small helper's compilation, for nothing,
+#: since only the kernels call the helpers.
 INNER = dict(OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 
 
@@ -88,11 +87,83 @@ def inner(fn):
 def inline(fn):
     """A small helper of the kernels, compiled into its callers (no call, no reference counting
     of its array arguments per sample); callable from Python too. A helper that takes the
-    layout's view is an :func:`inner` instead (inlined, it would be typed again at every call
-    site with its ninety arrays)."""
+    layout's view is an :func:`inner` instead (inlined, it would be typed and lowered again
+    at every call site)."""
     if numba is None:  # pragma: no cover
         return fn
     return numba.njit(inline="always", **OPTIONS)(fn)
+
+
+def pack(view):
+    """The layout's view (:data:`linkdyn.kinematics.layout.View`, a named tuple of arrays) as
+    the kernels take it: one object, a numba ``StructRef`` with a field of the same name for
+    each array (:class:`ViewRef`), which compiled code receives as one pointer (the named
+    tuple would be about 800 arguments once numba flattens its arrays, at every call of every
+    helper, which is most of the kernels' first compilation). Compiled code reads it by name
+    as it read the tuple (``L.parent[i]``); Python reads its arrays by name too. The view
+    itself without numba."""
+    if numba is None:  # pragma: no cover
+        return view
+    ref = _packed(view)
+    ref._view = view
+    return ref
+
+
+if numba is not None:
+    from numba.core import cgutils
+    from numba.core import types as _types
+    from numba.experimental import structref as _structref
+    from numba.experimental.jitclass.base import imp_dtor as _imp_dtor
+    from numba.extending import intrinsic as _intrinsic
+
+    @_structref.register
+    class ViewType(_types.StructRef):
+        """numba's type of :class:`ViewRef`: the view's fields, each its array's type."""
+
+        def preprocess_fields(self, fields):
+            return tuple((name, _types.unliteral(t)) for name, t in fields)
+
+    class ViewRef(_structref.StructRefProxy):
+        """The layout's view packed for the kernels (:func:`pack`); from Python, its arrays
+        read by name (those of the named tuple it was packed from)."""
+
+        def __getattr__(self, name):
+            if name == "_view":
+                raise AttributeError(name)
+            return getattr(self._view, name)
+
+    _structref.define_boxing(ViewType, ViewRef)
+
+    @_intrinsic
+    def _pack(typingctx, view):
+        """A new :class:`ViewType` struct holding (a reference to) each array of the named
+        tuple ``view``, field by field under the tuple's names."""
+        inst = ViewType(list(zip(view.fields, view.types)))
+
+        def codegen(context, builder, sig, args):
+            # structref.new's allocation, then each field set from the tuple
+            data_type = inst.get_data_type()
+            alloc_type = context.data_model_manager[data_type].get_value_type()
+            meminfo = context.nrt.meminfo_alloc_dtor(
+                builder, context.get_constant(_types.uintp, context.get_abi_sizeof(alloc_type)),
+                _imp_dtor(context, builder.module, inst))
+            ptr = builder.bitcast(context.nrt.meminfo_data(builder, meminfo),
+                                  alloc_type.as_pointer())
+            builder.store(cgutils.get_null_value(alloc_type), ptr)
+            data = cgutils.create_struct_proxy(data_type)(context, builder, ref=ptr)
+            for k, (name, ty) in enumerate(zip(view.fields, view.types)):
+                value = builder.extract_value(args[0], k)
+                context.nrt.incref(builder, ty, value)
+                setattr(data, name, value)
+            out = context.make_helper(builder, inst)
+            out.meminfo = meminfo
+            return out._getvalue()
+        return inst(view), codegen
+
+    @numba.njit(cache=True, **OPTIONS)
+    def _packed(view):
+        """:func:`pack`'s struct, made by compiled code (cached on disk)."""
+        return _pack(view)
 
 
 _FROM_PYTHON: dict = {}

@@ -229,10 +229,10 @@ def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
                 _turns(low, k, dy.chain_lower(_at(M, k), _at(F, k), pm, pf, m_k))
         _rotate(L, jl, low, wd, kw, nb, phi, c, s, r, e)
         # q_i = s (phi_i - phi_parent): the turns are the changes of the two joint angles
-        q_u, q_l = q[ju, wd, ks], q[jl, wd, ks]
+        q_u, q_l, s_u, s_l = q[ju, wd, ks], q[jl, wd, ks], L.sign[ju], L.sign[jl]
         for k in range(nb):
-            q_u[k] += L.sign[ju] * up[0, k]
-            q_l[k] += L.sign[jl] * low[0, k]
+            q_u[k] += s_u * up[0, k]
+            q_l[k] += s_l * low[0, k]
 
 
 @inner
@@ -487,7 +487,7 @@ def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col,
     (``phi`` ... ``e``), the cut frames ``P`` and the residual ``g`` (n_rows, block) are those
     of ``q``, the scaled residual in ``err`` (D, T); ``J`` the Jacobian of the last step.
     ``A``, ``perm``, ``col``: the LU of ``J_dep`` (:func:`scratch`); ``dx`` (n_dep, block)."""
-    dep = L.dependent
+    dep, angular, size = L.dependent, L.angular, L.size[d]
     m, ks = len(dep), slice(k0, k0 + nb)
     _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
     _cut_frames(L, d, d, k0, nb, c, s, r, P)
@@ -505,7 +505,7 @@ def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col,
             # the step, in rad or in m relative to the size (NaN: singular)
             step = 0.0
             for a in range(m):
-                u = abs(dx[a, k]) * (1.0 if L.angular[dep[a]] else 1.0 / L.size[d])
+                u = abs(dx[a, k]) * (1.0 if angular[dep[a]] else 1.0 / size)
                 step = math.nan if u != u or step != step else max(step, u)
             more = more or step > STEP_TOL   # NaN (singular) stops too
             for a in range(m):

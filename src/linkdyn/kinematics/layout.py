@@ -254,7 +254,9 @@ class Layout:
         own = [jk.get(kind).own({x: out[f"cut_{x}"][k] for x in jk.NUMBERS}, zero)
                for k, kind in enumerate(self.cut_kind)]
         out["cut_own"] = np.array(own, float).reshape(len(own), jk.WIDTH, zero.size)
-        return View(**{k: fixed(v) for k, v in out.items()})
+        from ..compiled import pack   # one object for the kernels (numba's StructRef)
+
+        return pack(View(**{k: fixed(v) for k, v in out.items()}))
 
     # --- designs ---------------------------------------------------------------------------
     def take(self, idx) -> Layout:
