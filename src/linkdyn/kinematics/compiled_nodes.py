@@ -13,10 +13,10 @@ keeps: the coordinates, the dependent rates and which nodes close; the poses and
 are scratch.
 
 A mechanism whose loops are not all dyads (a cam's) has its nodes followed by
-:func:`follow` (:func:`.compiled.newton` node by node) and its samples closed by
-:func:`newton_close` (:func:`.compiled.newton` a block of samples at a time, from the guesses
-the nodes give), :func:`.state.close`'s Newton stage; the samples it leaves open go to
-:func:`.state.close` (its damped restart).
+:func:`follow` (:func:`.compiled.newton` node by node); its samples are closed by the
+kinematics kernel itself (:func:`.compiled.run` with ``newton=True``: Newton's method in each
+block, from the guesses the nodes give, :func:`.state.close`'s Newton stage), and the samples
+it leaves open by :func:`.state.close` (its damped restart).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def kernel(L, modes, q, qd_drv, q0, k_zero, x, ok, phi, c, s, r, e, J, block):
             # design d's numbers, and its nodes in the arrays at d, k0
             _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             _close(L, modes, d, d, k0, nb, q, phi, c, s, r, e, up, low)
-            _cut_frames(L, d, d, k0, nb, c, s, r, P)
+            _cut_frames(L, d, d, k0, nb, c, s, r, P, False)
             _jacobian(L, d, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
             _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, nb, rhs)
@@ -180,43 +180,3 @@ def follow(lay: Layout, q_start: np.ndarray, times: np.ndarray):
         np.maximum(alive.sum(axis=-1) - 1, 0)], np.nan)
     return (Q.reshape(q_start.shape + (K,)), QD.reshape(q_start.shape + (K,)),
             last.reshape(batch))
-
-
-@njit
-def newton_kernel(L, q, phi, c, s, r, e, J, err, block):
-    """Close the loops of every sample of ``q`` (n, D, T) in place by Newton's method from the
-    guess it holds (its driven rows the drivers' values), a block of samples at a time
-    (:func:`.compiled.newton`, :func:`.state.close`'s Newton stage); the scaled residual into
-    ``err`` (D, T). ``phi`` ... ``J``: zeroed scratch shaped as the kinematics kernel's
-    outputs (:func:`.compiled.run`)."""
-    n, nd = len(L.parent), len(L.dependent)
-    D, T = q.shape[1], q.shape[2]
-    cq, sq, _, _, g, P, A, dx, col, perm, _ = scratch(n, len(L.cut_a), nd, J.shape[0], block)
-    for d in range(D):
-        for k0 in range(0, T, block):
-            nb = min(block, T - k0)
-            ks = slice(k0, k0 + nb)
-            for i in range(1, n):
-                _coordinates(L, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
-            newton(L, d, np.int64(k0), np.int64(nb), q, cq, sq, phi, c, s, r, e, J, P, g, err,
-                   A, perm, col, dx)
-
-
-def newton_close(lay: Layout, q_ind: np.ndarray, guess: np.ndarray):
-    """The loops of the states ``q_ind`` (n_drivers, ...) closed by Newton's method from
-    ``guess`` (n, ...) in :func:`newton_kernel`: the coordinates (n, ...) and the scaled
-    residual (...), above :data:`.positions.ACCEPT` where a sample does not close (which
-    :func:`.state.close`'s damped restart is left to)."""
-    topo, L = lay.topo, lay.view
-    n = topo.n
-    shape = np.broadcast_shapes(np.shape(q_ind)[1:], np.shape(guess)[1:])
-    D = max(lay.designs, 1)
-    q = np.array(np.broadcast_to(guess, (n,) + shape), dtype=float)
-    q[list(topo.driven)] = q_ind
-    q = np.ascontiguousarray(q.reshape(n, D, -1))
-    T = q.shape[2]
-    err = np.zeros((D, T))
-    scratch_ = [np.zeros(x + (D, T)) for x in ((n,), (n,), (n,), (n, 2), (n, 2),
-                                               (topo.n_rows, n - 1))]
-    newton_kernel(L, q, *scratch_, err, min(BLOCK, T))
-    return q.reshape((n,) + shape), err.reshape(shape)
