@@ -552,6 +552,12 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
         assert np.all(np.isfinite(b)) and a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))
+    # its node accelerations (for the samples' quintic guesses) are numpy's kinematics' there
+    assert ref.QDD is None and got.QDD.shape == got.Q.shape
+    kin = linkdyn.kinematics.solve(model, got.nodes, backend="numpy")
+    topo = lay.topo
+    qdd = np.array([kin.joint_motion[2][topo.tree_joint[i]] for i in range(1, topo.n)])
+    assert np.max(np.abs(got.QDD[1:] - qdd)) <= 1e-9 * np.max(np.abs(qdd))
 
 
 @pytest.mark.parametrize("name", ["cam_fourbar", "cam_flat_rocker"])
