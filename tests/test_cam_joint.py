@@ -552,6 +552,12 @@ def test_the_compiled_continuation_follows_numpys_nodes():
     for a, b in ((got.Q, ref.Q), (got.QD, ref.QD)):
         assert np.all(np.isfinite(b)) and a.shape == b.shape
         assert np.max(np.abs(a - b)) <= 1e-9 * np.max(np.abs(b))
+    # its node accelerations (for the samples' quintic guesses) are numpy's kinematics' there
+    assert ref.QDD is None and got.QDD.shape == got.Q.shape
+    kin = linkdyn.kinematics.solve(model, got.nodes, backend="numpy")
+    topo = lay.topo
+    qdd = np.array([kin.joint_motion[2][topo.tree_joint[i]] for i in range(1, topo.n)])
+    assert np.max(np.abs(got.QDD[1:] - qdd)) <= 1e-9 * np.max(np.abs(qdd))
 
 
 @pytest.mark.parametrize("name", ["cam_fourbar", "cam_flat_rocker"])
@@ -579,26 +585,32 @@ def test_the_contact_found_from_the_last_samples_or_from_rest_is_numpys(name):
 
 def test_the_compiled_newton_closes_the_samples_as_numpys():
     # the samples of a mechanism whose loops are not all dyads, closed on the compiled backend
-    # by compiled_nodes.newton_close (the kinematics kernel's Newton): numpy's state.close's
-    # coordinates to rounding; a sample from a guess too far for Newton's method is left open
-    # (above ACCEPT) for numpy's damped restart, which analyze then runs on it alone
+    # by the kinematics kernel's Newton in its blocks (compiled.run with newton=True): numpy's
+    # state.close's coordinates to rounding; a sample from a guess too far for Newton's method
+    # is left open (above ACCEPT) for numpy's damped restart, which analyze then runs on it
+    # alone
     pytest.importorskip("numba", reason="the compiled Newton needs numba (the fast extra)")
     from linkdyn.kinematics import compile_layout, compiled_nodes
+    from linkdyn.kinematics import compiled as kc
     from linkdyn.kinematics.positions import ACCEPT, follow
     from linkdyn.kinematics.state import close
     model = linkdyn.load(linkdyn.example_path("cam_fourbar"))
     lay = compile_layout(model)
     t = np.linspace(0.0, 0.2, 201)
-    q_ind = lay.driver_values(t)[0]
+    q_ind, qd_ind, qdd_ind = lay.driver_values(t)
     branch = follow([model], lay, t, newton_nodes=compiled_nodes.follow)
     guess = branch.guess(lay, t)
     ref, ref_err, _ = close(lay, q_ind, guess, branch.modes)
-    got, err = compiled_nodes.newton_close(lay, q_ind, guess)
+
+    def closed(start):
+        out = kc.run(lay, t, q_ind, qd_ind, qdd_ind, q=start, newton=True)
+        return out["q"].reshape(start.shape), out["err"].reshape(t.shape)
+    got, err = closed(guess)
     assert np.all(ref_err <= ACCEPT) and np.all(err <= ACCEPT)
     assert np.max(np.abs(got - ref)) <= 1e-12 * np.max(np.abs(ref))
     far = guess.copy()
     far[list(lay.topo.dependent), 7] += 2.5    # rad: no nearby guess
-    _, err = compiled_nodes.newton_close(lay, q_ind, far)
+    _, err = closed(far)
     assert not err[7] <= ACCEPT and np.all(np.delete(err, 7) <= ACCEPT)
     sol = linkdyn.analyze(model, t, backend="compiled")
     assert np.all(sol.valid)

@@ -85,7 +85,8 @@ def closed_by_the_kernel(model, t):
     assert lay.dyads is not None
     q0 = positions.assemble([model], lay, lay.driver_values(np.zeros(1))[0][..., 0])[:, 0]
     modes = dyads.sides(lay, lay.dyads, q0[..., None], kinematics.forward_positions)
-    nodes, Q, _, reach = positions.continuation(lay, q0, min(0.0, t.min()), max(0.0, t.max()), modes)
+    nodes, Q, _, reach, _ = positions.continuation(lay, q0, min(0.0, t.min()), max(0.0, t.max()),
+                                                   modes)
     return kc.run(lay, t, *lay.driver_values(t), nodes=nodes,
                   Q=Q, modes=modes, lo=reach[..., :1], hi=reach[..., 1:])
 

@@ -45,6 +45,7 @@ class Figure:
 MODES = "benchmarks/bench_modes.py"
 PAGE_PLAY = "benchmarks/bench_page.py"
 FRICTION = "benchmarks/bench_friction.py --samples 100000"
+CAM = "benchmarks/bench_cam.py --samples 20000 --repeat 10"
 CEILING = "benchmarks/bench_ceiling.py --clock cpu"
 HOEKEN = "benchmarks/bench_hoeken.py --samples 1000000 --clock cpu"
 
@@ -153,6 +154,10 @@ FIGURES = {
                                "timing"),
     "friction.ratio": Figure(FRICTION, r"ratio\s+(" + NUMBER + ")", "timing"),
     "friction.iterations": Figure(FRICTION, r"\(Newton (\d+) iterations\)", "exact"),
+    # a cam-driven four-bar against the same four-bar driven at its input
+    "cam.plain": Figure(CAM, r"plain four-bar\s+(" + NUMBER + ") samples/s", "timing"),
+    "cam.cam": Figure(CAM, r"cam-driven four-bar\s+(" + NUMBER + ") samples/s", "timing"),
+    "cam.ratio": Figure(CAM, r"ratio\s+(" + NUMBER + ")", "timing"),
     # the ceilings: what each hand-written kernel stores, and its rate
     "ceiling.kinematics_numbers": Figure(CEILING, r"kinematics: ceiling[^\n]*? (\d+) numbers "
                                          r"per sample", "exact"),

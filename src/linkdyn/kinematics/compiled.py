@@ -236,11 +236,13 @@ def _close(L, modes, d, wd, kw, nb, q, phi, c, s, r, e, up, low):
 
 
 @inner
-def _cut_frames(L, d, w, kw, nb, c, s, r, P):
+def _cut_frames(L, d, w, kw, nb, c, s, r, P, again):
     """Every cut's points on its bodies a and b, its axis (fixed in a), global, and its
     contact, once the loops are closed (:func:`.recursion.cut_frame`), for the steps that
     follow: ``P`` (n_cut, 9, block) rows ``[r_Pa (2), r_Pb (2), e_a (2), e_b (2), t]``
-    (design d's numbers, the poses at ``w``, ``kw``)."""
+    (design d's numbers, the poses at ``w``, ``kw``). The contact's search starts from the
+    sample's own contact in ``P`` when ``again`` (the same samples' frames at a nearby pose:
+    Newton's method's last step), else from the previous sample's."""
     ks = slice(kw, kw + nb)
     for ci in range(len(L.cut_a)):
         c_a, s_a, rx_a, ry_a = _body(c, s, r, L.cut_a[ci], w, ks)
@@ -250,6 +252,8 @@ def _cut_frames(L, d, w, kw, nb, c, s, r, P):
         P_c, code, nums = P[ci], L.cut_kind[ci], cut_numbers(L, ci, d)
         t0 = P_c[8, 0]   # the contact's search starts from the last sample's (or a stale one)
         for k in range(nb):
+            if again:
+                t0 = P_c[8, k]
             r_pa, r_pb, e_a = cut_frame(code, nums, c_a[k], s_a[k], (rx_a[k], ry_a[k]), c_b[k],
                                         s_b[k], (rx_b[k], ry_b[k]), pa, pb, axis, t0)
             t0 = e_a[4]
@@ -478,24 +482,33 @@ def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
 
 @inner
 def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
+    """:func:`newton_at` with the arrays at design d, samples from ``k0`` (the outputs
+    themselves)."""
+    newton_at(L, d, k0, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx)
+
+
+@inner
+def newton_at(L, d, k0, w, kw, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
     """Close the loops of the samples ``k0`` .. ``k0 + nb`` of design d by Newton's method on
-    the dependent coordinates from the guess in ``q`` (n, D, T) (its independent rows already
-    the state's, ``cq``, ``sq`` (n, block) the cosines and sines of ``s q`` of its angular
-    joints), as :func:`.state.close`'s Newton stage: until no sample's step is above
-    ``STEP_TOL`` (radians, or metres over the size), at most ``MAXITER`` steps; a step of a
-    radian or the size is not taken (no correction of a nearby guess). On return the poses
-    (``phi`` ... ``e``), the cut frames ``P`` and the residual ``g`` (n_rows, block) are those
-    of ``q``, the scaled residual in ``err`` (D, T); ``J`` the Jacobian of the last step.
-    ``A``, ``perm``, ``col``: the LU of ``J_dep`` (:func:`scratch`); ``dx`` (n_dep, block)."""
+    the dependent coordinates from the guess in ``q`` (n, D, T) at design ``w``, samples from
+    ``kw`` (its independent rows already the state's, ``cq``, ``sq`` (n, block) the cosines and
+    sines of ``s q`` of its angular joints), as :func:`.state.close`'s Newton stage: until no
+    sample's step is above ``STEP_TOL`` (radians, or metres over the size), at most ``MAXITER``
+    steps; a step of a radian or the size is not taken (no correction of a nearby guess). On
+    return the poses (``phi`` ... ``e``, at ``w``, ``kw``), the cut frames ``P`` and the
+    residual ``g`` (n_rows, block) are those of ``q``, the scaled residual in ``err`` (D, T) at
+    d, ``k0``; ``J`` the Jacobian of the last step. ``A``, ``perm``, ``col``: the LU of
+    ``J_dep`` (:func:`scratch`); ``dx`` (n_dep, block). After the first pose each contact's
+    search starts from the sample's own contact at the pose before (:func:`_cut_frames`)."""
     dep, angular, size = L.dependent, L.angular, L.size[d]
-    m, ks = len(dep), slice(k0, k0 + nb)
-    _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
-    _cut_frames(L, d, d, k0, nb, c, s, r, P)
-    _residual(L, d, k0, d, k0, nb, phi, P, err, g)
+    m, kws = len(dep), slice(kw, kw + nb)
+    _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
+    _cut_frames(L, d, w, kw, nb, c, s, r, P, False)
+    _residual(L, d, k0, w, kw, nb, phi, P, err, g)
     for _ in range(MAXITER if m else 0):
         # J_dep dx = -g                                                          (F1-F2)
-        _jacobian(L, d, d, k0, nb, r, e, P, J)
-        _factor_dep(dep, J, d, k0, nb, A, perm, col)
+        _jacobian(L, d, w, kw, nb, r, e, P, J)
+        _factor_dep(dep, J, w, kw, nb, A, perm, col)
         for a in range(m):
             for k in range(nb):
                 g[a, k] = -g[a, k]
@@ -510,13 +523,13 @@ def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col,
             more = more or step > STEP_TOL   # NaN (singular) stops too
             for a in range(m):
                 if math.isfinite(dx[a, k]) and step < 1.0:
-                    q[dep[a], d, k0 + k] += dx[a, k]
+                    q[dep[a], w, kw + k] += dx[a, k]
         for a in range(m):
             i = dep[a]
-            _coordinates(L, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
-        _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
-        _cut_frames(L, d, d, k0, nb, c, s, r, P)
-        _residual(L, d, k0, d, k0, nb, phi, P, err, g)
+            _coordinates(L, i, q[i, w, kws], q[i, w, kws], cq[i], sq[i], nb)
+        _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
+        _cut_frames(L, d, w, kw, nb, c, s, r, P, True)
+        _residual(L, d, k0, w, kw, nb, phi, P, err, g)
         if not more:
             break
 
@@ -555,10 +568,11 @@ def _driven_rhs(drv, nd, J, w, kws, qd_drv, d, ks, nb, rhs):
 #: ``t_s`` (T,); the continuation ``nodes`` (K,) s with their coordinates ``Qn`` (n, D, K) and
 #: the cosines and sines ``cQ``, ``sQ`` of ``s Qn``, each design's times clamped to ``lo``,
 #: ``hi`` (D,); the dyads' assembly ``modes`` (n_dyads, D); ``q_in`` (n, D, T) the coordinates
-#: closing the loops where there are no nodes (K = 0); the drivers' coordinates, rates and
-#: accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T).
+#: closing the loops where there are no nodes (K = 0), or, with ``newton`` (1,) = 1, the
+#: guess from which the kernel's Newton's method closes them (:func:`newton_at`); the drivers'
+#: coordinates, rates and accelerations ``q_drv``, ``qd_drv``, ``qdd_drv`` (n_drivers, D, T).
 Inputs = namedtuple("Inputs", ("t_s", "nodes", "lo", "hi", "Qn", "cQ", "sQ", "modes", "q_in",
-                               "q_drv", "qd_drv", "qdd_drv"), module=__name__)
+                               "newton", "q_drv", "qd_drv", "qdd_drv"), module=__name__)
 
 
 @inner
@@ -591,12 +605,18 @@ def block(L, X, d, k0, nb, work, w, kw, err, pivot, fin, tmp):
     for j in range(nv):
         i = drv[j]
         _coordinates(L, i, X.q_drv[j, d, ks], q[i, w, kws], cq[i], sq[i], nb)
-    # positions, the loops closed in closed form from the nodes
-    _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
-    if nodes.shape[0] > 0:
-        _close(L, X.modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
-    _cut_frames(L, d, w, kw, nb, c, s, r, P)
-    _residual(L, d, k0, w, kw, nb, phi, P, err, rhs)
+    if nodes.shape[0] == 0 and X.newton[0]:
+        # positions, the loops closed by Newton's method from the guess: its last pose, cut
+        # frames and residual are the sample's
+        newton_at(L, d, k0, w, kw, nb, q, cq, sq, phi, c, s, r, e, J, P, rhs, err, A, perm,
+                  col, sol)
+    else:
+        # positions, the loops closed in closed form from the nodes (or closed already)
+        _place(L, d, w, kw, nb, q, cq, sq, phi, c, s, r, e)
+        if nodes.shape[0] > 0:
+            _close(L, X.modes, d, w, kw, nb, q, phi, c, s, r, e, up, low)
+        _cut_frames(L, d, w, kw, nb, c, s, r, P, False)
+        _residual(L, d, k0, w, kw, nb, phi, P, err, rhs)
     _jacobian(L, d, w, kw, nb, r, e, P, J)
     # rates: J_dep qd_dep = -J_drv qd_drv                       (eqs. 4-5)
     for m in range(nd):   # the first pass of the twist rates takes qdd_dep = 0
@@ -631,7 +651,8 @@ def kernel(L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, b
 
     With continuation nodes (``X.nodes``, :data:`Inputs`), the loops are closed dyad by dyad
     from the node nearest to each time clamped to ``[lo, hi]``, in the assembly ``modes``;
-    without (K = 0), ``X.q_in`` already closes them. Each block of samples is :func:`block`,
+    without (K = 0), ``X.q_in`` already closes them, or (``X.newton``) Newton's method closes
+    them from it. Each block of samples is :func:`block`,
     written in place, then the cut joints' motion.
     """
     D, T = L.size.shape[0], X.t_s.shape[0]
@@ -645,7 +666,7 @@ def kernel(L, X, q, phi, c, s, r, e, J, qd, qdd, tw, td, cut, pivot, err, fin, b
 
 
 def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
-           lo=None, hi=None, modes=()) -> Inputs:
+           lo=None, hi=None, modes=(), newton=False) -> Inputs:
     """The per-call :data:`Inputs` of :func:`kernel` (and of :func:`block`) for the arguments
     of :func:`run`: each array C-contiguous and read-only (:func:`fixed`)."""
     topo, L = lay.topo, lay.view
@@ -676,15 +697,17 @@ def inputs(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=
         np.reshape(x, (nv, -1, T)), (nv, D, T)), dtype=float)
         for x in (q_drv, qd_drv, qdd_drv)]
     return Inputs(*fixed((t, np.asarray(nodes, float), lo, hi, Qn, cQ, sQ, md, q_in,
-                          *drivers)))
+                          np.array([1 if newton else 0], np.int64), *drivers)))
 
 
 def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=None, Q=None,
-        lo=None, hi=None, modes=()) -> dict:
+        lo=None, hi=None, modes=(), newton=False) -> dict:
     """Run :func:`kernel` on the layout ``lay`` at the times ``t`` (T,) with the driver values
     (n_drivers, T), or (n_drivers, D, T) per design.
 
-    Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or
+    Either ``q`` (n, ...) closes the loops at every sample (batch shape (T,) or (D, T)), or,
+    with ``newton``, is the guess from which Newton's method closes them in the kernel's
+    blocks (:func:`newton_at`; ``err`` above :data:`.positions.ACCEPT` where it does not), or
     the loops are closed from the continuation ``nodes`` (K,) with coordinates ``Q``
     (n, ..., K), each design's times clamped to ``[lo, hi]`` (D,), in the dyads' assembly
     ``modes`` (each (1,) or (D, 1)).
@@ -699,7 +722,7 @@ def run(lay: Layout, t: np.ndarray, q_drv, qd_drv, qdd_drv, *, q=None, nodes=Non
     n, nc = topo.n, topo.n_loops
     D, T = max(lay.designs, 1), len(t)
     args = inputs(lay, t, q_drv, qd_drv, qdd_drv, q=q, nodes=nodes, Q=Q, lo=lo, hi=hi,
-                  modes=modes)
+                  modes=modes, newton=newton)
     out = {"q": (n,), "phi": (n,), "c": (n,), "s": (n,), "r": (n, 2), "e": (n, 2),
            "J": (topo.n_rows, n - 1), "qd": (n,), "qdd": (n,), "tw": (n, 3),
            "twd": (n, 3), "cut": (nc, 3), "pivot": (), "err": ()}

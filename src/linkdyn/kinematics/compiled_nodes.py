@@ -13,10 +13,11 @@ keeps: the coordinates, the dependent rates and which nodes close; the poses and
 are scratch.
 
 A mechanism whose loops are not all dyads (a cam's) has its nodes followed by
-:func:`follow` (:func:`.compiled.newton` node by node) and its samples closed by
-:func:`newton_close` (:func:`.compiled.newton` a block of samples at a time, from the guesses
-the nodes give), :func:`.state.close`'s Newton stage; the samples it leaves open go to
-:func:`.state.close` (its damped restart).
+:func:`follow` (:func:`.compiled.newton` node by node, with the nodes' rates and
+accelerations for the samples' quintic Hermite guesses); its samples are closed by the
+kinematics kernel itself (:func:`.compiled.run` with ``newton=True``: Newton's method in each
+block, from the guesses the nodes give, :func:`.state.close`'s Newton stage), and the samples
+it leaves open by :func:`.state.close` (its damped restart).
 """
 
 from __future__ import annotations
@@ -26,8 +27,9 @@ import math
 import numpy as np
 
 from ..compiled import njit
-from .compiled import (BLOCK, _close, _coordinates, _cut_frames, _driven_rhs, _factor_dep,
-                       _jacobian, _place, _solve_dep, fixed, newton, scratch)
+from .compiled import (BLOCK, _bias, _close, _coordinates, _cut_frames, _driven_rhs,
+                       _factor_dep, _jacobian, _place, _solve_dep, _twist_rates, _twists, fixed,
+                       newton, scratch)
 from .layout import Layout
 from .positions import ACCEPT, unwrap_step
 
@@ -59,7 +61,7 @@ def kernel(L, modes, q, qd_drv, q0, k_zero, x, ok, phi, c, s, r, e, J, block):
             # design d's numbers, and its nodes in the arrays at d, k0
             _place(L, d, d, k0, nb, q, cq, sq, phi, c, s, r, e)
             _close(L, modes, d, d, k0, nb, q, phi, c, s, r, e, up, low)
-            _cut_frames(L, d, d, k0, nb, c, s, r, P)
+            _cut_frames(L, d, d, k0, nb, c, s, r, P, False)
             _jacobian(L, d, d, k0, nb, r, e, P, J)
             # rates: J_dep qd_dep = -J_drv qd_drv                           (eqs. 4-5)
             _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, nb, rhs)
@@ -112,17 +114,21 @@ def close(lay: Layout, Q: np.ndarray, qd_drv: np.ndarray, modes, q0: np.ndarray,
 
 
 @njit
-def follow_kernel(L, Q, QD, qd_drv, times, alive, phi, c, s, r, e, J, err):
+def follow_kernel(L, Q, QD, QDD, qd_drv, qdd_drv, times, alive, phi, c, s, r, e, J, tw, td,
+                  err):
     """Newton continuation of the layout whose view is ``L`` through the node ``times`` (K,),
     design by design, node by node, as :func:`.positions._continuation`: at each node the
     predictor ``q_dep += qd_dep dt`` from the last, Newton's method on the loops
-    (:func:`.compiled.newton`) and the dependent rates ``J_dep qd_dep = -J_drv qd_drv``
-    (eqs. 4-5). ``Q`` (n, D, K): node 0's dependent rows the start, every node's driven rows
-    the drivers' values; written in place, with the rates into ``QD`` (n, D, K; its driven
-    rows the drivers' rates ``qd_drv`` (n_drivers, D, K)). ``alive`` (D, K): the node closes
-    (scaled residual at most ``ACCEPT``) with finite rates; from a design's first node that
-    does not, its nodes are NaN. ``phi`` ... ``err``: zeroed scratch shaped as the kinematics
-    kernel's outputs (:func:`.compiled.run`, T = K)."""
+    (:func:`.compiled.newton`), the dependent rates ``J_dep qd_dep = -J_drv qd_drv``
+    (eqs. 4-5) and accelerations ``J_dep qdd_dep = -bias`` (eqs. 6-7; for the samples'
+    quintic Hermite guesses, :meth:`.positions.Branch.guess`). ``Q`` (n, D, K): node 0's
+    dependent rows the start, every node's driven rows the drivers' values; written in place,
+    with the rates into ``QD`` and the accelerations into ``QDD`` (n, D, K; their driven rows
+    the drivers' rates ``qd_drv`` and accelerations ``qdd_drv`` (n_drivers, D, K)).
+    ``alive`` (D, K): the node closes (scaled residual at most ``ACCEPT``) with finite rates
+    and accelerations; from a design's first node that does not, its nodes are NaN. ``phi``
+    ... ``err``: zeroed scratch shaped as the kinematics kernel's outputs
+    (:func:`.compiled.run`, T = K)."""
     dep, drv = L.dependent, L.driven
     n, nd = len(L.parent), len(dep)
     D, K = Q.shape[1], Q.shape[2]
@@ -132,6 +138,7 @@ def follow_kernel(L, Q, QD, qd_drv, times, alive, phi, c, s, r, e, J, err):
         dead = False
         for k in range(K):
             ks = slice(k, k + 1)
+            kk = np.int64(k)
             if k and not dead:   # the predictor from the last node
                 for m in range(nd):
                     i = dep[m]
@@ -139,84 +146,56 @@ def follow_kernel(L, Q, QD, qd_drv, times, alive, phi, c, s, r, e, J, err):
             if not dead:
                 for i in range(1, n):
                     _coordinates(L, i, Q[i, d, ks], Q[i, d, ks], cq[i], sq[i], one)
-                newton(L, d, np.int64(k), one, Q, cq, sq, phi, c, s, r, e, J, P, rhs, err, A,
-                       perm, col, sol)
-                _jacobian(L, d, d, np.int64(k), one, r, e, P, J)
+                newton(L, d, kk, one, Q, cq, sq, phi, c, s, r, e, J, P, rhs, err, A, perm, col,
+                       sol)
+                _jacobian(L, d, d, kk, one, r, e, P, J)
                 _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, one, rhs)
                 if nd:
-                    _factor_dep(dep, J, d, np.int64(k), one, A, perm, col)
-                    _solve_dep(dep, A, perm, col, d, np.int64(k), one, rhs, QD, sol)
+                    _factor_dep(dep, J, d, kk, one, A, perm, col)
+                    _solve_dep(dep, A, perm, col, d, kk, one, rhs, QD, sol)
+                    # accelerations: J_dep qdd_dep = -bias(qdd_dep = 0)    (eqs. 6-7)
+                    _twists(L, d, kk, one, r, e, QD, tw)
+                    for m in range(nd):
+                        QDD[dep[m], d, k] = 0.0
+                    _twist_rates(L, d, kk, one, r, e, tw, QD, QDD, td)
+                    _bias(L, d, d, kk, one, r, tw, td, P, rhs)
+                    for m in range(nd):
+                        rhs[m, 0] = -rhs[m, 0]
+                    _solve_dep(dep, A, perm, col, d, kk, one, rhs, QDD, sol)
                 ok = err[d, k] <= ACCEPT
                 for m in range(nd):
-                    ok = ok and math.isfinite(QD[dep[m], d, k])
+                    ok = ok and math.isfinite(QD[dep[m], d, k]) and math.isfinite(
+                        QDD[dep[m], d, k])
                 dead = not ok
             alive[d, k] = not dead
             if dead:
                 for i in range(n):
-                    Q[i, d, k], QD[i, d, k] = math.nan, math.nan
+                    Q[i, d, k], QD[i, d, k], QDD[i, d, k] = math.nan, math.nan, math.nan
 
 
 def follow(lay: Layout, q_start: np.ndarray, times: np.ndarray):
     """:func:`.positions._continuation` by :func:`follow_kernel`: the branch from ``q_start``
     (n, ...) followed through the node ``times`` (K,). Returns node coordinates and rates
-    (n, ..., K) and the last node time (...) where the loops still close (NaN: none)."""
+    (n, ..., K), the last node time (...) where the loops still close (NaN: none) and the
+    node accelerations (n, ..., K)."""
     topo, L = lay.topo, lay.view
     n, K = topo.n, len(times)
     batch = q_start.shape[1:]
     D = max(lay.designs, 1)
     drv = list(topo.driven)
-    nq, nqd, _ = lay.driver_values(times)
+    nq, nqd, nqdd = lay.driver_values(times)
     Q = np.array(np.broadcast_to(q_start.reshape(n, -1, 1), (n, D, K)), dtype=float)
     Q[drv] = np.broadcast_to(nq.reshape(len(drv), -1, K), (len(drv), D, K))
-    qd = fixed(np.broadcast_to(nqd.reshape(len(drv), -1, K), (len(drv), D, K)).astype(float))
-    QD = np.zeros((n, D, K))
-    QD[drv] = qd
+    qd, qdd = (fixed(np.broadcast_to(x.reshape(len(drv), -1, K), (len(drv), D, K)).astype(
+        float)) for x in (nqd, nqdd))
+    QD, QDD = np.zeros((n, D, K)), np.zeros((n, D, K))
+    QD[drv], QDD[drv] = qd, qdd
     alive = np.zeros((D, K), np.bool_)
     scratch_ = [np.zeros(shape + (D, K)) for shape in ((n,), (n,), (n,), (n, 2), (n, 2),
-                                                        (topo.n_rows, n - 1))]
-    follow_kernel(L, Q, QD, qd, fixed(np.asarray(times, float)), alive, *scratch_,
+                                                        (topo.n_rows, n - 1), (n, 3), (n, 3))]
+    follow_kernel(L, Q, QD, QDD, qd, qdd, fixed(np.asarray(times, float)), alive, *scratch_,
                   np.zeros((D, K)))
     last = np.where(alive.any(axis=-1), np.asarray(times, float)[
         np.maximum(alive.sum(axis=-1) - 1, 0)], np.nan)
     return (Q.reshape(q_start.shape + (K,)), QD.reshape(q_start.shape + (K,)),
-            last.reshape(batch))
-
-
-@njit
-def newton_kernel(L, q, phi, c, s, r, e, J, err, block):
-    """Close the loops of every sample of ``q`` (n, D, T) in place by Newton's method from the
-    guess it holds (its driven rows the drivers' values), a block of samples at a time
-    (:func:`.compiled.newton`, :func:`.state.close`'s Newton stage); the scaled residual into
-    ``err`` (D, T). ``phi`` ... ``J``: zeroed scratch shaped as the kinematics kernel's
-    outputs (:func:`.compiled.run`)."""
-    n, nd = len(L.parent), len(L.dependent)
-    D, T = q.shape[1], q.shape[2]
-    cq, sq, _, _, g, P, A, dx, col, perm, _ = scratch(n, len(L.cut_a), nd, J.shape[0], block)
-    for d in range(D):
-        for k0 in range(0, T, block):
-            nb = min(block, T - k0)
-            ks = slice(k0, k0 + nb)
-            for i in range(1, n):
-                _coordinates(L, i, q[i, d, ks], q[i, d, ks], cq[i], sq[i], nb)
-            newton(L, d, np.int64(k0), np.int64(nb), q, cq, sq, phi, c, s, r, e, J, P, g, err,
-                   A, perm, col, dx)
-
-
-def newton_close(lay: Layout, q_ind: np.ndarray, guess: np.ndarray):
-    """The loops of the states ``q_ind`` (n_drivers, ...) closed by Newton's method from
-    ``guess`` (n, ...) in :func:`newton_kernel`: the coordinates (n, ...) and the scaled
-    residual (...), above :data:`.positions.ACCEPT` where a sample does not close (which
-    :func:`.state.close`'s damped restart is left to)."""
-    topo, L = lay.topo, lay.view
-    n = topo.n
-    shape = np.broadcast_shapes(np.shape(q_ind)[1:], np.shape(guess)[1:])
-    D = max(lay.designs, 1)
-    q = np.array(np.broadcast_to(guess, (n,) + shape), dtype=float)
-    q[list(topo.driven)] = q_ind
-    q = np.ascontiguousarray(q.reshape(n, D, -1))
-    T = q.shape[2]
-    err = np.zeros((D, T))
-    scratch_ = [np.zeros(x + (D, T)) for x in ((n,), (n,), (n,), (n, 2), (n, 2),
-                                               (topo.n_rows, n - 1))]
-    newton_kernel(L, q, *scratch_, err, min(BLOCK, T))
-    return q.reshape((n,) + shape), err.reshape(shape)
+            last.reshape(batch), QDD.reshape(q_start.shape + (K,)))

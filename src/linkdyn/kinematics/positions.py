@@ -358,6 +358,10 @@ class Branch:
         Tree coordinates and rates at the nodes (NaN beyond a design's reach).
     reach : ndarray (..., 2)
         The time interval over which each design's branch was followed (empty if it was not).
+    QDD : ndarray (n, ..., K) or None
+        Their accelerations, where the continuation gives them (the compiled Newton
+        continuation, :func:`.compiled_nodes.follow`): the guesses between the nodes are then
+        quintic Hermite instead of cubic.
     """
 
     start: np.ndarray
@@ -366,6 +370,7 @@ class Branch:
     Q: np.ndarray | None = None
     QD: np.ndarray | None = None
     reach: np.ndarray | None = None
+    QDD: np.ndarray | None = None
 
     @property
     def followed(self) -> np.ndarray:
@@ -381,7 +386,8 @@ class Branch:
     def guess(self, lay: Layout, t: np.ndarray) -> np.ndarray:
         """Tree coordinates (n, ..., T) near the branch at the times ``t``, from the nodes: the
         nearest node where every loop is a dyad (closed form: the guess only sets the winding
-        of the angles), else cubic Hermite from the bracketing nodes (for Newton's method).
+        of the angles), else Hermite from the bracketing nodes (for Newton's method): cubic
+        from their coordinates and rates, quintic with their accelerations (``QDD``).
         Samples outside the reach start from its end; a design not followed from zeros."""
         if self.nodes is None:
             return self.start[..., None]
@@ -393,13 +399,23 @@ class Branch:
             return np.take_along_axis(np.nan_to_num(X), k[None], axis=-1)
         if lay.dyads is not None:
             q = at(self.Q, nearest_node(j, nodes[j], nodes[j + 1], tc))
-        else:
+        elif self.QDD is None:
             # q(u) = h00 Q_j + h10 QD_j + h01 Q_j+1 + h11 QD_j+1, u the fraction of the span
             u, h = node_fraction(nodes[j], nodes[j + 1], tc), nodes[j + 1] - nodes[j]
             h00, h10 = 2 * u**3 - 3 * u**2 + 1, (u**3 - 2 * u**2 + u) * h
             h01, h11 = -2 * u**3 + 3 * u**2, (u**3 - u**2) * h
             q = (h00 * at(self.Q, j) + h10 * at(self.QD, j) + h01 * at(self.Q, j + 1)
                  + h11 * at(self.QD, j + 1))
+        else:
+            # quintic Hermite: the cubic's terms and the accelerations' h^2 terms
+            u, h = node_fraction(nodes[j], nodes[j + 1], tc), nodes[j + 1] - nodes[j]
+            u2, u3 = u * u, u * u * u
+            w0, w1 = 1 - u3 * (10 - 15 * u + 6 * u2), u3 * (10 - 15 * u + 6 * u2)
+            v0, v1 = (u - u3 * (6 - 8 * u + 3 * u2)) * h, -u3 * (4 - 7 * u + 3 * u2) * h
+            a0 = 0.5 * u2 * (1 - u) ** 3 * h * h
+            a1 = 0.5 * u3 * (1 - u) ** 2 * h * h
+            q = (w0 * at(self.Q, j) + v0 * at(self.QD, j) + a0 * at(self.QDD, j)
+                 + w1 * at(self.Q, j + 1) + v1 * at(self.QD, j + 1) + a1 * at(self.QDD, j + 1))
         return np.where(np.isfinite(q), q, 0.0)
 
     def ended(self, t: np.ndarray, err: np.ndarray):
@@ -433,7 +449,8 @@ def follow(models: list[Model], lay: Layout, t: np.ndarray, single: bool = True,
     :func:`.compiled_nodes.close`: the same steps, to rounding); default these numpy passes.
     ``newton_nodes``: another backend's Newton continuation through the nodes of a mechanism
     not all of dyads, ``newton_nodes(lay, q_start, times) -> (Q, QD, last)`` as
-    :func:`_continuation` (:func:`.compiled_nodes.follow`); default the numpy one.
+    :func:`_continuation` (:func:`.compiled_nodes.follow`, which also gives the nodes'
+    accelerations); default the numpy one.
     """
     q_start = start if start is not None else assemble(
         models, lay, lay.driver_values(np.zeros(1))[0][..., 0], 0.0, raise_error=single)
@@ -477,38 +494,51 @@ def continuation(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes=None, 
     """Continuation from the assembly ``q0`` (n,) or, for designs, (n, D) at t = 0, forwards
     to ``hi`` and backwards to ``lo``; ``modes``: the dyads' assembly modes.
 
-    Returns ascending node times (K,), node coordinates and rates (n, ..., K), and the time
-    interval ``reach`` (..., 2) over which each branch was followed."""
+    Returns ascending node times (K,), node coordinates and rates (n, ..., K), the time
+    interval ``reach`` (..., 2) over which each branch was followed, and the node
+    accelerations (n, ..., K) where the continuation gives them (else None)."""
     if lay.dyads is not None:
-        return _follow_dyads(lay, q0, lo, hi, modes, nodes)
+        return _follow_dyads(lay, q0, lo, hi, modes, nodes) + (None,)
     if q0.ndim == 1:
         return _follow_newton(lay, q0, lo, hi, newton_nodes)
     # designs: Newton's batch is (D, 1), the trailing axis standing for time
-    nodes, Q, QD, reach = _follow_newton(lay, q0[..., None], lo, hi, newton_nodes)
-    return nodes, Q[..., 0, :], QD[..., 0, :], reach[..., 0, :]
+    nodes, Q, QD, reach, QDD = _follow_newton(lay, q0[..., None], lo, hi, newton_nodes)
+    return (nodes, Q[..., 0, :], QD[..., 0, :], reach[..., 0, :],
+            None if QDD is None else QDD[..., 0, :])
 
 
 def _follow_newton(lay: Layout, q0: np.ndarray, lo: float, hi: float, run=None):
     """:func:`continuation` by Newton continuation, node by node (by :func:`_continuation`, or
-    ``run`` with its arguments and results)."""
-    nodes, Q, QD, reach = [np.zeros(1)], [q0[..., None]], [None], []
+    ``run`` with its arguments and results: the nodes' coordinates, rates, last node time and
+    accelerations, or None for them)."""
+    nodes, Q, reach = [np.zeros(1)], [q0[..., None]], []
+    rates = {"QD": [None], "QDD": [None]}   # node 0's from the first run that reaches it
     for end in (hi, lo):
         if end == 0.0:
             reach.append(np.zeros(q0.shape[1:]))
             continue
         nd = _travel_nodes(lay, 0.0, end)
-        Qe, QDe, last = (run or _continuation)(lay, q0, nd)
+        Qe, QDe, last, QDDe = (run or _continuation)(lay, q0, nd)
         reach.append(last)
         if end < 0:
-            nd, Qe, QDe = nd[::-1], Qe[..., ::-1], QDe[..., ::-1]
-            nodes, Q, QD = [nd[:-1]] + nodes, [Qe[..., :-1]] + Q, [QDe[..., :-1]] + QD
-            QD[-1] = QDe[..., -1:] if QD[-1] is None else QD[-1]
+            nd, Qe = nd[::-1], Qe[..., ::-1]
+            nodes, Q = [nd[:-1]] + nodes, [Qe[..., :-1]] + Q
         else:
-            nodes, Q, QD = nodes + [nd[1:]], Q + [Qe[..., 1:]], QD + [QDe[..., 1:]]
-            QD[0 if lo == 0.0 else -2] = QDe[..., :1]
-    QD = [x for x in QD if x is not None]
-    return (np.concatenate(nodes), np.concatenate(Q, axis=-1), np.concatenate(QD, axis=-1),
-            np.stack([reach[1], reach[0]], axis=-1))
+            nodes, Q = nodes + [nd[1:]], Q + [Qe[..., 1:]]
+        for key, x in (("QD", QDe), ("QDD", QDDe)):
+            if x is None:
+                rates[key] = None
+            elif rates[key] is not None and end < 0:
+                x = x[..., ::-1]
+                rates[key] = [x[..., :-1]] + rates[key]
+                rates[key][-1] = x[..., -1:] if rates[key][-1] is None else rates[key][-1]
+            elif rates[key] is not None:
+                rates[key] = rates[key] + [x[..., 1:]]
+                rates[key][0 if lo == 0.0 else -2] = x[..., :1]
+    QD, QDD = ((None if x is None else np.concatenate([y for y in x if y is not None], axis=-1))
+               for x in (rates["QD"], rates["QDD"]))
+    return (np.concatenate(nodes), np.concatenate(Q, axis=-1), QD,
+            np.stack([reach[1], reach[0]], axis=-1), QDD)
 
 
 @step
@@ -561,7 +591,8 @@ def _follow_dyads(lay: Layout, q0: np.ndarray, lo: float, hi: float, modes, clos
 def _continuation(lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
     """Follow the branch from ``q_start`` (n, ...) through the node times: a predictor
     ``q += qd dt`` and a Newton corrector per node. Returns node coordinates and rates
-    (n, ..., K) and the last node time (...) where the loops still close."""
+    (n, ..., K), the last node time (...) where the loops still close, and None (no node
+    accelerations)."""
     topo = lay.topo
     dep, drv = list(topo.dependent), list(topo.driven)
     nq, nqd, _ = lay.driver_values(nodes)
@@ -587,4 +618,4 @@ def _continuation(lay: Layout, q_start: np.ndarray, nodes: np.ndarray):
         QD[dep, ..., k] = np.where(alive, x, np.nan)
         last_ok = np.where(alive, nodes[k], last_ok)
         q = np.where(alive, q, np.nan)
-    return Q, QD, last_ok
+    return Q, QD, last_ok, None

@@ -123,9 +123,10 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run
               ) -> KinematicSolution:
     """:func:`solve`'s state stage by the compiled kernel ``run`` for the whole batch: it
     closes every sample in closed form from its nearest node (every loop a dyad), or takes the
-    coordinates :func:`.state.close` closed (a mechanism of dyads) or
-    :func:`.compiled_nodes.newton_close` (Newton's method in a kernel; :func:`.state.close`
-    for the samples it leaves open), then the rates and accelerations."""
+    coordinates :func:`.state.close` closed (a mechanism of dyads), or closes them by Newton's
+    method from the nodes' guess in its blocks (``newton=True``; :func:`.state.close` for the
+    samples it leaves open, then the kernel again on the closed coordinates), then the rates
+    and accelerations."""
     out = None  # the compiled kernel's arrays
     if branch.nodes is not None and lay.dyads is not None:
         lo, hi = branch.span
@@ -143,14 +144,18 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run
         out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
     elif out is None:   # Newton's method in the kernel; numpy's (damped) for what it leaves
         guess = branch.guess(lay, t)
-        q, err = compiled_nodes.newton_close(lay, q_ind, guess)
+        how = {"q": guess, "newton": True}
+        out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
+        err = out["err"].reshape(guess.shape[1:])
         retry = ~(err <= ACCEPT)
-        if np.any(retry):
+        if np.any(retry):   # the samples it leaves open closed by numpy, then all again
+            q = out["q"].reshape(guess.shape).copy()
             q_r, err_r, _ = close(lay, np.broadcast_to(q_ind, q_ind.shape[:1] + err.shape)[
                 :, retry], np.broadcast_to(guess, q.shape)[:, retry], branch.modes)
-            q[:, retry], err[retry] = q_r, err_r
-        how = {"q": q}
-        out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
+            q[:, retry], err = q_r, err.copy()
+            err[retry] = err_r
+            how = {"q": q}
+            out = run(lay, t, q_ind, qd_ind, qdd_ind, **how)
     # the branch ends at the first sample past the last node that does not close
     ended = branch.ended(t, err)
     if ended is not None:
