@@ -481,20 +481,25 @@ def _coordinates(L, i, q_from, q_i, cq_i, sq_i, nb):
 
 
 @inner
-def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
+def newton(L, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx,
+           limit=1.0):
     """:func:`newton_at` with the arrays at design d, samples from ``k0`` (the outputs
     themselves)."""
-    newton_at(L, d, k0, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx)
+    newton_at(L, d, k0, d, k0, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx,
+              limit)
 
 
 @inner
-def newton_at(L, d, k0, w, kw, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx):
+def newton_at(L, d, k0, w, kw, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, perm, col, dx,
+              limit=1.0):
     """Close the loops of the samples ``k0`` .. ``k0 + nb`` of design d by Newton's method on
     the dependent coordinates from the guess in ``q`` (n, D, T) at design ``w``, samples from
     ``kw`` (its independent rows already the state's, ``cq``, ``sq`` (n, block) the cosines and
     sines of ``s q`` of its angular joints), as :func:`.state.close`'s Newton stage: until no
     sample's step is above ``STEP_TOL`` (radians, or metres over the size), at most ``MAXITER``
-    steps; a step of a radian or the size is not taken (no correction of a nearby guess). On
+    steps; a step of ``limit`` radians or times the size (default 1) is not taken (no
+    correction of a nearby guess; :func:`.positions.newton`, the continuation's, has no
+    limit: ``inf``). On
     return the poses (``phi`` ... ``e``, at ``w``, ``kw``), the cut frames ``P`` and the
     residual ``g`` (n_rows, block) are those of ``q``, the scaled residual in ``err`` (D, T) at
     d, ``k0``; ``J`` the Jacobian of the last step. ``A``, ``perm``, ``col``: the LU of
@@ -522,7 +527,7 @@ def newton_at(L, d, k0, w, kw, nb, q, cq, sq, phi, c, s, r, e, J, P, g, err, A, 
                 step = math.nan if u != u or step != step else max(step, u)
             more = more or step > STEP_TOL   # NaN (singular) stops too
             for a in range(m):
-                if math.isfinite(dx[a, k]) and step < 1.0:
+                if math.isfinite(dx[a, k]) and step < limit:
                     q[dep[a], w, kw + k] += dx[a, k]
         for a in range(m):
             i = dep[a]

@@ -146,8 +146,9 @@ def follow_kernel(L, Q, QD, QDD, qd_drv, qdd_drv, times, alive, phi, c, s, r, e,
             if not dead:
                 for i in range(1, n):
                     _coordinates(L, i, Q[i, d, ks], Q[i, d, ks], cq[i], sq[i], one)
+                # the corrector, its steps unlimited as :func:`.positions.newton`'s
                 newton(L, d, kk, one, Q, cq, sq, phi, c, s, r, e, J, P, rhs, err, A, perm, col,
-                       sol)
+                       sol, math.inf)
                 _jacobian(L, d, d, kk, one, r, e, P, J)
                 _driven_rhs(drv, nd, J, d, ks, qd_drv, d, ks, one, rhs)
                 if nd:
