@@ -10,6 +10,7 @@ kernel (:mod:`.compiled`) is the state stage for the whole batch.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import partial
 
 import numpy as np
@@ -150,6 +151,10 @@ def _compiled(model, lay: Layout, t, q_ind, qd_ind, qdd_ind, branch: Branch, run
         retry = ~(err <= ACCEPT)
         if np.any(retry):   # the samples it leaves open closed by numpy, then all again
             q = out["q"].reshape(guess.shape).copy()
+            # from the cubic guess (the rates' alone): near a singular position the nodes'
+            # accelerations are large and the quintic guess far off
+            if branch.QDD is not None:
+                guess = replace(branch, QDD=None).guess(lay, t)
             q_r, err_r, _ = close(lay, np.broadcast_to(q_ind, q_ind.shape[:1] + err.shape)[
                 :, retry], np.broadcast_to(guess, q.shape)[:, retry], branch.modes)
             q[:, retry], err = q_r, err.copy()
