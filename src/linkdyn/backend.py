@@ -61,7 +61,7 @@ COMPILED_CALL = 1e-5     # one evaluation's call into the compiled code
 COMPILED_SAMPLE = 1e-7   # one moving body of one sample in the compiled kernels
 # each stage's kernels loaded from numba's cache, and compiled the first time (CPU time)
 LOAD = {"kinematics": 0.5, "dynamics": 0.05, "reactions": 0.05, "sweep": 0.5, "rhs": 0.25}
-COMPILE = {"kinematics": 80.0, "dynamics": 24.0, "reactions": 8.0, "sweep": 21.0, "rhs": 42.0}
+COMPILE = {"kinematics": 80.0, "dynamics": 24.0, "reactions": 6.0, "sweep": 15.0, "rhs": 25.0}
 # the stages whose kernels have run in this process (:func:`mark_cached`): loaded, no start-up
 IN_PROCESS: set[str] = set()
 
