@@ -17,6 +17,7 @@ limit position.
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 
 import numpy as np
@@ -249,3 +250,31 @@ def test_two_drivers_reduce_their_own_columns(monkeypatch):
     models = [space.model([v]) for v in values[path]]
     _same_metrics(df, models, t, wanted, path_point="link3.P")
     assert not np.allclose(df.peak_tau_J1, df.peak_tau_J5)
+
+
+def test_a_design_at_a_dead_centre_is_invalid_as_analyze_says(tmp_path, monkeypatch):
+    """The offset slider-crank driven by its slider into its dead centre (crank and rod in line,
+    s* = sqrt(230^2 - 20^2) mm) at the last sample: closed in closed form to rounding, J_dep's
+    relative pivot there ~6e-9, above a fixed 1e-10 but within the closure's resolution
+    (:func:`linkdyn.kinematics.positions.singular`). The metrics-only kernel counts the sample
+    as analyze does: every design invalid, with analyze's reason, never a finite peak force."""
+    from linkdyn.io.writer import dumps_toml
+
+    calls = _recorded(monkeypatch)
+    d = tomllib.loads(linkdyn.example_path("slider_crank").read_text())
+    s_star = math.sqrt(230.0**2 - 20.0**2)
+    d["drivers"] = [{"joint": "J4", "motion": {"kind": "expression",
+                                               "q": f"{s_star!r} - 60*(1 - t)**2"}}]
+    d["assembly"] = {"phi": {"crank": 20.0, "rod": 354.0, "slider": 0.0}}
+    for key in ("analysis", "loads"):
+        d.pop(key, None)
+    path = tmp_path / "dead_centre.toml"
+    path.write_text(dumps_toml(d))
+    t = np.linspace(0.0, 1.0, 21)
+    ref = linkdyn.analyze(linkdyn.load(path), t, backend="numpy", allow_singular=True)
+    assert np.flatnonzero(~ref.valid).tolist() == [20]
+    df = linkdyn.sweep(path, {"bodies.slider.mass": [0.8, 1.0]}, t, ["peak_force_J4"],
+                       backend="compiled")
+    assert calls, "the metrics-only kernel ran"
+    assert not df.valid.any() and df["peak_force_J4"].isna().all()
+    assert all("singular" in r and "t = 1 s" in r for r in df.reason)

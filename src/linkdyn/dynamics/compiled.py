@@ -43,6 +43,7 @@ from ..design.reduce import larger_magnitude, plus_square
 from ..loads import Loads
 from ..planar import last, turned
 from ..kinematics.compiled import cut_numbers
+from ..kinematics.positions import singular
 from ..kinematics.recursion import cut_frame
 from ..reactions import Reactions, cut_wrench, flipped, minus, plus, without_effort
 from .denoc import (DynamicSolution, generalized_force, less_cut, newton_euler_wrench,
@@ -368,10 +369,10 @@ PEAK, SQUARES = 0, 1
 #: drivers' efforts ``col`` (n_red,), into ``out`` (n_red, D); the path ``xy`` (2, D, T) of the
 #: point ``point`` (2, D) of body ``body`` (no design: no path); ``ok`` (D,) whether every
 #: sample of the design is valid as :func:`linkdyn.analysis.analyze_layout` counts it (closed
-#: within ``accept``, the pivots of ``J_dep`` above ``singular``, every joint's motion, effort
-#: and the kinetic energy finite).
-Reduce = namedtuple("Reduce", ("kind", "col", "out", "body", "point", "xy", "ok", "accept",
-                               "singular"), module=__name__)
+#: within ``accept``, the pivots of ``J_dep`` clear of a singular position, every joint's
+#: motion, effort and the kinetic energy finite).
+Reduce = namedtuple("Reduce", ("kind", "col", "out", "body", "point", "xy", "ok", "accept"),
+                    module=__name__)
 
 
 @njit
@@ -480,12 +481,14 @@ def _sweep(L, X, axes, q, phi, c, s, r, e, qd, qdd, cut, pivot, err, fin, o_lam,
 @inline
 def _valid(R, nb, err, piv, fin, dyn_piv):
     """Whether every sample of a block is valid (closed within ``R.accept``, ``J_dep``'s
-    pivots of the kinematics and the dynamics above ``R.singular``, rates and accelerations
-    finite: :func:`linkdyn.analysis.analyze_layout`'s ``valid`` before the outputs' check)."""
+    pivots of the kinematics and the dynamics clear of a singular position for the sample's
+    closure residual, :func:`linkdyn.kinematics.positions.singular`, rates and accelerations
+    finite: :func:`linkdyn.analysis.analyze_layout`'s ``valid`` (:func:`linkdyn.analysis.regular`)
+    before the outputs' check)."""
     good = True
     for k in range(nb):
-        good = good and (err[0, k] <= R.accept and fin[0, k] and piv[0, k] > R.singular
-                         and dyn_piv[0, k] > R.singular)
+        good = good and (err[0, k] <= R.accept and fin[0, k] and not singular(piv[0, k], err[0, k])
+                         and not singular(dyn_piv[0, k], err[0, k]))
     return good
 
 
@@ -562,14 +565,12 @@ def sweep(lay, t, q_drv, qd_drv, qdd_drv, *, metrics=None, **closing) -> dict:
 class Metrics:
     """What a metrics-only :func:`sweep` keeps: ``efforts``, pairs ``(driver, how)`` (the
     driver's index in the model's drivers, ``'peak'`` or ``'rms'``); ``point``, ``(body,
-    point)`` names of the path point, or None; the thresholds of a valid sample, ``accept``
-    (the closure residual, :data:`linkdyn.kinematics.positions.ACCEPT`) and ``singular`` (the
-    relative pivot, :data:`linkdyn.analysis.SINGULAR`)."""
+    point)`` names of the path point, or None; ``accept``, the closure residual of a valid
+    sample (:data:`linkdyn.kinematics.positions.ACCEPT`)."""
 
     efforts: tuple
     point: tuple | None
     accept: float
-    singular: float
 
 
 def _reduce(lay, metrics: Metrics | None, D: int, T: int) -> Reduce:
@@ -577,7 +578,7 @@ def _reduce(lay, metrics: Metrics | None, D: int, T: int) -> Reduce:
     if metrics is None:
         return Reduce(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, D)),
                       np.int64(0), np.zeros((2, 1)), np.zeros((2, 0, 0)),
-                      np.zeros(0, np.bool_), 0.0, 0.0)
+                      np.zeros(0, np.bool_), 0.0)
     kind = np.array([PEAK if how == "peak" else SQUARES for _, how in metrics.efforts],
                     np.int64)
     col = np.array([k for k, _ in metrics.efforts], np.int64)
@@ -588,7 +589,7 @@ def _reduce(lay, metrics: Metrics | None, D: int, T: int) -> Reduce:
         point = np.ascontiguousarray(np.reshape(p, (2, -1)))
         xy = np.empty((2, D, T))
     return Reduce(kind, col, np.zeros((len(kind), D)), np.int64(body), point, xy,
-                  np.zeros(D, np.bool_), float(metrics.accept), float(metrics.singular))
+                  np.zeros(D, np.bool_), float(metrics.accept))
 
 
 def swept(kin: KinematicSolution, loads: Loads) -> DynamicSolution:

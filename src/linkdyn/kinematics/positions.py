@@ -28,21 +28,24 @@ TOL = 1e-12          # closure residual target, relative to the mechanism's size
 ACCEPT = 1e-10       # largest residual accepted as closed
 STEP_ANGLE = 0.1     # rad of driver travel between continuation nodes
 STEP_LENGTH = 0.02   # fraction of the mechanism's size between continuation nodes
+EPS = float(np.finfo(float).eps)   # the residual of a position closed to rounding
 RESOLUTION = 100.0   # a position is singular where J_dep's conditioning is at or below this
 #                      times the square root of its closure residual (:func:`singular`)
 
 
+@step
 def singular(conditioning, residual):
     """Where closed positions are singular: at a singular position or within the closure's
-    resolution of one (..., bool).
+    resolution of one (..., bool): a step, which ``analyze`` calls on its samples and the sweep
+    kernel's metrics-only form on each sample.
 
     Parameters
     ----------
-    conditioning : array_like (...)
+    conditioning : ndarray (...) or float
         The dependent joints' Jacobian ``J_dep`` made dimensionless (lengths over the
         mechanism's size): its smallest singular value relative to its largest (or an
         estimate of it, a relative pivot); 0 or NaN where it has lost rank.
-    residual : array_like (...)
+    residual : ndarray (...) or float
         The scaled closure residual the positions were closed to (dimensionless; machine
         epsilon is taken where it is smaller: rounding closes no better).
 
@@ -59,8 +62,9 @@ def singular(conditioning, residual):
     numbers to about ``1 / RESOLUTION^2`` relative at worst (at ``r`` = rounding, ``sigma``
     above about ``1.5e-6``), to rounding over ``sigma^2`` in general.
     """
-    r = np.maximum(np.asarray(residual, float), np.finfo(float).eps)
-    return ~(np.asarray(conditioning, float) > RESOLUTION * np.sqrt(r))     # NaN: singular
+    # sigma <= RESOLUTION sqrt(max(r, eps)); NaN in either: singular
+    bound = RESOLUTION * np.sqrt(select(residual < EPS, EPS, residual))
+    return (conditioning <= bound) | (conditioning != conditioning) | (bound != bound)
 
 
 @step

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .. import backend as backend_mod
-from ..analysis import SINGULAR, analyze, analyze_layout, failure, layout_stages
+from ..analysis import analyze, analyze_layout, failure, layout_stages
 from ..errors import AssemblyError, ModelError
 from ..kinematics import driver_values
 from ..dynamics import compiled as compiled_dynamics
@@ -261,7 +261,7 @@ def _metrics_only(task: Task, layout, backend) -> tuple | None:
     if spec is None:
         return None
     return spec, compiled_dynamics.Metrics(tuple((k, how) for _, k, how in spec.efforts),
-                                           spec.point, ACCEPT, SINGULAR), model
+                                           spec.point, ACCEPT), model
 
 
 def _backend(task: Task, samples: int, layout=None, runs: bool = True) -> backend_mod.Backend:
